@@ -1,0 +1,1 @@
+"""The hub: live fleet state, command dispatch, storage and the REST/WebSocket API."""

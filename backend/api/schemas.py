@@ -1,0 +1,57 @@
+"""REST request and response bodies (the WebSocket messages live in gcs.protocol)."""
+
+from __future__ import annotations
+
+from pydantic import BaseModel, ConfigDict, Field
+
+from gcs.protocol import Command, CommandOutcome
+
+
+class Health(BaseModel):
+    status: str
+    vehicles: int
+    connected: int
+    telemetry_backlog: int
+    telemetry_written: int
+
+
+class ClientConfig(BaseModel):
+    basemap_url: str | None
+    basemap_attribution: str
+    basemap_max_zoom: int
+    protocol: int
+
+
+class CommandResponse(BaseModel):
+    vehicle_id: str
+    command: Command
+    outcome: CommandOutcome
+
+
+class TelemetrySample(BaseModel):
+    model_config = ConfigDict(from_attributes=True)
+
+    seq: int
+    time: float = Field(description="Unix seconds")
+    mode: str
+    armed: bool
+    lat: float | None
+    lon: float | None
+    alt_msl: float | None
+    alt_rel: float | None
+    heading_deg: float | None
+    groundspeed: float | None
+    climb_rate: float | None
+    battery_voltage: float | None
+    battery_remaining: float | None
+    gps_fix: int
+    satellites: int | None
+
+
+class TelemetryPage(BaseModel):
+    vehicle_id: str
+    start: float
+    end: float
+    limit: int
+    samples: list[TelemetrySample]
+    truncated: bool = Field(description="True when more samples exist in the range")

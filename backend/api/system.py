@@ -1,0 +1,35 @@
+"""Health and client configuration."""
+
+from __future__ import annotations
+
+from fastapi import APIRouter
+
+from backend.api.deps import HubDep
+from backend.api.schemas import ClientConfig, Health
+from gcs.protocol import PROTOCOL_VERSION
+
+router = APIRouter(tags=["system"])
+
+
+@router.get("/health", response_model=Health)
+async def health(hub: HubDep) -> Health:
+    records = hub.registry.all()
+    return Health(
+        status="ok",
+        vehicles=len(records),
+        connected=sum(record.connected for record in records),
+        telemetry_backlog=hub.writer.backlog,
+        telemetry_written=hub.writer.stats.written,
+    )
+
+
+@router.get("/config", response_model=ClientConfig)
+async def client_config(hub: HubDep) -> ClientConfig:
+    """What the dashboard needs to draw itself (base map, protocol version)."""
+    settings = hub.settings
+    return ClientConfig(
+        basemap_url=settings.basemap_url,
+        basemap_attribution=settings.basemap_attribution,
+        basemap_max_zoom=settings.basemap_max_zoom,
+        protocol=PROTOCOL_VERSION,
+    )

@@ -1,0 +1,88 @@
+"""Vehicles: live state, commands, telemetry history."""
+
+from __future__ import annotations
+
+import asyncio
+from datetime import UTC, datetime, timedelta
+from typing import Annotated
+
+from fastapi import APIRouter, Body, Path, Query
+
+from backend.api.deps import HubDep
+from backend.api.schemas import CommandResponse, TelemetryPage, TelemetrySample
+from backend.errors import InvalidRequest
+from gcs.protocol import Command, VehicleSummary
+
+router = APIRouter(prefix="/vehicles", tags=["vehicles"])
+
+VehicleIdPath = Annotated[str, Path(description="The vehicle's identity", max_length=64)]
+MAX_TELEMETRY_PAGE = 10_000
+
+
+@router.get("", response_model=list[VehicleSummary])
+async def list_vehicles(hub: HubDep) -> list[VehicleSummary]:
+    """Every known vehicle with its live state (connected or not)."""
+    return [record.summary() for record in hub.registry.all()]
+
+
+@router.get("/{vehicle_id}", response_model=VehicleSummary)
+async def get_vehicle(vehicle_id: VehicleIdPath, hub: HubDep) -> VehicleSummary:
+    return hub.registry.get(vehicle_id).summary()
+
+
+@router.post(
+    "/{vehicle_id}/commands",
+    response_model=CommandResponse,
+    responses={
+        404: {"description": "Unknown vehicle"},
+        409: {"description": "Vehicle not connected"},
+        504: {"description": "The agent or flight controller did not answer in time"},
+    },
+)
+async def send_command(
+    vehicle_id: VehicleIdPath, command: Annotated[Command, Body()], hub: HubDep
+) -> CommandResponse:
+    """Send a command and return the flight controller's answer.
+
+    A refusal by the flight controller is an answer (status ``refused``, with its reason),
+    so it comes back as 200; a missing answer is 504.
+    """
+    outcome = await hub.dispatcher.execute(vehicle_id, command)
+    return CommandResponse(vehicle_id=vehicle_id, command=command, outcome=outcome)
+
+
+@router.get("/{vehicle_id}/telemetry", response_model=TelemetryPage)
+async def telemetry_history(
+    vehicle_id: VehicleIdPath,
+    hub: HubDep,
+    start: Annotated[
+        datetime | None, Query(description="ISO 8601 or Unix seconds; default: end - 10 min")
+    ] = None,
+    end: Annotated[
+        datetime | None, Query(description="ISO 8601 or Unix seconds; default: now")
+    ] = None,
+    limit: Annotated[int, Query(ge=1, le=MAX_TELEMETRY_PAGE)] = 1000,
+) -> TelemetryPage:
+    """Stored telemetry samples in a time range, oldest first."""
+    hub.registry.get(vehicle_id)
+    end_at = _aware(end) if end else datetime.now(UTC)
+    start_at = _aware(start) if start else end_at - timedelta(minutes=10)
+    if start_at > end_at:
+        raise InvalidRequest(
+            "start", f"start ({start_at.isoformat()}) is after end ({end_at.isoformat()})"
+        )
+    rows = await asyncio.to_thread(
+        hub.repository.telemetry, vehicle_id, start_at.timestamp(), end_at.timestamp(), limit + 1
+    )
+    return TelemetryPage(
+        vehicle_id=vehicle_id,
+        start=start_at.timestamp(),
+        end=end_at.timestamp(),
+        limit=limit,
+        samples=[TelemetrySample.model_validate(row) for row in rows[:limit]],
+        truncated=len(rows) > limit,
+    )
+
+
+def _aware(moment: datetime) -> datetime:
+    return moment if moment.tzinfo else moment.replace(tzinfo=UTC)

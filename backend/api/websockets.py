@@ -1,0 +1,22 @@
+"""The two WebSocket endpoints: agents, and clients (dashboards, integrations)."""
+
+from __future__ import annotations
+
+from fastapi import APIRouter, WebSocket
+
+from backend.api.deps import HubDep
+from backend.realtime.agent_gateway import AgentSession
+from backend.realtime.client_feed import ClientFeed
+from gcs.protocol import AGENT_WS_PATH, CLIENT_WS_PATH
+
+router = APIRouter()
+
+
+@router.websocket(AGENT_WS_PATH)
+async def agent_socket(websocket: WebSocket, hub: HubDep) -> None:
+    await AgentSession(websocket, hub).serve()
+
+
+@router.websocket(CLIENT_WS_PATH)
+async def client_socket(websocket: WebSocket, hub: HubDep) -> None:
+    await ClientFeed(websocket, hub).serve()

@@ -1,0 +1,74 @@
+"""The hub's FastAPI app factory."""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import logging
+from collections.abc import AsyncIterator
+
+from fastapi import FastAPI, Request
+from fastapi.responses import HTMLResponse, JSONResponse
+from fastapi.staticfiles import StaticFiles
+
+from backend.api import system, vehicles, websockets
+from backend.errors import GcsError, InvalidRequest
+from backend.hub import Hub
+from backend.settings import HubSettings
+
+log = logging.getLogger(__name__)
+
+API_PREFIX = "/api/v1"
+
+_DASHBOARD_MISSING = """<!doctype html><title>Fleet GCS</title>
+<h1>The dashboard is not built</h1>
+<p>Run <code>npm ci &amp;&amp; npm run build</code> in <code>frontend/</code>
+(or <code>make demo</code>), then reload. The API is up: see <a href="/docs">/docs</a>.</p>"""
+
+
+def create_app(settings: HubSettings | None = None) -> FastAPI:
+    settings = settings or HubSettings()  # fields come from the environment
+
+    @contextlib.asynccontextmanager
+    async def lifespan(app: FastAPI) -> AsyncIterator[None]:
+        hub = await Hub.start(settings)
+        app.state.hub = hub
+        runner = asyncio.create_task(hub.run(), name="hub")
+        try:
+            yield
+        finally:
+            runner.cancel()
+            with contextlib.suppress(asyncio.CancelledError):
+                await runner
+
+    app = FastAPI(
+        title="Fleet GCS hub",
+        version="0.1.0",
+        description="Live fleet state, commands and telemetry history for drone fleets.",
+        lifespan=lifespan,
+    )
+    app.include_router(system.router, prefix=API_PREFIX)
+    app.include_router(vehicles.router, prefix=API_PREFIX)
+    app.include_router(websockets.router)
+    app.add_exception_handler(GcsError, _gcs_error_response)  # type: ignore[arg-type]
+    _mount_dashboard(app, settings)
+    return app
+
+
+async def _gcs_error_response(request: Request, error: GcsError) -> JSONResponse:
+    if isinstance(error, InvalidRequest):
+        # The same shape as FastAPI's own 422s, so clients handle one format.
+        detail = [{"loc": ["body", error.field], "msg": error.message, "type": "value_error"}]
+        return JSONResponse({"detail": detail}, status_code=error.status_code)
+    return JSONResponse({"detail": error.message}, status_code=error.status_code)
+
+
+def _mount_dashboard(app: FastAPI, settings: HubSettings) -> None:
+    if (settings.frontend_dir / "index.html").is_file():
+        app.mount("/", StaticFiles(directory=settings.frontend_dir, html=True), name="dashboard")
+        return
+    log.warning("dashboard not built: %s has no index.html", settings.frontend_dir)
+
+    @app.get("/", include_in_schema=False)
+    async def dashboard_missing() -> HTMLResponse:
+        return HTMLResponse(_DASHBOARD_MISSING, status_code=503)

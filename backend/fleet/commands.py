@@ -1,0 +1,89 @@
+"""Command dispatch: check a command against the vehicle, send it to its agent, await
+the flight controller's answer."""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+import uuid
+from collections.abc import Awaitable, Callable
+
+from backend.errors import CommandTimedOut, InvalidRequest, VehicleOffline
+from backend.fleet.registry import FleetRegistry
+from gcs.protocol import Command, CommandOutcome, CommandRequest, SetModeCommand
+
+log = logging.getLogger(__name__)
+
+SendFrame = Callable[[CommandRequest], Awaitable[None]]
+
+# The hub waits this much longer than it lets the agent try, so the agent's own
+# timeout report (which names the flight controller) arrives before the hub gives up.
+AGENT_REPLY_GRACE_S = 2.0
+
+
+class AgentChannel:
+    """The hub's end of one connected agent, as far as commands are concerned."""
+
+    def __init__(self, send: SendFrame) -> None:
+        self._send = send
+        self._pending: dict[str, asyncio.Future[CommandOutcome]] = {}
+
+    async def request(self, command: Command, timeout_s: float) -> CommandOutcome:
+        request_id = uuid.uuid4().hex
+        future: asyncio.Future[CommandOutcome] = asyncio.get_running_loop().create_future()
+        self._pending[request_id] = future
+        try:
+            await self._send(
+                CommandRequest(request_id=request_id, command=command, timeout_s=timeout_s)
+            )
+            return await asyncio.wait_for(future, timeout_s + AGENT_REPLY_GRACE_S)
+        except TimeoutError:
+            raise CommandTimedOut(
+                f"{command.name}: the agent did not answer within {timeout_s:.0f} s"
+            ) from None
+        finally:
+            self._pending.pop(request_id, None)
+
+    def resolve(self, request_id: str, outcome: CommandOutcome) -> bool:
+        future = self._pending.get(request_id)
+        if future is None or future.done():
+            return False
+        future.set_result(outcome)
+        return True
+
+    def fail_all(self, reason: str) -> None:
+        for future in self._pending.values():
+            if not future.done():
+                future.set_exception(VehicleOffline(reason))
+
+
+class CommandDispatcher:
+    def __init__(self, registry: FleetRegistry, timeout_s: float) -> None:
+        self._registry = registry
+        self._timeout_s = timeout_s
+        self._channels: dict[str, AgentChannel] = {}
+
+    def attach(self, vehicle_id: str, channel: AgentChannel) -> None:
+        self._channels[vehicle_id] = channel
+
+    def detach(self, vehicle_id: str, channel: AgentChannel) -> None:
+        if self._channels.get(vehicle_id) is channel:
+            del self._channels[vehicle_id]
+        channel.fail_all(f"vehicle {vehicle_id!r} disconnected before answering")
+
+    async def execute(self, vehicle_id: str, command: Command) -> CommandOutcome:
+        record = self._registry.get(vehicle_id)
+        if isinstance(command, SetModeCommand) and command.mode not in record.modes:
+            raise InvalidRequest(
+                "mode",
+                f"unknown mode {command.mode!r} for {vehicle_id}; "
+                f"it has: {', '.join(record.modes) or 'none reported'}",
+            )
+        channel = self._channels.get(vehicle_id)
+        if channel is None:
+            raise VehicleOffline(f"vehicle {vehicle_id!r} is not connected")
+        outcome = await channel.request(command, self._timeout_s)
+        log.info("%s %s -> %s", vehicle_id, command.name, outcome.message)
+        if outcome.status == "timeout":
+            raise CommandTimedOut(outcome.message)
+        return outcome

@@ -1,0 +1,95 @@
+"""The fleet's live state: one record per vehicle, keyed by its identity."""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from dataclasses import dataclass, field
+
+from backend.errors import VehicleNotFound
+from backend.storage.models import VehicleRow
+from gcs.protocol import Hello, Telemetry, VehicleState, VehicleSummary
+
+
+@dataclass
+class VehicleRecord:
+    id: str
+    autopilot: str
+    vehicle_type: str
+    modes: list[str]
+    connected: bool = False
+    last_seen: float | None = None
+    state: VehicleState | None = None
+    # Highest sequence number seen per agent stream: anything at or below is a duplicate.
+    last_seq: dict[str, int] = field(default_factory=dict)
+
+    def summary(self) -> VehicleSummary:
+        return VehicleSummary(
+            id=self.id,
+            autopilot=self.autopilot,
+            vehicle_type=self.vehicle_type,
+            modes=self.modes,
+            connected=self.connected,
+            last_seen=self.last_seen,
+            state=self.state,
+        )
+
+
+class FleetRegistry:
+    def __init__(self) -> None:
+        self._vehicles: dict[str, VehicleRecord] = {}
+
+    def __len__(self) -> int:
+        return len(self._vehicles)
+
+    def load(self, rows: Iterable[VehicleRow]) -> None:
+        """Vehicles known from earlier runs, offline until their agent connects."""
+        for row in rows:
+            self._vehicles[row.id] = VehicleRecord(
+                id=row.id,
+                autopilot=row.autopilot,
+                vehicle_type=row.vehicle_type,
+                modes=[mode for mode in row.modes.split(",") if mode],
+                last_seen=row.last_seen,
+            )
+
+    def get(self, vehicle_id: str) -> VehicleRecord:
+        try:
+            return self._vehicles[vehicle_id]
+        except KeyError:
+            raise VehicleNotFound(vehicle_id) from None
+
+    def all(self) -> list[VehicleRecord]:
+        return sorted(self._vehicles.values(), key=lambda record: record.id)
+
+    def connect(self, hello: Hello) -> VehicleRecord:
+        record = self._vehicles.get(hello.vehicle_id)
+        if record is None:
+            record = VehicleRecord(
+                id=hello.vehicle_id,
+                autopilot=hello.autopilot,
+                vehicle_type=hello.vehicle_type,
+                modes=list(hello.modes),
+            )
+            self._vehicles[record.id] = record
+        else:
+            record.autopilot = hello.autopilot
+            record.vehicle_type = hello.vehicle_type
+            record.modes = list(hello.modes)
+        record.connected = True
+        return record
+
+    def disconnect(self, vehicle_id: str) -> VehicleRecord:
+        record = self.get(vehicle_id)
+        record.connected = False
+        return record
+
+    def apply(self, vehicle_id: str, stream_id: str, telemetry: Telemetry) -> bool:
+        """Take a sample into live state; False if it is a duplicate of one already seen."""
+        record = self.get(vehicle_id)
+        if telemetry.seq <= record.last_seq.get(stream_id, -1):
+            return False
+        record.last_seq[stream_id] = telemetry.seq
+        if record.last_seen is None or telemetry.time >= record.last_seen:
+            record.state = telemetry.state
+            record.last_seen = telemetry.time
+        return True

@@ -1,0 +1,151 @@
+"""One agent's WebSocket session: authenticate, hello, then telemetry in and commands out."""
+
+from __future__ import annotations
+
+import asyncio
+import hmac
+import logging
+import time
+
+from starlette.websockets import WebSocket, WebSocketDisconnect
+
+from backend.fleet.commands import AgentChannel
+from backend.hub import Hub
+from backend.realtime.bus import Topic
+from backend.realtime.frames import FrameTooLarge, PeerConnection
+from backend.storage.repository import TelemetryEnvelope
+from gcs.protocol import (
+    PROTOCOL_VERSION,
+    CloseCode,
+    CommandResult,
+    ErrorReply,
+    Hello,
+    ProtocolError,
+    Telemetry,
+    Welcome,
+    agent_to_hub,
+    decode,
+)
+
+log = logging.getLogger(__name__)
+
+HELLO_TIMEOUT_S = 10.0
+
+
+def _bearer_token(header: str | None) -> str | None:
+    if header is None:
+        return None
+    scheme, _, token = header.partition(" ")
+    return token.strip() if scheme.lower() == "bearer" and token.strip() else None
+
+
+class AgentSession(PeerConnection):
+    def __init__(self, websocket: WebSocket, hub: Hub) -> None:
+        super().__init__(websocket, hub.settings.max_frame_bytes, hub.settings.max_bad_frames)
+        self.hub = hub
+
+    async def serve(self) -> None:
+        await self.websocket.accept()
+        refusal = self._check_token()
+        if refusal is not None:
+            log.warning("refused agent connection from %s: %s", self.peer, refusal)
+            await self.close(CloseCode.UNAUTHORIZED, refusal)
+            return
+        try:
+            hello = await self._receive_hello()
+            if hello is None:
+                return
+            await self._serve_vehicle(hello)
+        except FrameTooLarge as error:
+            log.warning("closing agent %s: %s", self.peer, error)
+            await self.close(CloseCode.MESSAGE_TOO_BIG, str(error))
+        except WebSocketDisconnect:
+            pass
+
+    def _check_token(self) -> str | None:
+        token = _bearer_token(self.websocket.headers.get("authorization"))
+        if token is None:
+            return "missing agent token (send 'Authorization: Bearer <token>')"
+        expected = self.hub.settings.agent_token.get_secret_value()
+        if not hmac.compare_digest(token.encode(), expected.encode()):
+            return "invalid agent token"
+        return None
+
+    async def _receive_hello(self) -> Hello | None:
+        try:
+            frame = await asyncio.wait_for(self.receive(), HELLO_TIMEOUT_S)
+        except TimeoutError:
+            await self.close(CloseCode.BAD_HELLO, f"no hello within {HELLO_TIMEOUT_S:.0f} s")
+            return None
+        if frame is None:
+            return None
+        try:
+            message = decode(agent_to_hub, frame)
+        except ProtocolError as error:
+            await self.close(CloseCode.BAD_HELLO, f"first frame must be a hello: {error.message}")
+            return None
+        if not isinstance(message, Hello):
+            await self.close(
+                CloseCode.BAD_HELLO, f"first frame must be a hello, not {message.type}"
+            )
+            return None
+        if message.protocol != PROTOCOL_VERSION:
+            await self.close(
+                CloseCode.BAD_HELLO,
+                f"protocol {message.protocol} is not supported; this hub speaks {PROTOCOL_VERSION}",
+            )
+            return None
+        return message
+
+    async def _serve_vehicle(self, hello: Hello) -> None:
+        hub = self.hub
+        vehicle_id = hello.vehicle_id
+        await asyncio.to_thread(hub.repository.upsert_vehicle, hello, time.time())
+        record = hub.registry.connect(hello)
+        channel = AgentChannel(self.send)
+        hub.dispatcher.attach(vehicle_id, channel)
+        log.info(
+            "agent %s connected from %s (%s %s)",
+            vehicle_id,
+            self.peer,
+            hello.autopilot,
+            hello.vehicle_type,
+        )
+        try:
+            await self.send(Welcome(vehicle_id=vehicle_id))
+            await hub.publish_state(record)
+            while frame := await self.receive():
+                await self._handle_frame(hello, channel, frame)
+        finally:
+            hub.dispatcher.detach(vehicle_id, channel)
+            record = hub.registry.disconnect(vehicle_id)
+            await hub.publish_state(record)
+            log.info("agent %s disconnected", vehicle_id)
+
+    async def _handle_frame(self, hello: Hello, channel: AgentChannel, frame: str | bytes) -> None:
+        try:
+            message = decode(agent_to_hub, frame)
+        except ProtocolError as error:
+            await self.reject(error.reply())
+            return
+        match message:
+            case Telemetry():
+                await self._ingest(hello, message)
+            case CommandResult(request_id=request_id, outcome=outcome):
+                if not channel.resolve(request_id, outcome):
+                    log.info(
+                        "late or unknown command result %s from %s", request_id, hello.vehicle_id
+                    )
+            case Hello():
+                await self.reject(
+                    ErrorReply(code="unexpected_message", message="hello was already received")
+                )
+
+    async def _ingest(self, hello: Hello, telemetry: Telemetry) -> None:
+        hub = self.hub
+        if not hub.registry.apply(hello.vehicle_id, hello.stream_id, telemetry):
+            return
+        envelope = TelemetryEnvelope(hello.vehicle_id, hello.stream_id, telemetry)
+        # Storage is reliable: if the writer is behind, this waits, and so does the agent.
+        await hub.bus.publish(Topic.TELEMETRY, hello.vehicle_id, envelope)
+        await hub.publish_state(hub.registry.get(hello.vehicle_id))

@@ -1,0 +1,71 @@
+"""A dashboard or integration's live feed: the fleet, then coalesced per-vehicle updates."""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import logging
+
+from starlette.websockets import WebSocket, WebSocketDisconnect
+
+from backend.hub import Hub
+from backend.realtime.bus import LatestSubscription, Topic
+from backend.realtime.frames import FrameTooLarge, PeerConnection
+from gcs.protocol import (
+    CloseCode,
+    FleetSnapshot,
+    Ping,
+    Pong,
+    ProtocolError,
+    VehicleUpdate,
+    client_to_hub,
+    decode,
+)
+
+log = logging.getLogger(__name__)
+
+
+class ClientFeed(PeerConnection):
+    def __init__(self, websocket: WebSocket, hub: Hub) -> None:
+        super().__init__(websocket, hub.settings.max_frame_bytes, hub.settings.max_bad_frames)
+        self.hub = hub
+
+    async def serve(self) -> None:
+        await self.websocket.accept()
+        updates = LatestSubscription()
+        # Subscribe before the snapshot, so no change falls between the two.
+        self.hub.bus.subscribe(Topic.VEHICLE_STATE, updates)
+        try:
+            await self.send(
+                FleetSnapshot(vehicles=[record.summary() for record in self.hub.registry.all()])
+            )
+            async with asyncio.TaskGroup() as tasks:
+                pusher = tasks.create_task(self._push(updates))
+                await self._listen()
+                pusher.cancel()
+        except* FrameTooLarge as group:
+            log.warning("closing client %s: %s", self.peer, group.exceptions[0])
+            with contextlib.suppress(RuntimeError):
+                await self.close(CloseCode.MESSAGE_TOO_BIG, str(group.exceptions[0]))
+        except* WebSocketDisconnect:
+            pass
+        finally:
+            self.hub.bus.unsubscribe(Topic.VEHICLE_STATE, updates)
+
+    async def _push(self, updates: LatestSubscription) -> None:
+        interval = self.hub.settings.ui_update_interval_s
+        while True:
+            for summary in await updates.drain():
+                await self.send(VehicleUpdate(vehicle=summary))
+            # Pacing, not synchronisation: updates arriving meanwhile coalesce per vehicle.
+            await asyncio.sleep(interval)
+
+    async def _listen(self) -> None:
+        while (frame := await self.receive()) is not None:
+            try:
+                message = decode(client_to_hub, frame)
+            except ProtocolError as error:
+                await self.reject(error.reply())
+                continue
+            if isinstance(message, Ping):
+                await self.send(Pong(nonce=message.nonce))

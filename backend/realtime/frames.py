@@ -1,0 +1,60 @@
+"""A WebSocket peer (agent or client): size-limited frames, serialized sends, and the
+rule for bad frames (answer each with an error; close after too many)."""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+
+from starlette.websockets import WebSocket, WebSocketDisconnect
+
+from gcs.protocol import CloseCode, ErrorReply, Message, encode
+
+log = logging.getLogger(__name__)
+
+
+class FrameTooLarge(Exception):
+    def __init__(self, size: int, limit: int) -> None:
+        super().__init__(f"frame of {size} bytes is over the {limit}-byte limit")
+
+
+class PeerConnection:
+    def __init__(self, websocket: WebSocket, max_frame_bytes: int, max_bad_frames: int) -> None:
+        self.websocket = websocket
+        self.peer = f"{websocket.client.host}:{websocket.client.port}" if websocket.client else "?"
+        self._max_frame_bytes = max_frame_bytes
+        self._max_bad_frames = max_bad_frames
+        # Command requests, replies and pushes come from different tasks.
+        self._send_lock = asyncio.Lock()
+        self.bad_frames = 0
+
+    async def send(self, message: Message) -> None:
+        async with self._send_lock:
+            await self.websocket.send_text(encode(message))
+
+    async def close(self, code: int, reason: str) -> None:
+        async with self._send_lock:
+            await self.websocket.close(code, reason)
+
+    async def receive(self) -> str | bytes | None:
+        """The next frame, or None once the peer has gone."""
+        message = await self.websocket.receive()
+        if message["type"] == "websocket.disconnect":
+            return None
+        data: str | bytes = message.get("text") or message.get("bytes") or b""
+        size = len(data.encode() if isinstance(data, str) else data)
+        if size > self._max_frame_bytes:
+            raise FrameTooLarge(size, self._max_frame_bytes)
+        return data
+
+    async def reject(self, reply: ErrorReply) -> None:
+        """Answer a bad frame; past the limit, close the connection (raises disconnect)."""
+        self.bad_frames += 1
+        log.info("bad frame from %s: %s", self.peer, reply.message)
+        await self.send(reply)
+        if self.bad_frames >= self._max_bad_frames:
+            await self.send(
+                ErrorReply(code="too_many_errors", message="closing: too many bad frames")
+            )
+            await self.close(CloseCode.POLICY_VIOLATION, "too many bad frames")
+            raise WebSocketDisconnect(CloseCode.POLICY_VIOLATION)

@@ -1,0 +1,5 @@
+import sys
+
+from gcs.cli import main
+
+sys.exit(main())

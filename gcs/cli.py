@@ -1,0 +1,162 @@
+"""`gcs`: one entry point for the hub, the agent, the simulator and the demo.
+
+Each subcommand imports its own part lazily, so `gcs agent` on a Raspberry Pi never
+imports FastAPI or SQLAlchemy.
+"""
+
+from __future__ import annotations
+
+import argparse
+import asyncio
+import contextlib
+import logging
+import signal
+import sys
+import time
+from collections.abc import Coroutine
+from pathlib import Path
+from typing import Any
+
+LOG_FORMAT = "%(asctime)s %(levelname)-7s %(name)s: %(message)s"
+
+
+def _configure_logging(level: str) -> None:
+    logging.basicConfig(level=level.upper(), format=LOG_FORMAT)
+
+
+def run_until_signalled(main: Coroutine[Any, Any, None]) -> int:
+    """Run a coroutine until it ends or SIGINT/SIGTERM cancels it; exit code 0 on a signal."""
+
+    async def runner() -> None:
+        task = asyncio.current_task()
+        assert task is not None
+        loop = asyncio.get_running_loop()
+        for signum in (signal.SIGINT, signal.SIGTERM):
+            loop.add_signal_handler(signum, task.cancel)
+        await main
+
+    with contextlib.suppress(asyncio.CancelledError):
+        asyncio.run(runner())
+    return 0
+
+
+def _hub(args: argparse.Namespace) -> int:
+    import uvicorn
+
+    from backend.app import create_app
+    from backend.settings import HubSettings
+
+    overrides: dict[str, Any] = {"host": args.host, "port": args.port, "data_dir": args.data_dir}
+    settings = HubSettings(**{key: value for key, value in overrides.items() if value is not None})
+    settings.data_dir.mkdir(parents=True, exist_ok=True)
+    uvicorn.run(
+        create_app(settings),
+        host=settings.host,
+        port=settings.port,
+        log_level=args.log_level.lower(),
+        ws_max_size=settings.max_frame_bytes,
+        ssl_certfile=args.ssl_certfile,
+        ssl_keyfile=args.ssl_keyfile,
+    )
+    return 0
+
+
+def _agent(args: argparse.Namespace) -> int:
+    from vehicle_agents.agent import run_agent
+    from vehicle_agents.config import AgentSettings
+
+    overrides = {
+        "fcu": args.fcu,
+        "hub": args.hub,
+        "token": args.token,
+        "vehicle_id": args.vehicle_id,
+        "telemetry_rate_hz": args.telemetry_rate,
+    }
+    settings = AgentSettings(
+        **{key: value for key, value in overrides.items() if value is not None}
+    )
+    return run_until_signalled(run_agent(settings))
+
+
+def _sim(args: argparse.Namespace, rest: list[str]) -> int:
+    from vehicle_agents.simulator import main as simulator_main
+
+    return simulator_main(rest)
+
+
+def _demo(args: argparse.Namespace) -> int:
+    from gcs.launcher import FleetPlan, LocalFleet
+
+    plan = FleetPlan(
+        vehicles=args.vehicles, port=args.port, data_dir=args.data_dir, speedup=args.speedup
+    )
+    fleet = LocalFleet(plan)
+    log = logging.getLogger("gcs.demo")
+    try:
+        fleet.start()
+        fleet.wait_until_ready()
+        print(
+            f"\nFleet GCS demo: {plan.vehicles} simulated vehicles (speed-up {plan.speedup:g}x)\n"
+            f"  dashboard  {plan.hub_http}/\n"
+            f"  API docs   {plan.hub_http}/docs\n"
+            f"  logs       {fleet.log_dir}/\n"
+            "Press Ctrl-C to stop.\n",
+            flush=True,
+        )
+        signal.signal(signal.SIGTERM, _interrupt)
+        while True:
+            fleet.check_alive()
+            time.sleep(1.0)  # supervising: notice a child that died
+    except KeyboardInterrupt:
+        log.info("stopping")
+    finally:
+        fleet.stop()
+    return 0
+
+
+def _interrupt(signum: int, frame: object) -> None:
+    """SIGTERM stops the demo the way Ctrl-C does."""
+    raise KeyboardInterrupt
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="gcs", description=__doc__)
+    parser.add_argument("--log-level", default="INFO")
+    commands = parser.add_subparsers(dest="command", required=True)
+
+    hub = commands.add_parser("hub", help="run the hub (settings from GCS_* variables)")
+    hub.add_argument("--host")
+    hub.add_argument("--port", type=int)
+    hub.add_argument("--data-dir", type=Path)
+    hub.add_argument("--ssl-certfile", help="serve HTTPS/WSS directly with this certificate")
+    hub.add_argument("--ssl-keyfile")
+
+    agent = commands.add_parser("agent", help="bridge one flight controller to the hub")
+    agent.add_argument("--fcu", help="pymavlink URL, e.g. tcp:127.0.0.1:5760, /dev/ttyACM0")
+    agent.add_argument("--hub", help="hub URL, e.g. ws://hub.local:8000")
+    agent.add_argument("--token", help="agent token (better: GCS_AGENT_TOKEN)")
+    agent.add_argument("--vehicle-id")
+    agent.add_argument("--telemetry-rate", type=float, help="snapshots per second (10)")
+
+    commands.add_parser(
+        "sim", help="run a simulated MAVLink copter (see `gcs sim --help`)", add_help=False
+    )
+
+    demo = commands.add_parser("demo", help="hub + simulated fleet + agents, one command")
+    demo.add_argument("--vehicles", type=int, default=3)
+    demo.add_argument("--port", type=int, default=8000)
+    demo.add_argument("--data-dir", type=Path, default=Path("data"))
+    demo.add_argument("--speedup", type=float, default=1.0)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
+    args, rest = parser.parse_known_args(argv if argv is not None else sys.argv[1:])
+    _configure_logging(args.log_level)
+    if args.command == "sim":
+        return _sim(args, rest)
+    if rest:
+        parser.error(f"unrecognized arguments: {' '.join(rest)}")
+    handlers = {"hub": _hub, "agent": _agent, "demo": _demo}
+    return handlers[args.command](args)

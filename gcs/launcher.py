@@ -1,0 +1,184 @@
+"""Start and stop a local fleet (hub, simulators, agents) as separate processes.
+
+`gcs demo` uses this, and so do the integration tests, so both exercise the same path.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import logging
+import math
+import os
+import secrets
+import signal
+import socket
+import subprocess
+import sys
+import time
+import urllib.error
+import urllib.request
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import IO
+
+log = logging.getLogger(__name__)
+
+# ArduPilot's SITL home (CMAC, Canberra): a place every ArduPilot developer knows.
+DEFAULT_HOME = (-35.363262, 149.165237, 584.0)
+VEHICLE_SPACING_M = 8.0
+EARTH_RADIUS_M = 6_378_137.0
+
+
+def free_port() -> int:
+    with socket.socket() as probe:
+        probe.bind(("127.0.0.1", 0))
+        return int(probe.getsockname()[1])
+
+
+@dataclass(frozen=True)
+class FleetPlan:
+    vehicles: int = 3
+    port: int = 8000
+    data_dir: Path = Path("data")
+    speedup: float = 1.0
+    token: str = field(default_factory=lambda: secrets.token_urlsafe(24))
+    home: tuple[float, float, float] = DEFAULT_HOME
+    telemetry_rate_hz: float = 10.0
+
+    @property
+    def hub_http(self) -> str:
+        return f"http://127.0.0.1:{self.port}"
+
+    @property
+    def hub_ws(self) -> str:
+        return f"ws://127.0.0.1:{self.port}"
+
+    def vehicle_home(self, index: int) -> tuple[float, float, float]:
+        """Homes in a row, a few metres apart, so the vehicles do not share a spot."""
+        lat, lon, alt = self.home
+        east = index * VEHICLE_SPACING_M
+        dlon = math.degrees(east / (EARTH_RADIUS_M * math.cos(math.radians(lat))))
+        return lat, lon + dlon, alt
+
+
+@dataclass
+class ManagedProcess:
+    name: str
+    process: subprocess.Popen[bytes]
+    log_path: Path
+    log_file: IO[bytes]
+
+
+class LocalFleet:
+    """The processes of one local fleet; stop() ends agents, then simulators, then the hub."""
+
+    def __init__(self, plan: FleetPlan) -> None:
+        self.plan = plan
+        self.log_dir = plan.data_dir / "logs"
+        self.processes: list[ManagedProcess] = []
+
+    def vehicle_id(self, index: int) -> str:
+        return f"sim_{index + 1}"
+
+    def start(self, hub_env: dict[str, str] | None = None) -> None:
+        self.log_dir.mkdir(parents=True, exist_ok=True)
+        env = {"GCS_AGENT_TOKEN": self.plan.token}
+        self.spawn(
+            "hub",
+            ["hub", "--port", str(self.plan.port), "--data-dir", str(self.plan.data_dir)],
+            {**env, **(hub_env or {})},
+        )
+        for index in range(self.plan.vehicles):
+            self.start_vehicle(index)
+
+    def start_vehicle(self, index: int) -> None:
+        sim_port = free_port()
+        lat, lon, alt = self.plan.vehicle_home(index)
+        self.spawn(
+            f"sim_{index + 1}",
+            [
+                "sim",
+                "--listen",
+                f"tcp:127.0.0.1:{sim_port}",
+                "--system-id",
+                str(index + 1),
+                "--home",
+                f"{lat:.7f},{lon:.7f},{alt:.1f}",
+                "--speedup",
+                str(self.plan.speedup),
+            ],
+        )
+        self.spawn(
+            f"agent_{index + 1}",
+            [
+                "agent",
+                "--fcu",
+                f"tcp:127.0.0.1:{sim_port}",
+                "--hub",
+                self.plan.hub_ws,
+                "--vehicle-id",
+                self.vehicle_id(index),
+                "--telemetry-rate",
+                str(self.plan.telemetry_rate_hz),
+            ],
+            {"GCS_AGENT_TOKEN": self.plan.token},
+        )
+
+    def spawn(self, name: str, args: list[str], env: dict[str, str] | None = None) -> None:
+        log_path = self.log_dir / f"{name}.log"
+        log_file = log_path.open("ab")
+        process = subprocess.Popen(
+            [sys.executable, "-m", "gcs", *args],
+            stdin=subprocess.DEVNULL,
+            stdout=log_file,
+            stderr=subprocess.STDOUT,
+            env={**os.environ, **(env or {})},
+            # Own session: a Ctrl-C reaches only the launcher, which stops the
+            # children in order (agents before the hub, so the hub stores everything).
+            start_new_session=True,
+        )
+        self.processes.append(ManagedProcess(name, process, log_path, log_file))
+
+    def wait_until_ready(self, timeout_s: float = 30.0) -> None:
+        """Until the hub answers its health check; raises if a process died first."""
+        deadline = time.monotonic() + timeout_s
+        while True:
+            self.check_alive()
+            try:
+                with urllib.request.urlopen(f"{self.plan.hub_http}/api/v1/health", timeout=2):
+                    return
+            except (urllib.error.URLError, ConnectionError):
+                if time.monotonic() > deadline:
+                    raise TimeoutError(f"hub not ready after {timeout_s:.0f} s") from None
+                time.sleep(0.1)  # nothing to wait on but the port opening
+
+    def check_alive(self) -> None:
+        for managed in self.processes:
+            code = managed.process.poll()
+            if code is not None:
+                raise RuntimeError(
+                    f"{managed.name} exited with code {code}; see {managed.log_path}"
+                )
+
+    def stop(self, timeout_s: float = 10.0) -> None:
+        for group in ("agent", "sim", "hub"):
+            members = [m for m in self.processes if m.name.startswith(group)]
+            for managed in members:
+                if managed.process.poll() is None:
+                    managed.process.send_signal(signal.SIGTERM)
+            for managed in members:
+                try:
+                    managed.process.wait(timeout_s)
+                except subprocess.TimeoutExpired:
+                    log.warning("%s did not stop in %.0f s; killing it", managed.name, timeout_s)
+                    managed.process.kill()
+                    managed.process.wait()
+                managed.log_file.close()
+        self.processes.clear()
+
+    def __enter__(self) -> LocalFleet:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        with contextlib.suppress(Exception):
+            self.stop()

@@ -1,0 +1,308 @@
+"""The wire protocol: every message between agent and hub, and between hub and clients.
+
+This module is the single source of truth. The agent and the hub both import it, and
+the dashboard's expectations are checked against the JSON schema it exports
+(`python -m gcs.protocol`). Frames are JSON text, one message per frame, and every
+message names its ``type``. The agent announces ``PROTOCOL_VERSION`` in its hello;
+the hub refuses a version it does not speak.
+
+Delivery rules per message type (the realtime path honours them):
+- ``telemetry``: at least once, ordered per vehicle. Each carries a per-vehicle
+  ``(stream_id, seq)``; the hub drops duplicates.
+- ``vehicle`` updates to clients: coalesced; a newer state replaces an unsent one.
+- ``command`` / ``command_result``: request/response, correlated by ``request_id``.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+from enum import IntEnum
+from typing import Annotated, Any, Literal, TypeAlias, TypeVar
+
+from pydantic import BaseModel, ConfigDict, Field, TypeAdapter, ValidationError
+
+PROTOCOL_VERSION = 1
+# Telemetry frames are a few hundred bytes; 64 KiB leaves room for later scan data
+# while keeping one misbehaving peer from making the hub buffer megabytes.
+MAX_FRAME_BYTES = 64 * 1024
+
+AGENT_WS_PATH = "/api/v1/agent/ws"
+CLIENT_WS_PATH = "/api/v1/ws"
+
+T = TypeVar("T")
+
+VehicleId = Annotated[str, Field(pattern=r"^[A-Za-z0-9_.-]{1,64}$")]
+
+
+class CloseCode(IntEnum):
+    """WebSocket close codes the hub uses; 4xxx are application-defined."""
+
+    NORMAL = 1000
+    POLICY_VIOLATION = 1008  # repeated malformed frames
+    MESSAGE_TOO_BIG = 1009
+    BAD_HELLO = 4400  # first frame was not a valid hello, or wrong protocol version
+    UNAUTHORIZED = 4401  # missing or wrong agent token
+    SUPERSEDED = 4409  # another agent connected for the same vehicle
+
+
+class Message(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+
+# ---------------------------------------------------------------------------
+# Commands (hub -> agent, and the body of the REST command endpoint)
+# ---------------------------------------------------------------------------
+
+
+class ArmCommand(Message):
+    name: Literal["arm"] = "arm"
+
+
+class DisarmCommand(Message):
+    name: Literal["disarm"] = "disarm"
+    force: bool = Field(default=False, description="Disarm even in flight (motors stop).")
+
+
+class TakeoffCommand(Message):
+    """Guided take-off: switches to the guided mode and arms first if needed, as QGC does."""
+
+    name: Literal["takeoff"] = "takeoff"
+    altitude: float = Field(gt=0.5, le=500, description="Metres above home.")
+
+
+class LandCommand(Message):
+    name: Literal["land"] = "land"
+
+
+class ReturnToLaunchCommand(Message):
+    name: Literal["rtl"] = "rtl"
+
+
+class SetModeCommand(Message):
+    name: Literal["set_mode"] = "set_mode"
+    mode: str = Field(min_length=1, max_length=32, description="A mode name the vehicle lists.")
+
+
+class GotoCommand(Message):
+    name: Literal["goto"] = "goto"
+    lat: float = Field(ge=-90, le=90)
+    lon: float = Field(ge=-180, le=180)
+    altitude: float = Field(gt=0.5, le=500, description="Metres above home.")
+
+
+Command = Annotated[
+    ArmCommand
+    | DisarmCommand
+    | TakeoffCommand
+    | LandCommand
+    | ReturnToLaunchCommand
+    | SetModeCommand
+    | GotoCommand,
+    Field(discriminator="name"),
+]
+
+CommandStatus = Literal["accepted", "refused", "timeout", "failed"]
+
+
+class CommandOutcome(Message):
+    """What the flight controller answered, in words an operator can act on."""
+
+    status: CommandStatus
+    result: str | None = Field(
+        default=None, description="The MAV_RESULT name from COMMAND_ACK, when there was one."
+    )
+    message: str
+
+
+# ---------------------------------------------------------------------------
+# Vehicle state
+# ---------------------------------------------------------------------------
+
+
+class VehicleState(Message):
+    """One telemetry snapshot, assembled by the agent from the latest MAVLink messages."""
+
+    fcu_connected: bool = True
+    mode: str = "UNKNOWN"
+    armed: bool = False
+    system_status: str = "UNKNOWN"
+    lat: float | None = None
+    lon: float | None = None
+    alt_msl: float | None = Field(default=None, description="Metres above mean sea level.")
+    alt_rel: float | None = Field(default=None, description="Metres above home.")
+    heading_deg: float | None = None
+    groundspeed: float | None = Field(default=None, description="m/s")
+    climb_rate: float | None = Field(default=None, description="m/s, up is positive")
+    roll_deg: float | None = None
+    pitch_deg: float | None = None
+    battery_voltage: float | None = None
+    battery_current: float | None = Field(default=None, description="A")
+    battery_remaining: float | None = Field(default=None, description="percent")
+    gps_fix: int = Field(default=0, description="GPS_FIX_TYPE: 0-1 none, 2 2D, 3 3D, 4+ DGPS/RTK")
+    satellites: int | None = None
+    home_lat: float | None = None
+    home_lon: float | None = None
+    home_alt_msl: float | None = None
+
+
+# ---------------------------------------------------------------------------
+# Agent <-> hub
+# ---------------------------------------------------------------------------
+
+
+class Hello(Message):
+    """First frame from an agent: who it is and what it can do."""
+
+    type: Literal["hello"] = "hello"
+    protocol: int
+    vehicle_id: VehicleId
+    autopilot: str = Field(description="ardupilot, px4 or generic")
+    vehicle_type: str = Field(description="multirotor, rover, fixed_wing, ...")
+    system_id: int = Field(ge=1, le=255)
+    modes: list[str] = Field(default_factory=list, description="Mode names set_mode accepts.")
+    capabilities: list[str] = Field(default_factory=list)
+    agent_version: str
+    stream_id: str = Field(
+        min_length=1, max_length=64, description="Names this agent run's sequence counter."
+    )
+
+
+class Telemetry(Message):
+    type: Literal["telemetry"] = "telemetry"
+    seq: int = Field(ge=0)
+    time: float = Field(description="Unix time of the snapshot, seconds.")
+    state: VehicleState
+
+
+class CommandResult(Message):
+    type: Literal["command_result"] = "command_result"
+    request_id: str
+    outcome: CommandOutcome
+
+
+class Welcome(Message):
+    type: Literal["welcome"] = "welcome"
+    protocol: int = PROTOCOL_VERSION
+    vehicle_id: VehicleId
+
+
+class CommandRequest(Message):
+    type: Literal["command"] = "command"
+    request_id: str
+    command: Command
+    timeout_s: float = Field(gt=0, description="How long the agent may try before giving up.")
+
+
+class ErrorReply(Message):
+    """Sent to a peer whose frame could not be used; the connection stays open."""
+
+    type: Literal["error"] = "error"
+    code: Literal["bad_frame", "invalid_message", "unexpected_message", "too_many_errors"]
+    message: str
+
+
+# ---------------------------------------------------------------------------
+# Hub <-> clients (dashboard, integrations)
+# ---------------------------------------------------------------------------
+
+
+class VehicleSummary(Message):
+    id: VehicleId
+    autopilot: str
+    vehicle_type: str
+    modes: list[str]
+    connected: bool
+    last_seen: float | None = Field(default=None, description="Unix time of the last telemetry.")
+    state: VehicleState | None = None
+
+
+class FleetSnapshot(Message):
+    type: Literal["fleet"] = "fleet"
+    vehicles: list[VehicleSummary]
+
+
+class VehicleUpdate(Message):
+    type: Literal["vehicle"] = "vehicle"
+    vehicle: VehicleSummary
+
+
+class Ping(Message):
+    type: Literal["ping"] = "ping"
+    nonce: str | None = None
+
+
+class Pong(Message):
+    type: Literal["pong"] = "pong"
+    nonce: str | None = None
+
+
+AgentToHub: TypeAlias = Annotated[Hello | Telemetry | CommandResult, Field(discriminator="type")]
+HubToAgent: TypeAlias = Annotated[
+    Welcome | CommandRequest | ErrorReply, Field(discriminator="type")
+]
+ClientToHub: TypeAlias = Annotated[Ping, Field(discriminator="type")]
+HubToClient: TypeAlias = Annotated[
+    FleetSnapshot | VehicleUpdate | Pong | ErrorReply, Field(discriminator="type")
+]
+
+agent_to_hub: TypeAdapter[AgentToHub] = TypeAdapter(AgentToHub)
+hub_to_agent: TypeAdapter[HubToAgent] = TypeAdapter(HubToAgent)
+client_to_hub: TypeAdapter[ClientToHub] = TypeAdapter(ClientToHub)
+hub_to_client: TypeAdapter[HubToClient] = TypeAdapter(HubToClient)
+command_adapter: TypeAdapter[Command] = TypeAdapter(Command)
+
+
+class ProtocolError(ValueError):
+    """A frame that does not parse or validate; ``code`` goes into the ErrorReply."""
+
+    def __init__(self, code: Literal["bad_frame", "invalid_message"], message: str) -> None:
+        super().__init__(message)
+        self.code = code
+        self.message = message
+
+    def reply(self) -> ErrorReply:
+        return ErrorReply(code=self.code, message=self.message)
+
+
+def describe_validation_error(error: ValidationError) -> str:
+    """Name each offending field, e.g. ``state.lat: Input should be a valid number``."""
+    parts = []
+    for item in error.errors(include_url=False):
+        location = ".".join(str(part) for part in item["loc"]) or "(message)"
+        parts.append(f"{location}: {item['msg']}")
+    return "; ".join(parts)
+
+
+def decode(adapter: TypeAdapter[T], frame: str | bytes) -> T:
+    """Parse one frame, raising ProtocolError with a message that names the problem."""
+    try:
+        raw = json.loads(frame)
+    except (json.JSONDecodeError, UnicodeDecodeError) as error:
+        raise ProtocolError("bad_frame", f"frame is not valid JSON: {error}") from None
+    if not isinstance(raw, dict) or "type" not in raw:
+        raise ProtocolError("invalid_message", "frame must be a JSON object with a 'type' field")
+    try:
+        return adapter.validate_python(raw)
+    except ValidationError as error:
+        raise ProtocolError("invalid_message", describe_validation_error(error)) from None
+
+
+def encode(message: Message) -> str:
+    return message.model_dump_json()
+
+
+def json_schema() -> dict[str, Any]:
+    """Everything a client needs to check its types against."""
+    return {
+        "protocol": PROTOCOL_VERSION,
+        "agent_to_hub": agent_to_hub.json_schema(),
+        "hub_to_agent": hub_to_agent.json_schema(),
+        "client_to_hub": client_to_hub.json_schema(),
+        "hub_to_client": hub_to_client.json_schema(),
+    }
+
+
+if __name__ == "__main__":
+    json.dump(json_schema(), sys.stdout, indent=2)
+    sys.stdout.write("\n")

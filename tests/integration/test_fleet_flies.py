@@ -1,0 +1,92 @@
+"""The walking skeleton end to end: real hub, simulator and agent processes on loopback."""
+
+from __future__ import annotations
+
+import sqlite3
+import time
+from typing import Any
+
+import httpx
+import pytest
+
+from gcs.launcher import LocalFleet
+from tests.helpers import FleetWatcher
+
+pytestmark = pytest.mark.integration
+
+TAKEOFF_ALTITUDE_M = 10.0
+
+
+def _all_connected(vehicles: dict[str, dict[str, Any]], count: int) -> bool:
+    return sum(1 for v in vehicles.values() if v["connected"] and v["state"]) >= count
+
+
+def test_arm_takeoff_land_through_rest(fleet: LocalFleet) -> None:
+    base = fleet.plan.hub_http
+    vehicle = fleet.vehicle_id(0)
+    with FleetWatcher(base) as watcher, httpx.Client(base_url=base, timeout=30) as api:
+        watcher.wait_until(lambda v: _all_connected(v, 3), 30, "three connected vehicles")
+        listed = api.get("/api/v1/vehicles").json()
+        assert sorted(v["id"] for v in listed) == ["sim_1", "sim_2", "sim_3"]
+        assert all(v["state"]["gps_fix"] >= 3 for v in listed)
+
+        mode = api.post(f"/api/v1/vehicles/{vehicle}/commands", json={"name": "set_mode",
+                                                                       "mode": "GUIDED"})
+        assert mode.json()["outcome"]["status"] == "accepted", mode.text
+        armed = api.post(f"/api/v1/vehicles/{vehicle}/commands", json={"name": "arm"})
+        assert armed.status_code == 200, armed.text
+        assert armed.json()["outcome"]["status"] == "accepted"
+        assert armed.json()["outcome"]["result"] == "MAV_RESULT_ACCEPTED"
+
+        takeoff = api.post(
+            f"/api/v1/vehicles/{vehicle}/commands",
+            json={"name": "takeoff", "altitude": TAKEOFF_ALTITUDE_M},
+        )
+        assert takeoff.json()["outcome"]["status"] == "accepted", takeoff.text
+        started_at = time.time()
+
+        watcher.wait_until(
+            lambda v: (v[vehicle]["state"]["alt_rel"] or 0) >= TAKEOFF_ALTITUDE_M - 1,
+            60,
+            f"{vehicle} to climb to {TAKEOFF_ALTITUDE_M} m",
+        )
+        # It holds at the target rather than overshooting.
+        watcher.wait_until(
+            lambda v: abs(v[vehicle]["state"]["climb_rate"] or 0) < 0.2
+            and abs((v[vehicle]["state"]["alt_rel"] or 0) - TAKEOFF_ALTITUDE_M) <= 1,
+            30,
+            f"{vehicle} to hold {TAKEOFF_ALTITUDE_M} m ± 1 m",
+        )
+        assert watcher.state(vehicle)["armed"] is True
+        # The other vehicles stayed on the ground.
+        assert all((watcher.state(other)["alt_rel"] or 0) < 1 for other in ("sim_2", "sim_3"))
+
+        land = api.post(f"/api/v1/vehicles/{vehicle}/commands", json={"name": "land"})
+        assert land.json()["outcome"]["status"] == "accepted", land.text
+        watcher.wait_until(
+            lambda v: v[vehicle]["state"]["mode"] == "LAND", 10, f"{vehicle} in LAND mode"
+        )
+        watcher.wait_until(
+            lambda v: not v[vehicle]["state"]["armed"], 90, f"{vehicle} to land and disarm"
+        )
+        assert (watcher.state(vehicle)["alt_rel"] or 0) < 0.5
+
+        # The climb is in the stored history.
+        history = api.get(
+            f"/api/v1/vehicles/{vehicle}/telemetry",
+            params={"start": started_at - 5, "end": time.time() + 1, "limit": 10000},
+        ).json()
+        altitudes = [sample["alt_rel"] for sample in history["samples"]]
+        assert max(altitudes) >= TAKEOFF_ALTITUDE_M - 1
+        seqs = [sample["seq"] for sample in history["samples"]]
+        assert seqs == sorted(seqs)
+        assert len(seqs) == len(set(seqs))
+
+    # And the rows are really in the database file, for every vehicle.
+    database = fleet.plan.data_dir / "gcs.sqlite3"
+    with sqlite3.connect(database) as connection:
+        counts = dict(
+            connection.execute("SELECT vehicle_id, count(*) FROM telemetry GROUP BY vehicle_id")
+        )
+    assert set(counts) == {"sim_1", "sim_2", "sim_3"}
+    assert all(count > 10 for count in counts.values())

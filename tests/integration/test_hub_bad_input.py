@@ -1,0 +1,218 @@
+"""Bad input to the hub: each case gets a clear error, and everyone else keeps being served."""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import logging
+import time
+from collections.abc import Iterator
+from contextlib import contextmanager
+from typing import Any
+
+import httpx
+import pytest
+from websockets.exceptions import ConnectionClosed
+from websockets.sync.client import ClientConnection, connect
+
+from gcs.protocol import (
+    AGENT_WS_PATH,
+    CLIENT_WS_PATH,
+    MAX_FRAME_BYTES,
+    PROTOCOL_VERSION,
+    CloseCode,
+    Hello,
+    Telemetry,
+    VehicleState,
+    encode,
+)
+from tests.conftest import AGENT_TOKEN
+
+
+def _ws(base_url: str, path: str) -> str:
+    return base_url.replace("http://", "ws://") + path
+
+
+def _hello(vehicle_id: str) -> Hello:
+    return Hello(
+        protocol=PROTOCOL_VERSION,
+        vehicle_id=vehicle_id,
+        autopilot="ardupilot",
+        vehicle_type="multirotor",
+        system_id=1,
+        modes=["GUIDED", "LAND", "LOITER"],
+        agent_version="test",
+        stream_id="s1",
+    )
+
+
+def _telemetry(seq: int, alt: float = 1.0) -> str:
+    return encode(Telemetry(seq=seq, time=time.time(), state=VehicleState(alt_rel=alt)))
+
+
+@contextmanager
+def websocket(url: str, headers: dict[str, str] | None = None) -> Iterator[ClientConnection]:
+    """A client connection whose closing handshake may legitimately carry an error code."""
+    stack = contextlib.ExitStack()
+    socket = stack.enter_context(connect(url, additional_headers=headers or {}, max_size=None))
+    try:
+        yield socket
+    finally:
+        with contextlib.suppress(ConnectionClosed):
+            stack.close()
+
+
+@contextmanager
+def scripted_agent(base_url: str, vehicle_id: str) -> Iterator[ClientConnection]:
+    """A real WebSocket peer speaking the agent protocol, frame by frame."""
+    headers = {"Authorization": f"Bearer {AGENT_TOKEN}"}
+    with websocket(_ws(base_url, AGENT_WS_PATH), headers) as socket:
+        socket.send(encode(_hello(vehicle_id)))
+        assert json.loads(socket.recv(timeout=5))["type"] == "welcome"
+        yield socket
+
+
+def _close_code(socket: ClientConnection) -> tuple[int | None, str]:
+    with pytest.raises(ConnectionClosed) as closed:
+        while True:
+            socket.recv(timeout=5)
+    received = closed.value.rcvd
+    return (received.code, received.reason) if received else (None, "")
+
+
+def _stored_count(api: httpx.Client, vehicle_id: str) -> int:
+    page = api.get(f"/api/v1/vehicles/{vehicle_id}/telemetry",
+                   params={"start": 0, "limit": 10000}).json()
+    return len(page["samples"])
+
+
+def _wait_stored(api: httpx.Client, vehicle_id: str, count: int) -> None:
+    deadline = time.monotonic() + 10
+    while _stored_count(api, vehicle_id) < count:
+        assert time.monotonic() < deadline, f"{count} samples of {vehicle_id} never stored"
+        time.sleep(0.05)  # the batching writer flushes every 0.25 s; poll the real store
+
+
+def test_unknown_vehicle_is_404(hub: str) -> None:
+    with httpx.Client(base_url=hub) as api:
+        for response in (
+            api.get("/api/v1/vehicles/nope"),
+            api.post("/api/v1/vehicles/nope/commands", json={"name": "arm"}),
+            api.get("/api/v1/vehicles/nope/telemetry"),
+        ):
+            assert response.status_code == 404
+            assert "nope" in response.json()["detail"]
+
+
+def test_invalid_command_parameters_are_422_naming_the_field(hub: str) -> None:
+    with scripted_agent(hub, "v1"), httpx.Client(base_url=hub) as api:
+        too_high = api.post("/api/v1/vehicles/v1/commands",
+                            json={"name": "takeoff", "altitude": 9000})
+        assert too_high.status_code == 422
+        assert "altitude" in json.dumps(too_high.json()["detail"])
+
+        unknown = api.post("/api/v1/vehicles/v1/commands", json={"name": "fly_to_moon"})
+        assert unknown.status_code == 422
+        assert "name" in json.dumps(unknown.json()["detail"])
+
+        bad_mode = api.post("/api/v1/vehicles/v1/commands",
+                            json={"name": "set_mode", "mode": "WARP"})
+        assert bad_mode.status_code == 422
+        detail = bad_mode.json()["detail"][0]
+        assert detail["loc"][-1] == "mode"
+        assert "WARP" in detail["msg"] and "GUIDED" in detail["msg"]
+
+
+def test_start_after_end_is_422(hub: str) -> None:
+    with scripted_agent(hub, "v1"), httpx.Client(base_url=hub) as api:
+        response = api.get("/api/v1/vehicles/v1/telemetry", params={"start": 200, "end": 100})
+        assert response.status_code == 422
+        assert "start" in json.dumps(response.json())
+
+
+@pytest.mark.parametrize(
+    ("headers", "reason"),
+    [({}, "missing agent token"), ({"Authorization": "Bearer wrong"}, "invalid agent token")],
+)
+def test_agent_with_bad_token_is_refused_and_logged(
+    hub: str, headers: dict[str, str], reason: str, caplog: pytest.LogCaptureFixture
+) -> None:
+    caplog.set_level(logging.WARNING, logger="backend.realtime.agent_gateway")
+    with websocket(_ws(hub, AGENT_WS_PATH), headers) as socket:
+        # The hub closes before reading anything, so the hello never counts.
+        code, text = _close_code(socket)
+    assert code == CloseCode.UNAUTHORIZED
+    assert reason in text
+    assert any(reason in record.getMessage() for record in caplog.records)
+    with httpx.Client(base_url=hub) as api:
+        assert api.get("/api/v1/vehicles/intruder").status_code == 404
+
+
+def test_bad_frames_get_error_replies_and_the_connection_survives(hub: str) -> None:
+    with scripted_agent(hub, "v1") as agent, httpx.Client(base_url=hub) as api:
+        agent.send(_telemetry(0))
+        agent.send("{not json")
+        reply = json.loads(agent.recv(timeout=5))
+        assert reply == {"type": "error", "code": "bad_frame", "message": reply["message"]}
+        assert "not valid JSON" in reply["message"]
+
+        agent.send(json.dumps({"type": "telemetry", "seq": 1, "time": 1.0,
+                               "state": {"lat": "north"}}))
+        reply = json.loads(agent.recv(timeout=5))
+        assert reply["code"] == "invalid_message"
+        assert "state.lat" in reply["message"]
+
+        agent.send(_telemetry(1))
+        _wait_stored(api, "v1", 2)  # the good frames before and after both stored
+
+
+def test_oversized_frame_closes_only_that_agent(hub: str) -> None:
+    with scripted_agent(hub, "big") as big, scripted_agent(hub, "good") as good, \
+            httpx.Client(base_url=hub) as api:
+        big.send(_telemetry(0))
+        _wait_stored(api, "big", 1)
+        big.send("x" * (MAX_FRAME_BYTES + 1))
+        code, _ = _close_code(big)
+        assert code == CloseCode.MESSAGE_TOO_BIG
+        good.send(_telemetry(0))
+        _wait_stored(api, "good", 1)
+        assert _stored_count(api, "big") == 1  # what was accepted stays stored
+        vehicles = {v["id"]: v for v in api.get("/api/v1/vehicles").json()}
+        assert vehicles["good"]["connected"] is True
+        assert vehicles["big"]["connected"] is False
+
+
+def test_repeated_abuse_closes_the_connection(hub: str) -> None:
+    with scripted_agent(hub, "noisy") as agent:
+        for _ in range(25):
+            try:
+                agent.send("garbage")
+            except ConnectionClosed:
+                break
+        code, reason = _close_code(agent)
+    assert code == CloseCode.POLICY_VIOLATION
+    assert "too many bad frames" in reason
+
+
+def test_duplicate_telemetry_is_stored_once(hub: str) -> None:
+    with scripted_agent(hub, "v1") as agent, httpx.Client(base_url=hub) as api:
+        for seq in (0, 1, 1, 2, 0, 3):
+            agent.send(_telemetry(seq))
+        _wait_stored(api, "v1", 4)
+        page = api.get("/api/v1/vehicles/v1/telemetry", params={"start": 0}).json()
+        assert [sample["seq"] for sample in page["samples"]] == [0, 1, 2, 3]
+
+
+def test_client_bad_frame_gets_error_reply_and_feed_continues(hub: str) -> None:
+    with websocket(_ws(hub, CLIENT_WS_PATH)) as client:
+        assert json.loads(client.recv(timeout=5))["type"] == "fleet"
+        client.send('{"type": "launch_missiles"}')
+        reply: dict[str, Any] = json.loads(client.recv(timeout=5))
+        assert reply["type"] == "error"
+        assert reply["code"] == "invalid_message"
+        client.send('{"type": "ping", "nonce": "n1"}')
+        assert json.loads(client.recv(timeout=5)) == {"type": "pong", "nonce": "n1"}
+        with scripted_agent(hub, "late"):
+            update = json.loads(client.recv(timeout=5))
+            assert update["type"] == "vehicle"
+            assert update["vehicle"]["id"] == "late"

@@ -1,0 +1,190 @@
+"""Carry out the hub's commands on the flight controller and report its answer.
+
+Each MAVLink command is sent with retries and waits for the matching COMMAND_ACK.
+A refusal comes back with the STATUSTEXT the autopilot sent alongside it (for example
+the failed pre-arm check), because "FAILED" alone tells an operator nothing.
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+
+from pymavlink.dialects.v20 import ardupilotmega as mavlink2
+
+from gcs.protocol import (
+    ArmCommand,
+    Command,
+    CommandOutcome,
+    DisarmCommand,
+    GotoCommand,
+    LandCommand,
+    ReturnToLaunchCommand,
+    SetModeCommand,
+    TakeoffCommand,
+)
+from vehicle_agents.fcu_link import FcuLink, MavMessage
+from vehicle_agents.modes import mode_name
+
+log = logging.getLogger(__name__)
+
+# Builds the message for one attempt (COMMAND_LONG counts attempts in `confirmation`).
+MessageBuilder = Callable[[int], MavMessage]
+
+FORCE_DISARM_MAGIC = 21196  # ArduPilot and PX4 skip their checks with this param2
+
+
+@dataclass(frozen=True)
+class CommandTimeouts:
+    ack_s: float = 1.5  # one attempt's wait for COMMAND_ACK
+    attempts: int = 3
+
+
+class CommandRefused(Exception):
+    """A step of a multi-step command was refused; carries the outcome to report."""
+
+    def __init__(self, outcome: CommandOutcome) -> None:
+        super().__init__(outcome.message)
+        self.outcome = outcome
+
+
+def _result_name(result: int) -> str:
+    entry = mavlink2.enums["MAV_RESULT"].get(result)
+    return entry.name if entry is not None else f"MAV_RESULT_{result}"
+
+
+def _command_name(command: int) -> str:
+    entry = mavlink2.enums["MAV_CMD"].get(command)
+    return entry.name if entry is not None else f"command {command}"
+
+
+class CommandExecutor:
+    """Turns protocol commands into MAVLink exchanges with one flight controller."""
+
+    def __init__(self, link: FcuLink, timeouts: CommandTimeouts | None = None) -> None:
+        self.link = link
+        self.timeouts = timeouts or CommandTimeouts()
+
+    async def execute(self, command: Command) -> CommandOutcome:
+        if not self.link.connected:
+            return CommandOutcome(status="failed", message="flight controller link is down")
+        try:
+            return await self._dispatch(command)
+        except CommandRefused as refusal:
+            return refusal.outcome
+
+    async def _dispatch(self, command: Command) -> CommandOutcome:
+        match command:
+            case ArmCommand():
+                return await self.command_long(mavlink2.MAV_CMD_COMPONENT_ARM_DISARM, [1])
+            case DisarmCommand(force=force):
+                magic = FORCE_DISARM_MAGIC if force else 0
+                return await self.command_long(mavlink2.MAV_CMD_COMPONENT_ARM_DISARM, [0, magic])
+            case TakeoffCommand(altitude=altitude):
+                return await self._guided_takeoff(altitude)
+            case LandCommand():
+                return await self.command_long(mavlink2.MAV_CMD_NAV_LAND, [])
+            case ReturnToLaunchCommand():
+                return await self.command_long(mavlink2.MAV_CMD_NAV_RETURN_TO_LAUNCH, [])
+            case SetModeCommand(mode=mode):
+                return await self._set_mode(mode)
+            case GotoCommand(lat=lat, lon=lon, altitude=altitude):
+                return await self._goto(lat, lon, altitude)
+
+    async def _guided_takeoff(self, altitude: float) -> CommandOutcome:
+        # What QGroundControl does for a guided take-off: guided mode, arm, take off.
+        modes = self.link.modes
+        guided = modes.guided_mode if modes else None
+        if guided is None:
+            return CommandOutcome(status="refused", message="vehicle has no guided mode")
+        heartbeat = self.link.latest.get("HEARTBEAT")
+        if heartbeat is None or mode_name(heartbeat) != guided:
+            _require_accepted(await self._set_mode(guided), f"switch to {guided}")
+        if not _armed(self.link.latest.get("HEARTBEAT")):
+            _require_accepted(
+                await self.command_long(mavlink2.MAV_CMD_COMPONENT_ARM_DISARM, [1]), "arm"
+            )
+        return await self.command_long(mavlink2.MAV_CMD_NAV_TAKEOFF, [0, 0, 0, 0, 0, 0, altitude])
+
+    async def _set_mode(self, mode: str) -> CommandOutcome:
+        modes = self.link.modes
+        setting = modes.settings.get(mode) if modes else None
+        if setting is None:
+            known = ", ".join(modes.names) if modes else "none"
+            return CommandOutcome(
+                status="refused", message=f"unknown mode {mode!r}; this vehicle has: {known}"
+            )
+        return await self.command_long(
+            mavlink2.MAV_CMD_DO_SET_MODE,
+            [setting.base_mode, setting.custom_mode, setting.custom_sub_mode],
+        )
+
+    async def _goto(self, lat: float, lon: float, altitude: float) -> CommandOutcome:
+        link = self.link
+        message = mavlink2.MAVLink_command_int_message(
+            link.target_system or 1,
+            link.target_component,
+            mavlink2.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT,
+            mavlink2.MAV_CMD_DO_REPOSITION,
+            0,
+            0,
+            -1,  # default ground speed
+            mavlink2.MAV_DO_REPOSITION_FLAGS_CHANGE_MODE,
+            0,
+            float("nan"),  # keep the current yaw behaviour
+            round(lat * 1e7),
+            round(lon * 1e7),
+            altitude,
+        )
+        return await self._exchange(mavlink2.MAV_CMD_DO_REPOSITION, lambda _attempt: message)
+
+    async def command_long(self, command: int, params: list[float]) -> CommandOutcome:
+        padded = [float(value) for value in params] + [0.0] * (7 - len(params))
+        link = self.link
+
+        def build(attempt: int) -> MavMessage:
+            return mavlink2.MAVLink_command_long_message(
+                link.target_system or 1, link.target_component, command, attempt, *padded
+            )
+
+        return await self._exchange(command, build)
+
+    async def _exchange(self, command: int, build: MessageBuilder) -> CommandOutcome:
+        name = _command_name(command)
+        started = time.time()
+        for attempt in range(self.timeouts.attempts):
+            self.link.send(build(attempt))
+            ack = await self.link.wait_for(
+                lambda message: message.get_type() == "COMMAND_ACK" and message.command == command,
+                self.timeouts.ack_s,
+            )
+            if ack is not None:
+                return self._outcome(name, ack, started)
+            log.debug("%s: no COMMAND_ACK on attempt %d", name, attempt + 1)
+        waited = self.timeouts.ack_s * self.timeouts.attempts
+        return CommandOutcome(
+            status="timeout",
+            message=f"{name}: no COMMAND_ACK from the flight controller after "
+            f"{self.timeouts.attempts} attempts ({waited:.1f} s)",
+        )
+
+    def _outcome(self, name: str, ack: MavMessage, started: float) -> CommandOutcome:
+        result = _result_name(ack.result)
+        if ack.result == mavlink2.MAV_RESULT_ACCEPTED:
+            return CommandOutcome(status="accepted", result=result, message=f"{name}: accepted")
+        reasons = [entry.text for entry in self.link.statustexts if entry.time >= started - 0.5]
+        reason = f" ({'; '.join(reasons)})" if reasons else ""
+        return CommandOutcome(status="refused", result=result, message=f"{name}: {result}{reason}")
+
+
+def _require_accepted(outcome: CommandOutcome, step: str) -> None:
+    if outcome.status != "accepted":
+        raise CommandRefused(
+            outcome.model_copy(update={"message": f"{step} failed: {outcome.message}"})
+        )
+
+
+def _armed(heartbeat: MavMessage | None) -> bool:
+    return bool(heartbeat and heartbeat.base_mode & mavlink2.MAV_MODE_FLAG_SAFETY_ARMED)

@@ -1,0 +1,50 @@
+"""The agent's settings: CLI flags over environment variables (GCS_AGENT_*) over defaults."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from urllib.parse import urlsplit, urlunsplit
+
+from pydantic import Field, SecretStr, field_validator
+from pydantic_settings import BaseSettings, SettingsConfigDict
+
+from gcs.protocol import AGENT_WS_PATH
+
+
+class AgentSettings(BaseSettings):
+    model_config = SettingsConfigDict(env_prefix="GCS_AGENT_", extra="forbid")
+
+    fcu: str = Field(
+        default="tcp:127.0.0.1:5760",
+        description="pymavlink connection URL of the flight controller",
+    )
+    hub: str = Field(default="ws://127.0.0.1:8000", description="hub WebSocket URL")
+    token: SecretStr = Field(description="this agent's token for the hub")
+    vehicle_id: str | None = Field(
+        default=None, description="defaults to <model>_<first 4 hex of /etc/machine-id>"
+    )
+    telemetry_rate_hz: float = Field(default=10.0, gt=0, le=50)
+    source_system: int = Field(default=255, ge=1, le=255, description="our MAVLink system id")
+    outbox_limit: int = Field(
+        default=6000, ge=10, description="telemetry snapshots kept while the hub is unreachable"
+    )
+
+    @field_validator("hub")
+    @classmethod
+    def _agent_endpoint(cls, url: str) -> str:
+        """Accept the hub's base URL as well as the full agent endpoint."""
+        parts = urlsplit(url)
+        if parts.scheme not in ("ws", "wss"):
+            raise ValueError("hub URL must start with ws:// or wss://")
+        if parts.path in ("", "/"):
+            parts = parts._replace(path=AGENT_WS_PATH)
+        return urlunsplit(parts)
+
+
+def default_vehicle_id(model: str, machine_id_file: Path = Path("/etc/machine-id")) -> str:
+    """``<model>_<first 4 hex of the machine id>``, the seed framework's naming."""
+    try:
+        machine_id = machine_id_file.read_text().strip()[:4]
+    except OSError:
+        machine_id = "0000"
+    return f"{model}_{machine_id or '0000'}"

@@ -1,0 +1,258 @@
+"""The MAVLink link to the flight controller.
+
+pymavlink's connections are blocking, and the URL forms operators know
+(``tcp:``, ``udpin:``, ``/dev/ttyACM0,57600``) come from ``mavutil``. So one reader
+thread per link blocks on the connection and hands each message to the event loop;
+everything else (the cache of the latest message per type, acknowledgement waiters,
+sending) happens on the loop thread, which is the only writer.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import collections
+import contextlib
+import logging
+import threading
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+from pymavlink import mavutil
+from pymavlink.dialects.v20 import ardupilotmega as mavlink2
+
+from vehicle_agents.modes import ModeTable, mode_table_for
+
+log = logging.getLogger(__name__)
+
+MavMessage = Any  # pymavlink messages are dynamically generated classes
+MessagePredicate = Callable[[MavMessage], bool]
+
+
+@dataclass(frozen=True)
+class FcuTimeouts:
+    """Every wait on the flight controller, named, with defaults."""
+
+    heartbeat_s: float = 3.0  # no heartbeat for this long: the link is lost
+    reconnect_initial_s: float = 0.5
+    reconnect_max_s: float = 5.0
+    read_poll_s: float = 0.25  # how often the reader thread checks for shutdown
+
+
+@dataclass
+class LinkCounters:
+    messages: int = 0
+    bad_bytes_frames: int = 0
+    reconnects: int = 0
+
+
+@dataclass
+class _Waiter:
+    predicate: MessagePredicate
+    future: asyncio.Future[MavMessage]
+
+
+@dataclass
+class StatusText:
+    time: float
+    severity: int
+    text: str
+
+
+@dataclass
+class FcuLink:
+    """One flight controller, seen through its latest messages."""
+
+    url: str
+    source_system: int = 255
+    source_component: int = mavlink2.MAV_COMP_ID_ONBOARD_COMPUTER
+    timeouts: FcuTimeouts = field(default_factory=FcuTimeouts)
+
+    latest: dict[str, MavMessage] = field(default_factory=dict, init=False)
+    received_at: dict[str, float] = field(default_factory=dict, init=False)
+    statustexts: collections.deque[StatusText] = field(
+        default_factory=lambda: collections.deque(maxlen=50), init=False
+    )
+    counters: LinkCounters = field(default_factory=LinkCounters, init=False)
+    target_system: int | None = field(default=None, init=False)
+    target_component: int = field(default=1, init=False)
+    modes: ModeTable | None = field(default=None, init=False)
+
+    def __post_init__(self) -> None:
+        self._connection: Any = None
+        self._waiters: list[_Waiter] = []
+        self._identified = asyncio.Event()
+        self._loop: asyncio.AbstractEventLoop | None = None
+
+    # -- state -------------------------------------------------------------
+
+    @property
+    def connected(self) -> bool:
+        heartbeat_at = self.received_at.get("HEARTBEAT")
+        return (
+            self._connection is not None
+            and heartbeat_at is not None
+            and time.monotonic() - heartbeat_at < self.timeouts.heartbeat_s
+        )
+
+    async def wait_identified(self) -> None:
+        """Until the first heartbeat from an autopilot has told us who the vehicle is."""
+        await self._identified.wait()
+
+    # -- running -----------------------------------------------------------
+
+    async def run(self) -> None:
+        """Keep the link up for as long as the task lives: connect, read, reconnect."""
+        self._loop = asyncio.get_running_loop()
+        backoff = self.timeouts.reconnect_initial_s
+        while True:
+            try:
+                self._connection = await asyncio.to_thread(self._open)
+            except OSError as error:
+                log.warning("flight controller %s unreachable: %s", self.url, error)
+                await asyncio.sleep(backoff)
+                backoff = min(backoff * 2, self.timeouts.reconnect_max_s)
+                continue
+            backoff = self.timeouts.reconnect_initial_s
+            log.info("flight controller link open: %s", self.url)
+            stop = threading.Event()
+            try:
+                async with asyncio.TaskGroup() as tasks:
+                    tasks.create_task(asyncio.to_thread(self._read_forever, stop))
+                    tasks.create_task(self._send_heartbeats())
+            except* OSError as errors:
+                log.warning("flight controller link lost: %s", errors.exceptions[0])
+            finally:
+                stop.set()
+                connection, self._connection = self._connection, None
+                with contextlib.suppress(OSError):
+                    connection.close()
+            self.counters.reconnects += 1
+            await asyncio.sleep(backoff)
+
+    def _open(self) -> Any:
+        connection = mavutil.mavlink_connection(
+            self.url,
+            source_system=self.source_system,
+            source_component=self.source_component,
+            robust_parsing=True,
+            autoreconnect=False,
+            retries=0,  # our own backoff retries, without pymavlink's blocking sleeps
+        )
+        # pymavlink reports a closed TCP peer by printing and returning no data; make it
+        # an exception so the link is torn down and reopened.
+        if hasattr(connection, "handle_eof"):
+            connection.handle_eof = _raise_closed
+            connection.handle_disconnect = _raise_closed
+        return connection
+
+    def _read_forever(self, stop: threading.Event) -> None:
+        assert self._loop is not None
+        connection = self._connection
+        last_message = time.monotonic()
+        while not stop.is_set():
+            message = connection.recv_match(blocking=True, timeout=self.timeouts.read_poll_s)
+            now = time.monotonic()
+            if message is not None:
+                last_message = now
+                self._loop.call_soon_threadsafe(self._on_message, message)
+            elif now - last_message > self.timeouts.heartbeat_s:
+                # Serial and UDP links never "close": silence is how they fail.
+                raise TimeoutError(f"no MAVLink from {self.url} for {self.timeouts.heartbeat_s} s")
+
+    async def _send_heartbeats(self) -> None:
+        while True:
+            self.send(
+                mavlink2.MAVLink_heartbeat_message(
+                    mavlink2.MAV_TYPE_GCS, mavlink2.MAV_AUTOPILOT_INVALID, 0, 0, 0, 3
+                )
+            )
+            await asyncio.sleep(1.0)
+
+    # -- receiving ---------------------------------------------------------
+
+    def _on_message(self, message: MavMessage) -> None:
+        kind = message.get_type()
+        if kind == "BAD_DATA":
+            self.counters.bad_bytes_frames += 1
+            return
+        if kind == "HEARTBEAT" and self.target_system is None and _is_autopilot(message):
+            self._identify(message)
+        if message.get_srcSystem() != self.target_system:
+            return
+        self.counters.messages += 1
+        self.latest[kind] = message
+        self.received_at[kind] = time.monotonic()
+        if kind == "HEARTBEAT":
+            self.modes = self.modes or mode_table_for(message)
+        elif kind == "STATUSTEXT":
+            self.statustexts.append(StatusText(time.time(), message.severity, message.text))
+            log.info("FCU: %s", message.text)
+        for waiter in list(self._waiters):
+            if not waiter.future.done() and waiter.predicate(message):
+                waiter.future.set_result(message)
+
+    def _identify(self, heartbeat: MavMessage) -> None:
+        self.target_system = heartbeat.get_srcSystem()
+        self.target_component = heartbeat.get_srcComponent()
+        self.modes = mode_table_for(heartbeat)
+        log.info(
+            "flight controller identified: sysid=%d %s %s",
+            self.target_system,
+            self.modes.autopilot,
+            self.modes.vehicle_type,
+        )
+        self._identified.set()
+        self._request_streams()
+
+    def _request_streams(self) -> None:
+        # As MAVProxy does on connect; SET_MESSAGE_INTERVAL shaping is a later refinement.
+        self.send(
+            mavlink2.MAVLink_request_data_stream_message(
+                self.target_system, self.target_component, mavlink2.MAV_DATA_STREAM_ALL, 10, 1
+            )
+        )
+        self.send_command_long(mavlink2.MAV_CMD_REQUEST_MESSAGE, 0, [242])
+
+    async def wait_for(self, predicate: MessagePredicate, within_s: float) -> MavMessage | None:
+        """The first message after now that matches, or None after ``within_s`` seconds."""
+        future: asyncio.Future[MavMessage] = asyncio.get_running_loop().create_future()
+        waiter = _Waiter(predicate, future)
+        self._waiters.append(waiter)
+        try:
+            return await asyncio.wait_for(future, within_s)
+        except TimeoutError:
+            return None
+        finally:
+            self._waiters.remove(waiter)
+
+    # -- sending -----------------------------------------------------------
+
+    def send(self, message: MavMessage) -> None:
+        if self._connection is None:
+            raise ConnectionError("flight controller link is down")
+        self._connection.mav.send(message)
+
+    def send_command_long(self, command: int, confirmation: int, params: list[float]) -> None:
+        padded = [float(value) for value in params] + [0.0] * (7 - len(params))
+        self.send(
+            mavlink2.MAVLink_command_long_message(
+                self.target_system or 1,
+                self.target_component,
+                command,
+                confirmation,
+                *padded,
+            )
+        )
+
+
+def _is_autopilot(heartbeat: MavMessage) -> bool:
+    return bool(
+        heartbeat.autopilot != mavlink2.MAV_AUTOPILOT_INVALID
+        and heartbeat.type != mavlink2.MAV_TYPE_GCS
+    )
+
+
+def _raise_closed() -> None:
+    raise ConnectionResetError("flight controller closed the connection")

@@ -1,0 +1,156 @@
+"""The authenticated WebSocket link to the hub, reconnecting with backoff."""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+from collections.abc import Awaitable, Callable
+from dataclasses import dataclass
+
+from websockets.asyncio.client import ClientConnection, connect
+from websockets.exceptions import ConnectionClosed, InvalidHandshake
+
+from gcs.protocol import (
+    MAX_FRAME_BYTES,
+    CloseCode,
+    Command,
+    CommandOutcome,
+    CommandRequest,
+    CommandResult,
+    ErrorReply,
+    Hello,
+    ProtocolError,
+    Welcome,
+    decode,
+    encode,
+    hub_to_agent,
+)
+from vehicle_agents.outbox import Outbox
+
+log = logging.getLogger(__name__)
+
+CommandHandler = Callable[[Command], Awaitable[CommandOutcome]]
+
+
+@dataclass(frozen=True)
+class HubTimeouts:
+    welcome_s: float = 5.0
+    reconnect_initial_s: float = 0.5
+    reconnect_max_s: float = 10.0
+    # A refused token will not fix itself quickly; retry slowly instead of hammering.
+    unauthorized_retry_s: float = 30.0
+    ping_interval_s: float = 5.0
+
+
+class HubRefused(Exception):
+    """The hub answered the hello with something other than a welcome."""
+
+
+class HubClosed(Exception):
+    """The hub link ended; ``code`` is the WebSocket close code, if one was received."""
+
+    def __init__(self, code: int | None, reason: str) -> None:
+        super().__init__(f"closed with code {code}: {reason}")
+        self.code = code
+        self.reason = reason
+
+
+class HubLink:
+    def __init__(
+        self,
+        url: str,
+        token: str,
+        hello: Hello,
+        outbox: Outbox,
+        on_command: CommandHandler,
+        timeouts: HubTimeouts | None = None,
+    ) -> None:
+        self.url = url
+        self._token = token
+        self._hello = hello
+        self._outbox = outbox
+        self._on_command = on_command
+        self.timeouts = timeouts or HubTimeouts()
+        self.connected = asyncio.Event()
+        self._ever_welcomed = False
+
+    async def run(self) -> None:
+        backoff = self.timeouts.reconnect_initial_s
+        while True:
+            delay = backoff
+            try:
+                await self._session()
+            except* HubClosed as group:
+                closed = group.exceptions[0]
+                assert isinstance(closed, HubClosed)
+                if closed.code == CloseCode.UNAUTHORIZED:
+                    log.error("hub refused this agent's token: %s", closed.reason)
+                    delay = self.timeouts.unauthorized_retry_s
+                else:
+                    log.warning("hub closed the link (%s %s)", closed.code, closed.reason)
+            except* (OSError, InvalidHandshake, TimeoutError, HubRefused) as group:
+                log.warning("hub %s unreachable: %s", self.url, group.exceptions[0])
+            finally:
+                self.connected.clear()
+            if self._ever_welcomed:
+                backoff = self.timeouts.reconnect_initial_s
+                self._ever_welcomed = False
+            else:
+                backoff = min(backoff * 2, self.timeouts.reconnect_max_s)
+            await asyncio.sleep(delay)
+
+    async def _session(self) -> None:
+        async with connect(
+            self.url,
+            additional_headers={"Authorization": f"Bearer {self._token}"},
+            max_size=MAX_FRAME_BYTES,
+            ping_interval=self.timeouts.ping_interval_s,
+            open_timeout=self.timeouts.welcome_s,
+        ) as websocket:
+            try:
+                await websocket.send(encode(self._hello))
+                reply = await asyncio.wait_for(websocket.recv(), self.timeouts.welcome_s)
+            except ConnectionClosed:
+                raise HubClosed(websocket.close_code, websocket.close_reason or "") from None
+            welcome = decode(hub_to_agent, reply)
+            if not isinstance(welcome, Welcome):
+                raise HubRefused(f"expected welcome, got {welcome.type}")
+            log.info("connected to hub as %s", welcome.vehicle_id)
+            self.connected.set()
+            self._ever_welcomed = True
+            async with asyncio.TaskGroup() as tasks:
+                tasks.create_task(self._send_outbox(websocket))
+                try:
+                    async for frame in websocket:
+                        self._handle_frame(frame, websocket, tasks)
+                except ConnectionClosed:
+                    pass
+                raise HubClosed(websocket.close_code, websocket.close_reason or "")
+
+    async def _send_outbox(self, websocket: ClientConnection) -> None:
+        while True:
+            frame = await self._outbox.peek()
+            await websocket.send(frame)
+            self._outbox.pop()
+
+    def _handle_frame(
+        self, frame: str | bytes, websocket: ClientConnection, tasks: asyncio.TaskGroup
+    ) -> None:
+        try:
+            message = decode(hub_to_agent, frame)
+        except ProtocolError as error:
+            log.warning("unusable frame from hub: %s", error.message)
+            return
+        match message:
+            case CommandRequest():
+                tasks.create_task(self._run_command(message, websocket))
+            case ErrorReply(code=code, message=text):
+                log.warning("hub reported %s: %s", code, text)
+            case Welcome():
+                log.warning("unexpected second welcome from hub")
+
+    async def _run_command(self, request: CommandRequest, websocket: ClientConnection) -> None:
+        log.info("command %s: %s", request.request_id, request.command.name)
+        outcome = await self._on_command(request.command)
+        log.info("command %s: %s", request.request_id, outcome.message)
+        await websocket.send(encode(CommandResult(request_id=request.request_id, outcome=outcome)))

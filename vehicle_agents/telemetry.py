@@ -1,0 +1,61 @@
+"""Assemble one telemetry snapshot from the latest MAVLink message of each type."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+
+from pymavlink.dialects.v20 import ardupilotmega as mavlink2
+
+from gcs.protocol import VehicleState
+from vehicle_agents.fcu_link import MavMessage
+from vehicle_agents.modes import mode_name
+
+_UNKNOWN_INT16 = -1
+_UINT16_UNKNOWN = 65535
+
+
+def _system_status_name(status: int) -> str:
+    entry = mavlink2.enums["MAV_STATE"].get(status)
+    return entry.name.removeprefix("MAV_STATE_") if entry is not None else "UNKNOWN"
+
+
+def snapshot(latest: Mapping[str, MavMessage], fcu_connected: bool) -> VehicleState:
+    """A VehicleState from whatever has arrived; fields stay None until their message does."""
+    fields: dict[str, object] = {"fcu_connected": fcu_connected}
+    if (heartbeat := latest.get("HEARTBEAT")) is not None:
+        fields["mode"] = mode_name(heartbeat)
+        fields["armed"] = bool(heartbeat.base_mode & mavlink2.MAV_MODE_FLAG_SAFETY_ARMED)
+        fields["system_status"] = _system_status_name(heartbeat.system_status)
+    if (position := latest.get("GLOBAL_POSITION_INT")) is not None:
+        fields["lat"] = position.lat / 1e7
+        fields["lon"] = position.lon / 1e7
+        fields["alt_msl"] = position.alt / 1000
+        fields["alt_rel"] = position.relative_alt / 1000
+        if position.hdg != _UINT16_UNKNOWN:
+            fields["heading_deg"] = position.hdg / 100
+    if (hud := latest.get("VFR_HUD")) is not None:
+        fields["groundspeed"] = float(hud.groundspeed)
+        fields["climb_rate"] = float(hud.climb)
+        fields.setdefault("heading_deg", float(hud.heading))
+    if (attitude := latest.get("ATTITUDE")) is not None:
+        fields["roll_deg"] = math.degrees(attitude.roll)
+        fields["pitch_deg"] = math.degrees(attitude.pitch)
+    if (status := latest.get("SYS_STATUS")) is not None:
+        if status.voltage_battery != _UINT16_UNKNOWN:
+            fields["battery_voltage"] = status.voltage_battery / 1000
+        if status.current_battery != _UNKNOWN_INT16:
+            fields["battery_current"] = status.current_battery / 100
+        if status.battery_remaining != _UNKNOWN_INT16:
+            fields["battery_remaining"] = float(status.battery_remaining)
+    if (battery := latest.get("BATTERY_STATUS")) is not None and battery.battery_remaining >= 0:
+        fields["battery_remaining"] = float(battery.battery_remaining)
+    if (gps := latest.get("GPS_RAW_INT")) is not None:
+        fields["gps_fix"] = int(gps.fix_type)
+        if gps.satellites_visible != 255:
+            fields["satellites"] = int(gps.satellites_visible)
+    if (home := latest.get("HOME_POSITION")) is not None:
+        fields["home_lat"] = home.latitude / 1e7
+        fields["home_lon"] = home.longitude / 1e7
+        fields["home_alt_msl"] = home.altitude / 1000
+    return VehicleState.model_validate(fields)

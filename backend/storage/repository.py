@@ -59,12 +59,14 @@ class Repository:
         if not batch:
             return 0
         rows = [_telemetry_row(envelope) for envelope in batch]
-        statement = _insert(self.engine, TelemetryRow).on_conflict_do_nothing(
-            index_elements=["vehicle_id", "stream_id", "seq"]
+        statement = (
+            _insert(self.engine, TelemetryRow)
+            .on_conflict_do_nothing(index_elements=["vehicle_id", "stream_id", "seq"])
+            # rowcount is unreliable for batched inserts; the returned ids are not.
+            .returning(TelemetryRow.id)
         )
         with self.engine.begin() as connection:
-            result = connection.execute(statement, rows)
-        return int(result.rowcount) if result.rowcount is not None else len(rows)
+            return len(connection.execute(statement, rows).all())
 
     def telemetry(
         self, vehicle_id: str, start: float, end: float, limit: int

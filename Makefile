@@ -1,0 +1,23 @@
+# The two commands of the README. Both install what they need first.
+.PHONY: demo test lint setup setup-dev
+
+VEHICLES ?= 3
+PORT ?= 8000
+SPEEDUP ?= 1
+
+demo: setup
+	.venv/bin/gcs demo --vehicles $(VEHICLES) --port $(PORT) --speedup $(SPEEDUP)
+
+test: setup-dev
+	.venv/bin/python -m pytest
+
+lint: setup-dev
+	.venv/bin/ruff check .
+	.venv/bin/ruff format --check .
+	.venv/bin/mypy
+
+setup:
+	scripts/setup.sh
+
+setup-dev:
+	scripts/setup.sh --dev

@@ -78,8 +78,10 @@ class FleetWatcher:
         while not predicate(self.vehicles):
             remaining = deadline - time.monotonic()
             if remaining <= 0:
-                raise AssertionError(f"timed out after {timeout_s} s waiting for {what}; "
-                                     f"last state: {json.dumps(self.vehicles)[:2000]}")
+                raise AssertionError(
+                    f"timed out after {timeout_s} s waiting for {what}; "
+                    f"last state: {json.dumps(self.vehicles)[:2000]}"
+                )
             try:
                 frame = self._socket.recv(timeout=remaining)
             except TimeoutError:

@@ -17,7 +17,11 @@ def _config(env: dict[str, str]) -> subprocess.CompletedProcess[str]:
     assert COMPOSE, "docker-compose is missing: scripts/setup.sh --dev installs it"
     return subprocess.run(
         [COMPOSE, "-f", str(ROOT / "docker-compose.yml"), "config"],
-        capture_output=True, text=True, env={**os.environ, **env}, timeout=60, check=False,
+        capture_output=True,
+        text=True,
+        env={**os.environ, **env},
+        timeout=60,
+        check=False,
     )
 
 
@@ -34,7 +38,11 @@ def test_compose_refuses_to_run_without_an_agent_token() -> None:
     env = {key: value for key, value in os.environ.items() if key != "GCS_AGENT_TOKEN"}
     result = subprocess.run(
         [str(COMPOSE), "-f", str(ROOT / "docker-compose.yml"), "config", "-q"],
-        capture_output=True, text=True, env=env, timeout=60, check=False,
+        capture_output=True,
+        text=True,
+        env=env,
+        timeout=60,
+        check=False,
     )
     assert result.returncode != 0
     assert "GCS_AGENT_TOKEN" in result.stderr

@@ -174,7 +174,13 @@ class CommandExecutor:
         result = _result_name(ack.result)
         if ack.result == mavlink2.MAV_RESULT_ACCEPTED:
             return CommandOutcome(status="accepted", result=result, message=f"{name}: accepted")
-        reasons = [entry.text for entry in self.link.statustexts if entry.time >= started - 0.5]
+        # The autopilot explains a refusal in a STATUSTEXT (e.g. a failed pre-arm check)
+        # sent alongside the ACK; informational chatter is not an explanation.
+        reasons = [
+            entry.text
+            for entry in self.link.statustexts
+            if entry.time >= started and entry.severity <= mavlink2.MAV_SEVERITY_WARNING
+        ]
         reason = f" ({'; '.join(reasons)})" if reasons else ""
         return CommandOutcome(status="refused", result=result, message=f"{name}: {result}{reason}")
 

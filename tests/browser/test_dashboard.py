@@ -32,15 +32,13 @@ def test_dashboard_shows_the_fleet_and_takes_off(page: Page, fleet: LocalFleet) 
 
     row.locator('input[data-field="takeoff-altitude"]').fill("8")
     row.locator('button[data-action="takeoff"]').click()
-    expect(row.locator('[data-field="command-result"]')).to_contain_text(
-        "accepted", timeout=30_000
-    )
+    expect(row.locator('[data-field="command-result"]')).to_contain_text("accepted", timeout=30_000)
     # The altitude cell climbs live as telemetry arrives over the WebSocket.
     page.wait_for_function(
         """(id) => {
-            const cell = document.querySelector(`tr[data-vehicle-id="${id}"] [data-field="alt_rel"]`);
-            const value = parseFloat(cell ? cell.textContent : "");
-            return value >= 3;
+            const row = document.querySelector(`tr[data-vehicle-id="${id}"]`);
+            const cell = row && row.querySelector('[data-field="alt_rel"]');
+            return parseFloat(cell ? cell.textContent : "") >= 3;
         }""",
         arg=VEHICLE,
         timeout=60_000,

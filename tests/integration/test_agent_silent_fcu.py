@@ -41,8 +41,12 @@ class SilentFlightController:
     def _serve(self) -> None:
         mav = mavlink2.MAVLink(None, srcSystem=7, srcComponent=1)
         heartbeat = mavlink2.MAVLink_heartbeat_message(
-            mavlink2.MAV_TYPE_QUADROTOR, mavlink2.MAV_AUTOPILOT_ARDUPILOTMEGA,
-            mavlink2.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED, 4, mavlink2.MAV_STATE_STANDBY, 3,
+            mavlink2.MAV_TYPE_QUADROTOR,
+            mavlink2.MAV_AUTOPILOT_ARDUPILOTMEGA,
+            mavlink2.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED,
+            4,
+            mavlink2.MAV_STATE_STANDBY,
+            3,
         )
         with self._server.accept()[0] as peer:
             while not self._stop.wait(0.2):  # a 5 Hz heartbeat is the whole behaviour
@@ -53,8 +57,18 @@ class SilentFlightController:
 def silent_agent(hub: str) -> Iterator[subprocess.Popen[bytes]]:
     with SilentFlightController() as fcu:
         agent = subprocess.Popen(
-            [sys.executable, "-m", "gcs", "agent", "--fcu", f"tcp:127.0.0.1:{fcu.port}",
-             "--hub", hub.replace("http://", "ws://"), "--vehicle-id", "silent"],
+            [
+                sys.executable,
+                "-m",
+                "gcs",
+                "agent",
+                "--fcu",
+                f"tcp:127.0.0.1:{fcu.port}",
+                "--hub",
+                hub.replace("http://", "ws://"),
+                "--vehicle-id",
+                "silent",
+            ],
             env={**os.environ, "GCS_AGENT_TOKEN": AGENT_TOKEN},
         )
         try:
@@ -68,8 +82,11 @@ def test_command_to_a_silent_flight_controller_times_out(
     hub: str, silent_agent: subprocess.Popen[bytes]
 ) -> None:
     with FleetWatcher(hub) as watcher:
-        watcher.wait_until(lambda v: "silent" in v and v["silent"]["connected"], 30,
-                           "the silent vehicle to connect")
+        watcher.wait_until(
+            lambda v: "silent" in v and v["silent"]["connected"],
+            30,
+            "the silent vehicle to connect",
+        )
     with httpx.Client(base_url=hub, timeout=60) as api:
         started = time.monotonic()
         response = api.post("/api/v1/vehicles/silent/commands", json={"name": "arm"})

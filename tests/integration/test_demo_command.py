@@ -33,9 +33,23 @@ def _children(pid: int) -> set[int]:
 def test_demo_runs_the_fleet_and_stops_cleanly_on_ctrl_c(tmp_path: Path) -> None:
     port = free_port()
     demo = subprocess.Popen(
-        [sys.executable, "-m", "gcs", "demo", "--vehicles", "2", "--port", str(port),
-         "--data-dir", str(tmp_path), "--speedup", "2"],
-        stdout=subprocess.PIPE, text=True, env=os.environ.copy(),
+        [
+            sys.executable,
+            "-m",
+            "gcs",
+            "demo",
+            "--vehicles",
+            "2",
+            "--port",
+            str(port),
+            "--data-dir",
+            str(tmp_path),
+            "--speedup",
+            "2",
+        ],
+        stdout=subprocess.PIPE,
+        text=True,
+        env=os.environ.copy(),
     )
     try:
         assert demo.stdout is not None
@@ -50,16 +64,23 @@ def test_demo_runs_the_fleet_and_stops_cleanly_on_ctrl_c(tmp_path: Path) -> None
         with FleetWatcher(f"http://127.0.0.1:{port}") as watcher:
             watcher.wait_until(
                 lambda v: sum(1 for x in v.values() if x["connected"] and x["state"]) == 2,
-                30, "both demo vehicles online",
+                30,
+                "both demo vehicles online",
             )
         assert httpx.get(f"http://127.0.0.1:{port}/api/v1/health").json()["connected"] == 2
 
         demo.send_signal(signal.SIGINT)
         assert demo.wait(30) == 0
-        still_running = {pid for pid in children if Path(f"/proc/{pid}").exists()
-                         and "Z" not in Path(f"/proc/{pid}/stat").read_text().split()[2]}
+        still_running = {
+            pid
+            for pid in children
+            if Path(f"/proc/{pid}").exists()
+            and "Z" not in Path(f"/proc/{pid}/stat").read_text().split()[2]
+        }
         assert still_running == set()
     finally:
         if demo.poll() is None:
             demo.kill()
             demo.wait()
+        if demo.stdout is not None:
+            demo.stdout.close()

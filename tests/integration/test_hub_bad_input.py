@@ -73,16 +73,20 @@ def scripted_agent(base_url: str, vehicle_id: str) -> Iterator[ClientConnection]
 
 
 def _close_code(socket: ClientConnection) -> tuple[int | None, str]:
-    with pytest.raises(ConnectionClosed) as closed:
+    def read_until_closed() -> None:
         while True:
             socket.recv(timeout=5)
+
+    with pytest.raises(ConnectionClosed) as closed:
+        read_until_closed()
     received = closed.value.rcvd
     return (received.code, received.reason) if received else (None, "")
 
 
 def _stored_count(api: httpx.Client, vehicle_id: str) -> int:
-    page = api.get(f"/api/v1/vehicles/{vehicle_id}/telemetry",
-                   params={"start": 0, "limit": 10000}).json()
+    page = api.get(
+        f"/api/v1/vehicles/{vehicle_id}/telemetry", params={"start": 0, "limit": 10000}
+    ).json()
     return len(page["samples"])
 
 
@@ -106,8 +110,9 @@ def test_unknown_vehicle_is_404(hub: str) -> None:
 
 def test_invalid_command_parameters_are_422_naming_the_field(hub: str) -> None:
     with scripted_agent(hub, "v1"), httpx.Client(base_url=hub) as api:
-        too_high = api.post("/api/v1/vehicles/v1/commands",
-                            json={"name": "takeoff", "altitude": 9000})
+        too_high = api.post(
+            "/api/v1/vehicles/v1/commands", json={"name": "takeoff", "altitude": 9000}
+        )
         assert too_high.status_code == 422
         assert "altitude" in json.dumps(too_high.json()["detail"])
 
@@ -115,12 +120,14 @@ def test_invalid_command_parameters_are_422_naming_the_field(hub: str) -> None:
         assert unknown.status_code == 422
         assert "name" in json.dumps(unknown.json()["detail"])
 
-        bad_mode = api.post("/api/v1/vehicles/v1/commands",
-                            json={"name": "set_mode", "mode": "WARP"})
+        bad_mode = api.post(
+            "/api/v1/vehicles/v1/commands", json={"name": "set_mode", "mode": "WARP"}
+        )
         assert bad_mode.status_code == 422
         detail = bad_mode.json()["detail"][0]
         assert detail["loc"][-1] == "mode"
-        assert "WARP" in detail["msg"] and "GUIDED" in detail["msg"]
+        assert "WARP" in detail["msg"]
+        assert "GUIDED" in detail["msg"]
 
 
 def test_start_after_end_is_422(hub: str) -> None:
@@ -156,8 +163,9 @@ def test_bad_frames_get_error_replies_and_the_connection_survives(hub: str) -> N
         assert reply == {"type": "error", "code": "bad_frame", "message": reply["message"]}
         assert "not valid JSON" in reply["message"]
 
-        agent.send(json.dumps({"type": "telemetry", "seq": 1, "time": 1.0,
-                               "state": {"lat": "north"}}))
+        agent.send(
+            json.dumps({"type": "telemetry", "seq": 1, "time": 1.0, "state": {"lat": "north"}})
+        )
         reply = json.loads(agent.recv(timeout=5))
         assert reply["code"] == "invalid_message"
         assert "state.lat" in reply["message"]
@@ -167,8 +175,11 @@ def test_bad_frames_get_error_replies_and_the_connection_survives(hub: str) -> N
 
 
 def test_oversized_frame_closes_only_that_agent(hub: str) -> None:
-    with scripted_agent(hub, "big") as big, scripted_agent(hub, "good") as good, \
-            httpx.Client(base_url=hub) as api:
+    with (
+        scripted_agent(hub, "big") as big,
+        scripted_agent(hub, "good") as good,
+        httpx.Client(base_url=hub) as api,
+    ):
         big.send(_telemetry(0))
         _wait_stored(api, "big", 1)
         big.send("x" * (MAX_FRAME_BYTES + 1))

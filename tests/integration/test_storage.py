@@ -39,9 +39,16 @@ def engine(request: pytest.FixtureRequest, tmp_path: object) -> Iterator[Engine]
 
 
 def _hello(vehicle_id: str) -> Hello:
-    return Hello(protocol=PROTOCOL_VERSION, vehicle_id=vehicle_id, autopilot="ardupilot",
-                 vehicle_type="multirotor", system_id=1, modes=["GUIDED"], agent_version="t",
-                 stream_id="s")
+    return Hello(
+        protocol=PROTOCOL_VERSION,
+        vehicle_id=vehicle_id,
+        autopilot="ardupilot",
+        vehicle_type="multirotor",
+        system_id=1,
+        modes=["GUIDED"],
+        agent_version="t",
+        stream_id="s",
+    )
 
 
 def _sample(vehicle_id: str, seq: int, time: float) -> TelemetryEnvelope:
@@ -67,7 +74,7 @@ def test_batches_are_idempotent_and_ranges_ordered(engine: Engine) -> None:
     batch = [_sample("v1", seq, 1000.0 + seq) for seq in range(50)]
     assert repository.insert_telemetry(batch) == 50
     # Resending an overlapping batch (a replay after reconnect) stores only what is new.
-    assert repository.insert_telemetry(batch[40:] + [_sample("v1", 50, 1050.0)]) == 1
+    assert repository.insert_telemetry([*batch[40:], _sample("v1", 50, 1050.0)]) == 1
     assert repository.count_telemetry("v1") == 51
 
     rows = repository.telemetry("v1", start=1010.0, end=1019.0, limit=100)

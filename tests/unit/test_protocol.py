@@ -33,10 +33,16 @@ def test_round_trip_keeps_every_field() -> None:
         ("[1, 2]", "invalid_message", "'type' field"),
         ('{"type": "teleport"}', "invalid_message", "teleport"),
         ('{"type": "telemetry", "seq": -1, "time": 0, "state": {}}', "invalid_message", "seq"),
-        ('{"type": "telemetry", "seq": 1, "time": 0, "state": {"armed": "maybe"}}',
-         "invalid_message", "state.armed"),
-        ('{"type": "telemetry", "seq": 1, "time": 0, "state": {}, "extra": 1}',
-         "invalid_message", "extra"),
+        (
+            '{"type": "telemetry", "seq": 1, "time": 0, "state": {"armed": "maybe"}}',
+            "invalid_message",
+            "state.armed",
+        ),
+        (
+            '{"type": "telemetry", "seq": 1, "time": 0, "state": {}, "extra": 1}',
+            "invalid_message",
+            "extra",
+        ),
     ],
 )
 def test_bad_frames_raise_errors_that_name_the_problem(frame: str, code: str, names: str) -> None:

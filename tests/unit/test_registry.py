@@ -8,8 +8,15 @@ from gcs.protocol import PROTOCOL_VERSION, Hello, Telemetry, VehicleState
 
 
 def _hello(stream: str = "s1") -> Hello:
-    return Hello(protocol=PROTOCOL_VERSION, vehicle_id="v", autopilot="ardupilot",
-                 vehicle_type="multirotor", system_id=1, agent_version="t", stream_id=stream)
+    return Hello(
+        protocol=PROTOCOL_VERSION,
+        vehicle_id="v",
+        autopilot="ardupilot",
+        vehicle_type="multirotor",
+        system_id=1,
+        agent_version="t",
+        stream_id=stream,
+    )
 
 
 def _sample(seq: int, time: float, alt: float) -> Telemetry:

@@ -1,0 +1,301 @@
+"""The simulator over real sockets, seen through pymavlink's mavutil like the agent sees it."""
+
+from __future__ import annotations
+
+import asyncio
+import queue
+import signal
+import socket
+import subprocess
+import sys
+import threading
+import time
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Any
+
+import pytest
+from pymavlink import mavutil
+from pymavlink.dialects.v20 import ardupilotmega as mavlink2
+
+from vehicle_agents.simulator import ListenAddress, SimulatorConfig, SimulatorServer
+
+REPO_ROOT = Path(__file__).resolve().parents[2]
+SYSID = 7
+GCS = {"source_system": 255, "source_component": 190}
+
+
+def free_port() -> int:
+    with socket.socket() as probe:
+        probe.bind(("127.0.0.1", 0))
+        return int(probe.getsockname()[1])
+
+
+def wait_for(
+    connection: Any,
+    types: list[str],
+    predicate: Callable[[Any], bool],
+    timeout_s: float,
+    what: str,
+) -> Any:
+    """The first message of ``types`` from the simulator that satisfies ``predicate``."""
+    deadline = time.monotonic() + timeout_s
+    while (remaining := deadline - time.monotonic()) > 0:
+        message = connection.recv_match(type=types, blocking=True, timeout=remaining)
+        if message is not None and message.get_srcSystem() == SYSID and predicate(message):
+            return message
+    raise AssertionError(f"timed out after {timeout_s} s waiting for {what}")
+
+
+def command(connection: Any, cmd: int, *params: float, timeout_s: float = 5.0) -> int:
+    padded = [float(p) for p in params] + [0.0] * (7 - len(params))
+    connection.mav.command_long_send(SYSID, 1, cmd, 0, *padded)
+    ack = wait_for(
+        connection, ["COMMAND_ACK"], lambda m: m.command == cmd, timeout_s, f"ack of {cmd}"
+    )
+    return int(ack.result)
+
+
+@contextmanager
+def mavlink_client(url: str) -> Iterator[Any]:
+    connection = mavutil.mavlink_connection(url, **GCS)
+    try:
+        yield connection
+    finally:
+        connection.close()
+
+
+# -- the simulator as its own process, as the demo and the agent tests run it --------
+
+
+@contextmanager
+def simulator_process(*args: str) -> Iterator[tuple[int, queue.Queue[str]]]:
+    """``python -m vehicle_agents.simulator`` on a free port; yields (port, log lines)."""
+    port = free_port()
+    process = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "vehicle_agents.simulator",
+            "--listen",
+            f"tcp:127.0.0.1:{port}",
+            "--system-id",
+            str(SYSID),
+            *args,
+        ],
+        cwd=REPO_ROOT,
+        stdin=subprocess.DEVNULL,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    assert process.stderr is not None
+    lines: queue.Queue[str] = queue.Queue()
+    stderr = process.stderr
+
+    def pump_lines() -> None:
+        for line in stderr:
+            lines.put(line)
+
+    pump = threading.Thread(target=pump_lines)
+    pump.start()
+    try:
+        deadline = time.monotonic() + 20.0
+        while True:
+            remaining = deadline - time.monotonic()
+            if remaining <= 0:
+                raise AssertionError("simulator did not report listening within 20 s")
+            try:
+                line = lines.get(timeout=remaining)
+            except queue.Empty:
+                continue
+            if "listening on" in line:
+                break
+        yield port, lines
+    finally:
+        if process.poll() is None:
+            process.send_signal(signal.SIGTERM)
+        try:
+            code = process.wait(10)
+        except subprocess.TimeoutExpired:
+            process.kill()
+            process.wait()
+            raise
+        finally:
+            pump.join(10)
+            process.stderr.close()
+        assert code == 0, f"simulator exited with {code}"
+
+
+def test_guided_takeoff_and_land_over_tcp() -> None:
+    with (
+        simulator_process("--speedup", "10") as (port, lines),
+        mavlink_client(f"tcp:127.0.0.1:{port}") as gcs,
+    ):
+        heartbeat = wait_for(gcs, ["HEARTBEAT"], lambda m: True, 10, "a heartbeat")
+        assert heartbeat.type == mavlink2.MAV_TYPE_QUADROTOR
+        assert heartbeat.autopilot == mavlink2.MAV_AUTOPILOT_ARDUPILOTMEGA
+        assert heartbeat.get_srcComponent() == 1
+        position = wait_for(gcs, ["GLOBAL_POSITION_INT"], lambda m: True, 5, "a position")
+        assert abs(position.lat - (-353632620)) <= 1
+        assert abs(position.relative_alt) < 100
+        gps = wait_for(gcs, ["GPS_RAW_INT"], lambda m: True, 5, "GPS")
+        assert gps.fix_type == 3
+
+        assert command(gcs, mavlink2.MAV_CMD_DO_SET_MODE, 1, 4) == mavlink2.MAV_RESULT_ACCEPTED
+        wait_for(gcs, ["HEARTBEAT"], lambda m: m.custom_mode == 4, 5, "GUIDED in the heartbeat")
+        assert command(gcs, mavlink2.MAV_CMD_COMPONENT_ARM_DISARM, 1) == 0
+        assert command(gcs, mavlink2.MAV_CMD_NAV_TAKEOFF, 0, 0, 0, 0, 0, 0, 10) == 0
+        armed = mavlink2.MAV_MODE_FLAG_SAFETY_ARMED
+        wait_for(gcs, ["HEARTBEAT"], lambda m: m.base_mode & armed, 5, "armed heartbeat")
+
+        wait_for(
+            gcs,
+            ["GLOBAL_POSITION_INT"],
+            lambda m: 9_000 <= m.relative_alt <= 11_000 and abs(m.vz) < 20,
+            20,
+            "the copter holding 10 m +- 1 m",
+        )
+
+        assert command(gcs, mavlink2.MAV_CMD_NAV_LAND) == mavlink2.MAV_RESULT_ACCEPTED
+        wait_for(gcs, ["HEARTBEAT"], lambda m: m.custom_mode == 9, 5, "LAND in the heartbeat")
+        disarmed = wait_for(
+            gcs,
+            ["HEARTBEAT"],
+            lambda m: not m.base_mode & armed,
+            30,
+            "the copter to land and disarm",
+        )
+        assert disarmed.system_status == mavlink2.MAV_STATE_STANDBY
+        landed = wait_for(gcs, ["GLOBAL_POSITION_INT"], lambda m: True, 5, "a position")
+        assert landed.relative_alt < 500
+    log = "".join(iter_queue(lines))
+    assert "Disarming motors" in log
+    assert "stopped" in log
+
+
+def iter_queue(lines: queue.Queue[str]) -> Iterator[str]:
+    while True:
+        try:
+            yield lines.get_nowait()
+        except queue.Empty:
+            return
+
+
+def test_refusals_reach_the_client_with_their_reason() -> None:
+    with (
+        simulator_process("--speedup", "1") as (port, _lines),
+        mavlink_client(f"tcp:127.0.0.1:{port}") as gcs,
+    ):
+        wait_for(gcs, ["HEARTBEAT"], lambda m: True, 10, "a heartbeat")
+        assert command(gcs, mavlink2.MAV_CMD_DO_SET_MODE, 1, 9) == 0  # LAND, disarmed: fine
+        assert command(gcs, mavlink2.MAV_CMD_COMPONENT_ARM_DISARM, 1) == 4
+        # the reason was sent before the ack; mavutil keeps the last STATUSTEXT
+        text = gcs.messages["STATUSTEXT"]
+        assert text.text == "Arm: LAND mode not armable"
+        assert text.severity == mavlink2.MAV_SEVERITY_CRITICAL
+
+
+# -- the simulator in-process, for the transport's details -----------------------------
+
+
+@contextmanager
+def serving(config: SimulatorConfig) -> Iterator[tuple[SimulatorServer, ListenAddress]]:
+    """A SimulatorServer on its own event loop thread; yields it and its bound address."""
+    server = SimulatorServer(config)
+    loop = asyncio.new_event_loop()
+    started: queue.Queue[ListenAddress | BaseException] = queue.Queue()
+
+    def run() -> None:
+        asyncio.set_event_loop(loop)
+        try:
+            started.put(loop.run_until_complete(server.start()))
+        except BaseException as error:
+            started.put(error)
+            return
+        loop.run_forever()
+        loop.run_until_complete(server.stop())
+
+    thread = threading.Thread(target=run)
+    thread.start()
+    try:
+        result = started.get(timeout=10)
+        if isinstance(result, BaseException):
+            raise result
+        yield server, result
+    finally:
+        loop.call_soon_threadsafe(loop.stop)
+        thread.join(10)
+        loop.close()
+
+
+def test_tcp_clients_come_and_go() -> None:
+    config = SimulatorConfig(listen=ListenAddress("tcp", "127.0.0.1", 0), system_id=SYSID)
+    with serving(config) as (_server, address):
+        url = f"tcp:127.0.0.1:{address.port}"
+        with mavlink_client(url) as first:
+            with mavlink_client(url) as second:
+                for client in (first, second):
+                    wait_for(client, ["HEARTBEAT"], lambda m: True, 5, "a heartbeat")
+                # garbage on the link is skipped; the command after it still gets through
+                second.write(b"\xfd\x09garbage\x00\xff" * 20)
+                assert command(second, mavlink2.MAV_CMD_DO_SET_MODE, 1, 5) == 0
+                # only the sender gets the ack; everyone sees the new mode
+                wait_for(first, ["HEARTBEAT"], lambda m: m.custom_mode == 5, 5, "LOITER")
+            # the first client keeps its stream after the second one left
+            wait_for(first, ["ATTITUDE"], lambda m: True, 5, "attitude")
+        with mavlink_client(url) as third:
+            hb = wait_for(third, ["HEARTBEAT"], lambda m: True, 5, "a heartbeat")
+            assert hb.custom_mode == 5
+
+
+def test_udp_answers_whoever_writes() -> None:
+    config = SimulatorConfig(listen=ListenAddress("udp", "127.0.0.1", 0), system_id=SYSID)
+    with (
+        serving(config) as (_server, address),
+        mavlink_client(f"udpout:127.0.0.1:{address.port}") as gcs,
+    ):
+        gcs.mav.heartbeat_send(mavlink2.MAV_TYPE_GCS, mavlink2.MAV_AUTOPILOT_INVALID, 0, 0, 0)
+        wait_for(gcs, ["HEARTBEAT"], lambda m: True, 5, "a heartbeat over UDP")
+        assert command(gcs, mavlink2.MAV_CMD_REQUEST_MESSAGE, 242) == 0
+        home = wait_for(gcs, ["HOME_POSITION"], lambda m: True, 5, "home")
+        assert home.altitude == 584_000
+
+
+def test_stream_rates_are_wall_clock_whatever_the_speedup() -> None:
+    config = SimulatorConfig(
+        listen=ListenAddress("tcp", "127.0.0.1", 0), system_id=SYSID, speedup=100.0
+    )
+    with (
+        serving(config) as (_server, address),
+        mavlink_client(f"tcp:127.0.0.1:{address.port}") as gcs,
+    ):
+        first = wait_for(gcs, ["GLOBAL_POSITION_INT"], lambda m: True, 5, "a position")
+        started = time.monotonic()
+        count = 0
+        last = first
+        while time.monotonic() - started < 1.0:
+            message = gcs.recv_match(type="GLOBAL_POSITION_INT", blocking=True, timeout=0.2)
+            if message is not None:
+                count += 1
+                last = message
+        assert 7 <= count <= 13  # 10 Hz of wall time
+        # ... while sim time ran 100 times faster
+        assert last.time_boot_ms - first.time_boot_ms > 50_000
+
+
+def test_cannot_listen_exits_1(capfd: pytest.CaptureFixture[str]) -> None:
+    with socket.socket() as taken:
+        taken.bind(("127.0.0.1", 0))
+        taken.listen()
+        port = taken.getsockname()[1]
+        result = subprocess.run(
+            [sys.executable, "-m", "vehicle_agents.simulator", "--listen", f"tcp:127.0.0.1:{port}"],
+            cwd=REPO_ROOT,
+            capture_output=True,
+            text=True,
+            timeout=20,
+        )
+    assert result.returncode == 1
+    assert "cannot listen" in result.stderr

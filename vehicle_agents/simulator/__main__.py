@@ -1,0 +1,5 @@
+import sys
+
+from vehicle_agents.simulator import main
+
+sys.exit(main())

@@ -1,0 +1,303 @@
+"""Incoming MAVLink to copter calls, and the replies ArduCopter would send.
+
+No I/O: `MessageHandler.handle` takes one decoded message and returns `Reply` objects
+(a COMMAND_ACK and requested messages go back to the sender only; STATUSTEXTs go to
+everyone, as ArduPilot sends them on every link). Semantics follow GCS_Common.cpp and
+GCS_Mavlink.cpp of ArduCopter 4.x; COMMAND_LONG is handled as ArduPilot does, by reading
+it as a COMMAND_INT in the MAV_FRAME_GLOBAL_RELATIVE_ALT frame.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from dataclasses import dataclass
+from typing import Any, Protocol
+
+from vehicle_agents.simulator.copter import Copter
+from vehicle_agents.simulator.mavconst import (
+    DO_REPOSITION_FLAGS_CHANGE_MODE,
+    FORCE_ARM_MAGIC,
+    FORCE_DISARM_MAGIC,
+    POSITION_TARGET_IGNORE_POSITION,
+    CopterMode,
+    MavCmd,
+    MavFrame,
+    MavResult,
+    ModeFlag,
+)
+from vehicle_agents.simulator.telemetry import MavMessage, TelemetryBuilder
+
+log = logging.getLogger(__name__)
+
+INT32_MAX = 2**31 - 1
+MSG_ID_SET_MODE = 11  # ArduPilot acknowledges SET_MODE with a COMMAND_ACK for "command" 11
+
+_GLOBAL_FRAMES = frozenset({MavFrame.GLOBAL, MavFrame.GLOBAL_INT})
+_RELATIVE_FRAMES = frozenset(
+    {
+        MavFrame.GLOBAL_RELATIVE_ALT,
+        MavFrame.GLOBAL_RELATIVE_ALT_INT,
+        # flat simulated world: terrain altitude is altitude above home
+        MavFrame.GLOBAL_TERRAIN_ALT,
+        MavFrame.GLOBAL_TERRAIN_ALT_INT,
+    }
+)
+
+
+@dataclass(frozen=True)
+class Reply:
+    message: MavMessage
+    to_sender_only: bool = True
+
+
+class StreamControl(Protocol):
+    """The sending connection's telemetry schedule (for SET/GET_MESSAGE_INTERVAL)."""
+
+    def interval(self, msg_id: int) -> float | None: ...
+
+    def set_interval(self, msg_id: int, interval_s: float | None, now: float) -> None: ...
+
+    def reset_interval(self, msg_id: int, now: float) -> None: ...
+
+
+@dataclass(frozen=True)
+class Command:
+    """COMMAND_LONG or COMMAND_INT, in COMMAND_INT's terms."""
+
+    command: int
+    param1: float
+    param2: float
+    param3: float
+    param4: float
+    x: float  # latitude in degrees for global frames (COMMAND_INT's x / 1e7)
+    y: float
+    z: float
+    frame: int
+    x_unset: bool = False  # COMMAND_INT sent INT32_MAX / COMMAND_LONG sent NaN
+
+    @classmethod
+    def from_long(cls, msg: Any) -> Command:
+        return cls(
+            int(msg.command),
+            float(msg.param1),
+            float(msg.param2),
+            float(msg.param3),
+            float(msg.param4),
+            float(msg.param5),
+            float(msg.param6),
+            float(msg.param7),
+            MavFrame.GLOBAL_RELATIVE_ALT,
+            x_unset=math.isnan(msg.param5) or math.isnan(msg.param6),
+        )
+
+    @classmethod
+    def from_int(cls, msg: Any) -> Command:
+        return cls(
+            int(msg.command),
+            float(msg.param1),
+            float(msg.param2),
+            float(msg.param3),
+            float(msg.param4),
+            int(msg.x) / 1e7,
+            int(msg.y) / 1e7,
+            float(msg.z),
+            int(msg.frame),
+            x_unset=int(msg.x) == INT32_MAX or int(msg.y) == INT32_MAX,
+        )
+
+
+class MessageHandler:
+    """Dispatches one vehicle's incoming messages."""
+
+    def __init__(
+        self,
+        copter: Copter,
+        telemetry: TelemetryBuilder,
+        system_id: int,
+        component_id: int = 1,
+    ) -> None:
+        self.copter = copter
+        self.telemetry = telemetry
+        self.system_id = system_id
+        self.component_id = component_id
+
+    def handle(self, msg: Any, streams: StreamControl, now: float) -> list[Reply]:
+        """Replies to ``msg``; ``now`` is the wall clock, for stream scheduling."""
+        kind = msg.get_type()
+        if kind == "COMMAND_LONG":
+            if not self._for_us(msg.target_system):
+                return []
+            return self._command(Command.from_long(msg), msg, streams, now)
+        if kind == "COMMAND_INT":
+            if not self._for_us(msg.target_system):
+                return []
+            return self._command(Command.from_int(msg), msg, streams, now)
+        if kind == "SET_MODE":
+            if not self._for_us(msg.target_system):
+                return []
+            result = self._set_mode_common(int(msg.base_mode), int(msg.custom_mode))
+            return self._finish(MSG_ID_SET_MODE, result, msg)
+        if kind == "SET_POSITION_TARGET_GLOBAL_INT":
+            if self._for_us(msg.target_system):
+                self._position_target(msg)
+            return self._texts()
+        # HEARTBEAT, REQUEST_DATA_STREAM (accepted and ignored: streams keep their rates),
+        # and anything else the simulator does not model
+        return []
+
+    def _for_us(self, target_system: int) -> bool:
+        return target_system in (0, self.system_id)
+
+    # -- commands ------------------------------------------------------------
+
+    def _command(self, cmd: Command, msg: Any, streams: StreamControl, now: float) -> list[Reply]:
+        log.debug(
+            "command %d from %d/%d: %s",
+            cmd.command,
+            msg.get_srcSystem(),
+            msg.get_srcComponent(),
+            cmd,
+        )
+        copter = self.copter
+        extra_before: list[Reply] = []
+        extra_after: list[Reply] = []
+        match cmd.command:
+            case MavCmd.COMPONENT_ARM_DISARM:
+                if cmd.param1 == 1.0:
+                    result = copter.arm(force=cmd.param2 == FORCE_ARM_MAGIC)
+                elif cmd.param1 == 0.0:
+                    result = copter.disarm(force=cmd.param2 == FORCE_DISARM_MAGIC)
+                else:
+                    result = MavResult.UNSUPPORTED
+            case MavCmd.NAV_TAKEOFF:
+                if cmd.frame not in (
+                    MavFrame.GLOBAL_RELATIVE_ALT,
+                    MavFrame.GLOBAL_RELATIVE_ALT_INT,
+                ):
+                    result = MavResult.DENIED
+                else:
+                    result = copter.takeoff(cmd.z)
+            case MavCmd.NAV_LAND:
+                result = self._mode_command(CopterMode.LAND)
+            case MavCmd.NAV_RETURN_TO_LAUNCH:
+                result = self._mode_command(CopterMode.RTL)
+            case MavCmd.DO_SET_MODE:
+                result = self._set_mode_common(_as_int(cmd.param1), _as_int(cmd.param2))
+            case MavCmd.DO_REPOSITION:
+                result = self._reposition(cmd)
+            case MavCmd.DO_CHANGE_SPEED:
+                result = copter.set_guided_speed(_as_int(cmd.param1), cmd.param2)
+            case MavCmd.REQUEST_MESSAGE:
+                requested = self.telemetry.build(_as_int(cmd.param1))
+                result = MavResult.ACCEPTED if requested is not None else MavResult.FAILED
+                if requested is not None:
+                    extra_after.append(Reply(requested))
+            case MavCmd.GET_HOME_POSITION:
+                extra_before.append(Reply(self.telemetry.home_position()))
+                result = MavResult.ACCEPTED
+            case MavCmd.REQUEST_AUTOPILOT_CAPABILITIES:
+                result = MavResult.ACCEPTED if cmd.param1 == 1.0 else MavResult.FAILED
+                if result is MavResult.ACCEPTED:
+                    extra_after.append(Reply(self.telemetry.autopilot_version()))
+            case MavCmd.SET_MESSAGE_INTERVAL:
+                result = self._set_message_interval(cmd, streams, now)
+            case MavCmd.GET_MESSAGE_INTERVAL:
+                msg_id = _as_int(cmd.param1)
+                interval = streams.interval(msg_id)
+                interval_us = -1 if interval is None else round(interval * 1e6)
+                if msg_id not in self.telemetry.supported:
+                    interval_us = 0
+                extra_after.append(Reply(self.telemetry.message_interval(msg_id, interval_us)))
+                result = MavResult.ACCEPTED
+            case _:
+                result = MavResult.UNSUPPORTED
+        return extra_before + self._finish(cmd.command, result, msg) + extra_after
+
+    def _finish(self, command: int, result: MavResult, msg: Any) -> list[Reply]:
+        """STATUSTEXTs the command caused, then its COMMAND_ACK to the sender."""
+        if result is not MavResult.ACCEPTED:
+            log.info("command %d from sysid %d: %s", command, msg.get_srcSystem(), result.name)
+        ack = self.telemetry.command_ack(
+            command, result, msg.get_srcSystem(), msg.get_srcComponent()
+        )
+        return [*self._texts(), Reply(ack)]
+
+    def _texts(self) -> list[Reply]:
+        replies = []
+        for text in self.copter.drain_texts():
+            log.info("STATUSTEXT %s: %s", text.severity.name, text.text)
+            replies.append(Reply(self.telemetry.statustext(text), to_sender_only=False))
+        return replies
+
+    def _mode_command(self, mode: int) -> MavResult:
+        result = self.copter.set_mode(mode)
+        return MavResult.ACCEPTED if result is MavResult.ACCEPTED else MavResult.FAILED
+
+    def _set_mode_common(self, base_mode: int, custom_mode: int) -> MavResult:
+        """GCS_MAVLINK::_set_mode_common: only custom modes are understood."""
+        if base_mode & ModeFlag.CUSTOM_MODE_ENABLED:
+            return self._mode_command(custom_mode)
+        return MavResult.DENIED
+
+    def _set_message_interval(self, cmd: Command, streams: StreamControl, now: float) -> MavResult:
+        msg_id = _as_int(cmd.param1)
+        if msg_id not in self.telemetry.supported:
+            return MavResult.DENIED
+        interval_us = cmd.param2
+        if interval_us == 0.0:
+            streams.reset_interval(msg_id, now)
+        elif interval_us < 0.0:
+            streams.set_interval(msg_id, None, now)
+        else:
+            streams.set_interval(msg_id, interval_us / 1e6, now)
+        return MavResult.ACCEPTED
+
+    # -- guided targets ------------------------------------------------------
+
+    def _relative_alt(self, frame: int, alt: float) -> float | None:
+        if frame in _RELATIVE_FRAMES:
+            return alt
+        if frame in _GLOBAL_FRAMES:
+            return alt - self.copter.home.alt
+        return None
+
+    def _reposition(self, cmd: Command) -> MavResult:
+        """GCS_MAVLINK_Copter::handle_command_int_do_reposition."""
+        copter = self.copter
+        change_mode = bool(_as_int(cmd.param2) & DO_REPOSITION_FLAGS_CHANGE_MODE)
+        if copter.mode is not CopterMode.GUIDED and not change_mode:
+            return MavResult.DENIED
+        here = copter.position()
+        lat, lon = (here.lat, here.lon) if cmd.x_unset else (cmd.x, cmd.y)
+        if not (-90.0 <= lat <= 90.0 and -180.0 <= lon <= 180.0):
+            return MavResult.DENIED
+        alt = copter.relative_alt if math.isnan(cmd.z) else self._relative_alt(cmd.frame, cmd.z)
+        if alt is None:
+            return MavResult.DENIED
+        if copter.mode is not CopterMode.GUIDED and (
+            copter.set_mode(CopterMode.GUIDED) is not MavResult.ACCEPTED
+        ):
+            return MavResult.FAILED
+        if cmd.param1 > 0.0:
+            copter.set_guided_speed(0, cmd.param1)
+        return copter.guided_goto(lat, lon, alt)
+
+    def _position_target(self, msg: Any) -> None:
+        """SET_POSITION_TARGET_GLOBAL_INT: position targets in GUIDED, ignored otherwise."""
+        copter = self.copter
+        if copter.mode is not CopterMode.GUIDED:
+            return
+        if int(msg.type_mask) & POSITION_TARGET_IGNORE_POSITION == POSITION_TARGET_IGNORE_POSITION:
+            log.debug("velocity/acceleration-only position targets are not simulated")
+            return
+        lat, lon = int(msg.lat_int) / 1e7, int(msg.lon_int) / 1e7
+        alt = self._relative_alt(int(msg.coordinate_frame), float(msg.alt))
+        if alt is None or not (-90.0 <= lat <= 90.0 and -180.0 <= lon <= 180.0):
+            copter.guided_hold()  # ArduCopter re-initialises guided on a bad target
+            return
+        copter.guided_goto(lat, lon, alt)
+
+
+def _as_int(value: float) -> int:
+    return int(value) if math.isfinite(value) else -1

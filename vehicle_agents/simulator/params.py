@@ -1,0 +1,46 @@
+"""ArduCopter parameters the simulator honours, in SI units, with ArduCopter's defaults.
+
+The parameter each field mirrors is named in its comment. Where the brief for this
+simulator fixes a value (horizontal speed 5 m/s) it wins over the firmware default.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+
+@dataclass(frozen=True)
+class CopterParams:
+    # Navigation (AC_WPNav / AC_PosControl)
+    wpnav_speed: float = 5.0  # WPNAV_SPEED (cm/s in the firmware)
+    wpnav_speed_up: float = 2.5  # WPNAV_SPEED_UP
+    wpnav_speed_dn: float = 1.5  # WPNAV_SPEED_DN
+    wpnav_accel: float = 2.5  # WPNAV_ACCEL
+    wpnav_accel_z: float = 1.0  # WPNAV_ACCEL_Z
+    wpnav_radius: float = 2.0  # WPNAV_RADIUS: a waypoint counts as reached inside this
+    psc_posxy_p: float = 1.0  # PSC_POSXY_P
+    psc_posz_p: float = 1.0  # PSC_POSZ_P
+    angle_max: float = math.radians(30.0)  # ANGLE_MAX
+    yaw_rate_max: float = math.radians(60.0)  # ATC_SLEW_YAW
+    wp_yaw_behavior: int = 2  # WP_YAW_BEHAVIOR: face next waypoint except during RTL
+
+    # Return to launch (ModeRTL)
+    rtl_alt: float = 15.0  # RTL_ALT
+    rtl_alt_min: float = 2.0  # RTL_ALT_MIN (compile-time constant)
+    rtl_cone_slope: float = 3.0  # RTL_CONE_SLOPE
+    rtl_abs_min_climb: float = 2.5  # RTL_ABS_MIN_CLIMB (compile-time constant)
+    rtl_climb_min: float = 0.0  # RTL_CLIMB_MIN
+    rtl_loit_time: float = 5.0  # RTL_LOIT_TIME (ms in the firmware)
+
+    # Landing (ModeLand, land detector)
+    land_speed: float = 0.5  # LAND_SPEED
+    land_speed_high: float = 0.0  # LAND_SPEED_HIGH: 0 means use WPNAV_SPEED_DN
+    land_alt_low: float = 10.0  # LAND_ALT_LOW
+    land_detector_trigger: float = 1.0  # LAND_DETECTOR_TRIGGER_SEC
+
+    # Arming and motors
+    disarm_delay: float = 10.0  # DISARM_DELAY
+    arming_delay: float = 2.0  # ARMING_DELAY_MS: motors idle this long after arming
+    spool_time: float = 0.5  # MOT_SPOOL_TIME
+    hover_throttle: float = 0.35  # MOT_THST_HOVER

@@ -1,0 +1,300 @@
+"""The simulator's MAVLink transport: a TCP server or a UDP socket, on asyncio.
+
+Like SITL's port 5760, the TCP server takes any number of clients; each gets its own
+stream and its own sequence numbers. The UDP socket answers every address it has heard
+from. pymavlink serves only as a codec here (never ``mavutil``): one parser and one
+encoder per peer.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import logging
+import time
+from abc import ABC, abstractmethod
+from collections.abc import Callable
+from typing import Any
+
+from pymavlink.dialects.v20 import ardupilotmega as mavlink2
+
+from vehicle_agents.simulator.clock import Clock, SimClock
+from vehicle_agents.simulator.commands import MessageHandler
+from vehicle_agents.simulator.config import ListenAddress, SimulatorConfig
+from vehicle_agents.simulator.copter import Copter
+from vehicle_agents.simulator.mavconst import MsgId
+from vehicle_agents.simulator.streams import StreamSchedule
+from vehicle_agents.simulator.telemetry import DEFAULT_RATES_HZ, MavMessage, TelemetryBuilder
+
+log = logging.getLogger(__name__)
+
+COMPONENT_ID = 1  # MAV_COMP_ID_AUTOPILOT1
+TICK_S = 0.01  # wall seconds between physics catch-ups and stream checks
+MAX_PENDING_BYTES = 256 * 1024  # a client this far behind loses messages, not memory
+READ_SIZE = 4096
+
+
+class Link(ABC):
+    """One MAVLink peer: its parser, its encoder (sequence numbers) and its streams."""
+
+    def __init__(self, name: str, system_id: int, now: float) -> None:
+        self.name = name
+        self._parser: Any = mavlink2.MAVLink(None, srcSystem=system_id, srcComponent=COMPONENT_ID)
+        self._parser.robust_parsing = True
+        self._encoder: Any = mavlink2.MAVLink(None, srcSystem=system_id, srcComponent=COMPONENT_ID)
+        self.streams = StreamSchedule(DEFAULT_RATES_HZ, now)
+        self.bad_frames = 0
+
+    def decode(self, data: bytes) -> list[Any]:
+        try:
+            messages = self._parser.parse_buffer(data) or []
+        except Exception as error:  # pymavlink raises on a few malformed frames
+            log.debug("%s: undecodable bytes: %s", self.name, error)
+            self.bad_frames += 1
+            return []
+        good = [m for m in messages if m.get_type() != "BAD_DATA"]
+        self.bad_frames += len(messages) - len(good)
+        return good
+
+    def send(self, message: MavMessage) -> None:
+        frame: bytes = message.pack(self._encoder)
+        self._encoder.seq = (self._encoder.seq + 1) % 256
+        self._write(frame)
+
+    @abstractmethod
+    def _write(self, frame: bytes) -> None: ...
+
+    @abstractmethod
+    def close(self) -> None:
+        """Release the peer."""
+
+
+class TcpLink(Link):
+    def __init__(self, name: str, system_id: int, now: float, writer: asyncio.StreamWriter):
+        super().__init__(name, system_id, now)
+        self.writer = writer
+        self.dropped = 0
+
+    def _write(self, frame: bytes) -> None:
+        transport = self.writer.transport
+        if transport.is_closing():
+            return
+        if transport.get_write_buffer_size() > MAX_PENDING_BYTES:
+            self.dropped += 1
+            return
+        self.writer.write(frame)
+
+    def close(self) -> None:
+        self.writer.close()
+
+
+class UdpLink(Link):
+    def __init__(
+        self,
+        name: str,
+        system_id: int,
+        now: float,
+        transport: asyncio.DatagramTransport,
+        address: Any,
+    ) -> None:
+        super().__init__(name, system_id, now)
+        self.transport = transport
+        self.address = address
+
+    def _write(self, frame: bytes) -> None:
+        if not self.transport.is_closing():
+            self.transport.sendto(frame, self.address)
+
+    def close(self) -> None:
+        """UDP peers share the server's socket: nothing of their own to close."""
+
+
+class _UdpProtocol(asyncio.DatagramProtocol):
+    def __init__(self, server: SimulatorServer) -> None:
+        self.server = server
+
+    def datagram_received(self, data: bytes, addr: Any) -> None:
+        self.server._on_datagram(data, addr)
+
+    def error_received(self, exc: Exception) -> None:
+        # e.g. ICMP port unreachable from a peer that went away
+        log.debug("udp: %s", exc)
+
+
+class SimulatorServer:
+    """One simulated vehicle on one listening address."""
+
+    def __init__(
+        self,
+        config: SimulatorConfig,
+        *,
+        clock: Clock | None = None,
+        copter: Copter | None = None,
+        wall_clock: Callable[[], float] = time.monotonic,
+    ) -> None:
+        self.config = config
+        self.clock: Clock = clock if clock is not None else SimClock(config.speedup)
+        self.copter = copter if copter is not None else Copter(config.home)
+        self.telemetry = TelemetryBuilder(self.copter, boot_epoch_s=time.time())
+        self.handler = MessageHandler(self.copter, self.telemetry, config.system_id, COMPONENT_ID)
+        self.links: list[Link] = []
+        self.address: ListenAddress | None = None
+        self._wall = wall_clock
+        self._tcp_server: asyncio.Server | None = None
+        self._udp_transport: asyncio.DatagramTransport | None = None
+        self._udp_links: dict[Any, UdpLink] = {}
+        self._client_tasks: set[asyncio.Task[None]] = set()
+        self._ticker: asyncio.Task[None] | None = None
+        self._signature = self._state_signature()
+
+    # -- lifecycle -------------------------------------------------------------
+
+    async def start(self) -> ListenAddress:
+        """Bind and start simulating; returns the bound address (port 0 resolved)."""
+        listen = self.config.listen
+        loop = asyncio.get_running_loop()
+        if listen.scheme == "tcp":
+            self._tcp_server = await asyncio.start_server(
+                self._on_tcp_client, listen.host, listen.port
+            )
+            port = int(self._tcp_server.sockets[0].getsockname()[1])
+        else:
+            transport, _ = await loop.create_datagram_endpoint(
+                lambda: _UdpProtocol(self), local_addr=(listen.host, listen.port)
+            )
+            self._udp_transport = transport
+            port = int(transport.get_extra_info("sockname")[1])
+        self.address = ListenAddress(listen.scheme, listen.host, port)
+        self._ticker = asyncio.create_task(self._tick_forever(), name="simulator-tick")
+        log.info(
+            "simulator sysid=%d listening on %s speedup=%g",
+            self.config.system_id,
+            self.address,
+            self.config.speedup,
+        )
+        return self.address
+
+    async def stop(self) -> None:
+        """Stop listening, close every client, stop the clock."""
+        if self._ticker is not None:
+            self._ticker.cancel()
+            with contextlib.suppress(asyncio.CancelledError):
+                await self._ticker
+            self._ticker = None
+        if self._tcp_server is not None:
+            self._tcp_server.close()
+        for link in list(self.links):
+            link.close()
+        if self._client_tasks:
+            await asyncio.wait(self._client_tasks, timeout=2.0)
+        if self._tcp_server is not None:
+            await self._tcp_server.wait_closed()
+            self._tcp_server = None
+        if self._udp_transport is not None:
+            self._udp_transport.close()
+            self._udp_transport = None
+        self.links.clear()
+        self._udp_links.clear()
+        log.info("simulator sysid=%d stopped", self.config.system_id)
+
+    async def serve(self, stop: asyncio.Event) -> None:
+        """Run until ``stop`` is set."""
+        await self.start()
+        try:
+            await stop.wait()
+        finally:
+            await self.stop()
+
+    # -- simulation ------------------------------------------------------------
+
+    async def _tick_forever(self) -> None:
+        while True:
+            self.tick()
+            await asyncio.sleep(TICK_S)
+
+    def tick(self) -> None:
+        """Catch the physics up with the clock and send whatever streams are due."""
+        now = self._wall()
+        self.copter.advance_to(self.clock.now())
+        self._publish_changes(now)
+        built: dict[int, MavMessage] = {}
+        for link in list(self.links):
+            for msg_id in link.streams.due(now):
+                if msg_id not in built:
+                    built[msg_id] = self.telemetry.build(msg_id)
+                message = built[msg_id]
+                if message is not None:
+                    link.send(message)
+
+    def _publish_changes(self, now: float) -> None:
+        for text in self.copter.drain_texts():
+            log.info("STATUSTEXT %s: %s", text.severity.name, text.text)
+            self._broadcast(self.telemetry.statustext(text))
+        signature = self._state_signature()
+        if signature != self._signature:
+            # ArduCopter sends a HEARTBEAT straight away when its mode changes
+            self._signature = signature
+            for link in self.links:
+                link.streams.send_soon(MsgId.HEARTBEAT, now)
+
+    def _state_signature(self) -> tuple[int, bool, int]:
+        copter = self.copter
+        return int(copter.mode), copter.armed, int(copter.system_status())
+
+    def _broadcast(self, message: MavMessage) -> None:
+        for link in list(self.links):
+            link.send(message)
+
+    # -- receiving -------------------------------------------------------------
+
+    def _receive(self, link: Link, data: bytes) -> None:
+        now = self._wall()
+        self.copter.advance_to(self.clock.now())  # commands act on the current state
+        for message in link.decode(data):
+            for reply in self.handler.handle(message, link.streams, now):
+                if reply.to_sender_only:
+                    link.send(reply.message)
+                else:
+                    self._broadcast(reply.message)
+        self._publish_changes(now)
+
+    async def _on_tcp_client(
+        self, reader: asyncio.StreamReader, writer: asyncio.StreamWriter
+    ) -> None:
+        task = asyncio.current_task()
+        if task is not None:
+            self._client_tasks.add(task)
+        peer = writer.get_extra_info("peername")
+        link = TcpLink(f"tcp client {peer}", self.config.system_id, self._wall(), writer)
+        self.links.append(link)
+        log.info("client connected: %s", peer)
+        try:
+            while data := await reader.read(READ_SIZE):
+                self._receive(link, data)
+        except (ConnectionError, OSError) as error:
+            log.debug("client %s: %s", peer, error)
+        finally:
+            if link in self.links:
+                self.links.remove(link)
+            writer.close()
+            with contextlib.suppress(ConnectionError, OSError):
+                await writer.wait_closed()
+            log.info("client disconnected: %s", peer)
+            if task is not None:
+                self._client_tasks.discard(task)
+
+    def _on_datagram(self, data: bytes, address: Any) -> None:
+        link = self._udp_links.get(address)
+        if link is None:
+            assert self._udp_transport is not None
+            link = UdpLink(
+                f"udp peer {address}",
+                self.config.system_id,
+                self._wall(),
+                self._udp_transport,
+                address,
+            )
+            self._udp_links[address] = link
+            self.links.append(link)
+            log.info("udp peer: %s", address)
+        self._receive(link, data)

@@ -1,0 +1,297 @@
+"""Build the MAVLink messages that describe the simulated copter.
+
+pymavlink is used only to construct message objects here; encoding happens per
+connection in the transport. Field conventions follow ArduPilot's GCS_Common.cpp.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+from pymavlink.dialects.v20 import ardupilotmega as mavlink2
+
+from vehicle_agents.simulator.copter import Copter, StatusText
+from vehicle_agents.simulator.mavconst import CopterMode, MsgId, SysSensor
+
+MavMessage = Any  # pymavlink message classes are generated and untyped
+
+# Streams every client gets without asking, in messages per wall-clock second.
+DEFAULT_RATES_HZ: dict[int, float] = {
+    MsgId.HEARTBEAT: 1.0,
+    MsgId.SYS_STATUS: 2.0,
+    MsgId.GPS_RAW_INT: 5.0,
+    MsgId.GLOBAL_POSITION_INT: 10.0,
+    MsgId.ATTITUDE: 10.0,
+    MsgId.VFR_HUD: 5.0,
+    MsgId.BATTERY_STATUS: 1.0,
+    MsgId.HOME_POSITION: 0.5,
+    MsgId.EXTENDED_SYS_STATE: 1.0,
+}
+
+# ArduCopter 4.5.7, official release: what AUTOPILOT_VERSION reports.
+FIRMWARE_VERSION = (4, 5, 7)
+FIRMWARE_TYPE_OFFICIAL = 255
+CAPABILITIES = (
+    mavlink2.MAV_PROTOCOL_CAPABILITY_COMMAND_INT
+    | mavlink2.MAV_PROTOCOL_CAPABILITY_SET_POSITION_TARGET_GLOBAL_INT
+    | mavlink2.MAV_PROTOCOL_CAPABILITY_MAVLINK2
+)
+
+_UINT16_MAX = 65535
+_INT16_MAX = 32767
+_ALL_SENSORS = (
+    SysSensor.SENSOR_3D_GYRO
+    | SysSensor.SENSOR_3D_ACCEL
+    | SysSensor.SENSOR_3D_MAG
+    | SysSensor.SENSOR_ABSOLUTE_PRESSURE
+    | SysSensor.SENSOR_GPS
+    | SysSensor.SENSOR_ANGULAR_RATE_CONTROL
+    | SysSensor.SENSOR_ATTITUDE_STABILIZATION
+    | SysSensor.SENSOR_YAW_POSITION
+    | SysSensor.SENSOR_Z_ALTITUDE_CONTROL
+    | SysSensor.SENSOR_XY_POSITION_CONTROL
+    | SysSensor.SENSOR_MOTOR_OUTPUTS
+    | SysSensor.SENSOR_RC_RECEIVER
+    | SysSensor.AHRS
+    | SysSensor.LOGGING
+    | SysSensor.SENSOR_BATTERY
+    | SysSensor.PREARM_CHECK
+)
+
+
+def _cdeg(radians: float) -> int:
+    """0..35999 centidegrees of a heading in radians."""
+    return round(math.degrees(radians) * 100.0) % 36000
+
+
+class TelemetryBuilder:
+    """Turns the copter's state into MAVLink messages, one id at a time."""
+
+    def __init__(self, copter: Copter, boot_epoch_s: float) -> None:
+        self.copter = copter
+        self.boot_epoch_s = boot_epoch_s  # wall-clock time at sim time zero, for GPS time
+
+    @property
+    def supported(self) -> frozenset[int]:
+        return frozenset(self._builders())
+
+    def build(self, msg_id: int) -> MavMessage | None:
+        builder = self._builders().get(msg_id)
+        return builder() if builder is not None else None
+
+    def _builders(self) -> dict[int, Any]:
+        return {
+            MsgId.HEARTBEAT: self.heartbeat,
+            MsgId.SYS_STATUS: self.sys_status,
+            MsgId.GPS_RAW_INT: self.gps_raw_int,
+            MsgId.ATTITUDE: self.attitude,
+            MsgId.GLOBAL_POSITION_INT: self.global_position_int,
+            MsgId.GPS_GLOBAL_ORIGIN: self.gps_global_origin,
+            MsgId.VFR_HUD: self.vfr_hud,
+            MsgId.BATTERY_STATUS: self.battery_status,
+            MsgId.AUTOPILOT_VERSION: self.autopilot_version,
+            MsgId.HOME_POSITION: self.home_position,
+            MsgId.EXTENDED_SYS_STATE: self.extended_sys_state,
+        }
+
+    @property
+    def _time_boot_ms(self) -> int:
+        return int(self.copter.time_s * 1000.0) & 0xFFFFFFFF
+
+    @property
+    def _time_usec(self) -> int:
+        return int((self.boot_epoch_s + self.copter.time_s) * 1e6)
+
+    # -- messages ------------------------------------------------------------
+
+    def heartbeat(self) -> MavMessage:
+        copter = self.copter
+        return mavlink2.MAVLink_heartbeat_message(
+            mavlink2.MAV_TYPE_QUADROTOR,
+            mavlink2.MAV_AUTOPILOT_ARDUPILOTMEGA,
+            copter.base_mode(),
+            int(copter.mode),
+            int(copter.system_status()),
+            3,
+        )
+
+    def sys_status(self) -> MavMessage:
+        copter = self.copter
+        present = _ALL_SENSORS
+        enabled = present
+        if copter.mode is CopterMode.STABILIZE:
+            enabled &= ~(SysSensor.SENSOR_Z_ALTITUDE_CONTROL | SysSensor.SENSOR_XY_POSITION_CONTROL)
+        healthy = present
+        if not copter.position_ok:
+            healthy &= ~SysSensor.SENSOR_GPS
+        if not copter.prearm_ok():
+            healthy &= ~SysSensor.PREARM_CHECK
+        battery = copter.battery
+        return mavlink2.MAVLink_sys_status_message(
+            int(present),
+            int(enabled),
+            int(healthy),
+            200,  # load, per mille of the main loop
+            round(battery.voltage * 1000.0),
+            round(battery.current_a * 100.0),
+            battery.remaining_pct,
+            0,
+            0,
+            0,
+            0,
+            0,
+            0,
+        )
+
+    def gps_raw_int(self) -> MavMessage:
+        copter = self.copter
+        point = copter.position()
+        body = copter.body
+        speed = body.groundspeed
+        course = _cdeg(math.atan2(body.ve, body.vn)) if speed > 0.1 else 0
+        fix = copter.gps_fix_type
+        alt_mm = round(point.alt * 1000.0)
+        return mavlink2.MAVLink_gps_raw_int_message(
+            self._time_usec,
+            fix,
+            round(point.lat * 1e7),
+            round(point.lon * 1e7),
+            alt_mm,
+            121 if fix >= 3 else _UINT16_MAX,  # eph: HDOP 1.21, as SITL reports
+            200 if fix >= 3 else _UINT16_MAX,  # epv
+            min(round(speed * 100.0), _UINT16_MAX - 1),
+            course,
+            copter.satellites,
+            alt_mm,  # alt_ellipsoid: the simulated geoid is the ellipsoid
+            300,  # h_acc mm
+            500,  # v_acc mm
+            150,  # vel_acc mm/s
+            0,
+            0,  # yaw: no GPS yaw
+        )
+
+    def global_position_int(self) -> MavMessage:
+        copter = self.copter
+        point = copter.position()
+        body = copter.body
+        return mavlink2.MAVLink_global_position_int_message(
+            self._time_boot_ms,
+            round(point.lat * 1e7),
+            round(point.lon * 1e7),
+            round(point.alt * 1000.0),
+            round(copter.relative_alt * 1000.0),
+            round(body.vn * 100.0),
+            round(body.ve * 100.0),
+            round(body.vd * 100.0),
+            _cdeg(body.yaw),
+        )
+
+    def attitude(self) -> MavMessage:
+        body = self.copter.body
+        yaw = body.yaw if body.yaw <= math.pi else body.yaw - 2.0 * math.pi
+        return mavlink2.MAVLink_attitude_message(
+            self._time_boot_ms,
+            body.roll,
+            body.pitch,
+            yaw,
+            body.roll_rate,
+            body.pitch_rate,
+            body.yaw_rate,
+        )
+
+    def vfr_hud(self) -> MavMessage:
+        copter = self.copter
+        body = copter.body
+        return mavlink2.MAVLink_vfr_hud_message(
+            body.groundspeed,  # no airspeed sensor: ArduCopter reports its estimate
+            body.groundspeed,
+            _cdeg(body.yaw) // 100,
+            round(body.throttle * 100.0),
+            copter.altitude_msl,
+            body.climb_rate,
+        )
+
+    def battery_status(self) -> MavMessage:
+        battery = self.copter.battery
+        voltages = [min(round(battery.voltage * 1000.0), _UINT16_MAX - 1)] + [_UINT16_MAX] * 9
+        return mavlink2.MAVLink_battery_status_message(
+            0,
+            mavlink2.MAV_BATTERY_FUNCTION_UNKNOWN,
+            mavlink2.MAV_BATTERY_TYPE_LIPO,
+            _INT16_MAX,  # temperature unknown
+            voltages,
+            round(battery.current_a * 100.0),
+            round(battery.consumed_mah),
+            round(battery.consumed_wh * 36.0),  # hJ
+            battery.remaining_pct,
+            0,
+            mavlink2.MAV_BATTERY_CHARGE_STATE_OK,
+        )
+
+    def home_position(self) -> MavMessage:
+        copter = self.copter
+        home = copter.home
+        return mavlink2.MAVLink_home_position_message(
+            round(home.lat * 1e7),
+            round(home.lon * 1e7),
+            round(home.alt * 1000.0),
+            copter.home_ne[0],
+            copter.home_ne[1],
+            0.0,
+            [1.0, 0.0, 0.0, 0.0],
+            0.0,
+            0.0,
+            0.0,
+            self._time_usec,
+        )
+
+    def gps_global_origin(self) -> MavMessage:
+        origin = self.copter.frame.home
+        return mavlink2.MAVLink_gps_global_origin_message(
+            round(origin.lat * 1e7),
+            round(origin.lon * 1e7),
+            round(origin.alt * 1000.0),
+            self._time_usec,
+        )
+
+    def extended_sys_state(self) -> MavMessage:
+        return mavlink2.MAVLink_extended_sys_state_message(
+            mavlink2.MAV_VTOL_STATE_UNDEFINED, int(self.copter.landed_state())
+        )
+
+    def autopilot_version(self) -> MavMessage:
+        major, minor, patch = FIRMWARE_VERSION
+        version = (major << 24) | (minor << 16) | (patch << 8) | FIRMWARE_TYPE_OFFICIAL
+        return mavlink2.MAVLink_autopilot_version_message(
+            CAPABILITIES,
+            version,
+            0,
+            0,
+            0,
+            [0] * 8,
+            [0] * 8,
+            [0] * 8,
+            0,
+            0,
+            0,
+        )
+
+    # -- replies -------------------------------------------------------------
+
+    @staticmethod
+    def statustext(status: StatusText) -> MavMessage:
+        text = status.text.encode("ascii", errors="replace")[:50]
+        return mavlink2.MAVLink_statustext_message(int(status.severity), text)
+
+    @staticmethod
+    def command_ack(
+        command: int, result: int, target_system: int, target_component: int
+    ) -> MavMessage:
+        return mavlink2.MAVLink_command_ack_message(
+            command, int(result), 0, 0, target_system, target_component
+        )
+
+    @staticmethod
+    def message_interval(msg_id: int, interval_us: int) -> MavMessage:
+        return mavlink2.MAVLink_message_interval_message(msg_id, interval_us)

@@ -1,6 +1,6 @@
 """Print every vehicle update from the hub's live feed.
 
-    python examples/02_watch_the_fleet.py ws://127.0.0.1:8000/api/v1/ws
+python examples/02_watch_the_fleet.py ws://127.0.0.1:8000/api/v1/ws
 """
 
 import json
@@ -17,5 +17,7 @@ with connect(url) as feed:
         elif message["type"] == "vehicle":
             vehicle = message["vehicle"]
             state = vehicle["state"] or {}
-            print(f"{vehicle['id']:12} {state.get('mode')} armed={state.get('armed')} "
-                  f"alt={state.get('alt_rel')}")
+            print(
+                f"{vehicle['id']:12} {state.get('mode')} armed={state.get('armed')} "
+                f"alt={state.get('alt_rel')}"
+            )

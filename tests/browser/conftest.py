@@ -19,7 +19,9 @@ CHROMIUM_ARGS = [
 ]
 
 
-@pytest.fixture(scope="session")
+# Module scope: Playwright's sync API keeps an event loop running in this thread while
+# it is open, which would stop other tests from using asyncio.run().
+@pytest.fixture(scope="module")
 def browser() -> Iterator[Browser]:
     # Playwright gives each launch a fresh, empty profile of its own.
     with sync_playwright() as playwright:

@@ -1,0 +1,23 @@
+// Runs an operator command and words the answer for the row's result area.
+import { ApiError, sendCommand } from "./api";
+import type { Command } from "./types";
+
+export type ResultTone = "pending" | "accepted" | "refused" | "error";
+
+export interface CommandFeedback {
+  text: string;
+  tone: ResultTone;
+}
+
+export async function runCommand(vehicleId: string, command: Command): Promise<CommandFeedback> {
+  try {
+    const { outcome } = await sendCommand(vehicleId, command);
+    if (outcome.status === "accepted") return { text: `${command.name}: accepted`, tone: "accepted" };
+    const why = outcome.message ? ` — ${outcome.message}` : "";
+    return { text: `${command.name}: ${outcome.status}${why}`, tone: "refused" };
+  } catch (error) {
+    const message = error instanceof Error ? error.message : String(error);
+    const status = error instanceof ApiError && error.status ? ` (HTTP ${error.status})` : "";
+    return { text: `${command.name}: ${message}${status}`, tone: "error" };
+  }
+}

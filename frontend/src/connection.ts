@@ -1,0 +1,112 @@
+// The live WebSocket to the hub: reconnects with exponential backoff and pings
+// so that a silently dead link (common on field radios) is noticed.
+import { apiUrl } from "./api";
+import type { HubToClient, Ping } from "./types";
+
+export type ConnectionState = "connecting" | "connected" | "reconnecting";
+
+export interface FleetSocketHandlers {
+  onMessage(message: HubToClient): void;
+  /** `retryInMs` is set while waiting before the next attempt. */
+  onState(state: ConnectionState, retryInMs?: number): void;
+}
+
+const MIN_BACKOFF_MS = 500;
+const MAX_BACKOFF_MS = 5000;
+const PING_EVERY_MS = 10_000;
+/** No frame at all (not even a pong) for this long means the link is dead. */
+const SILENCE_LIMIT_MS = 25_000;
+
+export function socketUrl(): string {
+  const url = apiUrl("ws");
+  url.protocol = url.protocol === "https:" ? "wss:" : "ws:";
+  return url.toString();
+}
+
+export class FleetSocket {
+  private socket: WebSocket | null = null;
+  private backoffMs = MIN_BACKOFF_MS;
+  private retryTimer: number | undefined;
+  private pingTimer: number | undefined;
+  private lastFrameAt = 0;
+  private nonce = 0;
+  private stopped = false;
+
+  constructor(private readonly handlers: FleetSocketHandlers) {}
+
+  start(): void {
+    this.stopped = false;
+    this.connect("connecting");
+  }
+
+  stop(): void {
+    this.stopped = true;
+    window.clearTimeout(this.retryTimer);
+    this.teardown();
+  }
+
+  private connect(state: ConnectionState): void {
+    this.handlers.onState(state);
+    const socket = new WebSocket(socketUrl());
+    this.socket = socket;
+    socket.onopen = () => {
+      this.lastFrameAt = Date.now();
+      this.handlers.onState("connected");
+      this.pingTimer = window.setInterval(() => this.keepAlive(), PING_EVERY_MS);
+    };
+    socket.onmessage = (event: MessageEvent) => {
+      this.lastFrameAt = Date.now();
+      this.backoffMs = MIN_BACKOFF_MS; // the hub is really talking to us
+      const message = parse(event.data);
+      if (message) this.handlers.onMessage(message);
+    };
+    socket.onclose = () => {
+      if (this.socket !== socket) return;
+      this.teardown();
+      if (!this.stopped) this.scheduleReconnect();
+    };
+    // onerror is always followed by onclose, which does the work.
+  }
+
+  private keepAlive(): void {
+    const socket = this.socket;
+    if (!socket || socket.readyState !== WebSocket.OPEN) return;
+    if (Date.now() - this.lastFrameAt > SILENCE_LIMIT_MS) {
+      socket.close(); // onclose will reconnect
+      return;
+    }
+    const ping: Ping = { type: "ping", nonce: String(++this.nonce) };
+    socket.send(JSON.stringify(ping));
+  }
+
+  private scheduleReconnect(): void {
+    const delay = this.backoffMs;
+    this.backoffMs = Math.min(this.backoffMs * 2, MAX_BACKOFF_MS);
+    this.handlers.onState("reconnecting", delay);
+    this.retryTimer = window.setTimeout(() => this.connect("reconnecting"), delay);
+  }
+
+  private teardown(): void {
+    window.clearInterval(this.pingTimer);
+    const socket = this.socket;
+    this.socket = null;
+    if (socket) {
+      socket.onopen = socket.onmessage = socket.onclose = null;
+      if (socket.readyState === WebSocket.OPEN || socket.readyState === WebSocket.CONNECTING) {
+        socket.close();
+      }
+    }
+  }
+}
+
+function parse(data: unknown): HubToClient | null {
+  if (typeof data !== "string") return null;
+  try {
+    const message: unknown = JSON.parse(data);
+    if (message && typeof message === "object" && "type" in message) return message as HubToClient;
+  } catch {
+    // fall through
+  }
+  console.warn("ignoring malformed frame from hub", data);
+  return null;
+}

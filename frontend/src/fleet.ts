@@ -1,0 +1,61 @@
+// The dashboard's copy of the fleet. Changes are batched and handed to the views
+// once per animation frame, so dozens of vehicles at 10 Hz cost one render pass.
+import type { VehicleSummary } from "./types";
+
+export interface FleetChanges {
+  changed: VehicleSummary[];
+  removed: string[];
+  all: ReadonlyMap<string, VehicleSummary>;
+}
+
+export class FleetStore {
+  private readonly vehicles = new Map<string, VehicleSummary>();
+  private readonly dirty = new Set<string>();
+  private frame: number | null = null;
+
+  constructor(private readonly onFlush: (changes: FleetChanges) => void) {}
+
+  get(id: string): VehicleSummary | undefined {
+    return this.vehicles.get(id);
+  }
+
+  /** A full snapshot: vehicles missing from it are dropped. */
+  replaceAll(vehicles: VehicleSummary[]): void {
+    const incoming = new Set(vehicles.map((v) => v.id));
+    for (const id of this.vehicles.keys()) {
+      if (!incoming.has(id)) {
+        this.vehicles.delete(id);
+        this.dirty.add(id);
+      }
+    }
+    for (const vehicle of vehicles) this.put(vehicle);
+    this.schedule();
+  }
+
+  upsert(vehicle: VehicleSummary): void {
+    this.put(vehicle);
+    this.schedule();
+  }
+
+  private put(vehicle: VehicleSummary): void {
+    this.vehicles.set(vehicle.id, vehicle);
+    this.dirty.add(vehicle.id);
+  }
+
+  private schedule(): void {
+    if (this.frame === null) this.frame = requestAnimationFrame(() => this.flush());
+  }
+
+  private flush(): void {
+    this.frame = null;
+    const changed: VehicleSummary[] = [];
+    const removed: string[] = [];
+    for (const id of this.dirty) {
+      const vehicle = this.vehicles.get(id);
+      if (vehicle) changed.push(vehicle);
+      else removed.push(id);
+    }
+    this.dirty.clear();
+    this.onFlush({ changed, removed, all: this.vehicles });
+  }
+}

@@ -1,0 +1,59 @@
+// Display formatting for telemetry values. Missing values show as an em dash.
+import type { VehicleState, VehicleSummary } from "./types";
+
+export const MISSING = "—";
+
+type Num = number | null | undefined;
+
+function fixed(value: Num, digits: number, unit: string): string {
+  if (value === null || value === undefined || !Number.isFinite(value)) return MISSING;
+  const text = value.toFixed(digits);
+  // Avoid "-0.0" for tiny negative values.
+  return `${Number(text) === 0 ? (0).toFixed(digits) : text} ${unit}`;
+}
+
+export const formatAltitude = (metres: Num): string => fixed(metres, 1, "m");
+export const formatSpeed = (metresPerSecond: Num): string => fixed(metresPerSecond, 1, "m/s");
+
+export function formatBattery(state: VehicleState | null | undefined): string {
+  if (!state) return MISSING;
+  const parts: string[] = [];
+  const percent = state.battery_remaining;
+  if (percent !== null && percent !== undefined && percent >= 0) parts.push(`${Math.round(percent)}%`);
+  if (state.battery_voltage !== null && state.battery_voltage !== undefined) {
+    parts.push(`${state.battery_voltage.toFixed(1)} V`);
+  }
+  return parts.length ? parts.join(" · ") : MISSING;
+}
+
+const FIX_NAMES = ["No GPS", "No fix", "2D", "3D", "DGPS", "RTK float", "RTK fixed", "Static", "PPP"];
+
+export function formatGps(state: VehicleState | null | undefined): string {
+  if (!state) return MISSING;
+  const fix = FIX_NAMES[state.gps_fix] ?? `fix ${state.gps_fix}`;
+  const sats = state.satellites;
+  return sats === null || sats === undefined ? fix : `${fix} · ${sats} sats`;
+}
+
+export type LinkState = "online" | "no-fcu" | "offline";
+
+export function linkState(vehicle: VehicleSummary): LinkState {
+  if (!vehicle.connected) return "offline";
+  if (vehicle.state && !vehicle.state.fcu_connected) return "no-fcu";
+  return "online";
+}
+
+export const LINK_LABELS: Record<LinkState, string> = {
+  online: "online",
+  "no-fcu": "no FCU link",
+  offline: "offline",
+};
+
+export function formatLastSeen(lastSeen: Num, now = Date.now() / 1000): string {
+  if (lastSeen === null || lastSeen === undefined) return "never seen";
+  const ago = Math.max(0, now - lastSeen);
+  if (ago < 2) return "seen just now";
+  if (ago < 120) return `seen ${Math.round(ago)} s ago`;
+  if (ago < 7200) return `seen ${Math.round(ago / 60)} min ago`;
+  return `seen ${new Date(lastSeen * 1000).toLocaleString()}`;
+}

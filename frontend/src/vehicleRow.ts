@@ -1,0 +1,183 @@
+// One vehicle's row in the fleet table. Built once; `update` only touches the
+// cells whose text changed, so 10 Hz updates stay cheap.
+import type { CommandFeedback } from "./commands";
+import {
+  LINK_LABELS,
+  formatAltitude,
+  formatBattery,
+  formatGps,
+  formatLastSeen,
+  formatSpeed,
+  linkState,
+  MISSING,
+} from "./format";
+import type { Command, VehicleSummary } from "./types";
+
+export type CommandRunner = (vehicleId: string, command: Command) => Promise<CommandFeedback>;
+
+const TELEMETRY_FIELDS = ["mode", "armed", "alt_rel", "groundspeed", "battery", "gps"] as const;
+type TelemetryField = (typeof TELEMETRY_FIELDS)[number];
+
+const ACTIONS = [
+  { action: "arm", label: "Arm" },
+  { action: "disarm", label: "Disarm" },
+  { action: "takeoff", label: "Takeoff" },
+  { action: "land", label: "Land" },
+  { action: "rtl", label: "RTL" },
+] as const;
+type Action = (typeof ACTIONS)[number]["action"];
+
+const DEFAULT_TAKEOFF_ALTITUDE = "10";
+const LOW_BATTERY_PERCENT = 20;
+
+function cell(field: string): HTMLTableCellElement {
+  const td = document.createElement("td");
+  td.dataset.field = field;
+  return td;
+}
+
+/** Writes only when the text changed; the title shows text that does not fit. */
+function setText(element: HTMLElement, text: string): void {
+  if (element.textContent === text) return;
+  element.textContent = text;
+  element.title = text;
+}
+
+export class VehicleRow {
+  readonly element: HTMLTableRowElement;
+  private readonly cells = {} as Record<TelemetryField, HTMLTableCellElement>;
+  private readonly idText: HTMLElement;
+  private readonly link: HTMLElement;
+  private readonly altitudeInput: HTMLInputElement;
+  private readonly buttons: HTMLButtonElement[] = [];
+  private readonly result: HTMLElement;
+  private pending = false;
+  private lastSeen: number | null = null;
+
+  constructor(
+    readonly id: string,
+    private readonly runCommand: CommandRunner,
+  ) {
+    const tr = document.createElement("tr");
+    tr.className = "vehicle-row";
+    tr.dataset.vehicleId = id;
+    tr.tabIndex = 0;
+    this.element = tr;
+
+    const name = document.createElement("td");
+    name.className = "vehicle-name";
+    this.idText = document.createElement("strong");
+    this.idText.dataset.field = "id";
+    this.idText.textContent = id;
+    this.link = document.createElement("span");
+    this.link.className = "link";
+    this.link.dataset.field = "link";
+    // Worked out on hover, so an offline vehicle's "seen N s ago" is never stale.
+    this.link.addEventListener("mouseenter", () => (this.link.title = formatLastSeen(this.lastSeen)));
+    name.append(this.idText, this.link);
+    tr.append(name);
+
+    for (const field of TELEMETRY_FIELDS) {
+      this.cells[field] = cell(field);
+      tr.append(this.cells[field]);
+    }
+
+    const actions = document.createElement("td");
+    actions.className = "actions";
+    const altitude = document.createElement("label");
+    altitude.className = "takeoff-altitude";
+    this.altitudeInput = document.createElement("input");
+    this.altitudeInput.type = "number";
+    this.altitudeInput.min = "1";
+    this.altitudeInput.max = "500";
+    this.altitudeInput.step = "any";
+    this.altitudeInput.value = DEFAULT_TAKEOFF_ALTITUDE;
+    this.altitudeInput.dataset.field = "takeoff-altitude";
+    this.altitudeInput.setAttribute("aria-label", `Take-off altitude for ${id}, metres`);
+    altitude.append(this.altitudeInput, " m");
+    actions.append(altitude);
+    for (const { action, label } of ACTIONS) {
+      const button = document.createElement("button");
+      button.type = "button";
+      button.dataset.action = action;
+      button.textContent = label;
+      button.className = `action action-${action}`;
+      button.addEventListener("click", () => void this.run(action));
+      this.buttons.push(button);
+      actions.append(button);
+    }
+    this.result = document.createElement("output");
+    this.result.className = "command-result";
+    this.result.dataset.field = "command-result";
+    this.result.setAttribute("aria-live", "polite");
+    actions.append(this.result);
+    tr.append(actions);
+  }
+
+  update(vehicle: VehicleSummary): void {
+    const state = vehicle.state ?? null;
+    const link = linkState(vehicle);
+    this.element.classList.toggle("offline", link !== "online");
+    setText(this.link, LINK_LABELS[link]);
+    this.link.dataset.state = link;
+    this.lastSeen = vehicle.last_seen ?? null;
+    this.idText.title = `${vehicle.id}: ${vehicle.autopilot} ${vehicle.vehicle_type}`;
+
+    setText(this.cells.mode, state?.mode ?? MISSING);
+    setText(this.cells.armed, state ? (state.armed ? "ARMED" : "disarmed") : MISSING);
+    this.cells.armed.classList.toggle("is-armed", Boolean(state?.armed));
+    setText(this.cells.alt_rel, formatAltitude(state?.alt_rel));
+    setText(this.cells.groundspeed, formatSpeed(state?.groundspeed));
+    setText(this.cells.battery, formatBattery(state));
+    const percent = state?.battery_remaining;
+    const low = percent !== null && percent !== undefined && percent >= 0 && percent < LOW_BATTERY_PERCENT;
+    this.cells.battery.classList.toggle("warn", low);
+    setText(this.cells.gps, formatGps(state));
+    this.cells.gps.classList.toggle("warn", Boolean(state && state.gps_fix < 3));
+  }
+
+  setSelected(selected: boolean): void {
+    this.element.classList.toggle("selected", selected);
+    this.element.setAttribute("aria-selected", String(selected));
+  }
+
+  private commandFor(action: Action): Command {
+    switch (action) {
+      case "arm":
+        return { name: "arm" };
+      case "disarm":
+        return { name: "disarm", force: false };
+      case "takeoff":
+        return { name: "takeoff", altitude: this.altitudeInput.valueAsNumber };
+      case "land":
+        return { name: "land" };
+      case "rtl":
+        return { name: "rtl" };
+    }
+  }
+
+  private async run(action: Action): Promise<void> {
+    if (this.pending) return;
+    const command = this.commandFor(action);
+    this.setPending(true);
+    this.showResult({ text: `${command.name}: sending…`, tone: "pending" });
+    try {
+      this.showResult(await this.runCommand(this.id, command));
+    } finally {
+      this.setPending(false);
+    }
+  }
+
+  private setPending(pending: boolean): void {
+    this.pending = pending;
+    this.element.classList.toggle("pending", pending);
+    this.element.setAttribute("aria-busy", String(pending));
+    for (const button of this.buttons) button.disabled = pending;
+  }
+
+  private showResult({ text, tone }: CommandFeedback): void {
+    this.result.textContent = text;
+    this.result.title = text;
+    this.result.dataset.tone = tone;
+  }
+}

@@ -1,0 +1,31 @@
+"""The versioned API surface and its documentation."""
+
+from __future__ import annotations
+
+import httpx
+
+
+def test_rest_routes_are_versioned_and_documented(hub: str) -> None:
+    with httpx.Client(base_url=hub) as api:
+        schema = api.get("/openapi.json").json()
+        assert api.get("/docs").status_code == 200
+    paths = set(schema["paths"])
+    assert {
+        "/api/v1/vehicles",
+        "/api/v1/vehicles/{vehicle_id}",
+        "/api/v1/vehicles/{vehicle_id}/commands",
+        "/api/v1/vehicles/{vehicle_id}/telemetry",
+        "/api/v1/health",
+        "/api/v1/config",
+    } <= paths
+    assert all(path.startswith("/api/v1/") for path in paths)
+
+
+def test_health_and_config(hub: str) -> None:
+    with httpx.Client(base_url=hub) as api:
+        health = api.get("/api/v1/health").json()
+        config = api.get("/api/v1/config").json()
+    assert health["status"] == "ok"
+    assert health["vehicles"] == 0
+    assert config["basemap_url"] is None  # offline grid by default
+    assert config["protocol"] == 1

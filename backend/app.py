@@ -8,11 +8,19 @@ import logging
 from collections.abc import AsyncIterator
 
 from fastapi import FastAPI, Request
+from fastapi.middleware.cors import CORSMiddleware
 from fastapi.responses import HTMLResponse, JSONResponse
 from fastapi.staticfiles import StaticFiles
 
-from backend.api import system, vehicles, websockets
-from backend.errors import GcsError, InvalidRequest
+from backend.api import admin, auth, safety, system, vehicles, websockets
+from backend.api.hardening import SecurityMiddleware, content_security_policy
+from backend.errors import (
+    GcsError,
+    InvalidRequest,
+    RateLimited,
+    SafetyViolation,
+    Unauthenticated,
+)
 from backend.hub import Hub
 from backend.settings import HubSettings
 
@@ -47,10 +55,24 @@ def create_app(settings: HubSettings | None = None) -> FastAPI:
         description="Live fleet state, commands and telemetry history for drone fleets.",
         lifespan=lifespan,
     )
-    app.include_router(system.router, prefix=API_PREFIX)
-    app.include_router(vehicles.router, prefix=API_PREFIX)
+    for router in (system.router, auth.router, vehicles.router, safety.router, admin.router):
+        app.include_router(router, prefix=API_PREFIX)
     app.include_router(websockets.router)
     app.add_exception_handler(GcsError, _gcs_error_response)  # type: ignore[arg-type]
+    if settings.cors_origins:
+        app.add_middleware(
+            CORSMiddleware,
+            allow_origins=settings.cors_origins,
+            allow_credentials=True,
+            allow_methods=["GET", "POST", "PUT", "PATCH", "DELETE"],
+            allow_headers=["Authorization", "Content-Type"],
+        )
+    app.add_middleware(
+        SecurityMiddleware,
+        max_body_bytes=settings.max_body_bytes,
+        csp=content_security_policy(settings.basemap_url),
+        hsts=settings.environment == "production",
+    )
     _mount_dashboard(app, settings)
     return app
 
@@ -60,7 +82,15 @@ async def _gcs_error_response(request: Request, error: GcsError) -> JSONResponse
         # The same shape as FastAPI's own 422s, so clients handle one format.
         detail = [{"loc": ["body", error.field], "msg": error.message, "type": "value_error"}]
         return JSONResponse({"detail": detail}, status_code=error.status_code)
-    return JSONResponse({"detail": error.message}, status_code=error.status_code)
+    headers: dict[str, str] = {}
+    body: dict[str, object] = {"detail": error.message}
+    if isinstance(error, Unauthenticated):
+        headers["WWW-Authenticate"] = "Bearer"
+    elif isinstance(error, RateLimited):
+        headers["Retry-After"] = str(max(1, round(error.retry_after_s)))
+    elif isinstance(error, SafetyViolation):
+        body["violations"] = error.violations
+    return JSONResponse(body, status_code=error.status_code, headers=headers)
 
 
 def _mount_dashboard(app: FastAPI, settings: HubSettings) -> None:

@@ -4,19 +4,32 @@ from __future__ import annotations
 
 import asyncio
 import logging
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from typing import Protocol
 
 from sqlalchemy import Engine
 
+from backend.audit import AuditEntry, AuditLog
+from backend.auth.accounts import Accounts
+from backend.auth.rate_limit import Limit, RateLimiter
 from backend.fleet.commands import CommandDispatcher
 from backend.fleet.registry import FleetRegistry, VehicleRecord
+from backend.fleet.safety_gate import SafetyGate
 from backend.realtime.bus import InProcessBus, ReliableSubscription, Topic
 from backend.settings import HubSettings
 from backend.storage.database import make_engine, migrate
+from backend.storage.rails import RailsRepository
 from backend.storage.repository import Repository
 from backend.storage.writer import TelemetryWriter
+from gcs.protocol import CloseCode
 
 log = logging.getLogger(__name__)
+
+
+class AgentConnection(Protocol):
+    token_id: int | None
+
+    async def close(self, code: int, reason: str) -> None: ...
 
 
 @dataclass
@@ -28,6 +41,13 @@ class Hub:
     bus: InProcessBus
     dispatcher: CommandDispatcher
     writer: TelemetryWriter
+    accounts: Accounts
+    audit: AuditLog
+    login_limiter: RateLimiter
+    command_limiter: RateLimiter
+    safety: SafetyGate
+    # Live agent connections by vehicle, so revoking a token can drop its connection.
+    agent_sessions: dict[str, AgentConnection] = field(default_factory=dict)
 
     @classmethod
     async def start(cls, settings: HubSettings) -> Hub:
@@ -44,6 +64,8 @@ class Hub:
             repository, stored, settings.telemetry_batch_size, settings.telemetry_flush_interval_s
         )
         log.info("hub store: %s", engine.url.render_as_string(hide_password=True))
+        accounts = Accounts(engine)
+        await asyncio.to_thread(_bootstrap_accounts, accounts, settings)
         return cls(
             settings=settings,
             engine=engine,
@@ -52,6 +74,11 @@ class Hub:
             bus=bus,
             dispatcher=CommandDispatcher(registry, settings.command_timeout_s),
             writer=writer,
+            accounts=accounts,
+            audit=AuditLog(engine),
+            login_limiter=RateLimiter(Limit(settings.login_attempts_per_minute, 60.0)),
+            command_limiter=RateLimiter(Limit(settings.commands_per_second, 1.0)),
+            safety=SafetyGate(RailsRepository(engine), settings),
         )
 
     async def run(self) -> None:
@@ -64,3 +91,27 @@ class Hub:
 
     async def publish_state(self, record: VehicleRecord) -> None:
         await self.bus.publish(Topic.VEHICLE_STATE, record.id, record.summary())
+
+    async def record(self, entry: AuditEntry) -> None:
+        await asyncio.to_thread(self.audit.record, entry)
+
+    async def drop_agent_token(self, token_id: int, vehicle_id: str) -> None:
+        """A revoked agent token ends its live connection at once."""
+        session = self.agent_sessions.get(vehicle_id)
+        if session is not None and session.token_id == token_id:
+            await session.close(CloseCode.UNAUTHORIZED, "agent token revoked")
+
+
+def _bootstrap_accounts(accounts: Accounts, settings: HubSettings) -> None:
+    admin_password = settings.admin_password.get_secret_value() if settings.admin_password else None
+    generated = accounts.ensure_first_admin(admin_password)
+    if generated is not None:
+        # Shown once, on the console and never in the log, as the issue of a secret.
+        print(
+            f"\nCreated the first admin account: user 'admin', password {generated}\n"
+            "It is not shown again. Set GCS_ADMIN_PASSWORD to choose it instead.\n",
+            flush=True,
+        )
+    for vehicle_id, token in settings.enrolment_tokens().items():
+        if accounts.provision_agent_token(vehicle_id, token):
+            log.info("enrolled vehicle %s from GCS_AGENT_TOKENS", vehicle_id)

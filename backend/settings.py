@@ -2,14 +2,27 @@
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
+from typing import Any, Literal
+from urllib.parse import urlsplit
 
-from pydantic import AliasChoices, Field, SecretStr
+from pydantic import AliasChoices, Field, SecretStr, model_validator
 from pydantic_settings import BaseSettings, SettingsConfigDict
 
 from gcs.protocol import MAX_FRAME_BYTES
 
 REPO_ROOT = Path(__file__).resolve().parent.parent
+
+# Secrets that ship in examples and tutorials; refused outside development.
+WEAK_SECRETS = frozenset(
+    {"", "admin", "password", "changeme", "change-me", "secret", "gcs", "postgres", "test"}
+)
+SECRET_FILE_VARIABLES = {
+    "GCS_ADMIN_PASSWORD_FILE": "admin_password",
+    "DATABASE_URL_FILE": "database_url",
+    "GCS_AGENT_TOKENS_FILE": "agent_tokens",
+}
 
 
 class HubSettings(BaseSettings):
@@ -23,7 +36,28 @@ class HubSettings(BaseSettings):
         validation_alias=AliasChoices("DATABASE_URL", "GCS_DATABASE_URL"),
         description="SQLAlchemy URL; SQLite in the data folder when unset",
     )
-    agent_token: SecretStr = Field(description="token every agent must present (v1: shared)")
+    environment: Literal["development", "production"] = Field(
+        default="production", description="development relaxes cookie and secret checks"
+    )
+    admin_password: SecretStr | None = Field(
+        default=None, description="password of the first admin; generated and printed if unset"
+    )
+    agent_tokens: SecretStr | None = Field(
+        default=None,
+        description="vehicle=token pairs, comma-separated, enrolled at start (provisioning)",
+    )
+    session_ttl_s: float = Field(default=12 * 3600, gt=0)
+    access_token_ttl_s: float = Field(default=3600, gt=0)
+    cors_origins: list[str] = Field(default_factory=list)
+    max_body_bytes: int = Field(default=1024 * 1024, ge=1024)
+    login_attempts_per_minute: int = Field(default=5, ge=1)
+    commands_per_second: int = Field(default=20, ge=1)
+
+    max_altitude_m: float | None = Field(default=120.0, description="site ceiling above home")
+    min_altitude_m: float | None = Field(default=None, description="site floor for targets")
+    max_distance_from_home_m: float | None = Field(default=2000.0)
+    min_launch_battery_pct: float | None = Field(default=30.0)
+    battery_reserve_pct: float = Field(default=20.0, ge=0, le=100)
 
     command_timeout_s: float = Field(default=15.0, gt=0, le=120)
     telemetry_batch_size: int = Field(default=500, ge=1)
@@ -39,6 +73,58 @@ class HubSettings(BaseSettings):
     basemap_attribution: str = ""
     basemap_max_zoom: int = Field(default=19, ge=1, le=24)
     frontend_dir: Path = REPO_ROOT / "frontend" / "dist"
+
+    @model_validator(mode="before")
+    @classmethod
+    def _secret_files(cls, values: Any) -> Any:
+        """``X_FILE`` variables name files holding secrets (Docker and systemd credentials)."""
+        if not isinstance(values, dict):
+            return values
+        for variable, field_name in SECRET_FILE_VARIABLES.items():
+            path = os.environ.get(variable)
+            if path and field_name not in values:
+                values[field_name] = Path(path).read_text().strip()
+        return values
+
+    @model_validator(mode="after")
+    def _no_default_secrets_in_production(self) -> HubSettings:
+        if self.environment == "development":
+            return self
+        problems = []
+        if self.admin_password is not None:
+            password = self.admin_password.get_secret_value()
+            if password.lower() in WEAK_SECRETS or len(password) < 12:
+                problems.append("GCS_ADMIN_PASSWORD is a default or shorter than 12 characters")
+        if self.database_url:
+            db_password = urlsplit(self.database_url).password
+            if db_password is not None and db_password.lower() in WEAK_SECRETS:
+                problems.append("DATABASE_URL uses a default password")
+        for vehicle, token in self.enrolment_tokens().items():
+            if len(token) < 24:
+                problems.append(f"the agent token for {vehicle} is shorter than 24 characters")
+        if problems:
+            raise ValueError(
+                "refusing default secrets in production (set GCS_ENVIRONMENT=development "
+                "for a local trial): " + "; ".join(problems)
+            )
+        return self
+
+    def enrolment_tokens(self) -> dict[str, str]:
+        """The provisioned ``vehicle=token`` pairs."""
+        if self.agent_tokens is None:
+            return {}
+        pairs = {}
+        for item in self.agent_tokens.get_secret_value().split(","):
+            vehicle, separator, token = item.strip().partition("=")
+            if not separator or not vehicle or not token:
+                raise ValueError("GCS_AGENT_TOKENS must be vehicle=token pairs, comma-separated")
+            pairs[vehicle] = token
+        return pairs
+
+    @property
+    def cookie_secure(self) -> bool:
+        """Secure cookies need HTTPS; a local development hub serves plain HTTP."""
+        return self.environment == "production"
 
     @property
     def sqlalchemy_url(self) -> str:

@@ -87,8 +87,8 @@ def _sim(args: argparse.Namespace, rest: list[str]) -> int:
 def _demo(args: argparse.Namespace) -> int:
     from gcs.launcher import FleetPlan, LocalFleet
 
-    plan = FleetPlan(
-        vehicles=args.vehicles, port=args.port, data_dir=args.data_dir, speedup=args.speedup
+    plan = FleetPlan.reusing_secrets(
+        args.data_dir, vehicles=args.vehicles, port=args.port, speedup=args.speedup
     )
     fleet = LocalFleet(plan)
     log = logging.getLogger("gcs.demo")
@@ -98,6 +98,7 @@ def _demo(args: argparse.Namespace) -> int:
         print(
             f"\nFleet GCS demo: {plan.vehicles} simulated vehicles (speed-up {plan.speedup:g}x)\n"
             f"  dashboard  {plan.hub_http}/\n"
+            f"  log in     admin / {plan.admin_password}\n"
             f"  API docs   {plan.hub_http}/docs\n"
             f"  logs       {fleet.log_dir}/\n"
             "Press Ctrl-C to stop.\n",

@@ -6,6 +6,8 @@
 from __future__ import annotations
 
 import contextlib
+import hmac
+import json
 import logging
 import math
 import os
@@ -41,7 +43,9 @@ class FleetPlan:
     port: int = 8000
     data_dir: Path = Path("data")
     speedup: float = 1.0
-    token: str = field(default_factory=lambda: secrets.token_urlsafe(24))
+    admin_password: str = field(default_factory=lambda: secrets.token_urlsafe(12))
+    # Each vehicle's agent token is derived from this, so the plan stays one value.
+    secret: str = field(default_factory=lambda: secrets.token_urlsafe(24))
     home: tuple[float, float, float] = DEFAULT_HOME
     telemetry_rate_hz: float = 10.0
 
@@ -52,6 +56,28 @@ class FleetPlan:
     @property
     def hub_ws(self) -> str:
         return f"ws://127.0.0.1:{self.port}"
+
+    @staticmethod
+    def vehicle_id(index: int) -> str:
+        return f"sim_{index + 1}"
+
+    def agent_token(self, index: int) -> str:
+        digest = hmac.new(self.secret.encode(), self.vehicle_id(index).encode(), "sha256")
+        return "gcs_v_" + digest.hexdigest()
+
+    @classmethod
+    def reusing_secrets(cls, data_dir: Path, **values: object) -> FleetPlan:
+        """A plan whose admin password and tokens persist in the data folder, so a demo
+        restarted on the same data logs in with the same password."""
+        path = data_dir / "demo-secrets.json"
+        if path.is_file():
+            stored = json.loads(path.read_text())
+            return cls(data_dir=data_dir, **values, **stored)  # type: ignore[arg-type]
+        plan = cls(data_dir=data_dir, **values)  # type: ignore[arg-type]
+        data_dir.mkdir(parents=True, exist_ok=True)
+        path.touch(mode=0o600)
+        path.write_text(json.dumps({"admin_password": plan.admin_password, "secret": plan.secret}))
+        return plan
 
     def vehicle_home(self, index: int) -> tuple[float, float, float]:
         """Homes in a row, a few metres apart, so the vehicles do not share a spot."""
@@ -78,11 +104,20 @@ class LocalFleet:
         self.processes: list[ManagedProcess] = []
 
     def vehicle_id(self, index: int) -> str:
-        return f"sim_{index + 1}"
+        return self.plan.vehicle_id(index)
 
     def start(self, hub_env: dict[str, str] | None = None) -> None:
         self.log_dir.mkdir(parents=True, exist_ok=True)
-        env = {"GCS_AGENT_TOKEN": self.plan.token}
+        plan = self.plan
+        tokens = ",".join(
+            f"{plan.vehicle_id(i)}={plan.agent_token(i)}" for i in range(plan.vehicles)
+        )
+        env = {
+            # A local demo on plain HTTP: no Secure cookies, no production secret checks.
+            "GCS_ENVIRONMENT": "development",
+            "GCS_ADMIN_PASSWORD": plan.admin_password,
+            "GCS_AGENT_TOKENS": tokens,
+        }
         self.spawn(
             "hub",
             ["hub", "--port", str(self.plan.port), "--data-dir", str(self.plan.data_dir)],
@@ -121,7 +156,7 @@ class LocalFleet:
                 "--telemetry-rate",
                 str(self.plan.telemetry_rate_hz),
             ],
-            {"GCS_AGENT_TOKEN": self.plan.token},
+            {"GCS_AGENT_TOKEN": self.plan.agent_token(index)},
         )
 
     def spawn(self, name: str, args: list[str], env: dict[str, str] | None = None) -> None:

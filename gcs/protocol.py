@@ -42,7 +42,8 @@ class CloseCode(IntEnum):
     POLICY_VIOLATION = 1008  # repeated malformed frames
     MESSAGE_TOO_BIG = 1009
     BAD_HELLO = 4400  # first frame was not a valid hello, or wrong protocol version
-    UNAUTHORIZED = 4401  # missing or wrong agent token
+    UNAUTHORIZED = 4401  # missing, wrong, expired or revoked credentials
+    FORBIDDEN = 4403  # authenticated, but not allowed (role, vehicle, origin)
     SUPERSEDED = 4409  # another agent connected for the same vehicle
 
 
@@ -198,7 +199,9 @@ class ErrorReply(Message):
     """Sent to a peer whose frame could not be used; the connection stays open."""
 
     type: Literal["error"] = "error"
-    code: Literal["bad_frame", "invalid_message", "unexpected_message", "too_many_errors"]
+    code: Literal[
+        "bad_frame", "invalid_message", "unexpected_message", "too_many_errors", "forbidden"
+    ]
     message: str
 
 

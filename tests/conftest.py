@@ -1,15 +1,16 @@
 from __future__ import annotations
 
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from pathlib import Path
 
+import httpx
 import pytest
 
 from backend.settings import HubSettings
 from gcs.launcher import FleetPlan, LocalFleet, free_port
-from tests.helpers import running_hub
+from tests.helpers import access_token, api_client, running_hub
 
-AGENT_TOKEN = "test-agent-token"
+ADMIN_PASSWORD = "test-admin-password"
 # Fast enough that a take-off and landing take seconds, slow enough that the
 # 10 Hz telemetry still samples the climb finely.
 FLEET_SPEEDUP = 5.0
@@ -19,7 +20,8 @@ def hub_settings(data_dir: Path, **overrides: object) -> HubSettings:
     values: dict[str, object] = {
         "port": free_port(),
         "data_dir": data_dir,
-        "agent_token": AGENT_TOKEN,
+        "environment": "development",
+        "admin_password": ADMIN_PASSWORD,
         "frontend_dir": data_dir / "no-dashboard",
     }
     values.update(overrides)
@@ -41,9 +43,37 @@ def fleet(tmp_path_factory: pytest.TempPathFactory) -> Iterator[LocalFleet]:
         port=free_port(),
         data_dir=tmp_path_factory.mktemp("fleet"),
         speedup=FLEET_SPEEDUP,
-        token=AGENT_TOKEN,
     )
     with LocalFleet(plan) as local_fleet:
         local_fleet.start()
         local_fleet.wait_until_ready()
         yield local_fleet
+
+
+@pytest.fixture
+def admin_token(hub: str) -> str:
+    return access_token(hub, "admin", ADMIN_PASSWORD)
+
+
+@pytest.fixture
+def admin_api(hub: str, admin_token: str) -> Iterator[httpx.Client]:
+    with api_client(hub, admin_token) as client:
+        yield client
+
+
+@pytest.fixture
+def enrol(admin_api: httpx.Client) -> Callable[[str], str]:
+    """Enrol a vehicle through the admin API; returns its agent token."""
+
+    def enrol_vehicle(vehicle_id: str) -> str:
+        response = admin_api.post(f"/api/v1/vehicles/{vehicle_id}/agent-tokens")
+        assert response.status_code == 201, response.text
+        token: str = response.json()["token"]
+        return token
+
+    return enrol_vehicle
+
+
+@pytest.fixture(scope="session")
+def fleet_admin_token(fleet: LocalFleet) -> str:
+    return access_token(fleet.plan.hub_http, "admin", fleet.plan.admin_password)

@@ -10,6 +10,7 @@ from collections.abc import Callable, Iterator
 from contextlib import ExitStack, contextmanager
 from typing import Any
 
+import httpx
 import uvicorn
 from websockets.sync.client import ClientConnection, connect
 
@@ -56,10 +57,12 @@ def running_hub(settings: HubSettings) -> Iterator[str]:
 class FleetWatcher:
     """Follows the hub's client WebSocket and waits for a state to appear."""
 
-    def __init__(self, base_url: str) -> None:
+    def __init__(self, base_url: str, token: str) -> None:
         ws_url = base_url.replace("http://", "ws://") + CLIENT_WS_PATH
         self._stack = ExitStack()
-        self._socket: ClientConnection = self._stack.enter_context(connect(ws_url))
+        self._socket: ClientConnection = self._stack.enter_context(
+            connect(ws_url, additional_headers={"Authorization": f"Bearer {token}"})
+        )
         self.vehicles: dict[str, dict[str, Any]] = {}
 
     def close(self) -> None:
@@ -95,3 +98,19 @@ class FleetWatcher:
 
     def state(self, vehicle_id: str) -> dict[str, Any]:
         return self.vehicles.get(vehicle_id, {}).get("state") or {}
+
+
+def access_token(base_url: str, username: str, password: str) -> str:
+    """A bearer token through the OAuth2 password flow, as an integration gets one."""
+    response = httpx.post(
+        f"{base_url}/api/v1/auth/token", data={"username": username, "password": password}
+    )
+    response.raise_for_status()
+    token: str = response.json()["access_token"]
+    return token
+
+
+def api_client(base_url: str, token: str, timeout_s: float = 30) -> httpx.Client:
+    return httpx.Client(
+        base_url=base_url, timeout=timeout_s, headers={"Authorization": f"Bearer {token}"}
+    )

@@ -2,16 +2,16 @@
 
 from __future__ import annotations
 
-from fastapi import APIRouter
-
 from backend.api.deps import HubDep
 from backend.api.schemas import ClientConfig, Health
+from backend.api.security import SecuredRouter, requires
+from backend.auth.policy import PUBLIC, Permission
 from gcs.protocol import PROTOCOL_VERSION
 
-router = APIRouter(tags=["system"])
+router = SecuredRouter(tags=["system"])
 
 
-@router.get("/health", response_model=Health)
+@router.get("/health", response_model=Health, openapi_extra=requires(PUBLIC))
 async def health(hub: HubDep) -> Health:
     records = hub.registry.all()
     return Health(
@@ -23,7 +23,7 @@ async def health(hub: HubDep) -> Health:
     )
 
 
-@router.get("/config", response_model=ClientConfig)
+@router.get("/config", response_model=ClientConfig, openapi_extra=requires(Permission.READ))
 async def client_config(hub: HubDep) -> ClientConfig:
     """What the dashboard needs to draw itself (base map, protocol version)."""
     settings = hub.settings

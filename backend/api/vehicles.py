@@ -3,29 +3,32 @@
 from __future__ import annotations
 
 import asyncio
+from dataclasses import asdict
 from datetime import UTC, datetime, timedelta
 from typing import Annotated
 
-from fastapi import APIRouter, Body, Path, Query
+from fastapi import Body, Path, Query, Request
 
 from backend.api.deps import HubDep
 from backend.api.schemas import CommandResponse, TelemetryPage, TelemetrySample
-from backend.errors import InvalidRequest
+from backend.api.security import CurrentPrincipal, SecuredRouter, audit_entry, requires
+from backend.auth.policy import Permission
+from backend.errors import Forbidden, GcsError, InvalidRequest, SafetyViolation
 from gcs.protocol import Command, VehicleSummary
 
-router = APIRouter(prefix="/vehicles", tags=["vehicles"])
+router = SecuredRouter(prefix="/vehicles", tags=["vehicles"])
 
 VehicleIdPath = Annotated[str, Path(description="The vehicle's identity", max_length=64)]
 MAX_TELEMETRY_PAGE = 10_000
 
 
-@router.get("", response_model=list[VehicleSummary])
+@router.get("", response_model=list[VehicleSummary], openapi_extra=requires(Permission.READ))
 async def list_vehicles(hub: HubDep) -> list[VehicleSummary]:
     """Every known vehicle with its live state (connected or not)."""
     return [record.summary() for record in hub.registry.all()]
 
 
-@router.get("/{vehicle_id}", response_model=VehicleSummary)
+@router.get("/{vehicle_id}", response_model=VehicleSummary, openapi_extra=requires(Permission.READ))
 async def get_vehicle(vehicle_id: VehicleIdPath, hub: HubDep) -> VehicleSummary:
     return hub.registry.get(vehicle_id).summary()
 
@@ -33,25 +36,69 @@ async def get_vehicle(vehicle_id: VehicleIdPath, hub: HubDep) -> VehicleSummary:
 @router.post(
     "/{vehicle_id}/commands",
     response_model=CommandResponse,
+    openapi_extra=requires(Permission.COMMAND),
     responses={
         404: {"description": "Unknown vehicle"},
         409: {"description": "Vehicle not connected"},
+        422: {"description": "Invalid parameters, or refused by safety rules (all listed)"},
+        429: {"description": "Too many commands"},
         504: {"description": "The agent or flight controller did not answer in time"},
     },
 )
 async def send_command(
-    vehicle_id: VehicleIdPath, command: Annotated[Command, Body()], hub: HubDep
+    vehicle_id: VehicleIdPath,
+    command: Annotated[Command, Body()],
+    request: Request,
+    principal: CurrentPrincipal,
+    hub: HubDep,
+    override_reason: Annotated[
+        str | None,
+        Query(
+            min_length=10,
+            max_length=500,
+            description="Admins only: send despite safety rules, for this stated reason (audited)",
+        ),
+    ] = None,
 ) -> CommandResponse:
     """Send a command and return the flight controller's answer.
 
-    A refusal by the flight controller is an answer (status ``refused``, with its reason),
-    so it comes back as 200; a missing answer is 504.
+    The command is checked against the safety rails first; a refusal lists every
+    violated rule. A refusal by the flight controller is an answer (status ``refused``,
+    with its reason), so it comes back as 200; a missing answer is 504.
     """
-    outcome = await hub.dispatcher.execute(vehicle_id, command)
+    hub.command_limiter.check(principal.name, "commands")
+    hub.command_limiter.hit(principal.name)
+    details: dict[str, object] = {"command": command.model_dump()}
+    try:
+        record = hub.registry.get(vehicle_id)
+        violations = await asyncio.to_thread(hub.safety.check_command, record, command)
+        if violations:
+            if override_reason is None:
+                raise SafetyViolation([asdict(violation) for violation in violations])
+            if Permission.ADMIN not in principal.permissions:
+                raise Forbidden("only an admin may override safety rules")
+            details["override"] = {
+                "reason": override_reason,
+                "violations": [violation.rule for violation in violations],
+            }
+        outcome = await hub.dispatcher.execute(vehicle_id, command)
+    except GcsError as error:
+        details["error"] = error.message
+        await hub.record(
+            audit_entry(request, principal, "command", vehicle_id, "refused", **details)
+        )
+        raise
+    result = "ok" if outcome.status == "accepted" else "failed"
+    details["answer"] = outcome.model_dump()
+    await hub.record(audit_entry(request, principal, "command", vehicle_id, result, **details))
     return CommandResponse(vehicle_id=vehicle_id, command=command, outcome=outcome)
 
 
-@router.get("/{vehicle_id}/telemetry", response_model=TelemetryPage)
+@router.get(
+    "/{vehicle_id}/telemetry",
+    response_model=TelemetryPage,
+    openapi_extra=requires(Permission.READ),
+)
 async def telemetry_history(
     vehicle_id: VehicleIdPath,
     hub: HubDep,

@@ -3,12 +3,13 @@
 from __future__ import annotations
 
 import asyncio
-import hmac
 import logging
 import time
 
 from starlette.websockets import WebSocket, WebSocketDisconnect
 
+from backend.auth.policy import AGENT_MESSAGE_PERMISSIONS, Principal, authorize_message
+from backend.errors import Forbidden
 from backend.fleet.commands import AgentChannel
 from backend.hub import Hub
 from backend.realtime.bus import Topic
@@ -43,17 +44,23 @@ class AgentSession(PeerConnection):
     def __init__(self, websocket: WebSocket, hub: Hub) -> None:
         super().__init__(websocket, hub.settings.max_frame_bytes, hub.settings.max_bad_frames)
         self.hub = hub
+        self.token_id: int | None = None
 
     async def serve(self) -> None:
         await self.websocket.accept()
-        refusal = self._check_token()
-        if refusal is not None:
-            log.warning("refused agent connection from %s: %s", self.peer, refusal)
-            await self.close(CloseCode.UNAUTHORIZED, refusal)
+        principal = await self._authenticate()
+        if principal is None:
             return
+        self.token_id = principal.token_id
         try:
             hello = await self._receive_hello()
             if hello is None:
+                return
+            try:
+                authorize_message(principal, "hello", AGENT_MESSAGE_PERMISSIONS, hello.vehicle_id)
+            except Forbidden as refusal:
+                log.warning("refused agent from %s: %s", self.peer, refusal.message)
+                await self.close(CloseCode.FORBIDDEN, refusal.message)
                 return
             await self._serve_vehicle(hello)
         except FrameTooLarge as error:
@@ -62,14 +69,20 @@ class AgentSession(PeerConnection):
         except WebSocketDisconnect:
             pass
 
-    def _check_token(self) -> str | None:
+    async def _authenticate(self) -> Principal | None:
         token = _bearer_token(self.websocket.headers.get("authorization"))
-        if token is None:
-            return "missing agent token (send 'Authorization: Bearer <token>')"
-        expected = self.hub.settings.agent_token.get_secret_value()
-        if not hmac.compare_digest(token.encode(), expected.encode()):
-            return "invalid agent token"
-        return None
+        principal = None
+        if token is not None:
+            principal = await asyncio.to_thread(self.hub.accounts.resolve_agent_token, token)
+        if principal is None:
+            reason = (
+                "missing agent token (send 'Authorization: Bearer <token>')"
+                if token is None
+                else "invalid or revoked agent token"
+            )
+            log.warning("refused agent connection from %s: %s", self.peer, reason)
+            await self.close(CloseCode.UNAUTHORIZED, reason)
+        return principal
 
     async def _receive_hello(self) -> Hello | None:
         try:
@@ -103,6 +116,10 @@ class AgentSession(PeerConnection):
         await asyncio.to_thread(hub.repository.upsert_vehicle, hello, time.time())
         record = hub.registry.connect(hello)
         channel = AgentChannel(self.send)
+        previous = hub.agent_sessions.get(vehicle_id)
+        if previous is not None:
+            await previous.close(CloseCode.SUPERSEDED, "another agent connected for this vehicle")
+        hub.agent_sessions[vehicle_id] = self
         hub.dispatcher.attach(vehicle_id, channel)
         log.info(
             "agent %s connected from %s (%s %s)",
@@ -117,6 +134,8 @@ class AgentSession(PeerConnection):
             while frame := await self.receive():
                 await self._handle_frame(hello, channel, frame)
         finally:
+            if hub.agent_sessions.get(vehicle_id) is self:
+                del hub.agent_sessions[vehicle_id]
             hub.dispatcher.detach(vehicle_id, channel)
             record = hub.registry.disconnect(vehicle_id)
             await hub.publish_state(record)

@@ -8,11 +8,16 @@ import logging
 
 from starlette.websockets import WebSocket, WebSocketDisconnect
 
+from backend.api.hardening import origin_allowed
+from backend.api.security import principal_of
+from backend.auth.policy import CLIENT_MESSAGE_PERMISSIONS, authorize_message
+from backend.errors import Forbidden
 from backend.hub import Hub
 from backend.realtime.bus import LatestSubscription, Topic
 from backend.realtime.frames import FrameTooLarge, PeerConnection
 from gcs.protocol import (
     CloseCode,
+    ErrorReply,
     FleetSnapshot,
     Ping,
     Pong,
@@ -32,6 +37,16 @@ class ClientFeed(PeerConnection):
 
     async def serve(self) -> None:
         await self.websocket.accept()
+        if not origin_allowed(self.websocket, self.hub.settings.cors_origins):
+            origin = self.websocket.headers.get("origin")
+            log.warning("refused client from %s: origin %s not allowed", self.peer, origin)
+            await self.close(CloseCode.FORBIDDEN, f"origin {origin} is not allowed")
+            return
+        principal = await principal_of(self.websocket)
+        if principal is None:
+            await self.close(CloseCode.UNAUTHORIZED, "not authenticated: log in first")
+            return
+        self.principal = principal
         updates = LatestSubscription()
         # Subscribe before the snapshot, so no change falls between the two.
         self.hub.bus.subscribe(Topic.VEHICLE_STATE, updates)
@@ -66,6 +81,11 @@ class ClientFeed(PeerConnection):
                 message = decode(client_to_hub, frame)
             except ProtocolError as error:
                 await self.reject(error.reply())
+                continue
+            try:
+                authorize_message(self.principal, message.type, CLIENT_MESSAGE_PERMISSIONS)
+            except Forbidden as refusal:
+                await self.reject(ErrorReply(code="forbidden", message=refusal.message))
                 continue
             if isinstance(message, Ping):
                 await self.send(Pong(nonce=message.nonce))

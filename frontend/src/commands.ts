@@ -1,5 +1,5 @@
 // Runs an operator command and words the answer for the row's result area.
-import { ApiError, sendCommand } from "./api";
+import { ApiError, sendCommand, violationsOf } from "./api";
 import type { Command } from "./types";
 
 export type ResultTone = "pending" | "accepted" | "refused" | "error";
@@ -16,8 +16,15 @@ export async function runCommand(vehicleId: string, command: Command): Promise<C
     const why = outcome.message ? ` — ${outcome.message}` : "";
     return { text: `${command.name}: ${outcome.status}${why}`, tone: "refused" };
   } catch (error) {
+    // The hub's safety rails refused it before it reached the vehicle: name every rule broken.
+    const violations = error instanceof ApiError ? violationsOf(error.body) : [];
+    if (violations.length > 0) {
+      const why = violations.map((violation) => violation.message).join("; ");
+      return { text: `${command.name}: refused — ${why}`, tone: "refused" };
+    }
     const message = error instanceof Error ? error.message : String(error);
-    const status = error instanceof ApiError && error.status ? ` (HTTP ${error.status})` : "";
+    const status =
+      error instanceof ApiError && error.status && message !== `HTTP ${error.status}` ? ` (HTTP ${error.status})` : "";
     return { text: `${command.name}: ${message}${status}`, tone: "error" };
   }
 }

@@ -1,14 +1,30 @@
 // The live WebSocket to the hub: reconnects with exponential backoff and pings
-// so that a silently dead link (common on field radios) is noticed.
+// so that a silently dead link (common on field radios) is noticed. The browser
+// sends the session cookie with the handshake; a hub that refuses the session
+// closes with 4401, and then the socket stops instead of retrying forever.
 import { apiUrl } from "./api";
 import type { HubToClient, Ping } from "./types";
 
-export type ConnectionState = "connecting" | "connected" | "reconnecting";
+export type ConnectionState = "connecting" | "connected" | "reconnecting" | "stopped";
+
+/** `gcs.protocol.CloseCode.UNAUTHORIZED`: no session, or it expired or was revoked. */
+export const CLOSE_UNAUTHORIZED = 4401;
+/** `gcs.protocol.CloseCode.FORBIDDEN`: logged in, but not allowed (e.g. the page's origin). */
+export const CLOSE_FORBIDDEN = 4403;
 
 export interface FleetSocketHandlers {
   onMessage(message: HubToClient): void;
   /** `retryInMs` is set while waiting before the next attempt. */
   onState(state: ConnectionState, retryInMs?: number): void;
+  /** The hub closed with 4401; the socket has stopped. */
+  onUnauthorized(reason: string): void;
+  /** The hub closed with 4403; retrying would not help, so the socket has stopped. */
+  onForbidden(reason: string): void;
+  /**
+   * A connection attempt failed before it opened (e.g. the hub refused the upgrade
+   * with an HTTP status the browser does not expose); a chance to check the session.
+   */
+  onAttemptFailed?(): void;
 }
 
 const MIN_BACKOFF_MS = 500;
@@ -43,13 +59,16 @@ export class FleetSocket {
     this.stopped = true;
     window.clearTimeout(this.retryTimer);
     this.teardown();
+    this.handlers.onState("stopped");
   }
 
   private connect(state: ConnectionState): void {
     this.handlers.onState(state);
     const socket = new WebSocket(socketUrl());
     this.socket = socket;
+    let opened = false;
     socket.onopen = () => {
+      opened = true;
       this.lastFrameAt = Date.now();
       this.handlers.onState("connected");
       this.pingTimer = window.setInterval(() => this.keepAlive(), PING_EVERY_MS);
@@ -60,10 +79,22 @@ export class FleetSocket {
       const message = parse(event.data);
       if (message) this.handlers.onMessage(message);
     };
-    socket.onclose = () => {
+    socket.onclose = (event: CloseEvent) => {
       if (this.socket !== socket) return;
       this.teardown();
-      if (!this.stopped) this.scheduleReconnect();
+      if (this.stopped) return;
+      if (event.code === CLOSE_UNAUTHORIZED) {
+        this.stop();
+        this.handlers.onUnauthorized(event.reason || "the hub refused the session");
+        return;
+      }
+      if (event.code === CLOSE_FORBIDDEN) {
+        this.stop();
+        this.handlers.onForbidden(event.reason || "the hub refused the live feed");
+        return;
+      }
+      this.scheduleReconnect();
+      if (!opened) this.handlers.onAttemptFailed?.();
     };
     // onerror is always followed by onclose, which does the work.
   }

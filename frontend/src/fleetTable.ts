@@ -8,24 +8,27 @@ export class FleetTable {
   private readonly rows = new Map<string, VehicleRow>();
   private readonly emptyRow: HTMLTableRowElement | null;
   private selectedId: string | null = null;
+  private readonly listeners = new AbortController();
 
+  /** `runCommand` is null for users who may not command: their rows get no controls. */
   constructor(
     private readonly body: HTMLTableSectionElement,
-    private readonly runCommand: CommandRunner,
+    private readonly runCommand: CommandRunner | null,
     onSelect: (id: string) => void,
   ) {
     this.emptyRow = body.querySelector("tr.empty-row");
+    const { signal } = this.listeners;
     body.addEventListener("click", (event) => {
       const target = event.target as HTMLElement;
       if (target.closest("button, input, label, output")) return;
       const id = target.closest<HTMLElement>("tr[data-vehicle-id]")?.dataset.vehicleId;
       if (id) onSelect(id);
-    });
+    }, { signal });
     body.addEventListener("keydown", (event) => {
       const target = event.target as HTMLElement;
       if (event.key !== "Enter" || !target.matches("tr[data-vehicle-id]")) return;
       onSelect(target.dataset.vehicleId!);
-    });
+    }, { signal });
   }
 
   update(vehicles: Iterable<VehicleSummary>): void {
@@ -53,6 +56,15 @@ export class FleetTable {
     const row = id ? this.rows.get(id) : undefined;
     row?.setSelected(true);
     row?.element.scrollIntoView({ block: "nearest" });
+  }
+
+  /** Removes every row and the table's listeners (the session ended). */
+  destroy(): void {
+    this.listeners.abort();
+    for (const row of this.rows.values()) row.element.remove();
+    this.rows.clear();
+    this.selectedId = null;
+    this.toggleEmpty();
   }
 
   private insertSorted(row: VehicleRow): void {

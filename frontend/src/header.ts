@@ -1,12 +1,22 @@
-// The header: connection status, vehicle count and a transient notice line.
+// The header: connection status, vehicle count, a transient notice line, and who
+// is logged in (with the audit-log and logout buttons).
 import type { ConnectionState } from "./connection";
+import { type CurrentUser, can } from "./types";
 
 const NOTICE_MS = 10_000;
+
+export interface UserActions {
+  logout(): void;
+  /** Only offered to users with the "audit" permission. */
+  toggleAudit(): void;
+}
 
 export class Header {
   private readonly status = document.getElementById("connection-status")!;
   private readonly count = document.getElementById("vehicle-count")!;
   private readonly notice = document.getElementById("notice")!;
+  private readonly userMenu = document.getElementById("user-menu")!;
+  private auditButton: HTMLButtonElement | null = null;
   private noticeTimer: number | undefined;
 
   setConnection(state: ConnectionState, retryInMs?: number): void {
@@ -17,9 +27,11 @@ export class Header {
         ? "Connected"
         : state === "connecting"
           ? "Connecting…"
-          : retryInMs === undefined
-            ? "Reconnecting…"
-            : `Reconnecting in ${(retryInMs / 1000).toFixed(1)} s`;
+          : state === "stopped"
+            ? "Not connected"
+            : retryInMs === undefined
+              ? "Reconnecting…"
+              : `Reconnecting in ${(retryInMs / 1000).toFixed(1)} s`;
   }
 
   setCounts(total: number, online: number): void {
@@ -37,4 +49,49 @@ export class Header {
     window.clearTimeout(this.noticeTimer);
     if (!sticky) this.noticeTimer = window.setTimeout(() => (this.notice.hidden = true), NOTICE_MS);
   }
+
+  clearNotice(): void {
+    window.clearTimeout(this.noticeTimer);
+    this.notice.hidden = true;
+    this.notice.textContent = "";
+  }
+
+  /** Shows who is logged in and the buttons their permissions allow; null clears it. */
+  setUser(user: CurrentUser | null, actions?: UserActions): void {
+    this.userMenu.replaceChildren();
+    this.auditButton = null;
+    this.userMenu.hidden = user === null;
+    if (!user || !actions) return;
+
+    const name = document.createElement("span");
+    name.id = "current-user";
+    name.className = "current-user";
+    name.dataset.role = user.role;
+    name.textContent = `${user.username} · ${user.role}`;
+    name.title = `Logged in as ${user.username} (${user.role}); may ${user.permissions.join(", ")}`;
+    this.userMenu.append(name);
+
+    if (can(user, "audit")) {
+      this.auditButton = headerButton("show-audit", "Audit log", () => actions.toggleAudit());
+      this.auditButton.setAttribute("aria-controls", "audit-panel");
+      this.auditButton.setAttribute("aria-expanded", "false");
+      this.userMenu.append(this.auditButton);
+    }
+    this.userMenu.append(headerButton("logout", "Log out", () => actions.logout()));
+  }
+
+  setAuditOpen(open: boolean): void {
+    this.auditButton?.setAttribute("aria-expanded", String(open));
+    this.auditButton?.classList.toggle("active", open);
+  }
+}
+
+function headerButton(action: string, label: string, onClick: () => void): HTMLButtonElement {
+  const button = document.createElement("button");
+  button.type = "button";
+  button.className = "header-button";
+  button.dataset.action = action;
+  button.textContent = label;
+  button.addEventListener("click", onClick);
+  return button;
 }

@@ -1,72 +1,70 @@
-// Wires the dashboard together: config -> map, WebSocket -> store -> views.
-import { fetchConfig } from "./api";
-import { PROTOCOL_VERSION } from "./generated/protocol";
-import { runCommand } from "./commands";
-import { FleetSocket } from "./connection";
-import { FleetStore } from "./fleet";
-import { FleetTable } from "./fleetTable";
-import { linkState } from "./format";
+// Entry point: asks the hub who is logged in, then shows either the login screen
+// or the dashboard. Any 401 (REST) or 4401 (WebSocket) ends the dashboard and
+// brings the login screen back; that is handled here, in `endSession`.
+import { fetchCurrentUser, logout, onUnauthorized } from "./api";
+import { Dashboard } from "./dashboard";
 import { Header } from "./header";
-import { FleetMap } from "./map";
-import type { HubConfig, HubToClient } from "./types";
+import { LoginScreen } from "./login";
+import type { CurrentUser } from "./types";
 // Last, so the theme overrides Leaflet's stylesheet (imported by ./map).
 import "./style.css";
 
-const OFFLINE_CONFIG: HubConfig = { basemap_url: null, basemap_attribution: "", basemap_max_zoom: 19 };
+const header = new Header();
+const appParts = [document.querySelector<HTMLElement>(".app-header")!, document.querySelector<HTMLElement>(".layout")!];
+const login = new LoginScreen(startDashboard);
+let dashboard: Dashboard | null = null;
 
-async function main(): Promise<void> {
-  const header = new Header();
-  const config = await fetchConfig().catch((error: Error) => {
-    header.showNotice(`Could not load the hub's config (${error.message}); showing no basemap.`);
-    return OFFLINE_CONFIG;
-  });
-  if (config.protocol !== undefined && config.protocol !== PROTOCOL_VERSION) {
-    header.showNotice(
-      `The hub speaks protocol ${config.protocol}; this dashboard was built for ${PROTOCOL_VERSION}. Reload or rebuild it.`,
-      true,
-    );
-  }
-
-  const select = (id: string, pan: boolean) => {
-    table.select(id);
-    map.select(id, pan);
-  };
-  const map = new FleetMap(document.getElementById("map")!, config, (id) => select(id, false));
-  const table = new FleetTable(
-    document.querySelector<HTMLTableSectionElement>("#fleet-table tbody")!,
-    runCommand,
-    (id) => select(id, true),
-  );
-
-  const store = new FleetStore(({ changed, removed, all }) => {
-    for (const id of removed) {
-      table.remove(id);
-      map.remove(id);
-    }
-    table.update(changed);
-    map.update(changed);
-    let online = 0;
-    for (const vehicle of all.values()) if (linkState(vehicle) !== "offline") online++;
-    header.setCounts(all.size, online);
-  });
-
-  const onMessage = (message: HubToClient) => {
-    switch (message.type) {
-      case "fleet":
-        store.replaceAll(message.vehicles);
-        break;
-      case "vehicle":
-        store.upsert(message.vehicle);
-        break;
-      case "error":
-        header.showNotice(`Hub: ${message.message}`);
-        break;
-      case "pong":
-        break;
-    }
-  };
-
-  new FleetSocket({ onMessage, onState: (state, retry) => header.setConnection(state, retry) }).start();
+function setView(view: "login" | "dashboard"): void {
+  document.body.dataset.view = view;
+  for (const part of appParts) part.hidden = view !== "dashboard";
 }
 
-void main();
+function showLogin(message = ""): void {
+  dashboard?.stop();
+  dashboard = null;
+  setView("login");
+  login.show(message);
+}
+
+function startDashboard(user: CurrentUser): void {
+  dashboard?.stop();
+  setView("dashboard");
+  dashboard = new Dashboard(user, header, {
+    onUnauthorized: (reason) => endSession(reason),
+    logout: () => void signOut(),
+  });
+  void dashboard.start();
+}
+
+/** The hub says the session is over (expired, revoked, or never there). */
+function endSession(reason: string): void {
+  if (!dashboard) return; // already on the login screen
+  showLogin(`Your session has ended (${reason}). Log in again.`);
+}
+
+async function signOut(): Promise<void> {
+  try {
+    await logout();
+  } catch (error) {
+    // The cookie is HttpOnly: only the hub can clear it, so stay until it has.
+    header.showNotice(`Could not log out: ${error instanceof Error ? error.message : String(error)}`);
+    return;
+  }
+  showLogin();
+}
+
+onUnauthorized(endSession);
+
+async function boot(): Promise<void> {
+  let user: CurrentUser | null = null;
+  try {
+    user = await fetchCurrentUser();
+  } catch (error) {
+    showLogin(`Could not reach the hub (${error instanceof Error ? error.message : String(error)}).`);
+    return;
+  }
+  if (user) startDashboard(user);
+  else showLogin();
+}
+
+void boot();

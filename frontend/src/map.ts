@@ -78,6 +78,14 @@ export class FleetMap {
     if (pan) this.map.panTo(marker.marker.getLatLng());
   }
 
+  /** Removes the map and its markers, leaving the container empty for a later session. */
+  destroy(): void {
+    this.map.remove();
+    this.markers.clear();
+    this.container.classList.remove("no-basemap");
+    this.container.style.backgroundPosition = "";
+  }
+
   fitFleet(): void {
     const points = [...this.markers.values()].map((m) => m.marker.getLatLng());
     if (points.length === 0) return;

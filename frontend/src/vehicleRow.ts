@@ -43,20 +43,26 @@ function setText(element: HTMLElement, text: string): void {
   element.title = text;
 }
 
+/** The take-off altitude, command buttons and result line: only for users who may command. */
+interface RowControls {
+  altitudeInput: HTMLInputElement;
+  buttons: HTMLButtonElement[];
+  result: HTMLElement;
+}
+
 export class VehicleRow {
   readonly element: HTMLTableRowElement;
   private readonly cells = {} as Record<TelemetryField, HTMLTableCellElement>;
   private readonly idText: HTMLElement;
   private readonly link: HTMLElement;
-  private readonly altitudeInput: HTMLInputElement;
-  private readonly buttons: HTMLButtonElement[] = [];
-  private readonly result: HTMLElement;
+  private readonly controls: RowControls | null = null;
   private pending = false;
   private lastSeen: number | null = null;
 
+  /** `runCommand` is null for users without the "command" permission: no controls at all. */
   constructor(
     readonly id: string,
-    private readonly runCommand: CommandRunner,
+    private readonly runCommand: CommandRunner | null,
   ) {
     const tr = document.createElement("tr");
     tr.className = "vehicle-row";
@@ -82,20 +88,28 @@ export class VehicleRow {
       tr.append(this.cells[field]);
     }
 
-    const actions = document.createElement("td");
-    actions.className = "actions";
+    if (runCommand) {
+      const actions = document.createElement("td");
+      actions.className = "actions";
+      this.controls = this.buildControls(actions);
+      tr.append(actions);
+    }
+  }
+
+  private buildControls(actions: HTMLTableCellElement): RowControls {
     const altitude = document.createElement("label");
     altitude.className = "takeoff-altitude";
-    this.altitudeInput = document.createElement("input");
-    this.altitudeInput.type = "number";
-    this.altitudeInput.min = "1";
-    this.altitudeInput.max = "500";
-    this.altitudeInput.step = "any";
-    this.altitudeInput.value = DEFAULT_TAKEOFF_ALTITUDE;
-    this.altitudeInput.dataset.field = "takeoff-altitude";
-    this.altitudeInput.setAttribute("aria-label", `Take-off altitude for ${id}, metres`);
-    altitude.append(this.altitudeInput, " m");
+    const altitudeInput = document.createElement("input");
+    altitudeInput.type = "number";
+    altitudeInput.min = "1";
+    altitudeInput.max = "500";
+    altitudeInput.step = "any";
+    altitudeInput.value = DEFAULT_TAKEOFF_ALTITUDE;
+    altitudeInput.dataset.field = "takeoff-altitude";
+    altitudeInput.setAttribute("aria-label", `Take-off altitude for ${this.id}, metres`);
+    altitude.append(altitudeInput, " m");
     actions.append(altitude);
+    const buttons: HTMLButtonElement[] = [];
     for (const { action, label } of ACTIONS) {
       const button = document.createElement("button");
       button.type = "button";
@@ -103,15 +117,15 @@ export class VehicleRow {
       button.textContent = label;
       button.className = `action action-${action}`;
       button.addEventListener("click", () => void this.run(action));
-      this.buttons.push(button);
+      buttons.push(button);
       actions.append(button);
     }
-    this.result = document.createElement("output");
-    this.result.className = "command-result";
-    this.result.dataset.field = "command-result";
-    this.result.setAttribute("aria-live", "polite");
-    actions.append(this.result);
-    tr.append(actions);
+    const result = document.createElement("output");
+    result.className = "command-result";
+    result.dataset.field = "command-result";
+    result.setAttribute("aria-live", "polite");
+    actions.append(result);
+    return { altitudeInput, buttons, result };
   }
 
   update(vehicle: VehicleSummary): void {
@@ -148,7 +162,7 @@ export class VehicleRow {
       case "disarm":
         return { name: "disarm", force: false };
       case "takeoff":
-        return { name: "takeoff", altitude: this.altitudeInput.valueAsNumber };
+        return { name: "takeoff", altitude: this.controls?.altitudeInput.valueAsNumber ?? Number.NaN };
       case "land":
         return { name: "land" };
       case "rtl":
@@ -157,7 +171,7 @@ export class VehicleRow {
   }
 
   private async run(action: Action): Promise<void> {
-    if (this.pending) return;
+    if (this.pending || !this.runCommand) return;
     const command = this.commandFor(action);
     this.setPending(true);
     this.showResult({ text: `${command.name}: sending…`, tone: "pending" });
@@ -172,12 +186,14 @@ export class VehicleRow {
     this.pending = pending;
     this.element.classList.toggle("pending", pending);
     this.element.setAttribute("aria-busy", String(pending));
-    for (const button of this.buttons) button.disabled = pending;
+    for (const button of this.controls?.buttons ?? []) button.disabled = pending;
   }
 
   private showResult({ text, tone }: CommandFeedback): void {
-    this.result.textContent = text;
-    this.result.title = text;
-    this.result.dataset.tone = tone;
+    const result = this.controls?.result;
+    if (!result) return;
+    result.textContent = text;
+    result.title = text;
+    result.dataset.tone = tone;
   }
 }

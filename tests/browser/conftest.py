@@ -41,3 +41,11 @@ def page(browser: Browser) -> Iterator[Page]:
     yield opened
     context.close()
     assert errors == [], f"JavaScript errors on the page: {errors}"
+
+
+def log_in(page: Page, base_url: str, username: str, password: str) -> None:
+    """Through the dashboard's own login form, as an operator would."""
+    page.goto(base_url + "/")
+    page.locator('#login input[name="username"]').fill(username)
+    page.locator('#login input[name="password"]').fill(password)
+    page.locator('#login [type="submit"]').click()

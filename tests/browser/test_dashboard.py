@@ -8,6 +8,7 @@ import pytest
 from playwright.sync_api import Page, expect
 
 from gcs.launcher import LocalFleet
+from tests.browser.conftest import log_in
 
 pytestmark = [pytest.mark.browser, pytest.mark.integration]
 
@@ -21,7 +22,7 @@ def _altitude(page: Page) -> float:
 
 
 def test_dashboard_shows_the_fleet_and_takes_off(page: Page, fleet: LocalFleet) -> None:
-    page.goto(fleet.plan.hub_http + "/")
+    log_in(page, fleet.plan.hub_http, "admin", fleet.plan.admin_password)
     expect(page.locator(".vehicle-marker")).to_have_count(3, timeout=30_000)
     expect(page.locator("tr[data-vehicle-id]")).to_have_count(3)
     row = page.locator(f'tr[data-vehicle-id="{VEHICLE}"]')

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import os
 import signal
 import subprocess
@@ -12,7 +13,7 @@ import httpx
 import pytest
 
 from gcs.launcher import free_port
-from tests.helpers import FleetWatcher
+from tests.helpers import FleetWatcher, access_token
 
 pytestmark = pytest.mark.integration
 
@@ -61,7 +62,10 @@ def test_demo_runs_the_fleet_and_stops_cleanly_on_ctrl_c(tmp_path: Path) -> None
         assert f"http://127.0.0.1:{port}/" in banner
         children = _children(demo.pid)
         assert len(children) == 1 + 2 * 2  # hub, two simulators, two agents
-        with FleetWatcher(f"http://127.0.0.1:{port}") as watcher:
+        secrets = json.loads((tmp_path / "demo-secrets.json").read_text())
+        assert f"admin / {secrets['admin_password']}" in banner
+        token = access_token(f"http://127.0.0.1:{port}", "admin", secrets["admin_password"])
+        with FleetWatcher(f"http://127.0.0.1:{port}", token) as watcher:
             watcher.wait_until(
                 lambda v: sum(1 for x in v.values() if x["connected"] and x["state"]) == 2,
                 30,

@@ -6,11 +6,10 @@ import sqlite3
 import time
 from typing import Any
 
-import httpx
 import pytest
 
 from gcs.launcher import LocalFleet
-from tests.helpers import FleetWatcher
+from tests.helpers import FleetWatcher, api_client
 
 pytestmark = pytest.mark.integration
 
@@ -29,10 +28,13 @@ def _ready(vehicles: dict[str, dict[str, Any]], count: int) -> bool:
     )
 
 
-def test_arm_takeoff_land_through_rest(fleet: LocalFleet) -> None:
+def test_arm_takeoff_land_through_rest(fleet: LocalFleet, fleet_admin_token: str) -> None:
     base = fleet.plan.hub_http
     vehicle = fleet.vehicle_id(0)
-    with FleetWatcher(base) as watcher, httpx.Client(base_url=base, timeout=30) as api:
+    with (
+        FleetWatcher(base, fleet_admin_token) as watcher,
+        api_client(base, fleet_admin_token) as api,
+    ):
         watcher.wait_until(lambda v: _ready(v, 3), 30, "three connected vehicles with GPS")
         listed = api.get("/api/v1/vehicles").json()
         assert sorted(v["id"] for v in listed) == ["sim_1", "sim_2", "sim_3"]

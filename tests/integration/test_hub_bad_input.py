@@ -6,7 +6,7 @@ import contextlib
 import json
 import logging
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from typing import Any
 
@@ -26,7 +26,9 @@ from gcs.protocol import (
     VehicleState,
     encode,
 )
-from tests.conftest import AGENT_TOKEN
+from tests.helpers import api_client
+
+Enrol = Callable[[str], str]
 
 
 def _ws(base_url: str, path: str) -> str:
@@ -63,9 +65,9 @@ def websocket(url: str, headers: dict[str, str] | None = None) -> Iterator[Clien
 
 
 @contextmanager
-def scripted_agent(base_url: str, vehicle_id: str) -> Iterator[ClientConnection]:
+def scripted_agent(base_url: str, vehicle_id: str, token: str) -> Iterator[ClientConnection]:
     """A real WebSocket peer speaking the agent protocol, frame by frame."""
-    headers = {"Authorization": f"Bearer {AGENT_TOKEN}"}
+    headers = {"Authorization": f"Bearer {token}"}
     with websocket(_ws(base_url, AGENT_WS_PATH), headers) as socket:
         socket.send(encode(_hello(vehicle_id)))
         assert json.loads(socket.recv(timeout=5))["type"] == "welcome"
@@ -97,8 +99,8 @@ def _wait_stored(api: httpx.Client, vehicle_id: str, count: int) -> None:
         time.sleep(0.05)  # the batching writer flushes every 0.25 s; poll the real store
 
 
-def test_unknown_vehicle_is_404(hub: str) -> None:
-    with httpx.Client(base_url=hub) as api:
+def test_unknown_vehicle_is_404(hub: str, enrol: Enrol, admin_token: str) -> None:
+    with api_client(hub, admin_token) as api:
         for response in (
             api.get("/api/v1/vehicles/nope"),
             api.post("/api/v1/vehicles/nope/commands", json={"name": "arm"}),
@@ -108,8 +110,10 @@ def test_unknown_vehicle_is_404(hub: str) -> None:
             assert "nope" in response.json()["detail"]
 
 
-def test_invalid_command_parameters_are_422_naming_the_field(hub: str) -> None:
-    with scripted_agent(hub, "v1"), httpx.Client(base_url=hub) as api:
+def test_invalid_command_parameters_are_422_naming_the_field(
+    hub: str, enrol: Enrol, admin_token: str
+) -> None:
+    with scripted_agent(hub, "v1", enrol("v1")), api_client(hub, admin_token) as api:
         too_high = api.post(
             "/api/v1/vehicles/v1/commands", json={"name": "takeoff", "altitude": 9000}
         )
@@ -130,8 +134,8 @@ def test_invalid_command_parameters_are_422_naming_the_field(hub: str) -> None:
         assert "GUIDED" in detail["msg"]
 
 
-def test_start_after_end_is_422(hub: str) -> None:
-    with scripted_agent(hub, "v1"), httpx.Client(base_url=hub) as api:
+def test_start_after_end_is_422(hub: str, enrol: Enrol, admin_token: str) -> None:
+    with scripted_agent(hub, "v1", enrol("v1")), api_client(hub, admin_token) as api:
         response = api.get("/api/v1/vehicles/v1/telemetry", params={"start": 200, "end": 100})
         assert response.status_code == 422
         assert "start" in json.dumps(response.json())
@@ -139,10 +143,17 @@ def test_start_after_end_is_422(hub: str) -> None:
 
 @pytest.mark.parametrize(
     ("headers", "reason"),
-    [({}, "missing agent token"), ({"Authorization": "Bearer wrong"}, "invalid agent token")],
+    [
+        ({}, "missing agent token"),
+        ({"Authorization": "Bearer wrong"}, "invalid or revoked agent token"),
+    ],
 )
 def test_agent_with_bad_token_is_refused_and_logged(
-    hub: str, headers: dict[str, str], reason: str, caplog: pytest.LogCaptureFixture
+    hub: str,
+    admin_token: str,
+    headers: dict[str, str],
+    reason: str,
+    caplog: pytest.LogCaptureFixture,
 ) -> None:
     caplog.set_level(logging.WARNING, logger="backend.realtime.agent_gateway")
     with websocket(_ws(hub, AGENT_WS_PATH), headers) as socket:
@@ -151,12 +162,14 @@ def test_agent_with_bad_token_is_refused_and_logged(
     assert code == CloseCode.UNAUTHORIZED
     assert reason in text
     assert any(reason in record.getMessage() for record in caplog.records)
-    with httpx.Client(base_url=hub) as api:
+    with api_client(hub, admin_token) as api:
         assert api.get("/api/v1/vehicles/intruder").status_code == 404
 
 
-def test_bad_frames_get_error_replies_and_the_connection_survives(hub: str) -> None:
-    with scripted_agent(hub, "v1") as agent, httpx.Client(base_url=hub) as api:
+def test_bad_frames_get_error_replies_and_the_connection_survives(
+    hub: str, enrol: Enrol, admin_token: str
+) -> None:
+    with scripted_agent(hub, "v1", enrol("v1")) as agent, api_client(hub, admin_token) as api:
         agent.send(_telemetry(0))
         agent.send("{not json")
         reply = json.loads(agent.recv(timeout=5))
@@ -174,11 +187,11 @@ def test_bad_frames_get_error_replies_and_the_connection_survives(hub: str) -> N
         _wait_stored(api, "v1", 2)  # the good frames before and after both stored
 
 
-def test_oversized_frame_closes_only_that_agent(hub: str) -> None:
+def test_oversized_frame_closes_only_that_agent(hub: str, enrol: Enrol, admin_token: str) -> None:
     with (
-        scripted_agent(hub, "big") as big,
-        scripted_agent(hub, "good") as good,
-        httpx.Client(base_url=hub) as api,
+        scripted_agent(hub, "big", enrol("big")) as big,
+        scripted_agent(hub, "good", enrol("good")) as good,
+        api_client(hub, admin_token) as api,
     ):
         big.send(_telemetry(0))
         _wait_stored(api, "big", 1)
@@ -193,8 +206,8 @@ def test_oversized_frame_closes_only_that_agent(hub: str) -> None:
         assert vehicles["big"]["connected"] is False
 
 
-def test_repeated_abuse_closes_the_connection(hub: str) -> None:
-    with scripted_agent(hub, "noisy") as agent:
+def test_repeated_abuse_closes_the_connection(hub: str, enrol: Enrol, admin_token: str) -> None:
+    with scripted_agent(hub, "noisy", enrol("noisy")) as agent:
         for _ in range(25):
             try:
                 agent.send("garbage")
@@ -205,8 +218,8 @@ def test_repeated_abuse_closes_the_connection(hub: str) -> None:
     assert "too many bad frames" in reason
 
 
-def test_duplicate_telemetry_is_stored_once(hub: str) -> None:
-    with scripted_agent(hub, "v1") as agent, httpx.Client(base_url=hub) as api:
+def test_duplicate_telemetry_is_stored_once(hub: str, enrol: Enrol, admin_token: str) -> None:
+    with scripted_agent(hub, "v1", enrol("v1")) as agent, api_client(hub, admin_token) as api:
         for seq in (0, 1, 1, 2, 0, 3):
             agent.send(_telemetry(seq))
         _wait_stored(api, "v1", 4)
@@ -214,8 +227,10 @@ def test_duplicate_telemetry_is_stored_once(hub: str) -> None:
         assert [sample["seq"] for sample in page["samples"]] == [0, 1, 2, 3]
 
 
-def test_client_bad_frame_gets_error_reply_and_feed_continues(hub: str) -> None:
-    with websocket(_ws(hub, CLIENT_WS_PATH)) as client:
+def test_client_bad_frame_gets_error_reply_and_feed_continues(
+    hub: str, enrol: Enrol, admin_token: str
+) -> None:
+    with websocket(_ws(hub, CLIENT_WS_PATH), {"Authorization": f"Bearer {admin_token}"}) as client:
         assert json.loads(client.recv(timeout=5))["type"] == "fleet"
         client.send('{"type": "launch_missiles"}')
         reply: dict[str, Any] = json.loads(client.recv(timeout=5))
@@ -223,7 +238,37 @@ def test_client_bad_frame_gets_error_reply_and_feed_continues(hub: str) -> None:
         assert reply["code"] == "invalid_message"
         client.send('{"type": "ping", "nonce": "n1"}')
         assert json.loads(client.recv(timeout=5)) == {"type": "pong", "nonce": "n1"}
-        with scripted_agent(hub, "late"):
+        with scripted_agent(hub, "late", enrol("late")):
             update = json.loads(client.recv(timeout=5))
             assert update["type"] == "vehicle"
             assert update["vehicle"]["id"] == "late"
+
+
+def test_revoked_agent_token_drops_the_live_agent(
+    hub: str, admin_api: httpx.Client, enrol: Enrol
+) -> None:
+    token = enrol("rev")
+    token_id = admin_api.get("/api/v1/agent-tokens", params={"vehicle_id": "rev"}).json()[0]["id"]
+    with scripted_agent(hub, "rev", token) as agent:
+        agent.send(_telemetry(0))
+        assert admin_api.delete(f"/api/v1/agent-tokens/{token_id}").status_code == 204
+        code, reason = _close_code(agent)
+    assert code == CloseCode.UNAUTHORIZED
+    assert "revoked" in reason
+    with websocket(_ws(hub, AGENT_WS_PATH), {"Authorization": f"Bearer {token}"}) as again:
+        assert _close_code(again)[0] == CloseCode.UNAUTHORIZED
+
+
+def test_agent_token_cannot_speak_for_another_vehicle(
+    hub: str, admin_api: httpx.Client, enrol: Enrol
+) -> None:
+    token_a = enrol("alpha")
+    enrol("bravo")
+    headers = {"Authorization": f"Bearer {token_a}"}
+    with websocket(_ws(hub, AGENT_WS_PATH), headers) as socket:
+        socket.send(encode(_hello("bravo")))
+        code, reason = _close_code(socket)
+    assert code == CloseCode.FORBIDDEN
+    assert "alpha" in reason
+    assert "bravo" in reason
+    assert admin_api.get("/api/v1/vehicles/bravo").status_code == 404

@@ -9,8 +9,10 @@ import psycopg
 import pytest
 from alembic.autogenerate import compare_metadata
 from alembic.migration import MigrationContext
-from sqlalchemy import Engine
+from sqlalchemy import Engine, text
+from sqlalchemy.exc import DBAPIError
 
+from backend.audit import AuditEntry, AuditLog, AuditQuery
 from backend.storage.database import make_engine, migrate
 from backend.storage.models import Base
 from backend.storage.repository import Repository, TelemetryEnvelope
@@ -82,3 +84,14 @@ def test_batches_are_idempotent_and_ranges_ordered(engine: Engine) -> None:
     assert rows[0].alt_rel == 10.0
     assert rows[0].mode == "GUIDED"
     assert repository.telemetry("v1", start=1000.0, end=2000.0, limit=5)[-1].seq == 4
+
+
+def test_audit_log_is_append_only(engine: Engine) -> None:
+    migrate(engine)
+    audit = AuditLog(engine)
+    audit.record(AuditEntry("alice", "operator", "10.0.0.1", "command", "v1", "ok", {"n": 1}))
+    for statement in ("UPDATE audit_log SET actor = 'mallory'", "DELETE FROM audit_log"):
+        with pytest.raises(DBAPIError, match="append-only"), engine.begin() as connection:
+            connection.execute(text(statement))
+    (entry,) = audit.query(AuditQuery())
+    assert (entry.actor, entry.action, entry.outcome) == ("alice", "command", "ok")

@@ -186,7 +186,7 @@ export interface GotoCommand {
  */
 export interface ErrorReply {
   type: "error";
-  code: "bad_frame" | "invalid_message" | "unexpected_message" | "too_many_errors";
+  code: "bad_frame" | "invalid_message" | "unexpected_message" | "too_many_errors" | "forbidden";
   message: string;
 }
 export interface Ping {

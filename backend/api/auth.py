@@ -1,0 +1,232 @@
+"""Logging in (dashboard sessions, the OAuth2 password flow) and one's own API tokens."""
+
+from __future__ import annotations
+
+import asyncio
+from typing import Annotated
+
+from fastapi import Depends, Path, Request, Response, status
+from fastapi.security import OAuth2PasswordRequestForm
+from pydantic import BaseModel, Field
+
+from backend.api.deps import HubDep
+from backend.api.security import (
+    SESSION_COOKIE,
+    CurrentPrincipal,
+    SecuredRouter,
+    audit_entry,
+    client_address,
+    requires,
+)
+from backend.auth.policy import PUBLIC, ROLE_PERMISSIONS, Permission, Role, user_principal
+from backend.errors import Forbidden, Unauthenticated
+from backend.hub import Hub
+from backend.storage.models import UserRow
+
+router = SecuredRouter(prefix="/auth", tags=["auth"])
+
+WRONG_CREDENTIALS = "wrong username or password"
+
+
+class LoginRequest(BaseModel):
+    username: str = Field(min_length=1, max_length=64)
+    password: str = Field(min_length=1, max_length=1024)
+
+
+class Identity(BaseModel):
+    username: str
+    role: str
+    permissions: list[str]
+    expires_at: float | None = None
+
+
+class AccessToken(BaseModel):
+    access_token: str
+    token_type: str = "bearer"
+    expires_in: int
+
+
+class ApiTokenRequest(BaseModel):
+    name: str = Field(min_length=1, max_length=128)
+    scopes: list[Permission] | None = Field(
+        default=None, description="Permissions to keep (a subset of the role's); all if unset"
+    )
+    expires_in_days: int | None = Field(default=90, ge=1, le=3650)
+
+
+class ApiToken(BaseModel):
+    id: int
+    name: str
+    scopes: list[str]
+    created_at: float
+    expires_at: float | None
+    revoked: bool
+
+
+class IssuedApiToken(ApiToken):
+    token: str = Field(description="Shown once; store it now")
+
+
+async def _login(hub: Hub, request: Request, username: str, password: str) -> UserRow:
+    """Check a password under the login rate limits, auditing the attempt."""
+    address = f"address:{client_address(request)}"
+    account = f"user:{username}"
+    # Both limits apply: one address guessing many names, many addresses guessing one.
+    hub.login_limiter.check(address, "login attempts")
+    hub.login_limiter.check(account, "login attempts")
+    user = await asyncio.to_thread(hub.accounts.authenticate, username, password)
+    if user is None:
+        hub.login_limiter.hit(address)
+        hub.login_limiter.hit(account)
+        await hub.record(audit_entry(request, None, "login", username, "denied"))
+        raise Unauthenticated(WRONG_CREDENTIALS)
+    hub.login_limiter.reset(account)
+    return user
+
+
+def _identity(user: UserRow, expires_at: float | None) -> Identity:
+    permissions = sorted(ROLE_PERMISSIONS[Role(user.role)])
+    return Identity(
+        username=user.username, role=user.role, permissions=permissions, expires_at=expires_at
+    )
+
+
+@router.post("/login", response_model=Identity, openapi_extra=requires(PUBLIC))
+async def login(body: LoginRequest, request: Request, response: Response, hub: HubDep) -> Identity:
+    """Dashboard login: sets an HTTP-only session cookie."""
+    user = await _login(hub, request, body.username, body.password)
+    settings = hub.settings
+    issued = await asyncio.to_thread(
+        hub.accounts.issue_user_token, user, "session", settings.session_ttl_s
+    )
+    response.set_cookie(
+        SESSION_COOKIE,
+        issued.token,
+        max_age=int(settings.session_ttl_s),
+        httponly=True,
+        secure=settings.cookie_secure,
+        samesite="strict",
+        path="/",
+    )
+    who = user_principal(user.username, Role(user.role), None, issued.id)
+    await hub.record(audit_entry(request, who, "login", user.username, "ok", kind="session"))
+    return _identity(user, issued.expires_at)
+
+
+@router.post("/token", response_model=AccessToken, openapi_extra=requires(PUBLIC))
+async def token(
+    form: Annotated[OAuth2PasswordRequestForm, Depends()], request: Request, hub: HubDep
+) -> AccessToken:
+    """OAuth2 password flow for integrations: returns a bearer access token.
+
+    ``scope`` may narrow the token to some of the role's permissions (space-separated).
+    """
+    user = await _login(hub, request, form.username, form.password)
+    scopes = _requested_scopes(form.scopes, Role(user.role))
+    ttl = hub.settings.access_token_ttl_s
+    issued = await asyncio.to_thread(hub.accounts.issue_user_token, user, "access", ttl, scopes)
+    who = user_principal(user.username, Role(user.role), scopes, issued.id)
+    await hub.record(audit_entry(request, who, "login", user.username, "ok", kind="access"))
+    return AccessToken(access_token=issued.token, expires_in=int(ttl))
+
+
+def _requested_scopes(requested: list[str], role: Role) -> frozenset[Permission] | None:
+    if not requested:
+        return None
+    try:
+        scopes = frozenset(Permission(scope) for scope in requested)
+    except ValueError:
+        raise Forbidden(f"unknown scope in {requested}") from None
+    beyond = scopes - ROLE_PERMISSIONS[role]
+    if beyond:
+        raise Forbidden(f"the {role.value} role cannot have scopes {sorted(beyond)}")
+    return scopes
+
+
+@router.post(
+    "/logout", status_code=status.HTTP_204_NO_CONTENT, openapi_extra=requires(Permission.READ)
+)
+async def logout(request: Request, principal: CurrentPrincipal, hub: HubDep) -> Response:
+    """Ends the session (or revokes the bearer token used)."""
+    if principal.token_id is not None:
+        await asyncio.to_thread(hub.accounts.revoke_user_token, principal.token_id, None)
+    await hub.record(audit_entry(request, principal, "logout", principal.name, "ok"))
+    response = Response(status_code=status.HTTP_204_NO_CONTENT)
+    response.delete_cookie(SESSION_COOKIE, path="/")
+    return response
+
+
+@router.get("/me", response_model=Identity, openapi_extra=requires(Permission.READ))
+async def me(principal: CurrentPrincipal) -> Identity:
+    return Identity(
+        username=principal.name,
+        role=principal.role,
+        permissions=sorted(principal.permissions),
+    )
+
+
+@router.get("/api-tokens", response_model=list[ApiToken], openapi_extra=requires(Permission.READ))
+async def list_api_tokens(principal: CurrentPrincipal, hub: HubDep) -> list[ApiToken]:
+    """The caller's own API tokens (never their values)."""
+    rows = await asyncio.to_thread(hub.accounts.api_tokens, principal.name)
+    return [
+        ApiToken(
+            id=row.id,
+            name=row.name,
+            scopes=row.scopes.split(","),
+            created_at=row.created_at,
+            expires_at=row.expires_at,
+            revoked=row.revoked_at is not None,
+        )
+        for row in rows
+    ]
+
+
+@router.post(
+    "/api-tokens",
+    response_model=IssuedApiToken,
+    status_code=status.HTTP_201_CREATED,
+    openapi_extra=requires(Permission.READ),
+)
+async def create_api_token(
+    body: ApiTokenRequest, request: Request, principal: CurrentPrincipal, hub: HubDep
+) -> IssuedApiToken:
+    """A long-lived bearer token for an integration, scoped to some of the caller's rights."""
+    user = await asyncio.to_thread(hub.accounts.user, principal.name)
+    role_scopes = ROLE_PERMISSIONS[Role(user.role)]
+    scopes = frozenset(body.scopes) if body.scopes is not None else role_scopes
+    # A token never carries more than the session that created it.
+    if not scopes <= principal.permissions:
+        raise Forbidden(f"cannot grant {sorted(scopes - principal.permissions)}")
+    ttl = body.expires_in_days * 86400 if body.expires_in_days else None
+    issued = await asyncio.to_thread(
+        hub.accounts.issue_user_token, user, "api", ttl, scopes, body.name
+    )
+    await hub.record(
+        audit_entry(request, principal, "token.create", body.name, "ok", scopes=sorted(scopes))
+    )
+    return IssuedApiToken(
+        id=issued.id,
+        name=body.name,
+        scopes=sorted(scopes),
+        created_at=issued.created_at,
+        expires_at=issued.expires_at,
+        revoked=False,
+        token=issued.token,
+    )
+
+
+@router.delete(
+    "/api-tokens/{token_id}",
+    status_code=status.HTTP_204_NO_CONTENT,
+    openapi_extra=requires(Permission.READ),
+)
+async def revoke_api_token(
+    token_id: Annotated[int, Path(ge=1)],
+    request: Request,
+    principal: CurrentPrincipal,
+    hub: HubDep,
+) -> Response:
+    await asyncio.to_thread(hub.accounts.revoke_user_token, token_id, principal.name)
+    await hub.record(audit_entry(request, principal, "token.revoke", str(token_id), "ok"))
+    return Response(status_code=status.HTTP_204_NO_CONTENT)

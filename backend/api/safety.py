@@ -1,0 +1,112 @@
+"""Safety rails: the site's, per-vehicle overrides, and pre-flight mission checks."""
+
+from __future__ import annotations
+
+import asyncio
+from typing import Annotated
+
+from fastapi import Path, Request, Response, status
+
+from backend.api.deps import HubDep
+from backend.api.security import CurrentPrincipal, SecuredRouter, audit_entry, requires
+from backend.auth.policy import Permission
+from backend.safety.schemas import (
+    MissionCheckRequest,
+    MissionCheckResponse,
+    SafetyRailsModel,
+)
+from backend.storage.rails import SITE, vehicle_scope
+from gcs.protocol import VehicleId
+
+router = SecuredRouter(tags=["safety"])
+
+VehicleIdPath = Annotated[VehicleId, Path()]
+
+
+@router.get(
+    "/safety/rails", response_model=SafetyRailsModel, openapi_extra=requires(Permission.READ)
+)
+async def site_rails(hub: HubDep) -> SafetyRailsModel:
+    """The site's rails, which apply to every vehicle unless narrowed per vehicle."""
+    return SafetyRailsModel.from_rails(await asyncio.to_thread(hub.safety.site_rails))
+
+
+@router.put(
+    "/safety/rails", response_model=SafetyRailsModel, openapi_extra=requires(Permission.ADMIN)
+)
+async def set_site_rails(
+    body: SafetyRailsModel, request: Request, principal: CurrentPrincipal, hub: HubDep
+) -> SafetyRailsModel:
+    await asyncio.to_thread(hub.safety.repository.put, SITE, body.model_dump_json(), principal.name)
+    await hub.record(
+        audit_entry(request, principal, "rails.update", SITE, "ok", rails=body.model_dump())
+    )
+    return body
+
+
+@router.get(
+    "/vehicles/{vehicle_id}/safety-rails",
+    response_model=SafetyRailsModel,
+    openapi_extra=requires(Permission.READ),
+)
+async def effective_vehicle_rails(vehicle_id: VehicleIdPath, hub: HubDep) -> SafetyRailsModel:
+    """The rails in force for this vehicle: the site's, with its own overrides applied."""
+    hub.registry.get(vehicle_id)
+    return SafetyRailsModel.from_rails(
+        await asyncio.to_thread(hub.safety.effective_rails, vehicle_id)
+    )
+
+
+@router.put(
+    "/vehicles/{vehicle_id}/safety-rails",
+    response_model=SafetyRailsModel,
+    openapi_extra=requires(Permission.ADMIN),
+)
+async def set_vehicle_rails(
+    vehicle_id: VehicleIdPath,
+    body: SafetyRailsModel,
+    request: Request,
+    principal: CurrentPrincipal,
+    hub: HubDep,
+) -> SafetyRailsModel:
+    """Per-vehicle rails: each value set here replaces the site's for this vehicle."""
+    hub.registry.get(vehicle_id)
+    await asyncio.to_thread(
+        hub.safety.repository.put,
+        vehicle_scope(vehicle_id),
+        body.model_dump_json(),
+        principal.name,
+    )
+    await hub.record(
+        audit_entry(request, principal, "rails.update", vehicle_id, "ok", rails=body.model_dump())
+    )
+    return body
+
+
+@router.delete(
+    "/vehicles/{vehicle_id}/safety-rails",
+    status_code=status.HTTP_204_NO_CONTENT,
+    openapi_extra=requires(Permission.ADMIN),
+)
+async def clear_vehicle_rails(
+    vehicle_id: VehicleIdPath, request: Request, principal: CurrentPrincipal, hub: HubDep
+) -> Response:
+    hub.registry.get(vehicle_id)
+    await asyncio.to_thread(hub.safety.repository.delete, vehicle_scope(vehicle_id))
+    await hub.record(audit_entry(request, principal, "rails.clear", vehicle_id, "ok"))
+    return Response(status_code=status.HTTP_204_NO_CONTENT)
+
+
+@router.post(
+    "/vehicles/{vehicle_id}/mission-check",
+    response_model=MissionCheckResponse,
+    openapi_extra=requires(Permission.COMMAND),
+)
+async def check_mission(
+    vehicle_id: VehicleIdPath, body: MissionCheckRequest, hub: HubDep
+) -> MissionCheckResponse:
+    """Check a mission against the rails before it flies: every violated rule, plus the
+    battery estimate. Mission upload runs the same check and refuses on any violation."""
+    record = hub.registry.get(vehicle_id)
+    check = await asyncio.to_thread(hub.safety.check_mission, record, body.to_waypoints())
+    return MissionCheckResponse.from_plan_check(check)

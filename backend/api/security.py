@@ -1,0 +1,122 @@
+"""Authentication at the API edge, and the router that makes every route name its permission.
+
+``SecuredRouter`` refuses to register a route that does not declare a permission (through
+``requires(...)``), and puts the check in front of it. So the policy has one choke point,
+and a new route without a policy fails at import time, not in production.
+"""
+
+from __future__ import annotations
+
+import asyncio
+from collections.abc import Callable
+from typing import Annotated, Any
+
+from fastapi import APIRouter, Depends, Request
+from fastapi.params import Depends as DependsParam
+from fastapi.security import OAuth2PasswordBearer
+from starlette.requests import HTTPConnection
+
+from backend.api.deps import get_hub
+from backend.audit import AuditEntry
+from backend.auth.policy import PUBLIC, Permission, Principal, authorize
+from backend.errors import Forbidden, Unauthenticated
+
+SESSION_COOKIE = "gcs_session"
+PERMISSION_KEY = "x-required-permission"
+
+# Declares the bearer scheme in the OpenAPI document (the docs' "Authorize" button).
+bearer_scheme = OAuth2PasswordBearer(tokenUrl="/api/v1/auth/token", auto_error=False)
+
+
+def requires(permission: Permission | str) -> dict[str, Any]:
+    """The ``openapi_extra`` that declares a route's permission (or ``PUBLIC``)."""
+    return {PERMISSION_KEY: str(permission)}
+
+
+def client_address(connection: HTTPConnection) -> str:
+    return connection.client.host if connection.client else "unknown"
+
+
+def presented_token(connection: HTTPConnection) -> str | None:
+    """A bearer token from the Authorization header, else the dashboard's session cookie."""
+    header = connection.headers.get("authorization")
+    if header:
+        scheme, _, token = header.partition(" ")
+        return token.strip() if scheme.lower() == "bearer" and token.strip() else None
+    return connection.cookies.get(SESSION_COOKIE)
+
+
+async def principal_of(connection: HTTPConnection) -> Principal | None:
+    token = presented_token(connection)
+    if token is None:
+        return None
+    hub = get_hub(connection)
+    return await asyncio.to_thread(hub.accounts.resolve_user_token, token)
+
+
+async def get_principal(
+    request: Request, _bearer: Annotated[str | None, Depends(bearer_scheme)]
+) -> Principal:
+    principal = await principal_of(request)
+    if principal is None:
+        if presented_token(request) is None:
+            raise Unauthenticated("not authenticated: log in or send a bearer token")
+        raise Unauthenticated("the token is invalid, expired or revoked")
+    request.state.principal = principal
+    return principal
+
+
+CurrentPrincipal = Annotated[Principal, Depends(get_principal)]
+
+
+def _authorizer(permission: Permission) -> Callable[..., Any]:
+    async def check(request: Request, principal: CurrentPrincipal) -> None:
+        try:
+            authorize(principal, permission, request.path_params.get("vehicle_id"))
+        except Forbidden as refusal:
+            if permission != Permission.READ:
+                # A refused attempt to act is itself worth a line in the audit log.
+                action = f"{request.method} {request.url.path}"
+                entry = audit_entry(request, principal, "denied", action, "denied")
+                await get_hub(request).record(entry)
+            raise refusal
+
+    return check
+
+
+class SecuredRouter(APIRouter):
+    """An APIRouter whose every route must declare ``openapi_extra=requires(...)``."""
+
+    def add_api_route(self, path: str, endpoint: Callable[..., Any], **kwargs: Any) -> None:
+        extra = kwargs.get("openapi_extra") or {}
+        declared = extra.get(PERMISSION_KEY)
+        if declared is None:
+            raise RuntimeError(f"route {path} declares no permission: add requires(...)")
+        if declared != PUBLIC:
+            dependencies: list[DependsParam] = list(kwargs.get("dependencies") or [])
+            dependencies.insert(0, Depends(_authorizer(Permission(declared))))
+            kwargs["dependencies"] = dependencies
+            responses = dict(kwargs.get("responses") or {})
+            responses.setdefault(401, {"description": "Not authenticated"})
+            responses.setdefault(403, {"description": f"Needs the '{declared}' permission"})
+            kwargs["responses"] = responses
+        super().add_api_route(path, endpoint, **kwargs)
+
+
+def audit_entry(
+    request: HTTPConnection,
+    principal: Principal | None,
+    action: str,
+    target: str,
+    outcome: str,
+    **detail: Any,
+) -> AuditEntry:
+    return AuditEntry(
+        actor=principal.name if principal else "anonymous",
+        role=principal.role if principal else "",
+        source=client_address(request),
+        action=action,
+        target=target,
+        outcome=outcome,
+        detail=detail,
+    )

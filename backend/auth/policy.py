@@ -1,0 +1,108 @@
+"""The one authorization policy. Every REST route and WebSocket message is checked here.
+
+A later rule (a vehicle's manual-control lease, say) joins ``authorize`` and so
+applies to every caller at once.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from enum import StrEnum
+
+from backend.errors import Forbidden
+
+
+class Role(StrEnum):
+    VIEWER = "viewer"  # sees everything, commands nothing
+    OPERATOR = "operator"  # commands and plans
+    ADMIN = "admin"  # users, vehicles, settings
+
+
+class Permission(StrEnum):
+    READ = "read"  # fleet state, telemetry, configuration, one's own tokens
+    COMMAND = "command"  # vehicle commands, mission checks
+    AUDIT = "audit"  # the audit log
+    ADMIN = "admin"  # users, enrolment, safety rails, overrides
+    AGENT = "agent"  # speaking for one vehicle (agent tokens only)
+
+
+# Routes anyone may call (logging in, the health probe).
+PUBLIC = "public"
+
+ROLE_PERMISSIONS: dict[Role, frozenset[Permission]] = {
+    Role.VIEWER: frozenset({Permission.READ}),
+    Role.OPERATOR: frozenset({Permission.READ, Permission.COMMAND, Permission.AUDIT}),
+    Role.ADMIN: frozenset(
+        {Permission.READ, Permission.COMMAND, Permission.AUDIT, Permission.ADMIN}
+    ),
+}
+USER_PERMISSIONS = ROLE_PERMISSIONS[Role.ADMIN]
+
+
+@dataclass(frozen=True)
+class Principal:
+    """An authenticated caller: a user (through a session, access or API token) or an agent."""
+
+    name: str
+    role: str  # a Role, or "agent"
+    permissions: frozenset[Permission]
+    vehicle_id: str | None = None  # agents speak for exactly this vehicle
+    token_id: int | None = None
+    extra: dict[str, str] = field(default_factory=dict, compare=False)
+
+    @property
+    def is_agent(self) -> bool:
+        return self.vehicle_id is not None
+
+
+def user_principal(
+    name: str, role: Role, scopes: frozenset[Permission] | None, token_id: int
+) -> Principal:
+    """A user's principal: the role's permissions, narrowed by the token's scopes."""
+    allowed = ROLE_PERMISSIONS[role]
+    return Principal(
+        name=name,
+        role=role.value,
+        permissions=allowed if scopes is None else allowed & scopes,
+        token_id=token_id,
+    )
+
+
+def agent_principal(vehicle_id: str, token_id: int) -> Principal:
+    return Principal(
+        name=f"agent:{vehicle_id}",
+        role="agent",
+        permissions=frozenset({Permission.AGENT}),
+        vehicle_id=vehicle_id,
+        token_id=token_id,
+    )
+
+
+def authorize(principal: Principal, needed: Permission, vehicle_id: str | None = None) -> None:
+    """Raise Forbidden unless ``principal`` may do what ``needed`` covers (on ``vehicle_id``)."""
+    if needed not in principal.permissions:
+        raise Forbidden(f"{principal.name} ({principal.role}) lacks the '{needed}' permission")
+    if principal.is_agent and vehicle_id is not None and vehicle_id != principal.vehicle_id:
+        raise Forbidden(f"this agent token belongs to {principal.vehicle_id!r}, not {vehicle_id!r}")
+
+
+# What each WebSocket message type needs, by the ``type`` field. A message type missing
+# here is refused, and the test suite checks every type in gcs.protocol is listed.
+CLIENT_MESSAGE_PERMISSIONS: dict[str, Permission] = {"ping": Permission.READ}
+AGENT_MESSAGE_PERMISSIONS: dict[str, Permission] = {
+    "hello": Permission.AGENT,
+    "telemetry": Permission.AGENT,
+    "command_result": Permission.AGENT,
+}
+
+
+def authorize_message(
+    principal: Principal,
+    message_type: str,
+    table: dict[str, Permission],
+    vehicle_id: str | None = None,
+) -> None:
+    needed = table.get(message_type)
+    if needed is None:
+        raise Forbidden(f"message type {message_type!r} has no policy")
+    authorize(principal, needed, vehicle_id)

@@ -1,0 +1,49 @@
+"""Sliding-window rate limits, per key (an address, a username, a user)."""
+
+from __future__ import annotations
+
+import collections
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+
+from backend.errors import RateLimited
+
+
+@dataclass(frozen=True)
+class Limit:
+    events: int
+    per_s: float
+
+
+class RateLimiter:
+    def __init__(self, limit: Limit, clock: Callable[[], float] = time.monotonic) -> None:
+        self.limit = limit
+        self._clock = clock
+        self._events: dict[str, collections.deque[float]] = collections.defaultdict(
+            collections.deque
+        )
+
+    def _window(self, key: str) -> collections.deque[float]:
+        events = self._events[key]
+        horizon = self._clock() - self.limit.per_s
+        while events and events[0] <= horizon:
+            events.popleft()
+        return events
+
+    def check(self, key: str, what: str) -> None:
+        """Raise RateLimited if ``key`` has used up its budget (does not count an event)."""
+        events = self._window(key)
+        if len(events) >= self.limit.events:
+            retry_after = events[0] + self.limit.per_s - self._clock()
+            raise RateLimited(f"too many {what}; try again in {retry_after:.0f} s", retry_after)
+
+    def hit(self, key: str) -> None:
+        self._window(key).append(self._clock())
+        if len(self._events) > 10_000:
+            # Forget idle keys so an address scan cannot grow this without bound.
+            for idle in [k for k, v in self._events.items() if not v]:
+                del self._events[idle]
+
+    def reset(self, key: str) -> None:
+        self._events.pop(key, None)

@@ -1,0 +1,86 @@
+"""The safety gate between an operator's request and the vehicle: every command and
+mission is checked against the effective rails (the site's, narrowed per vehicle)."""
+
+from __future__ import annotations
+
+from backend.fleet.registry import VehicleRecord
+from backend.safety import (
+    PlanCheck,
+    SafetyRails,
+    VehicleSnapshot,
+    Violation,
+    Waypoint,
+    check_arm,
+    check_goto,
+    check_takeoff,
+    evaluate_plan,
+)
+from backend.safety.schemas import SafetyRailsModel
+from backend.settings import HubSettings
+from backend.storage.rails import SITE, RailsRepository, vehicle_scope
+from gcs.protocol import ArmCommand, Command, GotoCommand, TakeoffCommand
+
+# Below this height a vehicle counts as on the ground for the launch rules.
+LANDED_BELOW_M = 0.5
+
+
+def snapshot_of(record: VehicleRecord) -> VehicleSnapshot:
+    state = record.state
+    if state is None:
+        return VehicleSnapshot(None, None, None, None, None, None, armed=False, landed=True)
+    landed = not state.armed or (state.alt_rel is not None and state.alt_rel < LANDED_BELOW_M)
+    return VehicleSnapshot(
+        lat=state.lat,
+        lon=state.lon,
+        alt_rel=state.alt_rel,
+        home_lat=state.home_lat,
+        home_lon=state.home_lon,
+        battery_remaining_pct=state.battery_remaining,
+        armed=state.armed,
+        landed=landed,
+    )
+
+
+class SafetyGate:
+    def __init__(self, repository: RailsRepository, settings: HubSettings) -> None:
+        self.repository = repository
+        self.settings = settings
+
+    def site_rails(self) -> SafetyRails:
+        stored = self.repository.get(SITE)
+        if stored is not None:
+            return SafetyRailsModel.model_validate_json(stored).to_rails()
+        settings = self.settings
+        return SafetyRails(
+            max_altitude_m=settings.max_altitude_m,
+            min_altitude_m=settings.min_altitude_m,
+            max_distance_from_home_m=settings.max_distance_from_home_m,
+            min_launch_battery_pct=settings.min_launch_battery_pct,
+            battery_reserve_pct=settings.battery_reserve_pct,
+        )
+
+    def vehicle_rails(self, vehicle_id: str) -> SafetyRails | None:
+        stored = self.repository.get(vehicle_scope(vehicle_id))
+        return SafetyRailsModel.model_validate_json(stored).to_rails() if stored else None
+
+    def effective_rails(self, vehicle_id: str) -> SafetyRails:
+        return self.site_rails().merged_with(self.vehicle_rails(vehicle_id))
+
+    def check_command(self, record: VehicleRecord, command: Command) -> list[Violation]:
+        """Violations of the rails; landing, RTL, mode changes and disarming are never
+        blocked, because they are how an operator gets out of trouble."""
+        rails = self.effective_rails(record.id)
+        vehicle = snapshot_of(record)
+        match command:
+            case ArmCommand():
+                return check_arm(rails, vehicle)
+            case TakeoffCommand(altitude=altitude):
+                return check_takeoff(rails, vehicle, altitude)
+            case GotoCommand(lat=lat, lon=lon, altitude=altitude):
+                return check_goto(rails, vehicle, lat, lon, altitude)
+            case _:
+                return []
+
+    def check_mission(self, record: VehicleRecord, waypoints: list[Waypoint]) -> PlanCheck:
+        """Every violated rule of a mission, and the battery estimate when it can be made."""
+        return evaluate_plan(self.effective_rails(record.id), snapshot_of(record), waypoints)

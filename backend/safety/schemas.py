@@ -1,0 +1,212 @@
+"""REST bodies for safety rails and mission checks, with conversions to the rails' dataclasses.
+
+Unknown fields are rejected: a misspelt limit that was silently ignored would leave a vehicle
+without the rail its operator thinks it has. NaN and infinities are rejected for the same
+reason (they compare false against every limit).
+"""
+
+from __future__ import annotations
+
+from typing import Self
+
+from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
+
+from backend.safety.geometry import MAX_POLYGON_VERTICES, validate_polygon
+from backend.safety.rails import (
+    DEFAULT_BATTERY_RESERVE_PCT,
+    BatteryEstimate,
+    Geofence,
+    GeoPoint,
+    PlanCheck,
+    RuleName,
+    SafetyRails,
+    Violation,
+    Waypoint,
+)
+
+MAX_ALTITUDE_M = 10_000.0
+MAX_DISTANCE_M = 1_000_000.0
+MAX_WAYPOINTS = 2000
+
+
+class _Strict(BaseModel):
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
+
+
+class GeoPointModel(_Strict):
+    lat: float = Field(ge=-90, le=90, description="Latitude, degrees north (WGS84)")
+    lon: float = Field(ge=-180, le=180, description="Longitude, degrees east (WGS84)")
+
+
+class GeofenceModel(_Strict):
+    # Named objects rather than [lat, lon] pairs: GeoJSON orders pairs [lon, lat], and a
+    # swapped pair still looks like a valid fence somewhere else on Earth.
+    polygon: list[GeoPointModel] = Field(
+        max_length=MAX_POLYGON_VERTICES + 1,
+        description=(
+            'Vertices in order, each {"lat": .., "lon": ..}; the polygon closes itself '
+            "(repeating the first vertex at the end is allowed). At least 3 distinct vertices, "
+            f"at most {MAX_POLYGON_VERTICES}, no crossing edges, within 100 km of its centre."
+        ),
+    )
+    max_altitude_m: float | None = Field(
+        default=None,
+        ge=0,
+        le=MAX_ALTITUDE_M,
+        description="Ceiling inside the fence, metres above home; null for none",
+    )
+
+    @field_validator("polygon")
+    @classmethod
+    def _polygon_is_a_fence(cls, polygon: list[GeoPointModel]) -> list[GeoPointModel]:
+        # InvalidGeofence is a ValueError, so pydantic reports its message against `polygon`.
+        vertices = validate_polygon([(p.lat, p.lon) for p in polygon])
+        return [GeoPointModel(lat=lat, lon=lon) for lat, lon in vertices]
+
+    def to_geofence(self) -> Geofence:
+        return Geofence(
+            polygon=tuple(GeoPoint(p.lat, p.lon) for p in self.polygon),
+            max_altitude_m=self.max_altitude_m,
+        )
+
+    @classmethod
+    def from_geofence(cls, fence: Geofence) -> GeofenceModel:
+        return cls(
+            polygon=[GeoPointModel(lat=p.lat, lon=p.lon) for p in fence.polygon],
+            max_altitude_m=fence.max_altitude_m,
+        )
+
+
+class SafetyRailsModel(_Strict):
+    """Site-wide rails, or one vehicle's overrides (null fields fall back to the site's)."""
+
+    geofence: GeofenceModel | None = Field(default=None, description="Null for no geofence")
+    max_distance_from_home_m: float | None = Field(
+        default=None, gt=0, le=MAX_DISTANCE_M, description="Horizontal range limit, metres"
+    )
+    min_altitude_m: float | None = Field(
+        default=None, ge=0, le=MAX_ALTITUDE_M, description="Floor for targets, metres above home"
+    )
+    max_altitude_m: float | None = Field(
+        default=None, ge=0, le=MAX_ALTITUDE_M, description="Ceiling, metres above home"
+    )
+    min_launch_battery_pct: float | None = Field(
+        default=None, ge=0, le=100, description="Battery needed to arm or take off, percent"
+    )
+    battery_reserve_pct: float = Field(
+        default=DEFAULT_BATTERY_RESERVE_PCT,
+        ge=0,
+        le=100,
+        description="Battery that must remain after a planned mission and its return home",
+    )
+
+    @model_validator(mode="after")
+    def _floor_below_ceiling(self) -> Self:
+        floor, ceiling = self.min_altitude_m, self.max_altitude_m
+        if floor is not None and ceiling is not None and floor > ceiling:
+            raise ValueError(
+                f"min_altitude_m {floor} m is above max_altitude_m {ceiling} m; "
+                "no altitude could pass"
+            )
+        return self
+
+    def to_rails(self) -> SafetyRails:
+        return SafetyRails(
+            geofence=self.geofence.to_geofence() if self.geofence else None,
+            max_distance_from_home_m=self.max_distance_from_home_m,
+            min_altitude_m=self.min_altitude_m,
+            max_altitude_m=self.max_altitude_m,
+            min_launch_battery_pct=self.min_launch_battery_pct,
+            battery_reserve_pct=self.battery_reserve_pct,
+        )
+
+    @classmethod
+    def from_rails(cls, rails: SafetyRails) -> SafetyRailsModel:
+        return cls(
+            geofence=GeofenceModel.from_geofence(rails.geofence) if rails.geofence else None,
+            max_distance_from_home_m=rails.max_distance_from_home_m,
+            min_altitude_m=rails.min_altitude_m,
+            max_altitude_m=rails.max_altitude_m,
+            min_launch_battery_pct=rails.min_launch_battery_pct,
+            battery_reserve_pct=rails.battery_reserve_pct,
+        )
+
+
+class WaypointModel(_Strict):
+    lat: float = Field(ge=-90, le=90, description="Latitude, degrees north (WGS84)")
+    lon: float = Field(ge=-180, le=180, description="Longitude, degrees east (WGS84)")
+    alt_rel: float = Field(ge=0, le=MAX_ALTITUDE_M, description="Metres above home")
+
+    def to_waypoint(self) -> Waypoint:
+        return Waypoint(self.lat, self.lon, self.alt_rel)
+
+    @classmethod
+    def from_waypoint(cls, waypoint: Waypoint) -> WaypointModel:
+        return cls(lat=waypoint.lat, lon=waypoint.lon, alt_rel=waypoint.alt_rel)
+
+
+class MissionCheckRequest(_Strict):
+    waypoints: list[WaypointModel] = Field(
+        min_length=1,
+        max_length=MAX_WAYPOINTS,
+        description="Flown in order from the vehicle's current position, then home",
+    )
+
+    def to_waypoints(self) -> list[Waypoint]:
+        return [wp.to_waypoint() for wp in self.waypoints]
+
+
+class ViolationModel(_Strict):
+    rule: RuleName = Field(description="Stable name of the rule that was broken")
+    message: str = Field(description="What is wrong, with the numbers and units")
+    limit: float | None = Field(default=None, description="The rule's limit, where it has one")
+    value: float | None = Field(default=None, description="The offending value, where it has one")
+
+    @classmethod
+    def from_violation(cls, violation: Violation) -> ViolationModel:
+        return cls.model_validate(
+            {
+                "rule": violation.rule,
+                "message": violation.message,
+                "limit": violation.limit,
+                "value": violation.value,
+            }
+        )
+
+
+class BatteryEstimateModel(_Strict):
+    distance_m: float = Field(description="Horizontal distance including the return home")
+    flight_time_s: float
+    required_pct: float = Field(description="Battery the flight needs, percent of capacity")
+    available_pct: float | None = Field(description="Battery remaining now; null if unknown")
+
+    @classmethod
+    def from_estimate(cls, estimate: BatteryEstimate) -> BatteryEstimateModel:
+        return cls(
+            distance_m=estimate.distance_m,
+            flight_time_s=estimate.flight_time_s,
+            required_pct=estimate.required_pct,
+            available_pct=estimate.available_pct,
+        )
+
+
+class MissionCheckResponse(_Strict):
+    ok: bool = Field(description="True when no rule is violated")
+    violations: list[ViolationModel]
+    estimate: BatteryEstimateModel | None = Field(
+        description="Null when the vehicle's position, home or altitude is not known"
+    )
+
+    @classmethod
+    def build(
+        cls, violations: list[Violation], estimate: BatteryEstimate | None
+    ) -> MissionCheckResponse:
+        return cls(
+            ok=not violations,
+            violations=[ViolationModel.from_violation(v) for v in violations],
+            estimate=BatteryEstimateModel.from_estimate(estimate) if estimate else None,
+        )
+
+    @classmethod
+    def from_plan_check(cls, check: PlanCheck) -> MissionCheckResponse:
+        return cls.build(list(check.violations), check.estimate)

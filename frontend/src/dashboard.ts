@@ -1,0 +1,170 @@
+// One logged-in session of the dashboard: config -> map, WebSocket -> store ->
+// views. Built at login and torn down at logout or when the session ends, so the
+// next user starts clean (and gets the controls their role allows).
+import { checkSession, fetchConfig } from "./api";
+import { AuditPanel } from "./auditPanel";
+import { runCommand } from "./commands";
+import { FleetSocket } from "./connection";
+import { FleetStore } from "./fleet";
+import { FleetTable } from "./fleetTable";
+import { linkState } from "./format";
+import { PROTOCOL_VERSION } from "./generated/protocol";
+import type { Header } from "./header";
+import { FleetMap } from "./map";
+import { type CurrentUser, type HubConfig, type HubToClient, can } from "./types";
+
+const OFFLINE_CONFIG: HubConfig = { basemap_url: null, basemap_attribution: "", basemap_max_zoom: 19 };
+/** setTimeout's ceiling (about 24.8 days). */
+const MAX_TIMER_MS = 2 ** 31 - 1;
+
+export interface DashboardHooks {
+  /** The hub refused the session on the WebSocket (close code 4401). */
+  onUnauthorized(reason: string): void;
+  logout(): void;
+}
+
+export class Dashboard {
+  private socket: FleetSocket | null = null;
+  private map: FleetMap | null = null;
+  private table: FleetTable | null = null;
+  private audit: AuditPanel | null = null;
+  private expiryTimer: number | undefined;
+  private stopped = false;
+
+  constructor(
+    private readonly user: CurrentUser,
+    private readonly header: Header,
+    private readonly hooks: DashboardHooks,
+  ) {}
+
+  async start(): Promise<void> {
+    const { header, user, hooks } = this;
+    header.setUser(user, { logout: () => hooks.logout(), toggleAudit: () => this.toggleAudit() });
+    header.setCounts(0, 0);
+    header.setConnection("connecting");
+    this.watchExpiry();
+
+    const config = await fetchConfig().catch((error: Error) => {
+      if (!this.stopped) {
+        header.showNotice(`Could not load the hub's config (${error.message}); showing no basemap.`);
+      }
+      return OFFLINE_CONFIG;
+    });
+    // A 401 on the config call ends the session (and stops this dashboard) meanwhile.
+    if (this.stopped) return;
+    if (config.protocol !== undefined && config.protocol !== PROTOCOL_VERSION) {
+      header.showNotice(
+        `The hub speaks protocol ${config.protocol}; this dashboard was built for ${PROTOCOL_VERSION}. Reload or rebuild it.`,
+        true,
+      );
+    }
+
+    const select = (id: string, pan: boolean) => {
+      table.select(id);
+      map.select(id, pan);
+    };
+    const map = new FleetMap(document.getElementById("map")!, config, (id) => select(id, false));
+    const table = new FleetTable(
+      document.querySelector<HTMLTableSectionElement>("#fleet-table tbody")!,
+      can(user, "command") ? runCommand : null,
+      (id) => select(id, true),
+    );
+    this.map = map;
+    this.table = table;
+
+    const store = new FleetStore(({ changed, removed, all }) => {
+      if (this.stopped) return;
+      for (const id of removed) {
+        table.remove(id);
+        map.remove(id);
+      }
+      table.update(changed);
+      map.update(changed);
+      let online = 0;
+      for (const vehicle of all.values()) if (linkState(vehicle) !== "offline") online++;
+      header.setCounts(all.size, online);
+    });
+
+    const onMessage = (message: HubToClient) => {
+      switch (message.type) {
+        case "fleet":
+          store.replaceAll(message.vehicles);
+          break;
+        case "vehicle":
+          store.upsert(message.vehicle);
+          break;
+        case "error":
+          header.showNotice(`Hub: ${message.message}`);
+          break;
+        case "pong":
+          break;
+      }
+    };
+
+    this.socket = new FleetSocket({
+      onMessage,
+      onState: (state, retry) => {
+        if (!this.stopped) header.setConnection(state, retry);
+      },
+      onUnauthorized: (reason) => hooks.onUnauthorized(reason),
+      onForbidden: (reason) => header.showNotice(`The hub refused the live feed: ${reason}`, true),
+      // A refused upgrade looks like any network failure to the browser: ask the hub
+      // whether the session still holds (a 401 there shows the login screen).
+      onAttemptFailed: () => void checkSession().catch(() => {}),
+    });
+    this.socket.start();
+  }
+
+  /** Closes the socket and removes every view; safe to call twice. */
+  stop(): void {
+    if (this.stopped) return;
+    this.stopped = true;
+    window.clearTimeout(this.expiryTimer);
+    this.socket?.stop();
+    this.socket = null;
+    this.audit?.element.remove();
+    this.audit = null;
+    this.table?.destroy();
+    this.table = null;
+    this.map?.destroy();
+    this.map = null;
+    this.header.setConnection("stopped");
+    this.header.setCounts(0, 0);
+    this.header.setUser(null);
+    this.header.clearNotice();
+  }
+
+  private toggleAudit(): void {
+    if (this.stopped || !can(this.user, "audit")) return;
+    if (!this.audit) {
+      this.audit = new AuditPanel(() => this.toggleAudit());
+      document.querySelector(".layout")!.append(this.audit.element);
+    }
+    if (this.audit.isOpen) this.audit.close();
+    else this.audit.open();
+    this.header.setAuditOpen(this.audit.isOpen);
+  }
+
+  /**
+   * When the session's lifetime runs out, check with the hub (a 401 shows the login
+   * screen). `minDelayMs` keeps a browser clock ahead of the hub's from polling fast.
+   */
+  private watchExpiry(minDelayMs = 1000): void {
+    const expiresAt = this.user.expires_at;
+    if (typeof expiresAt !== "number") return; // unknown: the next 401 will tell
+    const untilMs = expiresAt * 1000 - Date.now();
+    this.expiryTimer = window.setTimeout(
+      () => {
+        if (this.stopped) return;
+        checkSession()
+          .then((user) => {
+            if (this.stopped) return;
+            if (typeof user.expires_at === "number") this.user.expires_at = user.expires_at;
+            this.watchExpiry(60_000);
+          })
+          .catch(() => {});
+      },
+      Math.min(Math.max(untilMs + 1000, minDelayMs), MAX_TIMER_MS),
+    );
+  }
+}

@@ -1,0 +1,150 @@
+"""Every route and every WebSocket message type, for every role: allowed or refused.
+
+The routes are enumerated from the running app, so a new route or message type without a
+policy fails here.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+import typing
+import uuid
+from collections.abc import Callable
+from typing import Any
+
+import httpx
+import pytest
+from websockets.exceptions import ConnectionClosed
+from websockets.sync.client import connect
+
+from backend.api.security import PERMISSION_KEY
+from backend.auth.policy import (
+    AGENT_MESSAGE_PERMISSIONS,
+    CLIENT_MESSAGE_PERMISSIONS,
+    PUBLIC,
+    ROLE_PERMISSIONS,
+    Permission,
+    Role,
+)
+from gcs.protocol import AGENT_WS_PATH, CLIENT_WS_PATH, AgentToHub, ClientToHub, CloseCode
+from tests.helpers import access_token
+
+PASSWORD = "correct horse battery"
+
+
+def _message_types(union: Any) -> set[str]:
+    members = typing.get_args(typing.get_args(union)[0]) or (typing.get_args(union)[0],)
+    return {member.model_fields["type"].default for member in members}
+
+
+def _operations(schema: dict[str, Any]) -> list[tuple[str, str, str]]:
+    return [
+        (method.upper(), path, operation[PERMISSION_KEY])
+        for path, item in schema["paths"].items()
+        for method, operation in item.items()
+    ]
+
+
+def _concrete(path: str) -> str:
+    values = {"vehicle_id": "ghost", "username": "nobody", "token_id": "999999"}
+    return re.sub(r"\{(\w+)\}", lambda match: values[match.group(1)], path)
+
+
+@pytest.fixture
+def users(hub: str, admin_api: httpx.Client) -> dict[str, str]:
+    """One user per role; returns role -> username."""
+    created = {}
+    for role in Role:
+        name = f"{role.value}-{uuid.uuid4().hex[:6]}"
+        response = admin_api.post(
+            "/api/v1/users", json={"username": name, "password": PASSWORD, "role": role.value}
+        )
+        assert response.status_code == 201, response.text
+        created[role.value] = name
+    return created
+
+
+def test_every_route_declares_a_permission(hub: str) -> None:
+    schema = httpx.get(f"{hub}/openapi.json").json()
+    for path, item in schema["paths"].items():
+        for method, operation in item.items():
+            assert PERMISSION_KEY in operation, f"{method.upper()} {path} has no policy"
+            assert operation[PERMISSION_KEY] in {PUBLIC, *Permission}
+
+
+def test_every_route_allows_exactly_the_roles_it_should(hub: str, users: dict[str, str]) -> None:
+    operations = _operations(httpx.get(f"{hub}/openapi.json").json())
+    assert len(operations) >= 20
+    callers: dict[str, Callable[[], dict[str, str]]] = {
+        "anonymous": dict,
+        **{
+            role: (
+                lambda name=name: {"Authorization": f"Bearer {access_token(hub, name, PASSWORD)}"}
+            )
+            for role, name in users.items()
+        },
+    }
+    failures = []
+    with httpx.Client(base_url=hub, timeout=30) as client:
+        for method, path, permission in operations:
+            for caller, headers in callers.items():
+                # A fresh token per call: some routes (logout) end the token they are given.
+                response = client.request(method, _concrete(path), headers=headers(), json={})
+                if permission == PUBLIC:
+                    expected_refusal = None
+                elif caller == "anonymous":
+                    expected_refusal = 401
+                elif Permission(permission) in ROLE_PERMISSIONS[Role(caller)]:
+                    expected_refusal = None
+                else:
+                    expected_refusal = 403
+                refused = response.status_code if response.status_code in (401, 403) else None
+                if refused != expected_refusal:
+                    failures.append(
+                        f"{caller} {method} {path}: got {response.status_code}, "
+                        f"expected {expected_refusal or 'allowed'}"
+                    )
+    assert failures == []
+
+
+def test_every_websocket_message_type_has_a_policy() -> None:
+    assert set(CLIENT_MESSAGE_PERMISSIONS) == _message_types(ClientToHub)
+    assert set(AGENT_MESSAGE_PERMISSIONS) == _message_types(AgentToHub)
+
+
+def test_client_feed_needs_a_login_and_serves_every_role(hub: str, users: dict[str, str]) -> None:
+    url = hub.replace("http://", "ws://") + CLIENT_WS_PATH
+    with pytest.raises(ConnectionClosed) as closed, connect(url) as anonymous:
+        anonymous.recv(timeout=5)
+    assert closed.value.rcvd is not None
+    assert closed.value.rcvd.code == CloseCode.UNAUTHORIZED
+    for name in users.values():
+        headers = {"Authorization": f"Bearer {access_token(hub, name, PASSWORD)}"}
+        with connect(url, additional_headers=headers) as feed:
+            assert json.loads(feed.recv(timeout=5))["type"] == "fleet"
+            for message_type in CLIENT_MESSAGE_PERMISSIONS:
+                feed.send(json.dumps({"type": message_type}))
+                assert json.loads(feed.recv(timeout=5))["type"] != "error"
+
+
+def test_user_tokens_cannot_connect_as_agents(hub: str, users: dict[str, str]) -> None:
+    token = access_token(hub, users["admin"], PASSWORD)
+    url = hub.replace("http://", "ws://") + AGENT_WS_PATH
+    with (
+        pytest.raises(ConnectionClosed) as closed,
+        connect(url, additional_headers={"Authorization": f"Bearer {token}"}) as socket,
+    ):
+        socket.recv(timeout=5)
+    assert closed.value.rcvd is not None
+    assert closed.value.rcvd.code == CloseCode.UNAUTHORIZED
+
+
+def test_websocket_from_a_foreign_origin_is_refused(hub: str, admin_token: str) -> None:
+    url = hub.replace("http://", "ws://") + CLIENT_WS_PATH
+    headers = {"Authorization": f"Bearer {admin_token}", "Origin": "https://evil.example"}
+    with pytest.raises(ConnectionClosed) as closed, connect(url, additional_headers=headers) as s:
+        s.recv(timeout=5)
+    assert closed.value.rcvd is not None
+    assert closed.value.rcvd.code == CloseCode.FORBIDDEN
+    assert "evil.example" in closed.value.rcvd.reason

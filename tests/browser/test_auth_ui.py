@@ -170,7 +170,8 @@ def test_an_operator_sees_safety_refusals_and_pages_the_audit_log(
     expect(entries).not_to_have_count(50, timeout=10_000)
     ids = [int(i) for i in entries.evaluate_all("rows => rows.map(r => r.dataset.auditId)")]
     assert len(ids) > 50
-    assert ids == sorted(ids, reverse=True) and len(set(ids)) == len(ids), ids
+    assert ids == sorted(ids, reverse=True), ids
+    assert len(set(ids)) == len(ids), ids
 
     # Refresh goes back to the newest page.
     panel.locator('button[data-action="audit-refresh"]').click()

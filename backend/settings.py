@@ -49,6 +49,9 @@ class HubSettings(BaseSettings):
     session_ttl_s: float = Field(default=12 * 3600, gt=0)
     access_token_ttl_s: float = Field(default=3600, gt=0)
     cors_origins: list[str] = Field(default_factory=list)
+    forwarded_allow_ips: str = Field(
+        default="127.0.0.1", description="proxies whose X-Forwarded-For is believed"
+    )
     max_body_bytes: int = Field(default=1024 * 1024, ge=1024)
     login_attempts_per_minute: int = Field(default=5, ge=1)
     commands_per_second: int = Field(default=20, ge=1)

@@ -46,7 +46,12 @@ def _hub(args: argparse.Namespace) -> int:
     from backend.app import create_app
     from backend.settings import HubSettings
 
-    overrides: dict[str, Any] = {"host": args.host, "port": args.port, "data_dir": args.data_dir}
+    overrides: dict[str, Any] = {
+        "host": args.host,
+        "port": args.port,
+        "data_dir": args.data_dir,
+        "forwarded_allow_ips": args.forwarded_allow_ips,
+    }
     settings = HubSettings(**{key: value for key, value in overrides.items() if value is not None})
     settings.data_dir.mkdir(parents=True, exist_ok=True)
     uvicorn.run(
@@ -57,6 +62,10 @@ def _hub(args: argparse.Namespace) -> int:
         ws_max_size=settings.max_frame_bytes,
         ssl_certfile=args.ssl_certfile,
         ssl_keyfile=args.ssl_keyfile,
+        # Client addresses (audit, login limits) come from X-Forwarded-For only when
+        # the connection is from a trusted proxy.
+        proxy_headers=True,
+        forwarded_allow_ips=settings.forwarded_allow_ips,
     )
     return 0
 
@@ -131,6 +140,9 @@ def build_parser() -> argparse.ArgumentParser:
     hub.add_argument("--data-dir", type=Path)
     hub.add_argument("--ssl-certfile", help="serve HTTPS/WSS directly with this certificate")
     hub.add_argument("--ssl-keyfile")
+    hub.add_argument(
+        "--forwarded-allow-ips", help="proxies trusted for X-Forwarded-For (127.0.0.1)"
+    )
 
     agent = commands.add_parser("agent", help="bridge one flight controller to the hub")
     agent.add_argument("--fcu", help="pymavlink URL, e.g. tcp:127.0.0.1:5760, /dev/ttyACM0")

@@ -11,6 +11,12 @@ import pytest
 
 ROOT = Path(__file__).resolve().parent.parent
 COMPOSE = shutil.which("docker-compose")
+COMPOSE_SECRETS = {
+    "GCS_ADMIN_PASSWORD": "compose-admin-password",
+    "POSTGRES_PASSWORD": "compose-db-password",
+    "SIM_1_TOKEN": "t1" * 16,
+    "SIM_2_TOKEN": "t2" * 16,
+}
 
 
 def _config(env: dict[str, str]) -> subprocess.CompletedProcess[str]:
@@ -26,7 +32,7 @@ def _config(env: dict[str, str]) -> subprocess.CompletedProcess[str]:
 
 
 def test_compose_file_is_valid_and_has_the_stack() -> None:
-    result = _config({"GCS_AGENT_TOKEN": "compose-test-token"})
+    result = _config(COMPOSE_SECRETS)
     assert result.returncode == 0, result.stderr
     for service in ("db:", "hub:", "sim-1:", "agent-1:", "sim-2:", "agent-2:"):
         assert f"  {service}" in result.stdout
@@ -34,8 +40,12 @@ def test_compose_file_is_valid_and_has_the_stack() -> None:
 
 
 @pytest.mark.skipif(COMPOSE is None, reason="checked by the test above")
-def test_compose_refuses_to_run_without_an_agent_token() -> None:
-    env = {key: value for key, value in os.environ.items() if key != "GCS_AGENT_TOKEN"}
+@pytest.mark.parametrize(
+    "missing", sorted(["GCS_ADMIN_PASSWORD", "POSTGRES_PASSWORD", "SIM_1_TOKEN"])
+)
+def test_compose_refuses_to_run_without_its_secrets(missing: str) -> None:
+    env = {**os.environ, **COMPOSE_SECRETS}
+    del env[missing]
     result = subprocess.run(
         [str(COMPOSE), "-f", str(ROOT / "docker-compose.yml"), "config", "-q"],
         capture_output=True,
@@ -45,4 +55,4 @@ def test_compose_refuses_to_run_without_an_agent_token() -> None:
         check=False,
     )
     assert result.returncode != 0
-    assert "GCS_AGENT_TOKEN" in result.stderr
+    assert missing in result.stderr

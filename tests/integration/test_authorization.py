@@ -73,11 +73,16 @@ def test_every_route_declares_a_permission(hub: str) -> None:
             assert operation[PERMISSION_KEY] in {PUBLIC, *Permission}
 
 
-def test_every_route_allows_exactly_the_roles_it_should(hub: str, users: dict[str, str]) -> None:
+def test_every_route_allows_exactly_the_roles_it_should(
+    hub: str, users: dict[str, str], enrol: Callable[[str], str]
+) -> None:
     operations = _operations(httpx.get(f"{hub}/openapi.json").json())
     assert len(operations) >= 20
+    agent_token = enrol("ghost")
     callers: dict[str, Callable[[], dict[str, str]]] = {
         "anonymous": dict,
+        # An agent token speaks for its vehicle on the agent socket, and nowhere else.
+        "agent": lambda: {"Authorization": f"Bearer {agent_token}"},
         **{
             role: (
                 lambda name=name: {"Authorization": f"Bearer {access_token(hub, name, PASSWORD)}"}
@@ -93,7 +98,7 @@ def test_every_route_allows_exactly_the_roles_it_should(hub: str, users: dict[st
                 response = client.request(method, _concrete(path), headers=headers(), json={})
                 if permission == PUBLIC:
                     expected_refusal = None
-                elif caller == "anonymous":
+                elif caller in ("anonymous", "agent"):
                     expected_refusal = 401
                 elif Permission(permission) in ROLE_PERMISSIONS[Role(caller)]:
                     expected_refusal = None

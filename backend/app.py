@@ -12,7 +12,7 @@ from fastapi.middleware.cors import CORSMiddleware
 from fastapi.responses import HTMLResponse, JSONResponse
 from fastapi.staticfiles import StaticFiles
 
-from backend.api import admin, auth, safety, system, vehicles, websockets
+from backend.api import admin, auth, logs, safety, system, vehicles, websockets
 from backend.api.hardening import SecurityMiddleware, content_security_policy
 from backend.errors import (
     GcsError,
@@ -55,7 +55,8 @@ def create_app(settings: HubSettings | None = None) -> FastAPI:
         description="Live fleet state, commands and telemetry history for drone fleets.",
         lifespan=lifespan,
     )
-    for router in (system.router, auth.router, vehicles.router, safety.router, admin.router):
+    routers = (system, auth, vehicles, safety, logs, admin)
+    for router in (module.router for module in routers):
         app.include_router(router, prefix=API_PREFIX)
     app.include_router(websockets.router)
     app.add_exception_handler(GcsError, _gcs_error_response)  # type: ignore[arg-type]
@@ -72,6 +73,7 @@ def create_app(settings: HubSettings | None = None) -> FastAPI:
         max_body_bytes=settings.max_body_bytes,
         csp=content_security_policy(settings.basemap_url),
         hsts=settings.environment == "production",
+        large_bodies={r"^/api/v1/vehicles/[^/]+/tlogs$": settings.max_tlog_bytes},
     )
     _mount_dashboard(app, settings)
     return app

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import asyncio
 import logging
+import time
 from dataclasses import dataclass, field
 from typing import Protocol
 
@@ -18,9 +19,12 @@ from backend.fleet.safety_gate import SafetyGate
 from backend.realtime.bus import InProcessBus, ReliableSubscription, Topic
 from backend.settings import HubSettings
 from backend.storage.database import make_engine, migrate
+from backend.storage.logbook import Logbook
 from backend.storage.rails import RailsRepository
+from backend.storage.records import StoredEvent
 from backend.storage.repository import Repository
-from backend.storage.writer import TelemetryWriter
+from backend.storage.retention import RetentionPolicy
+from backend.storage.writer import StorageWriter
 from gcs.protocol import CloseCode
 
 log = logging.getLogger(__name__)
@@ -40,7 +44,8 @@ class Hub:
     registry: FleetRegistry
     bus: InProcessBus
     dispatcher: CommandDispatcher
-    writer: TelemetryWriter
+    writer: StorageWriter
+    logbook: Logbook
     accounts: Accounts
     audit: AuditLog
     login_limiter: RateLimiter
@@ -59,9 +64,15 @@ class Hub:
         registry.load(await asyncio.to_thread(repository.vehicles))
         bus = InProcessBus()
         stored = ReliableSubscription(settings.telemetry_queue_limit)
-        bus.subscribe(Topic.TELEMETRY, stored)
-        writer = TelemetryWriter(
-            repository, stored, settings.telemetry_batch_size, settings.telemetry_flush_interval_s
+        bus.subscribe(Topic.STORAGE, stored)
+        logbook = Logbook(engine)
+        writer = await asyncio.to_thread(
+            StorageWriter,
+            repository,
+            logbook,
+            stored,
+            settings.telemetry_batch_size,
+            settings.telemetry_flush_interval_s,
         )
         log.info("hub store: %s", engine.url.render_as_string(hide_password=True))
         accounts = Accounts(engine)
@@ -74,6 +85,7 @@ class Hub:
             bus=bus,
             dispatcher=CommandDispatcher(registry, settings.command_timeout_s),
             writer=writer,
+            logbook=logbook,
             accounts=accounts,
             audit=AuditLog(engine),
             login_limiter=RateLimiter(Limit(settings.login_attempts_per_minute, 60.0)),
@@ -86,11 +98,27 @@ class Hub:
         try:
             async with asyncio.TaskGroup() as tasks:
                 tasks.create_task(self.writer.run())
+                tasks.create_task(self._apply_retention())
         finally:
             self.engine.dispose()
 
     async def publish_state(self, record: VehicleRecord) -> None:
         await self.bus.publish(Topic.VEHICLE_STATE, record.id, record.summary())
+
+    async def _apply_retention(self) -> None:
+        policy = self.settings.retention_policy()
+        if policy == RetentionPolicy():
+            return
+        while True:
+            removed = await asyncio.to_thread(self.logbook.apply_retention, policy, time.time())
+            if any(removed.values()):
+                log.info("retention removed %s", removed)
+            await asyncio.sleep(self.settings.retention_interval_s)
+
+    async def store_event(self, vehicle_id: str, kind: str, text: str) -> None:
+        """An event the hub itself observed (a link coming up or going down)."""
+        event = StoredEvent(vehicle_id, "hub", None, time.time(), kind, None, text)
+        await self.bus.publish(Topic.STORAGE, vehicle_id, event)
 
     async def record(self, entry: AuditEntry) -> None:
         await asyncio.to_thread(self.audit.record, entry)

@@ -10,6 +10,7 @@ from urllib.parse import urlsplit
 from pydantic import AliasChoices, Field, SecretStr, model_validator
 from pydantic_settings import BaseSettings, SettingsConfigDict
 
+from backend.storage.retention import RetentionPolicy
 from gcs.protocol import MAX_FRAME_BYTES
 
 REPO_ROOT = Path(__file__).resolve().parent.parent
@@ -53,6 +54,7 @@ class HubSettings(BaseSettings):
         default="127.0.0.1", description="proxies whose X-Forwarded-For is believed"
     )
     max_body_bytes: int = Field(default=1024 * 1024, ge=1024)
+    max_tlog_bytes: int = Field(default=512 * 1024 * 1024, ge=1024, description="per upload")
     login_attempts_per_minute: int = Field(default=5, ge=1)
     commands_per_second: int = Field(default=20, ge=1)
 
@@ -69,6 +71,12 @@ class HubSettings(BaseSettings):
     ui_update_interval_s: float = Field(default=0.1, gt=0, description="per-client coalescing")
     max_frame_bytes: int = Field(default=MAX_FRAME_BYTES, ge=1024)
     max_bad_frames: int = Field(default=20, ge=1, description="before a connection is closed")
+
+    retention_telemetry_days: float | None = Field(default=None, gt=0)
+    retention_events_days: float | None = Field(default=None, gt=0)
+    retention_commands_days: float | None = Field(default=None, gt=0)
+    retention_flights_days: float | None = Field(default=None, gt=0)
+    retention_interval_s: float = Field(default=3600, gt=0)
 
     basemap_url: str | None = Field(
         default=None, description="XYZ tile URL template; a plain grid when unset (offline)"
@@ -123,6 +131,14 @@ class HubSettings(BaseSettings):
                 raise ValueError("GCS_AGENT_TOKENS must be vehicle=token pairs, comma-separated")
             pairs[vehicle] = token
         return pairs
+
+    def retention_policy(self) -> RetentionPolicy:
+        return RetentionPolicy(
+            telemetry_days=self.retention_telemetry_days,
+            events_days=self.retention_events_days,
+            commands_days=self.retention_commands_days,
+            flights_days=self.retention_flights_days,
+        )
 
     @property
     def cookie_secure(self) -> bool:

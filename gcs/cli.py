@@ -80,6 +80,7 @@ def _agent(args: argparse.Namespace) -> int:
         "token": args.token,
         "vehicle_id": args.vehicle_id,
         "telemetry_rate_hz": args.telemetry_rate,
+        "tlog_dir": args.tlog_dir,
     }
     settings = AgentSettings(
         **{key: value for key, value in overrides.items() if value is not None}
@@ -150,6 +151,9 @@ def build_parser() -> argparse.ArgumentParser:
     agent.add_argument("--token", help="agent token (better: GCS_AGENT_TOKEN)")
     agent.add_argument("--vehicle-id")
     agent.add_argument("--telemetry-rate", type=float, help="snapshots per second (10)")
+    agent.add_argument(
+        "--tlog-dir", type=Path, help="record an onboard .tlog per flight; upload after landing"
+    )
 
     commands.add_parser(
         "sim", help="run a simulated MAVLink copter (see `gcs sim --help`)", add_help=False

@@ -155,6 +155,9 @@ class LocalFleet:
                 self.vehicle_id(index),
                 "--telemetry-rate",
                 str(self.plan.telemetry_rate_hz),
+                # Each simulated vehicle keeps an onboard .tlog, as a real one would.
+                "--tlog-dir",
+                str(self.plan.data_dir / "onboard" / self.vehicle_id(index)),
             ],
             {"GCS_AGENT_TOKEN": self.plan.agent_token(index)},
         )

@@ -7,7 +7,7 @@ message names its ``type``. The agent announces ``PROTOCOL_VERSION`` in its hell
 the hub refuses a version it does not speak.
 
 Delivery rules per message type (the realtime path honours them):
-- ``telemetry``: at least once, ordered per vehicle. Each carries a per-vehicle
+- ``telemetry`` and ``event``: at least once, ordered per vehicle. Each carries a per-vehicle
   ``(stream_id, seq)``; the hub drops duplicates.
 - ``vehicle`` updates to clients: coalesced; a newer state replaces an unsent one.
 - ``command`` / ``command_result``: request/response, correlated by ``request_id``.
@@ -176,6 +176,25 @@ class Telemetry(Message):
     state: VehicleState
 
 
+EventKind = Literal["statustext", "mode", "armed", "disarmed", "link_up", "link_down", "failsafe"]
+
+
+class Event(Message):
+    """Something that happened, for the flight log: a STATUSTEXT, a failsafe, ...
+
+    Events are stored like telemetry (at least once, de-duplicated by ``(stream_id, seq)``),
+    with their own sequence numbers."""
+
+    type: Literal["event"] = "event"
+    seq: int = Field(ge=0)
+    time: float = Field(description="Unix time, seconds.")
+    kind: EventKind
+    severity: int | None = Field(
+        default=None, ge=0, le=7, description="MAV_SEVERITY: 0 emergency .. 7 debug"
+    )
+    text: str = Field(max_length=500)
+
+
 class CommandResult(Message):
     type: Literal["command_result"] = "command_result"
     request_id: str
@@ -240,7 +259,9 @@ class Pong(Message):
     nonce: str | None = None
 
 
-AgentToHub: TypeAlias = Annotated[Hello | Telemetry | CommandResult, Field(discriminator="type")]
+AgentToHub: TypeAlias = Annotated[
+    Hello | Telemetry | Event | CommandResult, Field(discriminator="type")
+]
 HubToAgent: TypeAlias = Annotated[
     Welcome | CommandRequest | ErrorReply, Field(discriminator="type")
 ]

@@ -1,12 +1,17 @@
 from __future__ import annotations
 
+import uuid
 from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 import httpx
+import psycopg
 import pytest
+from sqlalchemy import Engine
 
 from backend.settings import HubSettings
+from backend.storage.database import make_engine
 from gcs.launcher import FleetPlan, LocalFleet, free_port
 from tests.helpers import access_token, api_client, running_hub
 
@@ -77,3 +82,36 @@ def enrol(admin_api: httpx.Client) -> Callable[[str], str]:
 @pytest.fixture(scope="session")
 def fleet_admin_token(fleet: LocalFleet) -> str:
     return access_token(fleet.plan.hub_http, "admin", fleet.plan.admin_password)
+
+
+POSTGRES_ADMIN = "postgresql://postgres@127.0.0.1:5432/postgres"
+
+
+@contextmanager
+def scratch_postgres() -> Iterator[str]:
+    """A new, empty database on the real PostgreSQL server; yields its SQLAlchemy URL."""
+    name = f"gcs_test_{uuid.uuid4().hex[:10]}"
+    with psycopg.connect(POSTGRES_ADMIN, autocommit=True) as admin:
+        admin.execute(f"CREATE DATABASE {name}")
+    try:
+        yield f"postgresql+psycopg://postgres@127.0.0.1:5432/{name}"
+    finally:
+        with psycopg.connect(POSTGRES_ADMIN, autocommit=True) as admin:
+            admin.execute(f"DROP DATABASE {name} WITH (FORCE)")
+
+
+@pytest.fixture(params=["sqlite", "postgresql"])
+def database_url(request: pytest.FixtureRequest, tmp_path: Path) -> Iterator[str]:
+    """The same storage test on the embedded default and on PostgreSQL."""
+    if request.param == "sqlite":
+        yield f"sqlite:///{tmp_path}/store.sqlite3"
+        return
+    with scratch_postgres() as url:
+        yield url
+
+
+@pytest.fixture
+def engine(database_url: str) -> Iterator[Engine]:
+    created = make_engine(database_url)
+    yield created
+    created.dispose()

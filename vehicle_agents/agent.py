@@ -7,18 +7,20 @@ import logging
 import time
 import uuid
 
-from gcs.protocol import PROTOCOL_VERSION, Hello, Telemetry, encode
+from gcs.protocol import PROTOCOL_VERSION, Event, Hello, Telemetry, encode
 from vehicle_agents import __version__
 from vehicle_agents.commands import CommandExecutor
-from vehicle_agents.config import AgentSettings, default_vehicle_id
-from vehicle_agents.fcu_link import FcuLink
+from vehicle_agents.config import AgentSettings, default_vehicle_id, hub_http_base
+from vehicle_agents.fcu_link import FcuLink, MavMessage
 from vehicle_agents.hub_link import HubLink
 from vehicle_agents.outbox import Outbox
 from vehicle_agents.telemetry import snapshot
+from vehicle_agents.tlog import TlogRecorder
+from vehicle_agents.tlog_uploads import TlogUploader
 
 log = logging.getLogger(__name__)
 
-CAPABILITIES = ["telemetry", "commands"]
+CAPABILITIES = ["telemetry", "commands", "events"]
 
 
 async def run_agent(settings: AgentSettings) -> None:
@@ -42,12 +44,21 @@ async def run_agent(settings: AgentSettings) -> None:
             agent_version=__version__,
             stream_id=uuid.uuid4().hex[:16],
         )
+        events = EventSource(outbox)
+        link.listeners.append(events.on_message)
         executor = CommandExecutor(link)
         hub = HubLink(
             settings.hub, settings.token.get_secret_value(), hello, outbox, executor.execute
         )
         tasks.create_task(publish_telemetry(link, outbox, settings.telemetry_rate_hz))
         tasks.create_task(hub.run())
+        if settings.tlog_dir is not None:
+            recorder = TlogRecorder(settings.tlog_dir, vehicle_id)
+            link.recorder = recorder.record
+            url = f"{hub_http_base(settings.hub)}/api/v1/vehicles/{vehicle_id}/tlogs"
+            uploader = TlogUploader(recorder, url, settings.token.get_secret_value())
+            link.listeners.append(uploader.on_message)
+            tasks.create_task(uploader.run())
 
 
 async def publish_telemetry(link: FcuLink, outbox: Outbox, rate_hz: float) -> None:
@@ -61,3 +72,28 @@ async def publish_telemetry(link: FcuLink, outbox: Outbox, rate_hz: float) -> No
         seq += 1
         next_at += period
         await asyncio.sleep(max(0.0, next_at - time.monotonic()))
+
+
+class EventSource:
+    """STATUSTEXT messages become numbered events for the hub's flight log."""
+
+    def __init__(self, outbox: Outbox) -> None:
+        self._outbox = outbox
+        self._seq = 0
+
+    def on_message(self, message: MavMessage) -> None:
+        if message.get_type() != "STATUSTEXT":
+            return
+        text = str(message.text).rstrip("\x00")
+        self._outbox.put(
+            encode(
+                Event(
+                    seq=self._seq,
+                    time=time.time(),
+                    kind="statustext",
+                    severity=int(message.severity),
+                    text=text,
+                )
+            )
+        )
+        self._seq += 1

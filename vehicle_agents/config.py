@@ -25,6 +25,9 @@ class AgentSettings(BaseSettings):
     )
     telemetry_rate_hz: float = Field(default=10.0, gt=0, le=50)
     source_system: int = Field(default=255, ge=1, le=255, description="our MAVLink system id")
+    tlog_dir: Path | None = Field(
+        default=None, description="keep an onboard .tlog per flight here, upload after landing"
+    )
     outbox_limit: int = Field(
         default=6000, ge=10, description="telemetry snapshots kept while the hub is unreachable"
     )
@@ -48,3 +51,10 @@ def default_vehicle_id(model: str, machine_id_file: Path = Path("/etc/machine-id
     except OSError:
         machine_id = "0000"
     return f"{model}_{machine_id or '0000'}"
+
+
+def hub_http_base(hub_ws_url: str) -> str:
+    """The hub's HTTP base URL, from the agent's WebSocket URL."""
+    parts = urlsplit(hub_ws_url)
+    scheme = "https" if parts.scheme == "wss" else "http"
+    return urlunsplit((scheme, parts.netloc, "", "", ""))

@@ -80,6 +80,11 @@ class FcuLink:
     modes: ModeTable | None = field(default=None, init=False)
 
     def __post_init__(self) -> None:
+        # Called on the event loop with every message from the vehicle.
+        self.listeners: list[Callable[[MavMessage], None]] = []
+        # Called on the reader thread with every message and its arrival (Unix) time,
+        # for work that must see messages exactly as they came (the onboard .tlog).
+        self.recorder: Callable[[MavMessage, float], None] | None = None
         self._connection: Any = None
         self._waiters: list[_Waiter] = []
         self._identified = asyncio.Event()
@@ -156,6 +161,8 @@ class FcuLink:
             now = time.monotonic()
             if message is not None:
                 last_message = now
+                if self.recorder is not None:
+                    self.recorder(message, time.time())
                 self._loop.call_soon_threadsafe(self._on_message, message)
             elif now - last_message > self.timeouts.heartbeat_s:
                 # Serial and UDP links never "close": silence is how they fail.
@@ -189,6 +196,8 @@ class FcuLink:
         elif kind == "STATUSTEXT":
             self.statustexts.append(StatusText(time.time(), message.severity, message.text))
             log.info("FCU: %s", message.text)
+        for listener in self.listeners:
+            listener(message)
         for waiter in list(self._waiters):
             if not waiter.future.done() and waiter.predicate(message):
                 waiter.future.set_result(message)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 from urllib.parse import urlsplit
 
 from starlette.datastructures import Headers
@@ -41,9 +42,18 @@ class SecurityMiddleware:
     WebSockets, whose frames have their own limit.
     """
 
-    def __init__(self, app: ASGIApp, max_body_bytes: int, csp: str, hsts: bool) -> None:
+    def __init__(
+        self,
+        app: ASGIApp,
+        max_body_bytes: int,
+        csp: str,
+        hsts: bool,
+        large_bodies: dict[str, int] | None = None,
+    ) -> None:
         self.app = app
         self.max_body_bytes = max_body_bytes
+        # Routes that take files: path pattern -> their own limit.
+        self.large_bodies = [(re.compile(p), size) for p, size in (large_bodies or {}).items()]
         self.headers = [(k.encode(), v.encode()) for k, v in SECURITY_HEADERS.items()]
         self.headers.append((b"content-security-policy", csp.encode()))
         if hsts:
@@ -53,9 +63,13 @@ class SecurityMiddleware:
         if scope["type"] != "http":
             await self.app(scope, receive, send)
             return
+        limit = next(
+            (size for pattern, size in self.large_bodies if pattern.match(scope["path"])),
+            self.max_body_bytes,
+        )
         declared = Headers(scope=scope).get("content-length")
-        if declared is not None and declared.isdigit() and int(declared) > self.max_body_bytes:
-            await self._too_large(send)
+        if declared is not None and declared.isdigit() and int(declared) > limit:
+            await self._too_large(send, limit)
             return
         received = 0
 
@@ -64,7 +78,7 @@ class SecurityMiddleware:
             message = await receive()
             if message["type"] == "http.request":
                 received += len(message.get("body", b""))
-                if received > self.max_body_bytes:
+                if received > limit:
                     # A chunked body that lies about nothing but keeps growing.
                     raise BodyTooLarge
             return message
@@ -77,14 +91,10 @@ class SecurityMiddleware:
         try:
             await self.app(scope, limited_receive, send_with_headers)
         except BodyTooLarge:
-            await self._too_large(send)
+            await self._too_large(send, limit)
 
-    async def _too_large(self, send: Send) -> None:
-        body = (
-            b'{"detail":"request body is over the '
-            + str(self.max_body_bytes).encode()
-            + b'-byte limit"}'
-        )
+    async def _too_large(self, send: Send, limit: int) -> None:
+        body = b'{"detail":"request body is over the ' + str(limit).encode() + b'-byte limit"}'
         await send(
             {
                 "type": "http.response.start",

@@ -13,7 +13,14 @@ from backend.api.deps import HubDep
 from backend.api.schemas import CommandResponse, TelemetryPage, TelemetrySample
 from backend.api.security import CurrentPrincipal, SecuredRouter, audit_entry, requires
 from backend.auth.policy import Permission
-from backend.errors import Forbidden, GcsError, InvalidRequest, SafetyViolation
+from backend.errors import (
+    CommandTimedOut,
+    Forbidden,
+    GcsError,
+    InvalidRequest,
+    SafetyViolation,
+    VehicleOffline,
+)
 from gcs.protocol import Command, VehicleSummary
 
 router = SecuredRouter(prefix="/vehicles", tags=["vehicles"])
@@ -87,10 +94,30 @@ async def send_command(
         await hub.record(
             audit_entry(request, principal, "command", vehicle_id, "refused", **details)
         )
+        if isinstance(error, CommandTimedOut | SafetyViolation | VehicleOffline):
+            status = "timeout" if isinstance(error, CommandTimedOut) else "refused"
+            await asyncio.to_thread(
+                hub.logbook.record_command,
+                vehicle_id,
+                principal.name,
+                command.model_dump(),
+                status,
+                None,
+                error.message,
+            )
         raise
     result = "ok" if outcome.status == "accepted" else "failed"
     details["answer"] = outcome.model_dump()
     await hub.record(audit_entry(request, principal, "command", vehicle_id, result, **details))
+    await asyncio.to_thread(
+        hub.logbook.record_command,
+        vehicle_id,
+        principal.name,
+        command.model_dump(),
+        outcome.status,
+        outcome.result,
+        outcome.message,
+    )
     return CommandResponse(vehicle_id=vehicle_id, command=command, outcome=outcome)
 
 

@@ -16,6 +16,7 @@ class VehicleRecord:
     autopilot: str
     vehicle_type: str
     modes: list[str]
+    system_id: int = 1
     connected: bool = False
     last_seen: float | None = None
     state: VehicleState | None = None
@@ -49,6 +50,7 @@ class FleetRegistry:
                 autopilot=row.autopilot,
                 vehicle_type=row.vehicle_type,
                 modes=[mode for mode in row.modes.split(",") if mode],
+                system_id=row.system_id,
                 last_seen=row.last_seen,
             )
 
@@ -69,12 +71,14 @@ class FleetRegistry:
                 autopilot=hello.autopilot,
                 vehicle_type=hello.vehicle_type,
                 modes=list(hello.modes),
+                system_id=hello.system_id,
             )
             self._vehicles[record.id] = record
         else:
             record.autopilot = hello.autopilot
             record.vehicle_type = hello.vehicle_type
             record.modes = list(hello.modes)
+            record.system_id = hello.system_id
         record.connected = True
         return record
 
@@ -82,6 +86,15 @@ class FleetRegistry:
         record = self.get(vehicle_id)
         record.connected = False
         return record
+
+    def accept_event(self, vehicle_id: str, stream_id: str, seq: int) -> bool:
+        """False if this event was seen before (events count in their own sequence)."""
+        record = self.get(vehicle_id)
+        key = f"{stream_id}/events"
+        if seq <= record.last_seq.get(key, -1):
+            return False
+        record.last_seq[key] = seq
+        return True
 
     def apply(self, vehicle_id: str, stream_id: str, telemetry: Telemetry) -> bool:
         """Take a sample into live state; False if it is a duplicate of one already seen."""

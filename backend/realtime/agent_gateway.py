@@ -14,12 +14,13 @@ from backend.fleet.commands import AgentChannel
 from backend.hub import Hub
 from backend.realtime.bus import Topic
 from backend.realtime.frames import FrameTooLarge, PeerConnection
-from backend.storage.repository import TelemetryEnvelope
+from backend.storage.records import StoredEvent, TelemetryEnvelope
 from gcs.protocol import (
     PROTOCOL_VERSION,
     CloseCode,
     CommandResult,
     ErrorReply,
+    Event,
     Hello,
     ProtocolError,
     Telemetry,
@@ -130,6 +131,7 @@ class AgentSession(PeerConnection):
         )
         try:
             await self.send(Welcome(vehicle_id=vehicle_id))
+            await hub.store_event(vehicle_id, "link_up", f"agent connected from {self.peer}")
             await hub.publish_state(record)
             while frame := await self.receive():
                 await self._handle_frame(hello, channel, frame)
@@ -139,6 +141,7 @@ class AgentSession(PeerConnection):
             hub.dispatcher.detach(vehicle_id, channel)
             record = hub.registry.disconnect(vehicle_id)
             await hub.publish_state(record)
+            await hub.store_event(vehicle_id, "link_down", "agent disconnected")
             log.info("agent %s disconnected", vehicle_id)
 
     async def _handle_frame(self, hello: Hello, channel: AgentChannel, frame: str | bytes) -> None:
@@ -150,6 +153,18 @@ class AgentSession(PeerConnection):
         match message:
             case Telemetry():
                 await self._ingest(hello, message)
+            case Event():
+                if self.hub.registry.accept_event(hello.vehicle_id, hello.stream_id, message.seq):
+                    stored = StoredEvent(
+                        hello.vehicle_id,
+                        hello.stream_id,
+                        message.seq,
+                        message.time,
+                        message.kind,
+                        message.severity,
+                        message.text,
+                    )
+                    await self.hub.bus.publish(Topic.STORAGE, hello.vehicle_id, stored)
             case CommandResult(request_id=request_id, outcome=outcome):
                 if not channel.resolve(request_id, outcome):
                     log.info(
@@ -166,5 +181,5 @@ class AgentSession(PeerConnection):
             return
         envelope = TelemetryEnvelope(hello.vehicle_id, hello.stream_id, telemetry)
         # Storage is reliable: if the writer is behind, this waits, and so does the agent.
-        await hub.bus.publish(Topic.TELEMETRY, hello.vehicle_id, envelope)
+        await hub.bus.publish(Topic.STORAGE, hello.vehicle_id, envelope)
         await hub.publish_state(hub.registry.get(hello.vehicle_id))

@@ -21,7 +21,7 @@ from typing import Any, Protocol
 
 
 class Topic(StrEnum):
-    TELEMETRY = "telemetry"  # TelemetryEnvelope, for storage
+    STORAGE = "storage"  # TelemetryEnvelope and StoredEvent, in order, for the writer
     VEHICLE_STATE = "vehicle.state"  # VehicleSummary, for clients
 
 
@@ -56,6 +56,10 @@ class ReliableSubscription:
 
     def qsize(self) -> int:
         return self._queue.qsize()
+
+    @property
+    def maxsize(self) -> int:
+        return self._queue.maxsize
 
 
 class LatestSubscription:

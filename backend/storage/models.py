@@ -41,6 +41,7 @@ class TelemetryRow(Base):
         # (vehicle, stream, seq) is the delivery identity: a resent sample is a duplicate.
         UniqueConstraint("vehicle_id", "stream_id", "seq", name="uq_telemetry_sample"),
         Index("ix_telemetry_vehicle_time", "vehicle_id", "time"),
+        Index("ix_telemetry_time", "time"),  # fleet-wide ranges and retention
     )
 
     id: Mapped[int] = mapped_column(RowId, primary_key=True, autoincrement=True)
@@ -151,3 +152,84 @@ class SafetyRailsRow(Base):
     rails_json: Mapped[str] = mapped_column(String(100_000))
     updated_at: Mapped[float] = mapped_column(Double)
     updated_by: Mapped[str] = mapped_column(String(64))
+
+
+class FlightRow(Base):
+    """One flight: from arming to disarming, found in the telemetry as it is stored."""
+
+    __tablename__ = "flights"
+    __table_args__ = (Index("ix_flights_vehicle_start", "vehicle_id", "start_time"),)
+
+    id: Mapped[int] = mapped_column(RowId, primary_key=True, autoincrement=True)
+    vehicle_id: Mapped[str] = mapped_column(String(64), ForeignKey("vehicles.id"))
+    start_time: Mapped[float] = mapped_column(Double)
+    end_time: Mapped[float | None] = mapped_column(Double, index=True)
+    duration_s: Mapped[float | None] = mapped_column(Double)
+    distance_m: Mapped[float | None] = mapped_column(Double)
+    max_alt_m: Mapped[float | None] = mapped_column(Double)
+    battery_used_pct: Mapped[float | None] = mapped_column(Double)
+    samples: Mapped[int | None] = mapped_column(Integer)
+
+
+class EventRow(Base):
+    __tablename__ = "events"
+    __table_args__ = (
+        # Agent events are de-duplicated like telemetry; the hub's own have no seq.
+        UniqueConstraint("vehicle_id", "stream_id", "seq", name="uq_event"),
+        Index("ix_events_vehicle_time", "vehicle_id", "time"),
+        Index("ix_events_time", "time"),
+    )
+
+    id: Mapped[int] = mapped_column(RowId, primary_key=True, autoincrement=True)
+    vehicle_id: Mapped[str] = mapped_column(String(64), ForeignKey("vehicles.id"))
+    stream_id: Mapped[str] = mapped_column(String(64))
+    seq: Mapped[int | None] = mapped_column(BigInteger)
+    time: Mapped[float] = mapped_column(Double)
+    kind: Mapped[str] = mapped_column(String(16))
+    severity: Mapped[int | None] = mapped_column(SmallInteger)
+    text: Mapped[str] = mapped_column(String(500))
+
+
+class CommandRow(Base):
+    __tablename__ = "commands"
+    __table_args__ = (Index("ix_commands_vehicle_time", "vehicle_id", "time"),)
+
+    id: Mapped[int] = mapped_column(RowId, primary_key=True, autoincrement=True)
+    time: Mapped[float] = mapped_column(Double, index=True)
+    vehicle_id: Mapped[str] = mapped_column(String(64))
+    actor: Mapped[str] = mapped_column(String(80))
+    name: Mapped[str] = mapped_column(String(32))
+    command_json: Mapped[str] = mapped_column(String(2000))
+    status: Mapped[str] = mapped_column(String(16), doc="accepted, refused, timeout, failed")
+    result: Mapped[str | None] = mapped_column(String(48))
+    message: Mapped[str] = mapped_column(String(1000))
+
+
+class MissionRunRow(Base):
+    """A mission flown by a vehicle. Written by mission upload and execution (the
+    MAVLink mission protocol); the table is here so the schema is whole."""
+
+    __tablename__ = "mission_runs"
+    __table_args__ = (Index("ix_mission_runs_vehicle_start", "vehicle_id", "started_at"),)
+
+    id: Mapped[int] = mapped_column(RowId, primary_key=True, autoincrement=True)
+    vehicle_id: Mapped[str] = mapped_column(String(64), ForeignKey("vehicles.id"))
+    flight_id: Mapped[int | None] = mapped_column(ForeignKey("flights.id"))
+    kind: Mapped[str] = mapped_column(String(32), doc="survey, formation, waypoints")
+    items: Mapped[int] = mapped_column(Integer)
+    started_at: Mapped[float] = mapped_column(Double)
+    ended_at: Mapped[float | None] = mapped_column(Double)
+    status: Mapped[str] = mapped_column(String(16))
+
+
+class TlogRow(Base):
+    """A .tlog recorded on board and uploaded by the agent after landing."""
+
+    __tablename__ = "tlogs"
+
+    id: Mapped[int] = mapped_column(RowId, primary_key=True, autoincrement=True)
+    vehicle_id: Mapped[str] = mapped_column(String(64), index=True)
+    filename: Mapped[str] = mapped_column(String(128))
+    path: Mapped[str] = mapped_column(String(512))
+    size: Mapped[int] = mapped_column(BigInteger)
+    uploaded_at: Mapped[float] = mapped_column(Double)

@@ -4,24 +4,24 @@ a worker thread (``asyncio.to_thread``) so the event loop never blocks on the da
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import asdict
 from typing import Any
 
-from sqlalchemy import Engine, func, select
+from sqlalchemy import Connection, Engine, func, select
 from sqlalchemy.dialects import postgresql, sqlite
 from sqlalchemy.orm import Session
 
-from backend.storage.models import TELEMETRY_STATE_COLUMNS, TelemetryRow, VehicleRow
-from gcs.protocol import Hello, Telemetry
+from backend.storage.database import transaction
+from backend.storage.models import TELEMETRY_STATE_COLUMNS, EventRow, TelemetryRow, VehicleRow
+from backend.storage.records import StoredEvent, TelemetryEnvelope
+from gcs.protocol import Hello
+
+# (vehicle_id, stream_id, seq): a sample's delivery identity.
+SampleKey = tuple[str, str, int]
 
 
-@dataclass(frozen=True)
-class TelemetryEnvelope:
-    """A telemetry message with the identity the hub knows it under."""
-
-    vehicle_id: str
-    stream_id: str
-    telemetry: Telemetry
+def sample_key(envelope: TelemetryEnvelope) -> SampleKey:
+    return (envelope.vehicle_id, envelope.stream_id, envelope.telemetry.seq)
 
 
 def _insert(engine: Engine, table: Any) -> Any:
@@ -54,19 +54,21 @@ class Repository:
         with Session(self.engine) as session:
             return session.scalars(select(VehicleRow).order_by(VehicleRow.id)).all()
 
-    def insert_telemetry(self, batch: Sequence[TelemetryEnvelope]) -> int:
-        """Store a batch; samples stored before are skipped. Returns rows written."""
+    def insert_telemetry(
+        self, batch: Sequence[TelemetryEnvelope], connection: Connection | None = None
+    ) -> set[SampleKey]:
+        """Store a batch; samples stored before are skipped. Returns the keys written."""
         if not batch:
-            return 0
+            return set()
         rows = [_telemetry_row(envelope) for envelope in batch]
         statement = (
             _insert(self.engine, TelemetryRow)
             .on_conflict_do_nothing(index_elements=["vehicle_id", "stream_id", "seq"])
-            # rowcount is unreliable for batched inserts; the returned ids are not.
-            .returning(TelemetryRow.id)
+            # rowcount is unreliable for batched inserts; the returned keys are not.
+            .returning(TelemetryRow.vehicle_id, TelemetryRow.stream_id, TelemetryRow.seq)
         )
-        with self.engine.begin() as connection:
-            return len(connection.execute(statement, rows).all())
+        with transaction(self.engine, connection) as active:
+            return {(v, s, q) for v, s, q in active.execute(statement, rows).all()}
 
     def telemetry(
         self, vehicle_id: str, start: float, end: float, limit: int
@@ -83,6 +85,19 @@ class Repository:
         )
         with Session(self.engine) as session:
             return session.scalars(query).all()
+
+    def insert_events(
+        self, events: Sequence[StoredEvent], connection: Connection | None = None
+    ) -> int:
+        if not events:
+            return 0
+        statement = (
+            _insert(self.engine, EventRow)
+            .on_conflict_do_nothing(index_elements=["vehicle_id", "stream_id", "seq"])
+            .returning(EventRow.id)
+        )
+        with transaction(self.engine, connection) as active:
+            return len(active.execute(statement, [asdict(e) for e in events]).all())
 
     def count_telemetry(self, vehicle_id: str | None = None) -> int:
         query = select(func.count()).select_from(TelemetryRow)

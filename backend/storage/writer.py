@@ -1,8 +1,15 @@
-"""The one batching writer: telemetry from the bus to the database in batches."""
+"""The one batching writer: telemetry and events from the bus to the database.
+
+It sees each vehicle's samples in order and exactly once, so it also finds flights
+(arm → disarm) and state changes as it stores them. Each batch is one transaction, and
+every statement in it is idempotent, so a batch that failed (database away) or was cut
+short by shutdown is simply written again.
+"""
 
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import logging
 import time
 from dataclasses import dataclass
@@ -10,52 +17,66 @@ from dataclasses import dataclass
 from sqlalchemy.exc import OperationalError
 
 from backend.realtime.bus import ReliableSubscription
-from backend.storage.repository import Repository, TelemetryEnvelope
+from backend.storage.flights import FlightClosed, FlightOpened, FlightTracker
+from backend.storage.logbook import Logbook
+from backend.storage.records import StoredEvent, StoredRecord, TelemetryEnvelope
+from backend.storage.repository import Repository, sample_key
 
 log = logging.getLogger(__name__)
 
 
 @dataclass
 class WriterStats:
-    written: int = 0
+    written: int = 0  # telemetry samples stored
+    events_written: int = 0
     batches: int = 0
-    retries: int = 0
+    retries: int = 0  # batches that had to wait for the database
     last_batch_s: float = 0.0
+    database_available: bool = True
 
 
-class TelemetryWriter:
-    """Collects up to ``batch_size`` samples or waits ``flush_interval_s``, then writes.
-
-    Writes are idempotent (the store skips a (vehicle, stream, seq) it has), so a
-    batch interrupted by shutdown is simply written again from ``finally``.
-    """
+class StorageWriter:
+    """Collects up to ``batch_size`` records or waits ``flush_interval_s``, then writes."""
 
     def __init__(
         self,
         repository: Repository,
+        logbook: Logbook,
         source: ReliableSubscription,
         batch_size: int,
         flush_interval_s: float,
         retry_backoff_s: float = 0.5,
+        max_backoff_s: float = 10.0,
     ) -> None:
         self._repository = repository
+        self._logbook = logbook
         self._source = source
         self._batch_size = batch_size
         self._flush_interval_s = flush_interval_s
         self._retry_backoff_s = retry_backoff_s
-        self._batch: list[TelemetryEnvelope] = []
+        self._max_backoff_s = max_backoff_s
+        self._batch: list[StoredRecord] = []
+        self._writing: asyncio.Future[None] | None = None
+        self.tracker = FlightTracker(open_flights=logbook.open_flights())
         self.stats = WriterStats()
 
     @property
     def backlog(self) -> int:
         return self._source.qsize() + len(self._batch)
 
+    @property
+    def capacity(self) -> int:
+        return self._source.maxsize
+
     async def run(self) -> None:
         try:
             while True:
                 await self._collect()
-                await self._write_batch()
+                await self._write_until_stored()
         finally:
+            if self._writing is not None and not self._writing.done():
+                with contextlib.suppress(Exception):
+                    await self._writing
             self._flush_on_shutdown()
 
     async def _collect(self) -> None:
@@ -65,38 +86,77 @@ class TelemetryWriter:
             remaining = deadline - time.monotonic()
             if remaining <= 0:
                 break
+            # asyncio.timeout, not wait_for: on Python 3.11, wait_for can swallow a
+            # cancellation that lands as the item arrives, and the hub would never stop.
             try:
-                self._batch.append(await asyncio.wait_for(self._source.get(), remaining))
+                async with asyncio.timeout(remaining):
+                    self._batch.append(await self._source.get())
             except TimeoutError:
                 break
 
-    async def _write_batch(self) -> None:
+    async def _write_until_stored(self) -> None:
         backoff = self._retry_backoff_s
         while True:
             try:
                 started = time.monotonic()
-                written = await asyncio.to_thread(self._repository.insert_telemetry, self._batch)
+                # Shielded: a write under way finishes even if the hub is stopping, so the
+                # shutdown flush never runs beside it.
+                self._writing = asyncio.ensure_future(asyncio.to_thread(self._write))
+                await asyncio.shield(self._writing)
             except OperationalError as error:
                 # The database is unavailable: keep the batch, wait, try again.
                 self.stats.retries += 1
-                log.warning("telemetry write failed, retrying in %.1f s: %s", backoff, error)
+                if self.stats.database_available:
+                    log.warning(
+                        "database unavailable, holding %d records: %s", len(self._batch), error.orig
+                    )
+                self.stats.database_available = False
                 await asyncio.sleep(backoff)
-                backoff = min(backoff * 2, 10.0)
+                backoff = min(backoff * 2, self._max_backoff_s)
                 continue
+            if not self.stats.database_available:
+                log.info("database available again after %d retries", self.stats.retries)
+            self.stats.database_available = True
             self.stats.last_batch_s = time.monotonic() - started
-            self.stats.written += written
             self.stats.batches += 1
-            self._batch = []
             return
 
+    def _write(self) -> None:
+        """One batch in one transaction. Flights and state changes are found only in the
+        samples this batch really added, so a replayed sample never opens a second flight;
+        the in-memory tracker changes only once the transaction has committed."""
+        telemetry = [r for r in self._batch if isinstance(r, TelemetryEnvelope)]
+        events = [r for r in self._batch if isinstance(r, StoredEvent)]
+        tracker = self.tracker.copy()
+        with self._repository.engine.begin() as connection:
+            added = self._repository.insert_telemetry(telemetry, connection)
+            plan = tracker.plan([r for r in telemetry if sample_key(r) in added])
+            events_written = self._repository.insert_events(events + plan.events, connection)
+            for transition in plan.transitions:
+                match transition:
+                    case FlightOpened(vehicle_id=vehicle, time=at):
+                        tracker.open_flights[vehicle] = self._logbook.open_flight(
+                            vehicle, at, connection
+                        )
+                    case FlightClosed(vehicle_id=vehicle, time=at) if (
+                        vehicle in tracker.open_flights
+                    ):
+                        flight_id = tracker.open_flights.pop(vehicle)
+                        self._logbook.close_flight(flight_id, at, connection)
+        self.tracker = tracker
+        self.stats.written += len(added)
+        self.stats.events_written += events_written
+        self._batch = []
+
     def _flush_on_shutdown(self) -> None:
+        """Store what was accepted: the batch in hand and everything still queued."""
         while True:
             try:
                 self._batch.append(self._source.get_nowait())
             except asyncio.QueueEmpty:
                 break
-        if self._batch:
-            written = self._repository.insert_telemetry(self._batch)
-            self.stats.written += written
-            log.info("flushed %d telemetry samples on shutdown", len(self._batch))
-            self._batch = []
+        if not self._batch:
+            return
+        count = len(self._batch)
+        self._write()
+        log.info("flushed %d records on shutdown", count)

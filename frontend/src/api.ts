@@ -5,7 +5,21 @@
 // sends by itself: no token or password is ever held here. A 401 from any call
 // except the login ones means the session ended; `request` reports it to the one
 // handler set with `onUnauthorized`, which shows the login screen.
-import type { AuditPage, AuditQuery, Command, CommandResponse, CurrentUser, HubConfig } from "./types";
+import type {
+  AuditPage,
+  AuditQuery,
+  Command,
+  CommandResponse,
+  CurrentUser,
+  EventPage,
+  EventQuery,
+  Flight,
+  FlightExportFormat,
+  FlightPage,
+  FlightQuery,
+  FlightTelemetry,
+  HubConfig,
+} from "./types";
 
 export class ApiError extends Error {
   constructor(
@@ -174,4 +188,38 @@ export function fetchAudit(query: AuditQuery): Promise<AuditPage> {
   if (query.actor) params.set("actor", query.actor);
   if (query.action) params.set("action", query.action);
   return request<AuditPage>(`audit?${params}`);
+}
+
+// ---------------------------------------------------------------- flight logs
+
+export function fetchFlights(query: FlightQuery): Promise<FlightPage> {
+  const params = new URLSearchParams({ limit: String(query.limit) });
+  if (query.vehicleId) params.set("vehicle_id", query.vehicleId);
+  if (query.beforeId !== undefined) params.set("before_id", String(query.beforeId));
+  return request<FlightPage>(`flights?${params}`);
+}
+
+export function fetchFlight(id: number): Promise<Flight> {
+  return request<Flight>(`flights/${id}`);
+}
+
+/** The flight's samples, downsampled by the hub to at most `points` (up to 10000). */
+export function fetchFlightTelemetry(id: number, points: number): Promise<FlightTelemetry> {
+  return request<FlightTelemetry>(`flights/${id}/telemetry?points=${points}`);
+}
+
+export function fetchEvents(query: EventQuery): Promise<EventPage> {
+  const params = new URLSearchParams({
+    vehicle_id: query.vehicleId,
+    start: String(query.start),
+    end: String(query.end),
+    limit: String(query.limit),
+  });
+  if (query.beforeId !== undefined) params.set("before_id", String(query.beforeId));
+  return request<EventPage>(`events?${params}`);
+}
+
+/** A plain download link: the session cookie authenticates it. */
+export function flightExportUrl(id: number, format: FlightExportFormat): string {
+  return apiUrl(`flights/${id}/export.${format}`).toString();
 }

@@ -1,6 +1,7 @@
 // The audit log drawer: who did what, when, from where and how it ended, newest
 // first, a page at a time ("Load older" asks for entries before the last id shown).
 import { fetchAudit } from "./api";
+import { actionButton, element } from "./dom";
 import type { AuditEntry } from "./types";
 
 const PAGE_SIZE = 50;
@@ -25,23 +26,6 @@ export function formatAuditDetail(detail: Record<string, unknown> | null): strin
   return Object.entries(detail)
     .map(([key, value]) => `${key}=${typeof value === "string" ? value : JSON.stringify(value)}`)
     .join(" ");
-}
-
-function element<K extends keyof HTMLElementTagNameMap>(
-  tag: K,
-  props: Partial<HTMLElementTagNameMap[K]> = {},
-  ...children: (Node | string)[]
-): HTMLElementTagNameMap[K] {
-  const node = Object.assign(document.createElement(tag), props);
-  node.append(...children);
-  return node;
-}
-
-function actionButton(action: string, label: string, onClick: () => void): HTMLButtonElement {
-  const button = element("button", { type: "button", className: "panel-button", textContent: label });
-  button.dataset.action = action;
-  button.addEventListener("click", onClick);
-  return button;
 }
 
 export class AuditPanel {

@@ -11,6 +11,7 @@ import { linkState } from "./format";
 import { PROTOCOL_VERSION } from "./generated/protocol";
 import type { Header } from "./header";
 import { FleetMap } from "./map";
+import { ReplayPanel } from "./replayPanel";
 import { type CurrentUser, type HubConfig, type HubToClient, can } from "./types";
 
 const OFFLINE_CONFIG: HubConfig = { basemap_url: null, basemap_attribution: "", basemap_max_zoom: 19 };
@@ -28,6 +29,8 @@ export class Dashboard {
   private map: FleetMap | null = null;
   private table: FleetTable | null = null;
   private audit: AuditPanel | null = null;
+  private replay: ReplayPanel | null = null;
+  private store: FleetStore | null = null;
   private expiryTimer: number | undefined;
   private stopped = false;
 
@@ -39,7 +42,11 @@ export class Dashboard {
 
   async start(): Promise<void> {
     const { header, user, hooks } = this;
-    header.setUser(user, { logout: () => hooks.logout(), toggleAudit: () => this.toggleAudit() });
+    header.setUser(user, {
+      logout: () => hooks.logout(),
+      toggleAudit: () => this.toggleAudit(),
+      toggleFlights: () => this.toggleFlights(),
+    });
     header.setCounts(0, 0);
     header.setConnection("connecting");
     this.watchExpiry();
@@ -83,7 +90,9 @@ export class Dashboard {
       let online = 0;
       for (const vehicle of all.values()) if (linkState(vehicle) !== "offline") online++;
       header.setCounts(all.size, online);
+      if (this.replay?.isOpen) this.replay.suggestVehicles(all.keys());
     });
+    this.store = store;
 
     const onMessage = (message: HubToClient) => {
       switch (message.type) {
@@ -124,6 +133,10 @@ export class Dashboard {
     this.socket = null;
     this.audit?.element.remove();
     this.audit = null;
+    this.replay?.destroy();
+    this.replay = null;
+    document.querySelector(".layout")?.classList.remove("flights-open");
+    this.store = null;
     this.table?.destroy();
     this.table = null;
     this.map?.destroy();
@@ -143,6 +156,21 @@ export class Dashboard {
     if (this.audit.isOpen) this.audit.close();
     else this.audit.open();
     this.header.setAuditOpen(this.audit.isOpen);
+  }
+
+  /** Enters or leaves the flight replay mode (the panel takes the fleet table's place). */
+  private toggleFlights(): void {
+    const map = this.map;
+    if (this.stopped || !map || !can(this.user, "read")) return;
+    const layout = document.querySelector(".layout")!;
+    if (!this.replay) {
+      this.replay = new ReplayPanel(map, () => this.toggleFlights());
+      layout.append(this.replay.element);
+    }
+    if (this.replay.isOpen) this.replay.close();
+    else this.replay.open(this.store?.ids() ?? []);
+    layout.classList.toggle("flights-open", this.replay.isOpen);
+    this.header.setFlightsOpen(this.replay.isOpen);
   }
 
   /**

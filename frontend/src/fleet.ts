@@ -19,6 +19,11 @@ export class FleetStore {
     return this.vehicles.get(id);
   }
 
+  /** The ids of the vehicles known now. */
+  ids(): string[] {
+    return [...this.vehicles.keys()];
+  }
+
   /** A full snapshot: vehicles missing from it are dropped. */
   replaceAll(vehicles: VehicleSummary[]): void {
     const incoming = new Set(vehicles.map((v) => v.id));

@@ -1,5 +1,5 @@
 // The header: connection status, vehicle count, a transient notice line, and who
-// is logged in (with the audit-log and logout buttons).
+// is logged in (with the flights, audit-log and logout buttons).
 import type { ConnectionState } from "./connection";
 import { type CurrentUser, can } from "./types";
 
@@ -9,6 +9,8 @@ export interface UserActions {
   logout(): void;
   /** Only offered to users with the "audit" permission. */
   toggleAudit(): void;
+  /** The flight log replay; offered to users with the "read" permission. */
+  toggleFlights(): void;
 }
 
 export class Header {
@@ -17,6 +19,7 @@ export class Header {
   private readonly notice = document.getElementById("notice")!;
   private readonly userMenu = document.getElementById("user-menu")!;
   private auditButton: HTMLButtonElement | null = null;
+  private flightsButton: HTMLButtonElement | null = null;
   private noticeTimer: number | undefined;
 
   setConnection(state: ConnectionState, retryInMs?: number): void {
@@ -60,6 +63,7 @@ export class Header {
   setUser(user: CurrentUser | null, actions?: UserActions): void {
     this.userMenu.replaceChildren();
     this.auditButton = null;
+    this.flightsButton = null;
     this.userMenu.hidden = user === null;
     if (!user || !actions) return;
 
@@ -71,6 +75,13 @@ export class Header {
     name.title = `Logged in as ${user.username} (${user.role}); may ${user.permissions.join(", ")}`;
     this.userMenu.append(name);
 
+    if (can(user, "read")) {
+      this.flightsButton = headerButton("show-flights", "Flights", () => actions.toggleFlights());
+      this.flightsButton.title = "Replay stored flights";
+      this.flightsButton.setAttribute("aria-controls", "replay-panel");
+      this.flightsButton.setAttribute("aria-expanded", "false");
+      this.userMenu.append(this.flightsButton);
+    }
     if (can(user, "audit")) {
       this.auditButton = headerButton("show-audit", "Audit log", () => actions.toggleAudit());
       this.auditButton.setAttribute("aria-controls", "audit-panel");
@@ -78,6 +89,11 @@ export class Header {
       this.userMenu.append(this.auditButton);
     }
     this.userMenu.append(headerButton("logout", "Log out", () => actions.logout()));
+  }
+
+  setFlightsOpen(open: boolean): void {
+    this.flightsButton?.setAttribute("aria-expanded", String(open));
+    this.flightsButton?.classList.toggle("active", open);
   }
 
   setAuditOpen(open: boolean): void {

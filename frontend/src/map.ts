@@ -19,6 +19,8 @@ export class FleetMap {
   private readonly markers = new Map<string, VehicleMarker>();
   private selectedId: string | null = null;
   private hasFitted = false;
+  /** The live view to return to when the replay ends. */
+  private liveView: { center: L.LatLng; zoom: number } | null = null;
 
   constructor(
     private readonly container: HTMLElement,
@@ -58,9 +60,33 @@ export class FleetMap {
       }
       marker.update(vehicle, position);
     }
-    if (!this.hasFitted && this.markers.size > 0) {
+    if (!this.hasFitted && !this.liveView && this.markers.size > 0) {
       this.hasFitted = true;
       this.fitFleet();
+    }
+  }
+
+  /** The Leaflet map, for the replay's layers. */
+  get leaflet(): L.Map {
+    return this.map;
+  }
+
+  /**
+   * In replay mode the live markers stay on the map but faded and not clickable;
+   * leaving it brings back the view the map had before.
+   */
+  setReplaying(replaying: boolean): void {
+    this.container.classList.toggle("replaying", replaying);
+    if (replaying) {
+      this.liveView ??= { center: this.map.getCenter(), zoom: this.map.getZoom() };
+    } else if (this.liveView) {
+      const { center, zoom } = this.liveView;
+      this.liveView = null;
+      if (this.hasFitted || this.markers.size === 0) this.map.setView(center, zoom, { animate: false });
+      else {
+        this.hasFitted = true;
+        this.fitFleet();
+      }
     }
   }
 
@@ -82,7 +108,7 @@ export class FleetMap {
   destroy(): void {
     this.map.remove();
     this.markers.clear();
-    this.container.classList.remove("no-basemap");
+    this.container.classList.remove("no-basemap", "replaying");
     this.container.style.backgroundPosition = "";
   }
 

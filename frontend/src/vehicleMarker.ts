@@ -5,7 +5,7 @@ import { linkState } from "./format";
 import type { VehicleSummary } from "./types";
 
 const SVG_NS = "http://www.w3.org/2000/svg";
-const ICON_SIZE = 28;
+export const ICON_SIZE = 28;
 
 function svgElement<K extends keyof SVGElementTagNameMap>(
   tag: K,
@@ -14,6 +14,22 @@ function svgElement<K extends keyof SVGElementTagNameMap>(
   const element = document.createElementNS(SVG_NS, tag);
   for (const [name, value] of Object.entries(attributes)) element.setAttribute(name, value);
   return element;
+}
+
+/** The heading arrow (and the dot shown instead when there is no heading); also used by the replay. */
+export function vehicleSymbol(): SVGSVGElement {
+  const symbol = svgElement("svg", {
+    class: "vehicle-symbol",
+    viewBox: "0 0 28 28",
+    width: String(ICON_SIZE),
+    height: String(ICON_SIZE),
+    "aria-hidden": "true",
+  });
+  symbol.append(
+    svgElement("path", { class: "vehicle-arrow", d: "M14 2 L24 25 L14 19.5 L4 25 Z" }),
+    svgElement("circle", { class: "vehicle-dot", cx: "14", cy: "14", r: "7" }),
+  );
+  return symbol;
 }
 
 export class VehicleMarker {
@@ -30,17 +46,7 @@ export class VehicleMarker {
     this.content = document.createElement("div");
     this.content.className = "vehicle-marker-body";
 
-    this.symbol = svgElement("svg", {
-      class: "vehicle-symbol",
-      viewBox: "0 0 28 28",
-      width: String(ICON_SIZE),
-      height: String(ICON_SIZE),
-      "aria-hidden": "true",
-    });
-    this.symbol.append(
-      svgElement("path", { class: "vehicle-arrow", d: "M14 2 L24 25 L14 19.5 L4 25 Z" }),
-      svgElement("circle", { class: "vehicle-dot", cx: "14", cy: "14", r: "7" }),
-    );
+    this.symbol = vehicleSymbol();
 
     const label = document.createElement("span");
     label.className = "vehicle-label";

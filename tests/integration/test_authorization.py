@@ -47,7 +47,14 @@ def _operations(schema: dict[str, Any]) -> list[tuple[str, str, str]]:
 
 
 def _concrete(path: str) -> str:
-    values = {"vehicle_id": "ghost", "username": "nobody", "token_id": "999999"}
+    values = {
+        "vehicle_id": "ghost",
+        "username": "nobody",
+        "token_id": "999999",
+        "flight_id": "999999",
+        "tlog_id": "999999",
+        "format": "csv",
+    }
     return re.sub(r"\{(\w+)\}", lambda match: values[match.group(1)], path)
 
 
@@ -81,7 +88,7 @@ def test_every_route_allows_exactly_the_roles_it_should(
     agent_token = enrol("ghost")
     callers: dict[str, Callable[[], dict[str, str]]] = {
         "anonymous": dict,
-        # An agent token speaks for its vehicle on the agent socket, and nowhere else.
+        # An agent token speaks for its vehicle (socket, .tlog upload), and does nothing else.
         "agent": lambda: {"Authorization": f"Bearer {agent_token}"},
         **{
             role: (
@@ -98,8 +105,10 @@ def test_every_route_allows_exactly_the_roles_it_should(
                 response = client.request(method, _concrete(path), headers=headers(), json={})
                 if permission == PUBLIC:
                     expected_refusal = None
-                elif caller in ("anonymous", "agent"):
+                elif caller == "anonymous":
                     expected_refusal = 401
+                elif caller == "agent":
+                    expected_refusal = None if permission == Permission.AGENT else 403
                 elif Permission(permission) in ROLE_PERMISSIONS[Role(caller)]:
                     expected_refusal = None
                 else:

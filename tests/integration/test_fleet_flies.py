@@ -6,14 +6,37 @@ import sqlite3
 import time
 from typing import Any
 
+import httpx
 import pytest
 
 from gcs.launcher import LocalFleet
 from tests.helpers import FleetWatcher, api_client
+from tests.mavutil_state import mavutil_in_mavlink2
 
 pytestmark = pytest.mark.integration
 
 TAKEOFF_ALTITUDE_M = 10.0
+
+
+def wait_for_closed_flight(api: httpx.Client, vehicle: str, since: float) -> dict[str, Any]:
+    """The live feed shows the disarm before the writer has stored it; poll the store."""
+    deadline = time.monotonic() + 10
+    while True:
+        flights = api.get("/api/v1/flights", params={"vehicle_id": vehicle}).json()["flights"]
+        closed = [f for f in flights if f["start_time"] >= since and f["end_time"] is not None]
+        if closed:
+            return dict(closed[0])
+        assert time.monotonic() < deadline, f"no closed flight of {vehicle}: {flights}"
+        time.sleep(0.1)  # the batching writer flushes every 0.25 s
+
+
+def watch_for_tlog(api: httpx.Client, vehicle: str) -> dict[str, Any]:
+    """The agent uploads after landing; poll the hub's list until it arrives."""
+    deadline = time.monotonic() + 30
+    while not (tlogs := api.get(f"/api/v1/vehicles/{vehicle}/tlogs").json()):
+        assert time.monotonic() < deadline, "the onboard .tlog never arrived"
+        time.sleep(0.2)  # polling the hub; the upload happens in the agent process
+    return dict(tlogs[-1])
 
 
 def _ready(vehicles: dict[str, dict[str, Any]], count: int) -> bool:
@@ -28,7 +51,9 @@ def _ready(vehicles: dict[str, dict[str, Any]], count: int) -> bool:
     )
 
 
-def test_arm_takeoff_land_through_rest(fleet: LocalFleet, fleet_admin_token: str) -> None:
+def test_arm_takeoff_land_through_rest(
+    fleet: LocalFleet, fleet_admin_token: str, monkeypatch: pytest.MonkeyPatch
+) -> None:
     base = fleet.plan.hub_http
     vehicle = fleet.vehicle_id(0)
     with (
@@ -101,6 +126,27 @@ def test_arm_takeoff_land_through_rest(fleet: LocalFleet, fleet_admin_token: str
         seqs = [sample["seq"] for sample in history["samples"]]
         assert seqs == sorted(seqs)
         assert len(seqs) == len(set(seqs))
+
+        # The hub found the flight, with its summary and events, and the agent uploaded
+        # the .tlog it recorded on board once it had landed.
+        flight = wait_for_closed_flight(api, vehicle, since=started_at - 30)
+        assert flight["max_alt_m"] >= TAKEOFF_ALTITUDE_M - 1
+        kinds = {
+            event["kind"]
+            for event in api.get(
+                "/api/v1/events",
+                params={"vehicle_id": vehicle, "start": flight["start_time"] - 5},
+            ).json()["events"]
+        }
+        assert {"armed", "disarmed", "mode"} <= kinds
+        commands = api.get("/api/v1/commands", params={"vehicle_id": vehicle}).json()["commands"]
+        assert {"arm", "takeoff", "land"} <= {command["name"] for command in commands}
+        tlog = watch_for_tlog(api, vehicle)
+        onboard = fleet.plan.data_dir / "onboard.tlog"
+        onboard.write_bytes(api.get(f"/api/v1/tlogs/{tlog['id']}").content)
+        log = mavutil_in_mavlink2(monkeypatch).mavlink_connection(str(onboard))
+        assert log.recv_match(type="GLOBAL_POSITION_INT") is not None
+        log.close()
 
     # And the rows are really in the database file, for every vehicle.
     database = fleet.plan.data_dir / "gcs.sqlite3"

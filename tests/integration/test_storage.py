@@ -2,10 +2,6 @@
 
 from __future__ import annotations
 
-import uuid
-from collections.abc import Iterator
-
-import psycopg
 import pytest
 from alembic.autogenerate import compare_metadata
 from alembic.migration import MigrationContext
@@ -13,31 +9,11 @@ from sqlalchemy import Engine, text
 from sqlalchemy.exc import DBAPIError
 
 from backend.audit import AuditEntry, AuditLog, AuditQuery
-from backend.storage.database import make_engine, migrate
+from backend.storage.database import migrate
 from backend.storage.models import Base
-from backend.storage.repository import Repository, TelemetryEnvelope
+from backend.storage.records import TelemetryEnvelope
+from backend.storage.repository import Repository
 from gcs.protocol import PROTOCOL_VERSION, Hello, Telemetry, VehicleState
-
-POSTGRES_ADMIN = "postgresql://postgres@127.0.0.1:5432/postgres"
-
-
-@pytest.fixture(params=["sqlite", "postgresql"])
-def engine(request: pytest.FixtureRequest, tmp_path: object) -> Iterator[Engine]:
-    if request.param == "sqlite":
-        created = make_engine(f"sqlite:///{tmp_path}/store.sqlite3")
-        yield created
-        created.dispose()
-        return
-    name = f"gcs_test_{uuid.uuid4().hex[:10]}"
-    with psycopg.connect(POSTGRES_ADMIN, autocommit=True) as admin:
-        admin.execute(f"CREATE DATABASE {name}")
-    created = make_engine(f"postgresql+psycopg://postgres@127.0.0.1:5432/{name}")
-    try:
-        yield created
-    finally:
-        created.dispose()
-        with psycopg.connect(POSTGRES_ADMIN, autocommit=True) as admin:
-            admin.execute(f"DROP DATABASE {name} WITH (FORCE)")
 
 
 def _hello(vehicle_id: str) -> Hello:
@@ -74,9 +50,11 @@ def test_batches_are_idempotent_and_ranges_ordered(engine: Engine) -> None:
     assert [row.last_seen for row in repository.vehicles()] == [200.0]
 
     batch = [_sample("v1", seq, 1000.0 + seq) for seq in range(50)]
-    assert repository.insert_telemetry(batch) == 50
+    assert len(repository.insert_telemetry(batch)) == 50
     # Resending an overlapping batch (a replay after reconnect) stores only what is new.
-    assert repository.insert_telemetry([*batch[40:], _sample("v1", 50, 1050.0)]) == 1
+    assert repository.insert_telemetry([*batch[40:], _sample("v1", 50, 1050.0)]) == {
+        ("v1", "s", 50)
+    }
     assert repository.count_telemetry("v1") == 51
 
     rows = repository.telemetry("v1", start=1010.0, end=1019.0, limit=100)

@@ -9,10 +9,10 @@ def test_reliable_subscription_applies_backpressure_and_keeps_order() -> None:
     async def scenario() -> None:
         bus = InProcessBus()
         queue = ReliableSubscription(maxsize=2)
-        bus.subscribe(Topic.TELEMETRY, queue)
-        await bus.publish(Topic.TELEMETRY, "v", 1)
-        await bus.publish(Topic.TELEMETRY, "v", 2)
-        blocked = asyncio.create_task(bus.publish(Topic.TELEMETRY, "v", 3))
+        bus.subscribe(Topic.STORAGE, queue)
+        await bus.publish(Topic.STORAGE, "v", 1)
+        await bus.publish(Topic.STORAGE, "v", 2)
+        blocked = asyncio.create_task(bus.publish(Topic.STORAGE, "v", 3))
         await asyncio.sleep(0)  # let the publisher run until it blocks
         assert not blocked.done(), "a full reliable queue makes the publisher wait"
         assert await queue.get() == 1

@@ -14,7 +14,7 @@
  * Any frame of protocol version 1, in either direction.
  */
 export type AnyMessage = AgentToHub | HubToAgent | ClientToHub | HubToClient;
-export type AgentToHub = Hello | Telemetry | CommandResult;
+export type AgentToHub = Hello | Telemetry | Event | CommandResult;
 export type HubToAgent = Welcome | CommandRequest | ErrorReply;
 export type ClientToHub = Ping;
 export type HubToClient = FleetSnapshot | VehicleUpdate | Pong | ErrorReply;
@@ -101,6 +101,26 @@ export interface VehicleState {
   home_lat: number | null;
   home_lon: number | null;
   home_alt_msl: number | null;
+}
+/**
+ * Something that happened, for the flight log: a STATUSTEXT, a failsafe, ...
+ *
+ * Events are stored like telemetry (at least once, de-duplicated by ``(stream_id, seq)``),
+ * with their own sequence numbers.
+ */
+export interface Event {
+  type: "event";
+  seq: number;
+  /**
+   * Unix time, seconds.
+   */
+  time: number;
+  kind: "statustext" | "mode" | "armed" | "disarmed" | "link_up" | "link_down" | "failsafe";
+  /**
+   * MAV_SEVERITY: 0 emergency .. 7 debug
+   */
+  severity: number | null;
+  text: string;
 }
 export interface CommandResult {
   type: "command_result";

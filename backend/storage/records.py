@@ -1,0 +1,30 @@
+"""What flows from the realtime path into storage."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from gcs.protocol import Telemetry
+
+
+@dataclass(frozen=True)
+class TelemetryEnvelope:
+    """A telemetry message with the identity the hub knows it under."""
+
+    vehicle_id: str
+    stream_id: str
+    telemetry: Telemetry
+
+
+@dataclass(frozen=True)
+class StoredEvent:
+    vehicle_id: str
+    stream_id: str  # the agent's stream, or "hub" for events the hub derives
+    seq: int | None  # None for the hub's own events
+    time: float
+    kind: str
+    severity: int | None
+    text: str
+
+
+StoredRecord = TelemetryEnvelope | StoredEvent

@@ -11,6 +11,7 @@ from fastapi import FastAPI, Request
 from fastapi.middleware.cors import CORSMiddleware
 from fastapi.responses import HTMLResponse, JSONResponse
 from fastapi.staticfiles import StaticFiles
+from sqlalchemy.exc import OperationalError
 
 from backend.api import admin, auth, logs, safety, system, vehicles, websockets
 from backend.api.hardening import SecurityMiddleware, content_security_policy
@@ -60,6 +61,7 @@ def create_app(settings: HubSettings | None = None) -> FastAPI:
         app.include_router(router, prefix=API_PREFIX)
     app.include_router(websockets.router)
     app.add_exception_handler(GcsError, _gcs_error_response)  # type: ignore[arg-type]
+    app.add_exception_handler(OperationalError, _database_unavailable)  # type: ignore[arg-type]
     if settings.cors_origins:
         app.add_middleware(
             CORSMiddleware,
@@ -93,6 +95,17 @@ async def _gcs_error_response(request: Request, error: GcsError) -> JSONResponse
     elif isinstance(error, SafetyViolation):
         body["violations"] = error.violations
     return JSONResponse(body, status_code=error.status_code, headers=headers)
+
+
+async def _database_unavailable(request: Request, error: OperationalError) -> JSONResponse:
+    log.warning(
+        "database unavailable during %s %s: %s", request.method, request.url.path, error.orig
+    )
+    return JSONResponse(
+        {"detail": "the database is unavailable; try again shortly"},
+        status_code=503,
+        headers={"Retry-After": "5"},
+    )
 
 
 def _mount_dashboard(app: FastAPI, settings: HubSettings) -> None:

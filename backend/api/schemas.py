@@ -8,11 +8,13 @@ from gcs.protocol import Command, CommandOutcome
 
 
 class Health(BaseModel):
-    status: str
+    status: str = Field(description="ok, or degraded while the database is unreachable")
+    database_available: bool
     vehicles: int
     connected: int
     telemetry_backlog: int
     telemetry_written: int
+    write_retries: int
 
 
 class ClientConfig(BaseModel):

@@ -14,12 +14,15 @@ router = SecuredRouter(tags=["system"])
 @router.get("/health", response_model=Health, openapi_extra=requires(PUBLIC))
 async def health(hub: HubDep) -> Health:
     records = hub.registry.all()
+    stats = hub.writer.stats
     return Health(
-        status="ok",
+        status="ok" if stats.database_available else "degraded",
+        database_available=stats.database_available,
         vehicles=len(records),
         connected=sum(record.connected for record in records),
         telemetry_backlog=hub.writer.backlog,
-        telemetry_written=hub.writer.stats.written,
+        telemetry_written=stats.written,
+        write_retries=stats.retries,
     )
 
 

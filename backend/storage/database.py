@@ -10,6 +10,7 @@ from typing import Any
 from alembic import command
 from alembic.config import Config
 from sqlalchemy import Connection, Engine, create_engine, event
+from sqlalchemy.dialects import postgresql, sqlite
 
 MIGRATIONS_DIR = Path(__file__).resolve().parent / "migrations"
 
@@ -57,3 +58,10 @@ def transaction(engine: Engine, connection: Connection | None) -> Iterator[Conne
         return
     with engine.begin() as owned:
         yield owned
+
+
+def dialect_insert(engine: Engine, table: Any) -> Any:
+    """An INSERT that skips rows already stored, in the engine's own dialect."""
+    if engine.dialect.name == "postgresql":
+        return postgresql.insert(table)
+    return sqlite.insert(table)

@@ -16,7 +16,7 @@ from sqlalchemy.orm import Session
 
 from backend.errors import NotFound
 from backend.safety.geometry import haversine_m
-from backend.storage.database import transaction
+from backend.storage.database import dialect_insert, transaction
 from backend.storage.downsample import minmax_downsample
 from backend.storage.models import (
     CommandRow,
@@ -76,13 +76,24 @@ class Logbook:
     def open_flight(
         self, vehicle_id: str, start_time: float, connection: Connection | None = None
     ) -> int:
+        """The flight of ``vehicle_id`` armed at ``start_time``, created if it is new."""
+        statement = (
+            dialect_insert(self.engine, FlightRow)
+            .values(vehicle_id=vehicle_id, start_time=start_time)
+            .on_conflict_do_nothing(index_elements=["vehicle_id", "start_time"])
+            .returning(FlightRow.id)
+        )
         with transaction(self.engine, connection) as active:
-            result = active.execute(
-                insert(FlightRow)
-                .values(vehicle_id=vehicle_id, start_time=start_time)
-                .returning(FlightRow.id)
+            created = active.execute(statement).scalar()
+            if created is not None:
+                return int(created)
+            return int(
+                active.execute(
+                    select(FlightRow.id).where(
+                        FlightRow.vehicle_id == vehicle_id, FlightRow.start_time == start_time
+                    )
+                ).scalar_one()
             )
-            return int(result.scalar_one())
 
     def close_flight(
         self, flight_id: int, end_time: float, connection: Connection | None = None

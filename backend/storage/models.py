@@ -158,7 +158,11 @@ class FlightRow(Base):
     """One flight: from arming to disarming, found in the telemetry as it is stored."""
 
     __tablename__ = "flights"
-    __table_args__ = (Index("ix_flights_vehicle_start", "vehicle_id", "start_time"),)
+    __table_args__ = (
+        # A flight is its vehicle's arming time: replayed telemetry finds the same flight.
+        UniqueConstraint("vehicle_id", "start_time", name="uq_flight_start"),
+        Index("ix_flights_vehicle_start", "vehicle_id", "start_time"),
+    )
 
     id: Mapped[int] = mapped_column(RowId, primary_key=True, autoincrement=True)
     vehicle_id: Mapped[str] = mapped_column(String(64), ForeignKey("vehicles.id"))

@@ -20,14 +20,14 @@ from backend.realtime.bus import ReliableSubscription
 from backend.storage.flights import FlightClosed, FlightOpened, FlightTracker
 from backend.storage.logbook import Logbook
 from backend.storage.records import StoredEvent, StoredRecord, TelemetryEnvelope
-from backend.storage.repository import Repository, sample_key
+from backend.storage.repository import Repository
 
 log = logging.getLogger(__name__)
 
 
 @dataclass
 class WriterStats:
-    written: int = 0  # telemetry samples stored
+    written: int = 0  # telemetry samples stored (a re-sent one is counted, not duplicated)
     events_written: int = 0
     batches: int = 0
     retries: int = 0  # batches that had to wait for the database
@@ -122,15 +122,15 @@ class StorageWriter:
             return
 
     def _write(self) -> None:
-        """One batch in one transaction. Flights and state changes are found only in the
-        samples this batch really added, so a replayed sample never opens a second flight;
-        the in-memory tracker changes only once the transaction has committed."""
+        """One batch in one transaction; the in-memory tracker changes only once it has
+        committed. Replayed samples are harmless: telemetry and events skip what is
+        stored, and a flight is identified by its vehicle and start time."""
         telemetry = [r for r in self._batch if isinstance(r, TelemetryEnvelope)]
         events = [r for r in self._batch if isinstance(r, StoredEvent)]
         tracker = self.tracker.copy()
         with self._repository.engine.begin() as connection:
-            added = self._repository.insert_telemetry(telemetry, connection)
-            plan = tracker.plan([r for r in telemetry if sample_key(r) in added])
+            self._repository.insert_telemetry(telemetry, connection)
+            plan = tracker.plan(telemetry)
             events_written = self._repository.insert_events(events + plan.events, connection)
             for transition in plan.transitions:
                 match transition:
@@ -144,7 +144,7 @@ class StorageWriter:
                         flight_id = tracker.open_flights.pop(vehicle)
                         self._logbook.close_flight(flight_id, at, connection)
         self.tracker = tracker
-        self.stats.written += len(added)
+        self.stats.written += len(telemetry)
         self.stats.events_written += events_written
         self._batch = []
 

@@ -50,11 +50,10 @@ def test_batches_are_idempotent_and_ranges_ordered(engine: Engine) -> None:
     assert [row.last_seen for row in repository.vehicles()] == [200.0]
 
     batch = [_sample("v1", seq, 1000.0 + seq) for seq in range(50)]
-    assert len(repository.insert_telemetry(batch)) == 50
+    repository.insert_telemetry(batch)
+    assert repository.count_telemetry("v1") == 50
     # Resending an overlapping batch (a replay after reconnect) stores only what is new.
-    assert repository.insert_telemetry([*batch[40:], _sample("v1", 50, 1050.0)]) == {
-        ("v1", "s", 50)
-    }
+    repository.insert_telemetry([*batch[40:], _sample("v1", 50, 1050.0)])
     assert repository.count_telemetry("v1") == 51
 
     rows = repository.telemetry("v1", start=1010.0, end=1019.0, limit=100)

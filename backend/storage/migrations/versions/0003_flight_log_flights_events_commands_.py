@@ -2,7 +2,7 @@
 
 Revision ID: 0003
 Revises: 0002
-Create Date: 2026-11-22 01:31:57.185489
+Create Date: 2026-11-22 02:05:37.630197
 """
 
 from collections.abc import Sequence
@@ -105,6 +105,7 @@ def upgrade() -> None:
             ["vehicles.id"],
         ),
         sa.PrimaryKeyConstraint("id"),
+        sa.UniqueConstraint("vehicle_id", "start_time", name="uq_flight_start"),
     )
     with op.batch_alter_table("flights", schema=None) as batch_op:
         batch_op.create_index(batch_op.f("ix_flights_end_time"), ["end_time"], unique=False)

@@ -1,0 +1,91 @@
+"""The writer under stress: a database that goes away, and a hub that is stopped."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import httpx
+
+from tests.conftest import ADMIN_PASSWORD, hub_settings, scratch_postgres
+from tests.helpers import access_token, api_client, running_hub
+from tests.integration.test_hub_bad_input import _telemetry, scripted_agent
+from tests.tcp_proxy import CuttableProxy
+
+SAMPLES = 200
+
+
+def _poll(check: Callable[[], Any], what: str, timeout_s: float = 30) -> Any:
+    """Poll the hub's REST view until ``check`` is truthy (storage has no push feed)."""
+    deadline = time.monotonic() + timeout_s
+    while not (value := check()):
+        assert time.monotonic() < deadline, f"timed out waiting for {what}"
+        time.sleep(0.05)
+    return value
+
+
+def _stored(api: httpx.Client, vehicle: str) -> int:
+    page = api.get(f"/api/v1/vehicles/{vehicle}/telemetry", params={"start": 0, "limit": 10000})
+    return len(page.json()["samples"])
+
+
+def test_writer_holds_samples_while_postgres_is_unreachable(tmp_path: Path) -> None:
+    with scratch_postgres() as url:
+        proxy = CuttableProxy(("127.0.0.1", 5432))
+        proxy.start()
+        proxied = url.replace("127.0.0.1:5432", f"127.0.0.1:{proxy.port}")
+        settings = hub_settings(tmp_path, database_url=proxied, telemetry_batch_size=20)
+        with running_hub(settings) as base:
+            token = access_token(base, "admin", ADMIN_PASSWORD)
+            with api_client(base, token) as api:
+                agent_token = api.post("/api/v1/vehicles/v1/agent-tokens").json()["token"]
+                with scripted_agent(base, "v1", agent_token) as agent:
+                    for seq in range(SAMPLES // 2):
+                        agent.send(_telemetry(seq))
+                    _poll(lambda: _stored(api, "v1") == SAMPLES // 2, "the first half stored")
+
+                    proxy.cut()
+                    for seq in range(SAMPLES // 2, SAMPLES):
+                        agent.send(_telemetry(seq))
+                    health = _poll(
+                        lambda: (h := api.get("/api/v1/health").json())["write_retries"] and h,
+                        "the writer to notice the outage",
+                    )
+                    assert health["status"] == "degraded"
+                    assert health["telemetry_backlog"] > 0  # held, not dropped
+                    # The API says what is wrong instead of failing obscurely.
+                    unavailable = api.get("/api/v1/vehicles")
+                    assert unavailable.status_code == 503
+                    assert "database" in unavailable.json()["detail"]
+
+                    proxy.start()
+                    _poll(lambda: _stored(api, "v1") == SAMPLES, "every sample stored")
+                    assert api.get("/api/v1/health").json()["status"] == "ok"
+        proxy.cut()
+
+
+def test_stopping_the_hub_stores_everything_it_received(tmp_path: Path) -> None:
+    settings = hub_settings(tmp_path, telemetry_flush_interval_s=30, telemetry_batch_size=10_000)
+    with running_hub(settings) as base:
+        token = access_token(base, "admin", ADMIN_PASSWORD)
+        with api_client(base, token) as api:
+            agent_token = api.post("/api/v1/vehicles/v1/agent-tokens").json()["token"]
+            with scripted_agent(base, "v1", agent_token) as agent:
+                for seq in range(SAMPLES):
+                    agent.send(_telemetry(seq))
+                # Received means taken off the socket and queued for the writer.
+                _poll(lambda: _received(api) >= SAMPLES, "the hub to take every sample")
+                assert api.get("/api/v1/metrics").json()["telemetry_written"] == 0
+    # ...and the writer, which would have waited 30 s to flush, stored it all on shutdown.
+    with (
+        running_hub(hub_settings(tmp_path, port=settings.port)) as base,
+        api_client(base, access_token(base, "admin", ADMIN_PASSWORD)) as api,
+    ):
+        assert _stored(api, "v1") == SAMPLES
+
+
+def _received(api: httpx.Client) -> int:
+    metrics = api.get("/api/v1/metrics").json()
+    return int(metrics["writer_backlog"]) + int(metrics["telemetry_written"])

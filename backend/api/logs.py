@@ -15,6 +15,7 @@ from fastapi.responses import FileResponse, StreamingResponse
 from pydantic import BaseModel, ConfigDict
 
 from backend.api.deps import HubDep
+from backend.api.schemas import Sample
 from backend.api.security import SecuredRouter, requires
 from backend.auth.policy import Permission
 from backend.errors import InvalidRequest
@@ -56,23 +57,6 @@ class Flight(BaseModel):
 class FlightPage(BaseModel):
     flights: list[Flight]
     next_before_id: int | None
-
-
-class Sample(BaseModel):
-    time: float
-    lat: float | None
-    lon: float | None
-    alt_msl: float | None
-    alt_rel: float | None
-    heading_deg: float | None
-    groundspeed: float | None
-    climb_rate: float | None
-    battery_voltage: float | None
-    battery_remaining: float | None
-    mode: str
-    armed: bool
-    gps_fix: int
-    satellites: int | None
 
 
 class FlightTelemetry(BaseModel):

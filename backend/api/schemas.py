@@ -30,10 +30,11 @@ class CommandResponse(BaseModel):
     outcome: CommandOutcome
 
 
-class TelemetrySample(BaseModel):
+class Sample(BaseModel):
+    """One stored telemetry sample, as charts, replays and history read it."""
+
     model_config = ConfigDict(from_attributes=True)
 
-    seq: int
     time: float = Field(description="Unix seconds")
     mode: str
     armed: bool
@@ -48,6 +49,10 @@ class TelemetrySample(BaseModel):
     battery_remaining: float | None
     gps_fix: int
     satellites: int | None
+
+
+class TelemetrySample(Sample):
+    seq: int
 
 
 class TelemetryPage(BaseModel):

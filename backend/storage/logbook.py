@@ -19,6 +19,7 @@ from backend.safety.geometry import haversine_m
 from backend.storage.database import dialect_insert, transaction
 from backend.storage.downsample import minmax_downsample
 from backend.storage.models import (
+    TELEMETRY_STATE_COLUMNS,
     CommandRow,
     EventRow,
     FlightRow,
@@ -27,23 +28,8 @@ from backend.storage.models import (
 )
 from backend.storage.retention import RetentionPolicy
 
-# The columns a chart, a replay or an export needs, in this order.
-SERIES_COLUMNS = (
-    "time",
-    "lat",
-    "lon",
-    "alt_msl",
-    "alt_rel",
-    "heading_deg",
-    "groundspeed",
-    "climb_rate",
-    "battery_voltage",
-    "battery_remaining",
-    "mode",
-    "armed",
-    "gps_fix",
-    "satellites",
-)
+# The columns a chart, a replay or an export needs.
+SERIES_COLUMNS = ("time", *TELEMETRY_STATE_COLUMNS)
 
 
 def _series_query(vehicle_id: str, start: float, end: float) -> Any:

@@ -27,7 +27,7 @@ log = logging.getLogger(__name__)
 
 # ArduPilot's SITL home (CMAC, Canberra): a place every ArduPilot developer knows.
 DEFAULT_HOME = (-35.363262, 149.165237, 584.0)
-VEHICLE_SPACING_M = 8.0
+VEHICLE_SPACING_M = 15.0
 EARTH_RADIUS_M = 6_378_137.0
 
 

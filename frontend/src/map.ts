@@ -5,7 +5,7 @@ import type { HubConfig, VehicleSummary } from "./types";
 import { VehicleMarker } from "./vehicleMarker";
 
 const GRID_PX = [320, 64]; // major and minor lines, in the order of style.css
-const FIT_MAX_ZOOM = 17;
+const FIT_MAX_ZOOM = 19; // close enough to tell apart vehicles a few metres apart
 
 function positionOf(vehicle: VehicleSummary): L.LatLng | null {
   const lat = vehicle.state?.lat;

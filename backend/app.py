@@ -13,7 +13,16 @@ from fastapi.responses import HTMLResponse, JSONResponse
 from fastapi.staticfiles import StaticFiles
 from sqlalchemy.exc import OperationalError
 
-from backend.api import admin, auth, logs, safety, system, vehicles, websockets
+from backend.api import (
+    admin,
+    auth,
+    fleet_commands,
+    logs,
+    safety,
+    system,
+    vehicles,
+    websockets,
+)
 from backend.api.hardening import SecurityMiddleware, content_security_policy
 from backend.errors import (
     GcsError,
@@ -56,7 +65,7 @@ def create_app(settings: HubSettings | None = None) -> FastAPI:
         description="Live fleet state, commands and telemetry history for drone fleets.",
         lifespan=lifespan,
     )
-    routers = (system, auth, vehicles, safety, logs, admin)
+    routers = (system, auth, vehicles, fleet_commands, safety, logs, admin)
     for router in (module.router for module in routers):
         app.include_router(router, prefix=API_PREFIX)
     app.include_router(websockets.router)

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import asyncio
-from dataclasses import asdict
 from datetime import UTC, datetime, timedelta
 from typing import Annotated
 
@@ -11,16 +10,12 @@ from fastapi import Body, Path, Query, Request
 
 from backend.api.deps import HubDep
 from backend.api.schemas import CommandResponse, TelemetryPage, TelemetrySample
-from backend.api.security import CurrentPrincipal, SecuredRouter, audit_entry, requires
+from backend.api.security import CurrentPrincipal, SecuredRouter, client_address, requires
 from backend.auth.policy import Permission
 from backend.errors import (
-    CommandTimedOut,
-    Forbidden,
-    GcsError,
     InvalidRequest,
-    SafetyViolation,
-    VehicleOffline,
 )
+from backend.fleet.command_service import execute_command
 from gcs.protocol import Command, VehicleSummary
 
 router = SecuredRouter(prefix="/vehicles", tags=["vehicles"])
@@ -75,48 +70,8 @@ async def send_command(
     """
     hub.command_limiter.check(principal.name, "commands")
     hub.command_limiter.hit(principal.name)
-    details: dict[str, object] = {"command": command.model_dump()}
-    try:
-        record = hub.registry.get(vehicle_id)
-        violations = await asyncio.to_thread(hub.safety.check_command, record, command)
-        if violations:
-            if override_reason is None:
-                raise SafetyViolation([asdict(violation) for violation in violations])
-            if Permission.ADMIN not in principal.permissions:
-                raise Forbidden("only an admin may override safety rules")
-            details["override"] = {
-                "reason": override_reason,
-                "violations": [violation.rule for violation in violations],
-            }
-        outcome = await hub.dispatcher.execute(vehicle_id, command)
-    except GcsError as error:
-        details["error"] = error.message
-        await hub.record(
-            audit_entry(request, principal, "command", vehicle_id, "refused", **details)
-        )
-        if isinstance(error, CommandTimedOut | SafetyViolation | VehicleOffline):
-            status = "timeout" if isinstance(error, CommandTimedOut) else "refused"
-            await asyncio.to_thread(
-                hub.logbook.record_command,
-                vehicle_id,
-                principal.name,
-                command.model_dump(),
-                status,
-                None,
-                error.message,
-            )
-        raise
-    result = "ok" if outcome.status == "accepted" else "failed"
-    details["answer"] = outcome.model_dump()
-    await hub.record(audit_entry(request, principal, "command", vehicle_id, result, **details))
-    await asyncio.to_thread(
-        hub.logbook.record_command,
-        vehicle_id,
-        principal.name,
-        command.model_dump(),
-        outcome.status,
-        outcome.result,
-        outcome.message,
+    outcome = await execute_command(
+        hub, principal, client_address(request), vehicle_id, command, override_reason
     )
     return CommandResponse(vehicle_id=vehicle_id, command=command, outcome=outcome)
 

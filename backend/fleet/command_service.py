@@ -1,0 +1,84 @@
+"""Sending one command to one vehicle, the whole way: the safety gate, the dispatch to
+its agent, the audit log and the command log. The REST routes for one vehicle and for a
+group both go through here, so every command is checked and recorded the same way."""
+
+from __future__ import annotations
+
+import asyncio
+from dataclasses import asdict
+
+from backend.audit import AuditEntry
+from backend.auth.policy import Permission, Principal
+from backend.errors import CommandTimedOut, Forbidden, GcsError, SafetyViolation, VehicleOffline
+from backend.hub import Hub
+from gcs.protocol import Command, CommandOutcome
+
+
+async def execute_command(
+    hub: Hub,
+    principal: Principal,
+    source: str,
+    vehicle_id: str,
+    command: Command,
+    override_reason: str | None = None,
+) -> CommandOutcome:
+    """The flight controller's answer; raises GcsError for a refusal before the vehicle."""
+    details: dict[str, object] = {"command": command.model_dump()}
+
+    async def audit(outcome: str) -> None:
+        await hub.record(
+            AuditEntry(
+                actor=principal.name,
+                role=principal.role,
+                source=source,
+                action="command",
+                target=vehicle_id,
+                outcome=outcome,
+                detail=details,
+            )
+        )
+
+    try:
+        record = hub.registry.get(vehicle_id)
+        violations = await asyncio.to_thread(hub.safety.check_command, record, command)
+        if violations:
+            if override_reason is None:
+                raise SafetyViolation([asdict(violation) for violation in violations])
+            if Permission.ADMIN not in principal.permissions:
+                raise Forbidden("only an admin may override safety rules")
+            details["override"] = {
+                "reason": override_reason,
+                "violations": [violation.rule for violation in violations],
+            }
+        outcome = await hub.dispatcher.execute(vehicle_id, command)
+    except GcsError as error:
+        details["error"] = error.message
+        await audit("refused")
+        if isinstance(error, CommandTimedOut | SafetyViolation | VehicleOffline):
+            status = "timeout" if isinstance(error, CommandTimedOut) else "refused"
+            await _log(hub, principal, vehicle_id, command, status, None, error.message)
+        raise
+    details["answer"] = outcome.model_dump()
+    await audit("ok" if outcome.status == "accepted" else "failed")
+    await _log(hub, principal, vehicle_id, command, outcome.status, outcome.result, outcome.message)
+    return outcome
+
+
+async def _log(
+    hub: Hub,
+    principal: Principal,
+    vehicle_id: str,
+    command: Command,
+    status: str,
+    result: str | None,
+    message: str,
+) -> None:
+    await asyncio.to_thread(
+        hub.logbook.record_command,
+        vehicle_id,
+        principal.name,
+        command.model_dump(),
+        status,
+        result,
+        message,
+    )

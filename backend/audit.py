@@ -41,12 +41,29 @@ class AuditQuery:
     limit: int = 100
 
 
+FIELD_LIMIT = 300
+
+
+def _clipped(value: Any) -> Any:
+    """Long strings (an agent's refusal text, say) shortened so the entry stays readable."""
+    if isinstance(value, str):
+        return value if len(value) <= FIELD_LIMIT else value[:FIELD_LIMIT] + "…"
+    if isinstance(value, dict):
+        return {key: _clipped(item) for key, item in value.items()}
+    if isinstance(value, list | tuple):
+        return [_clipped(item) for item in value]
+    return value
+
+
 class AuditLog:
     def __init__(self, engine: Engine) -> None:
         self.engine = engine
 
     def record(self, entry: AuditEntry) -> None:
-        detail = json.dumps(entry.detail, default=str, sort_keys=True)[:DETAIL_LIMIT]
+        detail = json.dumps(_clipped(entry.detail), default=str, sort_keys=True)
+        if len(detail) > DETAIL_LIMIT:
+            # Still valid JSON, whatever a peer put in it.
+            detail = json.dumps({"truncated": detail[: DETAIL_LIMIT - 100]})
         with self.engine.begin() as connection:
             connection.execute(
                 insert(AuditRow).values(

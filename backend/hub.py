@@ -9,6 +9,7 @@ from dataclasses import dataclass, field
 from typing import Protocol
 
 from sqlalchemy import Engine
+from sqlalchemy.exc import SQLAlchemyError
 
 from backend.audit import AuditEntry, AuditLog
 from backend.auth.accounts import Accounts
@@ -36,6 +37,13 @@ class AgentConnection(Protocol):
     async def close(self, code: int, reason: str) -> None: ...
 
 
+class ClientConnection(Protocol):
+    user: str
+    token_id: int | None
+
+    async def close(self, code: int, reason: str) -> None: ...
+
+
 @dataclass
 class Hub:
     settings: HubSettings
@@ -53,6 +61,8 @@ class Hub:
     safety: SafetyGate
     # Live agent connections by vehicle, so revoking a token can drop its connection.
     agent_sessions: dict[str, AgentConnection] = field(default_factory=dict)
+    # Live client feeds, so a revoked token or disabled user stops seeing the fleet.
+    client_feeds: set[ClientConnection] = field(default_factory=set)
 
     @classmethod
     async def start(cls, settings: HubSettings) -> Hub:
@@ -110,9 +120,14 @@ class Hub:
         if policy == RetentionPolicy():
             return
         while True:
-            removed = await asyncio.to_thread(self.logbook.apply_retention, policy, time.time())
-            if any(removed.values()):
-                log.info("retention removed %s", removed)
+            try:
+                removed = await asyncio.to_thread(self.logbook.apply_retention, policy, time.time())
+            except SQLAlchemyError as error:
+                # Retention can wait for the next round; it must never stop the hub.
+                log.warning("retention skipped: %s", error)
+            else:
+                if any(removed.values()):
+                    log.info("retention removed %s", removed)
             await asyncio.sleep(self.settings.retention_interval_s)
 
     async def store_event(self, vehicle_id: str, kind: str, text: str) -> None:
@@ -122,6 +137,12 @@ class Hub:
 
     async def record(self, entry: AuditEntry) -> None:
         await asyncio.to_thread(self.audit.record, entry)
+
+    async def drop_user_feeds(self, token_id: int | None = None, user: str | None = None) -> None:
+        """Close the live feeds of a revoked token, or of every session of a user."""
+        for feed in list(self.client_feeds):
+            if (token_id is not None and feed.token_id == token_id) or feed.user == user:
+                await feed.close(CloseCode.UNAUTHORIZED, "session ended or revoked")
 
     async def drop_agent_token(self, token_id: int, vehicle_id: str) -> None:
         """A revoked agent token ends its live connection at once."""

@@ -27,7 +27,7 @@ SECRET_FILE_VARIABLES = {
 
 
 class HubSettings(BaseSettings):
-    model_config = SettingsConfigDict(env_prefix="GCS_", extra="ignore")
+    model_config = SettingsConfigDict(env_prefix="GCS_", extra="ignore", hide_input_in_errors=True)
 
     host: str = "127.0.0.1"
     port: int = Field(default=8000, ge=0, le=65535)

@@ -47,8 +47,14 @@ class CloseCode(IntEnum):
     SUPERSEDED = 4409  # another agent connected for the same vehicle
 
 
+# Sequence numbers and times are stored in 64-bit columns; NaN compares false against
+# every bound, so it is refused at the edge rather than trusted anywhere.
+MAX_SEQ = 2**63 - 1
+MAX_UNIX_TIME = 1e11
+
+
 class Message(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True)
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
 
 
 # ---------------------------------------------------------------------------
@@ -125,9 +131,9 @@ class VehicleState(Message):
     """One telemetry snapshot, assembled by the agent from the latest MAVLink messages."""
 
     fcu_connected: bool = True
-    mode: str = "UNKNOWN"
+    mode: str = Field(default="UNKNOWN", max_length=32)
     armed: bool = False
-    system_status: str = "UNKNOWN"
+    system_status: str = Field(default="UNKNOWN", max_length=32)
     lat: float | None = None
     lon: float | None = None
     alt_msl: float | None = Field(default=None, description="Metres above mean sea level.")
@@ -140,8 +146,10 @@ class VehicleState(Message):
     battery_voltage: float | None = None
     battery_current: float | None = Field(default=None, description="A")
     battery_remaining: float | None = Field(default=None, description="percent")
-    gps_fix: int = Field(default=0, description="GPS_FIX_TYPE: 0-1 none, 2 2D, 3 3D, 4+ DGPS/RTK")
-    satellites: int | None = None
+    gps_fix: int = Field(
+        default=0, ge=0, le=255, description="GPS_FIX_TYPE: 0-1 none, 2 2D, 3 3D, 4+ DGPS/RTK"
+    )
+    satellites: int | None = Field(default=None, ge=0, le=255)
     home_lat: float | None = None
     home_lon: float | None = None
     home_alt_msl: float | None = None
@@ -171,8 +179,8 @@ class Hello(Message):
 
 class Telemetry(Message):
     type: Literal["telemetry"] = "telemetry"
-    seq: int = Field(ge=0)
-    time: float = Field(description="Unix time of the snapshot, seconds.")
+    seq: int = Field(ge=0, le=MAX_SEQ)
+    time: float = Field(ge=0, le=MAX_UNIX_TIME, description="Unix time of the snapshot, seconds.")
     state: VehicleState
 
 
@@ -186,8 +194,8 @@ class Event(Message):
     with their own sequence numbers."""
 
     type: Literal["event"] = "event"
-    seq: int = Field(ge=0)
-    time: float = Field(description="Unix time, seconds.")
+    seq: int = Field(ge=0, le=MAX_SEQ)
+    time: float = Field(ge=0, le=MAX_UNIX_TIME, description="Unix time, seconds.")
     kind: EventKind
     severity: int | None = Field(
         default=None, ge=0, le=7, description="MAV_SEVERITY: 0 emergency .. 7 debug"

@@ -12,7 +12,9 @@ from gcs.protocol import AGENT_WS_PATH
 
 
 class AgentSettings(BaseSettings):
-    model_config = SettingsConfigDict(env_prefix="GCS_AGENT_", extra="forbid")
+    model_config = SettingsConfigDict(
+        env_prefix="GCS_AGENT_", extra="forbid", hide_input_in_errors=True
+    )
 
     fcu: str = Field(
         default="tcp:127.0.0.1:5760",

@@ -88,6 +88,9 @@ class HubLink:
                     delay = self.timeouts.unauthorized_retry_s
                 else:
                     log.warning("hub closed the link (%s %s)", closed.code, closed.reason)
+            except* ConnectionClosed as group:
+                # The link dropped while sending (outbox or a command's answer).
+                log.warning("hub link lost: %s", group.exceptions[0])
             except* (OSError, InvalidHandshake, TimeoutError, HubRefused) as group:
                 log.warning("hub %s unreachable: %s", self.url, group.exceptions[0])
             finally:

@@ -7,7 +7,7 @@ import logging
 from pathlib import Path
 
 from vehicle_agents.fcu_link import MavMessage
-from vehicle_agents.tlog import TlogRecorder, upload_tlog
+from vehicle_agents.tlog import TlogRecorder, TlogUploadError, upload_tlog
 
 log = logging.getLogger(__name__)
 
@@ -34,17 +34,26 @@ class TlogUploader:
                 path = self.recorder.finished[0]
                 try:
                     await asyncio.to_thread(upload_tlog, path, self.url, self._token)
+                except TlogUploadError as refusal:
+                    if refusal.status >= 500 or refusal.status == 429:
+                        log.warning(
+                            "hub could not take %s (%s); retrying", path.name, refusal.status
+                        )
+                        await asyncio.sleep(RETRY_S)
+                        continue
+                    # Refused for good (too large, token revoked): it stays on board.
+                    log.error("hub refused tlog %s: %s; kept on board", path.name, refusal)
+                    self.recorder.finished.popleft()
+                    continue
                 except OSError as error:
-                    log.warning(
-                        "tlog upload of %s failed, retrying in %.0f s: %s",
-                        path.name,
-                        RETRY_S,
-                        error,
-                    )
+                    log.warning("tlog upload of %s failed; retrying: %s", path.name, error)
                     await asyncio.sleep(RETRY_S)
                     continue
                 self.recorder.finished.popleft()
-                _mark_uploaded(path)
+                try:
+                    _mark_uploaded(path)
+                except OSError as error:
+                    log.warning("uploaded %s but could not move it aside: %s", path.name, error)
                 log.info("uploaded onboard tlog %s", path.name)
 
 

@@ -68,6 +68,14 @@ class AuditPage(BaseModel):
     entries: list[AuditRecord]
 
 
+def _detail(stored: str) -> dict[str, Any]:
+    try:
+        value = json.loads(stored or "{}")
+    except json.JSONDecodeError:
+        return {"unparsed": stored}
+    return value if isinstance(value, dict) else {"value": value}
+
+
 def _user(row: UserRow) -> User:
     return User(
         username=row.username, role=row.role, disabled=row.disabled, created_at=row.created_at
@@ -107,6 +115,8 @@ async def update_user(
     row = await asyncio.to_thread(
         hub.accounts.update_user, username, body.role, body.disabled, body.password
     )
+    if body.disabled or body.password is not None:
+        await hub.drop_user_feeds(user=username)  # their sessions were just revoked
     changes = body.model_dump(exclude_none=True, exclude={"password"})
     if body.password is not None:
         changes["password"] = "changed"
@@ -166,7 +176,7 @@ async def list_agent_tokens(
     openapi_extra=requires(Permission.ADMIN),
 )
 async def revoke_agent_token(
-    token_id: Annotated[int, Path(ge=1)],
+    token_id: Annotated[int, Path(ge=1, le=2**62)],
     request: Request,
     principal: CurrentPrincipal,
     hub: HubDep,
@@ -188,7 +198,9 @@ async def audit_log(
     target: Annotated[str | None, Query(max_length=128)] = None,
     since: Annotated[float | None, Query(description="Unix seconds")] = None,
     until: Annotated[float | None, Query(description="Unix seconds")] = None,
-    before_id: Annotated[int | None, Query(ge=1, description="page: entries older than")] = None,
+    before_id: Annotated[
+        int | None, Query(ge=1, le=2**62, description="page: entries older than")
+    ] = None,
     limit: Annotated[int, Query(ge=1, le=1000)] = 100,
 ) -> AuditPage:
     """Audit entries, newest first."""
@@ -205,7 +217,7 @@ async def audit_log(
                 action=row.action,
                 target=row.target,
                 outcome=row.outcome,
-                detail=json.loads(row.detail or "{}"),
+                detail=_detail(row.detail),
             )
             for row in rows
         ]

@@ -26,6 +26,8 @@ from backend.storage.models import UserRow
 router = SecuredRouter(prefix="/auth", tags=["auth"])
 
 WRONG_CREDENTIALS = "wrong username or password"
+MAX_USERNAME = 64
+MAX_PASSWORD = 1024
 
 
 class LoginRequest(BaseModel):
@@ -70,17 +72,22 @@ class IssuedApiToken(ApiToken):
 async def _login(hub: Hub, request: Request, username: str, password: str) -> UserRow:
     """Check a password under the login rate limits, auditing the attempt."""
     address = f"address:{client_address(request)}"
-    account = f"user:{username}"
+    account = f"user:{username[:MAX_USERNAME]}"
     # Both limits apply: one address guessing many names, many addresses guessing one.
     hub.login_limiter.check(address, "login attempts")
     hub.login_limiter.check(account, "login attempts")
-    user = await asyncio.to_thread(hub.accounts.authenticate, username, password)
+    # Counted before the (slow) password check, so concurrent guesses cannot all slip
+    # in under the limit; a success takes its attempt back.
+    hub.login_limiter.hit(address)
+    hub.login_limiter.hit(account)
+    user = None
+    if len(username) <= MAX_USERNAME and len(password) <= MAX_PASSWORD:
+        user = await asyncio.to_thread(hub.accounts.authenticate, username, password)
     if user is None:
-        hub.login_limiter.hit(address)
-        hub.login_limiter.hit(account)
-        await hub.record(audit_entry(request, None, "login", username, "denied"))
+        await hub.record(audit_entry(request, None, "login", username[:MAX_USERNAME], "denied"))
         raise Unauthenticated(WRONG_CREDENTIALS)
     hub.login_limiter.reset(account)
+    hub.login_limiter.forget_one(address)
     return user
 
 
@@ -150,6 +157,7 @@ async def logout(request: Request, principal: CurrentPrincipal, hub: HubDep) -> 
     """Ends the session (or revokes the bearer token used)."""
     if principal.token_id is not None:
         await asyncio.to_thread(hub.accounts.revoke_user_token, principal.token_id, None)
+        await hub.drop_user_feeds(token_id=principal.token_id)
     await hub.record(audit_entry(request, principal, "logout", principal.name, "ok"))
     response = Response(status_code=status.HTTP_204_NO_CONTENT)
     response.delete_cookie(SESSION_COOKIE, path="/")
@@ -222,11 +230,12 @@ async def create_api_token(
     openapi_extra=requires(Permission.READ),
 )
 async def revoke_api_token(
-    token_id: Annotated[int, Path(ge=1)],
+    token_id: Annotated[int, Path(ge=1, le=2**62)],
     request: Request,
     principal: CurrentPrincipal,
     hub: HubDep,
 ) -> Response:
     await asyncio.to_thread(hub.accounts.revoke_user_token, token_id, principal.name)
+    await hub.drop_user_feeds(token_id=token_id)
     await hub.record(audit_entry(request, principal, "token.revoke", str(token_id), "ok"))
     return Response(status_code=status.HTTP_204_NO_CONTENT)

@@ -35,6 +35,9 @@ router = SecuredRouter(tags=["flight log"])
 
 MAX_PAGE = 1000
 MAX_POINTS = 10_000
+# The series reads the whole range before downsampling it; a week at 10 Hz is 6 M rows.
+MAX_SERIES_SPAN_S = 7 * 86400
+MAX_ID = 2**62  # ids are 64-bit in the database
 Metric = Literal["alt_rel", "alt_msl", "groundspeed", "battery_remaining", "climb_rate"]
 TimeQuery = Annotated[datetime | None, Query(description="ISO 8601 or Unix seconds")]
 SAFE_FILENAME = re.compile(r"[^A-Za-z0-9_.-]")
@@ -131,8 +134,8 @@ class Metrics(BaseModel):
 
 
 def _range(start: datetime | None, end: datetime | None, span_s: float) -> tuple[float, float]:
-    end_at = _aware(end).timestamp() if end else time.time()
-    start_at = _aware(start).timestamp() if start else end_at - span_s
+    end_at = _timestamp(end, "end") if end else time.time()
+    start_at = _timestamp(start, "start") if start else end_at - span_s
     if start_at > end_at:
         raise InvalidRequest("start", f"start ({start_at:.3f}) is after end ({end_at:.3f})")
     return start_at, end_at
@@ -141,8 +144,8 @@ def _range(start: datetime | None, end: datetime | None, span_s: float) -> tuple
 def _optional_range(
     start: datetime | None, end: datetime | None
 ) -> tuple[float | None, float | None]:
-    start_at = _aware(start).timestamp() if start else None
-    end_at = _aware(end).timestamp() if end else None
+    start_at = _timestamp(start, "start") if start else None
+    end_at = _timestamp(end, "end") if end else None
     if start_at is not None and end_at is not None and start_at > end_at:
         raise InvalidRequest("start", f"start ({start_at:.3f}) is after end ({end_at:.3f})")
     return start_at, end_at
@@ -150,6 +153,13 @@ def _optional_range(
 
 def _aware(moment: datetime) -> datetime:
     return moment if moment.tzinfo else moment.replace(tzinfo=UTC)
+
+
+def _timestamp(moment: datetime, field: str) -> float:
+    try:
+        return _aware(moment).timestamp()
+    except (OverflowError, ValueError, OSError):
+        raise InvalidRequest(field, f"{field} {moment} is out of range") from None
 
 
 def _next(rows: list[Any], limit: int) -> int | None:
@@ -169,7 +179,11 @@ async def telemetry_series(
     vehicle, keeping the true minimum and maximum of ``metric`` (a chart shows the real
     extremes, not every n-th row)."""
     start_at, end_at = _range(start, end, 3600)
-    vehicles = vehicle_id or [record.id for record in hub.registry.all()]
+    if end_at - start_at > MAX_SERIES_SPAN_S:
+        raise InvalidRequest(
+            "start", f"the range is over {MAX_SERIES_SPAN_S / 86400:.0f} days; ask for less"
+        )
+    vehicles = list(dict.fromkeys(vehicle_id or [r.id for r in hub.registry.all()]))
     for requested in vehicles:
         hub.registry.get(requested)
     series = {}
@@ -185,7 +199,7 @@ async def telemetry_series(
 async def list_flights(
     hub: HubDep,
     vehicle_id: Annotated[str | None, Query(max_length=64)] = None,
-    before_id: Annotated[int | None, Query(ge=1)] = None,
+    before_id: Annotated[int | None, Query(ge=1, le=MAX_ID)] = None,
     limit: Annotated[int, Query(ge=1, le=MAX_PAGE)] = 50,
 ) -> FlightPage:
     """Flights (arm to disarm) with their summaries, newest first."""
@@ -197,7 +211,7 @@ async def list_flights(
     )
 
 
-FlightIdPath = Annotated[int, Path(ge=1)]
+FlightIdPath = Annotated[int, Path(ge=1, le=MAX_ID)]
 
 
 @router.get("/flights/{flight_id}", response_model=Flight, openapi_extra=requires(Permission.READ))
@@ -304,7 +318,7 @@ async def list_events(
     kind: Annotated[str | None, Query(max_length=16)] = None,
     start: TimeQuery = None,
     end: TimeQuery = None,
-    before_id: Annotated[int | None, Query(ge=1)] = None,
+    before_id: Annotated[int | None, Query(ge=1, le=MAX_ID)] = None,
     limit: Annotated[int, Query(ge=1, le=MAX_PAGE)] = 100,
 ) -> EventPage:
     """STATUSTEXTs, mode changes, arming, failsafes and link changes, newest first."""
@@ -328,7 +342,7 @@ async def list_commands(
     actor: Annotated[str | None, Query(max_length=80)] = None,
     start: TimeQuery = None,
     end: TimeQuery = None,
-    before_id: Annotated[int | None, Query(ge=1)] = None,
+    before_id: Annotated[int | None, Query(ge=1, le=MAX_ID)] = None,
     limit: Annotated[int, Query(ge=1, le=MAX_PAGE)] = 100,
 ) -> CommandPage:
     """Commands sent, who sent them and what the vehicle answered, newest first."""
@@ -362,12 +376,16 @@ async def upload_tlog(
     name = SAFE_FILENAME.sub("_", request.headers.get("x-filename", "flight.tlog"))[:100]
     folder = hub.settings.data_dir / "tlogs" / vehicle_id
     await asyncio.to_thread(folder.mkdir, parents=True, exist_ok=True)
-    target = folder / f"{int(time.time() * 1000)}_{name}"
+    target = folder / f"{time.time_ns()}_{name}"
     size = 0
-    with target.open("wb") as file:  # streamed to disk chunk by chunk
-        async for chunk in request.stream():
-            size += len(chunk)
-            await asyncio.to_thread(file.write, chunk)
+    try:
+        with target.open("xb") as file:  # streamed to disk chunk by chunk
+            async for chunk in request.stream():
+                size += len(chunk)
+                await asyncio.to_thread(file.write, chunk)
+    except BaseException:
+        target.unlink(missing_ok=True)  # no half files from a cut upload
+        raise
     tlog_id = await asyncio.to_thread(hub.logbook.add_tlog, vehicle_id, name, str(target), size)
     return Tlog.model_validate(await asyncio.to_thread(hub.logbook.tlog, tlog_id))
 
@@ -390,7 +408,9 @@ async def list_tlogs(vehicle_id: Annotated[VehicleId, Path()], hub: HubDep) -> l
     openapi_extra=requires(Permission.READ),
     responses={200: {"content": {"application/octet-stream": {}}}},
 )
-async def download_tlog(tlog_id: Annotated[int, Path(ge=1)], hub: HubDep) -> FileResponse:
+async def download_tlog(
+    tlog_id: Annotated[int, Path(ge=1, le=MAX_ID)], hub: HubDep
+) -> FileResponse:
     row = await asyncio.to_thread(hub.logbook.tlog, tlog_id)
     return FileResponse(
         FilePath(row.path), filename=row.filename, media_type="application/octet-stream"

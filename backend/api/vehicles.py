@@ -94,14 +94,18 @@ async def telemetry_history(
 ) -> TelemetryPage:
     """Stored telemetry samples in a time range, oldest first."""
     hub.registry.get(vehicle_id)
-    end_at = _aware(end) if end else datetime.now(UTC)
-    start_at = _aware(start) if start else end_at - timedelta(minutes=10)
+    try:
+        end_at = _aware(end) if end else datetime.now(UTC)
+        start_at = _aware(start) if start else end_at - timedelta(minutes=10)
+        span = (start_at.timestamp(), end_at.timestamp())
+    except (OverflowError, ValueError, OSError):
+        raise InvalidRequest("start", "start or end is out of range") from None
     if start_at > end_at:
         raise InvalidRequest(
             "start", f"start ({start_at.isoformat()}) is after end ({end_at.isoformat()})"
         )
     rows = await asyncio.to_thread(
-        hub.repository.telemetry, vehicle_id, start_at.timestamp(), end_at.timestamp(), limit + 1
+        hub.repository.telemetry, vehicle_id, span[0], span[1], limit + 1
     )
     return TelemetryPage(
         vehicle_id=vehicle_id,

@@ -47,3 +47,9 @@ class RateLimiter:
 
     def reset(self, key: str) -> None:
         self._events.pop(key, None)
+
+    def forget_one(self, key: str) -> None:
+        """Take back the newest event of ``key`` (an attempt that turned out fine)."""
+        events = self._events.get(key)
+        if events:
+            events.pop()

@@ -5,13 +5,18 @@ group both go through here, so every command is checked and recorded the same wa
 from __future__ import annotations
 
 import asyncio
+import logging
 from dataclasses import asdict
+
+from sqlalchemy.exc import SQLAlchemyError
 
 from backend.audit import AuditEntry
 from backend.auth.policy import Permission, Principal
 from backend.errors import CommandTimedOut, Forbidden, GcsError, SafetyViolation, VehicleOffline
 from backend.hub import Hub
 from gcs.protocol import Command, CommandOutcome
+
+log = logging.getLogger(__name__)
 
 
 async def execute_command(
@@ -59,8 +64,17 @@ async def execute_command(
             await _log(hub, principal, vehicle_id, command, status, None, error.message)
         raise
     details["answer"] = outcome.model_dump()
-    await audit("ok" if outcome.status == "accepted" else "failed")
-    await _log(hub, principal, vehicle_id, command, outcome.status, outcome.result, outcome.message)
+    try:
+        await audit("ok" if outcome.status == "accepted" else "failed")
+        await _log(
+            hub, principal, vehicle_id, command, outcome.status, outcome.result, outcome.message
+        )
+    except SQLAlchemyError as error:
+        # The vehicle has acted: the operator must see its answer, not an error that
+        # invites a second takeoff. The lost record goes to the hub's log instead.
+        log.error(
+            "could not record %s to %s (%s): %s", command.name, vehicle_id, outcome.message, error
+        )
     return outcome
 
 

@@ -8,6 +8,8 @@ import logging
 import uuid
 from collections.abc import Awaitable, Callable
 
+from starlette.websockets import WebSocketDisconnect
+
 from backend.errors import CommandTimedOut, InvalidRequest, VehicleOffline
 from backend.fleet.registry import FleetRegistry
 from gcs.protocol import Command, CommandOutcome, CommandRequest, SetModeCommand
@@ -33,9 +35,12 @@ class AgentChannel:
         future: asyncio.Future[CommandOutcome] = asyncio.get_running_loop().create_future()
         self._pending[request_id] = future
         try:
-            await self._send(
-                CommandRequest(request_id=request_id, command=command, timeout_s=timeout_s)
-            )
+            try:
+                await self._send(
+                    CommandRequest(request_id=request_id, command=command, timeout_s=timeout_s)
+                )
+            except (RuntimeError, OSError, WebSocketDisconnect) as error:
+                raise VehicleOffline(f"the agent's connection closed: {error}") from None
             return await asyncio.wait_for(future, timeout_s + AGENT_REPLY_GRACE_S)
         except TimeoutError:
             raise CommandTimedOut(

@@ -69,6 +69,8 @@ class SafetyGate:
     def check_command(self, record: VehicleRecord, command: Command) -> list[Violation]:
         """Violations of the rails; landing, RTL, mode changes and disarming are never
         blocked, because they are how an operator gets out of trouble."""
+        if not isinstance(command, ArmCommand | TakeoffCommand | GotoCommand):
+            return []  # decided before any rails are read: no database needed
         rails = self.effective_rails(record.id)
         vehicle = snapshot_of(record)
         match command:
@@ -78,8 +80,6 @@ class SafetyGate:
                 return check_takeoff(rails, vehicle, altitude)
             case GotoCommand(lat=lat, lon=lon, altitude=altitude):
                 return check_goto(rails, vehicle, lat, lon, altitude)
-            case _:
-                return []
 
     def check_mission(self, record: VehicleRecord, waypoints: list[Waypoint]) -> PlanCheck:
         """Every violated rule of a mission, and the battery estimate when it can be made."""

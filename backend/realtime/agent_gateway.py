@@ -136,12 +136,13 @@ class AgentSession(PeerConnection):
             while frame := await self.receive():
                 await self._handle_frame(hello, channel, frame)
         finally:
+            hub.dispatcher.detach(vehicle_id, channel)
+            # A superseded session leaves the vehicle to its successor, still online.
             if hub.agent_sessions.get(vehicle_id) is self:
                 del hub.agent_sessions[vehicle_id]
-            hub.dispatcher.detach(vehicle_id, channel)
-            record = hub.registry.disconnect(vehicle_id)
-            await hub.publish_state(record)
-            await hub.store_event(vehicle_id, "link_down", "agent disconnected")
+                record = hub.registry.disconnect(vehicle_id)
+                await hub.publish_state(record)
+                await hub.store_event(vehicle_id, "link_down", "agent disconnected")
             log.info("agent %s disconnected", vehicle_id)
 
     async def _handle_frame(self, hello: Hello, channel: AgentChannel, frame: str | bytes) -> None:

@@ -10,7 +10,12 @@ from starlette.websockets import WebSocket, WebSocketDisconnect
 
 from backend.api.hardening import origin_allowed
 from backend.api.security import principal_of
-from backend.auth.policy import CLIENT_MESSAGE_PERMISSIONS, authorize_message
+from backend.auth.policy import (
+    CLIENT_MESSAGE_PERMISSIONS,
+    Permission,
+    authorize,
+    authorize_message,
+)
 from backend.errors import Forbidden
 from backend.hub import Hub
 from backend.realtime.bus import LatestSubscription, Topic
@@ -34,6 +39,8 @@ class ClientFeed(PeerConnection):
     def __init__(self, websocket: WebSocket, hub: Hub) -> None:
         super().__init__(websocket, hub.settings.max_frame_bytes, hub.settings.max_bad_frames)
         self.hub = hub
+        self.user = ""
+        self.token_id: int | None = None
 
     async def serve(self) -> None:
         await self.websocket.accept()
@@ -46,7 +53,15 @@ class ClientFeed(PeerConnection):
         if principal is None:
             await self.close(CloseCode.UNAUTHORIZED, "not authenticated: log in first")
             return
+        try:
+            authorize(principal, Permission.READ)
+        except Forbidden as refusal:
+            await self.close(CloseCode.FORBIDDEN, refusal.message)
+            return
         self.principal = principal
+        self.user = principal.name
+        self.token_id = principal.token_id
+        self.hub.client_feeds.add(self)
         updates = LatestSubscription()
         # Subscribe before the snapshot, so no change falls between the two.
         self.hub.bus.subscribe(Topic.VEHICLE_STATE, updates)
@@ -66,6 +81,7 @@ class ClientFeed(PeerConnection):
             pass
         finally:
             self.hub.bus.unsubscribe(Topic.VEHICLE_STATE, updates)
+            self.hub.client_feeds.discard(self)
 
     async def _push(self, updates: LatestSubscription) -> None:
         interval = self.hub.settings.ui_update_interval_s

@@ -64,7 +64,9 @@ class FlightTracker:
             ):
                 plan.transitions.append(FlightOpened(vehicle, sample.time))
                 plan.events.append(_hub_event(envelope, "armed", "armed"))
-            elif was_armed and not state.armed:
+            elif not state.armed and (
+                was_armed or (was_armed is None and vehicle in self.open_flights)
+            ):
                 plan.transitions.append(FlightClosed(vehicle, sample.time))
                 plan.events.append(_hub_event(envelope, "disarmed", "disarmed"))
             self.armed[vehicle] = state.armed

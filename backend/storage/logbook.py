@@ -11,7 +11,7 @@ import time
 from collections.abc import Iterator, Sequence
 from typing import Any
 
-from sqlalchemy import Connection, Engine, delete, func, insert, select, update
+from sqlalchemy import Connection, Engine, and_, delete, func, insert, or_, select, update
 from sqlalchemy.orm import Session
 
 from backend.errors import NotFound
@@ -141,14 +141,30 @@ class Logbook:
         kept = minmax_downsample(rows, points, lambda row: row[index])
         return [dict(zip(SERIES_COLUMNS, row, strict=True)) for row in kept]
 
-    def iter_series(self, vehicle_id: str, start: float, end: float) -> Iterator[dict[str, Any]]:
-        """Every sample in a range, streamed from the cursor (for exports)."""
-        with self.engine.connect() as connection:
-            result = connection.execution_options(yield_per=2000).execute(
-                _series_query(vehicle_id, start, end)
-            )
-            for row in result:
-                yield dict(zip(SERIES_COLUMNS, row, strict=True))
+    def iter_series(
+        self, vehicle_id: str, start: float, end: float, page: int = 5000
+    ) -> Iterator[dict[str, Any]]:
+        """Every sample in a range, page by page (for exports).
+
+        Keyset pages, each on a connection borrowed only for that page: a slow download
+        must not hold a pooled connection the storage writer needs."""
+        after: tuple[float, int] | None = None
+        while True:
+            query = _series_query(vehicle_id, start, end).add_columns(TelemetryRow.id)
+            if after is not None:
+                query = query.where(
+                    or_(
+                        TelemetryRow.time > after[0],
+                        and_(TelemetryRow.time == after[0], TelemetryRow.id > after[1]),
+                    )
+                )
+            with self.engine.connect() as connection:
+                rows = connection.execute(query.limit(page)).all()
+            for row in rows:
+                yield dict(zip(SERIES_COLUMNS, row[:-1], strict=True))
+            if len(rows) < page:
+                return
+            after = (rows[-1][0], rows[-1][-1])
 
     # -- events ------------------------------------------------------------
 

@@ -14,7 +14,8 @@ import logging
 import time
 from dataclasses import dataclass
 
-from sqlalchemy.exc import OperationalError
+from sqlalchemy.exc import OperationalError, SQLAlchemyError
+from sqlalchemy.exc import TimeoutError as PoolTimeout
 
 from backend.realtime.bus import ReliableSubscription
 from backend.storage.flights import FlightClosed, FlightOpened, FlightTracker
@@ -31,6 +32,7 @@ class WriterStats:
     events_written: int = 0
     batches: int = 0
     retries: int = 0  # batches that had to wait for the database
+    rejected: int = 0  # records the database refused outright (logged, set aside)
     last_batch_s: float = 0.0
     database_available: bool = True
 
@@ -103,17 +105,24 @@ class StorageWriter:
                 # shutdown flush never runs beside it.
                 self._writing = asyncio.ensure_future(asyncio.to_thread(self._write))
                 await asyncio.shield(self._writing)
-            except OperationalError as error:
+            except (OperationalError, PoolTimeout) as error:
                 # The database is unavailable: keep the batch, wait, try again.
                 self.stats.retries += 1
                 if self.stats.database_available:
                     log.warning(
-                        "database unavailable, holding %d records: %s", len(self._batch), error.orig
+                        "database unavailable, holding %d records: %s", len(self._batch), error
                     )
                 self.stats.database_available = False
                 await asyncio.sleep(backoff)
                 backoff = min(backoff * 2, self._max_backoff_s)
                 continue
+            except SQLAlchemyError as error:
+                # Not the database going away: something in this batch it will never take.
+                # Write the records one by one and set aside only the ones it refuses.
+                log.error(
+                    "batch of %d refused (%s); writing it record by record", len(self._batch), error
+                )
+                await asyncio.to_thread(self._write_one_by_one)
             if not self.stats.database_available:
                 log.info("database available again after %d retries", self.stats.retries)
             self.stats.database_available = True
@@ -147,6 +156,19 @@ class StorageWriter:
         self.stats.written += len(telemetry)
         self.stats.events_written += events_written
         self._batch = []
+
+    def _write_one_by_one(self) -> None:
+        records, self._batch = self._batch, []
+        for record in records:
+            self._batch = [record]
+            try:
+                self._write()
+            except OperationalError:
+                raise
+            except SQLAlchemyError as error:
+                self.stats.rejected += 1
+                log.error("record set aside, the database refuses it: %r (%s)", record, error)
+                self._batch = []
 
     def _flush_on_shutdown(self) -> None:
         """Store what was accepted: the batch in hand and everything still queued."""

@@ -72,7 +72,7 @@ def _hub(args: argparse.Namespace) -> int:
 
 def _agent(args: argparse.Namespace) -> int:
     from vehicle_agents.agent import run_agent
-    from vehicle_agents.config import AgentSettings
+    from vehicle_agents.config import load_agent_settings
 
     overrides = {
         "fcu": args.fcu,
@@ -82,9 +82,7 @@ def _agent(args: argparse.Namespace) -> int:
         "telemetry_rate_hz": args.telemetry_rate,
         "tlog_dir": args.tlog_dir,
     }
-    settings = AgentSettings(
-        **{key: value for key, value in overrides.items() if value is not None}
-    )
+    settings = load_agent_settings(overrides, args.config)
     return run_until_signalled(run_agent(settings))
 
 
@@ -146,6 +144,9 @@ def build_parser() -> argparse.ArgumentParser:
     )
 
     agent = commands.add_parser("agent", help="bridge one flight controller to the hub")
+    agent.add_argument(
+        "--config", type=Path, help="TOML settings file (default /etc/gcs/agent.toml if present)"
+    )
     agent.add_argument("--fcu", help="pymavlink URL, e.g. tcp:127.0.0.1:5760, /dev/ttyACM0")
     agent.add_argument("--hub", help="hub URL, e.g. ws://hub.local:8000")
     agent.add_argument("--token", help="agent token (better: GCS_AGENT_TOKEN)")

@@ -1,8 +1,12 @@
-"""The agent's settings: CLI flags over environment variables (GCS_AGENT_*) over defaults."""
+"""The agent's settings: CLI flags, over environment variables (GCS_AGENT_*), over a TOML
+config file (``/etc/gcs/agent.toml`` or ``--config``), over defaults."""
 
 from __future__ import annotations
 
+import os
+import tomllib
 from pathlib import Path
+from typing import Any
 from urllib.parse import urlsplit, urlunsplit
 
 from pydantic import Field, SecretStr, field_validator
@@ -60,3 +64,31 @@ def hub_http_base(hub_ws_url: str) -> str:
     parts = urlsplit(hub_ws_url)
     scheme = "https" if parts.scheme == "wss" else "http"
     return urlunsplit((scheme, parts.netloc, "", "", ""))
+
+
+DEFAULT_CONFIG_FILE = Path("/etc/gcs/agent.toml")
+ENV_PREFIX = "GCS_AGENT_"
+
+
+def load_agent_settings(
+    overrides: dict[str, Any], config_file: Path | None = None
+) -> AgentSettings:
+    """Settings with the precedence operators expect: flags, then the environment, then
+    the config file (keys as in the environment, lower-case, without the prefix)."""
+    path = config_file or (DEFAULT_CONFIG_FILE if DEFAULT_CONFIG_FILE.is_file() else None)
+    from_file: dict[str, Any] = {}
+    if path is not None:
+        with path.open("rb") as file:
+            from_file = tomllib.load(file)
+        unknown = set(from_file) - set(AgentSettings.model_fields)
+        if unknown:
+            raise ValueError(f"{path}: unknown settings {sorted(unknown)}")
+    # A value from the file is passed explicitly, which would outrank the environment;
+    # so it is dropped wherever the environment sets that field.
+    from_file = {
+        name: value
+        for name, value in from_file.items()
+        if f"{ENV_PREFIX}{name.upper()}" not in os.environ
+    }
+    given = {name: value for name, value in overrides.items() if value is not None}
+    return AgentSettings(**{**from_file, **given})

@@ -4,31 +4,15 @@ from __future__ import annotations
 
 import json
 import threading
-import time
 from collections.abc import Callable
 from contextlib import ExitStack
 
 import httpx
 from websockets.sync.client import ClientConnection
 
-from gcs.protocol import CommandOutcome, CommandResult, Telemetry, VehicleState, encode
+from gcs.protocol import CommandOutcome, CommandResult, encode
 from tests.integration.test_hub_bad_input import scripted_agent
-
-HOME = (-35.363262, 149.165237)
-
-
-def _on_the_ground(agent: ClientConnection) -> None:
-    state = VehicleState(
-        lat=HOME[0],
-        lon=HOME[1],
-        alt_rel=0.0,
-        home_lat=HOME[0],
-        home_lon=HOME[1],
-        battery_remaining=90.0,
-        gps_fix=3,
-        mode="GUIDED",
-    )
-    agent.send(encode(Telemetry(seq=0, time=time.time(), state=state)))
+from tests.integration.test_security import _report_position
 
 
 def _answer_commands(agent: ClientConnection, answered: list[str]) -> threading.Thread:
@@ -58,7 +42,7 @@ def test_group_command_reaches_each_selected_vehicle(
     with ExitStack() as stack:
         for vehicle, log in answered.items():
             agent = stack.enter_context(scripted_agent(hub, vehicle, enrol(vehicle)))
-            _on_the_ground(agent)
+            _report_position(agent)
             _answer_commands(agent, log)
 
         selection = {"vehicle_ids": ["g1", "g2", "nobody"], "command": {"name": "land"}}

@@ -22,6 +22,10 @@ class Battery:
         return max(0.0, 1.0 - self.consumed_mah / self.capacity_mah)
 
     @property
+    def remaining_mah(self) -> float:
+        return max(0.0, self.capacity_mah - self.consumed_mah)
+
+    @property
     def remaining_pct(self) -> int:
         return round(100.0 * self.remaining_fraction)
 
@@ -36,11 +40,12 @@ class Battery:
         """Terminal voltage under the present load."""
         return max(0.0, self.resting_voltage - self.current_a * INTERNAL_RESISTANCE_OHM)
 
-    def step(self, dt: float, current_a: float) -> None:
-        """Draw ``current_a`` amps for ``dt`` seconds."""
+    def step(self, dt: float, current_a: float, drain: float = 1.0) -> None:
+        """Draw ``current_a`` amps for ``dt`` seconds; ``drain`` scales the charge used
+        (SIM_BATT_DRAIN, to run a pack down quickly in tests)."""
         self.current_a = current_a
-        self.consumed_mah += current_a * dt * 1000.0 / 3600.0
-        self.consumed_wh += current_a * self.voltage * dt / 3600.0
+        self.consumed_mah += current_a * dt * drain * 1000.0 / 3600.0
+        self.consumed_wh += current_a * drain * self.voltage * dt / 3600.0
 
 
 def current_draw(armed: bool, flying: bool, throttle: float, hover_throttle: float) -> float:

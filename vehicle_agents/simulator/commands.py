@@ -23,9 +23,13 @@ from vehicle_agents.simulator.mavconst import (
     CopterMode,
     MavCmd,
     MavFrame,
+    MavMissionResult,
     MavResult,
     ModeFlag,
+    Severity,
 )
+from vehicle_agents.simulator.mission import MAX_ITEMS, MissionItem, check_item
+from vehicle_agents.simulator.param_table import SetOutcome
 from vehicle_agents.simulator.telemetry import MavMessage, TelemetryBuilder
 
 log = logging.getLogger(__name__)
@@ -107,6 +111,31 @@ class Command:
         )
 
 
+MISSION_TYPE_MISSION = 0  # MAV_MISSION_TYPE_MISSION: fences and rally points are not simulated
+_MISSION_MESSAGES = frozenset(
+    {
+        "MISSION_COUNT",
+        "MISSION_ITEM_INT",
+        "MISSION_ITEM",
+        "MISSION_REQUEST_LIST",
+        "MISSION_REQUEST_INT",
+        "MISSION_REQUEST",
+        "MISSION_CLEAR_ALL",
+        "MISSION_SET_CURRENT",
+        "MISSION_ACK",
+    }
+)
+
+
+@dataclass
+class _Upload:
+    """A mission upload in progress (MissionItemProtocol's receiving state)."""
+
+    count: int
+    items: list[MissionItem]
+    peer: tuple[int, int]
+
+
 class MessageHandler:
     """Dispatches one vehicle's incoming messages."""
 
@@ -121,6 +150,7 @@ class MessageHandler:
         self.telemetry = telemetry
         self.system_id = system_id
         self.component_id = component_id
+        self._upload: _Upload | None = None
 
     def handle(self, msg: Any, streams: StreamControl, now: float) -> list[Reply]:
         """Replies to ``msg``; ``now`` is the wall clock, for stream scheduling."""
@@ -138,6 +168,14 @@ class MessageHandler:
                 return []
             result = self._set_mode_common(int(msg.base_mode), int(msg.custom_mode))
             return self._finish(MSG_ID_SET_MODE, result, msg)
+        if kind in ("PARAM_REQUEST_LIST", "PARAM_REQUEST_READ", "PARAM_SET"):
+            if not self._for_us(msg.target_system):
+                return []
+            return self._param(kind, msg)
+        if kind in _MISSION_MESSAGES:
+            if not self._for_us(msg.target_system):
+                return []
+            return self._mission(kind, msg)
         if kind == "SET_POSITION_TARGET_GLOBAL_INT":
             if self._for_us(msg.target_system):
                 self._position_target(msg)
@@ -253,6 +291,140 @@ class MessageHandler:
             streams.set_interval(msg_id, interval_us / 1e6, now)
         return MavResult.ACCEPTED
 
+    # -- parameters ----------------------------------------------------------
+
+    def _param(self, kind: str, msg: Any) -> list[Reply]:
+        """The parameter protocol as GCS_Param.cpp answers it."""
+        table = self.copter.param_table
+        if kind == "PARAM_REQUEST_LIST":
+            return [
+                Reply(self.telemetry.param_value(name, index))
+                for index, name in enumerate(table.names())
+            ]
+        name = _param_name(msg.param_id)
+        if kind == "PARAM_REQUEST_READ":
+            index = int(msg.param_index)
+            if index >= 0:  # -1: by name
+                found = table.name_at(index)
+                if found is None:
+                    return []
+                name = found
+            found_index = table.index(name)
+            if found_index is None:
+                return []  # ArduPilot stays silent about a parameter it does not have
+            return [Reply(self.telemetry.param_value(name, found_index))]
+        outcome = self.copter.set_param(name, float(msg.param_value))
+        if outcome is SetOutcome.UNKNOWN:
+            log.info("PARAM_SET of unknown parameter %r ignored", name)
+            return []
+        replies = []
+        if outcome is SetOutcome.REFUSED:
+            definition = table.definition(name)
+            text = f"Param {name}: {msg.param_value:g} out of range"
+            replies.append(
+                Reply(
+                    self.telemetry.statustext_of(Severity.WARNING, text),
+                    to_sender_only=False,
+                )
+            )
+            log.info("%s (%g..%g)", text, definition.low, definition.high)
+        # the stored value, on every link, as ArduPilot announces a parameter change
+        replies.append(Reply(self.telemetry.param_value(name), to_sender_only=False))
+        return [*self._texts(), *replies]
+
+    # -- missions ------------------------------------------------------------
+
+    def _mission(self, kind: str, msg: Any) -> list[Reply]:
+        """The mission microservice as MissionItemProtocol_Waypoints answers it."""
+        peer = (msg.get_srcSystem(), msg.get_srcComponent())
+        mission_type = int(getattr(msg, "mission_type", 0))
+        if kind == "MISSION_ACK":
+            return []  # the end of a download: nothing to answer
+        if kind == "MISSION_SET_CURRENT":
+            if self.copter.set_mission_current(int(msg.seq)):
+                return [*self._texts(), Reply(self.telemetry.mission_current(), False)]
+            return self._texts()
+        if mission_type != MISSION_TYPE_MISSION:
+            return [self._mission_ack(MavMissionResult.UNSUPPORTED, peer)]
+        copter = self.copter
+        telemetry = self.telemetry
+        if kind == "MISSION_REQUEST_LIST":
+            return [Reply(telemetry.mission_count(len(copter.mission), *peer))]
+        if kind in ("MISSION_REQUEST_INT", "MISSION_REQUEST"):
+            item = copter.mission_item(int(msg.seq))
+            if item is None:
+                return [self._mission_ack(MavMissionResult.INVALID_SEQUENCE, peer)]
+            return [Reply(telemetry.mission_item_int(item, *peer))]
+        if kind == "MISSION_CLEAR_ALL":
+            cleared = copter.clear_mission()
+            self._upload = None
+            result = MavMissionResult.ACCEPTED if cleared else MavMissionResult.ERROR
+            return [self._mission_ack(result, peer)]
+        if kind == "MISSION_COUNT":
+            return self._mission_count(int(msg.count), peer)
+        return self._mission_item(msg, kind == "MISSION_ITEM_INT", peer)
+
+    def _mission_ack(self, result: MavMissionResult, peer: tuple[int, int]) -> Reply:
+        return Reply(self.telemetry.mission_ack(int(result), *peer))
+
+    def _mission_count(self, count: int, peer: tuple[int, int]) -> list[Reply]:
+        if count == 0:
+            self._upload = None
+            if not self.copter.clear_mission():
+                return [self._mission_ack(MavMissionResult.ERROR, peer)]
+            return [self._mission_ack(MavMissionResult.ACCEPTED, peer)]
+        if count > MAX_ITEMS:
+            return [self._mission_ack(MavMissionResult.NO_SPACE, peer)]
+        # a new MISSION_COUNT restarts any upload in progress
+        self._upload = _Upload(count, [], peer)
+        return [Reply(self.telemetry.mission_request_int(0, *peer))]
+
+    def _mission_item(self, msg: Any, is_int: bool, peer: tuple[int, int]) -> list[Reply]:
+        upload = self._upload
+        if upload is None or upload.peer != peer:
+            return [self._mission_ack(MavMissionResult.DENIED, peer)]
+        seq = int(msg.seq)
+        expected = len(upload.items)
+        if seq != expected:
+            if seq < expected:
+                return []  # a repeat of an item already stored: the next request stands
+            return [self._mission_ack(MavMissionResult.INVALID_SEQUENCE, peer)]
+        x, y = (int(msg.x), int(msg.y)) if is_int else _legacy_xy(msg)
+        item = MissionItem(
+            seq,
+            int(msg.frame),
+            int(msg.command),
+            float(msg.param1),
+            float(msg.param2),
+            float(msg.param3),
+            float(msg.param4),
+            x,
+            y,
+            float(msg.z),
+            int(msg.autocontinue),
+        )
+        problem = check_item(item)
+        if problem is not None:
+            # the upload is abandoned; the stored mission is unchanged
+            self._upload = None
+            result = (
+                MavMissionResult.UNSUPPORTED_FRAME
+                if problem == "frame"
+                else MavMissionResult.UNSUPPORTED
+            )
+            log.info("mission item %d (command %d) refused: %s", seq, item.command, problem)
+            return [self._mission_ack(result, peer)]
+        upload.items.append(item)
+        if len(upload.items) < upload.count:
+            return [Reply(self.telemetry.mission_request_int(len(upload.items), *peer))]
+        self._upload = None
+        self.copter.set_mission(upload.items)
+        text = self.telemetry.statustext_of(Severity.INFO, "Flight plan received")
+        return [
+            self._mission_ack(MavMissionResult.ACCEPTED, peer),
+            Reply(text, to_sender_only=False),
+        ]
+
     # -- guided targets ------------------------------------------------------
 
     def _relative_alt(self, frame: int, alt: float) -> float | None:
@@ -297,6 +469,19 @@ class MessageHandler:
             copter.guided_hold()  # ArduCopter re-initialises guided on a bad target
             return
         copter.guided_goto(lat, lon, alt)
+
+
+def _param_name(raw: Any) -> str:
+    text = raw.decode("ascii", errors="replace") if isinstance(raw, bytes) else str(raw)
+    return text.split("\x00", 1)[0]
+
+
+def _legacy_xy(msg: Any) -> tuple[int, int]:
+    """MISSION_ITEM's float x/y as MISSION_ITEM_INT's: degrees * 1e7 for positions."""
+    x, y = float(msg.x), float(msg.y)
+    if int(msg.frame) == MavFrame.MISSION:
+        return round(x), round(y)
+    return round(x * 1e7), round(y * 1e7)
 
 
 def _as_int(value: float) -> int:

@@ -118,12 +118,16 @@ class MavFrame(IntEnum):
 
 
 class MavCmd(IntEnum):
+    NAV_WAYPOINT = 16
+    NAV_LOITER_TIME = 19
     NAV_RETURN_TO_LAUNCH = 20
     NAV_LAND = 21
     NAV_TAKEOFF = 22
     DO_SET_MODE = 176
     DO_CHANGE_SPEED = 178
     DO_REPOSITION = 192
+    DO_DIGICAM_CONTROL = 203
+    DO_SET_CAM_TRIGG_DIST = 206
     GET_HOME_POSITION = 410
     COMPONENT_ARM_DISARM = 400
     GET_MESSAGE_INTERVAL = 510
@@ -137,18 +141,46 @@ class MsgId(IntEnum):
 
     HEARTBEAT = 0
     SYS_STATUS = 1
+    PARAM_VALUE = 22
     GPS_RAW_INT = 24
     ATTITUDE = 30
+    MISSION_CURRENT = 42
+    MISSION_ITEM_REACHED = 46
     GLOBAL_POSITION_INT = 33
     GPS_GLOBAL_ORIGIN = 49
     VFR_HUD = 74
     COMMAND_ACK = 77
+    CAMERA_FEEDBACK = 180
     BATTERY_STATUS = 147
     AUTOPILOT_VERSION = 148
     HOME_POSITION = 242
     MESSAGE_INTERVAL = 244
     EXTENDED_SYS_STATE = 245
     STATUSTEXT = 253
+
+
+class MavMissionResult(IntEnum):
+    """MAV_MISSION_RESULT (names after ``MAV_MISSION_``)."""
+
+    ACCEPTED = 0
+    ERROR = 1
+    UNSUPPORTED_FRAME = 2
+    UNSUPPORTED = 3
+    NO_SPACE = 4
+    INVALID = 5
+    INVALID_SEQUENCE = 13
+    DENIED = 14
+
+
+class MissionState(IntEnum):
+    """MISSION_STATE (names after ``MISSION_STATE_``)."""
+
+    UNKNOWN = 0
+    NO_MISSION = 1
+    NOT_STARTED = 2
+    ACTIVE = 3
+    PAUSED = 4
+    COMPLETE = 5
 
 
 class SysSensor(IntFlag):

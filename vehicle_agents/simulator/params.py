@@ -44,3 +44,16 @@ class CopterParams:
     arming_delay: float = 2.0  # ARMING_DELAY_MS: motors idle this long after arming
     spool_time: float = 0.5  # MOT_SPOOL_TIME
     hover_throttle: float = 0.35  # MOT_THST_HOVER
+
+    # Battery monitor and its failsafe (AP_BattMonitor, Copter::handle_battery_failsafe)
+    batt_capacity: float = 5000.0  # BATT_CAPACITY, mAh
+    batt_low_volt: float = 14.4  # BATT_LOW_VOLT (3.6 V a cell of the simulated 4S pack)
+    batt_low_mah: float = 0.0  # BATT_LOW_MAH: remaining mAh that counts as low; 0 off
+    batt_low_timer: float = 10.0  # BATT_LOW_TIMER: seconds below BATT_LOW_VOLT to trigger
+    batt_fs_low_act: int = 0  # BATT_FS_LOW_ACT: 0 warn only, 1 land, 2 RTL
+
+    # Simulation knobs (SITL's SIM_* parameters)
+    sim_batt_drain: float = 1.0  # SIM_BATT_DRAIN: multiplies the charge drawn (a test knob)
+    sim_gps_noise: float = 0.1  # SIM_GPS_NOISE: metres, 1 sigma, on GPS_RAW_INT
+    sim_wind_spd: float = 0.0  # SIM_WIND_SPD, m/s
+    sim_wind_dir: float = 0.0  # SIM_WIND_DIR, degrees the wind blows from

@@ -1,5 +1,9 @@
 """A kinematic point-mass multirotor with ArduPilot-style position control.
 
+Wind (SIM_WIND_SPD/SIM_WIND_DIR) is felt as drag on the velocity through the air: the
+position controller holds its track against it (as ArduPilot's integrators do), so wind
+shows as lean into it, as airspeed, and as drift when there is no thrust.
+
 The position controller turns a `Setpoint` into desired velocities with ArduPilot's
 square-root controller (so the vehicle decelerates in time to stop on its target), and
 the velocity follows at bounded acceleration. Attitude is derived: roll and pitch from
@@ -58,6 +62,14 @@ def _clamp(value: float, low: float, high: float) -> float:
     return max(low, min(high, value))
 
 
+def wind_ne(params: CopterParams) -> tuple[float, float]:
+    """The wind's velocity (m/s north, east); SIM_WIND_DIR is where it blows from."""
+    if params.sim_wind_spd <= 0.0:
+        return 0.0, 0.0
+    toward = math.radians(params.sim_wind_dir) + math.pi
+    return params.sim_wind_spd * math.cos(toward), params.sim_wind_spd * math.sin(toward)
+
+
 @dataclass(frozen=True)
 class Setpoint:
     """One step's demand on the position controller.
@@ -110,6 +122,11 @@ class Airframe:
     def climb_rate(self) -> float:
         return -self.vd
 
+    def airspeed_ne(self, params: CopterParams) -> tuple[float, float]:
+        """Velocity through the air (ground velocity less the wind's)."""
+        wind_n, wind_e = wind_ne(params)
+        return self.vn - wind_n, self.ve - wind_e
+
     def stopping_point(self, accel: float) -> tuple[float, float]:
         """Where the vehicle comes to rest braking at ``accel`` from its current velocity."""
         speed = self.groundspeed
@@ -123,20 +140,22 @@ class Airframe:
     def step(self, setpoint: Setpoint | None, dt: float, params: CopterParams) -> None:
         """Advance ``dt`` seconds. ``None`` means no thrust (disarmed or idling on the ground)."""
         if setpoint is None:
-            self._step_unpowered(dt)
+            self._step_unpowered(dt, params)
         else:
             self._step_powered(setpoint, dt, params)
 
-    def _step_unpowered(self, dt: float) -> None:
+    def _step_unpowered(self, dt: float, params: CopterParams) -> None:
         old_roll, old_pitch = self.roll, self.pitch
         self.throttle = 0.0
         if self.on_ground and self.vd >= 0.0:
             self.vn = self.ve = self.vd = 0.0
             self.down = 0.0
         else:
+            # falling, the air carries it along: velocity relaxes toward the wind's
+            wind_n, wind_e = wind_ne(params)
             decay = max(0.0, 1.0 - DRAG_PER_S * dt)
-            self.vn *= decay
-            self.ve *= decay
+            self.vn = wind_n + (self.vn - wind_n) * decay
+            self.ve = wind_e + (self.ve - wind_e) * decay
             self.vd = min(self.vd + GRAVITY * dt, MAX_FALL_SPEED)
             self._integrate_position(dt)
         self.roll = 0.0 if self.on_ground else self.roll
@@ -215,9 +234,11 @@ class Airframe:
         if self.on_ground:
             target_roll = target_pitch = 0.0
         else:
-            # Lean into the acceleration plus the drag being overcome, in the body frame.
-            total_n = accel_n + DRAG_PER_S * self.vn
-            total_e = accel_e + DRAG_PER_S * self.ve
+            # Lean into the acceleration plus the drag being overcome (drag acts on the
+            # velocity through the air, so a hover in wind leans into it), in the body frame.
+            air_n, air_e = self.airspeed_ne(params)
+            total_n = accel_n + DRAG_PER_S * air_n
+            total_e = accel_e + DRAG_PER_S * air_e
             cos_yaw, sin_yaw = math.cos(self.yaw), math.sin(self.yaw)
             forward = total_n * cos_yaw + total_e * sin_yaw
             right = -total_n * sin_yaw + total_e * cos_yaw

@@ -21,7 +21,7 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 from vehicle_agents.simulator.clock import Clock, SimClock
 from vehicle_agents.simulator.commands import MessageHandler
 from vehicle_agents.simulator.config import ListenAddress, SimulatorConfig
-from vehicle_agents.simulator.copter import Copter
+from vehicle_agents.simulator.copter import Copter, ItemReached
 from vehicle_agents.simulator.mavconst import MsgId
 from vehicle_agents.simulator.streams import StreamSchedule
 from vehicle_agents.simulator.telemetry import DEFAULT_RATES_HZ, MavMessage, TelemetryBuilder
@@ -134,7 +134,11 @@ class SimulatorServer:
     ) -> None:
         self.config = config
         self.clock: Clock = clock if clock is not None else SimClock(config.speedup)
-        self.copter = copter if copter is not None else Copter(config.home)
+        self.copter = (
+            copter
+            if copter is not None
+            else Copter(config.home, system_id=config.system_id, seed=config.system_id)
+        )
         self.telemetry = TelemetryBuilder(self.copter, boot_epoch_s=time.time())
         self.handler = MessageHandler(self.copter, self.telemetry, config.system_id, COMPONENT_ID)
         self.links: list[Link] = []
@@ -230,6 +234,11 @@ class SimulatorServer:
         for text in self.copter.drain_texts():
             log.info("STATUSTEXT %s: %s", text.severity.name, text.text)
             self._broadcast(self.telemetry.statustext(text))
+        for event in self.copter.drain_events():
+            if isinstance(event, ItemReached):
+                self._broadcast(self.telemetry.mission_item_reached(event.seq))
+            else:
+                self._broadcast(self.telemetry.camera_feedback(event))
         signature = self._state_signature()
         if signature != self._signature:
             # ArduCopter sends a HEARTBEAT straight away when its mode changes

@@ -11,8 +11,10 @@ from typing import Any
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
-from vehicle_agents.simulator.copter import Copter, StatusText
+from vehicle_agents.simulator.copter import Copter, PhotoTaken, StatusText
 from vehicle_agents.simulator.mavconst import CopterMode, MsgId, SysSensor
+from vehicle_agents.simulator.mission import MissionItem
+from vehicle_agents.simulator.param_table import PARAM_ID_LEN
 
 MavMessage = Any  # pymavlink message classes are generated and untyped
 
@@ -27,7 +29,9 @@ DEFAULT_RATES_HZ: dict[int, float] = {
     MsgId.BATTERY_STATUS: 1.0,
     MsgId.HOME_POSITION: 0.5,
     MsgId.EXTENDED_SYS_STATE: 1.0,
+    MsgId.MISSION_CURRENT: 1.0,
 }
+PARAM_INDEX_NONE = 65535  # PARAM_VALUE.param_index of the echo of a PARAM_SET (-1)
 
 # ArduCopter 4.5.7, official release: what AUTOPILOT_VERSION reports.
 FIRMWARE_VERSION = (4, 5, 7)
@@ -93,6 +97,7 @@ class TelemetryBuilder:
             MsgId.AUTOPILOT_VERSION: self.autopilot_version,
             MsgId.HOME_POSITION: self.home_position,
             MsgId.EXTENDED_SYS_STATE: self.extended_sys_state,
+            MsgId.MISSION_CURRENT: self.mission_current,
         }
 
     @property
@@ -146,7 +151,7 @@ class TelemetryBuilder:
 
     def gps_raw_int(self) -> MavMessage:
         copter = self.copter
-        point = copter.position()
+        point = copter.gps_position()
         body = copter.body
         speed = body.groundspeed
         course = _cdeg(math.atan2(body.ve, body.vn)) if speed > 0.1 else 0
@@ -204,7 +209,7 @@ class TelemetryBuilder:
         copter = self.copter
         body = copter.body
         return mavlink2.MAVLink_vfr_hud_message(
-            body.groundspeed,  # no airspeed sensor: ArduCopter reports its estimate
+            math.hypot(*body.airspeed_ne(copter.params)),  # the estimate, with the wind
             body.groundspeed,
             _cdeg(body.yaw) // 100,
             round(body.throttle * 100.0),
@@ -277,7 +282,86 @@ class TelemetryBuilder:
             0,
         )
 
+    def mission_current(self) -> MavMessage:
+        copter = self.copter
+        return mavlink2.MAVLink_mission_current_message(
+            copter.mission_current, copter.mission_count, int(copter.mission_state()), 0
+        )
+
     # -- replies -------------------------------------------------------------
+
+    def param_value(self, name: str, index: int | None = None) -> MavMessage:
+        """PARAM_VALUE of a stored parameter; ``index`` None for the echo of a PARAM_SET."""
+        table = self.copter.param_table
+        value = table.get(name)
+        assert value is not None, name
+        return mavlink2.MAVLink_param_value_message(
+            name.encode("ascii")[:PARAM_ID_LEN],
+            value,
+            int(table.definition(name).type),
+            table.count,
+            PARAM_INDEX_NONE if index is None else index,
+        )
+
+    @staticmethod
+    def mission_item_int(item: MissionItem, target_system: int, target_component: int) -> Any:
+        return mavlink2.MAVLink_mission_item_int_message(
+            target_system,
+            target_component,
+            item.seq,
+            item.frame,
+            item.command,
+            0,
+            item.autocontinue,
+            item.param1,
+            item.param2,
+            item.param3,
+            item.param4,
+            item.x,
+            item.y,
+            item.z,
+            0,
+        )
+
+    @staticmethod
+    def mission_count(count: int, target_system: int, target_component: int) -> MavMessage:
+        return mavlink2.MAVLink_mission_count_message(target_system, target_component, count, 0)
+
+    @staticmethod
+    def mission_request_int(seq: int, target_system: int, target_component: int) -> MavMessage:
+        return mavlink2.MAVLink_mission_request_int_message(target_system, target_component, seq, 0)
+
+    @staticmethod
+    def mission_ack(result: int, target_system: int, target_component: int) -> MavMessage:
+        return mavlink2.MAVLink_mission_ack_message(target_system, target_component, result, 0)
+
+    @staticmethod
+    def mission_item_reached(seq: int) -> MavMessage:
+        return mavlink2.MAVLink_mission_item_reached_message(seq)
+
+    def camera_feedback(self, photo: PhotoTaken) -> MavMessage:
+        return mavlink2.MAVLink_camera_feedback_message(
+            int((self.boot_epoch_s + photo.time_s) * 1e6),
+            self.copter.system_id,
+            0,
+            photo.index,
+            round(photo.lat * 1e7),
+            round(photo.lon * 1e7),
+            photo.alt_msl,
+            photo.alt_rel,
+            math.degrees(photo.roll),
+            math.degrees(photo.pitch),
+            math.degrees(photo.yaw),
+            0.0,
+            mavlink2.CAMERA_FEEDBACK_PHOTO,
+            photo.index,
+        )
+
+    @staticmethod
+    def statustext_of(severity: int, text: str) -> MavMessage:
+        return mavlink2.MAVLink_statustext_message(
+            int(severity), text.encode("ascii", errors="replace")[:50]
+        )
 
     @staticmethod
     def statustext(status: StatusText) -> MavMessage:

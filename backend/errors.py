@@ -6,6 +6,7 @@ GcsError
 ├── NotFound               404  no such user, token, ...
 │   └── VehicleNotFound         no vehicle with that id has ever connected
 ├── Conflict               409  e.g. a username that exists
+├── VehicleRefused         409  the flight controller kept its value
 ├── InvalidRequest         422  a value is out of range for this vehicle; names the field
 ├── VehicleOffline         409  the vehicle is known but its agent is not connected
 ├── SafetyViolation        422  the command or mission breaks safety rails; lists every rule
@@ -47,6 +48,12 @@ class InvalidRequest(GcsError):
 
 
 class VehicleOffline(GcsError):
+    status_code = 409
+
+
+class VehicleRefused(GcsError):
+    """The flight controller answered, but not with what was asked (a parameter it kept)."""
+
     status_code = 409
 
 

@@ -98,6 +98,28 @@ class GotoCommand(Message):
     altitude: float = Field(gt=0.5, le=500, description="Metres above home.")
 
 
+ParamName = Annotated[str, Field(pattern=r"^[A-Z0-9_]{1,16}$", description="e.g. WPNAV_SPEED")]
+
+
+class ParamListCommand(Message):
+    """Read every parameter (the flight controller's whole table)."""
+
+    name: Literal["param_list"] = "param_list"
+
+
+class ParamGetCommand(Message):
+    name: Literal["param_get"] = "param_get"
+    param: ParamName
+
+
+class ParamSetCommand(Message):
+    """Set one parameter; accepted only when the flight controller echoes the new value."""
+
+    name: Literal["param_set"] = "param_set"
+    param: ParamName
+    value: float
+
+
 Command = Annotated[
     ArmCommand
     | DisarmCommand
@@ -105,7 +127,10 @@ Command = Annotated[
     | LandCommand
     | ReturnToLaunchCommand
     | SetModeCommand
-    | GotoCommand,
+    | GotoCommand
+    | ParamListCommand
+    | ParamGetCommand
+    | ParamSetCommand,
     Field(discriminator="name"),
 ]
 
@@ -120,6 +145,9 @@ class CommandOutcome(Message):
         default=None, description="The MAV_RESULT name from COMMAND_ACK, when there was one."
     )
     message: str
+    values: dict[str, float] | None = Field(
+        default=None, description="Parameter values, for the parameter commands."
+    )
 
 
 # ---------------------------------------------------------------------------

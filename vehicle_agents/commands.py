@@ -21,12 +21,16 @@ from gcs.protocol import (
     DisarmCommand,
     GotoCommand,
     LandCommand,
+    ParamGetCommand,
+    ParamListCommand,
+    ParamSetCommand,
     ReturnToLaunchCommand,
     SetModeCommand,
     TakeoffCommand,
 )
 from vehicle_agents.fcu_link import FcuLink, MavMessage
 from vehicle_agents.modes import mode_name
+from vehicle_agents.params import ParamClient
 
 log = logging.getLogger(__name__)
 
@@ -66,6 +70,7 @@ class CommandExecutor:
     def __init__(self, link: FcuLink, timeouts: CommandTimeouts | None = None) -> None:
         self.link = link
         self.timeouts = timeouts or CommandTimeouts()
+        self.params = ParamClient(link)
 
     async def execute(self, command: Command) -> CommandOutcome:
         if not self.link.connected:
@@ -92,6 +97,12 @@ class CommandExecutor:
                 return await self._set_mode(mode)
             case GotoCommand(lat=lat, lon=lon, altitude=altitude):
                 return await self._goto(lat, lon, altitude)
+            case ParamListCommand():
+                return await self.params.read_all()
+            case ParamGetCommand(param=name):
+                return await self.params.read(name)
+            case ParamSetCommand(param=name, value=value):
+                return await self.params.write(name, value)
 
     async def _guided_takeoff(self, altitude: float) -> CommandOutcome:
         # What QGroundControl does for a guided take-off: guided mode, arm, take off.

@@ -54,6 +54,7 @@ def _concrete(path: str) -> str:
         "flight_id": "999999",
         "tlog_id": "999999",
         "format": "csv",
+        "param": "WPNAV_SPEED",
     }
     return re.sub(r"\{(\w+)\}", lambda match: values[match.group(1)], path)
 

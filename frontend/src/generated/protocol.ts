@@ -137,6 +137,12 @@ export interface CommandOutcome {
    */
   result: string | null;
   message: string;
+  /**
+   * Parameter values, for the parameter commands.
+   */
+  values: {
+    [k: string]: number | undefined;
+  } | null;
 }
 export interface Welcome {
   type: "welcome";
@@ -153,7 +159,10 @@ export interface CommandRequest {
     | LandCommand
     | ReturnToLaunchCommand
     | SetModeCommand
-    | GotoCommand;
+    | GotoCommand
+    | ParamListCommand
+    | ParamGetCommand
+    | ParamSetCommand;
   /**
    * How long the agent may try before giving up.
    */
@@ -200,6 +209,30 @@ export interface GotoCommand {
    * Metres above home.
    */
   altitude: number;
+}
+/**
+ * Read every parameter (the flight controller's whole table).
+ */
+export interface ParamListCommand {
+  name: "param_list";
+}
+export interface ParamGetCommand {
+  name: "param_get";
+  /**
+   * e.g. WPNAV_SPEED
+   */
+  param: string;
+}
+/**
+ * Set one parameter; accepted only when the flight controller echoes the new value.
+ */
+export interface ParamSetCommand {
+  name: "param_set";
+  /**
+   * e.g. WPNAV_SPEED
+   */
+  param: string;
+  value: number;
 }
 /**
  * Sent to a peer whose frame could not be used; the connection stays open.

@@ -1,0 +1,79 @@
+"""A vehicle's parameters, read from and written to its flight controller."""
+
+from __future__ import annotations
+
+from typing import Annotated
+
+from fastapi import Path, Request
+from pydantic import BaseModel
+
+from backend.api.deps import HubDep
+from backend.api.security import CurrentPrincipal, SecuredRouter, client_address, requires
+from backend.auth.policy import Permission
+from backend.errors import VehicleRefused
+from backend.fleet.command_service import execute_command
+from gcs.protocol import (
+    Command,
+    ParamGetCommand,
+    ParamListCommand,
+    ParamName,
+    ParamSetCommand,
+    VehicleId,
+)
+
+router = SecuredRouter(prefix="/vehicles/{vehicle_id}/params", tags=["parameters"])
+
+VehicleIdPath = Annotated[VehicleId, Path()]
+ParamPath = Annotated[ParamName, Path()]
+
+
+class ParamValues(BaseModel):
+    vehicle_id: str
+    values: dict[str, float]
+
+
+class ParamUpdate(BaseModel):
+    value: float
+
+
+async def _ask(
+    hub: HubDep, request: Request, principal: CurrentPrincipal, vehicle_id: str, command: Command
+) -> ParamValues:
+    outcome = await execute_command(hub, principal, client_address(request), vehicle_id, command)
+    if outcome.status != "accepted" or outcome.values is None:
+        raise VehicleRefused(outcome.message)
+    return ParamValues(vehicle_id=vehicle_id, values=outcome.values)
+
+
+@router.get("", response_model=ParamValues, openapi_extra=requires(Permission.READ))
+async def list_params(
+    vehicle_id: VehicleIdPath, request: Request, principal: CurrentPrincipal, hub: HubDep
+) -> ParamValues:
+    """Every parameter of the vehicle, read from its flight controller."""
+    return await _ask(hub, request, principal, vehicle_id, ParamListCommand())
+
+
+@router.get("/{param}", response_model=ParamValues, openapi_extra=requires(Permission.READ))
+async def get_param(
+    vehicle_id: VehicleIdPath,
+    param: ParamPath,
+    request: Request,
+    principal: CurrentPrincipal,
+    hub: HubDep,
+) -> ParamValues:
+    return await _ask(hub, request, principal, vehicle_id, ParamGetCommand(param=param))
+
+
+@router.put("/{param}", response_model=ParamValues, openapi_extra=requires(Permission.COMMAND))
+async def set_param(
+    vehicle_id: VehicleIdPath,
+    param: ParamPath,
+    body: ParamUpdate,
+    request: Request,
+    principal: CurrentPrincipal,
+    hub: HubDep,
+) -> ParamValues:
+    """Set a parameter; succeeds only when the flight controller echoes the new value
+    (409 with the value it kept otherwise, e.g. out of its range)."""
+    command = ParamSetCommand(param=param, value=body.value)
+    return await _ask(hub, request, principal, vehicle_id, command)

@@ -18,6 +18,7 @@ from backend.api import (
     auth,
     fleet_commands,
     logs,
+    missions,
     params,
     safety,
     system,
@@ -66,7 +67,7 @@ def create_app(settings: HubSettings | None = None) -> FastAPI:
         description="Live fleet state, commands and telemetry history for drone fleets.",
         lifespan=lifespan,
     )
-    routers = (system, auth, vehicles, params, fleet_commands, safety, logs, admin)
+    routers = (system, auth, vehicles, params, missions, fleet_commands, safety, logs, admin)
     for router in (module.router for module in routers):
         app.include_router(router, prefix=API_PREFIX)
     app.include_router(websockets.router)

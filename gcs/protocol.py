@@ -120,6 +120,41 @@ class ParamSetCommand(Message):
     value: float
 
 
+class MissionItem(Message):
+    """One mission item, as MISSION_ITEM_INT carries it (positions in degrees)."""
+
+    command: int = Field(ge=0, le=65535, description="MAV_CMD number, e.g. 16 NAV_WAYPOINT")
+    frame: int = Field(default=6, ge=0, le=21, description="MAV_FRAME; 6 = relative altitude")
+    param1: float = 0.0
+    param2: float = 0.0
+    param3: float = 0.0
+    param4: float = 0.0
+    lat: float = Field(default=0.0, ge=-90, le=90)
+    lon: float = Field(default=0.0, ge=-180, le=180)
+    alt: float = Field(default=0.0, ge=-1000, le=10000, description="metres")
+    autocontinue: bool = True
+
+
+class MissionUploadCommand(Message):
+    """Replace the vehicle's mission (item 0, home, is added by the agent)."""
+
+    name: Literal["mission_upload"] = "mission_upload"
+    items: list[MissionItem] = Field(min_length=1, max_length=2000)
+
+
+class MissionDownloadCommand(Message):
+    name: Literal["mission_download"] = "mission_download"
+
+
+class MissionClearCommand(Message):
+    name: Literal["mission_clear"] = "mission_clear"
+
+
+class MissionSetCurrentCommand(Message):
+    name: Literal["mission_set_current"] = "mission_set_current"
+    seq: int = Field(ge=1, le=2000, description="1 is the first item after home")
+
+
 Command = Annotated[
     ArmCommand
     | DisarmCommand
@@ -130,7 +165,11 @@ Command = Annotated[
     | GotoCommand
     | ParamListCommand
     | ParamGetCommand
-    | ParamSetCommand,
+    | ParamSetCommand
+    | MissionUploadCommand
+    | MissionDownloadCommand
+    | MissionClearCommand
+    | MissionSetCurrentCommand,
     Field(discriminator="name"),
 ]
 
@@ -147,6 +186,9 @@ class CommandOutcome(Message):
     message: str
     values: dict[str, float] | None = Field(
         default=None, description="Parameter values, for the parameter commands."
+    )
+    items: list[MissionItem] | None = Field(
+        default=None, description="The vehicle's mission, for a mission download."
     )
 
 

@@ -21,6 +21,10 @@ from gcs.protocol import (
     DisarmCommand,
     GotoCommand,
     LandCommand,
+    MissionClearCommand,
+    MissionDownloadCommand,
+    MissionSetCurrentCommand,
+    MissionUploadCommand,
     ParamGetCommand,
     ParamListCommand,
     ParamSetCommand,
@@ -29,6 +33,7 @@ from gcs.protocol import (
     TakeoffCommand,
 )
 from vehicle_agents.fcu_link import FcuLink, MavMessage
+from vehicle_agents.missions import MissionClient
 from vehicle_agents.modes import mode_name
 from vehicle_agents.params import ParamClient
 
@@ -71,6 +76,7 @@ class CommandExecutor:
         self.link = link
         self.timeouts = timeouts or CommandTimeouts()
         self.params = ParamClient(link)
+        self.missions = MissionClient(link)
 
     async def execute(self, command: Command) -> CommandOutcome:
         if not self.link.connected:
@@ -79,6 +85,10 @@ class CommandExecutor:
             return await self._dispatch(command)
         except CommandRefused as refusal:
             return refusal.outcome
+        except (ValueError, TypeError, ConnectionError, OSError) as error:
+            # A command must never take the agent (and the vehicle's link) down with it.
+            log.exception("command %s failed inside the agent", command.name)
+            return CommandOutcome(status="failed", message=f"{command.name}: agent error: {error}")
 
     async def _dispatch(self, command: Command) -> CommandOutcome:
         match command:
@@ -103,6 +113,14 @@ class CommandExecutor:
                 return await self.params.read(name)
             case ParamSetCommand(param=name, value=value):
                 return await self.params.write(name, value)
+            case MissionUploadCommand(items=items):
+                return await self.missions.upload(items)
+            case MissionDownloadCommand():
+                return await self.missions.download()
+            case MissionClearCommand():
+                return await self.missions.clear()
+            case MissionSetCurrentCommand(seq=seq):
+                return await self.missions.set_current(seq)
 
     async def _guided_takeoff(self, altitude: float) -> CommandOutcome:
         # What QGroundControl does for a guided take-off: guided mode, arm, take off.

@@ -18,10 +18,43 @@ from backend.safety import (
 from backend.safety.schemas import SafetyRailsModel
 from backend.settings import HubSettings
 from backend.storage.rails import SITE, RailsRepository, vehicle_scope
-from gcs.protocol import ArmCommand, Command, GotoCommand, TakeoffCommand
+from gcs.protocol import (
+    ArmCommand,
+    Command,
+    GotoCommand,
+    MissionItem,
+    MissionUploadCommand,
+    TakeoffCommand,
+)
 
 # Below this height a vehicle counts as on the ground for the launch rules.
 LANDED_BELOW_M = 0.5
+# MAV_CMD numbers of the navigation commands that fly somewhere.
+NAV_WAYPOINT, NAV_LOITER_UNLIM, NAV_LOITER_TURNS, NAV_LOITER_TIME = 16, 17, 18, 19
+NAV_LAND, NAV_TAKEOFF, NAV_SPLINE_WAYPOINT = 21, 22, 82
+POSITIONED = {
+    NAV_WAYPOINT,
+    NAV_LOITER_UNLIM,
+    NAV_LOITER_TURNS,
+    NAV_LOITER_TIME,
+    NAV_LAND,
+    NAV_SPLINE_WAYPOINT,
+}
+
+
+def mission_waypoints(items: list[MissionItem], record: VehicleRecord) -> list[Waypoint]:
+    """The places a mission will take the vehicle, for the rails to check.
+
+    A take-off climbs where the vehicle stands; a land with no position lands in place."""
+    here = record.state
+    points: list[Waypoint] = []
+    for item in items:
+        has_position = (item.lat, item.lon) != (0.0, 0.0)
+        if item.command in POSITIONED and has_position:
+            points.append(Waypoint(item.lat, item.lon, item.alt))
+        elif item.command == NAV_TAKEOFF and here and here.lat is not None and here.lon is not None:
+            points.append(Waypoint(here.lat, here.lon, item.alt))
+    return points
 
 
 def snapshot_of(record: VehicleRecord) -> VehicleSnapshot:
@@ -69,6 +102,10 @@ class SafetyGate:
     def check_command(self, record: VehicleRecord, command: Command) -> list[Violation]:
         """Violations of the rails; landing, RTL, mode changes and disarming are never
         blocked, because they are how an operator gets out of trouble."""
+        if isinstance(command, MissionUploadCommand):
+            return list(
+                self.check_mission(record, mission_waypoints(command.items, record)).violations
+            )
         if not isinstance(command, ArmCommand | TakeoffCommand | GotoCommand):
             return []  # decided before any rails are read: no database needed
         rails = self.effective_rails(record.id)

@@ -143,6 +143,34 @@ export interface CommandOutcome {
   values: {
     [k: string]: number | undefined;
   } | null;
+  /**
+   * The vehicle's mission, for a mission download.
+   */
+  items: MissionItem[] | null;
+}
+/**
+ * One mission item, as MISSION_ITEM_INT carries it (positions in degrees).
+ */
+export interface MissionItem {
+  /**
+   * MAV_CMD number, e.g. 16 NAV_WAYPOINT
+   */
+  command: number;
+  /**
+   * MAV_FRAME; 6 = relative altitude
+   */
+  frame: number;
+  param1: number;
+  param2: number;
+  param3: number;
+  param4: number;
+  lat: number;
+  lon: number;
+  /**
+   * metres
+   */
+  alt: number;
+  autocontinue: boolean;
 }
 export interface Welcome {
   type: "welcome";
@@ -162,7 +190,11 @@ export interface CommandRequest {
     | GotoCommand
     | ParamListCommand
     | ParamGetCommand
-    | ParamSetCommand;
+    | ParamSetCommand
+    | MissionUploadCommand
+    | MissionDownloadCommand
+    | MissionClearCommand
+    | MissionSetCurrentCommand;
   /**
    * How long the agent may try before giving up.
    */
@@ -233,6 +265,30 @@ export interface ParamSetCommand {
    */
   param: string;
   value: number;
+}
+/**
+ * Replace the vehicle's mission (item 0, home, is added by the agent).
+ */
+export interface MissionUploadCommand {
+  name: "mission_upload";
+  /**
+   * @minItems 1
+   * @maxItems 2000
+   */
+  items: [MissionItem, ...MissionItem[]];
+}
+export interface MissionDownloadCommand {
+  name: "mission_download";
+}
+export interface MissionClearCommand {
+  name: "mission_clear";
+}
+export interface MissionSetCurrentCommand {
+  name: "mission_set_current";
+  /**
+   * 1 is the first item after home
+   */
+  seq: number;
 }
 /**
  * Sent to a peer whose frame could not be used; the connection stays open.

@@ -1,0 +1,105 @@
+"""A vehicle's mission: upload (checked against the safety rails first), download, clear,
+and the current item."""
+
+from __future__ import annotations
+
+from typing import Annotated
+
+from fastapi import Path, Query, Request
+from pydantic import BaseModel, Field
+
+from backend.api.deps import HubDep
+from backend.api.security import CurrentPrincipal, SecuredRouter, client_address, requires
+from backend.auth.policy import Permission
+from backend.errors import VehicleRefused
+from backend.fleet.command_service import execute_command
+from gcs.protocol import (
+    Command,
+    CommandOutcome,
+    MissionClearCommand,
+    MissionDownloadCommand,
+    MissionItem,
+    MissionSetCurrentCommand,
+    MissionUploadCommand,
+    VehicleId,
+)
+
+router = SecuredRouter(prefix="/vehicles/{vehicle_id}/mission", tags=["missions"])
+
+VehicleIdPath = Annotated[VehicleId, Path()]
+OverrideQuery = Annotated[
+    str | None,
+    Query(min_length=10, max_length=500, description="Admins only, as for commands (audited)"),
+]
+
+
+class MissionUpload(BaseModel):
+    items: list[MissionItem] = Field(min_length=1, max_length=2000)
+
+
+class CurrentItem(BaseModel):
+    seq: int = Field(ge=1, le=2000)
+
+
+class MissionResult(BaseModel):
+    vehicle_id: str
+    outcome: CommandOutcome
+    items: list[MissionItem] | None = None
+
+
+async def _run(
+    hub: HubDep,
+    request: Request,
+    principal: CurrentPrincipal,
+    vehicle_id: str,
+    command: Command,
+    override_reason: str | None = None,
+) -> MissionResult:
+    outcome = await execute_command(
+        hub, principal, client_address(request), vehicle_id, command, override_reason
+    )
+    if outcome.status != "accepted":
+        raise VehicleRefused(outcome.message)
+    return MissionResult(vehicle_id=vehicle_id, outcome=outcome, items=outcome.items)
+
+
+@router.post("", response_model=MissionResult, openapi_extra=requires(Permission.COMMAND))
+async def upload_mission(
+    vehicle_id: VehicleIdPath,
+    body: MissionUpload,
+    request: Request,
+    principal: CurrentPrincipal,
+    hub: HubDep,
+    override_reason: OverrideQuery = None,
+) -> MissionResult:
+    """Replace the vehicle's mission. Every rail it breaks is listed (422) before anything
+    reaches the vehicle; a vehicle that rejects an item keeps its previous mission (409)."""
+    command = MissionUploadCommand(items=body.items)
+    return await _run(hub, request, principal, vehicle_id, command, override_reason)
+
+
+@router.get("", response_model=MissionResult, openapi_extra=requires(Permission.READ))
+async def download_mission(
+    vehicle_id: VehicleIdPath, request: Request, principal: CurrentPrincipal, hub: HubDep
+) -> MissionResult:
+    """The mission on the vehicle now (item 0 is home)."""
+    return await _run(hub, request, principal, vehicle_id, MissionDownloadCommand())
+
+
+@router.delete("", response_model=MissionResult, openapi_extra=requires(Permission.COMMAND))
+async def clear_mission(
+    vehicle_id: VehicleIdPath, request: Request, principal: CurrentPrincipal, hub: HubDep
+) -> MissionResult:
+    return await _run(hub, request, principal, vehicle_id, MissionClearCommand())
+
+
+@router.put("/current", response_model=MissionResult, openapi_extra=requires(Permission.COMMAND))
+async def set_current_item(
+    vehicle_id: VehicleIdPath,
+    body: CurrentItem,
+    request: Request,
+    principal: CurrentPrincipal,
+    hub: HubDep,
+) -> MissionResult:
+    command = MissionSetCurrentCommand(seq=body.seq)
+    return await _run(hub, request, principal, vehicle_id, command)

@@ -1,0 +1,198 @@
+"""The MAVLink mission protocol: upload, download, clear and set-current.
+
+Upload follows the vehicle's lead (MISSION_COUNT, then it asks for each item), with a
+timeout and retries per item; a rejected item ends the upload with the vehicle's reason,
+and the vehicle keeps its previous mission, as ArduPilot and PX4 do.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from pymavlink.dialects.v20 import ardupilotmega as mavlink2
+
+from gcs.protocol import CommandOutcome, MissionItem
+from vehicle_agents.fcu_link import FcuLink, MavMessage, MessagePredicate
+
+MISSION = mavlink2.MAV_MISSION_TYPE_MISSION
+
+
+@dataclass(frozen=True)
+class MissionTimeouts:
+    item_s: float = 1.5  # the vehicle's next request, or an item it asked for
+    attempts: int = 4
+
+
+def _result_name(result: int) -> str:
+    entry = mavlink2.enums["MAV_MISSION_RESULT"].get(result)
+    return entry.name if entry is not None else f"MAV_MISSION_RESULT {result}"
+
+
+def known_command(command: int) -> bool:
+    return command in mavlink2.enums["MAV_CMD"]
+
+
+class MissionClient:
+    def __init__(self, link: FcuLink, timeouts: MissionTimeouts | None = None) -> None:
+        self.link = link
+        self.timeouts = timeouts or MissionTimeouts()
+
+    def _target(self) -> tuple[int, int]:
+        return self.link.target_system or 1, self.link.target_component
+
+    def _item_message(self, seq: int, item: MissionItem) -> MavMessage:
+        system, component = self._target()
+        return mavlink2.MAVLink_mission_item_int_message(
+            system,
+            component,
+            seq,
+            item.frame,
+            item.command,
+            0,
+            int(item.autocontinue),
+            item.param1,
+            item.param2,
+            item.param3,
+            item.param4,
+            round(item.lat * 1e7),
+            round(item.lon * 1e7),
+            item.alt,
+            MISSION,
+        )
+
+    async def upload(self, items: list[MissionItem]) -> CommandOutcome:
+        unknown = [item.command for item in items if not known_command(item.command)]
+        if unknown:
+            return CommandOutcome(
+                status="refused", message=f"unknown MAV_CMD numbers {unknown}; nothing sent"
+            )
+        # Item 0 is home on ArduPilot; the vehicle keeps its own, so a placeholder will do.
+        sequence = [MissionItem(command=mavlink2.MAV_CMD_NAV_WAYPOINT, frame=0), *items]
+        system, component = self._target()
+        count = mavlink2.MAVLink_mission_count_message(system, component, len(sequence), MISSION)
+        last_sent: MavMessage = count
+        self.link.send(count)
+        for _ in range(len(sequence) * self.timeouts.attempts):
+            answer = await self.link.wait_for(_upload_answer, self.timeouts.item_s)
+            if answer is None:
+                self.link.send(last_sent)  # lost on the way: send it again
+                continue
+            if answer.get_type() == "MISSION_ACK":
+                if answer.type == mavlink2.MAV_MISSION_ACCEPTED:
+                    return CommandOutcome(
+                        status="accepted", message=f"mission of {len(items)} items uploaded"
+                    )
+                return CommandOutcome(
+                    status="refused",
+                    result=_result_name(answer.type),
+                    message=f"the vehicle rejected the mission: {_result_name(answer.type)}; "
+                    "it keeps its previous mission",
+                )
+            if not 0 <= answer.seq < len(sequence):
+                continue
+            last_sent = self._item_message(answer.seq, sequence[answer.seq])
+            self.link.send(last_sent)
+        return CommandOutcome(status="timeout", message="mission upload: the vehicle went quiet")
+
+    async def download(self) -> CommandOutcome:
+        system, component = self._target()
+        count = None
+        for _ in range(self.timeouts.attempts):
+            self.link.send(
+                mavlink2.MAVLink_mission_request_list_message(system, component, MISSION)
+            )
+            count = await self.link.wait_for(
+                lambda m: m.get_type() == "MISSION_COUNT", self.timeouts.item_s
+            )
+            if count is not None:
+                break
+        if count is None:
+            return CommandOutcome(status="timeout", message="no MISSION_COUNT from the vehicle")
+        items: list[MissionItem] = []
+        for seq in range(count.count):
+            received = None
+            for _ in range(self.timeouts.attempts):
+                self.link.send(
+                    mavlink2.MAVLink_mission_request_int_message(system, component, seq, MISSION)
+                )
+                received = await self.link.wait_for(
+                    _item_number(seq),
+                    self.timeouts.item_s,
+                )
+                if received is not None:
+                    break
+            if received is None:
+                return CommandOutcome(status="timeout", message=f"mission item {seq} never came")
+            items.append(_item_of(received))
+        self.link.send(
+            mavlink2.MAVLink_mission_ack_message(
+                system, component, mavlink2.MAV_MISSION_ACCEPTED, MISSION
+            )
+        )
+        return CommandOutcome(
+            status="accepted", message=f"{len(items) - 1} items (plus home)", items=items
+        )
+
+    async def clear(self) -> CommandOutcome:
+        system, component = self._target()
+        for _ in range(self.timeouts.attempts):
+            self.link.send(mavlink2.MAVLink_mission_clear_all_message(system, component, MISSION))
+            ack = await self.link.wait_for(
+                lambda m: m.get_type() == "MISSION_ACK", self.timeouts.item_s
+            )
+            if ack is not None:
+                if ack.type == mavlink2.MAV_MISSION_ACCEPTED:
+                    return CommandOutcome(status="accepted", message="mission cleared")
+                return CommandOutcome(
+                    status="refused",
+                    result=_result_name(ack.type),
+                    message=f"clear refused: {_result_name(ack.type)}",
+                )
+        return CommandOutcome(status="timeout", message="no MISSION_ACK for the clear")
+
+    async def set_current(self, seq: int) -> CommandOutcome:
+        system, component = self._target()
+        for _ in range(self.timeouts.attempts):
+            self.link.send(mavlink2.MAVLink_mission_set_current_message(system, component, seq))
+            current = await self.link.wait_for(
+                lambda m: m.get_type() == "MISSION_CURRENT" and m.seq == seq,
+                self.timeouts.item_s,
+            )
+            if current is not None:
+                return CommandOutcome(status="accepted", message=f"current item is {seq}")
+        return CommandOutcome(status="timeout", message=f"the vehicle did not move to item {seq}")
+
+
+def _upload_answer(message: MavMessage) -> bool:
+    kind = message.get_type()
+    if kind in ("MISSION_REQUEST_INT", "MISSION_REQUEST", "MISSION_ACK"):
+        return bool(int(getattr(message, "mission_type", MISSION)) == MISSION)
+    return False
+
+
+def _item_number(seq: int) -> MessagePredicate:
+    def matches(message: MavMessage) -> bool:
+        return bool(message.get_type() == "MISSION_ITEM_INT" and message.seq == seq)
+
+    return matches
+
+
+def _finite(value: float) -> float:
+    """Autopilots put NaN in unused parameters (e.g. 'keep yaw'); the wire has no NaN."""
+    return value if math.isfinite(value) else 0.0
+
+
+def _item_of(message: MavMessage) -> MissionItem:
+    return MissionItem(
+        command=message.command,
+        frame=message.frame,
+        param1=_finite(message.param1),
+        param2=_finite(message.param2),
+        param3=_finite(message.param3),
+        param4=_finite(message.param4),
+        lat=message.x / 1e7,
+        lon=message.y / 1e7,
+        alt=message.z,
+        autocontinue=bool(message.autocontinue),
+    )

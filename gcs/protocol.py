@@ -223,6 +223,10 @@ class VehicleState(Message):
     home_lat: float | None = None
     home_lon: float | None = None
     home_alt_msl: float | None = None
+    mission_current: int | None = Field(
+        default=None, description="the mission item being flown (MISSION_CURRENT)"
+    )
+    mission_total: int | None = None
 
 
 # ---------------------------------------------------------------------------
@@ -254,7 +258,9 @@ class Telemetry(Message):
     state: VehicleState
 
 
-EventKind = Literal["statustext", "mode", "armed", "disarmed", "link_up", "link_down", "failsafe"]
+EventKind = Literal[
+    "statustext", "mode", "armed", "disarmed", "link_up", "link_down", "failsafe", "mission"
+]
 
 
 class Event(Message):

@@ -7,7 +7,7 @@ import logging
 import time
 import uuid
 
-from gcs.protocol import PROTOCOL_VERSION, Event, Hello, Telemetry, encode
+from gcs.protocol import PROTOCOL_VERSION, Event, EventKind, Hello, Telemetry, encode
 from vehicle_agents import __version__
 from vehicle_agents.commands import CommandExecutor
 from vehicle_agents.config import AgentSettings, default_vehicle_id, hub_http_base
@@ -75,25 +75,20 @@ async def publish_telemetry(link: FcuLink, outbox: Outbox, rate_hz: float) -> No
 
 
 class EventSource:
-    """STATUSTEXT messages become numbered events for the hub's flight log."""
+    """STATUSTEXTs and mission progress become numbered events for the hub's flight log."""
 
     def __init__(self, outbox: Outbox) -> None:
         self._outbox = outbox
         self._seq = 0
 
     def on_message(self, message: MavMessage) -> None:
-        if message.get_type() != "STATUSTEXT":
-            return
-        text = str(message.text).rstrip("\x00")
-        self._outbox.put(
-            encode(
-                Event(
-                    seq=self._seq,
-                    time=time.time(),
-                    kind="statustext",
-                    severity=int(message.severity),
-                    text=text,
-                )
-            )
-        )
+        kind = message.get_type()
+        if kind == "STATUSTEXT":
+            self._emit("statustext", str(message.text).rstrip("\x00"), int(message.severity))
+        elif kind == "MISSION_ITEM_REACHED":
+            self._emit("mission", f"reached mission item {message.seq}", None)
+
+    def _emit(self, kind: EventKind, text: str, severity: int | None) -> None:
+        event = Event(seq=self._seq, time=time.time(), kind=kind, severity=severity, text=text)
+        self._outbox.put(encode(event))
         self._seq += 1

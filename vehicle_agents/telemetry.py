@@ -54,6 +54,10 @@ def snapshot(latest: Mapping[str, MavMessage], fcu_connected: bool) -> VehicleSt
         fields["gps_fix"] = int(gps.fix_type)
         if gps.satellites_visible != 255:
             fields["satellites"] = int(gps.satellites_visible)
+    if (current := latest.get("MISSION_CURRENT")) is not None:
+        fields["mission_current"] = int(current.seq)
+        total = int(getattr(current, "total", 0) or 0)
+        fields["mission_total"] = total if 0 < total < 65535 else None
     if (home := latest.get("HOME_POSITION")) is not None:
         fields["home_lat"] = home.latitude / 1e7
         fields["home_lon"] = home.longitude / 1e7

@@ -78,3 +78,7 @@ def test_mission_checked_uploaded_read_back_and_flown(
         state = watcher.state(VEHICLE)
         assert state["mode"] in ("RTL", "LAND", "AUTO")
         assert (state["alt_rel"] or 0) < 0.5
+        assert state["mission_current"] is not None
+        # Mission progress reached the flight log as events.
+        events = api.get("/api/v1/events", params={"vehicle_id": VEHICLE, "kind": "mission"})
+        assert any("reached mission item" in e["text"] for e in events.json()["events"])

@@ -101,6 +101,11 @@ export interface VehicleState {
   home_lat: number | null;
   home_lon: number | null;
   home_alt_msl: number | null;
+  /**
+   * the mission item being flown (MISSION_CURRENT)
+   */
+  mission_current: number | null;
+  mission_total: number | null;
 }
 /**
  * Something that happened, for the flight log: a STATUSTEXT, a failsafe, ...
@@ -115,7 +120,8 @@ export interface Event {
    * Unix time, seconds.
    */
   time: number;
-  kind: "statustext" | "mode" | "armed" | "disarmed" | "link_up" | "link_down" | "failsafe";
+  kind:
+    "statustext" | "mode" | "armed" | "disarmed" | "link_up" | "link_down" | "failsafe" | "mission";
   /**
    * MAV_SEVERITY: 0 emergency .. 7 debug
    */

@@ -86,6 +86,47 @@ class ParamClient:
         )
 
     async def read(self, name: str) -> CommandOutcome:
+        refusal = await self._known(name)
+        if refusal is not None:
+            return refusal
+        link = self.link
+        request = mavlink2.MAVLink_param_request_read_message(
+            link.target_system or 1, link.target_component, name.encode(), -1
+        )
+        echo = await self._exchange(name, request)
+        if echo is None:
+            return CommandOutcome(status="timeout", message=f"{name}: no PARAM_VALUE answer")
+        value = float(echo.param_value)
+        return CommandOutcome(
+            status="accepted", message=f"{name} = {value:g}", values={name: value}
+        )
+
+    async def write(self, name: str, value: float) -> CommandOutcome:
+        refusal = await self._known(name)
+        if refusal is not None:
+            return refusal
+        link = self.link
+        param_type = self.types.get(name, mavlink2.MAV_PARAM_TYPE_REAL32)
+        request = mavlink2.MAVLink_param_set_message(
+            link.target_system or 1, link.target_component, name.encode(), value, param_type
+        )
+        echo = await self._exchange(name, request)
+        if echo is None:
+            return CommandOutcome(status="timeout", message=f"{name}: no PARAM_VALUE echo")
+        stored = float(echo.param_value)
+        if math.isclose(stored, value, rel_tol=1e-6, abs_tol=1e-6):
+            return CommandOutcome(
+                status="accepted", message=f"{name} set to {stored:g}", values={name: stored}
+            )
+        reasons = [entry.text for entry in link.statustexts][-1:]
+        return CommandOutcome(
+            status="refused",
+            message=f"{name} kept at {stored:g}" + (f" ({reasons[0]})" if reasons else ""),
+            values={name: stored},
+        )
+
+    async def _known(self, name: str) -> CommandOutcome | None:
+        """None if the vehicle has ``name``; otherwise why the request goes no further."""
         if not self.complete:
             listing = await self.read_all()
             if listing.status != "accepted":
@@ -94,57 +135,16 @@ class ParamClient:
             return CommandOutcome(
                 status="refused", message=f"no parameter {name!r} on this vehicle"
             )
-        link = self.link
+        return None
+
+    async def _exchange(self, name: str, request: MavMessage) -> MavMessage | None:
+        """Send ``request`` until the vehicle answers with ``name``'s PARAM_VALUE."""
         for _ in range(self.timeouts.attempts):
-            link.send(
-                mavlink2.MAVLink_param_request_read_message(
-                    link.target_system or 1, link.target_component, name.encode(), -1
-                )
-            )
-            echo = await link.wait_for(
+            self.link.send(request)
+            echo = await self.link.wait_for(
                 lambda m: m.get_type() == "PARAM_VALUE" and _name(m) == name,
                 self.timeouts.echo_s,
             )
             if echo is not None:
-                return CommandOutcome(
-                    status="accepted",
-                    message=f"{name} = {echo.param_value:g}",
-                    values={name: float(echo.param_value)},
-                )
-        return CommandOutcome(status="timeout", message=f"{name}: no PARAM_VALUE answer")
-
-    async def write(self, name: str, value: float) -> CommandOutcome:
-        if not self.complete:
-            listing = await self.read_all()
-            if listing.status != "accepted":
-                return listing
-        if name not in self.values:
-            return CommandOutcome(
-                status="refused", message=f"no parameter {name!r} on this vehicle"
-            )
-        link = self.link
-        param_type = self.types.get(name, mavlink2.MAV_PARAM_TYPE_REAL32)
-        for _ in range(self.timeouts.attempts):
-            link.send(
-                mavlink2.MAVLink_param_set_message(
-                    link.target_system or 1, link.target_component, name.encode(), value, param_type
-                )
-            )
-            echo = await link.wait_for(
-                lambda m: m.get_type() == "PARAM_VALUE" and _name(m) == name,
-                self.timeouts.echo_s,
-            )
-            if echo is None:
-                continue
-            stored = float(echo.param_value)
-            if math.isclose(stored, value, rel_tol=1e-6, abs_tol=1e-6):
-                return CommandOutcome(
-                    status="accepted", message=f"{name} set to {stored:g}", values={name: stored}
-                )
-            reasons = [e.text for e in link.statustexts][-1:]
-            return CommandOutcome(
-                status="refused",
-                message=f"{name} kept at {stored:g}" + (f" ({reasons[0]})" if reasons else ""),
-                values={name: stored},
-            )
-        return CommandOutcome(status="timeout", message=f"{name}: no PARAM_VALUE echo")
+                return echo
+        return None

@@ -11,8 +11,7 @@ from pydantic import BaseModel, Field
 from backend.api.deps import HubDep
 from backend.api.security import CurrentPrincipal, SecuredRouter, client_address, requires
 from backend.auth.policy import Permission
-from backend.errors import VehicleRefused
-from backend.fleet.command_service import execute_command
+from backend.fleet.command_service import execute_expecting_acceptance
 from gcs.protocol import (
     Command,
     CommandOutcome,
@@ -55,11 +54,9 @@ async def _run(
     command: Command,
     override_reason: str | None = None,
 ) -> MissionResult:
-    outcome = await execute_command(
+    outcome = await execute_expecting_acceptance(
         hub, principal, client_address(request), vehicle_id, command, override_reason
     )
-    if outcome.status != "accepted":
-        raise VehicleRefused(outcome.message)
     return MissionResult(vehicle_id=vehicle_id, outcome=outcome, items=outcome.items)
 
 

@@ -10,8 +10,7 @@ from pydantic import BaseModel
 from backend.api.deps import HubDep
 from backend.api.security import CurrentPrincipal, SecuredRouter, client_address, requires
 from backend.auth.policy import Permission
-from backend.errors import VehicleRefused
-from backend.fleet.command_service import execute_command
+from backend.fleet.command_service import execute_expecting_acceptance
 from gcs.protocol import (
     Command,
     ParamGetCommand,
@@ -39,10 +38,10 @@ class ParamUpdate(BaseModel):
 async def _ask(
     hub: HubDep, request: Request, principal: CurrentPrincipal, vehicle_id: str, command: Command
 ) -> ParamValues:
-    outcome = await execute_command(hub, principal, client_address(request), vehicle_id, command)
-    if outcome.status != "accepted" or outcome.values is None:
-        raise VehicleRefused(outcome.message)
-    return ParamValues(vehicle_id=vehicle_id, values=outcome.values)
+    outcome = await execute_expecting_acceptance(
+        hub, principal, client_address(request), vehicle_id, command
+    )
+    return ParamValues(vehicle_id=vehicle_id, values=outcome.values or {})
 
 
 @router.get("", response_model=ParamValues, openapi_extra=requires(Permission.READ))

@@ -12,7 +12,14 @@ from sqlalchemy.exc import SQLAlchemyError
 
 from backend.audit import AuditEntry
 from backend.auth.policy import Permission, Principal
-from backend.errors import CommandTimedOut, Forbidden, GcsError, SafetyViolation, VehicleOffline
+from backend.errors import (
+    CommandTimedOut,
+    Forbidden,
+    GcsError,
+    SafetyViolation,
+    VehicleOffline,
+    VehicleRefused,
+)
 from backend.hub import Hub
 from gcs.protocol import Command, CommandOutcome
 
@@ -75,6 +82,22 @@ async def execute_command(
         log.error(
             "could not record %s to %s (%s): %s", command.name, vehicle_id, outcome.message, error
         )
+    return outcome
+
+
+async def execute_expecting_acceptance(
+    hub: Hub,
+    principal: Principal,
+    source: str,
+    vehicle_id: str,
+    command: Command,
+    override_reason: str | None = None,
+) -> CommandOutcome:
+    """For routes that return what the vehicle gave back (parameters, a mission): an
+    answer other than "accepted" becomes VehicleRefused (409) with its reason."""
+    outcome = await execute_command(hub, principal, source, vehicle_id, command, override_reason)
+    if outcome.status != "accepted":
+        raise VehicleRefused(outcome.message)
     return outcome
 
 

@@ -6,7 +6,7 @@ import asyncio
 import re
 import time
 from collections.abc import Iterator
-from datetime import UTC, datetime
+from datetime import datetime
 from pathlib import Path as FilePath
 from typing import Annotated, Any, Literal
 
@@ -17,6 +17,7 @@ from pydantic import BaseModel, ConfigDict
 from backend.api.deps import HubDep
 from backend.api.schemas import Sample
 from backend.api.security import SecuredRouter, requires
+from backend.api.time_ranges import optional_time_range, time_range
 from backend.auth.policy import Permission
 from backend.errors import InvalidRequest
 from backend.exports import (
@@ -133,35 +134,6 @@ class Metrics(BaseModel):
     connected_agents: int
 
 
-def _range(start: datetime | None, end: datetime | None, span_s: float) -> tuple[float, float]:
-    end_at = _timestamp(end, "end") if end else time.time()
-    start_at = _timestamp(start, "start") if start else end_at - span_s
-    if start_at > end_at:
-        raise InvalidRequest("start", f"start ({start_at:.3f}) is after end ({end_at:.3f})")
-    return start_at, end_at
-
-
-def _optional_range(
-    start: datetime | None, end: datetime | None
-) -> tuple[float | None, float | None]:
-    start_at = _timestamp(start, "start") if start else None
-    end_at = _timestamp(end, "end") if end else None
-    if start_at is not None and end_at is not None and start_at > end_at:
-        raise InvalidRequest("start", f"start ({start_at:.3f}) is after end ({end_at:.3f})")
-    return start_at, end_at
-
-
-def _aware(moment: datetime) -> datetime:
-    return moment if moment.tzinfo else moment.replace(tzinfo=UTC)
-
-
-def _timestamp(moment: datetime, field: str) -> float:
-    try:
-        return _aware(moment).timestamp()
-    except (OverflowError, ValueError, OSError):
-        raise InvalidRequest(field, f"{field} {moment} is out of range") from None
-
-
 def _next(rows: list[Any], limit: int) -> int | None:
     return int(rows[-1].id) if len(rows) == limit else None
 
@@ -178,7 +150,7 @@ async def telemetry_series(
     """Telemetry of one vehicle or the fleet over a range, at most ``points`` samples per
     vehicle, keeping the true minimum and maximum of ``metric`` (a chart shows the real
     extremes, not every n-th row)."""
-    start_at, end_at = _range(start, end, 3600)
+    start_at, end_at = time_range(start, end, 3600)
     if end_at - start_at > MAX_SERIES_SPAN_S:
         raise InvalidRequest(
             "start", f"the range is over {MAX_SERIES_SPAN_S / 86400:.0f} days; ask for less"
@@ -324,7 +296,7 @@ async def list_events(
     """STATUSTEXTs, mode changes, arming, failsafes and link changes, newest first."""
     if vehicle_id is not None:
         hub.registry.get(vehicle_id)
-    start_at, end_at = _optional_range(start, end)
+    start_at, end_at = optional_time_range(start, end)
     rows = list(
         await asyncio.to_thread(
             hub.logbook.events, vehicle_id, kind, start_at, end_at, before_id, limit
@@ -348,7 +320,7 @@ async def list_commands(
     """Commands sent, who sent them and what the vehicle answered, newest first."""
     if vehicle_id is not None:
         hub.registry.get(vehicle_id)
-    start_at, end_at = _optional_range(start, end)
+    start_at, end_at = optional_time_range(start, end)
     rows = list(
         await asyncio.to_thread(
             hub.logbook.commands, vehicle_id, actor, start_at, end_at, before_id, limit

@@ -38,12 +38,19 @@ def client_address(connection: HTTPConnection) -> str:
     return connection.client.host if connection.client else "unknown"
 
 
+def bearer_token(header: str | None) -> str | None:
+    """The token of an ``Authorization: Bearer <token>`` header, if that is what it is."""
+    if header is None:
+        return None
+    scheme, _, token = header.partition(" ")
+    return token.strip() if scheme.lower() == "bearer" and token.strip() else None
+
+
 def presented_token(connection: HTTPConnection) -> str | None:
     """A bearer token from the Authorization header, else the dashboard's session cookie."""
     header = connection.headers.get("authorization")
     if header:
-        scheme, _, token = header.partition(" ")
-        return token.strip() if scheme.lower() == "bearer" and token.strip() else None
+        return bearer_token(header)
     return connection.cookies.get(SESSION_COOKIE)
 
 

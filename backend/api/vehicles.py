@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import asyncio
-from datetime import UTC, datetime, timedelta
+from datetime import datetime
 from typing import Annotated
 
 from fastapi import Body, Path, Query, Request
@@ -11,10 +11,8 @@ from fastapi import Body, Path, Query, Request
 from backend.api.deps import HubDep
 from backend.api.schemas import CommandResponse, TelemetryPage, TelemetrySample
 from backend.api.security import CurrentPrincipal, SecuredRouter, client_address, requires
+from backend.api.time_ranges import time_range
 from backend.auth.policy import Permission
-from backend.errors import (
-    InvalidRequest,
-)
 from backend.fleet.command_service import execute_command
 from gcs.protocol import Command, VehicleSummary
 
@@ -22,6 +20,7 @@ router = SecuredRouter(prefix="/vehicles", tags=["vehicles"])
 
 VehicleIdPath = Annotated[str, Path(description="The vehicle's identity", max_length=64)]
 MAX_TELEMETRY_PAGE = 10_000
+DEFAULT_HISTORY_S = 600.0
 
 
 @router.get("", response_model=list[VehicleSummary], openapi_extra=requires(Permission.READ))
@@ -94,28 +93,15 @@ async def telemetry_history(
 ) -> TelemetryPage:
     """Stored telemetry samples in a time range, oldest first."""
     hub.registry.get(vehicle_id)
-    try:
-        end_at = _aware(end) if end else datetime.now(UTC)
-        start_at = _aware(start) if start else end_at - timedelta(minutes=10)
-        span = (start_at.timestamp(), end_at.timestamp())
-    except (OverflowError, ValueError, OSError):
-        raise InvalidRequest("start", "start or end is out of range") from None
-    if start_at > end_at:
-        raise InvalidRequest(
-            "start", f"start ({start_at.isoformat()}) is after end ({end_at.isoformat()})"
-        )
+    start_at, end_at = time_range(start, end, DEFAULT_HISTORY_S)
     rows = await asyncio.to_thread(
-        hub.repository.telemetry, vehicle_id, span[0], span[1], limit + 1
+        hub.repository.telemetry, vehicle_id, start_at, end_at, limit + 1
     )
     return TelemetryPage(
         vehicle_id=vehicle_id,
-        start=start_at.timestamp(),
-        end=end_at.timestamp(),
+        start=start_at,
+        end=end_at,
         limit=limit,
         samples=[TelemetrySample.model_validate(row) for row in rows[:limit]],
         truncated=len(rows) > limit,
     )
-
-
-def _aware(moment: datetime) -> datetime:
-    return moment if moment.tzinfo else moment.replace(tzinfo=UTC)

@@ -8,6 +8,7 @@ import time
 
 from starlette.websockets import WebSocket, WebSocketDisconnect
 
+from backend.api.security import bearer_token
 from backend.auth.policy import AGENT_MESSAGE_PERMISSIONS, Principal, authorize_message
 from backend.errors import Forbidden
 from backend.fleet.commands import AgentChannel
@@ -32,13 +33,6 @@ from gcs.protocol import (
 log = logging.getLogger(__name__)
 
 HELLO_TIMEOUT_S = 10.0
-
-
-def _bearer_token(header: str | None) -> str | None:
-    if header is None:
-        return None
-    scheme, _, token = header.partition(" ")
-    return token.strip() if scheme.lower() == "bearer" and token.strip() else None
 
 
 class AgentSession(PeerConnection):
@@ -71,7 +65,7 @@ class AgentSession(PeerConnection):
             pass
 
     async def _authenticate(self) -> Principal | None:
-        token = _bearer_token(self.websocket.headers.get("authorization"))
+        token = bearer_token(self.websocket.headers.get("authorization"))
         principal = None
         if token is not None:
             principal = await asyncio.to_thread(self.hub.accounts.resolve_agent_token, token)

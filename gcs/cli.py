@@ -81,6 +81,10 @@ def _agent(args: argparse.Namespace) -> int:
         "vehicle_id": args.vehicle_id,
         "telemetry_rate_hz": args.telemetry_rate,
         "tlog_dir": args.tlog_dir,
+        "outbox_dir": args.outbox_dir,
+        "hub_failsafe_action": args.hub_failsafe,
+        "hub_failsafe_timeout_s": args.hub_failsafe_timeout,
+        "mavlink_forward": args.mavlink_forward,
     }
     settings = load_agent_settings(overrides, args.config)
     return run_until_signalled(run_agent(settings))
@@ -154,6 +158,23 @@ def build_parser() -> argparse.ArgumentParser:
     agent.add_argument("--telemetry-rate", type=float, help="snapshots per second (10)")
     agent.add_argument(
         "--tlog-dir", type=Path, help="record an onboard .tlog per flight; upload after landing"
+    )
+    agent.add_argument(
+        "--outbox-dir", type=Path, help="keep unsent telemetry on disk here (survives outages)"
+    )
+    agent.add_argument(
+        "--hub-failsafe",
+        choices=["continue", "hold", "rtl"],
+        help="action when the hub link is lost (continue)",
+    )
+    agent.add_argument(
+        "--hub-failsafe-timeout", type=float, help="seconds without the hub before acting (10)"
+    )
+    agent.add_argument(
+        "--mavlink-forward",
+        action="append",
+        metavar="ENDPOINT",
+        help="MAVLink endpoint for a third-party GCS (repeatable), e.g. udpout:10.0.0.5:14550",
     )
 
     commands.add_parser(

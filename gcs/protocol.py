@@ -7,8 +7,11 @@ message names its ``type``. The agent announces ``PROTOCOL_VERSION`` in its hell
 the hub refuses a version it does not speak.
 
 Delivery rules per message type (the realtime path honours them):
-- ``telemetry`` and ``event``: at least once, ordered per vehicle. Each carries a per-vehicle
-  ``(stream_id, seq)``; the hub drops duplicates.
+- ``telemetry`` and ``event``: exactly once in the store. Each carries a per-vehicle
+  ``(stream_id, seq)``, counted separately per kind. The agent keeps every frame (on disk
+  while the hub is away) until an ``ack`` says it is committed, and replays the rest on
+  reconnect; the hub drops duplicates, asks for gaps with ``resend``, and the agent answers
+  ``unavailable`` for frames its bounded outbox had to drop.
 - ``vehicle`` updates to clients: coalesced; a newer state replaces an unsent one.
 - ``command`` / ``command_result``: request/response, correlated by ``request_id``.
 """
@@ -20,7 +23,7 @@ import sys
 from enum import IntEnum
 from typing import Annotated, Any, Literal, TypeAlias, TypeVar
 
-from pydantic import BaseModel, ConfigDict, Field, TypeAdapter, ValidationError
+from pydantic import BaseModel, ConfigDict, Field, TypeAdapter, ValidationError, model_validator
 
 PROTOCOL_VERSION = 1
 # Telemetry frames are a few hundred bytes; 64 KiB leaves room for later scan data
@@ -33,6 +36,7 @@ CLIENT_WS_PATH = "/api/v1/ws"
 T = TypeVar("T")
 
 VehicleId = Annotated[str, Field(pattern=r"^[A-Za-z0-9_.-]{1,64}$")]
+StreamId = Annotated[str, Field(min_length=1, max_length=64)]
 
 
 class CloseCode(IntEnum):
@@ -96,6 +100,43 @@ class GotoCommand(Message):
     lat: float = Field(ge=-90, le=90)
     lon: float = Field(ge=-180, le=180)
     altitude: float = Field(gt=0.5, le=500, description="Metres above home.")
+
+
+class HoldCommand(Message):
+    """Stop and hold position (the vehicle type's loiter/hold mode), never blocked."""
+
+    name: Literal["hold"] = "hold"
+
+
+class ChangeSpeedCommand(Message):
+    name: Literal["change_speed"] = "change_speed"
+    speed: float = Field(gt=0, le=50, description="m/s")
+    speed_type: Literal["ground", "air"] = "ground"
+
+
+class SetHomeCommand(Message):
+    """Set home (the RTL destination) to the vehicle's position, or to a given point."""
+
+    name: Literal["set_home"] = "set_home"
+    use_current: bool = True
+    lat: float | None = Field(default=None, ge=-90, le=90)
+    lon: float | None = Field(default=None, ge=-180, le=180)
+    alt_msl: float | None = Field(default=None, ge=-1000, le=10000, description="metres AMSL")
+
+    @model_validator(mode="after")
+    def _point_given(self) -> SetHomeCommand:
+        given = [self.lat is not None, self.lon is not None, self.alt_msl is not None]
+        if self.use_current and any(given):
+            raise ValueError("give either use_current or lat/lon/alt_msl, not both")
+        if not self.use_current and not all(given):
+            raise ValueError("lat, lon and alt_msl are required when use_current is false")
+        return self
+
+
+class RebootCommand(Message):
+    """Reboot the flight controller (autopilots refuse this while armed)."""
+
+    name: Literal["reboot"] = "reboot"
 
 
 ParamName = Annotated[str, Field(pattern=r"^[A-Z0-9_]{1,16}$", description="e.g. WPNAV_SPEED")]
@@ -163,6 +204,10 @@ Command = Annotated[
     | ReturnToLaunchCommand
     | SetModeCommand
     | GotoCommand
+    | HoldCommand
+    | ChangeSpeedCommand
+    | SetHomeCommand
+    | RebootCommand
     | ParamListCommand
     | ParamGetCommand
     | ParamSetCommand
@@ -227,6 +272,18 @@ class VehicleState(Message):
         default=None, description="the mission item being flown (MISSION_CURRENT)"
     )
     mission_total: int | None = None
+    position_source: str | None = Field(
+        default=None,
+        max_length=32,
+        description="the position source in use, e.g. GPS_RAW_INT or GPS2_RAW (RTK)",
+    )
+    fcu_receive_errors: int = Field(
+        default=0, ge=0, description="garbage bytes and bad frames skipped on the FCU link"
+    )
+    outbox_pending: int = Field(default=0, ge=0, description="frames not yet stored by the hub")
+    outbox_dropped: int = Field(
+        default=0, ge=0, description="frames the agent dropped because its outbox was full"
+    )
 
 
 # ---------------------------------------------------------------------------
@@ -246,13 +303,21 @@ class Hello(Message):
     modes: list[str] = Field(default_factory=list, description="Mode names set_mode accepts.")
     capabilities: list[str] = Field(default_factory=list)
     agent_version: str
-    stream_id: str = Field(
-        min_length=1, max_length=64, description="Names this agent run's sequence counter."
-    )
+    stream_id: StreamId = Field(description="Names this agent run's sequence counters.")
+
+
+ReplayedStream = Annotated[
+    StreamId | None,
+    Field(
+        default=None,
+        description="Set only on a frame replayed from an earlier agent run: that run's stream.",
+    ),
+]
 
 
 class Telemetry(Message):
     type: Literal["telemetry"] = "telemetry"
+    stream_id: ReplayedStream = None
     seq: int = Field(ge=0, le=MAX_SEQ)
     time: float = Field(ge=0, le=MAX_UNIX_TIME, description="Unix time of the snapshot, seconds.")
     state: VehicleState
@@ -270,6 +335,7 @@ class Event(Message):
     with their own sequence numbers."""
 
     type: Literal["event"] = "event"
+    stream_id: ReplayedStream = None
     seq: int = Field(ge=0, le=MAX_SEQ)
     time: float = Field(ge=0, le=MAX_UNIX_TIME, description="Unix time, seconds.")
     kind: EventKind
@@ -277,6 +343,21 @@ class Event(Message):
         default=None, ge=0, le=7, description="MAV_SEVERITY: 0 emergency .. 7 debug"
     )
     text: str = Field(max_length=500)
+
+
+SequencedKind = Literal["telemetry", "event"]
+
+
+class Unavailable(Message):
+    """The agent's answer to a resend it cannot serve: those frames were dropped when its
+    outbox was full. The hub records the loss and stops waiting for them."""
+
+    type: Literal["unavailable"] = "unavailable"
+    stream_id: StreamId
+    kind: SequencedKind
+    first_seq: int = Field(ge=0, le=MAX_SEQ)
+    last_seq: int = Field(ge=0, le=MAX_SEQ)
+    reason: str = Field(max_length=200)
 
 
 class CommandResult(Message):
@@ -296,6 +377,26 @@ class CommandRequest(Message):
     request_id: str
     command: Command
     timeout_s: float = Field(gt=0, description="How long the agent may try before giving up.")
+
+
+class Ack(Message):
+    """Everything up to these sequence numbers of the stream is stored; the agent may
+    forget it. Sent after the database commit, never on receipt."""
+
+    type: Literal["ack"] = "ack"
+    stream_id: StreamId
+    telemetry_seq: int | None = Field(default=None, ge=0, le=MAX_SEQ)
+    event_seq: int | None = Field(default=None, ge=0, le=MAX_SEQ)
+
+
+class Resend(Message):
+    """The hub saw a gap in a stream: send these frames again (or say they are gone)."""
+
+    type: Literal["resend"] = "resend"
+    stream_id: StreamId
+    kind: SequencedKind
+    first_seq: int = Field(ge=0, le=MAX_SEQ)
+    last_seq: int = Field(ge=0, le=MAX_SEQ)
 
 
 class ErrorReply(Message):
@@ -344,10 +445,10 @@ class Pong(Message):
 
 
 AgentToHub: TypeAlias = Annotated[
-    Hello | Telemetry | Event | CommandResult, Field(discriminator="type")
+    Hello | Telemetry | Event | CommandResult | Unavailable, Field(discriminator="type")
 ]
 HubToAgent: TypeAlias = Annotated[
-    Welcome | CommandRequest | ErrorReply, Field(discriminator="type")
+    Welcome | CommandRequest | Ack | Resend | ErrorReply, Field(discriminator="type")
 ]
 ClientToHub: TypeAlias = Annotated[Ping, Field(discriminator="type")]
 HubToClient: TypeAlias = Annotated[

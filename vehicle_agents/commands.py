@@ -16,10 +16,12 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from gcs.protocol import (
     ArmCommand,
+    ChangeSpeedCommand,
     Command,
     CommandOutcome,
     DisarmCommand,
     GotoCommand,
+    HoldCommand,
     LandCommand,
     MissionClearCommand,
     MissionDownloadCommand,
@@ -28,7 +30,9 @@ from gcs.protocol import (
     ParamGetCommand,
     ParamListCommand,
     ParamSetCommand,
+    RebootCommand,
     ReturnToLaunchCommand,
+    SetHomeCommand,
     SetModeCommand,
     TakeoffCommand,
 )
@@ -107,6 +111,21 @@ class CommandExecutor:
                 return await self._set_mode(mode)
             case GotoCommand(lat=lat, lon=lon, altitude=altitude):
                 return await self._goto(lat, lon, altitude)
+            case HoldCommand():
+                return await self._hold()
+            case ChangeSpeedCommand(speed=speed, speed_type=speed_type):
+                # param1: 0 airspeed, 1 ground speed; param3 -1 leaves the throttle alone.
+                kind = 1 if speed_type == "ground" else 0
+                return await self.command_long(mavlink2.MAV_CMD_DO_CHANGE_SPEED, [kind, speed, -1])
+            case SetHomeCommand(use_current=True):
+                return await self.command_long(mavlink2.MAV_CMD_DO_SET_HOME, [1])
+            case SetHomeCommand(lat=lat, lon=lon, alt_msl=alt_msl):
+                assert lat is not None and lon is not None and alt_msl is not None
+                return await self.command_long(
+                    mavlink2.MAV_CMD_DO_SET_HOME, [0, 0, 0, 0, lat, lon, alt_msl]
+                )
+            case RebootCommand():
+                return await self.command_long(mavlink2.MAV_CMD_PREFLIGHT_REBOOT_SHUTDOWN, [1])
             case ParamListCommand():
                 return await self.params.read_all()
             case ParamGetCommand(param=name):
@@ -136,6 +155,13 @@ class CommandExecutor:
                 await self.command_long(mavlink2.MAV_CMD_COMPONENT_ARM_DISARM, [1]), "arm"
             )
         return await self.command_long(mavlink2.MAV_CMD_NAV_TAKEOFF, [0, 0, 0, 0, 0, 0, altitude])
+
+    async def _hold(self) -> CommandOutcome:
+        modes = self.link.modes
+        hold = modes.hold_mode if modes else None
+        if hold is None:
+            return CommandOutcome(status="refused", message="vehicle has no hold mode")
+        return await self._set_mode(hold)
 
     async def _set_mode(self, mode: str) -> CommandOutcome:
         modes = self.link.modes

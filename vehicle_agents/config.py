@@ -6,7 +6,7 @@ from __future__ import annotations
 import os
 import tomllib
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal
 from urllib.parse import urlsplit, urlunsplit
 
 from pydantic import Field, SecretStr, field_validator
@@ -35,7 +35,31 @@ class AgentSettings(BaseSettings):
         default=None, description="keep an onboard .tlog per flight here, upload after landing"
     )
     outbox_limit: int = Field(
-        default=6000, ge=10, description="telemetry snapshots kept while the hub is unreachable"
+        default=36000,
+        ge=10,
+        description="frames kept until the hub stores them (36,000 = 1 h of 10 Hz telemetry); "
+        "when full, the oldest are dropped and counted",
+    )
+    outbox_dir: Path | None = Field(
+        default=None,
+        description="keep the outbox here while the hub is unreachable, so it survives "
+        "outages and agent restarts; without it the outbox lives in memory only",
+    )
+    hub_failsafe_action: Literal["continue", "hold", "rtl"] = Field(
+        default="continue",
+        description="what the vehicle does when the hub link has been lost for "
+        "hub_failsafe_timeout_s (the flight controller's own failsafes still apply)",
+    )
+    hub_failsafe_timeout_s: float = Field(default=10.0, gt=0, le=3600)
+    mavlink_forward: list[str] = Field(
+        default_factory=list,
+        description="MAVLink endpoints for third-party GCSs, e.g. udpout:10.0.0.5:14550 or "
+        "udpin:0.0.0.0:14551",
+    )
+    stream_rates_hz: dict[str, float] = Field(
+        default_factory=dict,
+        description="extra or changed MAVLink message rates to request, e.g. "
+        "{ATTITUDE = 10}; merged over the agent's defaults",
     )
 
     @field_validator("hub")

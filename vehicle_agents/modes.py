@@ -57,6 +57,16 @@ class ModeTable:
         return None
 
 
+    @property
+    def hold_mode(self) -> str | None:
+        """Where "stop here" lives: Copter's BRAKE stops hardest (QGroundControl's pause),
+        Rover HOLD, Plane LOITER, PX4 AUTO.LOITER ("Hold")."""
+        for candidate in ("BRAKE", "HOLD", "LOITER", "AUTO.LOITER"):
+            if candidate in self.settings:
+                return candidate
+        return None
+
+
 def autopilot_name(autopilot: int) -> str:
     return _AUTOPILOT_NAMES.get(autopilot, "generic")
 

@@ -14,8 +14,8 @@
  * Any frame of protocol version 1, in either direction.
  */
 export type AnyMessage = AgentToHub | HubToAgent | ClientToHub | HubToClient;
-export type AgentToHub = Hello | Telemetry | Event | CommandResult;
-export type HubToAgent = Welcome | CommandRequest | ErrorReply;
+export type AgentToHub = Hello | Telemetry | Event | CommandResult | Unavailable;
+export type HubToAgent = Welcome | CommandRequest | Ack | Resend | ErrorReply;
 export type ClientToHub = Ping;
 export type HubToClient = FleetSnapshot | VehicleUpdate | Pong | ErrorReply;
 
@@ -42,12 +42,16 @@ export interface Hello {
   capabilities?: string[];
   agent_version: string;
   /**
-   * Names this agent run's sequence counter.
+   * Names this agent run's sequence counters.
    */
   stream_id: string;
 }
 export interface Telemetry {
   type: "telemetry";
+  /**
+   * Set only on a frame replayed from an earlier agent run: that run's stream.
+   */
+  stream_id: string | null;
   seq: number;
   /**
    * Unix time of the snapshot, seconds.
@@ -106,6 +110,22 @@ export interface VehicleState {
    */
   mission_current: number | null;
   mission_total: number | null;
+  /**
+   * the position source in use, e.g. GPS_RAW_INT or GPS2_RAW (RTK)
+   */
+  position_source: string | null;
+  /**
+   * garbage bytes and bad frames skipped on the FCU link
+   */
+  fcu_receive_errors: number;
+  /**
+   * frames not yet stored by the hub
+   */
+  outbox_pending: number;
+  /**
+   * frames the agent dropped because its outbox was full
+   */
+  outbox_dropped: number;
 }
 /**
  * Something that happened, for the flight log: a STATUSTEXT, a failsafe, ...
@@ -115,6 +135,10 @@ export interface VehicleState {
  */
 export interface Event {
   type: "event";
+  /**
+   * Set only on a frame replayed from an earlier agent run: that run's stream.
+   */
+  stream_id: string | null;
   seq: number;
   /**
    * Unix time, seconds.
@@ -178,6 +202,18 @@ export interface MissionItem {
   alt: number;
   autocontinue: boolean;
 }
+/**
+ * The agent's answer to a resend it cannot serve: those frames were dropped when its
+ * outbox was full. The hub records the loss and stops waiting for them.
+ */
+export interface Unavailable {
+  type: "unavailable";
+  stream_id: string;
+  kind: "telemetry" | "event";
+  first_seq: number;
+  last_seq: number;
+  reason: string;
+}
 export interface Welcome {
   type: "welcome";
   protocol: number;
@@ -194,6 +230,10 @@ export interface CommandRequest {
     | ReturnToLaunchCommand
     | SetModeCommand
     | GotoCommand
+    | HoldCommand
+    | ChangeSpeedCommand
+    | SetHomeCommand
+    | RebootCommand
     | ParamListCommand
     | ParamGetCommand
     | ParamSetCommand
@@ -249,6 +289,39 @@ export interface GotoCommand {
   altitude: number;
 }
 /**
+ * Stop and hold position (the vehicle type's loiter/hold mode), never blocked.
+ */
+export interface HoldCommand {
+  name: "hold";
+}
+export interface ChangeSpeedCommand {
+  name: "change_speed";
+  /**
+   * m/s
+   */
+  speed: number;
+  speed_type: "ground" | "air";
+}
+/**
+ * Set home (the RTL destination) to the vehicle's position, or to a given point.
+ */
+export interface SetHomeCommand {
+  name: "set_home";
+  use_current: boolean;
+  lat: number | null;
+  lon: number | null;
+  /**
+   * metres AMSL
+   */
+  alt_msl: number | null;
+}
+/**
+ * Reboot the flight controller (autopilots refuse this while armed).
+ */
+export interface RebootCommand {
+  name: "reboot";
+}
+/**
  * Read every parameter (the flight controller's whole table).
  */
 export interface ParamListCommand {
@@ -295,6 +368,26 @@ export interface MissionSetCurrentCommand {
    * 1 is the first item after home
    */
   seq: number;
+}
+/**
+ * Everything up to these sequence numbers of the stream is stored; the agent may
+ * forget it. Sent after the database commit, never on receipt.
+ */
+export interface Ack {
+  type: "ack";
+  stream_id: string;
+  telemetry_seq: number | null;
+  event_seq: number | null;
+}
+/**
+ * The hub saw a gap in a stream: send these frames again (or say they are gone).
+ */
+export interface Resend {
+  type: "resend";
+  stream_id: string;
+  kind: "telemetry" | "event";
+  first_seq: number;
+  last_seq: number;
 }
 /**
  * Sent to a peer whose frame could not be used; the connection stays open.

@@ -25,6 +25,7 @@ from backend.storage.rails import RailsRepository
 from backend.storage.records import StoredEvent
 from backend.storage.repository import Repository
 from backend.storage.retention import RetentionPolicy
+from backend.storage.sequences import Gap, StreamKey
 from backend.storage.writer import StorageWriter
 from gcs.protocol import CloseCode
 
@@ -35,6 +36,10 @@ class AgentConnection(Protocol):
     token_id: int | None
 
     async def close(self, code: int, reason: str) -> None: ...
+
+    def acknowledge(self, key: StreamKey, seq: int) -> None: ...
+
+    def request_resend(self, gap: Gap) -> None: ...
 
 
 class ClientConnection(Protocol):
@@ -87,7 +92,7 @@ class Hub:
         log.info("hub store: %s", engine.url.render_as_string(hide_password=True))
         accounts = Accounts(engine)
         await asyncio.to_thread(_bootstrap_accounts, accounts, settings)
-        return cls(
+        hub = cls(
             settings=settings,
             engine=engine,
             repository=repository,
@@ -102,6 +107,8 @@ class Hub:
             command_limiter=RateLimiter(Limit(settings.commands_per_second, 1.0)),
             safety=SafetyGate(RailsRepository(engine), settings),
         )
+        writer.on_sequences = hub.deliver_sequence_news
+        return hub
 
     async def run(self) -> None:
         """The hub's long-running work; cancel it to stop (the writer flushes first)."""
@@ -111,6 +118,15 @@ class Hub:
                 tasks.create_task(self._apply_retention())
         finally:
             self.engine.dispose()
+
+    def deliver_sequence_news(self, acks: dict[StreamKey, int], gaps: list[Gap]) -> None:
+        """Tell each agent what is now stored and which of its frames never arrived."""
+        for key, seq in acks.items():
+            if (session := self.agent_sessions.get(key.vehicle_id)) is not None:
+                session.acknowledge(key, seq)
+        for gap in gaps:
+            if (session := self.agent_sessions.get(gap.key.vehicle_id)) is not None:
+                session.request_resend(gap)
 
     async def publish_state(self, record: VehicleRecord) -> None:
         await self.bus.publish(Topic.VEHICLE_STATE, record.id, record.summary())

@@ -12,6 +12,7 @@ from websockets.exceptions import ConnectionClosed, InvalidHandshake
 
 from gcs.protocol import (
     MAX_FRAME_BYTES,
+    Ack,
     CloseCode,
     Command,
     CommandOutcome,
@@ -20,6 +21,7 @@ from gcs.protocol import (
     ErrorReply,
     Hello,
     ProtocolError,
+    Resend,
     Welcome,
     decode,
     encode,
@@ -72,6 +74,8 @@ class HubLink:
         self._on_command = on_command
         self.timeouts = timeouts or HubTimeouts()
         self.connected = asyncio.Event()
+        self.disconnected = asyncio.Event()
+        self.disconnected.set()
         self._ever_welcomed = False
 
     async def run(self) -> None:
@@ -95,6 +99,7 @@ class HubLink:
                 log.warning("hub %s unreachable: %s", self.url, group.exceptions[0])
             finally:
                 self.connected.clear()
+                self.disconnected.set()
             if self._ever_welcomed:
                 backoff = self.timeouts.reconnect_initial_s
                 self._ever_welcomed = False
@@ -118,23 +123,31 @@ class HubLink:
             welcome = decode(hub_to_agent, reply)
             if not isinstance(welcome, Welcome):
                 raise HubRefused(f"expected welcome, got {welcome.type}")
-            log.info("connected to hub as %s", welcome.vehicle_id)
+            log.info(
+                "connected to hub as %s (%d frames to deliver)",
+                welcome.vehicle_id,
+                len(self._outbox),
+            )
             self.connected.set()
+            self.disconnected.clear()
             self._ever_welcomed = True
-            async with asyncio.TaskGroup() as tasks:
-                tasks.create_task(self._send_outbox(websocket))
-                try:
-                    async for frame in websocket:
-                        self._handle_frame(frame, websocket, tasks)
-                except ConnectionClosed:
-                    pass
-                raise HubClosed(websocket.close_code, websocket.close_reason or "")
+            self._outbox.link_up()
+            try:
+                async with asyncio.TaskGroup() as tasks:
+                    tasks.create_task(self._send_outbox(websocket))
+                    try:
+                        async for frame in websocket:
+                            self._handle_frame(frame, websocket, tasks)
+                    except ConnectionClosed:
+                        pass
+                    raise HubClosed(websocket.close_code, websocket.close_reason or "")
+            finally:
+                # Whatever was sent and not acknowledged goes again on the next link.
+                self._outbox.link_down()
 
     async def _send_outbox(self, websocket: ClientConnection) -> None:
         while True:
-            frame = await self._outbox.peek()
-            await websocket.send(frame)
-            self._outbox.pop()
+            await websocket.send(await self._outbox.next_frame())
 
     def _handle_frame(
         self, frame: str | bytes, websocket: ClientConnection, tasks: asyncio.TaskGroup
@@ -145,6 +158,17 @@ class HubLink:
             log.warning("unusable frame from hub: %s", error.message)
             return
         match message:
+            case Ack():
+                self._outbox.acknowledge(message)
+            case Resend():
+                for answer in self._outbox.resend(message):
+                    log.warning(
+                        "hub asked for %s %d-%d, which the outbox dropped",
+                        answer.kind,
+                        answer.first_seq,
+                        answer.last_seq,
+                    )
+                    tasks.create_task(websocket.send(encode(answer)))
             case CommandRequest():
                 tasks.create_task(self._run_command(message, websocket))
             case ErrorReply(code=code, message=text):

@@ -20,7 +20,8 @@ class VehicleRecord:
     connected: bool = False
     last_seen: float | None = None
     state: VehicleState | None = None
-    # Highest sequence number seen per agent stream: anything at or below is a duplicate.
+    # Highest telemetry number seen per agent stream: older samples do not move the
+    # live state backwards (storage has its own, gap-aware bookkeeping).
     last_seq: dict[str, int] = field(default_factory=dict)
 
     def summary(self) -> VehicleSummary:
@@ -87,17 +88,8 @@ class FleetRegistry:
         record.connected = False
         return record
 
-    def accept_event(self, vehicle_id: str, stream_id: str, seq: int) -> bool:
-        """False if this event was seen before (events count in their own sequence)."""
-        record = self.get(vehicle_id)
-        key = f"{stream_id}/events"
-        if seq <= record.last_seq.get(key, -1):
-            return False
-        record.last_seq[key] = seq
-        return True
-
     def apply(self, vehicle_id: str, stream_id: str, telemetry: Telemetry) -> bool:
-        """Take a sample into live state; False if it is a duplicate of one already seen."""
+        """Take a sample into live state; False if it is not newer than one already seen."""
         record = self.get(vehicle_id)
         if telemetry.seq <= record.last_seq.get(stream_id, -1):
             return False

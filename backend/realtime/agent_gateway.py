@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import logging
 import time
 
@@ -15,16 +16,20 @@ from backend.fleet.commands import AgentChannel
 from backend.hub import Hub
 from backend.realtime.bus import Topic
 from backend.realtime.frames import FrameTooLarge, PeerConnection
-from backend.storage.records import StoredEvent, TelemetryEnvelope
+from backend.storage.records import LostFrames, StoredEvent, TelemetryEnvelope
+from backend.storage.sequences import Gap, StreamKey
 from gcs.protocol import (
     PROTOCOL_VERSION,
+    Ack,
     CloseCode,
     CommandResult,
     ErrorReply,
     Event,
     Hello,
     ProtocolError,
+    Resend,
     Telemetry,
+    Unavailable,
     Welcome,
     agent_to_hub,
     decode,
@@ -40,6 +45,52 @@ class AgentSession(PeerConnection):
         super().__init__(websocket, hub.settings.max_frame_bytes, hub.settings.max_bad_frames)
         self.hub = hub
         self.token_id: int | None = None
+        # Acks (the newest per stream wins) and resend requests from the storage writer,
+        # sent by this session's own task so the writer never waits on a socket.
+        self._acks: dict[str, dict[str, int]] = {}
+        self._resends: list[Resend] = []
+        self._news = asyncio.Event()
+
+    def acknowledge(self, key: StreamKey, seq: int) -> None:
+        if seq >= 0:
+            self._acks.setdefault(key.stream_id, {})[key.kind] = seq
+            self._news.set()
+
+    def request_resend(self, gap: Gap) -> None:
+        log.info(
+            "asking %s for %s %d-%d of stream %s",
+            gap.key.vehicle_id,
+            gap.key.kind,
+            gap.first_seq,
+            gap.last_seq,
+            gap.key.stream_id,
+        )
+        self._resends.append(
+            Resend(
+                stream_id=gap.key.stream_id,
+                kind=gap.key.kind,
+                first_seq=gap.first_seq,
+                last_seq=gap.last_seq,
+            )
+        )
+        self._news.set()
+
+    async def _send_sequence_news(self) -> None:
+        while True:
+            await self._news.wait()
+            self._news.clear()
+            acks, self._acks = self._acks, {}
+            resends, self._resends = self._resends, []
+            for stream_id, by_kind in acks.items():
+                await self.send(
+                    Ack(
+                        stream_id=stream_id,
+                        telemetry_seq=by_kind.get("telemetry"),
+                        event_seq=by_kind.get("event"),
+                    )
+                )
+            for resend in resends:
+                await self.send(resend)
 
     async def serve(self) -> None:
         await self.websocket.accept()
@@ -127,8 +178,17 @@ class AgentSession(PeerConnection):
             await self.send(Welcome(vehicle_id=vehicle_id))
             await hub.store_event(vehicle_id, "link_up", f"agent connected from {self.peer}")
             await hub.publish_state(record)
-            while frame := await self.receive():
-                await self._handle_frame(hello, channel, frame)
+            # Not a TaskGroup: the receive loop's own exceptions (disconnect, oversized
+            # frame) must reach serve() as they are, not wrapped in a group.
+            news = asyncio.create_task(self._send_sequence_news())
+            try:
+                while frame := await self.receive():
+                    await self._handle_frame(hello, channel, frame)
+            finally:
+                news.cancel()
+                # The session is over; a send that failed on its way out changes nothing.
+                with contextlib.suppress(asyncio.CancelledError, Exception):
+                    await news
         finally:
             hub.dispatcher.detach(vehicle_id, channel)
             # A superseded session leaves the vehicle to its successor, still online.
@@ -149,17 +209,34 @@ class AgentSession(PeerConnection):
             case Telemetry():
                 await self._ingest(hello, message)
             case Event():
-                if self.hub.registry.accept_event(hello.vehicle_id, hello.stream_id, message.seq):
-                    stored = StoredEvent(
-                        hello.vehicle_id,
-                        hello.stream_id,
-                        message.seq,
-                        message.time,
-                        message.kind,
-                        message.severity,
-                        message.text,
-                    )
-                    await self.hub.bus.publish(Topic.STORAGE, hello.vehicle_id, stored)
+                stored = StoredEvent(
+                    hello.vehicle_id,
+                    message.stream_id or hello.stream_id,
+                    message.seq,
+                    message.time,
+                    message.kind,
+                    message.severity,
+                    message.text,
+                )
+                await self.hub.bus.publish(Topic.STORAGE, hello.vehicle_id, stored)
+            case Unavailable():
+                log.warning(
+                    "%s no longer has %s %d-%d: %s",
+                    hello.vehicle_id,
+                    message.kind,
+                    message.first_seq,
+                    message.last_seq,
+                    message.reason,
+                )
+                lost = LostFrames(
+                    hello.vehicle_id,
+                    message.stream_id,
+                    message.kind,
+                    message.first_seq,
+                    message.last_seq,
+                    message.reason,
+                )
+                await self.hub.bus.publish(Topic.STORAGE, hello.vehicle_id, lost)
             case CommandResult(request_id=request_id, outcome=outcome):
                 if not channel.resolve(request_id, outcome):
                     log.info(
@@ -172,9 +249,12 @@ class AgentSession(PeerConnection):
 
     async def _ingest(self, hello: Hello, telemetry: Telemetry) -> None:
         hub = self.hub
-        if not hub.registry.apply(hello.vehicle_id, hello.stream_id, telemetry):
-            return
-        envelope = TelemetryEnvelope(hello.vehicle_id, hello.stream_id, telemetry)
+        stream_id = telemetry.stream_id or hello.stream_id
+        envelope = TelemetryEnvelope(hello.vehicle_id, stream_id, telemetry)
         # Storage is reliable: if the writer is behind, this waits, and so does the agent.
+        # Replays go there too; the writer knows what it has stored.
         await hub.bus.publish(Topic.STORAGE, hello.vehicle_id, envelope)
-        await hub.publish_state(hub.registry.get(hello.vehicle_id))
+        if stream_id == hello.stream_id and hub.registry.apply(
+            hello.vehicle_id, stream_id, telemetry
+        ):
+            await hub.publish_state(hub.registry.get(hello.vehicle_id))

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Literal
 
 from gcs.protocol import Telemetry
 
@@ -27,4 +28,16 @@ class StoredEvent:
     text: str
 
 
-StoredRecord = TelemetryEnvelope | StoredEvent
+@dataclass(frozen=True)
+class LostFrames:
+    """Frames an agent said it no longer has (its bounded outbox dropped them)."""
+
+    vehicle_id: str
+    stream_id: str
+    kind: Literal["telemetry", "event"]
+    first_seq: int
+    last_seq: int
+    reason: str
+
+
+StoredRecord = TelemetryEnvelope | StoredEvent | LostFrames

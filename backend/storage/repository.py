@@ -83,6 +83,16 @@ class Repository:
         with transaction(self.engine, connection) as active:
             return len(active.execute(statement, [asdict(e) for e in events]).all())
 
+    def highest_seq(self, vehicle_id: str, stream_id: str, kind: str) -> int | None:
+        """The highest sequence number stored for an agent stream, of telemetry or events."""
+        row = TelemetryRow if kind == "telemetry" else EventRow
+        query = select(func.max(row.seq)).where(
+            row.vehicle_id == vehicle_id, row.stream_id == stream_id
+        )
+        with self.engine.connect() as connection:
+            found = connection.scalar(query)
+        return None if found is None else int(found)
+
     def count_telemetry(self, vehicle_id: str | None = None) -> int:
         query = select(func.count()).select_from(TelemetryRow)
         if vehicle_id is not None:

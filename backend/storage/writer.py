@@ -12,6 +12,7 @@ import asyncio
 import contextlib
 import logging
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 
 from sqlalchemy.exc import OperationalError, SQLAlchemyError
@@ -20,16 +21,23 @@ from sqlalchemy.exc import TimeoutError as PoolTimeout
 from backend.realtime.bus import ReliableSubscription
 from backend.storage.flights import FlightClosed, FlightOpened, FlightTracker
 from backend.storage.logbook import Logbook
-from backend.storage.records import StoredEvent, StoredRecord, TelemetryEnvelope
+from backend.storage.records import LostFrames, StoredEvent, StoredRecord, TelemetryEnvelope
 from backend.storage.repository import Repository
+from backend.storage.sequences import Gap, SequenceLedger, StreamKey
+
+# Told, after each commit, how far each touched agent stream is stored without a hole
+# (its ack) and which holes newly appeared (to ask the agent for).
+SequenceNews = Callable[[dict[StreamKey, int], list[Gap]], None]
 
 log = logging.getLogger(__name__)
 
 
 @dataclass
 class WriterStats:
-    written: int = 0  # telemetry samples stored (a re-sent one is counted, not duplicated)
+    written: int = 0  # telemetry samples stored
+    duplicates: int = 0  # frames received again (replays after a reconnect), not stored twice
     events_written: int = 0
+    lost: int = 0  # frames agents reported dropped from their full outboxes
     batches: int = 0
     retries: int = 0  # batches that had to wait for the database
     rejected: int = 0  # records the database refused outright (logged, set aside)
@@ -60,6 +68,11 @@ class StorageWriter:
         self._batch: list[StoredRecord] = []
         self._writing: asyncio.Future[None] | None = None
         self.tracker = FlightTracker(open_flights=logbook.open_flights())
+        self.sequences = SequenceLedger(
+            lambda key: repository.highest_seq(key.vehicle_id, key.stream_id, key.kind)
+        )
+        self.on_sequences: SequenceNews | None = None
+        self._news: tuple[dict[StreamKey, int], list[Gap]] | None = None
         self.stats = WriterStats()
 
     @property
@@ -123,6 +136,7 @@ class StorageWriter:
                     "batch of %d refused (%s); writing it record by record", len(self._batch), error
                 )
                 await asyncio.to_thread(self._write_one_by_one)
+            self._tell_sequence_news()
             if not self.stats.database_available:
                 log.info("database available again after %d retries", self.stats.retries)
             self.stats.database_available = True
@@ -131,16 +145,26 @@ class StorageWriter:
             return
 
     def _write(self) -> None:
-        """One batch in one transaction; the in-memory tracker changes only once it has
-        committed. Replayed samples are harmless: telemetry and events skip what is
-        stored, and a flight is identified by its vehicle and start time."""
+        """One batch in one transaction; the in-memory trackers change only once it has
+        committed. A frame stored before (a replay after a reconnect) is skipped; a
+        flight is identified by its vehicle and start time."""
         telemetry = [r for r in self._batch if isinstance(r, TelemetryEnvelope)]
         events = [r for r in self._batch if isinstance(r, StoredEvent)]
+        losses = [r for r in self._batch if isinstance(r, LostFrames)]
+        sequenced = [(_key(e), e.telemetry.seq) for e in telemetry]
+        sequenced += [(_key(e), e.seq) for e in events if e.seq is not None]
+        fresh = iter(self.sequences.fresh(sequenced))
+        new_telemetry = [e for e in telemetry if next(fresh)]
+        new_events = [e for e in events if e.seq is None or next(fresh)]
+        forward = self._moving_forward(new_telemetry)
+        loss_events = [_loss_event(loss) for loss in losses]
         tracker = self.tracker.copy()
         with self._repository.engine.begin() as connection:
-            self._repository.insert_telemetry(telemetry, connection)
-            plan = tracker.plan(telemetry)
-            events_written = self._repository.insert_events(events + plan.events, connection)
+            self._repository.insert_telemetry(new_telemetry, connection)
+            plan = tracker.plan(forward)
+            events_written = self._repository.insert_events(
+                new_events + plan.events + loss_events, connection
+            )
             for transition in plan.transitions:
                 match transition:
                     case FlightOpened(vehicle_id=vehicle, time=at):
@@ -153,9 +177,44 @@ class StorageWriter:
                         flight_id = tracker.open_flights.pop(vehicle)
                         self._logbook.close_flight(flight_id, at, connection)
         self.tracker = tracker
-        self.stats.written += len(telemetry)
+        stored = [(_key(e), e.telemetry.seq) for e in new_telemetry]
+        stored += [(_key(e), e.seq) for e in new_events if e.seq is not None]
+        gaps = self.sequences.record(stored)
+        for loss in losses:
+            self.sequences.give_up(_key(loss), loss.first_seq, loss.last_seq)
+        touched = {key for key, _ in sequenced} | {_key(loss) for loss in losses}
+        acks = {key: self.sequences.contiguous(key) for key in touched}
+        self._merge_news(acks, gaps)
+        self.stats.written += len(new_telemetry)
+        self.stats.duplicates += len(sequenced) - len(stored)
         self.stats.events_written += events_written
+        self.stats.lost += sum(loss.last_seq - loss.first_seq + 1 for loss in losses)
         self._batch = []
+
+    def _moving_forward(self, telemetry: list[TelemetryEnvelope]) -> list[TelemetryEnvelope]:
+        """The samples newer than anything stored of their stream, in order: the ones
+        flight detection follows (a gap filled late must not re-open an old flight)."""
+        newest: dict[StreamKey, int] = {}
+        forward = []
+        for envelope in telemetry:
+            key, seq = _key(envelope), envelope.telemetry.seq
+            if key not in newest:
+                newest[key] = self.sequences.tracker(key).highest
+            if seq > newest[key]:
+                newest[key] = seq
+                forward.append(envelope)
+        return forward
+
+    def _merge_news(self, acks: dict[StreamKey, int], gaps: list[Gap]) -> None:
+        if self._news is None:
+            self._news = ({}, [])
+        self._news[0].update(acks)
+        self._news[1].extend(gaps)
+
+    def _tell_sequence_news(self) -> None:
+        news, self._news = self._news, None
+        if news is not None and self.on_sequences is not None and (news[0] or news[1]):
+            self.on_sequences(*news)
 
     def _write_one_by_one(self) -> None:
         records, self._batch = self._batch, []
@@ -169,6 +228,16 @@ class StorageWriter:
                 self.stats.rejected += 1
                 log.error("record set aside, the database refuses it: %r (%s)", record, error)
                 self._batch = []
+                self._give_up_on(record)
+
+    def _give_up_on(self, record: StoredRecord) -> None:
+        """A record the database will never take must not hold its stream's acks back,
+        or the agent would keep it, and send it again, forever."""
+        match record:
+            case TelemetryEnvelope(telemetry=telemetry):
+                self.sequences.give_up(_key(record), telemetry.seq, telemetry.seq)
+            case StoredEvent(seq=seq) if seq is not None:
+                self.sequences.give_up(_key(record), seq, seq)
 
     def _flush_on_shutdown(self) -> None:
         """Store what was accepted: the batch in hand and everything still queued."""
@@ -182,3 +251,27 @@ class StorageWriter:
         count = len(self._batch)
         self._write()
         log.info("flushed %d records on shutdown", count)
+
+
+def _key(record: TelemetryEnvelope | StoredEvent | LostFrames) -> StreamKey:
+    match record:
+        case TelemetryEnvelope():
+            return StreamKey(record.vehicle_id, record.stream_id, "telemetry")
+        case StoredEvent():
+            return StreamKey(record.vehicle_id, record.stream_id, "event")
+        case LostFrames():
+            return StreamKey(record.vehicle_id, record.stream_id, record.kind)
+
+
+def _loss_event(loss: LostFrames) -> StoredEvent:
+    what = "telemetry samples" if loss.kind == "telemetry" else "events"
+    return StoredEvent(
+        loss.vehicle_id,
+        "hub",
+        None,
+        time.time(),
+        "data_lost",
+        4,  # MAV_SEVERITY_WARNING
+        f"{what} {loss.first_seq}-{loss.last_seq} of stream {loss.stream_id} never "
+        f"arrived: {loss.reason}",
+    )

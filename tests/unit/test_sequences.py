@@ -1,0 +1,52 @@
+"""The hub's per-stream bookkeeping: duplicates, gaps to ask for, and how far to ack."""
+
+from __future__ import annotations
+
+from backend.storage.sequences import SequenceLedger, SequenceTracker, StreamKey
+
+KEY = StreamKey("v1", "run", "telemetry")
+
+
+def test_in_order_numbers_advance_the_acknowledged_point() -> None:
+    tracker = SequenceTracker(contiguous=-1)
+    assert [tracker.add(seq) for seq in range(4)] == [None] * 4
+    assert tracker.contiguous == 3
+    assert tracker.holds(2)
+    assert not tracker.holds(4)
+
+
+def test_a_jump_opens_one_gap_and_filling_it_closes_it() -> None:
+    tracker = SequenceTracker(contiguous=4)
+    assert tracker.add(9) == (5, 8)
+    assert tracker.add(10) is None  # the same gap is not reported twice
+    assert tracker.contiguous == 4
+    for seq in (5, 6, 7, 8):
+        tracker.add(seq)
+    assert tracker.contiguous == 10
+    assert tracker.ahead == set()
+
+
+def test_giving_up_on_lost_numbers_lets_the_ack_move_on() -> None:
+    tracker = SequenceTracker(contiguous=4)
+    tracker.add(9)
+    tracker.give_up(5, 8)
+    assert tracker.contiguous == 9
+    # A loss report cannot move the ack past what was actually stored.
+    tracker.give_up(10, 1_000_000)
+    assert tracker.contiguous == 9
+
+
+def test_ledger_loads_a_stream_from_the_store_once_and_judges_a_batch() -> None:
+    loads: list[StreamKey] = []
+
+    def load(key: StreamKey) -> int | None:
+        loads.append(key)
+        return 7
+
+    ledger = SequenceLedger(load)
+    assert ledger.fresh([(KEY, 6), (KEY, 8), (KEY, 8), (KEY, 9)]) == [False, True, False, True]
+    assert ledger.contiguous(KEY) == 7  # judging changes nothing
+    gaps = ledger.record([(KEY, 8), (KEY, 11)])
+    assert [(gap.first_seq, gap.last_seq) for gap in gaps] == [(9, 10)]
+    assert ledger.contiguous(KEY) == 8
+    assert loads == [KEY]

@@ -1,0 +1,83 @@
+"""What the vehicle does when the hub has been out of reach for too long.
+
+The flight controller's own failsafes (RC loss, battery, geofence) still apply; this
+is the operator's choice for losing the ground station: carry on (a mission flies on
+without the hub), hold where it is, or come home. Whatever happened is reported as
+flight-log events, which reach the hub with the rest of the outbox once it is back.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+import time
+from collections.abc import Callable
+from typing import Literal
+
+from pymavlink.dialects.v20 import ardupilotmega as mavlink2
+
+from gcs.protocol import EventKind, HoldCommand, ReturnToLaunchCommand
+from vehicle_agents.commands import CommandExecutor
+from vehicle_agents.fcu_link import FcuLink
+
+log = logging.getLogger(__name__)
+
+FailsafeAction = Literal["continue", "hold", "rtl"]
+EmitEvent = Callable[[EventKind, str, int | None], None]
+
+
+class HubLinkFailsafe:
+    def __init__(
+        self,
+        connected: asyncio.Event,
+        disconnected: asyncio.Event,
+        executor: CommandExecutor,
+        link: FcuLink,
+        emit: EmitEvent,
+        action: FailsafeAction,
+        timeout_s: float,
+    ) -> None:
+        self._connected = connected
+        self._disconnected = disconnected
+        self._executor = executor
+        self._link = link
+        self._emit = emit
+        self.action = action
+        self.timeout_s = timeout_s
+
+    async def run(self) -> None:
+        while True:
+            await self._disconnected.wait()
+            lost_at = time.monotonic()
+            try:
+                async with asyncio.timeout(self.timeout_s):
+                    await self._connected.wait()
+                continue  # a blip, shorter than the timeout: nothing to do or report
+            except TimeoutError:
+                done = await self._act()
+            await self._connected.wait()
+            outage = time.monotonic() - lost_at
+            self._emit(
+                "failsafe",
+                f"hub link restored after {outage:.0f} s; on losing it the agent {done}",
+                mavlink2.MAV_SEVERITY_NOTICE,
+            )
+
+    async def _act(self) -> str:
+        """Carry out the configured action; what was done, in words for the log."""
+        lost_for = f"hub link lost for {self.timeout_s:g} s"
+        heartbeat = self._link.latest.get("HEARTBEAT")
+        armed = bool(heartbeat and heartbeat.base_mode & mavlink2.MAV_MODE_FLAG_SAFETY_ARMED)
+        if self.action == "continue":
+            done = "continued (configured action)"
+        elif not armed:
+            done = f"took no action ({self.action} configured, vehicle disarmed)"
+        else:
+            command = HoldCommand() if self.action == "hold" else ReturnToLaunchCommand()
+            outcome = await self._executor.execute(command)
+            verb = "commanded" if outcome.status == "accepted" else "could not command"
+            done = f"{verb} {self.action.upper()} ({outcome.message})"
+        log.warning("%s: %s", lost_for, done)
+        severity = mavlink2.MAV_SEVERITY_WARNING if armed else mavlink2.MAV_SEVERITY_NOTICE
+        self._emit("failsafe", f"{lost_for}: {done}", severity)
+        return done

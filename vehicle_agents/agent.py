@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import asyncio
 import logging
+import sqlite3
 import time
 import uuid
 
@@ -12,8 +13,9 @@ from vehicle_agents import __version__
 from vehicle_agents.commands import CommandExecutor
 from vehicle_agents.config import AgentSettings, default_vehicle_id, hub_http_base
 from vehicle_agents.fcu_link import FcuLink, MavMessage
+from vehicle_agents.hub_failsafe import HubLinkFailsafe
 from vehicle_agents.hub_link import HubLink
-from vehicle_agents.outbox import Outbox
+from vehicle_agents.outbox import Outbox, SpillFile
 from vehicle_agents.telemetry import snapshot
 from vehicle_agents.tlog import TlogRecorder
 from vehicle_agents.tlog_uploads import TlogUploader
@@ -25,7 +27,6 @@ CAPABILITIES = ["telemetry", "commands", "events"]
 
 async def run_agent(settings: AgentSettings) -> None:
     link = FcuLink(settings.fcu, source_system=settings.source_system)
-    outbox = Outbox(settings.outbox_limit)
     async with asyncio.TaskGroup() as tasks:
         tasks.create_task(link.run())
         log.info("waiting for a heartbeat from %s", settings.fcu)
@@ -44,6 +45,7 @@ async def run_agent(settings: AgentSettings) -> None:
             agent_version=__version__,
             stream_id=uuid.uuid4().hex[:16],
         )
+        outbox = open_outbox(settings, vehicle_id, hello.stream_id)
         events = EventSource(outbox)
         link.listeners.append(events.on_message)
         executor = CommandExecutor(link)
@@ -52,6 +54,16 @@ async def run_agent(settings: AgentSettings) -> None:
         )
         tasks.create_task(publish_telemetry(link, outbox, settings.telemetry_rate_hz))
         tasks.create_task(hub.run())
+        failsafe = HubLinkFailsafe(
+            hub.connected,
+            hub.disconnected,
+            executor,
+            link,
+            events.emit,
+            settings.hub_failsafe_action,
+            settings.hub_failsafe_timeout_s,
+        )
+        tasks.create_task(failsafe.run())
         if settings.tlog_dir is not None:
             recorder = TlogRecorder(settings.tlog_dir, vehicle_id)
             link.recorder = recorder.record
@@ -61,14 +73,29 @@ async def run_agent(settings: AgentSettings) -> None:
             tasks.create_task(uploader.run())
 
 
+def open_outbox(settings: AgentSettings, vehicle_id: str, stream_id: str) -> Outbox:
+    """The outbox, spilling to disk when the agent has a directory for it."""
+    spill = None
+    if settings.outbox_dir is not None:
+        path = settings.outbox_dir / f"{vehicle_id}.outbox.sqlite"
+        try:
+            spill = SpillFile(path)
+        except (OSError, sqlite3.Error) as error:
+            # Better a memory-only outbox than no agent: the vehicle still needs its link.
+            log.error("outbox file %s unusable (%s); keeping the outbox in memory", path, error)
+    return Outbox(stream_id, settings.outbox_limit, spill)
+
+
 async def publish_telemetry(link: FcuLink, outbox: Outbox, rate_hz: float) -> None:
     """Snapshot the vehicle at a fixed rate into the outbox, numbering each one."""
     period = 1.0 / rate_hz
     seq = 0
     next_at = time.monotonic()
     while True:
-        state = snapshot(link.latest, link.connected)
-        outbox.put(encode(Telemetry(seq=seq, time=time.time(), state=state)))
+        state = snapshot(link.latest, link.connected).model_copy(
+            update={"outbox_pending": len(outbox), "outbox_dropped": outbox.dropped}
+        )
+        outbox.put("telemetry", seq, encode(Telemetry(seq=seq, time=time.time(), state=state)))
         seq += 1
         next_at += period
         await asyncio.sleep(max(0.0, next_at - time.monotonic()))
@@ -84,11 +111,11 @@ class EventSource:
     def on_message(self, message: MavMessage) -> None:
         kind = message.get_type()
         if kind == "STATUSTEXT":
-            self._emit("statustext", str(message.text).rstrip("\x00"), int(message.severity))
+            self.emit("statustext", str(message.text).rstrip("\x00"), int(message.severity))
         elif kind == "MISSION_ITEM_REACHED":
-            self._emit("mission", f"reached mission item {message.seq}", None)
+            self.emit("mission", f"reached mission item {message.seq}", None)
 
-    def _emit(self, kind: EventKind, text: str, severity: int | None) -> None:
+    def emit(self, kind: EventKind, text: str, severity: int | None) -> None:
         event = Event(seq=self._seq, time=time.time(), kind=kind, severity=severity, text=text)
-        self._outbox.put(encode(event))
+        self._outbox.put("event", self._seq, encode(event))
         self._seq += 1

@@ -108,6 +108,11 @@ class LocalFleet:
 
     def start(self, hub_env: dict[str, str] | None = None) -> None:
         self.log_dir.mkdir(parents=True, exist_ok=True)
+        self.start_hub(hub_env)
+        for index in range(self.plan.vehicles):
+            self.start_vehicle(index)
+
+    def start_hub(self, hub_env: dict[str, str] | None = None) -> None:
         plan = self.plan
         tokens = ",".join(
             f"{plan.vehicle_id(i)}={plan.agent_token(i)}" for i in range(plan.vehicles)
@@ -120,11 +125,17 @@ class LocalFleet:
         }
         self.spawn(
             "hub",
-            ["hub", "--port", str(self.plan.port), "--data-dir", str(self.plan.data_dir)],
+            ["hub", "--port", str(plan.port), "--data-dir", str(plan.data_dir)],
             {**env, **(hub_env or {})},
         )
-        for index in range(self.plan.vehicles):
-            self.start_vehicle(index)
+
+    def kill(self, name: str) -> None:
+        """End one process at once (SIGKILL: no flush, no goodbye), as a crash would."""
+        for managed in [m for m in self.processes if m.name == name]:
+            managed.process.kill()
+            managed.process.wait()
+            managed.log_file.close()
+            self.processes.remove(managed)
 
     def start_vehicle(self, index: int) -> None:
         sim_port = free_port()
@@ -157,6 +168,9 @@ class LocalFleet:
                 str(self.plan.telemetry_rate_hz),
                 # Each simulated vehicle keeps an onboard .tlog, as a real one would.
                 "--tlog-dir",
+                str(self.plan.data_dir / "onboard" / self.vehicle_id(index)),
+                # ...and keeps what the hub has not stored on disk, through hub outages.
+                "--outbox-dir",
                 str(self.plan.data_dir / "onboard" / self.vehicle_id(index)),
             ],
             {"GCS_AGENT_TOKEN": self.plan.agent_token(index)},

@@ -1,0 +1,70 @@
+"""Delivery between agent and hub, frame by frame: acks after storage, gaps asked for,
+losses recorded, duplicates dropped. A scripted agent plays the agent's side."""
+
+from __future__ import annotations
+
+import json
+import time
+from collections.abc import Callable
+from typing import Any
+
+import httpx
+from websockets.sync.client import ClientConnection
+
+from gcs.protocol import Event, Unavailable, encode
+from tests.integration.test_hub_bad_input import _telemetry, scripted_agent
+
+Enrol = Callable[[str], str]
+
+
+def _next(socket: ClientConnection, wanted: Callable[[dict[str, Any]], bool]) -> dict[str, Any]:
+    """The first frame from the hub that matches, within a few seconds."""
+    deadline = time.monotonic() + 10
+    while True:
+        frame = json.loads(socket.recv(timeout=max(0.1, deadline - time.monotonic())))
+        if wanted(frame):
+            return frame
+
+
+def _acked(kind: str, seq: int) -> Callable[[dict[str, Any]], bool]:
+    return lambda frame: frame["type"] == "ack" and frame.get(f"{kind}_seq") == seq
+
+
+def test_gap_is_asked_for_filled_and_then_acknowledged(
+    hub: str, enrol: Enrol, admin_api: httpx.Client
+) -> None:
+    with scripted_agent(hub, "gappy", enrol("gappy")) as agent:
+        for seq in (0, 1, 2, 5):
+            agent.send(_telemetry(seq))
+        resend = _next(agent, lambda frame: frame["type"] == "resend")
+        assert (resend["kind"], resend["first_seq"], resend["last_seq"]) == ("telemetry", 3, 4)
+        assert resend["stream_id"] == "s1"
+        # Until the gap is filled, the hub acknowledges only what has no hole below it.
+        for seq in (3, 4, 1):  # 1 again: a duplicate, as a replay would send it
+            agent.send(_telemetry(seq, alt=99.0))
+        _next(agent, _acked("telemetry", 5))
+    stored = admin_api.get("/api/v1/vehicles/gappy/telemetry")
+    assert stored.status_code == 200, stored.text
+    samples = stored.json()["samples"]
+    assert sorted(s["seq"] for s in samples) == [0, 1, 2, 3, 4, 5]
+    assert next(s for s in samples if s["seq"] == 1)["alt_rel"] == 1.0  # the first copy
+
+
+def test_frames_the_vehicle_no_longer_has_are_recorded_as_lost(
+    hub: str, enrol: Enrol, admin_api: httpx.Client
+) -> None:
+    with scripted_agent(hub, "lossy", enrol("lossy")) as agent:
+        agent.send(_telemetry(0))
+        agent.send(_telemetry(9))
+        _next(agent, lambda frame: frame["type"] == "resend" and frame["first_seq"] == 1)
+        lost = Unavailable(
+            stream_id="s1", kind="telemetry", first_seq=1, last_seq=8, reason="outbox full"
+        )
+        agent.send(encode(lost))
+        _next(agent, _acked("telemetry", 9))
+        # Events are numbered and acknowledged on their own.
+        agent.send(encode(Event(seq=0, time=time.time(), kind="statustext", text="hello")))
+        _next(agent, _acked("event", 0))
+    events = admin_api.get("/api/v1/events", params={"vehicle_id": "lossy", "kind": "data_lost"})
+    texts = [event["text"] for event in events.json()["events"]]
+    assert texts == ["telemetry samples 1-8 of stream s1 never arrived: outbox full"]

@@ -1,0 +1,82 @@
+"""The hub-link failsafe: the hub dies while a copter hovers; after the configured time
+the agent commands RTL, and tells the hub what it did once the hub is back."""
+
+from __future__ import annotations
+
+import sqlite3
+import time
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+
+from gcs.launcher import FleetPlan, LocalFleet, free_port
+from tests.helpers import FleetWatcher, access_token, api_client
+
+pytestmark = pytest.mark.integration
+
+VEHICLE = "sim_1"
+
+
+@pytest.fixture
+def rtl_on_hub_loss(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Iterator[LocalFleet]:
+    # The agents read these from the environment, as they would from a systemd unit.
+    monkeypatch.setenv("GCS_AGENT_HUB_FAILSAFE_ACTION", "rtl")
+    monkeypatch.setenv("GCS_AGENT_HUB_FAILSAFE_TIMEOUT_S", "2")
+    plan = FleetPlan(vehicles=1, port=free_port(), data_dir=tmp_path, speedup=4.0)
+    with LocalFleet(plan) as fleet:
+        fleet.start()
+        fleet.wait_until_ready()
+        yield fleet
+
+
+def _outbox_mentions(path: Path, text: str) -> bool:
+    if not path.exists():
+        return False
+    with sqlite3.connect(path, timeout=5) as db:
+        rows = db.execute("SELECT body FROM frames WHERE kind = 'event'").fetchall()
+    return any(text in body for (body,) in rows)
+
+
+def test_lost_hub_link_triggers_rtl_and_is_reported_on_reconnect(
+    rtl_on_hub_loss: LocalFleet,
+) -> None:
+    fleet = rtl_on_hub_loss
+    base = fleet.plan.hub_http
+    token = access_token(base, "admin", fleet.plan.admin_password)
+    with FleetWatcher(base, token) as watcher, api_client(base, token) as api:
+        watcher.wait_until(
+            lambda v: (v.get(VEHICLE, {}).get("state") or {}).get("gps_fix", 0) >= 3, 60, "GPS"
+        )
+        takeoff = api.post(
+            f"/api/v1/vehicles/{VEHICLE}/commands", json={"name": "takeoff", "altitude": 15}
+        )
+        assert takeoff.json()["outcome"]["status"] == "accepted", takeoff.text
+        watcher.wait_until(lambda v: (v[VEHICLE]["state"]["alt_rel"] or 0) > 12, 60, "climb")
+
+    fleet.kill("hub")
+    outbox = fleet.plan.data_dir / "onboard" / VEHICLE / f"{VEHICLE}.outbox.sqlite"
+    deadline = time.monotonic() + 30
+    while not _outbox_mentions(outbox, "commanded RTL"):
+        assert time.monotonic() < deadline, "the agent did not act on the lost hub link"
+        time.sleep(0.2)  # polling the agent's spill file: there is no event to wait on
+
+    fleet.start_hub()
+    fleet.wait_until_ready()
+    token = access_token(base, "admin", fleet.plan.admin_password)
+    with FleetWatcher(base, token) as watcher, api_client(base, token) as api:
+        watcher.wait_until(
+            lambda v: (v.get(VEHICLE, {}).get("state") or {}).get("mode") == "RTL",
+            30,
+            "the vehicle to be seen returning",
+        )
+        deadline = time.monotonic() + 30
+        while True:
+            events = api.get("/api/v1/events", params={"vehicle_id": VEHICLE, "kind": "failsafe"})
+            texts = [event["text"] for event in events.json()["events"]]
+            if any("hub link restored" in text for text in texts):
+                break
+            assert time.monotonic() < deadline, f"no report of the failsafe: {texts}"
+            time.sleep(0.2)  # the report is on its way through the writer
+    assert any("hub link lost for 2 s: commanded RTL" in text for text in texts)
+    assert any("on losing it the agent commanded RTL" in text for text in texts)

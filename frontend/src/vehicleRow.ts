@@ -22,6 +22,7 @@ const ACTIONS = [
   { action: "arm", label: "Arm" },
   { action: "disarm", label: "Disarm" },
   { action: "takeoff", label: "Takeoff" },
+  { action: "hold", label: "Hold" },
   { action: "land", label: "Land" },
   { action: "rtl", label: "RTL" },
 ] as const;
@@ -147,6 +148,9 @@ export class VehicleRow {
     const low = percent !== null && percent !== undefined && percent >= 0 && percent < LOW_BATTERY_PERCENT;
     this.cells.battery.classList.toggle("warn", low);
     setText(this.cells.gps, formatGps(state));
+    const source = state?.position_source;
+    const gpsTitle = source ? `${formatGps(state)} from ${source}` : formatGps(state);
+    if (this.cells.gps.title !== gpsTitle) this.cells.gps.title = gpsTitle;
     this.cells.gps.classList.toggle("warn", Boolean(state && state.gps_fix < 3));
   }
 
@@ -163,6 +167,8 @@ export class VehicleRow {
         return { name: "disarm", force: false };
       case "takeoff":
         return { name: "takeoff", altitude: this.controls?.altitudeInput.valueAsNumber ?? Number.NaN };
+      case "hold":
+        return { name: "hold" };
       case "land":
         return { name: "land" };
       case "rtl":

@@ -118,7 +118,7 @@ def test_a_viewer_sees_the_fleet_but_no_controls(
     expect(rows).to_have_count(3, timeout=FLEET_TIMEOUT_MS)
     expect(page.locator(".vehicle-marker")).to_have_count(3)
     expect(rows.first.locator('[data-field="mode"]')).not_to_have_text("", timeout=10_000)
-    for action in ("arm", "disarm", "takeoff", "land", "rtl"):
+    for action in ("arm", "disarm", "takeoff", "hold", "land", "rtl"):
         expect(page.locator(f'button[data-action="{action}"]')).to_have_count(0)
     expect(page.locator('[data-field="takeoff-altitude"]')).to_have_count(0)
     expect(page.locator('button[data-action="show-audit"]')).to_have_count(0)

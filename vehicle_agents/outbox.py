@@ -22,7 +22,7 @@ import logging
 import sqlite3
 import time
 from collections import deque
-from collections.abc import Iterable, Iterator
+from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -222,28 +222,27 @@ class Outbox:
 
     def resend(self, request: Resend) -> list[Unavailable]:
         """Send the asked-for frames again; name the ones this outbox no longer holds."""
+        first, last = request.first_seq, request.last_seq
         held = {
             frame.seq
             for frame in self._memory_frames()
-            if frame.stream_id == request.stream_id and frame.kind == request.kind
+            if frame.stream_id == request.stream_id
+            and frame.kind == request.kind
+            and first <= frame.seq <= last
         }
         if self._spill is not None:
-            held |= self._spill.sequences(
-                request.stream_id, request.kind, request.first_seq, request.last_seq
-            )
-        wanted = range(request.first_seq, request.last_seq + 1)
-        if any(seq in held for seq in wanted):
+            held |= self._spill.sequences(request.stream_id, request.kind, first, last)
+        if held:
             self._rewind()
-        missing = _ranges(seq for seq in wanted if seq not in held)
         return [
             Unavailable(
                 stream_id=request.stream_id,
                 kind=request.kind,
-                first_seq=first,
-                last_seq=last,
+                first_seq=start,
+                last_seq=end,
                 reason=f"dropped by the vehicle's full outbox ({self.dropped} dropped so far)",
             )
-            for first, last in missing
+            for start, end in _holes(sorted(held), first, last)
         ]
 
     def _take(self) -> Frame | None:
@@ -317,12 +316,15 @@ class Outbox:
         return json.dumps(message)
 
 
-def _ranges(numbers: Iterable[int]) -> list[tuple[int, int]]:
-    """Consecutive runs of ascending numbers, as (first, last) pairs."""
-    runs: list[tuple[int, int]] = []
-    for number in numbers:
-        if runs and runs[-1][1] == number - 1:
-            runs[-1] = (runs[-1][0], number)
-        else:
-            runs.append((number, number))
-    return runs
+def _holes(held: list[int], first: int, last: int) -> list[tuple[int, int]]:
+    """The runs of numbers from ``first`` to ``last`` missing from sorted ``held``; the
+    work is in what is held, so a request for a huge range costs nothing extra."""
+    holes = []
+    expected = first
+    for seq in held:
+        if seq > expected:
+            holes.append((expected, seq - 1))
+        expected = seq + 1
+    if expected <= last:
+        holes.append((expected, last))
+    return holes

@@ -149,3 +149,11 @@ def test_events_and_telemetry_are_acknowledged_separately(drain: Drain) -> None:
     outbox.link_down()
     outbox.link_up()
     assert drain(outbox) == [2]
+
+
+def test_a_resend_of_a_huge_range_is_answered_at_once(drain: Drain) -> None:
+    outbox = Outbox("run", limit=100)
+    _put(outbox, range(10, 13))
+    request = Resend(stream_id="run", kind="telemetry", first_seq=0, last_seq=2**62)
+    unavailable = outbox.resend(request)
+    assert [(u.first_seq, u.last_seq) for u in unavailable] == [(0, 9), (13, 2**62)]

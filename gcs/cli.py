@@ -71,6 +71,8 @@ def _hub(args: argparse.Namespace) -> int:
 
 
 def _agent(args: argparse.Namespace) -> int:
+    from pydantic import ValidationError
+
     from vehicle_agents.agent import run_agent
     from vehicle_agents.config import load_agent_settings
 
@@ -86,7 +88,12 @@ def _agent(args: argparse.Namespace) -> int:
         "hub_failsafe_timeout_s": args.hub_failsafe_timeout,
         "mavlink_forward": args.mavlink_forward,
     }
-    settings = load_agent_settings(overrides, args.config)
+    try:
+        settings = load_agent_settings(overrides, args.config)
+    except (ValidationError, ValueError, OSError) as error:
+        # A configuration mistake: say which setting, not a traceback.
+        print(f"gcs agent: invalid settings: {error}", file=sys.stderr)
+        return 2
     return run_until_signalled(run_agent(settings))
 
 

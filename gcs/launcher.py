@@ -48,6 +48,10 @@ class FleetPlan:
     secret: str = field(default_factory=lambda: secrets.token_urlsafe(24))
     home: tuple[float, float, float] = DEFAULT_HOME
     telemetry_rate_hz: float = 10.0
+    # Per vehicle, by index: the simulator's --frame ("quad", "rover") and --autopilot
+    # ("ardupilot", "px4"); vehicles beyond a tuple's end are ArduPilot quads.
+    frames: tuple[str, ...] = ()
+    autopilots: tuple[str, ...] = ()
 
     @property
     def hub_http(self) -> str:
@@ -78,6 +82,15 @@ class FleetPlan:
         path.touch(mode=0o600)
         path.write_text(json.dumps({"admin_password": plan.admin_password, "secret": plan.secret}))
         return plan
+
+    def vehicle_sim_args(self, index: int) -> list[str]:
+        """The simulator options that make vehicle ``index`` what the plan says it is."""
+        args: list[str] = []
+        if index < len(self.frames):
+            args += ["--frame", self.frames[index]]
+        if index < len(self.autopilots):
+            args += ["--autopilot", self.autopilots[index]]
+        return args
 
     def vehicle_home(self, index: int) -> tuple[float, float, float]:
         """Homes in a row, a few metres apart, so the vehicles do not share a spot."""
@@ -152,6 +165,7 @@ class LocalFleet:
                 f"{lat:.7f},{lon:.7f},{alt:.1f}",
                 "--speedup",
                 str(self.plan.speedup),
+                *self.plan.vehicle_sim_args(index),
             ],
         )
         self.spawn(

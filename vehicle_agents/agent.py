@@ -12,11 +12,14 @@ from gcs.protocol import PROTOCOL_VERSION, Event, EventKind, Hello, Telemetry, e
 from vehicle_agents import __version__
 from vehicle_agents.commands import CommandExecutor
 from vehicle_agents.config import AgentSettings, default_vehicle_id, hub_http_base
+from vehicle_agents.fcu_events import FcuLinkEvents
 from vehicle_agents.fcu_link import FcuLink, MavMessage
+from vehicle_agents.forwarding import MavlinkForwarder
 from vehicle_agents.hub_failsafe import HubLinkFailsafe
 from vehicle_agents.hub_link import HubLink
 from vehicle_agents.outbox import Outbox, SpillFile
-from vehicle_agents.telemetry import snapshot
+from vehicle_agents.streams import StreamRequester
+from vehicle_agents.telemetry import link_snapshot
 from vehicle_agents.tlog import TlogRecorder
 from vehicle_agents.tlog_uploads import TlogUploader
 
@@ -27,8 +30,12 @@ CAPABILITIES = ["telemetry", "commands", "events"]
 
 async def run_agent(settings: AgentSettings) -> None:
     link = FcuLink(settings.fcu, source_system=settings.source_system)
+    streams = StreamRequester(link, settings.stream_rates_hz)  # checks the rates first
     async with asyncio.TaskGroup() as tasks:
         tasks.create_task(link.run())
+        if settings.mavlink_forward:  # third-party GCSs, from the start, whatever the hub does
+            tasks.create_task(MavlinkForwarder(link, settings.mavlink_forward).run())
+        tasks.create_task(streams.run())  # on every link up
         log.info("waiting for a heartbeat from %s", settings.fcu)
         await link.wait_identified()
         assert link.modes is not None
@@ -48,6 +55,7 @@ async def run_agent(settings: AgentSettings) -> None:
         outbox = open_outbox(settings, vehicle_id, hello.stream_id)
         events = EventSource(outbox)
         link.listeners.append(events.on_message)
+        link.state_listeners.append(FcuLinkEvents(events.emit).on_link_change)
         executor = CommandExecutor(link)
         hub = HubLink(
             settings.hub, settings.token.get_secret_value(), hello, outbox, executor.execute
@@ -92,7 +100,7 @@ async def publish_telemetry(link: FcuLink, outbox: Outbox, rate_hz: float) -> No
     seq = 0
     next_at = time.monotonic()
     while True:
-        state = snapshot(link.latest, link.connected).model_copy(
+        state = link_snapshot(link).model_copy(
             update={"outbox_pending": len(outbox), "outbox_dropped": outbox.dropped}
         )
         outbox.put("telemetry", seq, encode(Telemetry(seq=seq, time=time.time(), state=state)))

@@ -1,8 +1,12 @@
 """Carry out the hub's commands on the flight controller and report its answer.
 
-Each MAVLink command is sent with retries and waits for the matching COMMAND_ACK.
+Each MAVLink command is sent with retries and waits for the matching COMMAND_ACK. An
+ACK of MAV_RESULT_IN_PROGRESS ends the retries (the autopilot has the command) and the
+wait goes on, bounded by a longer timeout, for the final ACK, whose result is reported.
 A refusal comes back with the STATUSTEXT the autopilot sent alongside it (for example
-the failed pre-arm check), because "FAILED" alone tells an operator nothing.
+the failed pre-arm check), because "FAILED" alone tells an operator nothing; where an
+autopilot refuses without a word (ArduPilot declines a plain disarm in flight and a
+reboot while armed silently) the agent says what the vehicle's state points to.
 """
 
 from __future__ import annotations
@@ -47,12 +51,24 @@ log = logging.getLogger(__name__)
 MessageBuilder = Callable[[int], MavMessage]
 
 FORCE_DISARM_MAGIC = 21196  # ArduPilot and PX4 skip their checks with this param2
+GROUND_VEHICLES = frozenset({"rover", "boat", "submarine"})
+_AIRBORNE = frozenset(
+    {
+        mavlink2.MAV_LANDED_STATE_IN_AIR,
+        mavlink2.MAV_LANDED_STATE_TAKEOFF,
+        mavlink2.MAV_LANDED_STATE_LANDING,
+    }
+)
+_PROGRESS_UNKNOWN = 255
 
 
 @dataclass(frozen=True)
 class CommandTimeouts:
     ack_s: float = 1.5  # one attempt's wait for COMMAND_ACK
     attempts: int = 3
+    # After MAV_RESULT_IN_PROGRESS, how long the final COMMAND_ACK may take. Within the
+    # hub's command timeout (15 s by default) even when the first attempts went unheard.
+    in_progress_s: float = 10.0
 
 
 class CommandRefused(Exception):
@@ -102,7 +118,7 @@ class CommandExecutor:
                 magic = FORCE_DISARM_MAGIC if force else 0
                 return await self.command_long(mavlink2.MAV_CMD_COMPONENT_ARM_DISARM, [0, magic])
             case TakeoffCommand(altitude=altitude):
-                return await self._guided_takeoff(altitude)
+                return await self._takeoff(altitude)
             case LandCommand():
                 return await self.command_long(mavlink2.MAV_CMD_NAV_LAND, [])
             case ReturnToLaunchCommand():
@@ -119,10 +135,15 @@ class CommandExecutor:
                 return await self.command_long(mavlink2.MAV_CMD_DO_CHANGE_SPEED, [kind, speed, -1])
             case SetHomeCommand(use_current=True):
                 return await self.command_long(mavlink2.MAV_CMD_DO_SET_HOME, [1])
-            case SetHomeCommand(lat=lat, lon=lon, alt_msl=alt_msl):
-                assert lat is not None and lon is not None and alt_msl is not None
-                return await self.command_long(
-                    mavlink2.MAV_CMD_DO_SET_HOME, [0, 0, 0, 0, lat, lon, alt_msl]
+            case SetHomeCommand(lat=float(lat), lon=float(lon), alt_msl=float(alt_msl)):
+                # As COMMAND_INT: a float32 COMMAND_LONG parameter holds a latitude only to
+                # about a metre. MAV_FRAME_GLOBAL: the altitude is above mean sea level.
+                return await self.command_int(
+                    mavlink2.MAV_CMD_DO_SET_HOME, mavlink2.MAV_FRAME_GLOBAL, [0], lat, lon, alt_msl
+                )
+            case SetHomeCommand():
+                return CommandOutcome(
+                    status="refused", message="set_home: lat, lon and alt_msl are required"
                 )
             case RebootCommand():
                 return await self.command_long(mavlink2.MAV_CMD_PREFLIGHT_REBOOT_SHUTDOWN, [1])
@@ -140,6 +161,34 @@ class CommandExecutor:
                 return await self.missions.clear()
             case MissionSetCurrentCommand(seq=seq):
                 return await self.missions.set_current(seq)
+
+    async def _takeoff(self, altitude: float) -> CommandOutcome:
+        modes = self.link.modes
+        if modes is not None and modes.vehicle_type in GROUND_VEHICLES:
+            return CommandOutcome(
+                status="refused", message=f"takeoff: a {modes.vehicle_type} does not take off"
+            )
+        if modes is not None and modes.autopilot == "px4":
+            return await self._px4_takeoff(altitude)
+        return await self._guided_takeoff(altitude)
+
+    async def _px4_takeoff(self, altitude: float) -> CommandOutcome:
+        """What QGroundControl does on PX4: arm, then MAV_CMD_NAV_TAKEOFF, which switches to
+        Takeoff mode itself; its altitude is above mean sea level, so home's is needed."""
+        home = self.link.latest.get("HOME_POSITION")
+        if home is None:
+            return CommandOutcome(
+                status="refused", message="takeoff: the vehicle has not reported its home yet"
+            )
+        if not _armed(self.link.latest.get("HEARTBEAT")):
+            _require_accepted(
+                await self.command_long(mavlink2.MAV_CMD_COMPONENT_ARM_DISARM, [1]), "arm"
+            )
+        nan = float("nan")
+        amsl = home.altitude / 1000 + altitude
+        return await self.command_long(
+            mavlink2.MAV_CMD_NAV_TAKEOFF, [-1, 0, 0, nan, nan, nan, amsl]
+        )
 
     async def _guided_takeoff(self, altitude: float) -> CommandOutcome:
         # What QGroundControl does for a guided take-off: guided mode, arm, take off.
@@ -177,23 +226,39 @@ class CommandExecutor:
         )
 
     async def _goto(self, lat: float, lon: float, altitude: float) -> CommandOutcome:
+        return await self.command_int(
+            mavlink2.MAV_CMD_DO_REPOSITION,
+            mavlink2.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT,
+            [
+                -1,  # default ground speed
+                mavlink2.MAV_DO_REPOSITION_FLAGS_CHANGE_MODE,
+                0,
+                float("nan"),  # keep the current yaw behaviour
+            ],
+            lat,
+            lon,
+            altitude,
+        )
+
+    async def command_int(
+        self, command: int, frame: int, params: list[float], lat: float, lon: float, alt: float
+    ) -> CommandOutcome:
+        """A command with a position, which COMMAND_INT carries at full precision."""
+        padded = [float(value) for value in params] + [0.0] * (4 - len(params))
         link = self.link
         message = mavlink2.MAVLink_command_int_message(
             link.target_system or 1,
             link.target_component,
-            mavlink2.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT,
-            mavlink2.MAV_CMD_DO_REPOSITION,
-            0,
-            0,
-            -1,  # default ground speed
-            mavlink2.MAV_DO_REPOSITION_FLAGS_CHANGE_MODE,
-            0,
-            float("nan"),  # keep the current yaw behaviour
+            frame,
+            command,
+            0,  # current: unused
+            0,  # autocontinue: unused
+            *padded,
             round(lat * 1e7),
             round(lon * 1e7),
-            altitude,
+            alt,
         )
-        return await self._exchange(mavlink2.MAV_CMD_DO_REPOSITION, lambda _attempt: message)
+        return await self._exchange(command, lambda _attempt: message, padded)
 
     async def command_long(self, command: int, params: list[float]) -> CommandOutcome:
         padded = [float(value) for value in params] + [0.0] * (7 - len(params))
@@ -204,20 +269,23 @@ class CommandExecutor:
                 link.target_system or 1, link.target_component, command, attempt, *padded
             )
 
-        return await self._exchange(command, build)
+        return await self._exchange(command, build, padded)
 
-    async def _exchange(self, command: int, build: MessageBuilder) -> CommandOutcome:
+    async def _exchange(
+        self, command: int, build: MessageBuilder, params: list[float] | None = None
+    ) -> CommandOutcome:
         name = _command_name(command)
         started = time.time()
         for attempt in range(self.timeouts.attempts):
             self.link.send(build(attempt))
-            ack = await self.link.wait_for(
-                lambda message: message.get_type() == "COMMAND_ACK" and message.command == command,
-                self.timeouts.ack_s,
-            )
-            if ack is not None:
-                return self._outcome(name, ack, started)
-            log.debug("%s: no COMMAND_ACK on attempt %d", name, attempt + 1)
+            ack = await self.link.wait_for(_ack_of(command), self.timeouts.ack_s)
+            if ack is None:
+                log.debug("%s: no COMMAND_ACK on attempt %d", name, attempt + 1)
+            elif ack.result == mavlink2.MAV_RESULT_IN_PROGRESS:
+                # the autopilot has it: sending it again would start it again
+                return await self._final_ack(name, command, ack, started, params)
+            else:
+                return self._outcome(name, ack, started, params)
         waited = self.timeouts.ack_s * self.timeouts.attempts
         return CommandOutcome(
             status="timeout",
@@ -225,7 +293,39 @@ class CommandExecutor:
             f"{self.timeouts.attempts} attempts ({waited:.1f} s)",
         )
 
-    def _outcome(self, name: str, ack: MavMessage, started: float) -> CommandOutcome:
+    async def _final_ack(
+        self,
+        name: str,
+        command: int,
+        first: MavMessage,
+        started: float,
+        params: list[float] | None,
+    ) -> CommandOutcome:
+        """Wait out MAV_RESULT_IN_PROGRESS for the COMMAND_ACK that ends the command."""
+        progress = _progress(first)
+        log.info("%s: in progress%s", name, _percent(progress))
+        limit = self.timeouts.in_progress_s
+        deadline = time.monotonic() + limit
+        while (remaining := deadline - time.monotonic()) > 0:
+            ack = await self.link.wait_for(_ack_of(command), remaining)
+            if ack is None:
+                break
+            if ack.result != mavlink2.MAV_RESULT_IN_PROGRESS:
+                log.info("%s: finished: %s", name, _result_name(ack.result))
+                return self._outcome(name, ack, started, params)
+            if _progress(ack) != progress:
+                progress = _progress(ack)
+                log.info("%s: in progress%s", name, _percent(progress))
+        return CommandOutcome(
+            status="timeout",
+            result=_result_name(mavlink2.MAV_RESULT_IN_PROGRESS),
+            message=f"{name}: the flight controller said it was in progress"
+            f"{_percent(progress)} but sent no final COMMAND_ACK within {limit:.1f} s",
+        )
+
+    def _outcome(
+        self, name: str, ack: MavMessage, started: float, params: list[float] | None = None
+    ) -> CommandOutcome:
         result = _result_name(ack.result)
         if ack.result == mavlink2.MAV_RESULT_ACCEPTED:
             return CommandOutcome(status="accepted", result=result, message=f"{name}: accepted")
@@ -236,8 +336,35 @@ class CommandExecutor:
             for entry in self.link.statustexts
             if entry.time >= started and entry.severity <= mavlink2.MAV_SEVERITY_WARNING
         ]
-        reason = f" ({'; '.join(reasons)})" if reasons else ""
+        if reasons:
+            reason = f" ({'; '.join(reasons)})"
+        elif (likely := self._likely_reason(int(ack.command), params or [])) is not None:
+            reason = f" (no reason from the autopilot; {likely})"
+        else:
+            reason = ""
         return CommandOutcome(status="refused", result=result, message=f"{name}: {result}{reason}")
+
+    def _likely_reason(self, command: int, params: list[float]) -> str | None:
+        """What the vehicle's state says about a refusal the autopilot did not explain."""
+        heartbeat = self.link.latest.get("HEARTBEAT")
+        if not _armed(heartbeat):
+            return None
+        if command == mavlink2.MAV_CMD_PREFLIGHT_REBOOT_SHUTDOWN:
+            return "the vehicle is armed, and autopilots refuse to reboot while armed"
+        plain_disarm = params[:2] == [0.0, 0.0]
+        if command == mavlink2.MAV_CMD_COMPONENT_ARM_DISARM and plain_disarm and self._airborne():
+            return (
+                "the vehicle is in the air, and a plain disarm is refused in flight; "
+                "a forced disarm stops the motors"
+            )
+        return None
+
+    def _airborne(self) -> bool:
+        state = self.link.latest.get("EXTENDED_SYS_STATE")
+        if state is not None and state.landed_state != mavlink2.MAV_LANDED_STATE_UNDEFINED:
+            return int(state.landed_state) in _AIRBORNE
+        position = self.link.latest.get("GLOBAL_POSITION_INT")
+        return position is not None and position.relative_alt > 1000  # 1 m above home
 
 
 def _require_accepted(outcome: CommandOutcome, step: str) -> None:
@@ -249,3 +376,19 @@ def _require_accepted(outcome: CommandOutcome, step: str) -> None:
 
 def _armed(heartbeat: MavMessage | None) -> bool:
     return bool(heartbeat and heartbeat.base_mode & mavlink2.MAV_MODE_FLAG_SAFETY_ARMED)
+
+
+def _ack_of(command: int) -> Callable[[MavMessage], bool]:
+    def matches(message: MavMessage) -> bool:
+        return bool(message.get_type() == "COMMAND_ACK" and message.command == command)
+
+    return matches
+
+
+def _progress(ack: MavMessage) -> int:
+    """COMMAND_ACK.progress (a MAVLink 2 extension): percent done, 255 when unknown."""
+    return int(getattr(ack, "progress", _PROGRESS_UNKNOWN))
+
+
+def _percent(progress: int) -> str:
+    return f" ({progress}%)" if 0 <= progress <= 100 else ""

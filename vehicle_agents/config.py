@@ -30,7 +30,15 @@ class AgentSettings(BaseSettings):
         default=None, description="defaults to <model>_<first 4 hex of /etc/machine-id>"
     )
     telemetry_rate_hz: float = Field(default=10.0, gt=0, le=50)
-    source_system: int = Field(default=255, ge=1, le=255, description="our MAVLink system id")
+    # Not 255, which is QGroundControl's, Mission Planner's and MAVProxy's default: with
+    # --mavlink-forward they join the agent's MAVLink network, where a system id must name
+    # one system: the vehicle addresses its answers by it, and routers (ours, mavlink-router,
+    # ArduPilot's own) learn which link each id lives on. 254 is also skybrush-server's
+    # default. The price: ArduPilot takes MANUAL_CONTROL/RC overrides and counts GCS-failsafe
+    # heartbeats only from SYSID_MYGCS (MAV_GCS_SYSID from 4.7; default 255), so set that to
+    # 254 for them to follow the agent (4.7: MAV_GCS_SYSID=254 with MAV_GCS_SYSID_HI=255
+    # accepts a guest QGC as well).
+    source_system: int = Field(default=254, ge=1, le=255, description="our MAVLink system id")
     tlog_dir: Path | None = Field(
         default=None, description="keep an onboard .tlog per flight here, upload after landing"
     )
@@ -61,6 +69,14 @@ class AgentSettings(BaseSettings):
         description="extra or changed MAVLink message rates to request, e.g. "
         "{ATTITUDE = 10}; merged over the agent's defaults",
     )
+
+    @field_validator("stream_rates_hz")
+    @classmethod
+    def _known_messages(cls, rates: dict[str, float]) -> dict[str, float]:
+        from vehicle_agents.streams import stream_plan
+
+        stream_plan(rates)  # names MAVLink knows, rates >= 0: refused here, before flight
+        return rates
 
     @field_validator("hub")
     @classmethod

@@ -43,8 +43,18 @@ class FcuTimeouts:
 @dataclass
 class LinkCounters:
     messages: int = 0
-    bad_bytes_frames: int = 0
+    # Garbage bytes and bad frames (bad CRC, truncated, unknown id) that were skipped:
+    # pymavlink's robust parser turns each into one BAD_DATA message.
+    receive_errors: int = 0
     reconnects: int = 0
+
+
+@dataclass(frozen=True)
+class LinkChange:
+    """The link to the flight controller came up (a heartbeat) or went down, and why."""
+
+    up: bool
+    reason: str
 
 
 @dataclass
@@ -65,7 +75,7 @@ class FcuLink:
     """One flight controller, seen through its latest messages."""
 
     url: str
-    source_system: int = 255
+    source_system: int = 254
     source_component: int = mavlink2.MAV_COMP_ID_ONBOARD_COMPUTER
     timeouts: FcuTimeouts = field(default_factory=FcuTimeouts)
 
@@ -85,10 +95,21 @@ class FcuLink:
         # Called on the reader thread with every message and its arrival (Unix) time,
         # for work that must see messages exactly as they came (the onboard .tlog).
         self.recorder: Callable[[MavMessage, float], None] | None = None
+        # Called on the reader thread with every frame as it came off the wire (its bytes
+        # are ``message.get_msgbuf()``; BAD_DATA too), for MAVLink forwarding. Must not block.
+        self.taps: list[Callable[[MavMessage], None]] = []
+        # Called on the event loop when the link comes up (the target's first heartbeat
+        # on a connection) and when it goes down (heartbeat timeout, connection lost).
+        self.state_listeners: list[Callable[[LinkChange], None]] = []
+        self._up = False
         self._connection: Any = None
         self._waiters: list[_Waiter] = []
         self._identified = asyncio.Event()
         self._loop: asyncio.AbstractEventLoop | None = None
+        # Messages cross from the reader thread in batches: one loop wake-up per burst
+        # rather than per message, which is most of the agent's CPU at 200 messages/s.
+        self._inbox: list[MavMessage] = []
+        self._inbox_lock = threading.Lock()
 
     # -- state -------------------------------------------------------------
 
@@ -100,6 +121,11 @@ class FcuLink:
             and heartbeat_at is not None
             and time.monotonic() - heartbeat_at < self.timeouts.heartbeat_s
         )
+
+    @property
+    def up(self) -> bool:
+        """Heartbeats are arriving from the vehicle; flips only through ``LinkChange``s."""
+        return self._up
 
     async def wait_identified(self) -> None:
         """Until the first heartbeat from an autopilot has told us who the vehicle is."""
@@ -122,17 +148,22 @@ class FcuLink:
             backoff = self.timeouts.reconnect_initial_s
             log.info("flight controller link open: %s", self.url)
             stop = threading.Event()
+            reason = "connection closed"
             try:
                 async with asyncio.TaskGroup() as tasks:
                     tasks.create_task(asyncio.to_thread(self._read_forever, stop))
                     tasks.create_task(self._send_heartbeats())
-            except* OSError as errors:
-                log.warning("flight controller link lost: %s", errors.exceptions[0])
+                    tasks.create_task(self._watch_heartbeats())
+            except* OSError as errors:  # TimeoutError (silence) is an OSError too
+                reason = str(errors.exceptions[0]) or type(errors.exceptions[0]).__name__
+                log.warning("flight controller link lost: %s", reason)
             finally:
                 stop.set()
                 connection, self._connection = self._connection, None
                 with contextlib.suppress(OSError):
                     connection.close()
+            # (not reached when the agent is stopping: a shutdown is no lost link)
+            self._set_up(False, reason)
             self.counters.reconnects += 1
             await asyncio.sleep(backoff)
 
@@ -160,13 +191,22 @@ class FcuLink:
             message = connection.recv_match(blocking=True, timeout=self.timeouts.read_poll_s)
             now = time.monotonic()
             if message is not None:
-                last_message = now
+                if message.get_type() != "BAD_DATA":  # a stream of garbage is no link
+                    last_message = now
+                for tap in self.taps:
+                    tap(message)
                 if self.recorder is not None:
                     self.recorder(message, time.time())
-                self._loop.call_soon_threadsafe(self._on_message, message)
-            elif now - last_message > self.timeouts.heartbeat_s:
+                with self._inbox_lock:
+                    self._inbox.append(message)
+                    wake_loop = len(self._inbox) == 1
+                if wake_loop:
+                    self._loop.call_soon_threadsafe(self._deliver_inbox)
+            if now - last_message > self.timeouts.heartbeat_s:
                 # Serial and UDP links never "close": silence is how they fail.
-                raise TimeoutError(f"no MAVLink from {self.url} for {self.timeouts.heartbeat_s} s")
+                raise TimeoutError(
+                    f"no valid MAVLink from {self.url} for {self.timeouts.heartbeat_s:g} s"
+                )
 
     async def _send_heartbeats(self) -> None:
         while True:
@@ -177,22 +217,63 @@ class FcuLink:
             )
             await asyncio.sleep(1.0)
 
+    async def _watch_heartbeats(self) -> None:
+        """Down when the vehicle's heartbeats stop, even if other bytes keep coming."""
+        while True:
+            await asyncio.sleep(self.timeouts.read_poll_s)
+            heartbeat_at = self.received_at.get("HEARTBEAT")
+            silent = heartbeat_at is None or time.monotonic() - heartbeat_at > (
+                self.timeouts.heartbeat_s
+            )
+            if self._up and silent:
+                self._set_up(False, f"no heartbeat for {self.timeouts.heartbeat_s:g} s")
+
+    def _set_up(self, up: bool, reason: str) -> None:
+        if up == self._up:
+            return
+        self._up = up
+        if up:
+            log.info("flight controller link up: %s", reason)
+        else:
+            log.warning("flight controller link down: %s", reason)
+        change = LinkChange(up, reason)
+        for listener in list(self.state_listeners):
+            listener(change)
+
     # -- receiving ---------------------------------------------------------
+
+    def _deliver_inbox(self) -> None:
+        with self._inbox_lock:
+            batch, self._inbox = self._inbox, []
+        for message in batch:
+            self._on_message(message)
 
     def _on_message(self, message: MavMessage) -> None:
         kind = message.get_type()
         if kind == "BAD_DATA":
-            self.counters.bad_bytes_frames += 1
+            self.counters.receive_errors += 1
+            if self.counters.receive_errors == 1 or self.counters.receive_errors % 1000 == 0:
+                log.warning(
+                    "skipped bad data from the flight controller (%d so far): %s",
+                    self.counters.receive_errors,
+                    getattr(message, "reason", "?"),
+                )
             return
         if kind == "HEARTBEAT" and self.target_system is None and _is_autopilot(message):
             self._identify(message)
         if message.get_srcSystem() != self.target_system:
+            return
+        if getattr(message, "target_system", 0) not in (0, self.source_system):
+            # An answer to a GCS attached through forwarding: not the agent's to take,
+            # or a third party's COMMAND_ACK could complete the agent's own command.
             return
         self.counters.messages += 1
         self.latest[kind] = message
         self.received_at[kind] = time.monotonic()
         if kind == "HEARTBEAT":
             self.modes = self.modes or mode_table_for(message)
+            if not self._up and self._connection is not None:
+                self._set_up(True, f"heartbeat from system {self.target_system}")
         elif kind == "STATUSTEXT":
             self.statustexts.append(StatusText(time.time(), message.severity, message.text))
             log.info("FCU: %s", message.text)
@@ -213,16 +294,6 @@ class FcuLink:
             self.modes.vehicle_type,
         )
         self._identified.set()
-        self._request_streams()
-
-    def _request_streams(self) -> None:
-        # As MAVProxy does on connect; SET_MESSAGE_INTERVAL shaping is a later refinement.
-        self.send(
-            mavlink2.MAVLink_request_data_stream_message(
-                self.target_system, self.target_component, mavlink2.MAV_DATA_STREAM_ALL, 10, 1
-            )
-        )
-        self.send_command_long(mavlink2.MAV_CMD_REQUEST_MESSAGE, 0, [242])
 
     async def wait_for(self, predicate: MessagePredicate, within_s: float) -> MavMessage | None:
         """The first message after now that matches, or None after ``within_s`` seconds."""
@@ -242,6 +313,12 @@ class FcuLink:
         if self._connection is None:
             raise ConnectionError("flight controller link is down")
         self._connection.mav.send(message)
+
+    def write_frame(self, frame: bytes) -> None:
+        """Write an encoded MAVLink frame (a forwarded GCS's) to the vehicle unchanged."""
+        if self._connection is None:
+            raise ConnectionError("flight controller link is down")
+        self._connection.write(frame)
 
     def send_command_long(self, command: int, confirmation: int, params: list[float]) -> None:
         padded = [float(value) for value in params] + [0.0] * (7 - len(params))

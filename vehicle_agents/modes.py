@@ -56,7 +56,6 @@ class ModeTable:
                 return candidate
         return None
 
-
     @property
     def hold_mode(self) -> str | None:
         """Where "stop here" lives: Copter's BRAKE stops hardest (QGroundControl's pause),

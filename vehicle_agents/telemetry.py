@@ -3,12 +3,14 @@
 from __future__ import annotations
 
 import math
+import time
 from collections.abc import Mapping
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from gcs.protocol import VehicleState
-from vehicle_agents.fcu_link import MavMessage
+from vehicle_agents import positioning
+from vehicle_agents.fcu_link import FcuLink, MavMessage
 from vehicle_agents.modes import mode_name
 
 _UNKNOWN_INT16 = -1
@@ -20,9 +22,33 @@ def _system_status_name(status: int) -> str:
     return entry.name.removeprefix("MAV_STATE_") if entry is not None else "UNKNOWN"
 
 
-def snapshot(latest: Mapping[str, MavMessage], fcu_connected: bool) -> VehicleState:
-    """A VehicleState from whatever has arrived; fields stay None until their message does."""
-    fields: dict[str, object] = {"fcu_connected": fcu_connected}
+def link_snapshot(link: FcuLink) -> VehicleState:
+    """The state of the vehicle behind ``link``, with the link's own health."""
+    return snapshot(
+        link.latest,
+        link.connected,
+        received_at=link.received_at,
+        receive_errors=link.counters.receive_errors,
+    )
+
+
+def snapshot(
+    latest: Mapping[str, MavMessage],
+    fcu_connected: bool,
+    *,
+    received_at: Mapping[str, float] | None = None,
+    receive_errors: int = 0,
+    now: float | None = None,
+) -> VehicleState:
+    """A VehicleState from whatever has arrived; fields stay None until their message does.
+
+    ``received_at`` (monotonic arrival times per message type) lets the position source
+    skip receivers that went quiet; without it every message counts as fresh.
+    """
+    fields: dict[str, object] = {
+        "fcu_connected": fcu_connected,
+        "fcu_receive_errors": receive_errors,
+    }
     if (heartbeat := latest.get("HEARTBEAT")) is not None:
         fields["mode"] = mode_name(heartbeat)
         fields["armed"] = bool(heartbeat.base_mode & mavlink2.MAV_MODE_FLAG_SAFETY_ARMED)
@@ -50,10 +76,11 @@ def snapshot(latest: Mapping[str, MavMessage], fcu_connected: bool) -> VehicleSt
             fields["battery_remaining"] = float(status.battery_remaining)
     if (battery := latest.get("BATTERY_STATUS")) is not None and battery.battery_remaining >= 0:
         fields["battery_remaining"] = float(battery.battery_remaining)
-    if (gps := latest.get("GPS_RAW_INT")) is not None:
-        fields["gps_fix"] = int(gps.fix_type)
-        if gps.satellites_visible != 255:
-            fields["satellites"] = int(gps.satellites_visible)
+    now = time.monotonic() if now is None else now
+    if (fix := positioning.choose(latest, received_at, now)) is not None:
+        fields["position_source"] = fix.source
+        fields["gps_fix"] = fix.fix_type
+        fields["satellites"] = fix.satellites
     if (current := latest.get("MISSION_CURRENT")) is not None:
         fields["mission_current"] = int(current.seq)
         total = int(getattr(current, "total", 0) or 0)

@@ -94,6 +94,7 @@ AGENT_MESSAGE_PERMISSIONS: dict[str, Permission] = {
     "telemetry": Permission.AGENT,
     "event": Permission.AGENT,
     "command_result": Permission.AGENT,
+    "unavailable": Permission.AGENT,
 }
 
 

@@ -12,6 +12,7 @@ from backend.safety import (
     Waypoint,
     check_arm,
     check_goto,
+    check_set_home,
     check_takeoff,
     evaluate_plan,
 )
@@ -24,6 +25,7 @@ from gcs.protocol import (
     GotoCommand,
     MissionItem,
     MissionUploadCommand,
+    SetHomeCommand,
     TakeoffCommand,
 )
 
@@ -100,13 +102,14 @@ class SafetyGate:
         return self.site_rails().merged_with(self.vehicle_rails(vehicle_id))
 
     def check_command(self, record: VehicleRecord, command: Command) -> list[Violation]:
-        """Violations of the rails; landing, RTL, mode changes and disarming are never
-        blocked, because they are how an operator gets out of trouble."""
+        """Violations of the rails; landing, RTL, hold, mode changes and disarming are never
+        blocked, because they are how an operator gets out of trouble. A new home is
+        checked because RTL and the failsafes fly to it."""
         if isinstance(command, MissionUploadCommand):
             return list(
                 self.check_mission(record, mission_waypoints(command.items, record)).violations
             )
-        if not isinstance(command, ArmCommand | TakeoffCommand | GotoCommand):
+        if not isinstance(command, ArmCommand | TakeoffCommand | GotoCommand | SetHomeCommand):
             return []  # decided before any rails are read: no database needed
         rails = self.effective_rails(record.id)
         vehicle = snapshot_of(record)
@@ -117,6 +120,10 @@ class SafetyGate:
                 return check_takeoff(rails, vehicle, altitude)
             case GotoCommand(lat=lat, lon=lon, altitude=altitude):
                 return check_goto(rails, vehicle, lat, lon, altitude)
+            case SetHomeCommand(use_current=True):
+                return check_set_home(rails, vehicle, None, None)
+            case SetHomeCommand(lat=lat, lon=lon):
+                return check_set_home(rails, vehicle, lat, lon)
 
     def check_mission(self, record: VehicleRecord, waypoints: list[Waypoint]) -> PlanCheck:
         """Every violated rule of a mission, and the battery estimate when it can be made."""

@@ -420,6 +420,51 @@ def check_goto(
     return report.violations()
 
 
+def check_set_home(
+    rails: SafetyRails, vehicle: VehicleSnapshot, lat: float | None, lon: float | None
+) -> list[Violation]:
+    """A new home at (lat, lon), or where the vehicle is when those are None.
+
+    Home is where RTL, and every failsafe that returns, flies to: a home outside the
+    geofence, or one reached by a straight leg that leaves it, would send the vehicle out
+    of the fence; and the range limit is measured from home, so home may not move further
+    than that limit from where it is now.
+    """
+    report = _Report()
+    here = _position(vehicle)
+    if lat is None or lon is None:
+        label, target = "the vehicle's position (the new home)", here
+    else:
+        _require_target("home", lat, lon, 0.0)
+        label, target = "new home", GeoPoint(lat, lon)
+    fence = rails.geofence
+    if fence is not None:
+        if target is None:
+            report.unknown("position", GEOFENCE)
+        elif not fence.contains(target):
+            outside = fence.distance_outside_m(target)
+            message = _outside_message(label, outside) + ": RTL would fly there"
+            report.add(GEOFENCE, message, None, outside)
+        elif here is None:
+            report.unknown("position", GEOFENCE)
+        elif fence.contains(here) and fence.leg_leaves(here, target):
+            report.add(
+                GEOFENCE,
+                "the straight leg from the vehicle's position to the new home leaves the "
+                "geofence: RTL would fly it",
+                None,
+                None,
+            )
+    if rails.max_distance_from_home_m is not None:
+        home = _home(vehicle)
+        if home is None or target is None:
+            report.unknown("home position" if home is None else "position", MAX_DISTANCE_FROM_HOME)
+        else:
+            distance = haversine_m(home.lat, home.lon, target.lat, target.lon)
+            _distance_violation(rails, label, distance, "", report)
+    return report.violations()
+
+
 # --- Mission checks -------------------------------------------------------------------------
 
 

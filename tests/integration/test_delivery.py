@@ -9,15 +9,14 @@ from collections.abc import Callable
 from typing import Any
 
 import httpx
-from websockets.sync.client import ClientConnection
 
 from gcs.protocol import Event, Unavailable, encode
-from tests.integration.test_hub_bad_input import _telemetry, scripted_agent
+from tests.integration.test_hub_bad_input import ScriptedAgent, _telemetry, scripted_agent
 
 Enrol = Callable[[str], str]
 
 
-def _next(socket: ClientConnection, wanted: Callable[[dict[str, Any]], bool]) -> dict[str, Any]:
+def _next(socket: ScriptedAgent, wanted: Callable[[dict[str, Any]], bool]) -> dict[str, Any]:
     """The first frame from the hub that matches, within a few seconds."""
     deadline = time.monotonic() + 10
     while True:
@@ -33,7 +32,7 @@ def _acked(kind: str, seq: int) -> Callable[[dict[str, Any]], bool]:
 def test_gap_is_asked_for_filled_and_then_acknowledged(
     hub: str, enrol: Enrol, admin_api: httpx.Client
 ) -> None:
-    with scripted_agent(hub, "gappy", enrol("gappy")) as agent:
+    with scripted_agent(hub, "gappy", enrol("gappy"), delivery=True) as agent:
         for seq in (0, 1, 2, 5):
             agent.send(_telemetry(seq))
         resend = _next(agent, lambda frame: frame["type"] == "resend")
@@ -53,7 +52,7 @@ def test_gap_is_asked_for_filled_and_then_acknowledged(
 def test_frames_the_vehicle_no_longer_has_are_recorded_as_lost(
     hub: str, enrol: Enrol, admin_api: httpx.Client
 ) -> None:
-    with scripted_agent(hub, "lossy", enrol("lossy")) as agent:
+    with scripted_agent(hub, "lossy", enrol("lossy"), delivery=True) as agent:
         agent.send(_telemetry(0))
         agent.send(_telemetry(9))
         _next(agent, lambda frame: frame["type"] == "resend" and frame["first_seq"] == 1)

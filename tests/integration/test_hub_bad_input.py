@@ -64,14 +64,36 @@ def websocket(url: str, headers: dict[str, str] | None = None) -> Iterator[Clien
             stack.close()
 
 
+class ScriptedAgent:
+    """The agent's end of a real WebSocket. Unless ``delivery`` is asked for, the hub's
+    acks and resend requests are read past, so a test sees commands and errors only."""
+
+    def __init__(self, socket: ClientConnection, delivery: bool) -> None:
+        self.socket = socket
+        self._delivery = delivery
+
+    def send(self, frame: str) -> None:
+        self.socket.send(frame)
+
+    def recv(self, timeout: float | None = None) -> str | bytes:
+        deadline = None if timeout is None else time.monotonic() + timeout
+        while True:
+            remaining = None if deadline is None else max(0.0, deadline - time.monotonic())
+            frame = self.socket.recv(timeout=remaining)
+            if self._delivery or json.loads(frame).get("type") not in ("ack", "resend"):
+                return frame
+
+
 @contextmanager
-def scripted_agent(base_url: str, vehicle_id: str, token: str) -> Iterator[ClientConnection]:
+def scripted_agent(
+    base_url: str, vehicle_id: str, token: str, *, delivery: bool = False
+) -> Iterator[ScriptedAgent]:
     """A real WebSocket peer speaking the agent protocol, frame by frame."""
     headers = {"Authorization": f"Bearer {token}"}
     with websocket(_ws(base_url, AGENT_WS_PATH), headers) as socket:
         socket.send(encode(_hello(vehicle_id)))
         assert json.loads(socket.recv(timeout=5))["type"] == "welcome"
-        yield socket
+        yield ScriptedAgent(socket, delivery)
 
 
 def _close_code(socket: ClientConnection) -> tuple[int | None, str]:

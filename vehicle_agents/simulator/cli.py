@@ -1,4 +1,4 @@
-"""``python -m vehicle_agents.simulator`` / ``gcs sim``: run one simulated copter."""
+"""``python -m vehicle_agents.simulator`` / ``gcs sim``: run one simulated vehicle."""
 
 from __future__ import annotations
 

@@ -1,10 +1,15 @@
-"""Incoming MAVLink to copter calls, and the replies ArduCopter would send.
+"""Incoming MAVLink to vehicle calls, and the replies the autopilot would send.
 
 No I/O: `MessageHandler.handle` takes one decoded message and returns `Reply` objects
 (a COMMAND_ACK and requested messages go back to the sender only; STATUSTEXTs go to
 everyone, as ArduPilot sends them on every link). Semantics follow GCS_Common.cpp and
-GCS_Mavlink.cpp of ArduCopter 4.x; COMMAND_LONG is handled as ArduPilot does, by reading
-it as a COMMAND_INT in the MAV_FRAME_GLOBAL_RELATIVE_ALT frame.
+GCS_Mavlink.cpp of ArduPilot 4.x; COMMAND_LONG is handled as ArduPilot does, by reading
+it as a COMMAND_INT in the MAV_FRAME_GLOBAL_RELATIVE_ALT frame (MAV_FRAME_GLOBAL, above
+mean sea level, for DO_SET_HOME). What differs by vehicle or autopilot (modes, take-off,
+which answer a refusal gets) is the vehicle's to decide.
+
+A reboot is accepted by the vehicle and carried out by the transport, which sends the
+COMMAND_ACK first, as ArduPilot acknowledges before it restarts.
 """
 
 from __future__ import annotations
@@ -14,23 +19,22 @@ import math
 from dataclasses import dataclass
 from typing import Any, Protocol
 
-from vehicle_agents.simulator.copter import Copter
 from vehicle_agents.simulator.mavconst import (
     DO_REPOSITION_FLAGS_CHANGE_MODE,
     FORCE_ARM_MAGIC,
     FORCE_DISARM_MAGIC,
+    FORCE_REBOOT_MAGIC,
     POSITION_TARGET_IGNORE_POSITION,
-    CopterMode,
     MavCmd,
     MavFrame,
     MavMissionResult,
     MavResult,
-    ModeFlag,
     Severity,
 )
 from vehicle_agents.simulator.mission import MAX_ITEMS, MissionItem, check_item
 from vehicle_agents.simulator.param_table import SetOutcome
 from vehicle_agents.simulator.telemetry import MavMessage, TelemetryBuilder
+from vehicle_agents.simulator.vehicle import Vehicle
 
 log = logging.getLogger(__name__)
 
@@ -79,11 +83,15 @@ class Command:
     z: float
     frame: int
     x_unset: bool = False  # COMMAND_INT sent INT32_MAX / COMMAND_LONG sent NaN
+    raw_y: float = 0.0  # param6 as sent, for commands where it is a number, not a position
 
     @classmethod
     def from_long(cls, msg: Any) -> Command:
+        command = int(msg.command)
+        # DO_SET_HOME's altitude is above mean sea level; the rest are above home
+        frame = MavFrame.GLOBAL if command == MavCmd.DO_SET_HOME else MavFrame.GLOBAL_RELATIVE_ALT
         return cls(
-            int(msg.command),
+            command,
             float(msg.param1),
             float(msg.param2),
             float(msg.param3),
@@ -91,8 +99,9 @@ class Command:
             float(msg.param5),
             float(msg.param6),
             float(msg.param7),
-            MavFrame.GLOBAL_RELATIVE_ALT,
+            frame,
             x_unset=math.isnan(msg.param5) or math.isnan(msg.param6),
+            raw_y=float(msg.param6),
         )
 
     @classmethod
@@ -108,6 +117,7 @@ class Command:
             float(msg.z),
             int(msg.frame),
             x_unset=int(msg.x) == INT32_MAX or int(msg.y) == INT32_MAX,
+            raw_y=float(msg.y),
         )
 
 
@@ -141,7 +151,7 @@ class MessageHandler:
 
     def __init__(
         self,
-        copter: Copter,
+        copter: Vehicle,
         telemetry: TelemetryBuilder,
         system_id: int,
         component_id: int = 1,
@@ -166,7 +176,7 @@ class MessageHandler:
         if kind == "SET_MODE":
             if not self._for_us(msg.target_system):
                 return []
-            result = self._set_mode_common(int(msg.base_mode), int(msg.custom_mode))
+            result = self.copter.request_mode_encoded(int(msg.base_mode), int(msg.custom_mode))
             return self._finish(MSG_ID_SET_MODE, result, msg)
         if kind in ("PARAM_REQUEST_LIST", "PARAM_REQUEST_READ", "PARAM_SET"):
             if not self._for_us(msg.target_system):
@@ -209,23 +219,26 @@ class MessageHandler:
                 else:
                     result = MavResult.UNSUPPORTED
             case MavCmd.NAV_TAKEOFF:
-                if cmd.frame not in (
-                    MavFrame.GLOBAL_RELATIVE_ALT,
-                    MavFrame.GLOBAL_RELATIVE_ALT_INT,
-                ):
-                    result = MavResult.DENIED
-                else:
-                    result = copter.takeoff(cmd.z)
+                result = copter.nav_takeoff(cmd.z, cmd.frame)
             case MavCmd.NAV_LAND:
-                result = self._mode_command(CopterMode.LAND)
+                result = copter.nav_land()
             case MavCmd.NAV_RETURN_TO_LAUNCH:
-                result = self._mode_command(CopterMode.RTL)
+                result = copter.return_to_launch()
             case MavCmd.DO_SET_MODE:
-                result = self._set_mode_common(_as_int(cmd.param1), _as_int(cmd.param2))
+                result = copter.request_mode(
+                    _as_int(cmd.param1), _as_int(cmd.param2), _as_int(cmd.param3)
+                )
             case MavCmd.DO_REPOSITION:
                 result = self._reposition(cmd)
             case MavCmd.DO_CHANGE_SPEED:
-                result = copter.set_guided_speed(_as_int(cmd.param1), cmd.param2)
+                result = copter.change_speed(_as_int(cmd.param1), cmd.param2)
+            case MavCmd.DO_SET_HOME:
+                result = self._set_home(cmd)
+                if result is MavResult.ACCEPTED:
+                    # Copter::set_home sends the new home to every GCS straight away
+                    extra_after.append(Reply(self.telemetry.home_position(), False))
+            case MavCmd.PREFLIGHT_REBOOT_SHUTDOWN:
+                result = copter.request_reboot(cmd.param1, force=cmd.raw_y == FORCE_REBOOT_MAGIC)
             case MavCmd.REQUEST_MESSAGE:
                 requested = self.telemetry.build(_as_int(cmd.param1))
                 result = MavResult.ACCEPTED if requested is not None else MavResult.FAILED
@@ -268,15 +281,18 @@ class MessageHandler:
             replies.append(Reply(self.telemetry.statustext(text), to_sender_only=False))
         return replies
 
-    def _mode_command(self, mode: int) -> MavResult:
-        result = self.copter.set_mode(mode)
-        return MavResult.ACCEPTED if result is MavResult.ACCEPTED else MavResult.FAILED
-
-    def _set_mode_common(self, base_mode: int, custom_mode: int) -> MavResult:
-        """GCS_MAVLINK::_set_mode_common: only custom modes are understood."""
-        if base_mode & ModeFlag.CUSTOM_MODE_ENABLED:
-            return self._mode_command(custom_mode)
-        return MavResult.DENIED
+    def _set_home(self, cmd: Command) -> MavResult:
+        """GCS_MAVLINK::handle_command_do_set_home: param1=1, or no position given, is
+        the current location; otherwise the point, its altitude above mean sea level."""
+        if cmd.param1 == 1.0 or cmd.x_unset or (cmd.x == 0.0 and cmd.y == 0.0):
+            return self.copter.set_home_here()
+        if cmd.frame in _GLOBAL_FRAMES:
+            alt_msl = cmd.z
+        elif cmd.frame in _RELATIVE_FRAMES:
+            alt_msl = cmd.z + self.copter.home.alt
+        else:
+            return MavResult.DENIED
+        return self.copter.set_home_to(cmd.x, cmd.y, alt_msl)
 
     def _set_message_interval(self, cmd: Command, streams: StreamControl, now: float) -> MavResult:
         msg_id = _as_int(cmd.param1)
@@ -438,7 +454,7 @@ class MessageHandler:
         """GCS_MAVLINK_Copter::handle_command_int_do_reposition."""
         copter = self.copter
         change_mode = bool(_as_int(cmd.param2) & DO_REPOSITION_FLAGS_CHANGE_MODE)
-        if copter.mode is not CopterMode.GUIDED and not change_mode:
+        if not copter.in_guided and not change_mode:
             return MavResult.DENIED
         here = copter.position()
         lat, lon = (here.lat, here.lon) if cmd.x_unset else (cmd.x, cmd.y)
@@ -447,18 +463,16 @@ class MessageHandler:
         alt = copter.relative_alt if math.isnan(cmd.z) else self._relative_alt(cmd.frame, cmd.z)
         if alt is None:
             return MavResult.DENIED
-        if copter.mode is not CopterMode.GUIDED and (
-            copter.set_mode(CopterMode.GUIDED) is not MavResult.ACCEPTED
-        ):
+        if not copter.in_guided and copter.enter_guided() is not MavResult.ACCEPTED:
             return MavResult.FAILED
         if cmd.param1 > 0.0:
-            copter.set_guided_speed(0, cmd.param1)
+            copter.change_speed(0, cmd.param1)
         return copter.guided_goto(lat, lon, alt)
 
     def _position_target(self, msg: Any) -> None:
         """SET_POSITION_TARGET_GLOBAL_INT: position targets in GUIDED, ignored otherwise."""
         copter = self.copter
-        if copter.mode is not CopterMode.GUIDED:
+        if not copter.in_guided:
             return
         if int(msg.type_mask) & POSITION_TARGET_IGNORE_POSITION == POSITION_TARGET_IGNORE_POSITION:
             log.debug("velocity/acceleration-only position targets are not simulated")

@@ -16,6 +16,15 @@ from vehicle_agents.simulator.geo import GeoPoint
 DEFAULT_HOME = GeoPoint(-35.363262, 149.165237, 584.0)
 
 Scheme = Literal["tcp", "udp"]
+# What is simulated: a quadcopter or a wheeled rover (as SITL's --frame), and which
+# autopilot the quadcopter plays (the rover is always ArduRover).
+Frame = Literal["quad", "rover"]
+Autopilot = Literal["ardupilot", "px4"]
+# How SET_MESSAGE_INTERVAL is answered: as ArduPilot 4 does, or as an old flight
+# controller that refuses it (COMMAND_ACK UNSUPPORTED) or drops it (no COMMAND_ACK).
+MessageIntervalSupport = Literal["supported", "unsupported", "silent"]
+# GPS_FIX_TYPE of the optional second receiver (GPS2_RAW), by --gps2 name.
+GPS2_FIX_TYPES = {"3d": 3, "dgps": 4, "rtk-float": 5, "rtk-fixed": 6}
 
 
 @dataclass(frozen=True)
@@ -53,12 +62,20 @@ class SimulatorConfig:
     home: GeoPoint = DEFAULT_HOME
     speedup: float = 1.0
     log_level: str = "INFO"
+    gps2_fix: int | None = None  # a second GPS with this GPS_FIX_TYPE; None: just one GPS
+    message_interval: MessageIntervalSupport = "supported"
+    frame: Frame = "quad"
+    autopilot: Autopilot = "ardupilot"
 
     def __post_init__(self) -> None:
         if not 1 <= self.system_id <= 255:
             raise ValueError(f"system id must be 1..255, got {self.system_id}")
         if not 0.0 < self.speedup <= MAX_SPEEDUP:
             raise ValueError(f"speed-up must be > 0 and <= {MAX_SPEEDUP:g}, got {self.speedup}")
+        if self.frame == "rover" and self.autopilot != "ardupilot":
+            raise ValueError("the rover is simulated as ArduRover only (--autopilot ardupilot)")
+        if self.gps2_fix is not None and not 0 <= self.gps2_fix <= 8:
+            raise ValueError(f"GPS2 fix type must be a GPS_FIX_TYPE, 0..8, got {self.gps2_fix}")
 
 
 def _listen(text: str) -> ListenAddress:
@@ -147,6 +164,31 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument(
         "--log-level", type=_log_level, default=defaults.log_level, help="default INFO"
     )
+    parser.add_argument(
+        "--gps2",
+        choices=sorted(GPS2_FIX_TYPES),
+        help="fit a second GPS (GPS2_RAW) with this fix, e.g. rtk-fixed (default: none)",
+    )
+    parser.add_argument(
+        "--message-interval",
+        choices=["supported", "unsupported", "silent"],
+        default=defaults.message_interval,
+        help="answer SET_MESSAGE_INTERVAL (default), refuse it as UNSUPPORTED, or ignore "
+        "it, as old flight controllers do; REQUEST_DATA_STREAM always works",
+    )
+    parser.add_argument(
+        "--frame",
+        choices=["quad", "rover"],
+        default=defaults.frame,
+        help="a quadcopter (ArduCopter, or PX4 with --autopilot px4) or a wheeled rover "
+        "(ArduRover); default quad",
+    )
+    parser.add_argument(
+        "--autopilot",
+        choices=["ardupilot", "px4"],
+        default=defaults.autopilot,
+        help="the autopilot the quad plays on the wire: its modes and answers (default ardupilot)",
+    )
     return parser
 
 
@@ -166,11 +208,19 @@ def _join_negative_values(argv: Sequence[str]) -> list[str]:
 
 def parse_args(argv: Sequence[str] | None = None) -> SimulatorConfig:
     """Settings from the command line; argparse exits (code 2) on a bad argument."""
-    args = build_parser().parse_args(_join_negative_values(sys.argv[1:] if argv is None else argv))
-    return SimulatorConfig(
-        listen=args.listen,
-        system_id=args.system_id,
-        home=args.home,
-        speedup=args.speedup,
-        log_level=args.log_level,
-    )
+    parser = build_parser()
+    args = parser.parse_args(_join_negative_values(sys.argv[1:] if argv is None else argv))
+    try:
+        return SimulatorConfig(
+            listen=args.listen,
+            system_id=args.system_id,
+            home=args.home,
+            speedup=args.speedup,
+            log_level=args.log_level,
+            gps2_fix=None if args.gps2 is None else GPS2_FIX_TYPES[args.gps2],
+            message_interval=args.message_interval,
+            frame=args.frame,
+            autopilot=args.autopilot,
+        )
+    except ValueError as error:  # a combination the options cannot express
+        parser.error(str(error))

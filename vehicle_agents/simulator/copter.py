@@ -1,31 +1,33 @@
-"""The simulated vehicle: ArduCopter's arming rules, flight modes and navigation.
+"""The simulated multirotor: ArduCopter's arming rules, flight modes and navigation.
 
 Pure logic, no I/O and no wall clock: time moves only through `advance`, in fixed
 physics steps of `DT` sim seconds, so a run is the same whatever the speed-up and however
 the elapsed time is sliced. Commands return a `MavResult`; anything ArduCopter would say
-in a STATUSTEXT is queued and collected with `drain_texts`.
+in a STATUSTEXT is queued and collected with `drain_texts`. A `Personality` decides which
+autopilot it shows itself as on the wire (ArduCopter, or PX4's mode encoding).
 
 Behaviour follows ArduCopter 4.x (ArduCopter/mode*.cpp, AP_Arming_Copter.cpp):
 
-* arming is refused without a 3D fix in modes that need a position, and in RTL, LAND and
-  AUTO ("mode not armable"); param2=2989 forces it past everything but the position check;
+* arming is refused without a 3D fix in modes that need a position, and in RTL, LAND,
+  AUTO and BRAKE ("mode not armable"); param2=2989 forces it past everything but the
+  position check;
 * a GCS disarm is refused while flying unless forced (param2=21196);
 * after arming the motors idle for ARMING_DELAY plus the spool-up time before a take-off;
 * on the ground and armed for DISARM_DELAY it disarms itself; LAND and RTL disarm as soon
-  as the land detector (1 s resting on the ground) reports touchdown;
-* home moves to the vehicle's position when it arms, as on a vehicle whose home is not
-  locked.
+  as the land detector (1 s resting on the ground) reports touchdown, BRAKE at once;
+* BRAKE stops as hard as BRAKE_MODE_DECEL_RATE allows and holds there;
+* home moves to the vehicle's position when it arms, unless a GCS has set (and so
+  locked) it with MAV_CMD_DO_SET_HOME.
 """
 
 from __future__ import annotations
 
 import math
-import random
-from dataclasses import dataclass
 from enum import Enum
+from typing import Self
 
-from vehicle_agents.simulator.battery import Battery, current_draw
-from vehicle_agents.simulator.geo import GeoPoint, LocalFrame
+from vehicle_agents.simulator.battery import current_draw
+from vehicle_agents.simulator.geo import GeoPoint
 from vehicle_agents.simulator.mavconst import (
     SUPPORTED_MODES,
     CopterMode,
@@ -34,72 +36,54 @@ from vehicle_agents.simulator.mavconst import (
     MavFrame,
     MavResult,
     MavState,
-    MissionState,
-    ModeFlag,
+    MavType,
     Severity,
 )
-from vehicle_agents.simulator.mission import ABSOLUTE_FRAMES, MissionItem
-from vehicle_agents.simulator.param_table import ParamTable, SetOutcome
+from vehicle_agents.simulator.mission import MissionItem
 from vehicle_agents.simulator.params import CopterParams
-from vehicle_agents.simulator.physics import Airframe, Setpoint, sqrt_controller
-
-DT = 0.02  # physics step, sim seconds
-GPS_PERIOD_STEPS = 10  # a GPS fix every 0.2 s (5 Hz), each with fresh noise
-TAKEOFF_DONE_M = 0.1  # a take-off is complete this close to its altitude
-WAYPOINT_ALT_TOLERANCE_M = 1.0
-_STEP_EPSILON = 1e-6  # in steps: absorbs float error when summing many small increments
-
-# Modes that need a position estimate (Mode::requires_GPS) ...
-_POSITION_MODES = frozenset({CopterMode.GUIDED, CopterMode.LOITER, CopterMode.RTL, CopterMode.AUTO})
-# ... that refuse to arm (Mode::allows_arming is false) ...
-_NOT_ARMABLE = frozenset({CopterMode.RTL, CopterMode.LAND, CopterMode.AUTO})
-# ... that accept MAV_CMD_NAV_TAKEOFF on the ground (Mode::has_user_takeoff) ...
-_USER_TAKEOFF = frozenset({CopterMode.GUIDED, CopterMode.LOITER})
-# ... and that ArduCopter reports with MAV_MODE_FLAG_GUIDED_ENABLED.
-_GUIDED_FLAG_MODES = frozenset(
-    {CopterMode.AUTO, CopterMode.GUIDED, CopterMode.LOITER, CopterMode.RTL}
+from vehicle_agents.simulator.personality import (
+    PX4_TAKEOFF_ALT_M,
+    ArduCopterPersonality,
+    Declined,
+    ModeRequest,
+    Personality,
+)
+from vehicle_agents.simulator.physics import Setpoint, sqrt_controller
+from vehicle_agents.simulator.vehicle import (
+    DT,
+    AutoPhase,
+    Event,
+    ItemReached,
+    PhotoTaken,
+    StatusText,
+    Vehicle,
 )
 
+__all__ = [
+    "DT",
+    "AutoPhase",
+    "Copter",
+    "Event",
+    "ItemReached",
+    "PhotoTaken",
+    "RtlStage",
+    "StatusText",
+]
 
-@dataclass(frozen=True)
-class StatusText:
-    severity: Severity
-    text: str
+TAKEOFF_DONE_M = 0.1  # a take-off is complete this close to its altitude
+WAYPOINT_ALT_TOLERANCE_M = 1.0
+BRAKE_DECEL = 7.5  # BRAKE_MODE_DECEL_RATE, m/s/s
+BRAKE_SPEED_Z = 2.5  # BRAKE_MODE_SPEED_Z, m/s
 
-
-@dataclass(frozen=True)
-class ItemReached:
-    """MISSION_ITEM_REACHED: mission command ``seq`` is complete."""
-
-    seq: int
-
-
-@dataclass(frozen=True)
-class PhotoTaken:
-    """CAMERA_FEEDBACK: the camera fired (``index`` counts from 1)."""
-
-    index: int
-    time_s: float
-    lat: float
-    lon: float
-    alt_msl: float
-    alt_rel: float
-    roll: float
-    pitch: float
-    yaw: float
-
-
-Event = ItemReached | PhotoTaken
-
-
-class AutoPhase(Enum):
-    IDLE = "idle"  # not started (or stopped by leaving AUTO)
-    TAKEOFF = "takeoff"
-    FLY = "fly"  # to a waypoint's, loiter's or landing's position
-    HOLD = "hold"  # at a waypoint for its delay, or loitering for its time
-    LAND = "land"
-    RTL = "rtl"
-    DONE = "done"  # mission complete: hold where it ended
+# Modes that need a position estimate (Mode::requires_GPS) ...
+_POSITION_MODES = frozenset(
+    {CopterMode.GUIDED, CopterMode.LOITER, CopterMode.RTL, CopterMode.AUTO, CopterMode.BRAKE}
+)
+# ... and that accept MAV_CMD_NAV_TAKEOFF on the ground (Mode::has_user_takeoff).
+_USER_TAKEOFF = frozenset({CopterMode.GUIDED, CopterMode.LOITER})
+_RELATIVE_TAKEOFF_FRAMES = frozenset(
+    {MavFrame.GLOBAL_RELATIVE_ALT, MavFrame.GLOBAL_RELATIVE_ALT_INT}
+)
 
 
 class RtlStage(Enum):
@@ -109,8 +93,10 @@ class RtlStage(Enum):
     LAND = "land"
 
 
-class Copter:
+class Copter(Vehicle):
     """One multirotor: state, the rules for changing it, and the physics that moves it."""
+
+    mode: CopterMode
 
     def __init__(
         self,
@@ -119,37 +105,17 @@ class Copter:
         *,
         system_id: int = 1,
         seed: int = 0,
+        boot_at: float = 0.0,
+        personality: Personality | None = None,
     ) -> None:
-        self.params = params or CopterParams()
-        self.param_table = ParamTable(self.params, system_id)
-        self.system_id = system_id
-        # The EKF origin: local north/east/down are measured from here, and the ground
-        # is flat at its altitude.
-        self.frame = LocalFrame(home)
-        self.body = Airframe()
-        self.battery = Battery(capacity_mah=self.params.batt_capacity)
+        super().__init__(home, params, system_id=system_id, seed=seed, boot_at=boot_at)
+        self.personality = personality or ArduCopterPersonality()
         self.mode = CopterMode.STABILIZE  # ArduCopter's INITIAL_MODE
-        self.armed = False
         self.land_complete = True
-        self.gps_fix_type = 3
-        self.satellites = 10
-        self.home_ne = (0.0, 0.0)
-        self.battery_failsafe = False
-        # the stored mission, item 0 (home) included; empty when there is none
-        self.mission: list[MissionItem] = []
-        self.mission_current = 0  # the nav command running or to resume; 0: none
-        self.photos = 0
-        self._events: list[Event] = []
-        self._rng = random.Random(seed)
-        self.gps_error = (0.0, 0.0, 0.0)  # north, east, up metres of GPS noise
-
-        self._steps = 0
-        self._target_time = 0.0
-        self._texts: list[StatusText] = []
 
         p = self.params
         self._hold_ne = (0.0, 0.0)
-        self._hold_alt = 0.0
+        self._hold_alt = 0.0  # metres above the ground at the origin
         self._speed_xy = p.wpnav_speed
         self._speed_up = p.wpnav_speed_up
         self._speed_down = p.wpnav_speed_dn
@@ -163,83 +129,53 @@ class Copter:
         self._armed_at = 0.0
         self._on_ground_s = 0.0
         self._disarm_timer_s = 0.0
-        self._low_volt_s = 0.0
-        self._auto_phase = AutoPhase.IDLE
-        self._auto_item: MissionItem | None = None
-        self._auto_next = 0  # where the mission goes on after the current nav command
-        self._auto_hold_s = 0.0
-        self._cam_trigg_dist = 0.0
-        self._cam_last_ne = (0.0, 0.0)
 
-    # -- time --------------------------------------------------------------
+    def _reborn(self, origin: GeoPoint, boot_at: float) -> Self:
+        return type(self)(
+            origin,
+            self.params,
+            system_id=self.system_id,
+            seed=self.seed,
+            boot_at=boot_at,
+            personality=type(self.personality)(),
+        )
 
-    @property
-    def time_s(self) -> float:
-        """Sim seconds since boot (whole physics steps)."""
-        return self._steps * DT
-
-    def advance(self, dt: float) -> None:
-        """Let ``dt`` sim seconds pass (any size; stepped internally at `DT`)."""
-        if dt > 0.0:
-            self._target_time += dt
-            self._run_due_steps()
-
-    def advance_to(self, sim_time: float) -> None:
-        """Catch up with a clock reading ``sim_time`` sim seconds since boot."""
-        if sim_time > self._target_time:
-            self._target_time = sim_time
-            self._run_due_steps()
-
-    def _run_due_steps(self) -> None:
-        due = math.floor(self._target_time / DT + _STEP_EPSILON)
-        while self._steps < due:
-            self._step()
-
-    # -- derived state -----------------------------------------------------
+    # -- what the vehicle is -----------------------------------------------
 
     @property
-    def position_ok(self) -> bool:
-        return self.gps_fix_type >= 3
+    def mav_type(self) -> int:
+        return int(MavType.QUADROTOR)
+
+    @property
+    def autopilot(self) -> int:
+        return int(self.personality.autopilot)
+
+    def base_mode(self) -> int:
+        """HEARTBEAT.base_mode as the autopilot builds it."""
+        return self.personality.base_mode(self.mode, self.armed)
+
+    def custom_mode(self) -> int:
+        return self.personality.custom_mode(self.mode, self.taking_off)
+
+    @property
+    def manual_mode(self) -> bool:
+        return self.mode is CopterMode.STABILIZE
 
     @property
     def flying(self) -> bool:
         return self.armed and not self.land_complete
 
     @property
-    def home(self) -> GeoPoint:
-        return self.frame.to_global(self.home_ne[0], self.home_ne[1], 0.0)
-
-    def position(self) -> GeoPoint:
-        return self.frame.to_global(self.body.north, self.body.east, self.body.alt)
+    def taking_off(self) -> bool:
+        """A take-off accepted and not yet at its altitude."""
+        return self._takeoff_alt is not None or self._taking_off
 
     @property
-    def altitude_msl(self) -> float:
-        return self.frame.home.alt + self.body.alt
-
-    @property
-    def relative_alt(self) -> float:
-        """Metres above home (home is on the same flat ground as the origin)."""
-        return self.body.alt
-
-    def base_mode(self) -> int:
-        """HEARTBEAT.base_mode as GCS_MAVLINK_Copter::base_mode() builds it."""
-        flags = (
-            ModeFlag.CUSTOM_MODE_ENABLED
-            | ModeFlag.STABILIZE_ENABLED
-            | ModeFlag.MANUAL_INPUT_ENABLED
-        )
-        if self.mode in _GUIDED_FLAG_MODES:
-            flags |= ModeFlag.GUIDED_ENABLED
-        if self.armed:
-            flags |= ModeFlag.SAFETY_ARMED
-        return int(flags)
+    def _camera_moving(self) -> bool:
+        return self.flying
 
     def system_status(self) -> MavState:
-        """CRITICAL in a failsafe, else STANDBY while landed (armed or not), ACTIVE in the
-        air, as ArduCopter reports."""
-        if self.battery_failsafe:
-            return MavState.CRITICAL
-        return MavState.STANDBY if self.land_complete else MavState.ACTIVE
+        return self.personality.system_status(self.armed, self.land_complete, self.battery_failsafe)
 
     def landed_state(self) -> LandedState:
         if self.land_complete:
@@ -251,7 +187,6 @@ class Copter:
         return LandedState.IN_AIR
 
     def prearm_ok(self) -> bool:
-        """Whether the pre-arm checks pass in the current mode (SYS_STATUS PREARM bit)."""
         return self.position_ok or self.mode not in _POSITION_MODES
 
     @property
@@ -261,6 +196,14 @@ class Copter:
             return None
         return self._hold_ne[0], self._hold_ne[1], self._hold_alt
 
+    @property
+    def in_guided(self) -> bool:
+        return self.mode is CopterMode.GUIDED
+
+    @property
+    def in_auto(self) -> bool:
+        return self.mode is CopterMode.AUTO
+
     def _landing(self) -> bool:
         """In the descent of LAND, of RTL, or of a mission's NAV_LAND / RTL."""
         rtl_landing = self._rtl_stage is RtlStage.LAND
@@ -269,24 +212,6 @@ class Copter:
                 self._auto_phase is AutoPhase.RTL and rtl_landing
             )
         return self.mode is CopterMode.LAND or (self.mode is CopterMode.RTL and rtl_landing)
-
-    def drain_events(self) -> list[Event]:
-        events, self._events = self._events, []
-        return events
-
-    def gps_position(self) -> GeoPoint:
-        """What the GPS reports: the true position plus SIM_GPS_NOISE."""
-        north, east, up = self.gps_error
-        return self.frame.to_global(
-            self.body.north + north, self.body.east + east, self.body.alt + up
-        )
-
-    def drain_texts(self) -> list[StatusText]:
-        texts, self._texts = self._texts, []
-        return texts
-
-    def _say(self, severity: Severity, text: str) -> None:
-        self._texts.append(StatusText(severity, text))
 
     # -- commands ----------------------------------------------------------
 
@@ -299,30 +224,34 @@ class Copter:
             # only the mandatory checks run
             if needs_position and not self.position_ok:
                 self._say(Severity.CRITICAL, "Arm: Need Position Estimate")
-                return MavResult.FAILED
+                return self.personality.declined
         else:
             if needs_position and not self.position_ok:
                 self._say(Severity.CRITICAL, "Arm: GPS 1: Bad fix")
-                return MavResult.FAILED
-            if self.mode in _NOT_ARMABLE:
+                return self.personality.declined
+            if not self.personality.allows_arming(self.mode):
                 self._say(Severity.CRITICAL, f"Arm: {self.mode.name} mode not armable")
-                return MavResult.FAILED
+                return self.personality.declined
         self.armed = True
         self._armed_at = self.time_s
         self._disarm_timer_s = 0.0
         self._takeoff_alt = None
         if self.body.on_ground:
             self.land_complete = True
-            self.home_ne = (self.body.north, self.body.east)
+            self._home_on_arming()
         self._say(Severity.INFO, "Arming motors")
         return MavResult.ACCEPTED
 
     def disarm(self, force: bool = False) -> MavResult:
-        """MAV_CMD_COMPONENT_ARM_DISARM param1=0; ``force`` is param2=21196."""
+        """MAV_CMD_COMPONENT_ARM_DISARM param1=0; ``force`` is param2=21196. ArduCopter
+        declines a GCS disarm in the air without a word (AP_Arming_Copter::disarm)."""
         if not self.armed:
             return MavResult.ACCEPTED
         if not force and not self.land_complete:
-            return MavResult.FAILED
+            text = self.personality.disarm_declined_text()
+            if text is not None:
+                self._say(Severity.CRITICAL, text)
+            return self.personality.declined
         self._disarm()
         return MavResult.ACCEPTED
 
@@ -332,6 +261,10 @@ class Copter:
         self._takeoff_alt = None
         self._taking_off = False
         self._say(Severity.INFO, "Disarming motors")
+
+    @property
+    def reboot_declined(self) -> MavResult:
+        return self.personality.reboot_declined
 
     def set_mode(self, number: int) -> MavResult:
         """Copter::set_mode for a GCS request."""
@@ -361,6 +294,35 @@ class Copter:
         self._enter_mode(mode)
         return MavResult.ACCEPTED
 
+    def request_mode(self, base_mode: int, custom_mode: int, custom_sub_mode: int) -> MavResult:
+        return self._requested(self.personality.decode(base_mode, custom_mode, custom_sub_mode))
+
+    def request_mode_encoded(self, base_mode: int, custom_mode: int) -> MavResult:
+        return self._requested(self.personality.decode_encoded(base_mode, custom_mode))
+
+    def _requested(self, request: ModeRequest | Declined) -> MavResult:
+        if isinstance(request, Declined):
+            if request.text is not None:
+                self._say(Severity.CRITICAL, request.text)
+            return request.result
+        if request.takeoff:
+            return self._autopilot_takeoff(PX4_TAKEOFF_ALT_M)
+        result = self.set_mode(request.mode)
+        if result is not MavResult.ACCEPTED:
+            return self.personality.declined
+        self.personality.selected(request)
+        return result
+
+    def _mode_command(self, mode: CopterMode) -> MavResult:
+        result = self.set_mode(mode)
+        return result if result is MavResult.ACCEPTED else self.personality.declined
+
+    def nav_land(self) -> MavResult:
+        return self._mode_command(CopterMode.LAND)
+
+    def return_to_launch(self) -> MavResult:
+        return self._mode_command(CopterMode.RTL)
+
     def _enter_mode(self, mode: CopterMode) -> None:
         p = self.params
         # leaving a mode cancels any take-off in progress
@@ -382,14 +344,19 @@ class Copter:
                     self._auto_begin()  # ModeAuto::init: mission.start_or_resume
         elif mode is CopterMode.GUIDED:
             self._guided_hold()
+        elif mode is CopterMode.BRAKE:
+            # ModeBrake::init: stop at BRAKE_MODE_DECEL_RATE, hold the altitude reached
+            self._hold_ne = self.body.stopping_point(BRAKE_DECEL)
+            self._hold_alt = self._stopping_alt(BRAKE_DECEL)
         elif mode is CopterMode.LAND:
             self._land_ne = stop_ne
         elif mode is CopterMode.RTL:
             self._start_rtl(stop_ne)
 
-    def _stopping_alt(self) -> float:
+    def _stopping_alt(self, accel: float | None = None) -> float:
         climb = self.body.climb_rate
-        return self.body.alt + climb * abs(climb) / (2.0 * self.params.wpnav_accel_z)
+        decel = accel if accel is not None else self.params.wpnav_accel_z
+        return self.body.alt + climb * abs(climb) / (2.0 * decel)
 
     def _guided_hold(self) -> None:
         """ModeGuided::init: reset speeds, hold at the stopping point."""
@@ -407,13 +374,39 @@ class Copter:
         if self.mode is CopterMode.GUIDED:
             self._guided_hold()
 
+    def enter_guided(self) -> MavResult:
+        return self.set_mode(CopterMode.GUIDED)
+
     def takeoff(self, altitude: float) -> MavResult:
         """MAV_CMD_NAV_TAKEOFF: climb to ``altitude`` metres above home (Mode::do_user_takeoff)."""
         if not self.armed or not self.land_complete or self.mode not in _USER_TAKEOFF:
             return MavResult.FAILED
-        if not math.isfinite(altitude) or altitude <= self.body.alt:
+        if not math.isfinite(altitude):
             return MavResult.FAILED
-        self._takeoff_alt = altitude
+        target = self._relative_to_origin(altitude)
+        if target <= self.body.alt:
+            return MavResult.FAILED
+        self._takeoff_alt = target
+        return MavResult.ACCEPTED
+
+    def nav_takeoff(self, altitude: float, frame: int) -> MavResult:
+        """MAV_CMD_NAV_TAKEOFF from a GCS: ArduCopter takes it in the current (guided)
+        mode, with an altitude above home; PX4 switches to AUTO.TAKEOFF, with an altitude
+        above mean sea level (NaN: MIS_TAKEOFF_ALT)."""
+        if not self.personality.takeoff_alt_is_amsl:
+            if frame not in _RELATIVE_TAKEOFF_FRAMES:
+                return MavResult.DENIED
+            return self.takeoff(altitude)
+        above_home = altitude - self.home.alt if math.isfinite(altitude) else PX4_TAKEOFF_ALT_M
+        return self._autopilot_takeoff(max(above_home, PX4_TAKEOFF_ALT_M))
+
+    def _autopilot_takeoff(self, above_home: float) -> MavResult:
+        """PX4's Takeoff mode: climb where it stands, then Hold."""
+        if not (self.armed and self.land_complete and self.position_ok):
+            return self.personality.declined
+        self._enter_mode(CopterMode.GUIDED)
+        self._takeoff_alt = self._relative_to_origin(above_home)
+        self.personality.takeoff_selected()
         return MavResult.ACCEPTED
 
     def guided_goto(self, lat: float, lon: float, relative_alt: float) -> MavResult:
@@ -423,7 +416,7 @@ class Copter:
         if not (-90.0 <= lat <= 90.0 and -180.0 <= lon <= 180.0) or not math.isfinite(relative_alt):
             return MavResult.DENIED
         self._hold_ne = self.frame.to_local(lat, lon)
-        self._hold_alt = relative_alt
+        self._hold_alt = self._relative_to_origin(relative_alt)
         self._taking_off = False
         return MavResult.ACCEPTED
 
@@ -444,16 +437,12 @@ class Copter:
             return MavResult.FAILED
         return MavResult.ACCEPTED
 
+    def change_speed(self, kind: int, speed: float) -> MavResult:
+        return self.set_guided_speed(kind, speed)
+
     # -- parameters ------------------------------------------------------------
 
-    def set_param(self, name: str, value: float) -> SetOutcome:
-        """PARAM_SET: store ``value`` (MAVLink units) and let it take effect."""
-        outcome = self.param_table.set(name, value)
-        if outcome is not SetOutcome.STORED:
-            return outcome
-        old = self.params
-        self.params = new = self.param_table.apply(name, old)
-        self.battery.capacity_mah = new.batt_capacity
+    def _params_changed(self, old: CopterParams, new: CopterParams) -> None:
         # AC_WPNav::update_wpnav: a changed WPNAV_SPEED* replaces the speed in use
         if new.wpnav_speed != old.wpnav_speed:
             self._speed_xy = new.wpnav_speed
@@ -461,120 +450,12 @@ class Copter:
             self._speed_up = new.wpnav_speed_up
         if new.wpnav_speed_dn != old.wpnav_speed_dn:
             self._speed_down = new.wpnav_speed_dn
-        return outcome
 
     # -- missions --------------------------------------------------------------
-
-    @property
-    def mission_count(self) -> int:
-        """Mission commands stored after item 0 (home)."""
-        return max(0, len(self.mission) - 1)
-
-    def mission_item(self, seq: int) -> MissionItem | None:
-        """Item ``seq`` as a GCS downloads it: item 0 is always the current home."""
-        if not 0 <= seq < len(self.mission):
-            return None
-        if seq == 0:
-            home = self.home
-            return MissionItem(
-                0,
-                MavFrame.GLOBAL,
-                MavCmd.NAV_WAYPOINT,
-                x=round(home.lat * 1e7),
-                y=round(home.lon * 1e7),
-                z=home.alt,
-            )
-        return self.mission[seq]
-
-    def set_mission(self, items: list[MissionItem]) -> None:
-        """Replace the stored mission (a completed upload; item 0 is home)."""
-        self.mission = list(items) if len(items) > 1 else []
-        if self.mode is CopterMode.AUTO and self._auto_phase is not AutoPhase.IDLE:
-            # carry on with the command in flight; the new mission follows it
-            self._auto_next = min(self._auto_next, len(self.mission))
-            self.mission_current = min(self.mission_current, max(0, len(self.mission) - 1))
-        else:
-            self.mission_current = 0
-
-    def clear_mission(self) -> bool:
-        """MISSION_CLEAR_ALL; refused while the mission is running (AP_Mission::clear)."""
-        if self._mission_running():
-            return False
-        self.mission = []
-        self.mission_current = 0
-        return True
-
-    def set_mission_current(self, seq: int) -> bool:
-        """MISSION_SET_CURRENT: run (or, outside AUTO, resume at) command ``seq``."""
-        if not 1 <= seq < len(self.mission):
-            return False
-        if self._mission_running():
-            self._auto_run_from(seq)
-        else:
-            self.mission_current = seq
-        return True
-
-    def mission_state(self) -> MissionState:
-        """MISSION_CURRENT.mission_state, as ArduPilot 4.5 reports it."""
-        if self.mission_count == 0:
-            return MissionState.NO_MISSION
-        if self._auto_phase is AutoPhase.DONE:
-            return MissionState.COMPLETE
-        if self.mode is CopterMode.AUTO and self._auto_phase is not AutoPhase.IDLE:
-            return MissionState.ACTIVE
-        return MissionState.NOT_STARTED if self.mission_current == 0 else MissionState.PAUSED
-
-    def _mission_running(self) -> bool:
-        return (
-            self.mode is CopterMode.AUTO
-            and self.armed
-            and self._auto_phase not in (AutoPhase.IDLE, AutoPhase.DONE)
-        )
-
-    def _first_nav_seq(self) -> int | None:
-        start = self.mission_current if self.mission_current >= 1 else 1
-        for seq in range(start, len(self.mission)):
-            if self.mission[seq].is_nav:
-                return seq
-        return None
 
     def _mission_starts_with_takeoff(self) -> bool:
         seq = self._first_nav_seq()
         return seq is not None and self.mission[seq].command == MavCmd.NAV_TAKEOFF
-
-    def _item_alt(self, item: MissionItem) -> float:
-        """A mission item's altitude above home."""
-        if item.frame in ABSOLUTE_FRAMES:
-            return item.z - self.home.alt
-        return item.z
-
-    def _item_ne(self, item: MissionItem) -> tuple[float, float]:
-        """A mission item's position; none given (0, 0) means where the vehicle is."""
-        if not item.has_position:
-            return self.body.stopping_point(self.params.wpnav_accel)
-        return self.frame.to_local(item.x / 1e7, item.y / 1e7)
-
-    def _auto_begin(self) -> None:
-        """ModeAuto::run with a mission not yet started: start or resume it."""
-        self._auto_run_from(self.mission_current if self.mission_current >= 1 else 1)
-
-    def _auto_run_from(self, seq: int) -> None:
-        """Run "do" commands up to the next nav command, start that, and then the "do"
-        commands after it, which ArduPilot runs while the nav command is in progress."""
-        mission = self.mission
-        while seq < len(mission) and not mission[seq].is_nav:
-            self._do_command(mission[seq])
-            seq += 1
-        if seq >= len(mission):
-            self._auto_complete()
-            return
-        self.mission_current = seq
-        self._start_nav(mission[seq])
-        following = seq + 1
-        while following < len(mission) and not mission[following].is_nav:
-            self._do_command(mission[following])
-            following += 1
-        self._auto_next = following
 
     def _auto_complete(self) -> None:
         """ModeAuto::exit_mission: hold where it is (disarms if on the ground)."""
@@ -586,19 +467,13 @@ class Copter:
         if self.armed and self.land_complete:
             self._disarm()
 
-    def _nav_done(self) -> None:
-        item = self._auto_item
-        if item is not None:
-            self._events.append(ItemReached(item.seq))
-        self._auto_run_from(self._auto_next)
-
     def _start_nav(self, item: MissionItem) -> None:
         self._auto_item = item
         self._auto_hold_s = 0.0
         match item.command:
             case MavCmd.NAV_TAKEOFF:
                 self._auto_phase = AutoPhase.TAKEOFF
-                alt = max(self._item_alt(item), self.body.alt)
+                alt = max(self._relative_to_origin(self._item_alt(item)), self.body.alt)
                 if self.land_complete:
                     self._takeoff_alt = alt if alt > 0.0 else None
                 else:
@@ -615,41 +490,11 @@ class Copter:
             case _:  # NAV_WAYPOINT, NAV_LOITER_TIME
                 self._hold_ne = self._item_ne(item)
                 alt = self._item_alt(item)
-                self._hold_alt = alt if alt != 0.0 or item.has_position else self.body.alt
+                if alt != 0.0 or item.has_position:
+                    self._hold_alt = self._relative_to_origin(alt)
+                else:
+                    self._hold_alt = self.body.alt
                 self._auto_phase = AutoPhase.FLY
-
-    def _do_command(self, item: MissionItem) -> None:
-        match item.command:
-            case MavCmd.DO_CHANGE_SPEED:
-                self.set_guided_speed(int(item.param1), item.param2)
-            case MavCmd.DO_SET_CAM_TRIGG_DIST:
-                self._cam_trigg_dist = max(0.0, item.param1)
-                self._cam_last_ne = (self.body.north, self.body.east)
-                if item.param3 == 1.0:
-                    self.take_photo()
-            case MavCmd.DO_DIGICAM_CONTROL:
-                if item.x == 1:  # param5 "shot"
-                    self.take_photo()
-
-    def take_photo(self) -> None:
-        """AP_Camera::take_picture: the shutter fires; CAMERA_FEEDBACK follows."""
-        self.photos += 1
-        point = self.position()
-        body = self.body
-        self._cam_last_ne = (body.north, body.east)
-        self._events.append(
-            PhotoTaken(
-                self.photos,
-                self.time_s,
-                point.lat,
-                point.lon,
-                point.alt,
-                self.relative_alt,
-                body.roll,
-                body.pitch,
-                body.yaw,
-            )
-        )
 
     def _auto_setpoint(self) -> Setpoint:
         """ModeAuto::run for the nav command in progress."""
@@ -711,12 +556,6 @@ class Copter:
             face_travel=self.params.wp_yaw_behavior != 0 and self._auto_phase is AutoPhase.FLY,
         )
 
-    # -- fault injection (tests, demo) -----------------------------------------
-
-    def set_gps_fix(self, fix_type: int, satellites: int | None = None) -> None:
-        self.gps_fix_type = fix_type
-        self.satellites = satellites if satellites is not None else (10 if fix_type >= 3 else 0)
-
     # -- stepping ----------------------------------------------------------
 
     def _step(self) -> None:
@@ -728,40 +567,12 @@ class Copter:
         amps = current_draw(self.armed, self.flying, self.body.throttle, p.hover_throttle)
         self.battery.step(DT, amps, p.sim_batt_drain)
         self._check_battery()
-        self._check_camera_distance()
-        if self._steps % GPS_PERIOD_STEPS == 0:
-            sigma = p.sim_gps_noise
-            gauss = self._rng.gauss
-            self.gps_error = (gauss(0.0, sigma), gauss(0.0, sigma), gauss(0.0, 1.5 * sigma))
-        self._steps += 1
-
-    def _check_camera_distance(self) -> None:
-        """AP_Camera: with a trigger distance set, a photo every that many metres flown."""
-        if self._cam_trigg_dist <= 0.0 or not self.flying:
-            return
-        here = (self.body.north, self.body.east)
-        if math.dist(here, self._cam_last_ne) >= self._cam_trigg_dist:
-            self.take_photo()
+        self._step_sensors()
 
     def _check_battery(self) -> None:
-        """AP_BattMonitor::check_failsafes and Copter::handle_battery_failsafe."""
+        """Copter::handle_battery_failsafe once the monitor reports the pack low."""
         p = self.params
-        if self.battery_failsafe or not self.armed:
-            self._low_volt_s = 0.0
-            return
-        battery = self.battery
-        low_volt = p.batt_low_volt > 0.0 and battery.voltage < p.batt_low_volt
-        self._low_volt_s = self._low_volt_s + DT if low_volt else 0.0
-        volt_trip = low_volt and self._low_volt_s + 1e-9 >= p.batt_low_timer
-        mah_trip = p.batt_low_mah > 0.0 and battery.remaining_mah < p.batt_low_mah
-        if not (volt_trip or mah_trip):
-            return
-        self.battery_failsafe = True
-        self._say(
-            Severity.WARNING,
-            f"Battery 1 is low {battery.voltage:.2f}V used {battery.consumed_mah:.0f} mAh",
-        )
-        if p.batt_fs_low_act == 0:
+        if not self._battery_low() or p.batt_fs_low_act == 0:
             return
         if self.land_complete:
             # should_disarm_on_failsafe: on the ground the action is to disarm
@@ -786,8 +597,8 @@ class Copter:
         ):
             self._auto_begin()
         if self.land_complete:
-            if self.mode is CopterMode.LAND:
-                # ModeLand::run disarms as soon as it finds itself landed
+            if self.mode in (CopterMode.LAND, CopterMode.BRAKE):
+                # ModeLand::run and ModeBrake::run disarm as soon as they find it landed
                 self._disarm()
                 return None
             if not self._takeoff_ready():
@@ -802,6 +613,16 @@ class Copter:
             return self._landing_setpoint(self._land_ne)
         if self.mode is CopterMode.RTL:
             return self._rtl_setpoint()
+        if self.mode is CopterMode.BRAKE:
+            return Setpoint(
+                self._hold_ne,
+                self._hold_alt,
+                speed_xy=max(self.params.wpnav_speed, self.body.groundspeed),
+                speed_up=BRAKE_SPEED_Z,
+                speed_down=BRAKE_SPEED_Z,
+                face_travel=False,
+                accel_xy=BRAKE_DECEL,
+            )
         if self.mode is CopterMode.AUTO and self._auto_phase is not AutoPhase.IDLE:
             return self._auto_setpoint()
         if self.mode is CopterMode.GUIDED:
@@ -854,9 +675,9 @@ class Copter:
     # -- RTL -----------------------------------------------------------------
 
     def _start_rtl(self, stop_ne: tuple[float, float]) -> None:
-        """ModeRTL::build_path and compute_return_target."""
+        """ModeRTL::build_path and compute_return_target (altitudes above home)."""
         p = self.params
-        current = self.body.alt
+        current = self.relative_alt
         distance = math.dist(stop_ne, self.home_ne)
         target = max(0.0, current + max(0.0, p.rtl_climb_min))
         target = max(target, max(p.rtl_alt, p.rtl_alt_min))
@@ -866,7 +687,7 @@ class Copter:
                 min(target, max(distance * p.rtl_cone_slope, current + p.rtl_abs_min_climb)),
             )
         self._rtl_origin_ne = stop_ne
-        self._rtl_alt = target
+        self._rtl_alt = self._relative_to_origin(target)
         self._rtl_stage = RtlStage.CLIMB
         self._rtl_loiter_s = 0.0
 

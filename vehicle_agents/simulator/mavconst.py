@@ -1,4 +1,4 @@
-"""The MAVLink and ArduCopter numbers the simulator uses, as typed enums.
+"""The MAVLink, ArduCopter, ArduRover and PX4 numbers the simulator uses, as typed enums.
 
 pymavlink's constants are untyped module attributes; these mirror the ones we need so
 the pure logic stays typed. A unit test checks every value against pymavlink's dialect.
@@ -49,8 +49,72 @@ SUPPORTED_MODES = frozenset(
         CopterMode.LOITER,
         CopterMode.RTL,
         CopterMode.LAND,
+        CopterMode.BRAKE,
     }
 )
+
+
+class RoverMode(IntEnum):
+    """ArduRover mode numbers (Rover/mode.h; pymavlink's mode_mapping_rover)."""
+
+    MANUAL = 0
+    ACRO = 1
+    STEERING = 3
+    HOLD = 4
+    LOITER = 5
+    FOLLOW = 6
+    SIMPLE = 7
+    DOCK = 8
+    CIRCLE = 9
+    AUTO = 10
+    RTL = 11
+    SMART_RTL = 12
+    GUIDED = 15
+    INITIALISING = 16
+
+
+# The Rover modes this simulator drives; the others exist but are not modelled.
+SUPPORTED_ROVER_MODES = frozenset(
+    {RoverMode.MANUAL, RoverMode.HOLD, RoverMode.AUTO, RoverMode.GUIDED, RoverMode.RTL}
+)
+
+
+class Px4MainMode(IntEnum):
+    """PX4_CUSTOM_MAIN_MODE (commander/px4_custom_mode.h)."""
+
+    MANUAL = 1
+    ALTCTL = 2
+    POSCTL = 3
+    AUTO = 4
+    ACRO = 5
+    OFFBOARD = 6
+    STABILIZED = 7
+    RATTITUDE = 8
+
+
+class Px4AutoMode(IntEnum):
+    """PX4_CUSTOM_SUB_MODE_AUTO: the sub mode of main mode AUTO."""
+
+    READY = 1
+    TAKEOFF = 2
+    LOITER = 3
+    MISSION = 4
+    RTL = 5
+    LAND = 6
+    FOLLOW_TARGET = 8
+    PRECLAND = 9
+
+
+class MavType(IntEnum):
+    """HEARTBEAT.type values of the simulated frames."""
+
+    QUADROTOR = 2
+    GROUND_ROVER = 10
+
+
+class MavAutopilot(IntEnum):
+    ARDUPILOTMEGA = 3
+    PX4 = 12
 
 
 class MavResult(IntEnum):
@@ -123,11 +187,14 @@ class MavCmd(IntEnum):
     NAV_RETURN_TO_LAUNCH = 20
     NAV_LAND = 21
     NAV_TAKEOFF = 22
+    NAV_LOITER_UNLIM = 17
     DO_SET_MODE = 176
     DO_CHANGE_SPEED = 178
+    DO_SET_HOME = 179
     DO_REPOSITION = 192
     DO_DIGICAM_CONTROL = 203
     DO_SET_CAM_TRIGG_DIST = 206
+    PREFLIGHT_REBOOT_SHUTDOWN = 246
     GET_HOME_POSITION = 410
     COMPONENT_ARM_DISARM = 400
     GET_MESSAGE_INTERVAL = 510
@@ -207,6 +274,8 @@ class SysSensor(IntFlag):
 # COMPONENT_ARM_DISARM param2 values that skip checks (ArduPilot's GCS.h).
 FORCE_ARM_MAGIC = 2989.0
 FORCE_DISARM_MAGIC = 21196.0
+# PREFLIGHT_REBOOT_SHUTDOWN param6 that reboots even while armed (pymavlink's force=True).
+FORCE_REBOOT_MAGIC = 20190226.0
 
 # SET_POSITION_TARGET_* type_mask bits: position x, y, z ignored.
 POSITION_TARGET_IGNORE_POSITION = 0b111

@@ -75,7 +75,10 @@ class Setpoint:
     """One step's demand on the position controller.
 
     ``target_ne`` is a horizontal position to fly to (None: brake to a stop and drift no
-    further). ``target_alt`` is an altitude above home (None: follow ``climb_rate``).
+    further). ``target_alt`` is an altitude above the ground at the origin (None: follow
+    ``climb_rate``). ``accel_xy`` overrides WPNAV_ACCEL (BRAKE stops harder than a
+    waypoint leg). ``on_wheels``: a ground vehicle, which drives along the ground instead of
+    resting on skids, and turns to face its travel however slowly it moves.
     """
 
     target_ne: tuple[float, float] | None
@@ -85,6 +88,8 @@ class Setpoint:
     speed_up: float = 2.5
     speed_down: float = 1.5
     face_travel: bool = True
+    accel_xy: float | None = None
+    on_wheels: bool = False
 
 
 @dataclass
@@ -166,6 +171,7 @@ class Airframe:
 
     def _step_powered(self, sp: Setpoint, dt: float, params: CopterParams) -> None:
         # Horizontal: desired velocity toward the target, reached at bounded acceleration.
+        accel = sp.accel_xy if sp.accel_xy is not None else params.wpnav_accel
         want_n = want_e = 0.0
         if sp.target_ne is not None:
             err_n, err_e = sp.target_ne[0] - self.north, sp.target_ne[1] - self.east
@@ -173,12 +179,12 @@ class Airframe:
             if distance > 1e-9:
                 speed = min(
                     sp.speed_xy,
-                    sqrt_controller(distance, params.psc_posxy_p, params.wpnav_accel, dt),
+                    sqrt_controller(distance, params.psc_posxy_p, accel, dt),
                 )
                 want_n, want_e = err_n / distance * speed, err_e / distance * speed
         dvn, dve = want_n - self.vn, want_e - self.ve
         dv = math.hypot(dvn, dve)
-        max_dv = params.wpnav_accel * dt
+        max_dv = accel * dt
         if dv > max_dv:
             dvn, dve = dvn / dv * max_dv, dve / dv * max_dv
 
@@ -198,12 +204,15 @@ class Airframe:
         self.ve += dve
         self.vd -= dvu
         self._integrate_position(dt)
-        if self.on_ground and want_up <= 0.0:
+        if self.on_ground and want_up <= 0.0 and not sp.on_wheels:
             # resting on the ground: skids do not slide
             self.vn = self.ve = 0.0
             dvn = dve = 0.0
 
         self._update_attitude(dvn / dt, dve / dt, dvu / dt, sp, dt, params)
+        if sp.on_wheels:
+            # a ground vehicle's throttle follows its speed, not a hover
+            self.throttle = _clamp(self.groundspeed / max(sp.speed_xy, 0.1), 0.0, 1.0)
 
     def _integrate_position(self, dt: float) -> None:
         self.north += self.vn * dt
@@ -225,7 +234,10 @@ class Airframe:
         old_roll, old_pitch = self.roll, self.pitch
         # Heading: toward the direction of travel, at a bounded yaw rate.
         self.yaw_rate = 0.0
-        if sp.face_travel and self.groundspeed > FACE_TRAVEL_MIN_SPEED and not self.on_ground:
+        # a multirotor on its skids does not turn; a ground vehicle steers at any speed
+        turning_speed = 0.05 if sp.on_wheels else FACE_TRAVEL_MIN_SPEED
+        can_turn = sp.on_wheels or not self.on_ground
+        if sp.face_travel and self.groundspeed > turning_speed and can_turn:
             error = wrap_pi(math.atan2(self.ve, self.vn) - self.yaw)
             turn = _clamp(error, -params.yaw_rate_max * dt, params.yaw_rate_max * dt)
             self.yaw = wrap_2pi(self.yaw + turn)

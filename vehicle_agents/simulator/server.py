@@ -21,10 +21,16 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 from vehicle_agents.simulator.clock import Clock, SimClock
 from vehicle_agents.simulator.commands import MessageHandler
 from vehicle_agents.simulator.config import ListenAddress, SimulatorConfig
-from vehicle_agents.simulator.copter import Copter, ItemReached
 from vehicle_agents.simulator.mavconst import MsgId
-from vehicle_agents.simulator.streams import StreamSchedule
-from vehicle_agents.simulator.telemetry import DEFAULT_RATES_HZ, MavMessage, TelemetryBuilder
+from vehicle_agents.simulator.streams import StreamRequests, StreamSchedule
+from vehicle_agents.simulator.telemetry import (
+    DEFAULT_RATES_HZ,
+    MavMessage,
+    SecondGps,
+    TelemetryBuilder,
+)
+from vehicle_agents.simulator.vehicle import ItemReached, Vehicle
+from vehicle_agents.simulator.vehicles import REBOOT_SILENCE_S, build_vehicle
 
 log = logging.getLogger(__name__)
 
@@ -129,18 +135,18 @@ class SimulatorServer:
         config: SimulatorConfig,
         *,
         clock: Clock | None = None,
-        copter: Copter | None = None,
+        copter: Vehicle | None = None,
         wall_clock: Callable[[], float] = time.monotonic,
     ) -> None:
         self.config = config
         self.clock: Clock = clock if clock is not None else SimClock(config.speedup)
-        self.copter = (
-            copter
-            if copter is not None
-            else Copter(config.home, system_id=config.system_id, seed=config.system_id)
+        self.copter = copter if copter is not None else build_vehicle(config)
+        gps2 = None if config.gps2_fix is None else SecondGps(config.gps2_fix)
+        self.telemetry = TelemetryBuilder(self.copter, boot_epoch_s=time.time(), gps2=gps2)
+        self.handler = StreamRequests(
+            MessageHandler(self.copter, self.telemetry, config.system_id, COMPONENT_ID),
+            config.message_interval,
         )
-        self.telemetry = TelemetryBuilder(self.copter, boot_epoch_s=time.time())
-        self.handler = MessageHandler(self.copter, self.telemetry, config.system_id, COMPONENT_ID)
         self.links: list[Link] = []
         self.address: ListenAddress | None = None
         self._wall = wall_clock
@@ -150,6 +156,7 @@ class SimulatorServer:
         self._client_tasks: set[asyncio.Task[None]] = set()
         self._ticker: asyncio.Task[None] | None = None
         self._signature = self._state_signature()
+        self._silent_until = 0.0  # a rebooting flight controller neither hears nor sends
 
     # -- lifecycle -------------------------------------------------------------
 
@@ -220,6 +227,8 @@ class SimulatorServer:
         """Catch the physics up with the clock and send whatever streams are due."""
         now = self._wall()
         self.copter.advance_to(self.clock.now())
+        if now < self._silent_until:
+            return
         self._publish_changes(now)
         built: dict[int, MavMessage] = {}
         for link in list(self.links):
@@ -248,7 +257,24 @@ class SimulatorServer:
 
     def _state_signature(self) -> tuple[int, bool, int]:
         copter = self.copter
-        return int(copter.mode), copter.armed, int(copter.system_status())
+        return copter.custom_mode(), copter.armed, int(copter.system_status())
+
+    def _reboot(self, now: float) -> None:
+        """The flight controller restarts: silence, then a fresh boot of the same vehicle,
+        with every link back on the default streams."""
+        self._silent_until = now + REBOOT_SILENCE_S
+        self.copter = self.copter.rebooted(boot_at=self.clock.now())
+        self.telemetry = TelemetryBuilder(
+            self.copter, boot_epoch_s=time.time(), gps2=self.telemetry.gps2
+        )
+        self.handler = StreamRequests(
+            MessageHandler(self.copter, self.telemetry, self.config.system_id, COMPONENT_ID),
+            self.config.message_interval,
+        )
+        for link in self.links:
+            link.streams = StreamSchedule(DEFAULT_RATES_HZ, self._silent_until)
+        self._signature = self._state_signature()
+        log.info("simulator sysid=%d rebooting", self.config.system_id)
 
     def _broadcast(self, message: MavMessage) -> None:
         for link in list(self.links):
@@ -258,6 +284,8 @@ class SimulatorServer:
 
     def _receive(self, link: Link, data: bytes) -> None:
         now = self._wall()
+        if now < self._silent_until:
+            return
         self.copter.advance_to(self.clock.now())  # commands act on the current state
         for message in link.decode(data):
             for reply in self.handler.handle(message, link.streams, now):
@@ -266,6 +294,8 @@ class SimulatorServer:
                 else:
                     self._broadcast(reply.message)
         self._publish_changes(now)
+        if self.copter.reboot_requested:  # acknowledged above; now it restarts
+            self._reboot(now)
 
     async def _on_tcp_client(
         self, reader: asyncio.StreamReader, writer: asyncio.StreamWriter

@@ -7,16 +7,19 @@ connection in the transport. Field conventions follow ArduPilot's GCS_Common.cpp
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from typing import Any
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
-from vehicle_agents.simulator.copter import Copter, PhotoTaken, StatusText
-from vehicle_agents.simulator.mavconst import CopterMode, MsgId, SysSensor
+from vehicle_agents.simulator.mavconst import MsgId, SysSensor
 from vehicle_agents.simulator.mission import MissionItem
 from vehicle_agents.simulator.param_table import PARAM_ID_LEN
+from vehicle_agents.simulator.vehicle import PhotoTaken, StatusText, Vehicle
 
 MavMessage = Any  # pymavlink message classes are generated and untyped
+
+GPS2_RAW = mavlink2.MAVLINK_MSG_ID_GPS2_RAW  # the second receiver, when there is one
 
 # Streams every client gets without asking, in messages per wall-clock second.
 DEFAULT_RATES_HZ: dict[int, float] = {
@@ -64,6 +67,15 @@ _ALL_SENSORS = (
 )
 
 
+@dataclass(frozen=True)
+class SecondGps:
+    """A second receiver (GPS2_RAW), e.g. an RTK rover beside the primary GPS. It reports
+    the true position: at RTK accuracy the simulated noise is negligible."""
+
+    fix_type: int = mavlink2.GPS_FIX_TYPE_RTK_FIXED
+    satellites: int = 18
+
+
 def _cdeg(radians: float) -> int:
     """0..35999 centidegrees of a heading in radians."""
     return round(math.degrees(radians) * 100.0) % 36000
@@ -72,9 +84,10 @@ def _cdeg(radians: float) -> int:
 class TelemetryBuilder:
     """Turns the copter's state into MAVLink messages, one id at a time."""
 
-    def __init__(self, copter: Copter, boot_epoch_s: float) -> None:
+    def __init__(self, copter: Vehicle, boot_epoch_s: float, gps2: SecondGps | None = None) -> None:
         self.copter = copter
         self.boot_epoch_s = boot_epoch_s  # wall-clock time at sim time zero, for GPS time
+        self.gps2 = gps2  # None: not fitted (or unplugged), GPS2_RAW is not sent
 
     @property
     def supported(self) -> frozenset[int]:
@@ -85,7 +98,7 @@ class TelemetryBuilder:
         return builder() if builder is not None else None
 
     def _builders(self) -> dict[int, Any]:
-        return {
+        builders: dict[int, Any] = {
             MsgId.HEARTBEAT: self.heartbeat,
             MsgId.SYS_STATUS: self.sys_status,
             MsgId.GPS_RAW_INT: self.gps_raw_int,
@@ -99,6 +112,9 @@ class TelemetryBuilder:
             MsgId.EXTENDED_SYS_STATE: self.extended_sys_state,
             MsgId.MISSION_CURRENT: self.mission_current,
         }
+        if self.gps2 is not None:  # a receiver that is not there has no messages
+            builders[GPS2_RAW] = self.gps2_raw
+        return builders
 
     @property
     def _time_boot_ms(self) -> int:
@@ -113,10 +129,10 @@ class TelemetryBuilder:
     def heartbeat(self) -> MavMessage:
         copter = self.copter
         return mavlink2.MAVLink_heartbeat_message(
-            mavlink2.MAV_TYPE_QUADROTOR,
-            mavlink2.MAV_AUTOPILOT_ARDUPILOTMEGA,
+            copter.mav_type,
+            copter.autopilot,
             copter.base_mode(),
-            int(copter.mode),
+            copter.custom_mode(),
             int(copter.system_status()),
             3,
         )
@@ -125,7 +141,7 @@ class TelemetryBuilder:
         copter = self.copter
         present = _ALL_SENSORS
         enabled = present
-        if copter.mode is CopterMode.STABILIZE:
+        if copter.manual_mode:
             enabled &= ~(SysSensor.SENSOR_Z_ALTITUDE_CONTROL | SysSensor.SENSOR_XY_POSITION_CONTROL)
         healthy = present
         if not copter.position_ok:
@@ -174,6 +190,37 @@ class TelemetryBuilder:
             150,  # vel_acc mm/s
             0,
             0,  # yaw: no GPS yaw
+        )
+
+    def gps2_raw(self) -> MavMessage | None:
+        gps2 = self.gps2
+        if gps2 is None:
+            return None
+        copter = self.copter
+        point = copter.position()
+        body = copter.body
+        speed = body.groundspeed
+        fix = gps2.fix_type
+        alt_mm = round(point.alt * 1000.0)
+        return mavlink2.MAVLink_gps2_raw_message(
+            self._time_usec,
+            fix,
+            round(point.lat * 1e7),
+            round(point.lon * 1e7),
+            alt_mm,
+            70 if fix >= 3 else _UINT16_MAX,  # eph: HDOP 0.7
+            120 if fix >= 3 else _UINT16_MAX,  # epv
+            min(round(speed * 100.0), _UINT16_MAX - 1),
+            _cdeg(math.atan2(body.ve, body.vn)) if speed > 0.1 else 0,
+            gps2.satellites,
+            1 if fix >= mavlink2.GPS_FIX_TYPE_DGPS else 0,  # dgps_numch: one correction source
+            0,  # dgps_age ms
+            0,  # yaw: no GPS yaw
+            alt_mm,
+            14 if fix == mavlink2.GPS_FIX_TYPE_RTK_FIXED else 300,  # h_acc mm
+            20 if fix == mavlink2.GPS_FIX_TYPE_RTK_FIXED else 500,  # v_acc mm
+            50,  # vel_acc mm/s
+            0,
         )
 
     def global_position_int(self) -> MavMessage:

@@ -1,0 +1,419 @@
+"""The flight controller link under stress: rate requests and their fallback, garbage on
+the wire, a link cut or silenced and restored, and a better GPS coming and going.
+
+The simulator runs in-process; the agent is a real process talking to it over TCP, either
+directly or through ``FcuTap``, a proxy that reads what the agent asks for and can
+corrupt, silence or cut what the flight controller sends back.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import os
+import socket
+import subprocess
+import sys
+import threading
+import time
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Any
+
+import httpx
+import pytest
+from pymavlink.dialects.v20 import ardupilotmega as mavlink2
+
+from gcs.launcher import free_port
+from tests.helpers import FleetWatcher, api_client
+from tests.simulator.test_sim_server import serving
+from vehicle_agents.fcu_link import FcuLink
+from vehicle_agents.simulator import ListenAddress, SimulatorConfig, SimulatorServer
+from vehicle_agents.simulator.config import MessageIntervalSupport
+from vehicle_agents.simulator.telemetry import SecondGps
+from vehicle_agents.streams import DEFAULT_RATES_HZ, StreamRequester, StreamTimeouts
+
+pytestmark = pytest.mark.integration
+
+SYSID = 5
+SET_MESSAGE_INTERVAL = mavlink2.MAV_CMD_SET_MESSAGE_INTERVAL
+
+
+def sim_config(**overrides: Any) -> SimulatorConfig:
+    return SimulatorConfig(
+        listen=ListenAddress("tcp", "127.0.0.1", 0), system_id=SYSID, **overrides
+    )
+
+
+# -- rate requests, agent link against the simulator in one event loop ----------------
+
+
+async def request_and_read_back(port: int, rates: dict[str, float]) -> tuple[str, dict[str, int]]:
+    """One round of stream requests; then each message's interval as the FCU reports it."""
+    link = FcuLink(f"tcp:127.0.0.1:{port}")
+    requester = StreamRequester(link, rates, StreamTimeouts(ack_s=0.5, attempts=2))
+    async with asyncio.TaskGroup() as tasks:
+        running = tasks.create_task(link.run())
+        await asyncio.wait_for(link.wait_identified(), 10)
+        method = await requester.request()
+        intervals = {}
+        # Requests are handled in order, so these answers reflect the ones before.
+        for name in ("GLOBAL_POSITION_INT", "ATTITUDE", "VFR_HUD", "GPS_RAW_INT", "HOME_POSITION"):
+            msg_id = getattr(mavlink2, f"MAVLINK_MSG_ID_{name}")
+            link.send_command_long(mavlink2.MAV_CMD_GET_MESSAGE_INTERVAL, 0, [msg_id])
+            reply = await link.wait_for(
+                lambda m, msg_id=msg_id: (
+                    m.get_type() == "MESSAGE_INTERVAL" and m.message_id == msg_id
+                ),
+                5,
+            )
+            assert reply is not None, f"no MESSAGE_INTERVAL for {name}"
+            intervals[name] = int(reply.interval_us)
+        running.cancel()
+    return method, intervals
+
+
+def test_rates_are_set_per_message() -> None:
+    with serving(sim_config()) as (_server, address):
+        method, intervals = asyncio.run(
+            request_and_read_back(address.port, {"ATTITUDE": 4, "VFR_HUD": 0, "HOME_POSITION": 1})
+        )
+    assert method == "message_interval"
+    assert intervals == {
+        "GLOBAL_POSITION_INT": 100_000,  # the agent's default
+        "ATTITUDE": 250_000,  # overridden
+        "VFR_HUD": -1,  # stopped
+        "GPS_RAW_INT": 500_000,
+        "HOME_POSITION": 1_000_000,
+    }
+
+
+@pytest.mark.parametrize("support", ["unsupported", "silent"])
+def test_old_flight_controllers_get_data_streams(support: MessageIntervalSupport) -> None:
+    with serving(sim_config(message_interval=support)) as (_server, address):
+        method, intervals = asyncio.run(
+            request_and_read_back(address.port, {"ATTITUDE": 4, "VFR_HUD": 0, "HOME_POSITION": 1})
+        )
+    assert method == "data_stream"
+    assert intervals == {
+        "GLOBAL_POSITION_INT": 100_000,  # POSITION group at 10 Hz
+        "ATTITUDE": 250_000,  # EXTRA1 at the fastest of its messages
+        "VFR_HUD": -1,  # EXTRA2 stopped
+        "GPS_RAW_INT": 500_000,  # EXTENDED_STATUS at 2 Hz
+        "HOME_POSITION": 2_000_000,  # in no group: the simulator's default stays
+    }
+
+
+# -- a proxy that sees and spoils the link ----------------------------------------------
+
+
+class FcuTap:
+    """TCP between the agent and the flight controller: records what the agent sends, and
+    can corrupt (garbage, bad CRCs, truncated frames), silence or cut the other way."""
+
+    def __init__(self, target_port: int) -> None:
+        self.target = ("127.0.0.1", target_port)
+        self.port = free_port()
+        self.corrupt_every = 0  # frames between injections; 0 passes everything intact
+        self.injections = 0
+        self._silent = threading.Event()
+        self._changed = threading.Condition()
+        self._from_agent: list[Any] = []
+        self._sockets: list[socket.socket] = []
+        self._listener: socket.socket | None = None
+
+    def __enter__(self) -> FcuTap:
+        self.restore()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.cut()
+
+    def restore(self) -> None:
+        self._listener = socket.create_server(("127.0.0.1", self.port))
+        threading.Thread(target=self._accept, args=(self._listener,), daemon=True).start()
+
+    def cut(self) -> None:
+        """Drop every connection and refuse new ones, as an unplugged cable would."""
+        with self._changed:
+            listener, self._listener = self._listener, None
+            sockets, self._sockets = self._sockets, []
+        for each in [listener, *sockets]:
+            if each is not None:
+                with contextlib.suppress(OSError):
+                    each.shutdown(socket.SHUT_RDWR)
+                each.close()
+
+    def silence(self) -> None:
+        """Keep the connection but let nothing through, as a radio out of range."""
+        self._silent.set()
+
+    def speak(self) -> None:
+        self._silent.clear()
+
+    def interval_requests(self) -> int:
+        with self._changed:
+            return sum(1 for m in self._from_agent if _is_set_interval(m))
+
+    def wait_for_interval_requests(self, count: int, timeout_s: float) -> None:
+        with self._changed:
+            if not self._changed.wait_for(lambda: self.interval_requests() >= count, timeout_s):
+                raise AssertionError(
+                    f"the agent sent {self.interval_requests()} SET_MESSAGE_INTERVALs "
+                    f"within {timeout_s} s, expected {count}"
+                )
+
+    def _accept(self, listener: socket.socket) -> None:
+        while True:
+            try:
+                client, _ = listener.accept()
+            except OSError:
+                return  # cut
+            try:
+                upstream = socket.create_connection(self.target)
+            except OSError:
+                client.close()
+                continue
+            with self._changed:
+                self._sockets += [client, upstream]
+            threading.Thread(target=self._uplink, args=(client, upstream), daemon=True).start()
+            threading.Thread(target=self._downlink, args=(upstream, client), daemon=True).start()
+
+    def _uplink(self, agent: socket.socket, fcu: socket.socket) -> None:
+        parser = _robust_parser()
+        with _closing_both(agent, fcu):
+            while data := agent.recv(65536):
+                if self._silent.is_set():
+                    continue
+                decoded = [m for m in parser.parse_buffer(data) or [] if m.get_type() != "BAD_DATA"]
+                with self._changed:
+                    self._from_agent += decoded
+                    self._changed.notify_all()
+                fcu.sendall(data)
+
+    def _downlink(self, fcu: socket.socket, agent: socket.socket) -> None:
+        parser = _robust_parser()
+        frames = 0
+        with _closing_both(fcu, agent):
+            while data := fcu.recv(65536):
+                if self._silent.is_set():
+                    continue
+                out = bytearray()
+                for message in parser.parse_buffer(data) or []:
+                    frame = bytes(message.get_msgbuf())
+                    out += frame
+                    frames += 1
+                    if self.corrupt_every and frames % self.corrupt_every == 0:
+                        out += _spoiled(frame)
+                        self.injections += 1
+                agent.sendall(out)
+
+
+def _spoiled(frame: bytes) -> bytes:
+    """Garbage, the frame with a bad CRC, then the frame cut short (it swallows the start
+    of the next frame, as a dropped byte on a serial line does)."""
+    bad_crc = bytearray(frame)
+    bad_crc[-1] ^= 0xFF
+    return b"\x00\x13line noise\x37" + bytes(bad_crc) + frame[: len(frame) // 2]
+
+
+def _robust_parser() -> Any:
+    parser = mavlink2.MAVLink(None)
+    parser.robust_parsing = True
+    return parser
+
+
+def _is_set_interval(message: Any) -> bool:
+    return bool(message.get_type() == "COMMAND_LONG" and message.command == SET_MESSAGE_INTERVAL)
+
+
+@contextmanager
+def _closing_both(a: socket.socket, b: socket.socket) -> Iterator[None]:
+    try:
+        yield
+    except OSError:
+        pass
+    finally:
+        for each in (a, b):
+            with contextlib.suppress(OSError):
+                each.shutdown(socket.SHUT_RDWR)
+
+
+# -- the agent as a process ---------------------------------------------------------------
+
+
+@contextmanager
+def agent_process(
+    hub: str, token: str, vehicle_id: str, fcu_port: int, log_dir: Path
+) -> Iterator[subprocess.Popen[bytes]]:
+    with (log_dir / f"{vehicle_id}.log").open("wb") as log_file:
+        agent = subprocess.Popen(
+            [
+                sys.executable,
+                "-m",
+                "gcs",
+                "agent",
+                "--fcu",
+                f"tcp:127.0.0.1:{fcu_port}",
+                "--hub",
+                hub.replace("http://", "ws://"),
+                "--vehicle-id",
+                vehicle_id,
+            ],
+            env={**os.environ, "GCS_AGENT_TOKEN": token},
+            stdout=log_file,
+            stderr=subprocess.STDOUT,
+        )
+        try:
+            yield agent
+        finally:
+            agent.terminate()
+            agent.wait(10)
+
+
+def fcu_link_events(api: httpx.Client, vehicle: str, kind: str) -> list[dict[str, Any]]:
+    """The agent's events about its flight controller link, newest first (the hub logs
+    its own link_up/link_down for the agent's connection)."""
+    params = {"vehicle_id": vehicle, "kind": kind}
+    events: list[dict[str, Any]] = api.get("/api/v1/events", params=params).json()["events"]
+    return [event for event in events if event["text"].startswith("flight controller")]
+
+
+def wait_for_events(
+    api: httpx.Client, vehicle: str, kind: str, count: int, timeout_s: float
+) -> list[dict[str, Any]]:
+    """The agent has sent them; the hub's batching writer stores them: poll the store."""
+    deadline = time.monotonic() + timeout_s
+    while True:
+        events = fcu_link_events(api, vehicle, kind)
+        if len(events) >= count:
+            return events
+        assert time.monotonic() < deadline, f"{count} {kind} events expected, got {events}"
+        time.sleep(0.1)  # the writer flushes every 0.25 s
+
+
+def state_of(vehicle: str) -> Callable[[dict[str, dict[str, Any]]], dict[str, Any]]:
+    def state(vehicles: dict[str, dict[str, Any]]) -> dict[str, Any]:
+        summary = vehicles.get(vehicle) or {}
+        return dict(summary.get("state") or {}) if summary.get("connected") else {}
+
+    return state
+
+
+def test_garbage_on_the_fcu_link_is_skipped_and_counted(
+    hub: str, admin_token: str, enrol: Callable[[str], str], tmp_path: Path
+) -> None:
+    vehicle = "noisy"
+    state = state_of(vehicle)
+    with (
+        serving(sim_config()) as (_server, address),
+        FcuTap(address.port) as tap,
+        agent_process(hub, enrol(vehicle), vehicle, tap.port, tmp_path) as agent,
+        FleetWatcher(hub, admin_token) as watcher,
+    ):
+        watcher.wait_until(lambda v: state(v).get("lat") is not None, 30, "a clean link first")
+        # Each injection costs the few frames after it; a few seconds apart, they can
+        # never swallow three heartbeats in a row (which would rightly be a lost link).
+        tap.corrupt_every = 100
+        watcher.wait_until(
+            lambda v: state(v).get("fcu_receive_errors", 0) > 0, 15, "receive errors counted"
+        )
+        first = state(watcher.vehicles)["fcu_receive_errors"]
+        # the link survives: fresh telemetry keeps coming, with ever more errors skipped
+        watcher.wait_until(
+            lambda v: (
+                state(v).get("fcu_receive_errors", 0) >= first + 15
+                and state(v).get("fcu_connected") is True
+            ),
+            30,
+            "telemetry still flowing through the noise",
+        )
+        assert 0 < tap.injections <= state(watcher.vehicles)["fcu_receive_errors"]
+        with api_client(hub, admin_token) as api:
+            [summary] = [s for s in api.get("/api/v1/vehicles").json() if s["id"] == vehicle]
+            assert summary["state"]["fcu_receive_errors"] > first
+            assert summary["state"]["lat"] == pytest.approx(-35.363262, abs=1e-4)
+            assert summary["state"]["position_source"] == "GPS_RAW_INT"
+            assert fcu_link_events(api, vehicle, "link_down") == []
+        assert agent.poll() is None
+
+
+def test_a_lost_fcu_link_is_reported_retried_and_reshaped(
+    hub: str, admin_token: str, enrol: Callable[[str], str], tmp_path: Path
+) -> None:
+    vehicle = "tethered"
+    state = state_of(vehicle)
+    requests_per_round = len(DEFAULT_RATES_HZ)
+    with (
+        serving(sim_config()) as (_server, address),
+        FcuTap(address.port) as tap,
+        agent_process(hub, enrol(vehicle), vehicle, tap.port, tmp_path) as agent,
+        FleetWatcher(hub, admin_token) as watcher,
+        api_client(hub, admin_token) as api,
+    ):
+        watcher.wait_until(lambda v: state(v).get("fcu_connected") is True, 30, "the FCU link")
+        tap.wait_for_interval_requests(requests_per_round, 15)
+
+        # The cable is pulled: the socket closes, reconnecting is refused for a while.
+        tap.cut()
+        watcher.wait_until(lambda v: state(v).get("fcu_connected") is False, 15, "link lost")
+        [down] = wait_for_events(api, vehicle, "link_down", 1, 15)
+        assert "flight controller link lost" in down["text"]
+        tap.restore()
+        watcher.wait_until(lambda v: state(v).get("fcu_connected") is True, 20, "link back")
+        [up] = wait_for_events(api, vehicle, "link_up", 1, 15)
+        assert up["text"] == "flight controller link restored"
+        assert up["time"] >= down["time"]
+        # every rate is asked for again on the new connection
+        tap.wait_for_interval_requests(2 * requests_per_round, 15)
+
+        # The radio goes out of range: the connection stays, nothing comes through.
+        tap.silence()
+        watcher.wait_until(lambda v: state(v).get("fcu_connected") is False, 15, "silence")
+        downs = wait_for_events(api, vehicle, "link_down", 2, 15)
+        assert "flight controller link lost" in downs[0]["text"]
+        assert "3 s" in downs[0]["text"]  # the heartbeat (or any valid MAVLink) timeout
+        tap.speak()
+        watcher.wait_until(lambda v: state(v).get("fcu_connected") is True, 20, "heard again")
+        wait_for_events(api, vehicle, "link_up", 2, 15)
+        tap.wait_for_interval_requests(3 * requests_per_round, 15)
+        assert agent.poll() is None
+
+
+def test_position_source_follows_the_better_receiver(
+    hub: str, admin_token: str, enrol: Callable[[str], str], tmp_path: Path
+) -> None:
+    vehicle = "rtk"
+    state = state_of(vehicle)
+    config = sim_config(gps2_fix=mavlink2.GPS_FIX_TYPE_RTK_FIXED)
+    with (
+        serving(config) as (server, address),
+        agent_process(hub, enrol(vehicle), vehicle, address.port, tmp_path),
+        FleetWatcher(hub, admin_token) as watcher,
+    ):
+
+        def source(name: str, fix: int, satellites: int) -> Callable[[Any], bool]:
+            return lambda v: (
+                (
+                    state(v).get("position_source"),
+                    state(v).get("gps_fix"),
+                    state(v).get("satellites"),
+                )
+                == (name, fix, satellites)
+            )
+
+        watcher.wait_until(source("GPS2_RAW", 6, 18), 30, "the RTK receiver chosen")
+        unplug(server)
+        watcher.wait_until(source("GPS_RAW_INT", 3, 10), 15, "the primary GPS once RTK is stale")
+        plug_in(server, SecondGps(mavlink2.GPS_FIX_TYPE_RTK_FLOAT, 14))
+        watcher.wait_until(source("GPS2_RAW", 5, 14), 15, "the RTK receiver back")
+
+
+def unplug(server: SimulatorServer) -> None:
+    # One attribute, read by the simulator's loop thread at its next tick.
+    server.telemetry.gps2 = None
+
+
+def plug_in(server: SimulatorServer, gps2: SecondGps) -> None:
+    server.telemetry.gps2 = gps2

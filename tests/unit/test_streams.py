@@ -1,0 +1,91 @@
+"""The agent's stream plan: defaults, overrides, and the REQUEST_DATA_STREAM fallback."""
+
+from __future__ import annotations
+
+import pytest
+from pymavlink.dialects.v20 import ardupilotmega as mavlink2
+
+from vehicle_agents.streams import (
+    DATA_STREAM_GROUPS,
+    DEFAULT_RATES_HZ,
+    StreamRequest,
+    data_stream_rates,
+    message_id,
+    stream_plan,
+)
+
+
+def rates(plan: list[StreamRequest]) -> dict[str, float]:
+    return {request.message: request.rate_hz for request in plan}
+
+
+def test_the_defaults_cover_what_the_snapshot_reads() -> None:
+    plan = stream_plan({})
+    assert rates(plan) == dict(DEFAULT_RATES_HZ)
+    assert {"GLOBAL_POSITION_INT", "GPS_RAW_INT", "GPS2_RAW", "HOME_POSITION"} <= set(rates(plan))
+    assert plan[0].message == "GLOBAL_POSITION_INT"  # the probe: every autopilot has it
+    by_name = {request.message: request for request in plan}
+    assert by_name["GPS2_RAW"].msg_id == 124
+    assert by_name["GLOBAL_POSITION_INT"].interval_us == 100_000
+    assert by_name["HOME_POSITION"].interval_us == 5_000_000
+
+
+def test_overrides_merge_over_the_defaults() -> None:
+    plan = stream_plan({"attitude": 25, "RC_CHANNELS": 2, "GPS2_RAW": 0})
+    merged = rates(plan)
+    assert merged["ATTITUDE"] == 25.0
+    assert merged["RC_CHANNELS"] == 2.0  # extra messages are added
+    assert merged["GLOBAL_POSITION_INT"] == DEFAULT_RATES_HZ["GLOBAL_POSITION_INT"]
+    by_name = {request.message: request for request in plan}
+    assert by_name["GPS2_RAW"].interval_us == -1  # 0 Hz: stop it
+    assert by_name["ATTITUDE"].interval_us == 40_000
+    assert len(plan) == len(DEFAULT_RATES_HZ) + 1
+
+
+@pytest.mark.parametrize(
+    ("overrides", "error"),
+    [
+        ({"NOT_A_MESSAGE": 1.0}, "unknown MAVLink message 'NOT_A_MESSAGE'"),
+        ({"ATTITUDE": -1.0}, "ATTITUDE must be >= 0 Hz"),
+        ({"ATTITUDE": float("nan")}, "ATTITUDE must be >= 0 Hz"),
+    ],
+)
+def test_bad_rates_are_refused_before_connecting(overrides: dict[str, float], error: str) -> None:
+    with pytest.raises(ValueError, match=error):
+        stream_plan(overrides)
+
+
+def test_message_ids_come_from_the_dialect() -> None:
+    assert message_id("HEARTBEAT") == 0
+    assert message_id("EXTENDED_SYS_STATE") == 245
+    with pytest.raises(ValueError, match="unknown"):
+        message_id("MAV_CMD_NAV_LAND")
+
+
+def test_the_fallback_asks_each_group_at_its_fastest_member() -> None:
+    plan = stream_plan({"GPS_RAW_INT": 5, "GPS2_RAW": 0.5, "SYS_STATUS": 1.5})
+    groups = data_stream_rates(plan)
+    assert groups == {
+        mavlink2.MAV_DATA_STREAM_POSITION: 10,
+        mavlink2.MAV_DATA_STREAM_EXTRA1: 10,
+        mavlink2.MAV_DATA_STREAM_EXTRA2: 4,
+        mavlink2.MAV_DATA_STREAM_EXTENDED_STATUS: 5,
+        mavlink2.MAV_DATA_STREAM_EXTRA3: 1,  # BATTERY_STATUS
+    }
+    # fractional rates round up: the group is never slower than asked
+    assert data_stream_rates(stream_plan({"ATTITUDE": 0.2}))[mavlink2.MAV_DATA_STREAM_EXTRA1] == 1
+
+
+def test_a_group_whose_messages_are_all_stopped_is_stopped() -> None:
+    plan = stream_plan({"ATTITUDE": 0, "VFR_HUD": 0})
+    groups = data_stream_rates(plan)
+    assert groups[mavlink2.MAV_DATA_STREAM_EXTRA1] == 0
+    assert groups[mavlink2.MAV_DATA_STREAM_EXTRA2] == 0
+
+
+def test_groups_name_real_messages() -> None:
+    for names in DATA_STREAM_GROUPS.values():
+        for name in names:
+            message_id(name)
+    grouped = {name for names in DATA_STREAM_GROUPS.values() for name in names}
+    assert set(DEFAULT_RATES_HZ) - grouped == {"HOME_POSITION", "EXTENDED_SYS_STATE"}

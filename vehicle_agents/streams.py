@@ -1,0 +1,250 @@
+"""Telemetry shaping: ask the flight controller for the messages the agent uses, at the
+rates it uses them, each time the link comes up.
+
+MAV_CMD_SET_MESSAGE_INTERVAL sets one message's rate and is acknowledged. Flight
+controllers that answer it UNSUPPORTED, or not at all (old ArduPilot, some radios that
+drop COMMAND_LONG), get the older REQUEST_DATA_STREAM instead: one rate per group of
+messages (ArduPilot's SRx_ parameters), with no acknowledgement.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Literal
+
+from pymavlink.dialects.v20 import ardupilotmega as mavlink2
+
+from vehicle_agents.fcu_link import FcuLink, LinkChange, MavMessage
+
+log = logging.getLogger(__name__)
+
+# What the agent's snapshot reads (HEARTBEAT comes at 1 Hz without asking), in the order
+# they are requested: the first one also probes for SET_MESSAGE_INTERVAL support.
+DEFAULT_RATES_HZ: Mapping[str, float] = {
+    "GLOBAL_POSITION_INT": 10.0,
+    "ATTITUDE": 10.0,
+    "VFR_HUD": 4.0,
+    "SYS_STATUS": 2.0,
+    "GPS_RAW_INT": 2.0,
+    "GPS2_RAW": 2.0,
+    "BATTERY_STATUS": 1.0,
+    "MISSION_CURRENT": 1.0,
+    "EXTENDED_SYS_STATE": 1.0,
+    "HOME_POSITION": 0.2,
+}
+
+# REQUEST_DATA_STREAM's groups, as ArduPilot fills them (GCS_Common.cpp, the
+# STREAM_*_msgs tables; ArduCopter 4.x). Messages in no group (HOME_POSITION,
+# EXTENDED_SYS_STATE) can only be had through SET_MESSAGE_INTERVAL or on request.
+DATA_STREAM_GROUPS: Mapping[int, tuple[str, ...]] = {
+    mavlink2.MAV_DATA_STREAM_RAW_SENSORS: (
+        "RAW_IMU",
+        "SCALED_IMU2",
+        "SCALED_IMU3",
+        "SCALED_PRESSURE",
+        "SCALED_PRESSURE2",
+        "SCALED_PRESSURE3",
+    ),
+    mavlink2.MAV_DATA_STREAM_EXTENDED_STATUS: (
+        "SYS_STATUS",
+        "POWER_STATUS",
+        "MEMINFO",
+        "MISSION_CURRENT",
+        "GPS_RAW_INT",
+        "GPS_RTK",
+        "GPS2_RAW",
+        "GPS2_RTK",
+        "NAV_CONTROLLER_OUTPUT",
+        "FENCE_STATUS",
+        "POSITION_TARGET_GLOBAL_INT",
+    ),
+    mavlink2.MAV_DATA_STREAM_POSITION: ("GLOBAL_POSITION_INT", "LOCAL_POSITION_NED"),
+    mavlink2.MAV_DATA_STREAM_RC_CHANNELS: ("SERVO_OUTPUT_RAW", "RC_CHANNELS", "RC_CHANNELS_RAW"),
+    mavlink2.MAV_DATA_STREAM_EXTRA1: ("ATTITUDE", "SIMSTATE", "AHRS2", "PID_TUNING"),
+    mavlink2.MAV_DATA_STREAM_EXTRA2: ("VFR_HUD",),
+    mavlink2.MAV_DATA_STREAM_EXTRA3: (
+        "AHRS",
+        "WIND",
+        "RANGEFINDER",
+        "DISTANCE_SENSOR",
+        "SYSTEM_TIME",
+        "BATTERY_STATUS",
+        "EKF_STATUS_REPORT",
+        "VIBRATION",
+    ),
+}
+_GROUP_OF = {name: group for group, names in DATA_STREAM_GROUPS.items() for name in names}
+
+INTERVAL_DEFAULT_US = 0  # SET_MESSAGE_INTERVAL param2: the flight controller's default rate
+INTERVAL_DISABLED_US = -1  # ... and: stop sending
+MAX_DATA_STREAM_HZ = 65535  # REQUEST_DATA_STREAM.req_message_rate is a uint16
+
+Method = Literal["message_interval", "data_stream"]
+
+
+@dataclass(frozen=True)
+class StreamTimeouts:
+    # A flight controller that has not answered after this, ignores the command.
+    ack_s: float = 1.0
+    attempts: int = 2
+
+
+@dataclass(frozen=True)
+class StreamRequest:
+    """One message at one rate; 0 Hz stops it."""
+
+    message: str
+    msg_id: int
+    rate_hz: float
+
+    @property
+    def interval_us(self) -> int:
+        if self.rate_hz == 0:
+            return INTERVAL_DISABLED_US
+        return max(1, round(1e6 / self.rate_hz))
+
+
+def message_id(name: str) -> int:
+    """The MAVLink id of a message named as in the XML (``GPS2_RAW``)."""
+    msg_id = getattr(mavlink2, f"MAVLINK_MSG_ID_{name}", None)
+    if not isinstance(msg_id, int):
+        raise ValueError(f"unknown MAVLink message {name!r} in stream_rates_hz")
+    return msg_id
+
+
+def stream_plan(
+    overrides: Mapping[str, float], defaults: Mapping[str, float] = DEFAULT_RATES_HZ
+) -> list[StreamRequest]:
+    """The defaults with ``overrides`` merged over them (names are case-insensitive)."""
+    merged = dict(defaults)
+    for name, rate in overrides.items():
+        merged[name.upper()] = rate
+    plan = []
+    for name, rate in merged.items():
+        if not math.isfinite(rate) or rate < 0:
+            raise ValueError(f"stream_rates_hz: {name} must be >= 0 Hz (0 stops it), not {rate}")
+        plan.append(StreamRequest(name, message_id(name), float(rate)))
+    return plan
+
+
+def data_stream_rates(plan: list[StreamRequest]) -> dict[int, int]:
+    """REQUEST_DATA_STREAM rates (whole Hz, 0 stops) per group: the fastest of its messages."""
+    rates: dict[int, int] = {}
+    for request in plan:
+        group = _GROUP_OF.get(request.message)
+        if group is None:
+            continue
+        whole = min(math.ceil(request.rate_hz), MAX_DATA_STREAM_HZ)
+        rates[group] = max(rates.get(group, 0), whole)
+    return rates
+
+
+class StreamRequester:
+    """Requests the plan when the link comes up, and again after every reconnect."""
+
+    def __init__(
+        self,
+        link: FcuLink,
+        rates_hz: Mapping[str, float],
+        timeouts: StreamTimeouts | None = None,
+    ) -> None:
+        self.link = link
+        self.plan = stream_plan(rates_hz)
+        self.timeouts = timeouts or StreamTimeouts()
+        self.method: Method | None = None  # how the last round was asked for
+        self.rounds = 0
+        self._wanted = asyncio.Event()
+
+    async def run(self) -> None:
+        self.link.state_listeners.append(self._on_link_change)
+        try:
+            if self.link.up:
+                self._wanted.set()
+            while True:
+                await self._wanted.wait()
+                self._wanted.clear()
+                try:
+                    self.method = await self.request()
+                    self.rounds += 1
+                except ConnectionError as error:
+                    # The link went down mid-round; the next "up" starts a new one.
+                    log.info("stream requests interrupted: %s", error)
+        finally:
+            self.link.state_listeners.remove(self._on_link_change)
+
+    def _on_link_change(self, change: LinkChange) -> None:
+        if change.up:
+            self._wanted.set()
+
+    async def request(self) -> Method:
+        """One round: SET_MESSAGE_INTERVAL per message, or the fallback for all of them."""
+        answered = False
+        for request in self.plan:
+            result = await self._set_interval(request)
+            if result == mavlink2.MAV_RESULT_UNSUPPORTED or (result is None and not answered):
+                why = "refuses" if result is not None else "does not answer"
+                log.warning(
+                    "flight controller %s SET_MESSAGE_INTERVAL; asking with REQUEST_DATA_STREAM",
+                    why,
+                )
+                self.request_data_streams()
+                return "data_stream"
+            answered = True
+            if result != mavlink2.MAV_RESULT_ACCEPTED:
+                # e.g. FAILED for a message this vehicle does not have (no second GPS)
+                log.info(
+                    "%s at %g Hz not set: %s", request.message, request.rate_hz, _result(result)
+                )
+        log.info("requested %d message rates with SET_MESSAGE_INTERVAL", len(self.plan))
+        return "message_interval"
+
+    async def _set_interval(self, request: StreamRequest) -> int | None:
+        """The MAV_RESULT of one SET_MESSAGE_INTERVAL, or None if never acknowledged."""
+        for attempt in range(self.timeouts.attempts):
+            self.link.send_command_long(
+                mavlink2.MAV_CMD_SET_MESSAGE_INTERVAL,
+                attempt,
+                [request.msg_id, request.interval_us],
+            )
+            ack = await self.link.wait_for(_is_interval_ack, self.timeouts.ack_s)
+            if ack is not None:
+                return int(ack.result)
+        return None
+
+    def request_data_streams(self) -> None:
+        link = self.link
+        target = (link.target_system or 1, link.target_component)
+        for group, rate in data_stream_rates(self.plan).items():
+            link.send(
+                mavlink2.MAVLink_request_data_stream_message(
+                    *target, group, rate, 1 if rate > 0 else 0
+                )
+            )
+        if any(r.message == "HOME_POSITION" and r.rate_hz > 0 for r in self.plan):
+            # not streamed in any group; ask once (ArduPilot also sends it when it changes)
+            link.send_command_long(mavlink2.MAV_CMD_GET_HOME_POSITION, 0, [])
+        ungrouped = [
+            r.message
+            for r in self.plan
+            if r.message not in _GROUP_OF and r.message != "HOME_POSITION" and r.rate_hz > 0
+        ]
+        if ungrouped:
+            log.info("without SET_MESSAGE_INTERVAL, no stream carries %s", ", ".join(ungrouped))
+
+
+def _is_interval_ack(message: MavMessage) -> bool:
+    return bool(
+        message.get_type() == "COMMAND_ACK"
+        and message.command == mavlink2.MAV_CMD_SET_MESSAGE_INTERVAL
+    )
+
+
+def _result(result: int | None) -> str:
+    if result is None:
+        return "no answer"
+    entry = mavlink2.enums["MAV_RESULT"].get(result)
+    return entry.name if entry is not None else f"MAV_RESULT {result}"

@@ -270,13 +270,8 @@ class Copter(Vehicle):
         """Copter::set_mode for a GCS request."""
         if number == self.mode:
             return MavResult.ACCEPTED
-        try:
-            mode = CopterMode(number)
-        except ValueError:
-            self._say(Severity.WARNING, f"No such mode {number}")
-            return MavResult.FAILED
-        if mode not in SUPPORTED_MODES:
-            self._say(Severity.WARNING, f"Mode change to {mode.name} failed: not simulated")
+        mode = self._requested_mode(number, CopterMode, SUPPORTED_MODES)
+        if mode is None:
             return MavResult.FAILED
         ignore_checks = not self.armed  # any mode may be selected while disarmed
         if not ignore_checks and mode in _POSITION_MODES and not self.position_ok:

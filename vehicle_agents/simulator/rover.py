@@ -198,13 +198,8 @@ class Rover(Vehicle):
         """Rover::set_mode for a GCS request."""
         if number == self.mode:
             return MavResult.ACCEPTED
-        try:
-            mode = RoverMode(number)
-        except ValueError:
-            self._say(Severity.WARNING, f"No such mode {number}")
-            return MavResult.FAILED
-        if mode not in SUPPORTED_ROVER_MODES:
-            self._say(Severity.WARNING, f"Mode change to {mode.name} failed: not simulated")
+        mode = self._requested_mode(number, RoverMode, SUPPORTED_ROVER_MODES)
+        if mode is None:
             return MavResult.FAILED
         if mode is RoverMode.AUTO and self.mission_count == 0:
             self._say(Severity.NOTICE, "No Mission. Can't set AUTO.")  # ModeAuto::_enter

@@ -13,7 +13,7 @@ import random
 from abc import ABC, abstractmethod
 from dataclasses import dataclass
 from enum import Enum, IntEnum
-from typing import Self
+from typing import Self, TypeVar
 
 from vehicle_agents.simulator.battery import Battery
 from vehicle_agents.simulator.geo import GeoPoint, LocalFrame
@@ -77,6 +77,9 @@ class AutoPhase(Enum):
     LAND = "land"
     RTL = "rtl"
     DONE = "done"  # mission complete: hold where it ended
+
+
+ModeT = TypeVar("ModeT", bound=IntEnum)
 
 
 class Vehicle(ABC):
@@ -246,6 +249,20 @@ class Vehicle(ABC):
     def drain_texts(self) -> list[StatusText]:
         texts, self._texts = self._texts, []
         return texts
+
+    def _requested_mode(
+        self, number: int, modes: type[ModeT], supported: frozenset[ModeT]
+    ) -> ModeT | None:
+        """The mode a GCS asked for by number, or None once the refusal has been said."""
+        try:
+            mode = modes(number)
+        except ValueError:
+            self._say(Severity.WARNING, f"No such mode {number}")
+            return None
+        if mode not in supported:
+            self._say(Severity.WARNING, f"Mode change to {mode.name} failed: not simulated")
+            return None
+        return mode
 
     def _say(self, severity: Severity, text: str) -> None:
         self._texts.append(StatusText(severity, text))

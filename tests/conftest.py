@@ -12,8 +12,8 @@ from sqlalchemy import Engine
 
 from backend.settings import HubSettings
 from backend.storage.database import make_engine
-from gcs.launcher import FleetPlan, LocalFleet, free_port
-from tests.helpers import access_token, api_client, running_hub
+from gcs.launcher import LocalFleet, free_port
+from tests.helpers import access_token, api_client, running_fleet, running_hub
 
 ADMIN_PASSWORD = "test-admin-password"
 # Fast enough that a take-off and landing take seconds, slow enough that the
@@ -43,15 +43,9 @@ def hub(tmp_path: Path) -> Iterator[str]:
 @pytest.fixture(scope="session")
 def fleet(tmp_path_factory: pytest.TempPathFactory) -> Iterator[LocalFleet]:
     """Hub, three simulators and three agents as real processes on loopback."""
-    plan = FleetPlan(
-        vehicles=3,
-        port=free_port(),
-        data_dir=tmp_path_factory.mktemp("fleet"),
-        speedup=FLEET_SPEEDUP,
-    )
-    with LocalFleet(plan) as local_fleet:
-        local_fleet.start()
-        local_fleet.wait_until_ready()
+    with running_fleet(
+        tmp_path_factory.mktemp("fleet"), vehicles=3, speedup=FLEET_SPEEDUP
+    ) as local_fleet:
         yield local_fleet
 
 

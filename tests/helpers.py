@@ -4,10 +4,15 @@ from __future__ import annotations
 
 import asyncio
 import json
+import math
+import os
+import subprocess
+import sys
 import threading
 import time
 from collections.abc import Callable, Iterator
 from contextlib import ExitStack, contextmanager
+from pathlib import Path
 from typing import Any
 
 import httpx
@@ -16,7 +21,10 @@ from websockets.sync.client import ClientConnection, connect
 
 from backend.app import create_app
 from backend.settings import HubSettings
+from gcs.launcher import FleetPlan, LocalFleet, free_port
 from gcs.protocol import CLIENT_WS_PATH
+
+Vehicles = dict[str, dict[str, Any]]
 
 
 class _NotifyingServer(uvicorn.Server):
@@ -97,7 +105,42 @@ class FleetWatcher:
         return self.vehicles
 
     def state(self, vehicle_id: str) -> dict[str, Any]:
-        return self.vehicles.get(vehicle_id, {}).get("state") or {}
+        return state_of(self.vehicles, vehicle_id)
+
+
+# -- what a FleetWatcher waits for -----------------------------------------------------
+
+
+def state_of(vehicles: Vehicles, vehicle: str) -> dict[str, Any]:
+    """A vehicle's last state as the hub reported it; empty before the first."""
+    return (vehicles.get(vehicle) or {}).get("state") or {}
+
+
+def speed_of(state: dict[str, Any]) -> float:
+    """Ground speed; unknown counts as moving fast, so "stopped" is never assumed."""
+    speed = state.get("groundspeed")
+    return math.inf if speed is None else float(speed)
+
+
+def connected(vehicle: str) -> Callable[[Vehicles], bool]:
+    """A predicate for `FleetWatcher.wait_until`: the vehicle's agent is connected."""
+    return lambda vehicles: bool((vehicles.get(vehicle) or {}).get("connected"))
+
+
+def ready(vehicle: str) -> Callable[[Vehicles], bool]:
+    """A predicate for `FleetWatcher.wait_until`: connected, with a 3D fix, a home and
+    a battery reading, so that a command has all it could check."""
+
+    def check(vehicles: Vehicles) -> bool:
+        state = state_of(vehicles, vehicle)
+        return bool(
+            connected(vehicle)(vehicles)
+            and state.get("gps_fix", 0) >= 3
+            and state.get("home_lat") is not None
+            and state.get("battery_remaining") is not None
+        )
+
+    return check
 
 
 def access_token(base_url: str, username: str, password: str) -> str:
@@ -114,3 +157,62 @@ def api_client(base_url: str, token: str, timeout_s: float = 30) -> httpx.Client
     return httpx.Client(
         base_url=base_url, timeout=timeout_s, headers={"Authorization": f"Bearer {token}"}
     )
+
+
+def send_command(api: httpx.Client, vehicle: str, **command: Any) -> dict[str, Any]:
+    """A command through the REST API, which must answer 200; returns its outcome."""
+    response = api.post(f"/api/v1/vehicles/{vehicle}/commands", json=command)
+    assert response.status_code == 200, response.text
+    outcome: dict[str, Any] = response.json()["outcome"]
+    return outcome
+
+
+# -- processes -------------------------------------------------------------------------
+
+
+@contextmanager
+def running_fleet(data_dir: Path, **plan: Any) -> Iterator[LocalFleet]:
+    """Hub, simulators and agents as real processes on loopback, started and ready;
+    ``plan`` is what differs from `FleetPlan`'s defaults (vehicles, speedup, frames...)."""
+    with LocalFleet(FleetPlan(port=free_port(), data_dir=data_dir, **plan)) as fleet:
+        fleet.start()
+        fleet.wait_until_ready()
+        yield fleet
+
+
+@contextmanager
+def agent_process(
+    hub: str, token: str, vehicle_id: str, fcu_port: int, log_dir: Path | None = None
+) -> Iterator[subprocess.Popen[bytes]]:
+    """`gcs agent` as a process between a flight controller on loopback TCP at
+    ``fcu_port`` and the hub
+    at ``hub`` (its http:// URL); its output goes to ``log_dir/<vehicle_id>.log`` if
+    given, else where the test's goes."""
+    with ExitStack() as stack:
+        log = (
+            None
+            if log_dir is None
+            else stack.enter_context((log_dir / f"{vehicle_id}.log").open("wb"))
+        )
+        agent = subprocess.Popen(
+            [
+                sys.executable,
+                "-m",
+                "gcs",
+                "agent",
+                "--fcu",
+                f"tcp:127.0.0.1:{fcu_port}",
+                "--hub",
+                hub.replace("http://", "ws://"),
+                "--vehicle-id",
+                vehicle_id,
+            ],
+            env={**os.environ, "GCS_AGENT_TOKEN": token},
+            stdout=log,
+            stderr=None if log is None else subprocess.STDOUT,
+        )
+        try:
+            yield agent
+        finally:
+            agent.terminate()
+            agent.wait(10)

@@ -1,24 +1,19 @@
 """The agent's command exchange against a scripted flight controller over real TCP.
 
-`ScriptedFlightController` is a MAVLink peer that sends heartbeats and answers each
-command as the test scripts it: MAV_RESULT_IN_PROGRESS acks with progress and then a
-final ACK, an ACK that never ends, a silent refusal. The agent's `CommandExecutor` runs
-in-process with short timeouts, over its real `FcuLink`; one case goes the whole way
-through the hub's REST API and an agent process.
+`ScriptedFlightController` (tests/mavlink_peer.py) is a MAVLink peer that sends
+heartbeats and answers each command as the test scripts it: MAV_RESULT_IN_PROGRESS acks
+with progress and then a final ACK, an ACK that never ends, a silent refusal. The
+agent's `CommandExecutor` runs in-process with short timeouts, over its real `FcuLink`;
+one case goes the whole way through the hub's REST API and an agent process.
 """
 
 from __future__ import annotations
 
 import asyncio
 import contextlib
-import os
-import socket
 import subprocess
-import sys
-import threading
 import time
 from collections.abc import Awaitable, Callable, Iterator
-from dataclasses import dataclass
 from typing import Any, TypeVar
 
 import pytest
@@ -35,163 +30,18 @@ from gcs.protocol import (
     SetHomeCommand,
     TakeoffCommand,
 )
-from tests.helpers import FleetWatcher, api_client
+from tests.helpers import FleetWatcher, agent_process, api_client, connected
+from tests.mavlink_peer import HOME_ALT_MSL, Answer, Script, ScriptedFlightController
 from vehicle_agents.commands import CommandExecutor, CommandTimeouts
 from vehicle_agents.fcu_link import FcuLink, MavMessage
 
 pytestmark = pytest.mark.integration
 
-SYSID = 9
 IN_PROGRESS = mavlink2.MAV_RESULT_IN_PROGRESS
 ACCEPTED = mavlink2.MAV_RESULT_ACCEPTED
-HOME_ALT_MSL = 584.0
 # Short enough that a case takes a second or two, long enough for a loaded machine.
 TIMEOUTS = CommandTimeouts(ack_s=0.5, attempts=3, in_progress_s=1.5)
 T = TypeVar("T")
-
-
-@dataclass(frozen=True)
-class Answer:
-    """A COMMAND_ACK (or STATUSTEXT) the peer sends ``after_s`` seconds after a command."""
-
-    after_s: float
-    result: int | None = None  # None: send ``text`` instead
-    progress: int = 0
-    text: str = ""
-
-
-Script = Callable[[MavMessage], list[Answer]]
-
-
-class ScriptedFlightController:
-    """A real MAVLink peer on TCP: an autopilot's heartbeat and a little telemetry, and
-    for each command the answers its script gives (no script: no answer)."""
-
-    def __init__(
-        self,
-        *,
-        autopilot: int = mavlink2.MAV_AUTOPILOT_ARDUPILOTMEGA,
-        mav_type: int = mavlink2.MAV_TYPE_QUADROTOR,
-        armed: bool = False,
-        in_air: bool = False,
-    ) -> None:
-        self.autopilot, self.mav_type, self.armed, self.in_air = autopilot, mav_type, armed, in_air
-        self.scripts: dict[int, Script] = {}
-        self.received: list[MavMessage] = []  # every message from the agent, in order
-        self._lock = threading.Lock()
-        self._arrived = threading.Condition(self._lock)
-        self._server = socket.create_server(("127.0.0.1", 0))
-        self.port = int(self._server.getsockname()[1])
-        self._stop = threading.Event()
-        self._thread = threading.Thread(target=self._serve, daemon=True)
-
-    def __enter__(self) -> ScriptedFlightController:
-        self._thread.start()
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self._stop.set()
-        self._server.close()
-        self._thread.join(5)
-
-    def commands(self, command: int) -> list[MavMessage]:
-        with self._lock:
-            return [
-                m
-                for m in self.received
-                if m.get_type() in ("COMMAND_LONG", "COMMAND_INT") and m.command == command
-            ]
-
-    def kinds(self) -> list[str]:
-        with self._lock:
-            return [m.get_type() for m in self.received]
-
-    def wait_for_command(self, command: int, timeout_s: float) -> MavMessage:
-        with self._arrived:
-            found = self._arrived.wait_for(lambda: self._first(command), timeout_s)
-            assert found, f"command {command} never reached the flight controller"
-            return found
-
-    def _first(self, command: int) -> MavMessage | None:
-        for m in self.received:
-            if m.get_type() in ("COMMAND_LONG", "COMMAND_INT") and m.command == command:
-                return m
-        return None
-
-    def _telemetry(self) -> list[MavMessage]:
-        base = mavlink2.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED
-        if self.armed:
-            base |= mavlink2.MAV_MODE_FLAG_SAFETY_ARMED
-        landed = mavlink2.MAV_LANDED_STATE_IN_AIR if self.in_air else 1
-        return [
-            mavlink2.MAVLink_heartbeat_message(
-                self.mav_type, self.autopilot, base, 4, mavlink2.MAV_STATE_STANDBY, 3
-            ),
-            mavlink2.MAVLink_extended_sys_state_message(0, landed),
-            mavlink2.MAVLink_home_position_message(
-                -353632620, 1491652370, round(HOME_ALT_MSL * 1000), 0, 0, 0, [1, 0, 0, 0], 0, 0, 0
-            ),
-        ]
-
-    def _serve(self) -> None:
-        mav = mavlink2.MAVLink(None, srcSystem=SYSID, srcComponent=1)
-        parser = mavlink2.MAVLink(None)
-        parser.robust_parsing = True
-        try:
-            peer, _ = self._server.accept()
-        except OSError:
-            return  # closed before the agent came
-        with peer, contextlib.suppress(ConnectionError):  # the agent went away: done
-            peer.settimeout(0.02)
-            self._exchange(peer, mav, parser)
-
-    def _exchange(self, peer: socket.socket, mav: Any, parser: Any) -> None:
-        pending: list[tuple[float, MavMessage]] = []
-        next_beat = 0.0
-        while not self._stop.is_set():
-            now = time.monotonic()
-            if now >= next_beat:
-                for message in self._telemetry():
-                    peer.sendall(message.pack(mav))
-                next_beat = now + 0.2
-            for due in [p for p in pending if p[0] <= now]:
-                pending.remove(due)
-                peer.sendall(due[1].pack(mav))
-            try:
-                data = peer.recv(4096)
-            except TimeoutError:
-                continue
-            if not data:
-                return
-            for message in parser.parse_buffer(data) or []:
-                pending += self._answer(message, now)
-
-    def _answer(self, message: MavMessage, now: float) -> list[tuple[float, MavMessage]]:
-        with self._arrived:
-            self.received.append(message)
-            self._arrived.notify_all()
-        if message.get_type() not in ("COMMAND_LONG", "COMMAND_INT"):
-            return []
-        script = self.scripts.get(message.command)
-        if script is None:
-            return []
-        replies = []
-        for answer in script(message):
-            if answer.result is None:
-                reply = mavlink2.MAVLink_statustext_message(
-                    mavlink2.MAV_SEVERITY_CRITICAL, answer.text.encode()
-                )
-            else:
-                reply = mavlink2.MAVLink_command_ack_message(
-                    message.command,
-                    answer.result,
-                    answer.progress,
-                    0,
-                    message.get_srcSystem(),
-                    message.get_srcComponent(),
-                )
-            replies.append((now + answer.after_s, reply))
-        return replies
 
 
 def with_executor(
@@ -393,27 +243,11 @@ def test_a_bad_mission_item_is_refused_before_anything_is_sent() -> None:
 def scripted_agent(
     hub: str, enrol: Callable[[str], str]
 ) -> Iterator[tuple[ScriptedFlightController, subprocess.Popen[bytes]]]:
-    with ScriptedFlightController() as fcu:
-        agent = subprocess.Popen(
-            [
-                sys.executable,
-                "-m",
-                "gcs",
-                "agent",
-                "--fcu",
-                f"tcp:127.0.0.1:{fcu.port}",
-                "--hub",
-                hub.replace("http://", "ws://"),
-                "--vehicle-id",
-                "scripted",
-            ],
-            env={**os.environ, "GCS_AGENT_TOKEN": enrol("scripted")},
-        )
-        try:
-            yield fcu, agent
-        finally:
-            agent.terminate()
-            agent.wait(10)
+    with (
+        ScriptedFlightController() as fcu,
+        agent_process(hub, enrol("scripted"), "scripted", fcu.port) as agent,
+    ):
+        yield fcu, agent
 
 
 def test_in_progress_through_the_hub(
@@ -424,9 +258,7 @@ def test_in_progress_through_the_hub(
     fcu, _agent = scripted_agent
     fcu.scripts[mavlink2.MAV_CMD_DO_CHANGE_SPEED] = in_progress_then(ACCEPTED)
     with FleetWatcher(hub, admin_token) as watcher:
-        watcher.wait_until(
-            lambda v: "scripted" in v and v["scripted"]["connected"], 30, "the agent to connect"
-        )
+        watcher.wait_until(connected("scripted"), 30, "the agent to connect")
     with api_client(hub, admin_token) as api:
         response = api.post(
             "/api/v1/vehicles/scripted/commands",

@@ -15,8 +15,17 @@ from typing import Any
 import httpx
 import pytest
 
-from gcs.launcher import FleetPlan, LocalFleet, free_port
-from tests.helpers import FleetWatcher, access_token, api_client
+from gcs.launcher import FleetPlan, LocalFleet
+from tests.helpers import (
+    FleetWatcher,
+    access_token,
+    api_client,
+    ready,
+    running_fleet,
+    send_command,
+    speed_of,
+    state_of,
+)
 
 pytestmark = pytest.mark.integration
 
@@ -26,15 +35,8 @@ NORTH = 1 / 111_320  # degrees of latitude per metre, near enough
 
 @pytest.fixture(scope="module")
 def fleet(tmp_path_factory: pytest.TempPathFactory) -> Iterator[LocalFleet]:
-    plan = FleetPlan(
-        vehicles=3,
-        port=free_port(),
-        data_dir=tmp_path_factory.mktemp("operator-commands"),
-        speedup=SPEEDUP,
-    )
-    with LocalFleet(plan) as local_fleet:
-        local_fleet.start()
-        local_fleet.wait_until_ready()
+    data_dir = tmp_path_factory.mktemp("operator-commands")
+    with running_fleet(data_dir, vehicles=3, speedup=SPEEDUP) as local_fleet:
         yield local_fleet
 
 
@@ -55,22 +57,6 @@ def api(fleet: LocalFleet, token: str) -> Iterator[httpx.Client]:
         yield client
 
 
-def state_of(vehicles: dict[str, dict[str, Any]], vehicle: str) -> dict[str, Any]:
-    return (vehicles.get(vehicle) or {}).get("state") or {}
-
-
-def speed_of(state: dict[str, Any]) -> float:
-    speed = state.get("groundspeed")
-    return math.inf if speed is None else float(speed)
-
-
-def send(api: httpx.Client, vehicle: str, **command: Any) -> dict[str, Any]:
-    response = api.post(f"/api/v1/vehicles/{vehicle}/commands", json=command)
-    assert response.status_code == 200, response.text
-    outcome: dict[str, Any] = response.json()["outcome"]
-    return outcome
-
-
 def metres(a: dict[str, Any], lat: float, lon: float) -> float:
     north = (a["lat"] - lat) / NORTH
     east = (a["lon"] - lon) / NORTH * math.cos(math.radians(lat))
@@ -79,15 +65,8 @@ def metres(a: dict[str, Any], lat: float, lon: float) -> float:
 
 def airborne(api: httpx.Client, watcher: FleetWatcher, vehicle: str) -> dict[str, Any]:
     """Up at 10 m in GUIDED; returns the state there."""
-    watcher.wait_until(
-        lambda v: (
-            state_of(v, vehicle).get("gps_fix", 0) >= 3
-            and state_of(v, vehicle).get("home_lat") is not None
-        ),
-        60,
-        f"{vehicle} ready",
-    )
-    assert send(api, vehicle, name="takeoff", altitude=10)["status"] == "accepted"
+    watcher.wait_until(ready(vehicle), 60, f"{vehicle} ready")
+    assert send_command(api, vehicle, name="takeoff", altitude=10)["status"] == "accepted"
     watcher.wait_until(
         lambda v: (state_of(v, vehicle).get("alt_rel") or 0) > 9.5, 60, f"{vehicle} at 10 m"
     )
@@ -97,7 +76,7 @@ def airborne(api: httpx.Client, watcher: FleetWatcher, vehicle: str) -> dict[str
 def cruising(api: httpx.Client, watcher: FleetWatcher, vehicle: str) -> dict[str, Any]:
     """On its way to a point 400 m north, at WPNAV_SPEED."""
     here = airborne(api, watcher, vehicle)
-    goto = send(
+    goto = send_command(
         api, vehicle, name="goto", lat=here["lat"] + 400 * NORTH, lon=here["lon"], altitude=10
     )
     assert goto["status"] == "accepted", goto
@@ -111,7 +90,7 @@ def test_hold_brakes_and_holds_and_change_speed_paces_the_goto(
     vehicle = "sim_1"
     cruising(api, watcher, vehicle)
 
-    slower = send(api, vehicle, name="change_speed", speed=2, speed_type="ground")
+    slower = send_command(api, vehicle, name="change_speed", speed=2, speed_type="ground")
     assert slower["status"] == "accepted", slower
     assert slower["result"] == "MAV_RESULT_ACCEPTED"
     watcher.wait_until(
@@ -121,7 +100,7 @@ def test_hold_brakes_and_holds_and_change_speed_paces_the_goto(
     )
 
     before = state_of(watcher.vehicles, vehicle)
-    hold = send(api, vehicle, name="hold")
+    hold = send_command(api, vehicle, name="hold")
     assert hold["status"] == "accepted", hold
     stopped = watcher.wait_until(
         lambda v: (
@@ -138,7 +117,7 @@ def test_hold_brakes_and_holds_and_change_speed_paces_the_goto(
     )
     assert metres(state_of(later, vehicle), stop["lat"], stop["lon"]) < 0.5
     assert abs((state_of(later, vehicle).get("alt_rel") or 0) - 10) < 0.5
-    assert send(api, vehicle, name="land")["status"] == "accepted"
+    assert send_command(api, vehicle, name="land")["status"] == "accepted"
 
 
 def test_set_home_moves_home_and_rtl_goes_there(api: httpx.Client, watcher: FleetWatcher) -> None:
@@ -146,7 +125,7 @@ def test_set_home_moves_home_and_rtl_goes_there(api: httpx.Client, watcher: Flee
     here = airborne(api, watcher, vehicle)
     home_alt = here["home_alt_msl"]
     lat, lon = here["home_lat"] + 30 * NORTH, here["home_lon"]
-    outcome = send(
+    outcome = send_command(
         api, vehicle, name="set_home", use_current=False, lat=lat, lon=lon, alt_msl=home_alt
     )
     assert outcome["status"] == "accepted", outcome
@@ -157,7 +136,7 @@ def test_set_home_moves_home_and_rtl_goes_there(api: httpx.Client, watcher: Flee
     )
     assert state_of(moved, vehicle)["home_lon"] == pytest.approx(lon, abs=1e-6)
 
-    assert send(api, vehicle, name="rtl")["status"] == "accepted"
+    assert send_command(api, vehicle, name="rtl")["status"] == "accepted"
     landed = watcher.wait_until(
         lambda v: not state_of(v, vehicle).get("armed"), 120, "the RTL to land and disarm"
     )
@@ -186,7 +165,7 @@ def test_set_home_moves_home_and_rtl_goes_there(api: httpx.Client, watcher: Flee
     [violation] = far.json()["violations"]
     assert violation["rule"] == "geofence"
     assert "RTL would fly there" in violation["message"]
-    assert send(api, vehicle, name="set_home")["status"] == "accepted"  # here: inside
+    assert send_command(api, vehicle, name="set_home")["status"] == "accepted"  # here: inside
 
 
 def test_disarm_and_reboot_refused_in_flight_then_forced_disarm_and_reboot(
@@ -195,17 +174,17 @@ def test_disarm_and_reboot_refused_in_flight_then_forced_disarm_and_reboot(
     vehicle = "sim_3"
     airborne(api, watcher, vehicle)
 
-    reboot = send(api, vehicle, name="reboot")
+    reboot = send_command(api, vehicle, name="reboot")
     assert reboot["status"] == "refused"
     assert reboot["result"] == "MAV_RESULT_FAILED"
     assert "the vehicle is armed" in reboot["message"]
 
-    plain = send(api, vehicle, name="disarm")
+    plain = send_command(api, vehicle, name="disarm")
     assert plain["status"] == "refused"
     assert "in the air" in plain["message"]
     assert state_of(watcher.vehicles, vehicle)["armed"]
 
-    forced = send(api, vehicle, name="disarm", force=True)
+    forced = send_command(api, vehicle, name="disarm", force=True)
     assert forced["status"] == "accepted", forced
     watcher.wait_until(
         lambda v: (
@@ -217,7 +196,7 @@ def test_disarm_and_reboot_refused_in_flight_then_forced_disarm_and_reboot(
     )
     assert state_of(watcher.vehicles, vehicle)["mode"] == "GUIDED"
 
-    accepted = send(api, vehicle, name="reboot")
+    accepted = send_command(api, vehicle, name="reboot")
     assert accepted["status"] == "accepted", accepted
     watcher.wait_until(
         lambda v: not state_of(v, vehicle).get("fcu_connected", True),
@@ -233,7 +212,7 @@ def test_disarm_and_reboot_refused_in_flight_then_forced_disarm_and_reboot(
         "the flight controller back, freshly booted",
     )
     assert back[vehicle]["connected"]
-    assert send(api, vehicle, name="set_mode", mode="GUIDED")["status"] == "accepted"
+    assert send_command(api, vehicle, name="set_mode", mode="GUIDED")["status"] == "accepted"
 
 
 def test_a_bad_mission_item_is_refused_with_its_index(

@@ -2,22 +2,16 @@
 the wire, a link cut or silenced and restored, and a better GPS coming and going.
 
 The simulator runs in-process; the agent is a real process talking to it over TCP, either
-directly or through ``FcuTap``, a proxy that reads what the agent asks for and can
+directly or through ``FcuTap``, a `CuttableProxy` that reads what the agent asks for and can
 corrupt, silence or cut what the flight controller sends back.
 """
 
 from __future__ import annotations
 
 import asyncio
-import contextlib
-import os
-import socket
-import subprocess
-import sys
 import threading
 import time
-from collections.abc import Callable, Iterator
-from contextlib import contextmanager
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -25,9 +19,9 @@ import httpx
 import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
-from gcs.launcher import free_port
-from tests.helpers import FleetWatcher, api_client
+from tests.helpers import FleetWatcher, agent_process, api_client
 from tests.simulator.test_sim_server import serving
+from tests.tcp_proxy import CuttableProxy, Filter
 from vehicle_agents.fcu_link import FcuLink
 from vehicle_agents.simulator import ListenAddress, SimulatorConfig, SimulatorServer
 from vehicle_agents.simulator.config import MessageIntervalSupport
@@ -108,42 +102,17 @@ def test_old_flight_controllers_get_data_streams(support: MessageIntervalSupport
 # -- a proxy that sees and spoils the link ----------------------------------------------
 
 
-class FcuTap:
+class FcuTap(CuttableProxy):
     """TCP between the agent and the flight controller: records what the agent sends, and
     can corrupt (garbage, bad CRCs, truncated frames), silence or cut the other way."""
 
     def __init__(self, target_port: int) -> None:
-        self.target = ("127.0.0.1", target_port)
-        self.port = free_port()
+        super().__init__(("127.0.0.1", target_port))
         self.corrupt_every = 0  # frames between injections; 0 passes everything intact
         self.injections = 0
         self._silent = threading.Event()
         self._changed = threading.Condition()
         self._from_agent: list[Any] = []
-        self._sockets: list[socket.socket] = []
-        self._listener: socket.socket | None = None
-
-    def __enter__(self) -> FcuTap:
-        self.restore()
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.cut()
-
-    def restore(self) -> None:
-        self._listener = socket.create_server(("127.0.0.1", self.port))
-        threading.Thread(target=self._accept, args=(self._listener,), daemon=True).start()
-
-    def cut(self) -> None:
-        """Drop every connection and refuse new ones, as an unplugged cable would."""
-        with self._changed:
-            listener, self._listener = self._listener, None
-            sockets, self._sockets = self._sockets, []
-        for each in [listener, *sockets]:
-            if each is not None:
-                with contextlib.suppress(OSError):
-                    each.shutdown(socket.SHUT_RDWR)
-                each.close()
 
     def silence(self) -> None:
         """Keep the connection but let nothing through, as a radio out of range."""
@@ -164,50 +133,42 @@ class FcuTap:
                     f"within {timeout_s} s, expected {count}"
                 )
 
-    def _accept(self, listener: socket.socket) -> None:
-        while True:
-            try:
-                client, _ = listener.accept()
-            except OSError:
-                return  # cut
-            try:
-                upstream = socket.create_connection(self.target)
-            except OSError:
-                client.close()
-                continue
-            with self._changed:
-                self._sockets += [client, upstream]
-            threading.Thread(target=self._uplink, args=(client, upstream), daemon=True).start()
-            threading.Thread(target=self._downlink, args=(upstream, client), daemon=True).start()
+    def filters(self) -> tuple[Filter, Filter]:
+        return self._uplink(), self._downlink()
 
-    def _uplink(self, agent: socket.socket, fcu: socket.socket) -> None:
+    def _uplink(self) -> Filter:
         parser = _robust_parser()
-        with _closing_both(agent, fcu):
-            while data := agent.recv(65536):
-                if self._silent.is_set():
-                    continue
-                decoded = [m for m in parser.parse_buffer(data) or [] if m.get_type() != "BAD_DATA"]
-                with self._changed:
-                    self._from_agent += decoded
-                    self._changed.notify_all()
-                fcu.sendall(data)
 
-    def _downlink(self, fcu: socket.socket, agent: socket.socket) -> None:
+        def record(data: bytes) -> bytes:
+            if self._silent.is_set():
+                return b""
+            decoded = [m for m in parser.parse_buffer(data) or [] if m.get_type() != "BAD_DATA"]
+            with self._changed:
+                self._from_agent += decoded
+                self._changed.notify_all()
+            return data
+
+        return record
+
+    def _downlink(self) -> Filter:
         parser = _robust_parser()
         frames = 0
-        with _closing_both(fcu, agent):
-            while data := fcu.recv(65536):
-                if self._silent.is_set():
-                    continue
-                out = bytearray()
-                for message in parser.parse_buffer(data) or []:
-                    frame = bytes(message.get_msgbuf())
-                    out += frame
-                    frames += 1
-                    if self.corrupt_every and frames % self.corrupt_every == 0:
-                        out += _spoiled(frame)
-                        self.injections += 1
-                agent.sendall(out)
+
+        def reframe_and_spoil(data: bytes) -> bytes:
+            nonlocal frames
+            if self._silent.is_set():
+                return b""
+            out = bytearray()
+            for message in parser.parse_buffer(data) or []:
+                frame = bytes(message.get_msgbuf())
+                out += frame
+                frames += 1
+                if self.corrupt_every and frames % self.corrupt_every == 0:
+                    out += _spoiled(frame)
+                    self.injections += 1
+            return bytes(out)
+
+        return reframe_and_spoil
 
 
 def _spoiled(frame: bytes) -> bytes:
@@ -228,48 +189,7 @@ def _is_set_interval(message: Any) -> bool:
     return bool(message.get_type() == "COMMAND_LONG" and message.command == SET_MESSAGE_INTERVAL)
 
 
-@contextmanager
-def _closing_both(a: socket.socket, b: socket.socket) -> Iterator[None]:
-    try:
-        yield
-    except OSError:
-        pass
-    finally:
-        for each in (a, b):
-            with contextlib.suppress(OSError):
-                each.shutdown(socket.SHUT_RDWR)
-
-
-# -- the agent as a process ---------------------------------------------------------------
-
-
-@contextmanager
-def agent_process(
-    hub: str, token: str, vehicle_id: str, fcu_port: int, log_dir: Path
-) -> Iterator[subprocess.Popen[bytes]]:
-    with (log_dir / f"{vehicle_id}.log").open("wb") as log_file:
-        agent = subprocess.Popen(
-            [
-                sys.executable,
-                "-m",
-                "gcs",
-                "agent",
-                "--fcu",
-                f"tcp:127.0.0.1:{fcu_port}",
-                "--hub",
-                hub.replace("http://", "ws://"),
-                "--vehicle-id",
-                vehicle_id,
-            ],
-            env={**os.environ, "GCS_AGENT_TOKEN": token},
-            stdout=log_file,
-            stderr=subprocess.STDOUT,
-        )
-        try:
-            yield agent
-        finally:
-            agent.terminate()
-            agent.wait(10)
+# -- what the agent reports --------------------------------------------------------------
 
 
 def fcu_link_events(api: httpx.Client, vehicle: str, kind: str) -> list[dict[str, Any]]:
@@ -309,7 +229,7 @@ def test_garbage_on_the_fcu_link_is_skipped_and_counted(
     with (
         serving(sim_config()) as (_server, address),
         FcuTap(address.port) as tap,
-        agent_process(hub, enrol(vehicle), vehicle, tap.port, tmp_path) as agent,
+        agent_process(hub, enrol(vehicle), vehicle, tap.port, log_dir=tmp_path) as agent,
         FleetWatcher(hub, admin_token) as watcher,
     ):
         watcher.wait_until(lambda v: state(v).get("lat") is not None, 30, "a clean link first")
@@ -348,7 +268,7 @@ def test_a_lost_fcu_link_is_reported_retried_and_reshaped(
     with (
         serving(sim_config()) as (_server, address),
         FcuTap(address.port) as tap,
-        agent_process(hub, enrol(vehicle), vehicle, tap.port, tmp_path) as agent,
+        agent_process(hub, enrol(vehicle), vehicle, tap.port, log_dir=tmp_path) as agent,
         FleetWatcher(hub, admin_token) as watcher,
         api_client(hub, admin_token) as api,
     ):
@@ -360,7 +280,7 @@ def test_a_lost_fcu_link_is_reported_retried_and_reshaped(
         watcher.wait_until(lambda v: state(v).get("fcu_connected") is False, 15, "link lost")
         [down] = wait_for_events(api, vehicle, "link_down", 1, 15)
         assert "flight controller link lost" in down["text"]
-        tap.restore()
+        tap.start()  # plugged back in
         watcher.wait_until(lambda v: state(v).get("fcu_connected") is True, 20, "link back")
         [up] = wait_for_events(api, vehicle, "link_up", 1, 15)
         assert up["text"] == "flight controller link restored"
@@ -389,7 +309,7 @@ def test_position_source_follows_the_better_receiver(
     config = sim_config(gps2_fix=mavlink2.GPS_FIX_TYPE_RTK_FIXED)
     with (
         serving(config) as (server, address),
-        agent_process(hub, enrol(vehicle), vehicle, address.port, tmp_path),
+        agent_process(hub, enrol(vehicle), vehicle, address.port, log_dir=tmp_path),
         FleetWatcher(hub, admin_token) as watcher,
     ):
 

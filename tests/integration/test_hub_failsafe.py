@@ -10,8 +10,8 @@ from pathlib import Path
 
 import pytest
 
-from gcs.launcher import FleetPlan, LocalFleet, free_port
-from tests.helpers import FleetWatcher, access_token, api_client
+from gcs.launcher import LocalFleet
+from tests.helpers import FleetWatcher, access_token, api_client, ready, running_fleet
 
 pytestmark = pytest.mark.integration
 
@@ -23,10 +23,7 @@ def rtl_on_hub_loss(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Iterator
     # The agents read these from the environment, as they would from a systemd unit.
     monkeypatch.setenv("GCS_AGENT_HUB_FAILSAFE_ACTION", "rtl")
     monkeypatch.setenv("GCS_AGENT_HUB_FAILSAFE_TIMEOUT_S", "2")
-    plan = FleetPlan(vehicles=1, port=free_port(), data_dir=tmp_path, speedup=4.0)
-    with LocalFleet(plan) as fleet:
-        fleet.start()
-        fleet.wait_until_ready()
+    with running_fleet(tmp_path, vehicles=1, speedup=4.0) as fleet:
         yield fleet
 
 
@@ -45,9 +42,7 @@ def test_lost_hub_link_triggers_rtl_and_is_reported_on_reconnect(
     base = fleet.plan.hub_http
     token = access_token(base, "admin", fleet.plan.admin_password)
     with FleetWatcher(base, token) as watcher, api_client(base, token) as api:
-        watcher.wait_until(
-            lambda v: (v.get(VEHICLE, {}).get("state") or {}).get("gps_fix", 0) >= 3, 60, "GPS"
-        )
+        watcher.wait_until(ready(VEHICLE), 60, f"{VEHICLE} ready")
         takeoff = api.post(
             f"/api/v1/vehicles/{VEHICLE}/commands", json={"name": "takeoff", "altitude": 15}
         )

@@ -3,15 +3,23 @@ list their own modes, and do what their autopilots do with the same REST command
 
 from __future__ import annotations
 
-import math
 from collections.abc import Iterator
 from typing import Any
 
 import httpx
 import pytest
 
-from gcs.launcher import FleetPlan, LocalFleet, free_port
-from tests.helpers import FleetWatcher, access_token, api_client
+from gcs.launcher import LocalFleet
+from tests.helpers import (
+    FleetWatcher,
+    access_token,
+    api_client,
+    ready,
+    running_fleet,
+    send_command,
+    speed_of,
+    state_of,
+)
 
 pytestmark = pytest.mark.integration
 
@@ -22,17 +30,13 @@ WAYPOINT, RTL = 16, 20
 
 @pytest.fixture(scope="module")
 def fleet(tmp_path_factory: pytest.TempPathFactory) -> Iterator[LocalFleet]:
-    plan = FleetPlan(
+    with running_fleet(
+        tmp_path_factory.mktemp("mixed-fleet"),
         vehicles=2,
-        port=free_port(),
-        data_dir=tmp_path_factory.mktemp("mixed-fleet"),
         speedup=5.0,
         frames=("rover", "quad"),
         autopilots=("ardupilot", "px4"),
-    )
-    with LocalFleet(plan) as local_fleet:
-        local_fleet.start()
-        local_fleet.wait_until_ready()
+    ) as local_fleet:
         yield local_fleet
 
 
@@ -44,48 +48,27 @@ def clients(fleet: LocalFleet) -> Iterator[tuple[httpx.Client, FleetWatcher]]:
         yield api, watcher
 
 
-def state_of(vehicles: dict[str, dict[str, Any]], vehicle: str) -> dict[str, Any]:
-    return (vehicles.get(vehicle) or {}).get("state") or {}
-
-
-def ready(vehicle: str) -> Any:
-    def check(vehicles: dict[str, dict[str, Any]]) -> bool:
-        state = state_of(vehicles, vehicle)
-        return bool(
-            vehicles.get(vehicle, {}).get("connected")
-            and state.get("gps_fix", 0) >= 3
-            and state.get("home_lat") is not None
-            and state.get("battery_remaining") is not None
-        )
-
-    return check
-
-
-def speed_of(state: dict[str, Any]) -> float:
-    speed = state.get("groundspeed")
-    return math.inf if speed is None else float(speed)
-
-
-def send(api: httpx.Client, vehicle: str, **command: Any) -> dict[str, Any]:
-    response = api.post(f"/api/v1/vehicles/{vehicle}/commands", json=command)
-    assert response.status_code == 200, response.text
-    outcome: dict[str, Any] = response.json()["outcome"]
-    return outcome
+def listed_once_ready(
+    clients: tuple[httpx.Client, FleetWatcher], vehicle: str, what: str
+) -> dict[str, Any]:
+    """The vehicle's summary from the REST API, once the watcher has seen it ready."""
+    api, watcher = clients
+    watcher.wait_until(ready(vehicle), 60, f"{what} ready")
+    summary: dict[str, Any] = api.get(f"/api/v1/vehicles/{vehicle}").json()
+    return summary
 
 
 def test_rover_connects_lists_rover_modes_and_drives_a_mission(
     clients: tuple[httpx.Client, FleetWatcher],
 ) -> None:
     api, watcher = clients
-    watcher.wait_until(ready(ROVER), 60, "the rover ready")
-    rover = api.get(f"/api/v1/vehicles/{ROVER}").json()
-    assert rover["vehicle_type"] == "rover"
-    assert rover["autopilot"] == "ardupilot"
+    rover = listed_once_ready(clients, ROVER, "the rover")
+    assert (rover["vehicle_type"], rover["autopilot"]) == ("rover", "ardupilot")
     assert {"MANUAL", "HOLD", "AUTO", "GUIDED", "RTL", "SMART_RTL"} <= set(rover["modes"])
     assert "LAND" not in rover["modes"]
     assert rover["state"]["mode"] == "MANUAL"
 
-    takeoff = send(api, ROVER, name="takeoff", altitude=10)
+    takeoff = send_command(api, ROVER, name="takeoff", altitude=10)
     assert takeoff["status"] == "refused"
     assert takeoff["message"] == "takeoff: a rover does not take off"
 
@@ -101,8 +84,8 @@ def test_rover_connects_lists_rover_modes_and_drives_a_mission(
     stored = api.get(f"/api/v1/vehicles/{ROVER}/mission").json()["items"]
     assert [item["command"] for item in stored[1:]] == [WAYPOINT, WAYPOINT, RTL]
 
-    assert send(api, ROVER, name="set_mode", mode="AUTO")["status"] == "accepted"
-    assert send(api, ROVER, name="arm")["status"] == "accepted"  # Rover arms in AUTO
+    assert send_command(api, ROVER, name="set_mode", mode="AUTO")["status"] == "accepted"
+    assert send_command(api, ROVER, name="arm")["status"] == "accepted"  # Rover arms in AUTO
     top_alt = 0.0
 
     def mission_done(vehicles: dict[str, dict[str, Any]]) -> bool:
@@ -121,33 +104,31 @@ def test_rover_connects_lists_rover_modes_and_drives_a_mission(
     events = api.get("/api/v1/events", params={"vehicle_id": ROVER, "kind": "mission"}).json()
     reached = {e["text"] for e in events["events"]}
     assert {f"reached mission item {n}" for n in (1, 2, 3)} <= reached
-    assert send(api, ROVER, name="disarm")["status"] == "accepted"
+    assert send_command(api, ROVER, name="disarm")["status"] == "accepted"
 
 
 def test_px4_copter_lists_px4_modes_and_reports_them_decoded(
     clients: tuple[httpx.Client, FleetWatcher],
 ) -> None:
     api, watcher = clients
-    watcher.wait_until(ready(PX4), 60, "the PX4 copter ready")
-    copter = api.get(f"/api/v1/vehicles/{PX4}").json()
-    assert copter["autopilot"] == "px4"
-    assert copter["vehicle_type"] == "multirotor"
+    copter = listed_once_ready(clients, PX4, "the PX4 copter")
+    assert (copter["vehicle_type"], copter["autopilot"]) == ("multirotor", "px4")
     assert {"MANUAL", "POSCTL", "LOITER", "MISSION", "RTL", "LAND", "OFFBOARD"} <= set(
         copter["modes"]
     )
     assert "GUIDED" not in copter["modes"]
     assert copter["state"]["mode"] == "MANUAL"
 
-    assert send(api, PX4, name="set_mode", mode="POSCTL")["status"] == "accepted"
+    assert send_command(api, PX4, name="set_mode", mode="POSCTL")["status"] == "accepted"
     watcher.wait_until(lambda v: state_of(v, PX4).get("mode") == "POSCTL", 10, "POSCTL")
-    assert send(api, PX4, name="hold")["status"] == "accepted"  # PX4's Hold: AUTO.LOITER
+    assert send_command(api, PX4, name="hold")["status"] == "accepted"  # PX4's Hold: AUTO.LOITER
     watcher.wait_until(lambda v: state_of(v, PX4).get("mode") == "LOITER", 10, "Hold")
 
-    offboard = send(api, PX4, name="set_mode", mode="OFFBOARD")
+    offboard = send_command(api, PX4, name="set_mode", mode="OFFBOARD")
     assert offboard["status"] == "refused"
     assert offboard["result"] == "MAV_RESULT_TEMPORARILY_REJECTED"
 
-    assert send(api, PX4, name="takeoff", altitude=8)["status"] == "accepted"
+    assert send_command(api, PX4, name="takeoff", altitude=8)["status"] == "accepted"
     watcher.wait_until(lambda v: state_of(v, PX4).get("mode") == "TAKEOFF", 10, "Takeoff mode")
     watcher.wait_until(
         lambda v: (
@@ -157,6 +138,6 @@ def test_px4_copter_lists_px4_modes_and_reports_them_decoded(
         60,
         "at 8 m, holding",
     )
-    assert send(api, PX4, name="land")["status"] == "accepted"
+    assert send_command(api, PX4, name="land")["status"] == "accepted"
     watcher.wait_until(lambda v: state_of(v, PX4).get("mode") == "LAND", 10, "Land mode")
     watcher.wait_until(lambda v: not state_of(v, PX4).get("armed"), 120, "landed and disarmed")

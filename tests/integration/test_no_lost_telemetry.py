@@ -16,8 +16,8 @@ from typing import Any
 
 import pytest
 
-from gcs.launcher import FleetPlan, LocalFleet, free_port
-from tests.helpers import FleetWatcher, access_token, api_client
+from gcs.launcher import LocalFleet
+from tests.helpers import FleetWatcher, access_token, api_client, ready, running_fleet
 
 pytestmark = pytest.mark.integration
 
@@ -28,10 +28,7 @@ TAKEOFF, WAYPOINT, LOITER_TIME, RTL = 22, 16, 19, 20
 
 @pytest.fixture
 def one_vehicle(tmp_path: Path) -> Iterator[LocalFleet]:
-    plan = FleetPlan(vehicles=1, port=free_port(), data_dir=tmp_path, speedup=4.0)
-    with LocalFleet(plan) as fleet:
-        fleet.start()
-        fleet.wait_until_ready()
+    with running_fleet(tmp_path, vehicles=1, speedup=4.0) as fleet:
         yield fleet
 
 
@@ -54,15 +51,6 @@ def _wait_for(condition: Any, timeout_s: float, what: str) -> None:
         time.sleep(0.2)  # polling a file: there is no event to wait on
 
 
-def _ready(vehicles: dict[str, dict[str, Any]]) -> bool:
-    state = (vehicles.get(VEHICLE) or {}).get("state") or {}
-    return bool(
-        vehicles.get(VEHICLE, {}).get("connected")
-        and state.get("gps_fix", 0) >= 3
-        and state.get("home_lat") is not None
-    )
-
-
 def _long_mission(lat: float, lon: float) -> list[dict[str, Any]]:
     north = 1 / 111_320
     return [
@@ -81,7 +69,7 @@ def test_hub_killed_for_30_s_mid_mission_loses_and_duplicates_nothing(
     base = fleet.plan.hub_http
     token = access_token(base, "admin", fleet.plan.admin_password)
     with FleetWatcher(base, token) as watcher, api_client(base, token) as api:
-        watcher.wait_until(_ready, 60, f"{VEHICLE} ready")
+        watcher.wait_until(ready(VEHICLE), 60, f"{VEHICLE} ready")
         here = watcher.state(VEHICLE)
         mission = api.post(
             f"/api/v1/vehicles/{VEHICLE}/mission",

@@ -246,7 +246,12 @@ class FcuLink:
         with self._inbox_lock:
             batch, self._inbox = self._inbox, []
         for message in batch:
-            self._on_message(message)
+            try:
+                self._on_message(message)
+            except Exception:
+                # One message a listener chokes on must not cost the rest of the batch
+                # (the next heartbeat, a COMMAND_ACK) their delivery.
+                log.exception("handling %s from the flight controller failed", message.get_type())
 
     def _on_message(self, message: MavMessage) -> None:
         kind = message.get_type()

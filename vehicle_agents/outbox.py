@@ -17,6 +17,7 @@ hub asking for dropped frames is told they are unavailable, so it records the lo
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import json
 import logging
 import sqlite3
@@ -77,13 +78,17 @@ class SpillFile:
         return self._rows
 
     def append(self, frames: list[Frame]) -> None:
+        row_ids = []
         with self._transaction():
             for frame in frames:
                 cursor = self._db.execute(
                     "INSERT INTO frames (stream_id, kind, seq, body) VALUES (?, ?, ?, ?)",
                     (frame.stream_id, frame.kind, frame.seq, frame.body),
                 )
-                frame.disk_id = cursor.lastrowid
+                row_ids.append(cursor.lastrowid)
+        # Only once committed: a frame marked as on disk is no longer kept in memory.
+        for frame, row_id in zip(frames, row_ids, strict=True):
+            frame.disk_id = row_id
         self._rows += len(frames)
 
     def after(self, disk_id: int, limit: int) -> list[Frame]:
@@ -144,7 +149,10 @@ class _Transaction:
         self._db.execute("BEGIN")
 
     def __exit__(self, kind: object, *rest: object) -> None:
-        self._db.execute("COMMIT" if kind is None else "ROLLBACK")
+        if kind is None:
+            self._db.execute("COMMIT")
+        elif self._db.in_transaction:  # SQLite may have rolled back already (disk full)
+            self._db.execute("ROLLBACK")
 
 
 class Outbox:
@@ -165,6 +173,32 @@ class Outbox:
             log.info("outbox: %d frames from an earlier run wait for the hub", left)
             self._ready.set()
 
+    @contextlib.contextmanager
+    def _disk(self) -> Iterator[None]:
+        """Around every use of the spill file: a disk that fails (full, worn out, gone
+        read-only) costs the outbox its disk, never the agent its link to the vehicle."""
+        try:
+            yield
+        except sqlite3.Error as error:
+            self._abandon_spill(error)
+
+    def _abandon_spill(self, error: sqlite3.Error) -> None:
+        log.error("outbox file failed (%s); keeping the outbox in memory from now on", error)
+        # What the file holds and this connection has not sent yet comes back into
+        # memory, if it can still be read (a full disk reads fine). Left in the file, it
+        # would be sent again by the next run, and the hub drops duplicates.
+        stranded: list[Frame] = []
+        if self._spill is not None:
+            with contextlib.suppress(sqlite3.Error):
+                stranded = self._spill.after(self._disk_cursor, self._limit)
+            with contextlib.suppress(sqlite3.Error):
+                self._spill.close()
+        self._spill = None
+        for frame in [*self._in_flight, *stranded]:
+            frame.disk_id = None
+        self._unsent.extendleft(reversed(stranded))
+        self._disk_backlog.clear()
+
     def __len__(self) -> int:
         on_disk = len(self._spill) if self._spill else 0
         in_memory = sum(1 for frame in self._in_flight if frame.disk_id is None)
@@ -173,8 +207,10 @@ class Outbox:
     def put(self, kind: SequencedKind, seq: int, body: str) -> None:
         self._unsent.append(Frame(self.stream_id, kind, seq, body, time.monotonic()))
         if self._spill is not None and self._should_spill():
-            self._spill_memory()
-        self._enforce_limit()
+            with self._disk():
+                self._spill_memory()
+        with self._disk():
+            self._enforce_limit()
         self._ready.set()
 
     async def next_frame(self) -> str:
@@ -197,7 +233,8 @@ class Outbox:
         self._connected = False
         self._rewind()
         if self._spill is not None:
-            self._spill_memory()
+            with self._disk():
+                self._spill_memory()
 
     def acknowledge(self, ack: Ack) -> None:
         acked: list[tuple[SequencedKind, int | None]] = [
@@ -218,7 +255,8 @@ class Outbox:
         self._unsent = deque(filter(kept, self._unsent))
         self._disk_backlog = deque(filter(kept, self._disk_backlog))
         if self._spill is not None:
-            self._spill.forget(stream_id, kind, up_to_seq)
+            with self._disk():
+                self._spill.forget(stream_id, kind, up_to_seq)
 
     def resend(self, request: Resend) -> list[Unavailable]:
         """Send the asked-for frames again; name the ones this outbox no longer holds."""
@@ -231,7 +269,8 @@ class Outbox:
             and first <= frame.seq <= last
         }
         if self._spill is not None:
-            held |= self._spill.sequences(request.stream_id, request.kind, first, last)
+            with self._disk():
+                held |= self._spill.sequences(request.stream_id, request.kind, first, last)
         if held:
             self._rewind()
         return [
@@ -247,7 +286,8 @@ class Outbox:
 
     def _take(self) -> Frame | None:
         if not self._disk_backlog and self._spill is not None:
-            self._disk_backlog.extend(self._spill.after(self._disk_cursor, DISK_READ_BATCH))
+            with self._disk():
+                self._disk_backlog.extend(self._spill.after(self._disk_cursor, DISK_READ_BATCH))
         if self._disk_backlog:
             frame = self._disk_backlog.popleft()
             assert frame.disk_id is not None
@@ -266,7 +306,8 @@ class Outbox:
             self._ready.set()
 
     def _should_spill(self) -> bool:
-        if len(self._unsent) > MEMORY_FRAMES:
+        in_memory = len(self._unsent) + sum(1 for f in self._in_flight if f.disk_id is None)
+        if in_memory > MEMORY_FRAMES:
             return True
         if self._connected or not self._unsent:
             return False

@@ -157,3 +157,15 @@ def test_a_resend_of_a_huge_range_is_answered_at_once(drain: Drain) -> None:
     request = Resend(stream_id="run", kind="telemetry", first_seq=0, last_seq=2**62)
     unavailable = outbox.resend(request)
     assert [(u.first_seq, u.last_seq) for u in unavailable] == [(0, 9), (13, 2**62)]
+
+
+def test_a_full_disk_costs_the_outbox_its_file_not_the_agent(tmp_path: Path, drain: Drain) -> None:
+    spill = SpillFile(tmp_path / "o.sqlite")
+    spill._db.execute("PRAGMA max_page_count = 8")  # a card with almost no room left
+    outbox = Outbox("run", limit=10_000, spill=spill)
+    _put(outbox, range(2000))  # the hub is away: spilling fails part way, nothing raises
+    outbox.link_down()
+    outbox.link_up()
+    sent = drain(outbox)
+    assert sorted(set(sent)) == list(range(2000)), "every frame is still sent"
+    assert sent == sorted(sent)

@@ -33,13 +33,20 @@ class Gap:
 class SequenceTracker:
     contiguous: int  # every number up to this one is stored (or known lost)
     ahead: set[int] = field(default_factory=set)  # stored beyond a gap, waiting for it
+    # Ranges beyond a gap that the agent said it no longer has, as (first, last): kept as
+    # ranges, so a loss of a million frames costs what a loss of one does.
+    lost: list[tuple[int, int]] = field(default_factory=list)
     highest: int = -1
 
     def __post_init__(self) -> None:
         self.highest = max(self.highest, self.contiguous, *self.ahead)
 
     def holds(self, seq: int) -> bool:
-        return seq <= self.contiguous or seq in self.ahead
+        return (
+            seq <= self.contiguous
+            or seq in self.ahead
+            or any(first <= seq <= last for first, last in self.lost)
+        )
 
     def add(self, seq: int) -> tuple[int, int] | None:
         """Record a stored number; the gap it opens below itself, if it opens one."""
@@ -53,16 +60,36 @@ class SequenceTracker:
         return gap
 
     def give_up(self, first: int, last: int) -> None:
-        """Numbers the agent no longer has: stop waiting for them."""
+        """Numbers the agent no longer has: stop waiting for them. Only what lies in a
+        gap counts; a loss report cannot move the ack past what was actually stored."""
         first = max(first, self.contiguous + 1)
         last = min(last, self.highest)
-        self.ahead.update(range(first, last + 1))
-        self._absorb()
+        if first <= last:
+            self.lost.append((first, last))
+            self._absorb()
+
+    def first_gap(self) -> tuple[int, int] | None:
+        """The lowest range still waited for, if any."""
+        if self.contiguous >= self.highest:
+            return None
+        start = self.contiguous + 1
+        above = [seq for seq in self.ahead if seq > start]
+        above += [first for first, _ in self.lost if first > start]
+        return start, min(above, default=self.highest + 1) - 1
 
     def _absorb(self) -> None:
-        while self.contiguous + 1 in self.ahead:
-            self.contiguous += 1
-            self.ahead.remove(self.contiguous)
+        while True:
+            following = self.contiguous + 1
+            if following in self.ahead:
+                self.ahead.remove(following)
+                self.contiguous = following
+                continue
+            reached = [last for first, last in self.lost if first <= following]
+            if not reached:
+                return
+            self.contiguous = max(self.contiguous, *reached)
+            self.lost = [(f, last) for f, last in self.lost if last > self.contiguous]
+            self.ahead = {seq for seq in self.ahead if seq > self.contiguous}
 
 
 class SequenceLedger:
@@ -107,6 +134,18 @@ class SequenceLedger:
 
     def give_up(self, key: StreamKey, first: int, last: int) -> None:
         self.tracker(key).give_up(first, last)
+
+    def set_aside(self, key: StreamKey, seq: int) -> None:
+        """A frame the database refused: handled, as far as acks and gaps go."""
+        self.tracker(key).add(seq)
+
+    def open_gaps(self, keys: Iterable[StreamKey]) -> list[Gap]:
+        """The lowest gap still waited for in each of these streams."""
+        gaps = []
+        for key in keys:
+            if (gap := self.tracker(key).first_gap()) is not None:
+                gaps.append(Gap(key, *gap))
+        return gaps
 
     def contiguous(self, key: StreamKey) -> int:
         return self.tracker(key).contiguous

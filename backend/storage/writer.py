@@ -27,6 +27,8 @@ from backend.storage.sequences import Gap, SequenceLedger, StreamKey
 
 # Told, after each commit, how far each touched agent stream is stored without a hole
 # (its ack) and which holes newly appeared (to ask the agent for).
+GAP_REASK_S = 10.0  # how often a gap that is still open is asked for again
+
 SequenceNews = Callable[[dict[StreamKey, int], list[Gap]], None]
 
 log = logging.getLogger(__name__)
@@ -72,6 +74,7 @@ class StorageWriter:
             lambda key: repository.highest_seq(key.vehicle_id, key.stream_id, key.kind)
         )
         self.on_sequences: SequenceNews | None = None
+        self._gap_asked_at: dict[StreamKey, float] = {}
         self._news: tuple[dict[StreamKey, int], list[Gap]] | None = None
         self.stats = WriterStats()
 
@@ -183,6 +186,7 @@ class StorageWriter:
         for loss in losses:
             self.sequences.give_up(_key(loss), loss.first_seq, loss.last_seq)
         touched = {key for key, _ in sequenced} | {_key(loss) for loss in losses}
+        gaps = self._gaps_to_ask(gaps, touched)
         acks = {key: self.sequences.contiguous(key) for key in touched}
         self._merge_news(acks, gaps)
         self.stats.written += len(new_telemetry)
@@ -190,6 +194,19 @@ class StorageWriter:
         self.stats.events_written += events_written
         self.stats.lost += sum(loss.last_seq - loss.first_seq + 1 for loss in losses)
         self._batch = []
+
+    def _gaps_to_ask(self, opened: list[Gap], touched: set[StreamKey]) -> list[Gap]:
+        """New gaps, and gaps still open from before, asked again now and then: a request
+        lost with a dropped connection must not hold a stream's acks back for good."""
+        now = time.monotonic()
+        for gap in opened:
+            self._gap_asked_at[gap.key] = now
+        asking = list(opened)
+        for gap in self.sequences.open_gaps(touched):
+            if now - self._gap_asked_at.get(gap.key, -GAP_REASK_S) >= GAP_REASK_S:
+                self._gap_asked_at[gap.key] = now
+                asking.append(gap)
+        return asking
 
     def _moving_forward(self, telemetry: list[TelemetryEnvelope]) -> list[TelemetryEnvelope]:
         """The samples newer than anything stored of their stream, in order: the ones
@@ -235,9 +252,9 @@ class StorageWriter:
         or the agent would keep it, and send it again, forever."""
         match record:
             case TelemetryEnvelope(telemetry=telemetry):
-                self.sequences.give_up(_key(record), telemetry.seq, telemetry.seq)
+                self.sequences.set_aside(_key(record), telemetry.seq)
             case StoredEvent(seq=seq) if seq is not None:
-                self.sequences.give_up(_key(record), seq, seq)
+                self.sequences.set_aside(_key(record), seq)
 
     def _flush_on_shutdown(self) -> None:
         """Store what was accepted: the batch in hand and everything still queued."""

@@ -50,3 +50,32 @@ def test_ledger_loads_a_stream_from_the_store_once_and_judges_a_batch() -> None:
     assert [(gap.first_seq, gap.last_seq) for gap in gaps] == [(9, 10)]
     assert ledger.contiguous(KEY) == 8
     assert loads == [KEY]
+
+
+def test_a_huge_loss_is_recorded_as_a_range_at_once() -> None:
+    tracker = SequenceTracker(contiguous=-1)
+    tracker.add(2**40)
+    tracker.give_up(0, 2**40 - 1)
+    assert tracker.contiguous == 2**40
+    assert tracker.lost == []
+
+
+def test_a_loss_beyond_another_gap_waits_for_that_gap() -> None:
+    tracker = SequenceTracker(contiguous=0)
+    tracker.add(5)
+    tracker.add(20)
+    tracker.give_up(6, 19)
+    assert tracker.contiguous == 0
+    assert tracker.first_gap() == (1, 4)
+    assert tracker.holds(10)
+    for seq in range(1, 5):
+        tracker.add(seq)
+    assert tracker.contiguous == 20
+    assert tracker.first_gap() is None
+
+
+def test_a_set_aside_record_releases_the_ack() -> None:
+    ledger = SequenceLedger(lambda key: 3)
+    ledger.set_aside(KEY, 4)
+    assert ledger.contiguous(KEY) == 4
+    assert ledger.open_gaps([KEY]) == []

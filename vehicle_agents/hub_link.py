@@ -44,6 +44,9 @@ class HubTimeouts:
     ping_interval_s: float = 5.0
 
 
+COMMAND_ANSWER_MARGIN_S = 0.5
+
+
 class HubRefused(Exception):
     """The hub answered the hello with something other than a welcome."""
 
@@ -178,6 +181,17 @@ class HubLink:
 
     async def _run_command(self, request: CommandRequest, websocket: ClientConnection) -> None:
         log.info("command %s: %s", request.request_id, request.command.name)
-        outcome = await self._on_command(request.command)
+        # Within the hub's deadline, with room for the answer to travel: once the hub has
+        # told the operator "timeout", no later step (arming, then take-off) may follow.
+        allowed_s = max(0.5, request.timeout_s - COMMAND_ANSWER_MARGIN_S)
+        try:
+            async with asyncio.timeout(allowed_s):
+                outcome = await self._on_command(request.command)
+        except TimeoutError:
+            outcome = CommandOutcome(
+                status="timeout",
+                message=f"{request.command.name}: not finished within {allowed_s:.1f} s; "
+                "the agent stopped it there",
+            )
         log.info("command %s: %s", request.request_id, outcome.message)
         await websocket.send(encode(CommandResult(request_id=request.request_id, outcome=outcome)))

@@ -12,7 +12,15 @@ from starlette.websockets import WebSocketDisconnect
 
 from backend.errors import CommandTimedOut, InvalidRequest, VehicleOffline
 from backend.fleet.registry import FleetRegistry
-from gcs.protocol import Command, CommandOutcome, CommandRequest, SetModeCommand
+from gcs.protocol import (
+    Command,
+    CommandOutcome,
+    CommandRequest,
+    MissionDownloadCommand,
+    MissionUploadCommand,
+    ParamListCommand,
+    SetModeCommand,
+)
 
 log = logging.getLogger(__name__)
 
@@ -62,6 +70,23 @@ class AgentChannel:
                 future.set_exception(VehicleOffline(reason))
 
 
+# Exchanges that move a table item by item take longer than one command; over a
+# 57600-baud radio an item's round trip can take this long.
+PER_ITEM_S = 0.1
+LONG_EXCHANGE_S = 60.0
+
+
+def allowed_time(command: Command, base_s: float) -> float:
+    """How long the agent may work on a command before it must answer."""
+    match command:
+        case MissionUploadCommand(items=items):
+            return base_s + PER_ITEM_S * len(items)
+        case ParamListCommand() | MissionDownloadCommand():
+            return max(base_s, LONG_EXCHANGE_S)
+        case _:
+            return base_s
+
+
 class CommandDispatcher:
     def __init__(self, registry: FleetRegistry, timeout_s: float) -> None:
         self._registry = registry
@@ -87,7 +112,7 @@ class CommandDispatcher:
         channel = self._channels.get(vehicle_id)
         if channel is None:
             raise VehicleOffline(f"vehicle {vehicle_id!r} is not connected")
-        outcome = await channel.request(command, self._timeout_s)
+        outcome = await channel.request(command, allowed_time(command, self._timeout_s))
         log.info("%s %s -> %s", vehicle_id, command.name, outcome.message)
         if outcome.status == "timeout":
             raise CommandTimedOut(outcome.message)

@@ -14,6 +14,7 @@ import contextlib
 import subprocess
 import time
 from collections.abc import Awaitable, Callable, Iterator
+from pathlib import Path
 from typing import Any, TypeVar
 
 import pytest
@@ -30,7 +31,8 @@ from gcs.protocol import (
     SetHomeCommand,
     TakeoffCommand,
 )
-from tests.helpers import FleetWatcher, agent_process, api_client, connected
+from tests.conftest import hub_settings
+from tests.helpers import FleetWatcher, agent_process, api_client, connected, running_hub
 from tests.mavlink_peer import HOME_ALT_MSL, Answer, Script, ScriptedFlightController
 from vehicle_agents.commands import CommandExecutor, CommandTimeouts
 from vehicle_agents.fcu_link import FcuLink, MavMessage
@@ -270,3 +272,33 @@ def test_in_progress_through_the_hub(
     assert outcome["result"] == "MAV_RESULT_ACCEPTED"
     [sent] = fcu.commands(mavlink2.MAV_CMD_DO_CHANGE_SPEED)
     assert (sent.param1, sent.param2) == (1, 4)
+
+
+@pytest.fixture
+def hub(tmp_path: Path) -> Iterator[str]:
+    """This module's hub gives agents 2 s per command, so a deadline is quick to reach."""
+    with running_hub(hub_settings(tmp_path, command_timeout_s=2.0)) as base_url:
+        yield base_url
+
+
+def test_the_agent_stops_a_command_at_the_hubs_deadline(
+    hub: str,
+    admin_token: str,
+    scripted_agent: tuple[ScriptedFlightController, subprocess.Popen[bytes]],
+) -> None:
+    fcu, _agent = scripted_agent
+    # in progress for far longer than the hub allows (the agent's own wait is 10 s)
+    fcu.scripts[mavlink2.MAV_CMD_DO_CHANGE_SPEED] = lambda _m: [
+        Answer(0.05 + 0.3 * i, IN_PROGRESS, 10) for i in range(40)
+    ]
+    with FleetWatcher(hub, admin_token) as watcher:
+        watcher.wait_until(connected("scripted"), 30, "the agent to connect")
+    with api_client(hub, admin_token) as api:
+        started = time.monotonic()
+        response = api.post(
+            "/api/v1/vehicles/scripted/commands", json={"name": "change_speed", "speed": 4}
+        )
+        elapsed = time.monotonic() - started
+    assert response.status_code == 504, response.text
+    assert "not finished within 1.5 s; the agent stopped it there" in response.text
+    assert elapsed < 4, "the agent's answer, not the hub's own give-up"

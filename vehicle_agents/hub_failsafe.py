@@ -19,10 +19,41 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 from gcs.protocol import EventKind, HoldCommand, ReturnToLaunchCommand
 from vehicle_agents.commands import CommandExecutor
 from vehicle_agents.fcu_link import FcuLink
+from vehicle_agents.modes import mode_name
 
 log = logging.getLogger(__name__)
 
 FailsafeAction = Literal["continue", "hold", "rtl"]
+
+# Already coming down or home, often by the autopilot's own failsafe (battery, RC): an
+# RTL would climb on a critical battery, a hold would stop a vehicle on its way back.
+RECOVERING_MODES = frozenset(
+    {"LAND", "RTL", "SMART_RTL", "QLAND", "QRTL", "AUTO.LAND", "AUTO.RTL", "AUTO.PRECLAND"}
+)
+# Flown by hand on RC: the pilot outranks a ground-station failsafe.
+PILOTED_MODES = frozenset(
+    {
+        "STABILIZE",
+        "ALT_HOLD",
+        "ACRO",
+        "SPORT",
+        "DRIFT",
+        "FLOWHOLD",
+        "MANUAL",
+        "STEERING",
+        "FBWA",
+        "FBWB",
+        "CRUISE",
+        "TRAINING",
+        "QSTABILIZE",
+        "QHOVER",
+        "QACRO",
+        "ALTCTL",
+        "POSCTL",
+        "STABILIZED",
+        "RATTITUDE",
+    }
+)
 EmitEvent = Callable[[EventKind, str, int | None], None]
 
 
@@ -68,10 +99,15 @@ class HubLinkFailsafe:
         lost_for = f"hub link lost for {self.timeout_s:g} s"
         heartbeat = self._link.latest.get("HEARTBEAT")
         armed = bool(heartbeat and heartbeat.base_mode & mavlink2.MAV_MODE_FLAG_SAFETY_ARMED)
+        mode = mode_name(heartbeat) if heartbeat is not None else "UNKNOWN"
         if self.action == "continue":
             done = "continued (configured action)"
         elif not armed:
             done = f"took no action ({self.action} configured, vehicle disarmed)"
+        elif mode in RECOVERING_MODES:
+            done = f"took no action ({self.action} configured): the autopilot is in {mode}"
+        elif mode in PILOTED_MODES:
+            done = f"took no action ({self.action} configured): a pilot flies it in {mode}"
         else:
             command = HoldCommand() if self.action == "hold" else ReturnToLaunchCommand()
             outcome = await self._executor.execute(command)

@@ -11,6 +11,7 @@ reboot while armed silently) the agent says what the vehicle's state points to.
 
 from __future__ import annotations
 
+import asyncio
 import logging
 import time
 from collections.abc import Callable
@@ -276,16 +277,19 @@ class CommandExecutor:
     ) -> CommandOutcome:
         name = _command_name(command)
         started = time.time()
-        for attempt in range(self.timeouts.attempts):
-            self.link.send(build(attempt))
-            ack = await self.link.wait_for(_ack_of(command), self.timeouts.ack_s)
-            if ack is None:
-                log.debug("%s: no COMMAND_ACK on attempt %d", name, attempt + 1)
-            elif ack.result == mavlink2.MAV_RESULT_IN_PROGRESS:
-                # the autopilot has it: sending it again would start it again
-                return await self._final_ack(name, command, ack, started, params)
-            else:
-                return self._outcome(name, ack, started, params)
+        # One queue for the whole exchange: a late ACK to an earlier attempt still counts,
+        # and a final ACK arriving right behind IN_PROGRESS is not missed.
+        with self.link.collect(_ack_of(command)) as acks:
+            for attempt in range(self.timeouts.attempts):
+                self.link.send(build(attempt))
+                ack = await _next(acks, self.timeouts.ack_s)
+                if ack is None:
+                    log.debug("%s: no COMMAND_ACK on attempt %d", name, attempt + 1)
+                elif ack.result == mavlink2.MAV_RESULT_IN_PROGRESS:
+                    # the autopilot has it: sending it again would start it again
+                    return await self._final_ack(name, acks, ack, started, params)
+                else:
+                    return self._outcome(name, ack, started, params)
         waited = self.timeouts.ack_s * self.timeouts.attempts
         return CommandOutcome(
             status="timeout",
@@ -296,7 +300,7 @@ class CommandExecutor:
     async def _final_ack(
         self,
         name: str,
-        command: int,
+        acks: asyncio.Queue[MavMessage],
         first: MavMessage,
         started: float,
         params: list[float] | None,
@@ -307,7 +311,7 @@ class CommandExecutor:
         limit = self.timeouts.in_progress_s
         deadline = time.monotonic() + limit
         while (remaining := deadline - time.monotonic()) > 0:
-            ack = await self.link.wait_for(_ack_of(command), remaining)
+            ack = await _next(acks, remaining)
             if ack is None:
                 break
             if ack.result != mavlink2.MAV_RESULT_IN_PROGRESS:
@@ -365,6 +369,14 @@ class CommandExecutor:
             return int(state.landed_state) in _AIRBORNE
         position = self.link.latest.get("GLOBAL_POSITION_INT")
         return position is not None and position.relative_alt > 1000  # 1 m above home
+
+
+async def _next(queue: asyncio.Queue[MavMessage], within_s: float) -> MavMessage | None:
+    try:
+        async with asyncio.timeout(within_s):
+            return await queue.get()
+    except TimeoutError:
+        return None
 
 
 def _require_accepted(outcome: CommandOutcome, step: str) -> None:

@@ -15,7 +15,7 @@ import contextlib
 import logging
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -104,6 +104,7 @@ class FcuLink:
         self._up = False
         self._connection: Any = None
         self._waiters: list[_Waiter] = []
+        self._collectors: list[tuple[MessagePredicate, asyncio.Queue[MavMessage]]] = []
         self._identified = asyncio.Event()
         self._loop: asyncio.AbstractEventLoop | None = None
         # Messages cross from the reader thread in batches: one loop wake-up per burst
@@ -287,6 +288,9 @@ class FcuLink:
         for waiter in list(self._waiters):
             if not waiter.future.done() and waiter.predicate(message):
                 waiter.future.set_result(message)
+        for predicate, queue in self._collectors:
+            if predicate(message):
+                queue.put_nowait(message)
 
     def _identify(self, heartbeat: MavMessage) -> None:
         self.target_system = heartbeat.get_srcSystem()
@@ -299,6 +303,19 @@ class FcuLink:
             self.modes.vehicle_type,
         )
         self._identified.set()
+
+    @contextlib.contextmanager
+    def collect(self, predicate: MessagePredicate) -> Iterator[asyncio.Queue[MavMessage]]:
+        """Every matching message from now until the block ends, queued: for exchanges
+        with several answers (IN_PROGRESS, then the final ACK), where two can arrive
+        together and a waiter registered after the first would miss the second."""
+        queue: asyncio.Queue[MavMessage] = asyncio.Queue()
+        collector = (predicate, queue)
+        self._collectors.append(collector)
+        try:
+            yield queue
+        finally:
+            self._collectors.remove(collector)
 
     async def wait_for(self, predicate: MessagePredicate, within_s: float) -> MavMessage | None:
         """The first message after now that matches, or None after ``within_s`` seconds."""

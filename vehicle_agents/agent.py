@@ -17,6 +17,7 @@ from vehicle_agents.fcu_link import FcuLink, MavMessage
 from vehicle_agents.forwarding import MavlinkForwarder
 from vehicle_agents.hub_failsafe import HubLinkFailsafe
 from vehicle_agents.hub_link import HubLink
+from vehicle_agents.missions import mission_number
 from vehicle_agents.outbox import Outbox, SpillFile
 from vehicle_agents.streams import StreamRequester
 from vehicle_agents.telemetry import link_snapshot
@@ -53,7 +54,7 @@ async def run_agent(settings: AgentSettings) -> None:
             stream_id=uuid.uuid4().hex[:16],
         )
         outbox = open_outbox(settings, vehicle_id, hello.stream_id)
-        events = EventSource(outbox)
+        events = EventSource(outbox, link.modes.autopilot)
         link.listeners.append(events.on_message)
         link.state_listeners.append(FcuLinkEvents(events.emit).on_link_change)
         executor = CommandExecutor(link)
@@ -112,8 +113,9 @@ async def publish_telemetry(link: FcuLink, outbox: Outbox, rate_hz: float) -> No
 class EventSource:
     """STATUSTEXTs and mission progress become numbered events for the hub's flight log."""
 
-    def __init__(self, outbox: Outbox) -> None:
+    def __init__(self, outbox: Outbox, autopilot: str) -> None:
         self._outbox = outbox
+        self._autopilot = autopilot
         self._seq = 0
 
     def on_message(self, message: MavMessage) -> None:
@@ -121,7 +123,8 @@ class EventSource:
         if kind == "STATUSTEXT":
             self.emit("statustext", str(message.text).rstrip("\x00"), int(message.severity))
         elif kind == "MISSION_ITEM_REACHED":
-            self.emit("mission", f"reached mission item {message.seq}", None)
+            number = mission_number(int(message.seq), self._autopilot)
+            self.emit("mission", f"reached mission item {number}", None)
 
     def emit(self, kind: EventKind, text: str, severity: int | None) -> None:
         event = Event(seq=self._seq, time=time.time(), kind=kind, severity=severity, text=text)

@@ -197,6 +197,22 @@ class MissionClient:
             MISSION,
         )
 
+    def _autopilot(self) -> str:
+        return self.link.modes.autopilot if self.link.modes else "ardupilot"
+
+    def _home_item(self) -> MissionItem:
+        """Home as item 0, from HOME_POSITION when the vehicle has reported it."""
+        home = self.link.latest.get("HOME_POSITION")
+        if home is None:
+            return MissionItem(command=mavlink2.MAV_CMD_NAV_WAYPOINT, frame=0)
+        return MissionItem(
+            command=mavlink2.MAV_CMD_NAV_WAYPOINT,
+            frame=mavlink2.MAV_FRAME_GLOBAL,
+            lat=home.latitude / 1e7,
+            lon=home.longitude / 1e7,
+            alt=home.altitude / 1000,
+        )
+
     async def upload(self, items: list[MissionItem]) -> CommandOutcome:
         modes = self.link.modes
         vehicle_type = modes.vehicle_type if modes else "multirotor"
@@ -208,7 +224,9 @@ class MissionClient:
                 message=f"mission refused, nothing sent to the vehicle: {'; '.join(problems)}",
             )
         # Item 0 is home on ArduPilot; the vehicle keeps its own, so a placeholder will do.
-        sequence = [MissionItem(command=mavlink2.MAV_CMD_NAV_WAYPOINT, frame=0), *items]
+        # PX4 has no home item: a placeholder there would be a waypoint at 0°N 0°E.
+        placeholder = MissionItem(command=mavlink2.MAV_CMD_NAV_WAYPOINT, frame=0)
+        sequence = [placeholder] * home_slots(autopilot) + list(items)
         system, component = self._target()
         count = mavlink2.MAVLink_mission_count_message(system, component, len(sequence), MISSION)
         last_sent: MavMessage = count
@@ -265,6 +283,8 @@ class MissionClient:
             if received is None:
                 return CommandOutcome(status="timeout", message=f"mission item {seq} never came")
             items.append(_item_of(received))
+        if not home_slots(self._autopilot()):
+            items.insert(0, self._home_item())  # so that item n is the hub's n everywhere
         self.link.send(
             mavlink2.MAVLink_mission_ack_message(
                 system, component, mavlink2.MAV_MISSION_ACCEPTED, MISSION
@@ -293,15 +313,32 @@ class MissionClient:
 
     async def set_current(self, seq: int) -> CommandOutcome:
         system, component = self._target()
+        on_wire = wire_seq(seq, self._autopilot())
         for _ in range(self.timeouts.attempts):
-            self.link.send(mavlink2.MAVLink_mission_set_current_message(system, component, seq))
+            self.link.send(mavlink2.MAVLink_mission_set_current_message(system, component, on_wire))
             current = await self.link.wait_for(
-                lambda m: m.get_type() == "MISSION_CURRENT" and m.seq == seq,
+                lambda m: m.get_type() == "MISSION_CURRENT" and m.seq == on_wire,
                 self.timeouts.item_s,
             )
             if current is not None:
                 return CommandOutcome(status="accepted", message=f"current item is {seq}")
         return CommandOutcome(status="timeout", message=f"the vehicle did not move to item {seq}")
+
+
+def home_slots(autopilot: str) -> int:
+    """Wire items before the mission's first: ArduPilot keeps home as item 0; PX4 and
+    the MAVLink spec start the mission itself at 0. The hub's numbering is ArduPilot's
+    (1 is the first item, 0 is home) whatever flies, so only this module knows."""
+    return 1 if autopilot == "ardupilot" else 0
+
+
+def mission_number(wire_seq: int, autopilot: str) -> int:
+    """The hub's number for a mission item the vehicle names ``wire_seq``."""
+    return wire_seq + 1 - home_slots(autopilot)
+
+
+def wire_seq(number: int, autopilot: str) -> int:
+    return number - 1 + home_slots(autopilot)
 
 
 def _upload_answer(message: MavMessage) -> bool:

@@ -11,6 +11,7 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 from gcs.protocol import VehicleState
 from vehicle_agents import positioning
 from vehicle_agents.fcu_link import FcuLink, MavMessage
+from vehicle_agents.missions import mission_number
 from vehicle_agents.modes import mode_name
 
 _UNKNOWN_INT16 = -1
@@ -29,6 +30,7 @@ def link_snapshot(link: FcuLink) -> VehicleState:
         link.connected,
         received_at=link.received_at,
         receive_errors=link.counters.receive_errors,
+        autopilot=link.modes.autopilot if link.modes else "ardupilot",
     )
 
 
@@ -38,6 +40,7 @@ def snapshot(
     *,
     received_at: Mapping[str, float] | None = None,
     receive_errors: int = 0,
+    autopilot: str = "ardupilot",
     now: float | None = None,
 ) -> VehicleState:
     """A VehicleState from whatever has arrived; fields stay None until their message does.
@@ -82,7 +85,7 @@ def snapshot(
         fields["gps_fix"] = fix.fix_type
         fields["satellites"] = fix.satellites
     if (current := latest.get("MISSION_CURRENT")) is not None:
-        fields["mission_current"] = int(current.seq)
+        fields["mission_current"] = mission_number(int(current.seq), autopilot)
         total = int(getattr(current, "total", 0) or 0)
         fields["mission_total"] = total if 0 < total < 65535 else None
     if (home := latest.get("HOME_POSITION")) is not None:

@@ -141,3 +141,28 @@ def test_px4_copter_lists_px4_modes_and_reports_them_decoded(
     assert send_command(api, PX4, name="land")["status"] == "accepted"
     watcher.wait_until(lambda v: state_of(v, PX4).get("mode") == "LAND", 10, "Land mode")
     watcher.wait_until(lambda v: not state_of(v, PX4).get("armed"), 120, "landed and disarmed")
+
+
+def test_px4_missions_start_at_item_zero_on_the_wire_and_number_as_everywhere(
+    clients: tuple[httpx.Client, FleetWatcher],
+) -> None:
+    """PX4 keeps no home item: the agent sends the mission as it is (a placeholder would
+    be a waypoint at 0°N 0°E), and the hub still numbers items from 1, home being 0."""
+    api, watcher = clients
+    state = listed_once_ready(clients, PX4, "the PX4 copter")["state"]
+    lat, lon = state["lat"], state["lon"]
+    items = [
+        {"command": WAYPOINT, "lat": lat + 20 * NORTH, "lon": lon, "alt": 10},
+        {"command": WAYPOINT, "lat": lat + 40 * NORTH, "lon": lon, "alt": 10},
+        {"command": RTL},
+    ]
+    url = f"/api/v1/vehicles/{PX4}/mission"
+    assert api.post(url, json={"items": items}).status_code == 200
+    stored = api.get(url).json()["items"]
+    assert len(stored) == 4, "home (from HOME_POSITION) and the three items, nothing else"
+    assert stored[0]["lat"] == pytest.approx(state["home_lat"], abs=1e-6)
+    assert [item["command"] for item in stored[1:]] == [WAYPOINT, WAYPOINT, RTL]
+    assert stored[1]["lat"] == pytest.approx(lat + 20 * NORTH, abs=1e-6)
+    current = send_command(api, PX4, name="mission_set_current", seq=2)
+    assert current["status"] == "accepted", current
+    watcher.wait_until(lambda v: state_of(v, PX4).get("mission_current") == 2, 10, "item 2")

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import logging
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any, Protocol
 
 from vehicle_agents.simulator.mavconst import (
@@ -31,7 +31,7 @@ from vehicle_agents.simulator.mavconst import (
     MavResult,
     Severity,
 )
-from vehicle_agents.simulator.mission import MAX_ITEMS, MissionItem, check_item
+from vehicle_agents.simulator.mission import HOME_PLACEHOLDER, MAX_ITEMS, MissionItem, check_item
 from vehicle_agents.simulator.param_table import SetOutcome
 from vehicle_agents.simulator.telemetry import MavMessage, TelemetryBuilder
 from vehicle_agents.simulator.vehicle import Vehicle
@@ -356,8 +356,9 @@ class MessageHandler:
         mission_type = int(getattr(msg, "mission_type", 0))
         if kind == "MISSION_ACK":
             return []  # the end of a download: nothing to answer
+        offset = self.copter.mission_wire_offset
         if kind == "MISSION_SET_CURRENT":
-            if self.copter.set_mission_current(int(msg.seq)):
+            if self.copter.set_mission_current(int(msg.seq) + offset):
                 return [*self._texts(), Reply(self.telemetry.mission_current(), False)]
             return self._texts()
         if mission_type != MISSION_TYPE_MISSION:
@@ -365,12 +366,13 @@ class MessageHandler:
         copter = self.copter
         telemetry = self.telemetry
         if kind == "MISSION_REQUEST_LIST":
-            return [Reply(telemetry.mission_count(len(copter.mission), *peer))]
+            on_wire = max(0, len(copter.mission) - offset)
+            return [Reply(telemetry.mission_count(on_wire, *peer))]
         if kind in ("MISSION_REQUEST_INT", "MISSION_REQUEST"):
-            item = copter.mission_item(int(msg.seq))
+            item = copter.mission_item(int(msg.seq) + offset)
             if item is None:
                 return [self._mission_ack(MavMissionResult.INVALID_SEQUENCE, peer)]
-            return [Reply(telemetry.mission_item_int(item, *peer))]
+            return [Reply(telemetry.mission_item_int(replace(item, seq=int(msg.seq)), *peer))]
         if kind == "MISSION_CLEAR_ALL":
             cleared = copter.clear_mission()
             self._upload = None
@@ -434,7 +436,11 @@ class MessageHandler:
         if len(upload.items) < upload.count:
             return [Reply(self.telemetry.mission_request_int(len(upload.items), *peer))]
         self._upload = None
-        self.copter.set_mission(upload.items)
+        items = upload.items
+        if self.copter.mission_wire_offset:
+            # PX4's item 0 is the first real one: home goes in front, as stored here.
+            items = [HOME_PLACEHOLDER] + [replace(i, seq=i.seq + 1) for i in items]
+        self.copter.set_mission(items)
         text = self.telemetry.statustext_of(Severity.INFO, "Flight plan received")
         return [
             self._mission_ack(MavMissionResult.ACCEPTED, peer),

@@ -266,6 +266,10 @@ class Copter(Vehicle):
     def reboot_declined(self) -> MavResult:
         return self.personality.reboot_declined
 
+    @property
+    def mission_wire_offset(self) -> int:
+        return self.personality.mission_wire_offset
+
     def set_mode(self, number: int) -> MavResult:
         """Copter::set_mode for a GCS request."""
         if number == self.mode:

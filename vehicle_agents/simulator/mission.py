@@ -77,3 +77,7 @@ def check_item(item: MissionItem) -> str | None:
     if item.command in NAV_COMMANDS and item.frame == MavFrame.MISSION:
         return "frame"
     return None
+
+
+# Item 0 as ArduPilot stores it: home, whose position the vehicle keeps itself.
+HOME_PLACEHOLDER = MissionItem(seq=0, frame=0, command=16)

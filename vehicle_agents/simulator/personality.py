@@ -63,6 +63,10 @@ class Personality(ABC):
     declined: MavResult  # the answer to an arming, disarming or mode change it declines
     reboot_declined: MavResult  # the answer to a reboot while armed
     takeoff_alt_is_amsl: bool  # NAV_TAKEOFF param7: above mean sea level, or above home
+    # Where the mission starts on the wire: ArduPilot keeps home as item 0, PX4 (as the
+    # MAVLink spec has it) starts the mission itself at 0. The simulator always stores
+    # home first; this is how far its numbers are from the wire's.
+    mission_wire_offset: int
 
     @abstractmethod
     def base_mode(self, mode: CopterMode, armed: bool) -> int: ...
@@ -104,6 +108,7 @@ class ArduCopterPersonality(Personality):
     declined = MavResult.FAILED
     reboot_declined = MavResult.FAILED
     takeoff_alt_is_amsl = False
+    mission_wire_offset = 0
 
     def base_mode(self, mode: CopterMode, armed: bool) -> int:
         """GCS_MAVLINK_Copter::base_mode."""
@@ -176,6 +181,7 @@ class Px4Personality(Personality):
     declined = MavResult.TEMPORARILY_REJECTED
     reboot_declined = MavResult.DENIED
     takeoff_alt_is_amsl = True
+    mission_wire_offset = 1
 
     def __init__(self) -> None:
         # the PX4 mode last selected by name, and the copter mode that flies it

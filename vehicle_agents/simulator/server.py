@@ -245,7 +245,8 @@ class SimulatorServer:
             self._broadcast(self.telemetry.statustext(text))
         for event in self.copter.drain_events():
             if isinstance(event, ItemReached):
-                self._broadcast(self.telemetry.mission_item_reached(event.seq))
+                on_wire = event.seq - self.copter.mission_wire_offset
+                self._broadcast(self.telemetry.mission_item_reached(on_wire))
             else:
                 self._broadcast(self.telemetry.camera_feedback(event))
         signature = self._state_signature()

@@ -331,8 +331,9 @@ class TelemetryBuilder:
 
     def mission_current(self) -> MavMessage:
         copter = self.copter
+        on_wire = max(0, copter.mission_current - copter.mission_wire_offset)
         return mavlink2.MAVLink_mission_current_message(
-            copter.mission_current, copter.mission_count, int(copter.mission_state()), 0
+            on_wire, copter.mission_count, int(copter.mission_state()), 0
         )
 
     # -- replies -------------------------------------------------------------

@@ -430,6 +430,11 @@ class Vehicle(ABC):
         """In the mode that runs the stored mission."""
 
     @property
+    def mission_wire_offset(self) -> int:
+        """How far the stored mission's numbers (home first) are from the wire's."""
+        return 0
+
+    @property
     def mission_count(self) -> int:
         """Mission commands stored after item 0 (home)."""
         return max(0, len(self.mission) - 1)

@@ -3,6 +3,7 @@ mission is checked against the effective rails (the site's, narrowed per vehicle
 
 from __future__ import annotations
 
+from backend.errors import InvalidRequest
 from backend.fleet.registry import VehicleRecord
 from backend.safety import (
     PlanCheck,
@@ -34,6 +35,8 @@ LANDED_BELOW_M = 0.5
 # MAV_CMD numbers of the navigation commands that fly somewhere.
 NAV_WAYPOINT, NAV_LOITER_UNLIM, NAV_LOITER_TURNS, NAV_LOITER_TIME = 16, 17, 18, 19
 NAV_LAND, NAV_TAKEOFF, NAV_SPLINE_WAYPOINT = 21, 22, 82
+NAV_LOITER_TO_ALT, NAV_VTOL_TAKEOFF, NAV_VTOL_LAND, NAV_PAYLOAD_PLACE = 31, 84, 85, 94
+DO_SET_HOME = 179  # with a position: home moves there mid-mission, so RTL goes there
 POSITIONED = {
     NAV_WAYPOINT,
     NAV_LOITER_UNLIM,
@@ -41,7 +44,14 @@ POSITIONED = {
     NAV_LOITER_TIME,
     NAV_LAND,
     NAV_SPLINE_WAYPOINT,
+    NAV_LOITER_TO_ALT,
+    NAV_VTOL_TAKEOFF,
+    NAV_VTOL_LAND,
+    NAV_PAYLOAD_PLACE,
+    DO_SET_HOME,
 }
+# Frames whose altitude is above mean sea level rather than above home.
+AMSL_FRAMES = {0, 5}  # MAV_FRAME_GLOBAL, MAV_FRAME_GLOBAL_INT
 
 
 def mission_waypoints(items: list[MissionItem], record: VehicleRecord) -> list[Waypoint]:
@@ -49,11 +59,22 @@ def mission_waypoints(items: list[MissionItem], record: VehicleRecord) -> list[W
 
     A take-off climbs where the vehicle stands; a land with no position lands in place."""
     here = record.state
+    home_alt = here.home_alt_msl if here else None
     points: list[Waypoint] = []
-    for item in items:
+    for number, item in enumerate(items, 1):
         has_position = (item.lat, item.lon) != (0.0, 0.0)
+        alt = item.alt
+        if item.frame in AMSL_FRAMES:
+            if home_alt is None:
+                # The rails measure from home: refuse rather than guess.
+                raise InvalidRequest(
+                    "items",
+                    f"item {number}: its altitude is above sea level, and the vehicle has "
+                    "not reported home's altitude to check it against",
+                )
+            alt = item.alt - home_alt
         if item.command in POSITIONED and has_position:
-            points.append(Waypoint(item.lat, item.lon, item.alt))
+            points.append(Waypoint(item.lat, item.lon, alt))
         elif item.command == NAV_TAKEOFF and here and here.lat is not None and here.lon is not None:
             points.append(Waypoint(here.lat, here.lon, item.alt))
     return points
@@ -73,6 +94,7 @@ def snapshot_of(record: VehicleRecord) -> VehicleSnapshot:
         battery_remaining_pct=state.battery_remaining,
         armed=state.armed,
         landed=landed,
+        home_alt_msl=state.home_alt_msl,
     )
 
 
@@ -122,8 +144,8 @@ class SafetyGate:
                 return check_goto(rails, vehicle, lat, lon, altitude)
             case SetHomeCommand(use_current=True):
                 return check_set_home(rails, vehicle, None, None)
-            case SetHomeCommand(lat=lat, lon=lon):
-                return check_set_home(rails, vehicle, lat, lon)
+            case SetHomeCommand(lat=lat, lon=lon, alt_msl=alt_msl):
+                return check_set_home(rails, vehicle, lat, lon, alt_msl)
 
     def check_mission(self, record: VehicleRecord, waypoints: list[Waypoint]) -> PlanCheck:
         """Every violated rule of a mission, and the battery estimate when it can be made."""

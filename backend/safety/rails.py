@@ -28,6 +28,7 @@ RuleName = Literal[
     "max_distance_from_home",
     "min_launch_battery",
     "battery_sufficiency",
+    "home_altitude",
     "position_unknown",
 ]
 GEOFENCE: Final = "geofence"
@@ -37,7 +38,11 @@ MIN_ALTITUDE: Final = "min_altitude"
 MAX_DISTANCE_FROM_HOME: Final = "max_distance_from_home"
 MIN_LAUNCH_BATTERY: Final = "min_launch_battery"
 BATTERY_SUFFICIENCY: Final = "battery_sufficiency"
+HOME_ALTITUDE: Final = "home_altitude"
 POSITION_UNKNOWN: Final = "position_unknown"
+# Every altitude a vehicle is given is measured from home's: moving home up or down
+# moves them all, ceilings included. A new home may differ from the old by this much.
+HOME_ALTITUDE_TOLERANCE_M: Final = 10.0
 RULES: Final[tuple[RuleName, ...]] = (
     GEOFENCE,
     GEOFENCE_MAX_ALTITUDE,
@@ -46,6 +51,7 @@ RULES: Final[tuple[RuleName, ...]] = (
     MAX_DISTANCE_FROM_HOME,
     MIN_LAUNCH_BATTERY,
     BATTERY_SUFFICIENCY,
+    HOME_ALTITUDE,
     POSITION_UNKNOWN,
 )
 
@@ -154,6 +160,7 @@ class VehicleSnapshot:
     battery_remaining_pct: float | None
     armed: bool
     landed: bool
+    home_alt_msl: float | None = None
 
 
 @dataclass(frozen=True)
@@ -256,7 +263,7 @@ def _others(count: int, noun: str) -> str:
 class _Report:
     """Collects violations, and the unknowns that stopped rules from being checked."""
 
-    _ITEM_ORDER = ("position", "home position", "altitude", "battery level")
+    _ITEM_ORDER = ("position", "home position", "home altitude", "altitude", "battery level")
 
     def __init__(self) -> None:
         self._violations: list[Violation] = []
@@ -421,16 +428,42 @@ def check_goto(
 
 
 def check_set_home(
-    rails: SafetyRails, vehicle: VehicleSnapshot, lat: float | None, lon: float | None
+    rails: SafetyRails,
+    vehicle: VehicleSnapshot,
+    lat: float | None,
+    lon: float | None,
+    alt_msl: float | None = None,
 ) -> list[Violation]:
-    """A new home at (lat, lon), or where the vehicle is when those are None.
+    """A new home at (lat, lon, alt_msl), or where the vehicle is when those are None.
 
     Home is where RTL, and every failsafe that returns, flies to: a home outside the
     geofence, or one reached by a straight leg that leaves it, would send the vehicle out
     of the fence; and the range limit is measured from home, so home may not move further
-    than that limit from where it is now.
+    than that limit from where it is now. Every altitude is measured from home's, so its
+    altitude may barely change, and home is not taken from a vehicle in the air.
     """
     report = _Report()
+    if lat is None and not vehicle.landed:
+        report.add(
+            HOME_ALTITUDE,
+            "the vehicle is in the air: home would take its altitude, and every altitude "
+            "measured from home (take-off, go-to, RTL, the ceiling) would move with it",
+            None,
+            None,
+        )
+    if alt_msl is not None:
+        old_alt = _known(vehicle.home_alt_msl)
+        if old_alt is None:
+            report.unknown("home altitude", HOME_ALTITUDE)
+        elif abs(alt_msl - old_alt) > HOME_ALTITUDE_TOLERANCE_M:
+            report.add(
+                HOME_ALTITUDE,
+                f"new home is {alt_msl - old_alt:+.1f} m from the current home's altitude "
+                f"(at most ±{HOME_ALTITUDE_TOLERANCE_M:g} m): every altitude measured from "
+                "home would move with it",
+                HOME_ALTITUDE_TOLERANCE_M,
+                alt_msl - old_alt,
+            )
     here = _position(vehicle)
     if lat is None or lon is None:
         label, target = "the vehicle's position (the new home)", here

@@ -4,6 +4,7 @@ geofence, or beyond the range limit, is refused."""
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import pytest
 
@@ -97,6 +98,7 @@ def gate_with_fence() -> tuple[SafetyGate, _Rails, VehicleRecord]:
         armed=True,
         home_lat=here.lat,
         home_lon=here.lon,
+        home_alt_msl=500,
         battery_remaining=80,
     )
     record = VehicleRecord("v1", "ardupilot", "multirotor", [], state=state)
@@ -109,7 +111,29 @@ def test_the_gate_checks_a_new_home_and_never_holds_back_hold() -> None:
     far = SetHomeCommand(use_current=False, lat=outside.lat, lon=outside.lon, alt_msl=500)
     [violation] = gate.check_command(record, far)
     assert violation.rule == "geofence"
-    assert gate.check_command(record, SetHomeCommand()) == []  # here, inside the fence
+    [airborne] = gate.check_command(record, SetHomeCommand())  # here, but 10 m up
+    assert airborne.rule == "home_altitude"
     reads = rails.reads
     assert gate.check_command(record, HoldCommand()) == []
     assert rails.reads == reads  # decided without reading any rails
+
+
+def test_home_is_not_taken_from_a_vehicle_in_the_air() -> None:
+    [violation] = check_set_home(SafetyRails(), vehicle(alt=30.0, landed=False), None, None)
+    assert violation.rule == "home_altitude"
+    assert "in the air" in violation.message
+    assert check_set_home(SafetyRails(), vehicle(), None, None) == []
+
+
+def test_a_home_that_moves_every_altitude_is_refused() -> None:
+    here = replace(vehicle(), home_alt_msl=584.0)
+    point = geo(60, 60)
+    assert check_set_home(SafetyRails(), here, point.lat, point.lon, 590.0) == []
+    [violation] = check_set_home(SafetyRails(), here, point.lat, point.lon, 884.0)
+    assert violation.rule == "home_altitude"
+    assert violation.value == pytest.approx(300.0)
+    assert "+300.0 m from the current home's altitude" in violation.message
+    # Without home's altitude there is nothing to compare with: refused, saying why.
+    [unknown] = check_set_home(SafetyRails(), vehicle(), point.lat, point.lon, 590.0)
+    assert unknown.rule == "position_unknown"
+    assert "home altitude" in unknown.message

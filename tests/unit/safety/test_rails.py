@@ -369,5 +369,6 @@ def test_rule_names_are_stable() -> None:
         "max_distance_from_home",
         "min_launch_battery",
         "battery_sufficiency",
+        "home_altitude",
         "position_unknown",
     )

@@ -189,18 +189,20 @@ class FcuLink:
         connection = self._connection
         last_message = time.monotonic()
         while not stop.is_set():
-            message = connection.recv_match(blocking=True, timeout=self.timeouts.read_poll_s)
+            messages = _read_available(connection, self.timeouts.read_poll_s)
             now = time.monotonic()
-            if message is not None:
+            arrived_at = time.time()
+            for message in messages:
                 if message.get_type() != "BAD_DATA":  # a stream of garbage is no link
                     last_message = now
                 for tap in self.taps:
                     tap(message)
                 if self.recorder is not None:
-                    self.recorder(message, time.time())
+                    self.recorder(message, arrived_at)
+            if messages:
                 with self._inbox_lock:
-                    self._inbox.append(message)
-                    wake_loop = len(self._inbox) == 1
+                    wake_loop = not self._inbox
+                    self._inbox.extend(messages)
                 if wake_loop:
                     self._loop.call_soon_threadsafe(self._deliver_inbox)
             if now - last_message > self.timeouts.heartbeat_s:
@@ -360,6 +362,25 @@ def _is_autopilot(heartbeat: MavMessage) -> bool:
         heartbeat.autopilot != mavlink2.MAV_AUTOPILOT_INVALID
         and heartbeat.type != mavlink2.MAV_TYPE_GCS
     )
+
+
+# One read takes whatever has arrived, up to this: every message in it then costs one
+# parse, not a wait, two small reads and a wake-up of the event loop each.
+READ_CHUNK = 4096
+
+
+def _read_available(connection: Any, wait_s: float) -> list[MavMessage]:
+    """The messages that arrived within ``wait_s``: one select, one read, one parse.
+
+    ``connection.recv`` is pymavlink's, per link type: a TCP read (end of stream raises
+    through ``handle_eof``), a UDP datagram (remembering the sender, so replies reach
+    it), or what a serial port holds."""
+    if not connection.select(wait_s):
+        return []
+    data = connection.recv(READ_CHUNK)
+    if not data:
+        return []
+    return list(connection.mav.parse_buffer(data) or [])
 
 
 def _raise_closed() -> None:

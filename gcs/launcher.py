@@ -115,6 +115,7 @@ class LocalFleet:
         self.plan = plan
         self.log_dir = plan.data_dir / "logs"
         self.processes: list[ManagedProcess] = []
+        self.sim_ports: dict[int, int] = {}  # by vehicle index, to restart an agent
 
     def vehicle_id(self, index: int) -> str:
         return self.plan.vehicle_id(index)
@@ -152,6 +153,7 @@ class LocalFleet:
 
     def start_vehicle(self, index: int) -> None:
         sim_port = free_port()
+        self.sim_ports[index] = sim_port
         lat, lon, alt = self.plan.vehicle_home(index)
         self.spawn(
             f"sim_{index + 1}",
@@ -168,6 +170,10 @@ class LocalFleet:
                 *self.plan.vehicle_sim_args(index),
             ],
         )
+        self.start_agent(index, sim_port)
+
+    def start_agent(self, index: int, sim_port: int) -> None:
+        """The agent of vehicle ``index``, to its flight controller on ``sim_port``."""
         self.spawn(
             f"agent_{index + 1}",
             [

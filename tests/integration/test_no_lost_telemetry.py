@@ -136,3 +136,50 @@ def _spilled(path: Path) -> int:
         return 0
     with sqlite3.connect(path, timeout=5) as db:
         return int(db.execute("SELECT count(*) FROM frames").fetchone()[0])
+
+
+def test_an_agent_restarted_during_an_outage_replays_its_earlier_run(
+    one_vehicle: LocalFleet,
+) -> None:
+    """The agent dies (SIGKILL) while the hub is away: what it had spilled to disk is
+    sent by its next run, under the earlier run's stream, once the hub is back."""
+    fleet = one_vehicle
+    base = fleet.plan.hub_http
+    token = access_token(base, "admin", fleet.plan.admin_password)
+    with FleetWatcher(base, token) as watcher:
+        watcher.wait_until(ready(VEHICLE), 60, f"{VEHICLE} ready")
+    fleet.kill("hub")
+    outbox = fleet.plan.data_dir / "onboard" / VEHICLE / f"{VEHICLE}.outbox.sqlite"
+    _wait_for(lambda: _spilled(outbox) > 60, 30, "the outbox to spill to disk")
+    fleet.kill("agent_1")
+    with sqlite3.connect(outbox) as db:
+        [(earlier_run, spilled_up_to)] = db.execute(
+            "SELECT stream_id, max(seq) FROM frames WHERE kind = 'telemetry'"
+        ).fetchall()
+    fleet.start_agent(0, fleet.sim_ports[0])
+    fleet.start_hub()
+    fleet.wait_until_ready()
+
+    def earlier_run_stored() -> list[int]:
+        rows = _stored(fleet, f"SELECT seq FROM telemetry WHERE stream_id = '{earlier_run}'")
+        return sorted(seq for (seq,) in rows)
+
+    _wait_for(
+        lambda: (seqs := earlier_run_stored()) and seqs[-1] >= spilled_up_to,
+        60,
+        "the earlier run's frames to be stored",
+    )
+    # Everything the earlier run had stored or spilled is there, each once.
+    assert earlier_run_stored()[: spilled_up_to + 1] == list(range(spilled_up_to + 1))
+    runs = _stored(
+        fleet, f"SELECT DISTINCT stream_id FROM telemetry WHERE vehicle_id = '{VEHICLE}'"
+    )
+    assert len(runs) == 2, "the new run streams under its own name"
+
+    def earlier_run_on_disk() -> int:
+        with sqlite3.connect(outbox, timeout=5) as db:
+            query = "SELECT count(*) FROM frames WHERE stream_id = ?"
+            return int(db.execute(query, (earlier_run,)).fetchone()[0])
+
+    # The hub's acks name the earlier run too: the agent forgets what is stored.
+    _wait_for(lambda: earlier_run_on_disk() == 0, 30, "the stored frames to leave the disk")

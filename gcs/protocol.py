@@ -323,6 +323,16 @@ class Telemetry(Message):
     state: VehicleState
 
 
+class LiveState(Message):
+    """The vehicle's state now, ahead of a backlog being replayed: for the live view only,
+    never stored. While an agent catches up after an outage its numbered telemetry is
+    minutes old; this keeps the map showing where the vehicle is, not where it was."""
+
+    type: Literal["live_state"] = "live_state"
+    time: float = Field(ge=0, le=MAX_UNIX_TIME, description="Unix time of the snapshot, seconds.")
+    state: VehicleState
+
+
 EventKind = Literal[
     "statustext", "mode", "armed", "disarmed", "link_up", "link_down", "failsafe", "mission"
 ]
@@ -445,7 +455,8 @@ class Pong(Message):
 
 
 AgentToHub: TypeAlias = Annotated[
-    Hello | Telemetry | Event | CommandResult | Unavailable, Field(discriminator="type")
+    Hello | Telemetry | LiveState | Event | CommandResult | Unavailable,
+    Field(discriminator="type"),
 ]
 HubToAgent: TypeAlias = Annotated[
     Welcome | CommandRequest | Ack | Resend | ErrorReply, Field(discriminator="type")

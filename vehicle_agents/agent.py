@@ -8,7 +8,15 @@ import sqlite3
 import time
 import uuid
 
-from gcs.protocol import PROTOCOL_VERSION, Event, EventKind, Hello, Telemetry, encode
+from gcs.protocol import (
+    PROTOCOL_VERSION,
+    Event,
+    EventKind,
+    Hello,
+    Telemetry,
+    VehicleState,
+    encode,
+)
 from vehicle_agents import __version__
 from vehicle_agents.commands import CommandExecutor
 from vehicle_agents.config import AgentSettings, default_vehicle_id, hub_http_base
@@ -59,7 +67,12 @@ async def run_agent(settings: AgentSettings) -> None:
         link.state_listeners.append(FcuLinkEvents(events.emit).on_link_change)
         executor = CommandExecutor(link)
         hub = HubLink(
-            settings.hub, settings.token.get_secret_value(), hello, outbox, executor.execute
+            settings.hub,
+            settings.token.get_secret_value(),
+            hello,
+            outbox,
+            executor.execute,
+            live_state=lambda: current_state(link, outbox),
         )
         tasks.create_task(publish_telemetry(link, outbox, settings.telemetry_rate_hz))
         tasks.create_task(hub.run())
@@ -95,15 +108,20 @@ def open_outbox(settings: AgentSettings, vehicle_id: str, stream_id: str) -> Out
     return Outbox(stream_id, settings.outbox_limit, spill)
 
 
+def current_state(link: FcuLink, outbox: Outbox) -> VehicleState:
+    """The vehicle now, with the agent's own delivery counters."""
+    return link_snapshot(link).model_copy(
+        update={"outbox_pending": len(outbox), "outbox_dropped": outbox.dropped}
+    )
+
+
 async def publish_telemetry(link: FcuLink, outbox: Outbox, rate_hz: float) -> None:
     """Snapshot the vehicle at a fixed rate into the outbox, numbering each one."""
     period = 1.0 / rate_hz
     seq = 0
     next_at = time.monotonic()
     while True:
-        state = link_snapshot(link).model_copy(
-            update={"outbox_pending": len(outbox), "outbox_dropped": outbox.dropped}
-        )
+        state = current_state(link, outbox)
         outbox.put("telemetry", seq, encode(Telemetry(seq=seq, time=time.time(), state=state)))
         seq += 1
         next_at += period

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import asyncio
 import logging
+import time
 from collections.abc import Awaitable, Callable
 from dataclasses import dataclass
 
@@ -20,8 +21,10 @@ from gcs.protocol import (
     CommandResult,
     ErrorReply,
     Hello,
+    LiveState,
     ProtocolError,
     Resend,
+    VehicleState,
     Welcome,
     decode,
     encode,
@@ -42,9 +45,12 @@ class HubTimeouts:
     # A refused token will not fix itself quickly; retry slowly instead of hammering.
     unauthorized_retry_s: float = 30.0
     ping_interval_s: float = 5.0
+    live_state_interval_s: float = 0.5
 
 
 COMMAND_ANSWER_MARGIN_S = 0.5
+# More frames than this waiting to be sent (a second or two of telemetry) is a backlog.
+BEHIND_FRAMES = 20
 
 
 class HubRefused(Exception):
@@ -69,6 +75,7 @@ class HubLink:
         outbox: Outbox,
         on_command: CommandHandler,
         timeouts: HubTimeouts | None = None,
+        live_state: Callable[[], VehicleState] | None = None,
     ) -> None:
         self.url = url
         self._token = token
@@ -76,6 +83,7 @@ class HubLink:
         self._outbox = outbox
         self._on_command = on_command
         self.timeouts = timeouts or HubTimeouts()
+        self._live_state = live_state
         self.connected = asyncio.Event()
         self.disconnected = asyncio.Event()
         self.disconnected.set()
@@ -135,9 +143,14 @@ class HubLink:
             self.disconnected.clear()
             self._ever_welcomed = True
             self._outbox.link_up()
+            if self._live_state is not None and self._outbox.backlog() > BEHIND_FRAMES:
+                # Ahead of the backlog, so the hub's live view never shows the past.
+                await websocket.send(encode(self._live_now()))
             try:
                 async with asyncio.TaskGroup() as tasks:
                     tasks.create_task(self._send_outbox(websocket))
+                    if self._live_state is not None:
+                        tasks.create_task(self._send_live_while_behind(websocket))
                     try:
                         async for frame in websocket:
                             self._handle_frame(frame, websocket, tasks)
@@ -147,6 +160,18 @@ class HubLink:
             finally:
                 # Whatever was sent and not acknowledged goes again on the next link.
                 self._outbox.link_down()
+
+    async def _send_live_while_behind(self, websocket: ClientConnection) -> None:
+        """While a backlog replays, the hub's live view gets the vehicle as it is now,
+        so the map does not re-fly the outage."""
+        while True:
+            await asyncio.sleep(self.timeouts.live_state_interval_s)
+            if self._outbox.backlog() > BEHIND_FRAMES:
+                await websocket.send(encode(self._live_now()))
+
+    def _live_now(self) -> LiveState:
+        assert self._live_state is not None
+        return LiveState(time=time.time(), state=self._live_state())
 
     async def _send_outbox(self, websocket: ClientConnection) -> None:
         while True:

@@ -204,6 +204,10 @@ class Outbox:
         in_memory = sum(1 for frame in self._in_flight if frame.disk_id is None)
         return on_disk + in_memory + len(self._unsent)
 
+    def backlog(self) -> int:
+        """Frames waiting to be sent on this connection (not counting those in flight)."""
+        return len(self) - len(self._in_flight)
+
     def put(self, kind: SequencedKind, seq: int, body: str) -> None:
         self._unsent.append(Frame(self.stream_id, kind, seq, body, time.monotonic()))
         if self._spill is not None and self._should_spill():

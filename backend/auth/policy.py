@@ -92,6 +92,7 @@ CLIENT_MESSAGE_PERMISSIONS: dict[str, Permission] = {"ping": Permission.READ}
 AGENT_MESSAGE_PERMISSIONS: dict[str, Permission] = {
     "hello": Permission.AGENT,
     "telemetry": Permission.AGENT,
+    "live_state": Permission.AGENT,
     "event": Permission.AGENT,
     "command_result": Permission.AGENT,
     "unavailable": Permission.AGENT,

@@ -88,13 +88,25 @@ class FleetRegistry:
         record.connected = False
         return record
 
+    def apply_live(self, vehicle_id: str, time: float, state: VehicleState) -> bool:
+        """The agent's state now, sent ahead of a replayed backlog; older samples that
+        arrive after it are stored but no longer move the live state."""
+        record = self.get(vehicle_id)
+        if record.last_seen is not None and time < record.last_seen:
+            return False
+        record.state = state
+        record.last_seen = time
+        return True
+
     def apply(self, vehicle_id: str, stream_id: str, telemetry: Telemetry) -> bool:
-        """Take a sample into live state; False if it is not newer than one already seen."""
+        """Take a sample into live state; False if it is not newer than what the live
+        state already shows (a replayed backlog behind a `LiveState`, a duplicate)."""
         record = self.get(vehicle_id)
         if telemetry.seq <= record.last_seq.get(stream_id, -1):
             return False
         record.last_seq[stream_id] = telemetry.seq
-        if record.last_seen is None or telemetry.time >= record.last_seen:
-            record.state = telemetry.state
-            record.last_seen = telemetry.time
+        if record.last_seen is not None and telemetry.time < record.last_seen:
+            return False
+        record.state = telemetry.state
+        record.last_seen = telemetry.time
         return True

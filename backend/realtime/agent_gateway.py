@@ -26,6 +26,7 @@ from gcs.protocol import (
     ErrorReply,
     Event,
     Hello,
+    LiveState,
     ProtocolError,
     Resend,
     Telemetry,
@@ -208,6 +209,9 @@ class AgentSession(PeerConnection):
         match message:
             case Telemetry():
                 await self._ingest(hello, message)
+            case LiveState(time=at, state=state):
+                if self.hub.registry.apply_live(hello.vehicle_id, at, state):
+                    await self.hub.publish_state(self.hub.registry.get(hello.vehicle_id))
             case Event():
                 stored = StoredEvent(
                     hello.vehicle_id,

@@ -10,7 +10,7 @@ from typing import Any
 
 import httpx
 
-from gcs.protocol import Event, Unavailable, encode
+from gcs.protocol import Event, LiveState, Telemetry, Unavailable, VehicleState, encode
 from tests.integration.test_hub_bad_input import ScriptedAgent, _telemetry, scripted_agent
 
 Enrol = Callable[[str], str]
@@ -67,3 +67,23 @@ def test_frames_the_vehicle_no_longer_has_are_recorded_as_lost(
     events = admin_api.get("/api/v1/events", params={"vehicle_id": "lossy", "kind": "data_lost"})
     texts = [event["text"] for event in events.json()["events"]]
     assert texts == ["telemetry samples 1-8 of stream s1 never arrived: outbox full"]
+
+
+def test_a_live_state_keeps_a_replayed_backlog_off_the_live_view(
+    hub: str, enrol: Enrol, admin_api: httpx.Client
+) -> None:
+    now = time.time()
+    with scripted_agent(hub, "catching-up", enrol("catching-up"), delivery=True) as agent:
+        live = LiveState(time=now, state=VehicleState(alt_rel=50.0))
+        agent.send(encode(live))
+        for seq in range(5):  # an hour-old backlog, replayed after the live state
+            old = Telemetry(seq=seq, time=now - 3600 + seq, state=VehicleState(alt_rel=1.0))
+            agent.send(encode(old))
+        _next(agent, _acked("telemetry", 4))
+    vehicle = admin_api.get("/api/v1/vehicles/catching-up").json()
+    assert vehicle["state"]["alt_rel"] == 50.0, "the live view kept the vehicle as it is now"
+    assert vehicle["last_seen"] == now
+    stored = admin_api.get(
+        "/api/v1/vehicles/catching-up/telemetry", params={"start": now - 4000}
+    ).json()["samples"]
+    assert [s["seq"] for s in stored] == [0, 1, 2, 3, 4], "the backlog is stored all the same"

@@ -169,3 +169,13 @@ def test_a_full_disk_costs_the_outbox_its_file_not_the_agent(tmp_path: Path, dra
     sent = drain(outbox)
     assert sorted(set(sent)) == list(range(2000)), "every frame is still sent"
     assert sent == sorted(sent)
+
+
+def test_backlog_counts_what_waits_to_be_sent(tmp_path: Path, drain: Drain) -> None:
+    outbox = Outbox("run", limit=1000, spill=SpillFile(tmp_path / "o.sqlite"))
+    _put(outbox, range(120))  # the hub is away: most of it goes to disk
+    assert outbox.backlog() == 120
+    outbox.link_up()
+    drain(outbox)
+    assert outbox.backlog() == 0
+    assert len(outbox) == 120  # sent, not yet acknowledged

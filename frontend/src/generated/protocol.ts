@@ -14,7 +14,7 @@
  * Any frame of protocol version 1, in either direction.
  */
 export type AnyMessage = AgentToHub | HubToAgent | ClientToHub | HubToClient;
-export type AgentToHub = Hello | Telemetry | Event | CommandResult | Unavailable;
+export type AgentToHub = Hello | Telemetry | LiveState | Event | CommandResult | Unavailable;
 export type HubToAgent = Welcome | CommandRequest | Ack | Resend | ErrorReply;
 export type ClientToHub = Ping;
 export type HubToClient = FleetSnapshot | VehicleUpdate | Pong | ErrorReply;
@@ -126,6 +126,19 @@ export interface VehicleState {
    * frames the agent dropped because its outbox was full
    */
   outbox_dropped: number;
+}
+/**
+ * The vehicle's state now, ahead of a backlog being replayed: for the live view only,
+ * never stored. While an agent catches up after an outage its numbered telemetry is
+ * minutes old; this keeps the map showing where the vehicle is, not where it was.
+ */
+export interface LiveState {
+  type: "live_state";
+  /**
+   * Unix time of the snapshot, seconds.
+   */
+  time: number;
+  state: VehicleState;
 }
 /**
  * Something that happened, for the flight log: a STATUSTEXT, a failsafe, ...

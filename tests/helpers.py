@@ -6,12 +6,14 @@ import asyncio
 import json
 import math
 import os
+import sqlite3
 import subprocess
 import sys
 import threading
 import time
 from collections.abc import Callable, Iterator
 from contextlib import ExitStack, contextmanager
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -216,3 +218,22 @@ def agent_process(
         finally:
             agent.terminate()
             agent.wait(10)
+
+
+@dataclass(frozen=True)
+class SpilledFrame:
+    stream_id: str
+    kind: str
+    seq: int
+    body: str
+
+
+def spilled_frames(fleet: LocalFleet, vehicle: str) -> list[SpilledFrame]:
+    """What the agent of a local fleet keeps on disk for the hub, oldest first (nothing
+    before it first spills)."""
+    path = fleet.plan.data_dir / "onboard" / vehicle / f"{vehicle}.outbox.sqlite"
+    if not path.exists():
+        return []
+    with sqlite3.connect(path, timeout=5) as db:
+        rows = db.execute("SELECT stream_id, kind, seq, body FROM frames ORDER BY id").fetchall()
+    return [SpilledFrame(*row) for row in rows]

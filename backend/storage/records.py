@@ -3,9 +3,8 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Literal
 
-from gcs.protocol import Telemetry
+from gcs.protocol import SequencedKind, Telemetry
 
 
 @dataclass(frozen=True)
@@ -34,7 +33,7 @@ class LostFrames:
 
     vehicle_id: str
     stream_id: str
-    kind: Literal["telemetry", "event"]
+    kind: SequencedKind
     first_seq: int
     last_seq: int
     reason: str

@@ -10,9 +10,8 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
-from typing import Literal
 
-SequencedKind = Literal["telemetry", "event"]
+from gcs.protocol import SequencedKind
 
 
 @dataclass(frozen=True)

@@ -3,7 +3,6 @@ the agent commands RTL, and tells the hub what it did once the hub is back."""
 
 from __future__ import annotations
 
-import sqlite3
 import time
 from collections.abc import Iterator
 from pathlib import Path
@@ -11,7 +10,14 @@ from pathlib import Path
 import pytest
 
 from gcs.launcher import LocalFleet
-from tests.helpers import FleetWatcher, access_token, api_client, ready, running_fleet
+from tests.helpers import (
+    FleetWatcher,
+    access_token,
+    api_client,
+    ready,
+    running_fleet,
+    spilled_frames,
+)
 
 pytestmark = pytest.mark.integration
 
@@ -25,14 +31,6 @@ def rtl_on_hub_loss(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Iterator
     monkeypatch.setenv("GCS_AGENT_HUB_FAILSAFE_TIMEOUT_S", "2")
     with running_fleet(tmp_path, vehicles=1, speedup=4.0) as fleet:
         yield fleet
-
-
-def _outbox_mentions(path: Path, text: str) -> bool:
-    if not path.exists():
-        return False
-    with sqlite3.connect(path, timeout=5) as db:
-        rows = db.execute("SELECT body FROM frames WHERE kind = 'event'").fetchall()
-    return any(text in body for (body,) in rows)
 
 
 def test_lost_hub_link_triggers_rtl_and_is_reported_on_reconnect(
@@ -50,9 +48,11 @@ def test_lost_hub_link_triggers_rtl_and_is_reported_on_reconnect(
         watcher.wait_until(lambda v: (v[VEHICLE]["state"]["alt_rel"] or 0) > 12, 60, "climb")
 
     fleet.kill("hub")
-    outbox = fleet.plan.data_dir / "onboard" / VEHICLE / f"{VEHICLE}.outbox.sqlite"
     deadline = time.monotonic() + 30
-    while not _outbox_mentions(outbox, "commanded RTL"):
+    while not any(
+        frame.kind == "event" and "commanded RTL" in frame.body
+        for frame in spilled_frames(fleet, VEHICLE)
+    ):
         assert time.monotonic() < deadline, "the agent did not act on the lost hub link"
         time.sleep(0.2)  # polling the agent's spill file: there is no event to wait on
 

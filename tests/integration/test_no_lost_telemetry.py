@@ -17,7 +17,14 @@ from typing import Any
 import pytest
 
 from gcs.launcher import LocalFleet
-from tests.helpers import FleetWatcher, access_token, api_client, ready, running_fleet
+from tests.helpers import (
+    FleetWatcher,
+    access_token,
+    api_client,
+    ready,
+    running_fleet,
+    spilled_frames,
+)
 
 pytestmark = pytest.mark.integration
 
@@ -85,10 +92,9 @@ def test_hub_killed_for_30_s_mid_mission_loses_and_duplicates_nothing(
 
     killed_at = time.time()
     fleet.kill("hub")
-    outbox = fleet.plan.data_dir / "onboard" / VEHICLE / f"{VEHICLE}.outbox.sqlite"
     deadline = time.monotonic() + OUTAGE_S
     # Meanwhile the agent spills to disk (checked, not assumed: the file fills up).
-    _wait_for(lambda: _spilled(outbox) > 100, OUTAGE_S, "the outbox to spill to disk")
+    _wait_for(lambda: len(spilled_frames(fleet, VEHICLE)) > 100, OUTAGE_S, "the outbox to spill")
     time.sleep(max(0.0, deadline - time.monotonic()))  # the outage itself, not a sync
     restarted_at = time.time()
     fleet.start_hub()
@@ -131,13 +137,6 @@ def test_hub_killed_for_30_s_mid_mission_loses_and_duplicates_nothing(
     assert any("hub link restored after" in text for _, text in events)
 
 
-def _spilled(path: Path) -> int:
-    if not path.exists():
-        return 0
-    with sqlite3.connect(path, timeout=5) as db:
-        return int(db.execute("SELECT count(*) FROM frames").fetchone()[0])
-
-
 def test_an_agent_restarted_during_an_outage_replays_its_earlier_run(
     one_vehicle: LocalFleet,
 ) -> None:
@@ -149,13 +148,11 @@ def test_an_agent_restarted_during_an_outage_replays_its_earlier_run(
     with FleetWatcher(base, token) as watcher:
         watcher.wait_until(ready(VEHICLE), 60, f"{VEHICLE} ready")
     fleet.kill("hub")
-    outbox = fleet.plan.data_dir / "onboard" / VEHICLE / f"{VEHICLE}.outbox.sqlite"
-    _wait_for(lambda: _spilled(outbox) > 60, 30, "the outbox to spill to disk")
+    _wait_for(lambda: len(spilled_frames(fleet, VEHICLE)) > 60, 30, "the outbox to spill")
     fleet.kill("agent_1")
-    with sqlite3.connect(outbox) as db:
-        [(earlier_run, spilled_up_to)] = db.execute(
-            "SELECT stream_id, max(seq) FROM frames WHERE kind = 'telemetry'"
-        ).fetchall()
+    spilled = [f for f in spilled_frames(fleet, VEHICLE) if f.kind == "telemetry"]
+    (earlier_run,) = {f.stream_id for f in spilled}
+    spilled_up_to = max(f.seq for f in spilled)
     fleet.start_agent(0, fleet.sim_ports[0])
     fleet.start_hub()
     fleet.wait_until_ready()
@@ -177,9 +174,7 @@ def test_an_agent_restarted_during_an_outage_replays_its_earlier_run(
     assert len(runs) == 2, "the new run streams under its own name"
 
     def earlier_run_on_disk() -> int:
-        with sqlite3.connect(outbox, timeout=5) as db:
-            query = "SELECT count(*) FROM frames WHERE stream_id = ?"
-            return int(db.execute(query, (earlier_run,)).fetchone()[0])
+        return sum(f.stream_id == earlier_run for f in spilled_frames(fleet, VEHICLE))
 
     # The hub's acks name the earlier run too: the agent forgets what is stored.
     _wait_for(lambda: earlier_run_on_disk() == 0, 30, "the stored frames to leave the disk")

@@ -41,9 +41,9 @@ from gcs.protocol import (
     SetModeCommand,
     TakeoffCommand,
 )
-from vehicle_agents.fcu_link import FcuLink, MavMessage
+from vehicle_agents.fcu_link import FcuLink, MavMessage, next_match
 from vehicle_agents.missions import MissionClient
-from vehicle_agents.modes import mode_name
+from vehicle_agents.modes import is_armed, mode_name
 from vehicle_agents.params import ParamClient
 
 log = logging.getLogger(__name__)
@@ -181,7 +181,7 @@ class CommandExecutor:
             return CommandOutcome(
                 status="refused", message="takeoff: the vehicle has not reported its home yet"
             )
-        if not _armed(self.link.latest.get("HEARTBEAT")):
+        if not is_armed(self.link.latest.get("HEARTBEAT")):
             _require_accepted(
                 await self.command_long(mavlink2.MAV_CMD_COMPONENT_ARM_DISARM, [1]), "arm"
             )
@@ -200,7 +200,7 @@ class CommandExecutor:
         heartbeat = self.link.latest.get("HEARTBEAT")
         if heartbeat is None or mode_name(heartbeat) != guided:
             _require_accepted(await self._set_mode(guided), f"switch to {guided}")
-        if not _armed(self.link.latest.get("HEARTBEAT")):
+        if not is_armed(self.link.latest.get("HEARTBEAT")):
             _require_accepted(
                 await self.command_long(mavlink2.MAV_CMD_COMPONENT_ARM_DISARM, [1]), "arm"
             )
@@ -282,7 +282,7 @@ class CommandExecutor:
         with self.link.collect(_ack_of(command)) as acks:
             for attempt in range(self.timeouts.attempts):
                 self.link.send(build(attempt))
-                ack = await _next(acks, self.timeouts.ack_s)
+                ack = await next_match(acks, self.timeouts.ack_s)
                 if ack is None:
                     log.debug("%s: no COMMAND_ACK on attempt %d", name, attempt + 1)
                 elif ack.result == mavlink2.MAV_RESULT_IN_PROGRESS:
@@ -311,7 +311,7 @@ class CommandExecutor:
         limit = self.timeouts.in_progress_s
         deadline = time.monotonic() + limit
         while (remaining := deadline - time.monotonic()) > 0:
-            ack = await _next(acks, remaining)
+            ack = await next_match(acks, remaining)
             if ack is None:
                 break
             if ack.result != mavlink2.MAV_RESULT_IN_PROGRESS:
@@ -351,7 +351,7 @@ class CommandExecutor:
     def _likely_reason(self, command: int, params: list[float]) -> str | None:
         """What the vehicle's state says about a refusal the autopilot did not explain."""
         heartbeat = self.link.latest.get("HEARTBEAT")
-        if not _armed(heartbeat):
+        if not is_armed(heartbeat):
             return None
         if command == mavlink2.MAV_CMD_PREFLIGHT_REBOOT_SHUTDOWN:
             return "the vehicle is armed, and autopilots refuse to reboot while armed"
@@ -371,23 +371,11 @@ class CommandExecutor:
         return position is not None and position.relative_alt > 1000  # 1 m above home
 
 
-async def _next(queue: asyncio.Queue[MavMessage], within_s: float) -> MavMessage | None:
-    try:
-        async with asyncio.timeout(within_s):
-            return await queue.get()
-    except TimeoutError:
-        return None
-
-
 def _require_accepted(outcome: CommandOutcome, step: str) -> None:
     if outcome.status != "accepted":
         raise CommandRefused(
             outcome.model_copy(update={"message": f"{step} failed: {outcome.message}"})
         )
-
-
-def _armed(heartbeat: MavMessage | None) -> bool:
-    return bool(heartbeat and heartbeat.base_mode & mavlink2.MAV_MODE_FLAG_SAFETY_ARMED)
 
 
 def _ack_of(command: int) -> Callable[[MavMessage], bool]:

@@ -58,12 +58,6 @@ class LinkChange:
 
 
 @dataclass
-class _Waiter:
-    predicate: MessagePredicate
-    future: asyncio.Future[MavMessage]
-
-
-@dataclass
 class StatusText:
     time: float
     severity: int
@@ -103,7 +97,6 @@ class FcuLink:
         self.state_listeners: list[Callable[[LinkChange], None]] = []
         self._up = False
         self._connection: Any = None
-        self._waiters: list[_Waiter] = []
         self._collectors: list[tuple[MessagePredicate, asyncio.Queue[MavMessage]]] = []
         self._identified = asyncio.Event()
         self._loop: asyncio.AbstractEventLoop | None = None
@@ -287,10 +280,7 @@ class FcuLink:
             log.info("FCU: %s", message.text)
         for listener in self.listeners:
             listener(message)
-        for waiter in list(self._waiters):
-            if not waiter.future.done() and waiter.predicate(message):
-                waiter.future.set_result(message)
-        for predicate, queue in self._collectors:
+        for predicate, queue in list(self._collectors):
             if predicate(message):
                 queue.put_nowait(message)
 
@@ -321,15 +311,8 @@ class FcuLink:
 
     async def wait_for(self, predicate: MessagePredicate, within_s: float) -> MavMessage | None:
         """The first message after now that matches, or None after ``within_s`` seconds."""
-        future: asyncio.Future[MavMessage] = asyncio.get_running_loop().create_future()
-        waiter = _Waiter(predicate, future)
-        self._waiters.append(waiter)
-        try:
-            return await asyncio.wait_for(future, within_s)
-        except TimeoutError:
-            return None
-        finally:
-            self._waiters.remove(waiter)
+        with self.collect(predicate) as matches:
+            return await next_match(matches, within_s)
 
     # -- sending -----------------------------------------------------------
 
@@ -355,6 +338,18 @@ class FcuLink:
                 *padded,
             )
         )
+
+
+async def next_match(queue: asyncio.Queue[MavMessage], within_s: float) -> MavMessage | None:
+    """The next message a ``collect`` queue receives, or None after ``within_s`` seconds.
+
+    ``asyncio.timeout``, not ``wait_for``: on Python 3.11 ``wait_for`` can swallow a
+    cancellation that lands as the message arrives."""
+    try:
+        async with asyncio.timeout(within_s):
+            return await queue.get()
+    except TimeoutError:
+        return None
 
 
 def _is_autopilot(heartbeat: MavMessage) -> bool:

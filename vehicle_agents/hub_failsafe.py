@@ -19,7 +19,7 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 from gcs.protocol import EventKind, HoldCommand, ReturnToLaunchCommand
 from vehicle_agents.commands import CommandExecutor
 from vehicle_agents.fcu_link import FcuLink
-from vehicle_agents.modes import mode_name
+from vehicle_agents.modes import is_armed, mode_name
 
 log = logging.getLogger(__name__)
 
@@ -98,7 +98,7 @@ class HubLinkFailsafe:
         """Carry out the configured action; what was done, in words for the log."""
         lost_for = f"hub link lost for {self.timeout_s:g} s"
         heartbeat = self._link.latest.get("HEARTBEAT")
-        armed = bool(heartbeat and heartbeat.base_mode & mavlink2.MAV_MODE_FLAG_SAFETY_ARMED)
+        armed = is_armed(heartbeat)
         mode = mode_name(heartbeat) if heartbeat is not None else "UNKNOWN"
         if self.action == "continue":
             done = "continued (configured action)"

@@ -89,3 +89,8 @@ def mode_table_for(heartbeat: Any) -> ModeTable:
 
 def mode_name(heartbeat: Any) -> str:
     return str(mavutil.mode_string_v10(heartbeat))
+
+
+def is_armed(heartbeat: Any) -> bool:
+    """Whether a HEARTBEAT says the motors are armed (False when there is none yet)."""
+    return bool(heartbeat and heartbeat.base_mode & mavlink2.MAV_MODE_FLAG_SAFETY_ARMED)

@@ -12,7 +12,7 @@ from gcs.protocol import VehicleState
 from vehicle_agents import positioning
 from vehicle_agents.fcu_link import FcuLink, MavMessage
 from vehicle_agents.missions import mission_number
-from vehicle_agents.modes import mode_name
+from vehicle_agents.modes import is_armed, mode_name
 
 _UNKNOWN_INT16 = -1
 _UINT16_UNKNOWN = 65535
@@ -54,7 +54,7 @@ def snapshot(
     }
     if (heartbeat := latest.get("HEARTBEAT")) is not None:
         fields["mode"] = mode_name(heartbeat)
-        fields["armed"] = bool(heartbeat.base_mode & mavlink2.MAV_MODE_FLAG_SAFETY_ARMED)
+        fields["armed"] = is_armed(heartbeat)
         fields["system_status"] = _system_status_name(heartbeat.system_status)
     if (position := latest.get("GLOBAL_POSITION_INT")) is not None:
         fields["lat"] = position.lat / 1e7

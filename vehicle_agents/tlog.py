@@ -27,6 +27,8 @@ from typing import IO, Any
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
+from vehicle_agents.modes import is_armed
+
 log = logging.getLogger(__name__)
 
 DEFAULT_MAX_BYTES = 200 * 1024 * 1024
@@ -106,7 +108,7 @@ class TlogRecorder:
             self._autopilot = source
         if source != self._autopilot:
             return None
-        return bool(message.base_mode & mavlink2.MAV_MODE_FLAG_SAFETY_ARMED)
+        return is_armed(message)
 
     def _open(self, received_at: float) -> None:
         stamp = datetime.fromtimestamp(received_at, UTC).strftime("%Y%m%dT%H%M%S")

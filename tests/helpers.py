@@ -237,3 +237,12 @@ def spilled_frames(fleet: LocalFleet, vehicle: str) -> list[SpilledFrame]:
     with sqlite3.connect(path, timeout=5) as db:
         rows = db.execute("SELECT stream_id, kind, seq, body FROM frames ORDER BY id").fetchall()
     return [SpilledFrame(*row) for row in rows]
+
+
+def poll_until(condition: Callable[[], object], timeout_s: float, what: str) -> None:
+    """Until ``condition()`` is true, for state that announces nothing (a file, a table)."""
+    deadline = time.monotonic() + timeout_s
+    while not condition():
+        if time.monotonic() > deadline:
+            raise AssertionError(f"timed out after {timeout_s:.0f} s waiting for {what}")
+        time.sleep(0.2)  # polling: there is no event to wait on

@@ -105,8 +105,4 @@ class FleetRegistry:
         if telemetry.seq <= record.last_seq.get(stream_id, -1):
             return False
         record.last_seq[stream_id] = telemetry.seq
-        if record.last_seen is not None and telemetry.time < record.last_seen:
-            return False
-        record.state = telemetry.state
-        record.last_seen = telemetry.time
-        return True
+        return self.apply_live(vehicle_id, telemetry.time, telemetry.state)

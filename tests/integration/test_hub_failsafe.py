@@ -3,7 +3,6 @@ the agent commands RTL, and tells the hub what it did once the hub is back."""
 
 from __future__ import annotations
 
-import time
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -14,6 +13,7 @@ from tests.helpers import (
     FleetWatcher,
     access_token,
     api_client,
+    poll_until,
     ready,
     running_fleet,
     spilled_frames,
@@ -48,13 +48,14 @@ def test_lost_hub_link_triggers_rtl_and_is_reported_on_reconnect(
         watcher.wait_until(lambda v: (v[VEHICLE]["state"]["alt_rel"] or 0) > 12, 60, "climb")
 
     fleet.kill("hub")
-    deadline = time.monotonic() + 30
-    while not any(
-        frame.kind == "event" and "commanded RTL" in frame.body
-        for frame in spilled_frames(fleet, VEHICLE)
-    ):
-        assert time.monotonic() < deadline, "the agent did not act on the lost hub link"
-        time.sleep(0.2)  # polling the agent's spill file: there is no event to wait on
+    poll_until(
+        lambda: any(
+            frame.kind == "event" and "commanded RTL" in frame.body
+            for frame in spilled_frames(fleet, VEHICLE)
+        ),
+        30,
+        "the agent to act on the lost hub link",
+    )
 
     fleet.start_hub()
     fleet.wait_until_ready()
@@ -65,13 +66,16 @@ def test_lost_hub_link_triggers_rtl_and_is_reported_on_reconnect(
             30,
             "the vehicle to be seen returning",
         )
-        deadline = time.monotonic() + 30
-        while True:
+
+        def failsafe_texts() -> list[str]:
             events = api.get("/api/v1/events", params={"vehicle_id": VEHICLE, "kind": "failsafe"})
-            texts = [event["text"] for event in events.json()["events"]]
-            if any("hub link restored" in text for text in texts):
-                break
-            assert time.monotonic() < deadline, f"no report of the failsafe: {texts}"
-            time.sleep(0.2)  # the report is on its way through the writer
+            return [event["text"] for event in events.json()["events"]]
+
+        poll_until(
+            lambda: any("hub link restored" in text for text in failsafe_texts()),
+            30,
+            "the failsafe's report to be stored",
+        )
+        texts = failsafe_texts()
     assert any("hub link lost for 2 s: commanded RTL" in text for text in texts)
     assert any("on losing it the agent commanded RTL" in text for text in texts)

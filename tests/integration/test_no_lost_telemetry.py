@@ -21,6 +21,7 @@ from tests.helpers import (
     FleetWatcher,
     access_token,
     api_client,
+    poll_until,
     ready,
     running_fleet,
     spilled_frames,
@@ -48,14 +49,6 @@ def _stored(fleet: LocalFleet, query: str) -> list[tuple[Any, ...]]:
 def _telemetry_seqs(fleet: LocalFleet) -> list[int]:
     rows = _stored(fleet, f"SELECT seq FROM telemetry WHERE vehicle_id = '{VEHICLE}'")
     return sorted(seq for (seq,) in rows)
-
-
-def _wait_for(condition: Any, timeout_s: float, what: str) -> None:
-    deadline = time.monotonic() + timeout_s
-    while not condition():
-        if time.monotonic() > deadline:
-            raise AssertionError(f"timed out after {timeout_s:.0f} s waiting for {what}")
-        time.sleep(0.2)  # polling a file: there is no event to wait on
 
 
 def _long_mission(lat: float, lon: float) -> list[dict[str, Any]]:
@@ -94,7 +87,7 @@ def test_hub_killed_for_30_s_mid_mission_loses_and_duplicates_nothing(
     fleet.kill("hub")
     deadline = time.monotonic() + OUTAGE_S
     # Meanwhile the agent spills to disk (checked, not assumed: the file fills up).
-    _wait_for(lambda: len(spilled_frames(fleet, VEHICLE)) > 100, OUTAGE_S, "the outbox to spill")
+    poll_until(lambda: len(spilled_frames(fleet, VEHICLE)) > 100, OUTAGE_S, "the outbox to spill")
     time.sleep(max(0.0, deadline - time.monotonic()))  # the outage itself, not a sync
     restarted_at = time.time()
     fleet.start_hub()
@@ -102,7 +95,7 @@ def test_hub_killed_for_30_s_mid_mission_loses_and_duplicates_nothing(
 
     # Everything the agent produced up to now must arrive, without holes.
     target = int((time.time() - killed_at + 5) * fleet.plan.telemetry_rate_hz)
-    _wait_for(
+    poll_until(
         lambda: (
             (seqs := _telemetry_seqs(fleet)) and seqs[-1] >= target and len(seqs) == seqs[-1] + 1
         ),
@@ -148,7 +141,7 @@ def test_an_agent_restarted_during_an_outage_replays_its_earlier_run(
     with FleetWatcher(base, token) as watcher:
         watcher.wait_until(ready(VEHICLE), 60, f"{VEHICLE} ready")
     fleet.kill("hub")
-    _wait_for(lambda: len(spilled_frames(fleet, VEHICLE)) > 60, 30, "the outbox to spill")
+    poll_until(lambda: len(spilled_frames(fleet, VEHICLE)) > 60, 30, "the outbox to spill")
     fleet.kill("agent_1")
     spilled = [f for f in spilled_frames(fleet, VEHICLE) if f.kind == "telemetry"]
     (earlier_run,) = {f.stream_id for f in spilled}
@@ -161,7 +154,7 @@ def test_an_agent_restarted_during_an_outage_replays_its_earlier_run(
         rows = _stored(fleet, f"SELECT seq FROM telemetry WHERE stream_id = '{earlier_run}'")
         return sorted(seq for (seq,) in rows)
 
-    _wait_for(
+    poll_until(
         lambda: (seqs := earlier_run_stored()) and seqs[-1] >= spilled_up_to,
         60,
         "the earlier run's frames to be stored",
@@ -177,4 +170,4 @@ def test_an_agent_restarted_during_an_outage_replays_its_earlier_run(
         return sum(f.stream_id == earlier_run for f in spilled_frames(fleet, VEHICLE))
 
     # The hub's acks name the earlier run too: the agent forgets what is stored.
-    _wait_for(lambda: earlier_run_on_disk() == 0, 30, "the stored frames to leave the disk")
+    poll_until(lambda: earlier_run_on_disk() == 0, 30, "the stored frames to leave the disk")

@@ -97,5 +97,7 @@ async def set_current_item(
     principal: CurrentPrincipal,
     hub: HubDep,
 ) -> MissionResult:
+    """Fly on from item ``seq`` (1 is the first after home). An item beyond the mission
+    on board is refused at once (422, naming the mission's length)."""
     command = MissionSetCurrentCommand(seq=body.seq)
     return await _run(hub, request, principal, vehicle_id, command)

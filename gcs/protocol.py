@@ -23,7 +23,15 @@ import sys
 from enum import IntEnum
 from typing import Annotated, Any, Literal, TypeAlias, TypeVar
 
-from pydantic import BaseModel, ConfigDict, Field, TypeAdapter, ValidationError, model_validator
+from pydantic import (
+    BaseModel,
+    ConfigDict,
+    Field,
+    TypeAdapter,
+    ValidationError,
+    field_validator,
+    model_validator,
+)
 
 PROTOCOL_VERSION = 1
 # Telemetry frames are a few hundred bytes; 64 KiB leaves room for later scan data
@@ -161,11 +169,25 @@ class ParamSetCommand(Message):
     value: float
 
 
+# MISSION_ITEM_INT carries integer positions whatever its frame says, so the "_INT" frames
+# add nothing there (MAVLink deprecates them), and autopilots do not keep them: ArduPilot
+# stores "relative altitude" and gives back 3 for an item sent as 6, PX4 gives back 6 for
+# one sent as 3. One form on both sides of the hub, so a round trip returns what was sent.
+_PLAIN_FRAME = {5: 0, 6: 3, 11: 10}  # GLOBAL_INT, GLOBAL_RELATIVE_ALT_INT, GLOBAL_TERRAIN_ALT_INT
+
+
 class MissionItem(Message):
     """One mission item, as MISSION_ITEM_INT carries it (positions in degrees)."""
 
     command: int = Field(ge=0, le=65535, description="MAV_CMD number, e.g. 16 NAV_WAYPOINT")
-    frame: int = Field(default=6, ge=0, le=21, description="MAV_FRAME; 6 = relative altitude")
+    frame: int = Field(
+        default=3,
+        ge=0,
+        le=21,
+        description="MAV_FRAME: 0 above sea level, 3 above home, 10 above terrain. The _INT "
+        "forms 5, 6 and 11 are accepted and become 0, 3 and 10, in uploads and downloads "
+        "alike. A command without a position ignores its frame (ArduPilot gives back 0).",
+    )
     param1: float = 0.0
     param2: float = 0.0
     param3: float = 0.0
@@ -174,6 +196,11 @@ class MissionItem(Message):
     lon: float = Field(default=0.0, ge=-180, le=180)
     alt: float = Field(default=0.0, ge=-1000, le=10000, description="metres")
     autocontinue: bool = True
+
+    @field_validator("frame")
+    @classmethod
+    def _plain_frame(cls, frame: int) -> int:
+        return _PLAIN_FRAME.get(frame, frame)
 
 
 class MissionUploadCommand(Message):

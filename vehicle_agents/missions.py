@@ -283,8 +283,10 @@ class MissionClient:
             if received is None:
                 return CommandOutcome(status="timeout", message=f"mission item {seq} never came")
             items.append(_item_of(received))
-        if not home_slots(self._autopilot()):
-            items.insert(0, self._home_item())  # so that item n is the hub's n everywhere
+        if not home_slots(self._autopilot()) or not items:
+            # So that item n is the hub's n everywhere. ArduPilot's item 0 is home, but a
+            # cleared mission has none (AP_Mission::clear truncates to 0): count 0, no items.
+            items.insert(0, self._home_item())
         self.link.send(
             mavlink2.MAVLink_mission_ack_message(
                 system, component, mavlink2.MAV_MISSION_ACCEPTED, MISSION

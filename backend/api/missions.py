@@ -12,6 +12,7 @@ from backend.api.deps import HubDep
 from backend.api.security import CurrentPrincipal, SecuredRouter, client_address, requires
 from backend.auth.policy import Permission
 from backend.fleet.command_service import execute_expecting_acceptance
+from backend.safety.schemas import Mission
 from gcs.protocol import (
     Command,
     CommandOutcome,
@@ -30,10 +31,6 @@ OverrideQuery = Annotated[
     str | None,
     Query(min_length=10, max_length=500, description="Admins only, as for commands (audited)"),
 ]
-
-
-class MissionUpload(BaseModel):
-    items: list[MissionItem] = Field(min_length=1, max_length=2000)
 
 
 class CurrentItem(BaseModel):
@@ -63,14 +60,16 @@ async def _run(
 @router.post("", response_model=MissionResult, openapi_extra=requires(Permission.COMMAND))
 async def upload_mission(
     vehicle_id: VehicleIdPath,
-    body: MissionUpload,
+    body: Mission,
     request: Request,
     principal: CurrentPrincipal,
     hub: HubDep,
     override_reason: OverrideQuery = None,
 ) -> MissionResult:
-    """Replace the vehicle's mission. Every rail it breaks is listed (422) before anything
-    reaches the vehicle; a vehicle that rejects an item keeps its previous mission (409)."""
+    """Replace the vehicle's mission. The mission check runs first (the body and the
+    rules are those of `mission-check`): every item problem and every rail it breaks is
+    listed (422) before anything reaches the vehicle; a vehicle that rejects an item keeps
+    its previous mission (409)."""
     command = MissionUploadCommand(items=body.items)
     return await _run(hub, request, principal, vehicle_id, command, override_reason)
 
@@ -98,5 +97,7 @@ async def set_current_item(
     principal: CurrentPrincipal,
     hub: HubDep,
 ) -> MissionResult:
+    """Fly on from item ``seq`` (1 is the first after home). An item beyond the mission
+    on board is refused at once (422, naming the mission's length)."""
     command = MissionSetCurrentCommand(seq=body.seq)
     return await _run(hub, request, principal, vehicle_id, command)

@@ -11,7 +11,7 @@ from backend.api.deps import HubDep
 from backend.api.security import CurrentPrincipal, SecuredRouter, audit_entry, requires
 from backend.auth.policy import Permission
 from backend.safety.schemas import (
-    MissionCheckRequest,
+    Mission,
     MissionCheckResponse,
     SafetyRailsModel,
 )
@@ -103,10 +103,12 @@ async def clear_vehicle_rails(
     openapi_extra=requires(Permission.COMMAND),
 )
 async def check_mission(
-    vehicle_id: VehicleIdPath, body: MissionCheckRequest, hub: HubDep
+    vehicle_id: VehicleIdPath, body: Mission, hub: HubDep
 ) -> MissionCheckResponse:
-    """Check a mission against the rails before it flies: every violated rule, plus the
-    battery estimate. Mission upload runs the same check and refuses on any violation."""
+    """Check a mission before it flies: what each item's command needs (rule
+    `mission_item`), every rail its places break, and the battery estimate. The body is
+    the upload's; upload and a switch to AUTO run the same check and refuse on any
+    violation (422)."""
     record = hub.registry.get(vehicle_id)
-    check = await asyncio.to_thread(hub.safety.check_mission, record, body.to_waypoints())
+    check = await asyncio.to_thread(hub.safety.check_mission, record, body.items)
     return MissionCheckResponse.from_plan_check(check)

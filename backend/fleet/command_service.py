@@ -20,6 +20,7 @@ from backend.errors import (
     VehicleOffline,
     VehicleRefused,
 )
+from backend.fleet.mission_gate import check_current_item, starts_mission, unchecked_mission
 from backend.hub import Hub
 from gcs.protocol import Command, CommandOutcome
 
@@ -53,6 +54,12 @@ async def execute_command(
     try:
         record = hub.registry.get(vehicle_id)
         violations = await asyncio.to_thread(hub.safety.check_command, record, command)
+        if starts_mission(command):
+            # AUTO flies whatever is on board, perhaps loaded by another GCS: it flies
+            # only after the same check as an upload (or an admin's audited override).
+            found, count = await unchecked_mission(hub, record)
+            details["mission_checked"] = {"items": count, "ok": not found}
+            violations += found
         if violations:
             if override_reason is None:
                 raise SafetyViolation([asdict(violation) for violation in violations])
@@ -62,6 +69,7 @@ async def execute_command(
                 "reason": override_reason,
                 "violations": [violation.rule for violation in violations],
             }
+        await check_current_item(hub, record, command)
         outcome = await hub.dispatcher.execute(vehicle_id, command)
     except GcsError as error:
         details["error"] = error.message

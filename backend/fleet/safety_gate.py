@@ -17,6 +17,7 @@ from backend.safety import (
     check_takeoff,
     evaluate_plan,
 )
+from backend.safety.rails import MISSION_ITEM
 from backend.safety.schemas import SafetyRailsModel
 from backend.settings import HubSettings
 from backend.storage.rails import SITE, RailsRepository, vehicle_scope
@@ -29,6 +30,7 @@ from gcs.protocol import (
     SetHomeCommand,
     TakeoffCommand,
 )
+from vehicle_agents.missions import mission_problems
 
 # Below this height a vehicle counts as on the ground for the launch rules.
 LANDED_BELOW_M = 0.5
@@ -74,9 +76,9 @@ def mission_waypoints(items: list[MissionItem], record: VehicleRecord) -> list[W
                 )
             alt = item.alt - home_alt
         if item.command in POSITIONED and has_position:
-            points.append(Waypoint(item.lat, item.lon, alt))
+            points.append(Waypoint(item.lat, item.lon, alt, number))
         elif item.command == NAV_TAKEOFF and here and here.lat is not None and here.lon is not None:
-            points.append(Waypoint(here.lat, here.lon, item.alt))
+            points.append(Waypoint(here.lat, here.lon, item.alt, number))
     return points
 
 
@@ -128,9 +130,7 @@ class SafetyGate:
         blocked, because they are how an operator gets out of trouble. A new home is
         checked because RTL and the failsafes fly to it."""
         if isinstance(command, MissionUploadCommand):
-            return list(
-                self.check_mission(record, mission_waypoints(command.items, record)).violations
-            )
+            return list(self.check_mission(record, command.items).violations)
         if not isinstance(command, ArmCommand | TakeoffCommand | GotoCommand | SetHomeCommand):
             return []  # decided before any rails are read: no database needed
         rails = self.effective_rails(record.id)
@@ -147,6 +147,16 @@ class SafetyGate:
             case SetHomeCommand(lat=lat, lon=lon, alt_msl=alt_msl):
                 return check_set_home(rails, vehicle, lat, lon, alt_msl)
 
-    def check_mission(self, record: VehicleRecord, waypoints: list[Waypoint]) -> PlanCheck:
-        """Every violated rule of a mission, and the battery estimate when it can be made."""
-        return evaluate_plan(self.effective_rails(record.id), snapshot_of(record), waypoints)
+    def check_mission(self, record: VehicleRecord, items: list[MissionItem]) -> PlanCheck:
+        """The mission check, the same for a check, an upload and a switch to AUTO: what
+        each item's command needs, then every rail the mission's places break, and the
+        battery estimate when it can be made. Items number from 1 (home is 0)."""
+        problems = tuple(
+            Violation(MISSION_ITEM, problem)
+            for problem in mission_problems(items, record.vehicle_type, record.autopilot)
+        )
+        waypoints = mission_waypoints(items, record)
+        if not waypoints:
+            return PlanCheck(problems, None)  # no place to go: nothing for the rails
+        plan = evaluate_plan(self.effective_rails(record.id), snapshot_of(record), waypoints)
+        return PlanCheck(problems + plan.violations, plan.estimate)

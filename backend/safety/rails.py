@@ -30,6 +30,8 @@ RuleName = Literal[
     "battery_sufficiency",
     "home_altitude",
     "position_unknown",
+    "mission_item",
+    "mission_unchecked",
 ]
 GEOFENCE: Final = "geofence"
 GEOFENCE_MAX_ALTITUDE: Final = "geofence_max_altitude"
@@ -40,6 +42,10 @@ MIN_LAUNCH_BATTERY: Final = "min_launch_battery"
 BATTERY_SUFFICIENCY: Final = "battery_sufficiency"
 HOME_ALTITUDE: Final = "home_altitude"
 POSITION_UNKNOWN: Final = "position_unknown"
+# What an item's MAV_CMD needs (a place for a waypoint, a global frame, ...).
+MISSION_ITEM: Final = "mission_item"
+# A mission that would fly without having been checked: none on board, or unreadable.
+MISSION_UNCHECKED: Final = "mission_unchecked"
 # Every altitude a vehicle is given is measured from home's: moving home up or down
 # moves them all, ceilings included. A new home may differ from the old by this much.
 HOME_ALTITUDE_TOLERANCE_M: Final = 10.0
@@ -53,6 +59,8 @@ RULES: Final[tuple[RuleName, ...]] = (
     BATTERY_SUFFICIENCY,
     HOME_ALTITUDE,
     POSITION_UNKNOWN,
+    MISSION_ITEM,
+    MISSION_UNCHECKED,
 )
 
 DEFAULT_BATTERY_RESERVE_PCT: Final = 20.0
@@ -183,6 +191,13 @@ class Waypoint:
     lat: float
     lon: float
     alt_rel: float
+    # The mission item this place comes from (1 is the first after home), so that a
+    # refusal names the item the operator wrote; None: named by its place in the list.
+    item: int | None = None
+
+    def name(self, index: int) -> str:
+        """``index`` counts from 1 among the waypoints."""
+        return f"item {self.item}" if self.item is not None else f"waypoint {index}"
 
 
 @dataclass(frozen=True)
@@ -515,7 +530,7 @@ def _plan_geofence(
     stops: list[tuple[str, GeoPoint | None, bool]] = [
         ("the vehicle's position", here, here is not None and fence.contains(here))
     ]
-    stops += [(f"waypoint {i + 1}", p, inside[i]) for i, p in enumerate(points)]
+    stops += [(waypoints[i].name(i + 1), p, inside[i]) for i, p in enumerate(points)]
     legs = [
         f"the leg from {a_label} to {b_label}"
         for (a_label, a, a_in), (b_label, b, b_in) in itertools.pairwise(stops)
@@ -523,7 +538,7 @@ def _plan_geofence(
     ]
     if outside:
         distance, worst = max(outside)
-        message = _outside_message(f"waypoint {worst + 1}", distance)
+        message = _outside_message(waypoints[worst].name(worst + 1), distance)
         message += _others(len(outside), "waypoints are outside it")
         if legs:
             verb = "leaves" if len(legs) == 1 else "leave"
@@ -555,7 +570,7 @@ def _plan_distance(
     distances = [haversine_m(home.lat, home.lon, wp.lat, wp.lon) for wp in waypoints]
     far = max(range(len(distances)), key=distances.__getitem__)
     suffix = _others(sum(d > limit for d in distances), "waypoints are beyond it")
-    _distance_violation(rails, f"waypoint {far + 1}", distances[far], suffix, report)
+    _distance_violation(rails, waypoints[far].name(far + 1), distances[far], suffix, report)
 
 
 def _missing_for_estimate(vehicle: VehicleSnapshot) -> list[str]:
@@ -639,11 +654,11 @@ def evaluate_plan(
     if not waypoints:
         raise ValueError("a mission needs at least one waypoint")
     for i, wp in enumerate(waypoints, start=1):
-        _require_target(f"waypoint {i}", wp.lat, wp.lon, wp.alt_rel)
+        _require_target(wp.name(i), wp.lat, wp.lon, wp.alt_rel)
     report = _Report()
     _check_launch_battery(rails, vehicle, report)
     _check_altitudes(
-        rails, [(f"waypoint {i} altitude", wp.alt_rel) for i, wp in enumerate(waypoints, 1)], report
+        rails, [(f"{wp.name(i)} altitude", wp.alt_rel) for i, wp in enumerate(waypoints, 1)], report
     )
     if rails.geofence is not None:
         _plan_geofence(rails.geofence, vehicle, waypoints, report)

@@ -21,8 +21,8 @@ from backend.safety.rails import (
     RuleName,
     SafetyRails,
     Violation,
-    Waypoint,
 )
+from gcs.protocol import MissionItem
 
 MAX_ALTITUDE_M = 10_000.0
 MAX_DISTANCE_M = 1_000_000.0
@@ -132,28 +132,15 @@ class SafetyRailsModel(_Strict):
         )
 
 
-class WaypointModel(_Strict):
-    lat: float = Field(ge=-90, le=90, description="Latitude, degrees north (WGS84)")
-    lon: float = Field(ge=-180, le=180, description="Longitude, degrees east (WGS84)")
-    alt_rel: float = Field(ge=0, le=MAX_ALTITUDE_M, description="Metres above home")
+class Mission(_Strict):
+    """One mission, the same body for the check, the upload and the download."""
 
-    def to_waypoint(self) -> Waypoint:
-        return Waypoint(self.lat, self.lon, self.alt_rel)
-
-    @classmethod
-    def from_waypoint(cls, waypoint: Waypoint) -> WaypointModel:
-        return cls(lat=waypoint.lat, lon=waypoint.lon, alt_rel=waypoint.alt_rel)
-
-
-class MissionCheckRequest(_Strict):
-    waypoints: list[WaypointModel] = Field(
+    items: list[MissionItem] = Field(
         min_length=1,
         max_length=MAX_WAYPOINTS,
-        description="Flown in order from the vehicle's current position, then home",
+        description="Flown in order from the vehicle's position; item 1 is the first "
+        "(home, item 0, is the vehicle's own and is not sent)",
     )
-
-    def to_waypoints(self) -> list[Waypoint]:
-        return [wp.to_waypoint() for wp in self.waypoints]
 
 
 class ViolationModel(_Strict):

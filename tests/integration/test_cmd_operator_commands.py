@@ -227,10 +227,16 @@ def test_a_bad_mission_item_is_refused_with_its_index(
         f"/api/v1/vehicles/{vehicle}/mission",
         json={"items": [{"command": 22, "alt": 10}, good, {**good, "param1": -4, "command": 19}]},
     )
-    assert response.status_code == 409, response.text
-    detail = response.json()["detail"]
-    assert "nothing sent to the vehicle" in detail
-    assert "item 3 (NAV_LOITER_TIME): loiter time -4 s is negative" in detail
+    # checked by the hub, before anything reaches the agent or the vehicle
+    assert response.status_code == 422, response.text
+    assert response.json()["violations"] == [
+        {
+            "rule": "mission_item",
+            "message": "item 3 (NAV_LOITER_TIME): loiter time -4 s is negative",
+            "limit": None,
+            "value": None,
+        }
+    ]
     assert api.get(f"/api/v1/vehicles/{vehicle}/mission").json()["items"] == before
 
 

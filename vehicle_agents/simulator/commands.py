@@ -31,7 +31,14 @@ from vehicle_agents.simulator.mavconst import (
     MavResult,
     Severity,
 )
-from vehicle_agents.simulator.mission import HOME_PLACEHOLDER, MAX_ITEMS, MissionItem, check_item
+from vehicle_agents.simulator.mission import (
+    HOME_PLACEHOLDER,
+    MAX_ITEMS,
+    MissionItem,
+    check_item,
+    px4_download_frame,
+    stored_frame,
+)
 from vehicle_agents.simulator.param_table import SetOutcome
 from vehicle_agents.simulator.telemetry import MavMessage, TelemetryBuilder
 from vehicle_agents.simulator.vehicle import Vehicle
@@ -372,7 +379,9 @@ class MessageHandler:
             item = copter.mission_item(int(msg.seq) + offset)
             if item is None:
                 return [self._mission_ack(MavMissionResult.INVALID_SEQUENCE, peer)]
-            return [Reply(telemetry.mission_item_int(replace(item, seq=int(msg.seq)), *peer))]
+            frame = px4_download_frame(item.frame) if offset else item.frame
+            answer = replace(item, seq=int(msg.seq), frame=frame)
+            return [Reply(telemetry.mission_item_int(answer, *peer))]
         if kind == "MISSION_CLEAR_ALL":
             cleared = copter.clear_mission()
             self._upload = None
@@ -432,7 +441,7 @@ class MessageHandler:
             )
             log.info("mission item %d (command %d) refused: %s", seq, item.command, problem)
             return [self._mission_ack(result, peer)]
-        upload.items.append(item)
+        upload.items.append(replace(item, frame=stored_frame(item.frame)))
         if len(upload.items) < upload.count:
             return [Reply(self.telemetry.mission_request_int(len(upload.items), *peer))]
         self._upload = None

@@ -79,5 +79,24 @@ def check_item(item: MissionItem) -> str | None:
     return None
 
 
+# Autopilots store whether an altitude is relative, not which message form named it:
+# ArduPilot's AP_Mission gives back GLOBAL, GLOBAL_RELATIVE_ALT or GLOBAL_TERRAIN_ALT for an
+# item sent in their "_INT" forms; PX4 gives back the "_INT" forms to MISSION_REQUEST_INT.
+_STORED_FRAME: dict[int, int] = {
+    MavFrame.GLOBAL_INT: MavFrame.GLOBAL,
+    MavFrame.GLOBAL_RELATIVE_ALT_INT: MavFrame.GLOBAL_RELATIVE_ALT,
+    MavFrame.GLOBAL_TERRAIN_ALT_INT: MavFrame.GLOBAL_TERRAIN_ALT,
+}
+_INT_FRAME: dict[int, int] = {stored: sent for sent, stored in _STORED_FRAME.items()}
+
+
+def stored_frame(frame: int) -> int:
+    return int(_STORED_FRAME.get(frame, frame))  # IntEnum keys hash as their numbers
+
+
+def px4_download_frame(frame: int) -> int:
+    return int(_INT_FRAME.get(frame, frame))
+
+
 # Item 0 as ArduPilot stores it: home, whose position the vehicle keeps itself.
 HOME_PLACEHOLDER = MissionItem(seq=0, frame=0, command=16)

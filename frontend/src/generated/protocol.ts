@@ -200,7 +200,7 @@ export interface MissionItem {
    */
   command: number;
   /**
-   * MAV_FRAME; 6 = relative altitude
+   * MAV_FRAME: 0 above sea level, 3 above home, 10 above terrain. The _INT forms 5, 6 and 11 are accepted and become 0, 3 and 10, in uploads and downloads alike. A command without a position ignores its frame (ArduPilot gives back 0).
    */
   frame: number;
   param1: number;

@@ -371,4 +371,6 @@ def test_rule_names_are_stable() -> None:
         "battery_sufficiency",
         "home_altitude",
         "position_unknown",
+        "mission_item",
+        "mission_unchecked",
     )

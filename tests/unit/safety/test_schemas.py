@@ -9,11 +9,11 @@ from pydantic import ValidationError
 from backend.safety import SafetyRails, evaluate_plan
 from backend.safety.schemas import (
     GeofenceModel,
-    MissionCheckRequest,
+    Mission,
     MissionCheckResponse,
     SafetyRailsModel,
-    WaypointModel,
 )
+from gcs.protocol import MissionItem
 from tests.unit.safety.shapes import U_SHAPE, geo, u_fence, vehicle, wp
 
 
@@ -97,23 +97,16 @@ def test_invalid_rails_name_the_field_and_the_problem(
     assert reason in message
 
 
-def test_mission_request_bounds() -> None:
-    one = {"lat": 47.0, "lon": 8.0, "alt_rel": 30}
-    assert MissionCheckRequest.model_validate({"waypoints": [one]}).to_waypoints() == [
-        WaypointModel.model_validate(one).to_waypoint()
-    ]
+def test_mission_bounds() -> None:
+    one = {"command": 16, "lat": 47.0, "lon": 8.0, "alt": 30}
+    assert Mission.model_validate({"items": [one]}).items == [MissionItem.model_validate(one)]
     for count in (0, 2001):
         with pytest.raises(ValidationError) as caught:
-            MissionCheckRequest.model_validate({"waypoints": [one] * count})
-        assert errors(caught)[0][0] == ("waypoints",)
+            Mission.model_validate({"items": [one] * count})
+        assert errors(caught)[0][0] == ("items",)
     with pytest.raises(ValidationError) as caught:
-        MissionCheckRequest.model_validate({"waypoints": [{**one, "alt_rel": -1}]})
-    assert errors(caught)[0][0] == ("waypoints", 0, "alt_rel")
-
-
-def test_waypoint_round_trip() -> None:
-    point = wp(10, 20, 30)
-    assert WaypointModel.from_waypoint(point).to_waypoint() == point
+        Mission.model_validate({"items": [{**one, "lat": 91}]})
+    assert errors(caught)[0][0] == ("items", 0, "lat")
 
 
 def test_mission_response_from_a_plan_check() -> None:

@@ -34,6 +34,7 @@ from backend.errors import (
     Unauthenticated,
 )
 from backend.hub import Hub
+from backend.log_escaping import escape_control_characters_in_logs
 from backend.settings import HubSettings
 
 log = logging.getLogger(__name__)
@@ -51,6 +52,8 @@ def create_app(settings: HubSettings | None = None) -> FastAPI:
 
     @contextlib.asynccontextmanager
     async def lifespan(app: FastAPI) -> AsyncIterator[None]:
+        # By now the server has configured logging (its handlers and ours).
+        escape_control_characters_in_logs()
         hub = await Hub.start(settings)
         app.state.hub = hub
         runner = asyncio.create_task(hub.run(), name="hub")

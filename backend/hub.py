@@ -13,6 +13,7 @@ from sqlalchemy.exc import SQLAlchemyError
 
 from backend.audit import AuditEntry, AuditLog
 from backend.auth.accounts import Accounts
+from backend.auth.password_work import PasswordWork
 from backend.auth.rate_limit import Limit, RateLimiter
 from backend.fleet.commands import CommandDispatcher
 from backend.fleet.registry import FleetRegistry, VehicleRecord
@@ -61,8 +62,11 @@ class Hub:
     logbook: Logbook
     accounts: Accounts
     audit: AuditLog
+    # Failed logins per (address, user name), and per address whatever the name.
     login_limiter: RateLimiter
+    login_address_limiter: RateLimiter
     command_limiter: RateLimiter
+    passwords: PasswordWork
     safety: SafetyGate
     # Live agent connections by vehicle, so revoking a token can drop its connection.
     agent_sessions: dict[str, AgentConnection] = field(default_factory=dict)
@@ -104,7 +108,13 @@ class Hub:
             accounts=accounts,
             audit=AuditLog(engine),
             login_limiter=RateLimiter(Limit(settings.login_attempts_per_minute, 60.0)),
+            login_address_limiter=RateLimiter(
+                Limit(settings.login_attempts_per_address_per_minute, 60.0)
+            ),
             command_limiter=RateLimiter(Limit(settings.commands_per_second, 1.0)),
+            passwords=PasswordWork(
+                settings.password_hash_threads, settings.password_hash_max_pending
+            ),
             safety=SafetyGate(RailsRepository(engine), settings),
         )
         writer.on_sequences = hub.deliver_sequence_news
@@ -117,6 +127,7 @@ class Hub:
                 tasks.create_task(self.writer.run())
                 tasks.create_task(self._apply_retention())
         finally:
+            self.passwords.close()
             self.engine.dispose()
 
     def deliver_sequence_news(self, acks: dict[StreamKey, int], gaps: list[Gap]) -> None:
@@ -169,11 +180,12 @@ class Hub:
 
 def _bootstrap_accounts(accounts: Accounts, settings: HubSettings) -> None:
     admin_password = settings.admin_password.get_secret_value() if settings.admin_password else None
-    generated = accounts.ensure_first_admin(admin_password)
+    generated = accounts.ensure_first_admin(settings.admin_username, admin_password)
     if generated is not None:
         # Shown once, on the console and never in the log, as the issue of a secret.
         print(
-            f"\nCreated the first admin account: user 'admin', password {generated}\n"
+            f"\nCreated the first admin account: user {settings.admin_username!r}, "
+            f"password {generated}\n"
             "It is not shown again. Set GCS_ADMIN_PASSWORD to choose it instead.\n",
             flush=True,
         )

@@ -10,7 +10,8 @@ from urllib.parse import urlsplit
 from pydantic import AliasChoices, Field, SecretStr, model_validator
 from pydantic_settings import BaseSettings, SettingsConfigDict
 
-from backend.storage.retention import RetentionPolicy
+from backend.auth.password_policy import password_problem
+from backend.storage.retention import AUDIT_MIN_RETENTION_DAYS, RetentionPolicy
 from gcs.protocol import MAX_FRAME_BYTES
 
 REPO_ROOT = Path(__file__).resolve().parent.parent
@@ -40,6 +41,11 @@ class HubSettings(BaseSettings):
     environment: Literal["development", "production"] = Field(
         default="production", description="development relaxes cookie and secret checks"
     )
+    admin_username: str = Field(
+        default="admin",
+        pattern=r"^[A-Za-z0-9_.@-]{1,64}$",
+        description="name of the first admin, created when there are no users",
+    )
     admin_password: SecretStr | None = Field(
         default=None, description="password of the first admin; generated and printed if unset"
     )
@@ -51,11 +57,24 @@ class HubSettings(BaseSettings):
     access_token_ttl_s: float = Field(default=3600, gt=0)
     cors_origins: list[str] = Field(default_factory=list)
     forwarded_allow_ips: str = Field(
-        default="127.0.0.1", description="proxies whose X-Forwarded-For is believed"
+        default="127.0.0.1",
+        description="proxies whose X-Forwarded-For is believed: the default assumes a proxy "
+        "on the same host; without a proxy it must be empty",
     )
     max_body_bytes: int = Field(default=1024 * 1024, ge=1024)
     max_tlog_bytes: int = Field(default=512 * 1024 * 1024, ge=1024, description="per upload")
-    login_attempts_per_minute: int = Field(default=5, ge=1)
+    login_attempts_per_minute: int = Field(
+        default=5, ge=1, description="failed logins per address and user name together"
+    )
+    login_attempts_per_address_per_minute: int = Field(
+        default=20, ge=1, description="failed logins per address, whatever the user name"
+    )
+    password_hash_threads: int = Field(
+        default=2, ge=1, le=32, description="threads of their own for argon2 (64 MB each)"
+    )
+    password_hash_max_pending: int = Field(
+        default=8, ge=1, description="password checks running or waiting; beyond, 429"
+    )
     commands_per_second: int = Field(default=20, ge=1)
 
     max_altitude_m: float | None = Field(default=120.0, description="site ceiling above home")
@@ -76,6 +95,11 @@ class HubSettings(BaseSettings):
     retention_events_days: float | None = Field(default=None, gt=0)
     retention_commands_days: float | None = Field(default=None, gt=0)
     retention_flights_days: float | None = Field(default=None, gt=0)
+    retention_audit_days: float | None = Field(
+        default=365,
+        ge=AUDIT_MIN_RETENTION_DAYS,
+        description="the database refuses to delete younger audit entries; None keeps all",
+    )
     retention_interval_s: float = Field(default=3600, gt=0)
 
     basemap_url: str | None = Field(
@@ -104,8 +128,9 @@ class HubSettings(BaseSettings):
         problems = []
         if self.admin_password is not None:
             password = self.admin_password.get_secret_value()
-            if password.lower() in WEAK_SECRETS or len(password) < 12:
-                problems.append("GCS_ADMIN_PASSWORD is a default or shorter than 12 characters")
+            weakness = password_problem(password, self.admin_username)
+            if password.lower() in WEAK_SECRETS or weakness:
+                problems.append(f"GCS_ADMIN_PASSWORD {weakness or 'is a default'}")
         if self.database_url:
             db_password = urlsplit(self.database_url).password
             if db_password is not None and db_password.lower() in WEAK_SECRETS:
@@ -138,6 +163,7 @@ class HubSettings(BaseSettings):
             events_days=self.retention_events_days,
             commands_days=self.retention_commands_days,
             flights_days=self.retention_flights_days,
+            audit_days=self.retention_audit_days,
         )
 
     @property

@@ -7,11 +7,13 @@ import json
 from typing import Annotated, Any
 
 from fastapi import Path, Query, Request, Response, status
-from pydantic import BaseModel, Field
+from pydantic import BaseModel, Field, ValidationInfo, field_validator
+from pydantic_core import PydanticCustomError
 
 from backend.api.deps import HubDep
 from backend.api.security import CurrentPrincipal, SecuredRouter, audit_entry, requires
 from backend.audit import AuditQuery
+from backend.auth.password_policy import MIN_LENGTH, password_problem
 from backend.auth.policy import Permission, Role
 from backend.storage.models import UserRow
 from gcs.protocol import VehicleId
@@ -21,16 +23,46 @@ router = SecuredRouter(tags=["admin"])
 Username = Annotated[str, Field(pattern=r"^[A-Za-z0-9_.@-]{1,64}$")]
 
 
+Password = Annotated[
+    str,
+    Field(
+        min_length=MIN_LENGTH,
+        max_length=1024,
+        description=f"at least {MIN_LENGTH} characters, and not a common or guessable one",
+    ),
+]
+
+
 class UserCreate(BaseModel):
     username: Username
-    password: str = Field(min_length=8, max_length=1024)
+    password: Password
     role: Role
+
+    @field_validator("password")
+    @classmethod
+    def _strong_password(cls, password: str, info: ValidationInfo) -> str:
+        _refuse_weak(password, info.data.get("username"))  # declared before: checked first
+        return password
 
 
 class UserUpdate(BaseModel):
     role: Role | None = None
     disabled: bool | None = None
-    password: str | None = Field(default=None, min_length=8, max_length=1024)
+    password: Password | None = None
+
+    @field_validator("password")
+    @classmethod
+    def _strong_password(cls, password: str | None) -> str | None:
+        if password is not None:
+            _refuse_weak(password, None)
+        return password
+
+
+def _refuse_weak(password: str, username: str | None) -> None:
+    """The same rule for every role: an operator's account commands vehicles too."""
+    problem = password_problem(password, username)
+    if problem is not None:
+        raise PydanticCustomError("weak_password", "password {problem}", {"problem": problem})
 
 
 class User(BaseModel):
@@ -96,7 +128,8 @@ async def list_users(hub: HubDep) -> list[User]:
 async def create_user(
     body: UserCreate, request: Request, principal: CurrentPrincipal, hub: HubDep
 ) -> User:
-    row = await asyncio.to_thread(hub.accounts.create_user, body.username, body.password, body.role)
+    # Hashing runs on the password threads, bounded like a login.
+    row = await hub.passwords.run(hub.accounts.create_user, body.username, body.password, body.role)
     await hub.record(
         audit_entry(request, principal, "user.create", body.username, "ok", role=body.role)
     )
@@ -112,9 +145,8 @@ async def update_user(
     hub: HubDep,
 ) -> User:
     """Change a role, disable an account (ends its sessions) or reset a password."""
-    row = await asyncio.to_thread(
-        hub.accounts.update_user, username, body.role, body.disabled, body.password
-    )
+    run = asyncio.to_thread if body.password is None else hub.passwords.run
+    row = await run(hub.accounts.update_user, username, body.role, body.disabled, body.password)
     if body.disabled or body.password is not None:
         await hub.drop_user_feeds(user=username)  # their sessions were just revoked
     changes = body.model_dump(exclude_none=True, exclude={"password"})

@@ -19,7 +19,7 @@ from backend.api.security import (
     requires,
 )
 from backend.auth.policy import PUBLIC, ROLE_PERMISSIONS, Permission, Role, user_principal
-from backend.errors import Forbidden, Unauthenticated
+from backend.errors import Forbidden, RateLimited, Unauthenticated
 from backend.hub import Hub
 from backend.storage.models import UserRow
 
@@ -70,24 +70,34 @@ class IssuedApiToken(ApiToken):
 
 
 async def _login(hub: Hub, request: Request, username: str, password: str) -> UserRow:
-    """Check a password under the login rate limits, auditing the attempt."""
-    address = f"address:{client_address(request)}"
-    account = f"user:{username[:MAX_USERNAME]}"
-    # Both limits apply: one address guessing many names, many addresses guessing one.
-    hub.login_limiter.check(address, "login attempts")
-    hub.login_limiter.check(account, "login attempts")
+    """Check a password under the login rate limits, auditing the attempt.
+
+    Failures count per (address, user name) and per address. Not per user name alone:
+    then anyone could lock a user out with a few wrong passwords from anywhere, and the
+    user's right password from a fresh address would be refused too. Guessing one name
+    from many addresses is bounded by the password-hashing capacity instead.
+    """
+    address = client_address(request)
+    pair = f"{address}|{username[:MAX_USERNAME]}"
+    hub.login_limiter.check(pair, "login attempts")
+    hub.login_address_limiter.check(address, "login attempts")
     # Counted before the (slow) password check, so concurrent guesses cannot all slip
-    # in under the limit; a success takes its attempt back.
-    hub.login_limiter.hit(address)
-    hub.login_limiter.hit(account)
+    # in under the limit; a success, or a check that never ran, takes its attempt back.
+    hub.login_limiter.hit(pair)
+    hub.login_address_limiter.hit(address)
     user = None
     if len(username) <= MAX_USERNAME and len(password) <= MAX_PASSWORD:
-        user = await asyncio.to_thread(hub.accounts.authenticate, username, password)
+        try:
+            user = await hub.passwords.run(hub.accounts.authenticate, username, password)
+        except RateLimited:
+            hub.login_limiter.forget_one(pair)
+            hub.login_address_limiter.forget_one(address)
+            raise
     if user is None:
         await hub.record(audit_entry(request, None, "login", username[:MAX_USERNAME], "denied"))
         raise Unauthenticated(WRONG_CREDENTIALS)
-    hub.login_limiter.reset(account)
-    hub.login_limiter.forget_one(address)
+    hub.login_limiter.reset(pair)
+    hub.login_address_limiter.forget_one(address)
     return user
 
 

@@ -11,14 +11,17 @@ from pydantic import BaseModel, Field
 from backend.api.deps import HubDep
 from backend.api.security import CurrentPrincipal, SecuredRouter, client_address, requires
 from backend.auth.policy import Permission, Principal, authorize
-from backend.errors import GcsError, SafetyViolation
+from backend.errors import GcsError, InvalidRequest, SafetyViolation
 from backend.fleet.command_service import execute_command
 from backend.hub import Hub
 from gcs.protocol import Command, CommandOutcome, VehicleId
 
 router = SecuredRouter(prefix="/fleet", tags=["vehicles"])
 
+# The design's fleet size: one call can still reach every vehicle of a full fleet.
 MAX_GROUP = 1000
+# Unknown ids named in a refusal; the rest are counted.
+NAMED_UNKNOWN = 10
 
 
 class GroupCommandRequest(BaseModel):
@@ -60,14 +63,18 @@ async def send_group_command(
     """Send one command to many vehicles at once, concurrently; one result per vehicle.
 
     Each vehicle goes through the same checks as a single command (policy, safety
-    rails, audit), so one refusal does not hold back the others.
+    rails, audit), so one refusal does not hold back the others. A selection naming
+    a vehicle the hub does not know is refused whole (422), before anything is sent.
+    Each vehicle reached counts as one command in the caller's rate limit; a call is
+    accepted while the caller has budget left, so a fleet-wide RTL is never split.
     """
     hub.command_limiter.check(principal.name, "commands")
-    hub.command_limiter.hit(principal.name)
     if body.vehicle_ids is not None:
         targets = list(dict.fromkeys(body.vehicle_ids))
+        _refuse_unknown(hub, targets)
     else:
         targets = [r.id for r in hub.registry.all() if r.connected]
+    hub.command_limiter.hit(principal.name, len(targets))
     source = client_address(request)
     results = await asyncio.gather(
         *(
@@ -76,6 +83,17 @@ async def send_group_command(
         )
     )
     return GroupCommandResponse(command=body.command, results=list(results))
+
+
+def _refuse_unknown(hub: Hub, targets: list[str]) -> None:
+    """One answer for the whole selection, instead of a refusal and an audit entry per
+    made-up id."""
+    known = {record.id for record in hub.registry.all()}
+    unknown = [vehicle for vehicle in targets if vehicle not in known]
+    if unknown:
+        named = ", ".join(unknown[:NAMED_UNKNOWN])
+        more = f" and {len(unknown) - NAMED_UNKNOWN} more" if len(unknown) > NAMED_UNKNOWN else ""
+        raise InvalidRequest("vehicle_ids", f"unknown vehicles: {named}{more}")
 
 
 async def _one(

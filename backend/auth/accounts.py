@@ -30,8 +30,6 @@ from backend.auth.secrets import (
 from backend.errors import Conflict, NotFound
 from backend.storage.models import AgentTokenRow, UserRow, UserTokenRow
 
-FIRST_ADMIN = "admin"
-
 
 @dataclass(frozen=True)
 class IssuedToken:
@@ -57,13 +55,14 @@ class Accounts:
 
     # -- users -------------------------------------------------------------
 
-    def ensure_first_admin(self, password: str | None) -> str | None:
-        """Create ``admin`` if there are no users; returns a generated password, if any."""
+    def ensure_first_admin(self, username: str, password: str | None) -> str | None:
+        """Create the admin ``username`` if there are no users; returns a generated
+        password, if any."""
         with Session(self.engine) as session:
             if session.scalar(select(func.count()).select_from(UserRow)):
                 return None
         generated = None if password else generate_password()
-        self.create_user(FIRST_ADMIN, password or generated or "", Role.ADMIN)
+        self.create_user(username, password or generated or "", Role.ADMIN)
         return generated
 
     def create_user(self, username: str, password: str, role: Role) -> UserRow:

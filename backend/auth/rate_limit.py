@@ -38,8 +38,10 @@ class RateLimiter:
             retry_after = events[0] + self.limit.per_s - self._clock()
             raise RateLimited(f"too many {what}; try again in {retry_after:.0f} s", retry_after)
 
-    def hit(self, key: str) -> None:
-        self._window(key).append(self._clock())
+    def hit(self, key: str, count: int = 1) -> None:
+        """Count ``count`` events now (a group command counts each vehicle it reaches)."""
+        now = self._clock()
+        self._window(key).extend([now] * count)
         if len(self._events) > 10_000:
             # Forget idle keys so an address scan cannot grow this without bound.
             for idle in [k for k, v in self._events.items() if not v]:

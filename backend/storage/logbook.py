@@ -20,6 +20,7 @@ from backend.storage.database import dialect_insert, transaction
 from backend.storage.downsample import minmax_downsample
 from backend.storage.models import (
     TELEMETRY_STATE_COLUMNS,
+    AuditRow,
     CommandRow,
     EventRow,
     FlightRow,
@@ -277,6 +278,8 @@ class Logbook:
             ("events", EventRow, EventRow.time, policy.events_days),
             ("commands", CommandRow, CommandRow.time, policy.commands_days),
             ("flights", FlightRow, FlightRow.end_time, policy.flights_days),
+            # The database refuses to delete younger entries (AUDIT_MIN_RETENTION_DAYS).
+            ("audit", AuditRow, AuditRow.time, policy.audit_days),
         )
         with self.engine.begin() as connection:
             for name, table, column, days in targets:

@@ -4,6 +4,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+# The database itself refuses to delete audit entries younger than this (migration 0004),
+# so no setting, bug or stolen connection can shorten the audit trail below it.
+AUDIT_MIN_RETENTION_DAYS = 30
+
 
 @dataclass(frozen=True)
 class RetentionPolicy:
@@ -13,3 +17,4 @@ class RetentionPolicy:
     events_days: float | None = None
     commands_days: float | None = None
     flights_days: float | None = None
+    audit_days: float | None = None

@@ -1,0 +1,153 @@
+"""Logins under attack: the throttle cannot lock a user out, password hashing is bounded
+and kept off the live service's threads, and the first admin's name is configurable.
+
+The in-process hub (uvicorn's defaults) believes ``X-Forwarded-For`` from 127.0.0.1, as
+the hub does behind a proxy on the same host: that is how these tests, like the attack
+in the security review, come "from" many addresses.
+"""
+
+from __future__ import annotations
+
+import concurrent.futures
+import time
+from collections.abc import Iterator
+from pathlib import Path
+
+import httpx
+import pytest
+
+from tests.conftest import ADMIN_PASSWORD, hub_settings
+from tests.helpers import access_token, api_client, running_hub
+
+PASSWORD = "correct horse battery"
+
+
+def _login(client: httpx.Client, username: str, password: str, address: str) -> httpx.Response:
+    return client.post(
+        "/api/v1/auth/login",
+        json={"username": username, "password": password},
+        headers={"X-Forwarded-For": address},
+    )
+
+
+@pytest.fixture
+def operator(hub: str, admin_api: httpx.Client) -> str:
+    created = admin_api.post(
+        "/api/v1/users", json={"username": "operator", "password": PASSWORD, "role": "operator"}
+    )
+    assert created.status_code == 201, created.text
+    return "operator"
+
+
+def test_wrong_passwords_from_elsewhere_do_not_lock_a_user_out(hub: str, operator: str) -> None:
+    with httpx.Client(base_url=hub, timeout=30) as client:
+        for n in range(6):
+            assert _login(client, operator, "not the password", f"203.0.113.{n}").status_code == 401
+        fresh = _login(client, operator, PASSWORD, "198.51.100.7")
+    assert fresh.status_code == 200, fresh.text
+    assert fresh.json()["username"] == operator
+
+
+def test_guessing_one_user_from_one_address_is_throttled(hub: str, operator: str) -> None:
+    with httpx.Client(base_url=hub, timeout=30) as client:
+        statuses = [
+            _login(client, operator, "not the password", "203.0.113.9").status_code
+            for _ in range(5)
+        ]
+        # Even the right password waits, from that address: it may be the guesser's.
+        locked = _login(client, operator, PASSWORD, "203.0.113.9")
+        elsewhere = _login(client, operator, PASSWORD, "203.0.113.10")
+    assert statuses == [401] * 5
+    assert locked.status_code == 429
+    assert int(locked.headers["retry-after"]) >= 1
+    assert elsewhere.status_code == 200
+
+
+def test_guessing_many_users_from_one_address_is_throttled(tmp_path: Path) -> None:
+    settings = hub_settings(tmp_path, login_attempts_per_address_per_minute=3)
+    with running_hub(settings) as hub, httpx.Client(base_url=hub, timeout=30) as client:
+        statuses = [
+            _login(client, f"user{n}", "not the password", "203.0.113.20").status_code
+            for n in range(4)
+        ]
+        other_address = _login(client, "admin", ADMIN_PASSWORD, "203.0.113.21")
+    assert statuses == [401, 401, 401, 429]
+    assert other_address.status_code == 200
+
+
+def test_the_first_admin_name_is_configurable(tmp_path: Path) -> None:
+    with running_hub(hub_settings(tmp_path, admin_username="chief")) as hub:
+        token = access_token(hub, "chief", ADMIN_PASSWORD)
+        with api_client(hub, token) as api:
+            users = api.get("/api/v1/users").json()
+        default_name = httpx.post(
+            f"{hub}/api/v1/auth/token", data={"username": "admin", "password": ADMIN_PASSWORD}
+        )
+    assert [(user["username"], user["role"]) for user in users] == [("chief", "admin")]
+    assert default_name.status_code == 401
+
+
+@pytest.fixture
+def small_hashing_hub(tmp_path: Path) -> Iterator[str]:
+    settings = hub_settings(tmp_path, password_hash_threads=1, password_hash_max_pending=2)
+    with running_hub(settings) as hub:
+        yield hub
+
+
+def test_a_login_flood_from_many_addresses_is_refused_fast_and_the_api_stays_up(
+    small_hashing_hub: str,
+) -> None:
+    """The review's attack, scaled down: failed logins with distinct names and addresses
+    (each under every rate limit) while a dashboard keeps reading the fleet."""
+    hub = small_hashing_hub
+    token = access_token(hub, "admin", ADMIN_PASSWORD)
+    flood = 40
+
+    def failed_login(n: int) -> httpx.Response:
+        with httpx.Client(base_url=hub, timeout=60) as client:
+            return _login(client, f"nobody{n}", "not the password", f"10.{n // 250}.{n % 250}.1")
+
+    with (
+        concurrent.futures.ThreadPoolExecutor(flood) as attackers,
+        api_client(hub, token) as dashboard,
+    ):
+        attempts = [attackers.submit(failed_login, n) for n in range(flood)]
+        latencies = []
+        while not all(attempt.done() for attempt in attempts) or len(latencies) < 5:
+            started = time.perf_counter()
+            assert dashboard.get("/api/v1/vehicles").status_code == 200
+            latencies.append(time.perf_counter() - started)
+        answers = [attempt.result() for attempt in attempts]
+
+    busy = [answer for answer in answers if answer.status_code == 429]
+    assert busy, "no password check was refused: hashing is not bounded"
+    assert all(answer.status_code in (401, 429) for answer in answers)
+    assert "password checks in progress" in busy[0].json()["detail"]
+    assert int(busy[0].headers["retry-after"]) >= 1
+    # At most two hashes at a time (one running, one waiting) leave the API's own threads
+    # free: no read waits behind the flood (here 0.7 s at worst, against 5.9 s when every
+    # login hashed on the shared pool).
+    assert max(latencies) < 3.0, sorted(latencies)[-5:]
+
+
+@pytest.mark.parametrize("role", ["admin", "operator", "viewer"])
+@pytest.mark.parametrize("weak", ["aaaaaaaa", "password", "aaaaaaaaaaaaaaaa", "password1234"])
+def test_weak_passwords_are_refused_for_every_role(
+    admin_api: httpx.Client, role: str, weak: str
+) -> None:
+    created = admin_api.post(
+        "/api/v1/users", json={"username": "weakling", "password": weak, "role": role}
+    )
+    assert created.status_code == 422, created.text
+    detail = created.json()["detail"][0]
+    assert detail["loc"] == ["body", "password"]
+    assert any(rule in detail["msg"] for rule in ("at least 12 characters", "easy to guess"))
+    assert admin_api.get("/api/v1/users").json()[-1]["username"] != "weakling"
+
+
+def test_a_weak_password_reset_is_refused(admin_api: httpx.Client, operator: str) -> None:
+    reset = admin_api.patch(f"/api/v1/users/{operator}", json={"password": "password"})
+    assert reset.status_code == 422
+    assert reset.json()["detail"][0]["loc"] == ["body", "password"]
+    strong = admin_api.patch(f"/api/v1/users/{operator}", json={"password": "vivid-otter-lamp-42"})
+    assert strong.status_code == 200, strong.text

@@ -14,12 +14,14 @@ import contextlib
 import json
 import time
 from collections.abc import AsyncIterator, Callable
+from pathlib import Path
 from typing import Any
 
 import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from gcs.protocol import VehicleState
+from tests.helpers import FleetWatcher, agent_process, api_client, poll_until, state_of
 from tests.mavlink_peer import ScriptedFlightController
 from vehicle_agents.agent import EventSource
 from vehicle_agents.fcu_link import FcuLink, MavMessage
@@ -224,3 +226,40 @@ def test_no_position_is_reported_until_the_autopilot_has_one() -> None:
                 assert state.alt_rel is None
 
     asyncio.run(run())
+
+
+# -- the whole way: agent process, hub, storage ------------------------------------------
+
+
+def test_the_hub_stores_no_position_and_one_reached_event_with_its_item(
+    hub: str, admin_token: str, enrol: Callable[[str], str], tmp_path: Path
+) -> None:
+    vehicle = "no-origin"
+    fcu = PositionedFlightController()  # ArduPilot, its EKF without an origin: zeros
+    with (
+        fcu,
+        agent_process(hub, enrol(vehicle), vehicle, fcu.port, log_dir=tmp_path),
+        FleetWatcher(hub, admin_token) as watcher,
+        api_client(hub, admin_token) as api,
+    ):
+        watcher.wait_until(
+            lambda v: state_of(v, vehicle).get("fcu_connected") is True, 30, "the vehicle"
+        )
+        fcu.push(current(3, 4), *[reached(2), current(3, 4)] * 5)  # sent again and again
+
+        def stored() -> tuple[list[dict[str, Any]], list[dict[str, Any]]]:
+            events = api.get("/api/v1/events", params={"vehicle_id": vehicle, "kind": "mission"})
+            series = api.get(
+                "/api/v1/telemetry/series", params={"vehicle_id": vehicle, "metric": "alt_rel"}
+            )
+            return events.json()["events"], series.json()["series"].get(vehicle, [])
+
+        poll_until(lambda: stored()[0], 30, "the reached item stored")
+        # two more seconds of samples stored: every repeat has long arrived
+        before = len(stored()[1])
+        poll_until(lambda: len(stored()[1]) >= before + 20, 30, "more telemetry stored")
+        events, samples = stored()
+        assert [(e["mission_item"], e["text"]) for e in events] == [(2, "reached mission item 2")]
+        assert {(s["lat"], s["lon"], s["alt_msl"]) for s in samples} == {(None, None, None)}
+        summary = api.get(f"/api/v1/vehicles/{vehicle}").json()
+        assert (summary["state"]["lat"], summary["state"]["lon"]) == (None, None)

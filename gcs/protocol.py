@@ -380,6 +380,12 @@ class Event(Message):
         default=None, ge=0, le=7, description="MAV_SEVERITY: 0 emergency .. 7 debug"
     )
     text: str = Field(max_length=500)
+    mission_item: int | None = Field(
+        default=None,
+        ge=0,
+        le=65535,
+        description="the mission item a 'mission' event is about (numbered as the hub does)",
+    )
 
 
 SequencedKind = Literal["telemetry", "event"]

@@ -57,6 +57,7 @@ class ScriptedFlightController:
         self.autopilot, self.mav_type, self.armed, self.in_air = autopilot, mav_type, armed, in_air
         self.scripts: dict[int, Script] = {}
         self.received: list[MavMessage] = []  # every message from the agent, in order
+        self._outgoing: list[MavMessage] = []  # pushed by the test, sent once, in order
         self._lock = threading.Lock()
         self._arrived = threading.Condition(self._lock)
         self._server = socket.create_server(("127.0.0.1", 0))
@@ -113,6 +114,12 @@ class ScriptedFlightController:
             ),
         ]
 
+    def push(self, *messages: MavMessage) -> None:
+        """Send these once, in order, at the next turn of the loop (after that turn's
+        telemetry, if it is due)."""
+        with self._lock:
+            self._outgoing.extend(messages)
+
     # -- the connection -------------------------------------------------------------------
 
     def _serve(self) -> None:
@@ -136,6 +143,10 @@ class ScriptedFlightController:
                 for message in self.telemetry():
                     peer.sendall(message.pack(mav))
                 next_beat = now + TELEMETRY_PERIOD_S
+            with self._lock:
+                pushed, self._outgoing = self._outgoing, []
+            for message in pushed:
+                peer.sendall(message.pack(mav))
             for due in [p for p in pending if p[0] <= now]:
                 pending.remove(due)
                 peer.sendall(due[1].pack(mav))

@@ -7,6 +7,7 @@ import logging
 import sqlite3
 import time
 import uuid
+from collections.abc import Callable
 
 from gcs.protocol import (
     PROTOCOL_VERSION,
@@ -25,8 +26,10 @@ from vehicle_agents.fcu_link import FcuLink, MavMessage
 from vehicle_agents.forwarding import MavlinkForwarder
 from vehicle_agents.hub_failsafe import HubLinkFailsafe
 from vehicle_agents.hub_link import HubLink
+from vehicle_agents.mission_progress import ReachedItems
 from vehicle_agents.missions import mission_number
 from vehicle_agents.outbox import Outbox, SpillFile
+from vehicle_agents.statustext import StatusTextJoiner
 from vehicle_agents.streams import StreamRequester
 from vehicle_agents.telemetry import link_snapshot
 from vehicle_agents.tlog import TlogRecorder
@@ -129,22 +132,51 @@ async def publish_telemetry(link: FcuLink, outbox: Outbox, rate_hz: float) -> No
 
 
 class EventSource:
-    """STATUSTEXTs and mission progress become numbered events for the hub's flight log."""
+    """STATUSTEXTs and mission progress become numbered events for the hub's flight log:
+    long texts joined from their chunks, each reached item once per pass."""
 
-    def __init__(self, outbox: Outbox, autopilot: str) -> None:
+    def __init__(
+        self,
+        outbox: Outbox,
+        autopilot: str,
+        clock: Callable[[], float] = time.monotonic,
+    ) -> None:
         self._outbox = outbox
         self._autopilot = autopilot
         self._seq = 0
+        self._clock = clock
+        self._texts = StatusTextJoiner()
+        self._reached = ReachedItems()
 
     def on_message(self, message: MavMessage) -> None:
         kind = message.get_type()
-        if kind == "STATUSTEXT":
-            self.emit("statustext", str(message.text).rstrip("\x00"), int(message.severity))
-        elif kind == "MISSION_ITEM_REACHED":
+        now = self._clock()
+        # An unfinished chunked text is let out on the next message after its wait
+        # (heartbeats come every second), so no timer of its own is needed.
+        texts = self._texts.add(message, now) if kind == "STATUSTEXT" else self._texts.due(now)
+        for text in texts:
+            self.emit("statustext", text.text, text.severity)
+        if kind == "MISSION_CURRENT":
+            self._reached.current(int(message.seq))
+        elif kind == "MISSION_ITEM_REACHED" and self._reached.reached(int(message.seq)):
             number = mission_number(int(message.seq), self._autopilot)
-            self.emit("mission", f"reached mission item {number}", None)
+            self.emit("mission", f"reached mission item {number}", None, mission_item=number)
 
-    def emit(self, kind: EventKind, text: str, severity: int | None) -> None:
-        event = Event(seq=self._seq, time=time.time(), kind=kind, severity=severity, text=text)
+    def emit(
+        self,
+        kind: EventKind,
+        text: str,
+        severity: int | None,
+        *,
+        mission_item: int | None = None,
+    ) -> None:
+        event = Event(
+            seq=self._seq,
+            time=time.time(),
+            kind=kind,
+            severity=severity,
+            text=text,
+            mission_item=mission_item,
+        )
         self._outbox.put("event", self._seq, encode(event))
         self._seq += 1

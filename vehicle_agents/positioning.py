@@ -1,5 +1,11 @@
-"""Which GNSS receiver the vehicle's position comes from, when it has more than one.
+"""Whether the vehicle has a position, and which GNSS receiver it comes from.
 
+A position is GLOBAL_POSITION_INT, the autopilot's estimate, once it has one. ArduPilot
+streams the message from boot, filled with zeros until its EKF has an origin; PX4 sends
+it only while its global position is valid, so its sign of "none" is silence while the
+heartbeats go on. Either way the agent reports no position rather than 0°N 0°E.
+
+Which receiver: when the vehicle has more than one.
 ArduPilot and PX4 report their first receiver in GPS_RAW_INT and the second in
 GPS2_RAW. The best source present is the one with the better fix (RTK fixed > RTK float
 > PPP > DGPS > 3D > 2D > none), then the one seeing more satellites, then the first
@@ -37,6 +43,10 @@ FIX_RANK: Mapping[int, int] = {
 class PositionTimeouts:
     # ArduPilot streams GPS_RAW_INT at 2-5 Hz; a receiver silent this long is gone.
     stale_after_s: float = 3.0
+    # GLOBAL_POSITION_INT this much older than the latest heartbeat: the autopilot has
+    # stopped estimating (PX4). Measured against the heartbeat, so a link that is down
+    # altogether keeps its last known position (shown with fcu_connected false).
+    position_lost_after_s: float = 3.0
 
 
 DEFAULT_TIMEOUTS = PositionTimeouts()
@@ -67,6 +77,25 @@ class PositionFix:
     @property
     def rank(self) -> int:
         return FIX_RANK.get(self.fix_type, 0)
+
+
+def global_position(
+    latest: Mapping[str, MavMessage],
+    received_at: Mapping[str, float] | None,
+    now: float,
+    timeouts: PositionTimeouts = DEFAULT_TIMEOUTS,
+) -> MavMessage | None:
+    """The GLOBAL_POSITION_INT to report, or None while the autopilot has no position."""
+    position = latest.get("GLOBAL_POSITION_INT")
+    if position is None or (position.lat == 0 and position.lon == 0):
+        # 0/0 is ArduPilot's "no origin yet", never a drone on Null Island (open sea)
+        return None
+    if received_at is not None:
+        arrived = received_at.get("GLOBAL_POSITION_INT", now)
+        heartbeat = received_at.get("HEARTBEAT", arrived)
+        if heartbeat - arrived > timeouts.position_lost_after_s:
+            return None
+    return position
 
 
 def candidates(

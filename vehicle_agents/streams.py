@@ -5,6 +5,10 @@ MAV_CMD_SET_MESSAGE_INTERVAL sets one message's rate and is acknowledged. Flight
 controllers that answer it UNSUPPORTED, or not at all (old ArduPilot, some radios that
 drop COMMAND_LONG), get the older REQUEST_DATA_STREAM instead: one rate per group of
 messages (ArduPilot's SRx_ parameters), with no acknowledgement.
+
+Another GCS on the same link can change those rates at any time; `RateWatch`
+(stream_watch.py) measures what arrives, and the requester asks again for any message
+that falls below its rate, the same way it asked the first time.
 """
 
 from __future__ import annotations
@@ -12,13 +16,15 @@ from __future__ import annotations
 import asyncio
 import logging
 import math
-from collections.abc import Mapping
+import time
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Literal
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from vehicle_agents.fcu_link import FcuLink, LinkChange, MavMessage
+from vehicle_agents.stream_watch import RateWatch, RateWatchSettings
 
 log = logging.getLogger(__name__)
 
@@ -91,6 +97,7 @@ class StreamTimeouts:
     # A flight controller that has not answered after this, ignores the command.
     ack_s: float = 1.0
     attempts: int = 2
+    watch_every_s: float = 1.0  # how often the achieved rates are judged
 
 
 @dataclass(frozen=True)
@@ -144,37 +151,85 @@ def data_stream_rates(plan: list[StreamRequest]) -> dict[int, int]:
 
 
 class StreamRequester:
-    """Requests the plan when the link comes up, and again after every reconnect."""
+    """Requests the plan when the link comes up, and again after every reconnect; in
+    between, asks again for each message that arrives slower than asked."""
 
     def __init__(
         self,
         link: FcuLink,
         rates_hz: Mapping[str, float],
         timeouts: StreamTimeouts | None = None,
+        watch: RateWatchSettings | None = None,
+        clock: Callable[[], float] = time.monotonic,
     ) -> None:
         self.link = link
         self.plan = stream_plan(rates_hz)
         self.timeouts = timeouts or StreamTimeouts()
         self.method: Method | None = None  # how the last round was asked for
         self.rounds = 0
+        self.watch = RateWatch(watch or RateWatchSettings(), clock)
+        self._accepted: set[str] = set()  # SET_MESSAGE_INTERVAL accepted, this round
         self._wanted = asyncio.Event()
+        self._asking = asyncio.Lock()  # one exchange of interval acks at a time
 
     async def run(self) -> None:
         self.link.state_listeners.append(self._on_link_change)
+        self.link.listeners.append(self.watch.on_message)
         try:
             if self.link.up:
                 self._wanted.set()
-            while True:
-                await self._wanted.wait()
-                self._wanted.clear()
-                try:
-                    self.method = await self.request()
-                    self.rounds += 1
-                except ConnectionError as error:
-                    # The link went down mid-round; the next "up" starts a new one.
-                    log.info("stream requests interrupted: %s", error)
+            async with asyncio.TaskGroup() as tasks:
+                tasks.create_task(self._watch_rates())
+                while True:
+                    await self._wanted.wait()
+                    self._wanted.clear()
+                    try:
+                        async with self._asking:
+                            self.method = await self.request()
+                            self.watch.watch(self._watched_requests())
+                        self.rounds += 1
+                    except ConnectionError as error:
+                        # The link went down mid-round; the next "up" starts a new one.
+                        log.info("stream requests interrupted: %s", error)
         finally:
+            self.link.listeners.remove(self.watch.on_message)
             self.link.state_listeners.remove(self._on_link_change)
+
+    def _watched_requests(self) -> list[StreamRequest]:
+        """What the last round can be held to: messages the flight controller accepted a
+        rate for, or (data streams) that a group carries."""
+        if self.method == "message_interval":
+            return [r for r in self.plan if r.message in self._accepted]
+        return [r for r in self.plan if r.message in _GROUP_OF]
+
+    async def _watch_rates(self) -> None:
+        while True:
+            await asyncio.sleep(self.timeouts.watch_every_s)
+            if self.method is None or not self.link.up or self._wanted.is_set():
+                continue
+            slow = self.watch.due()
+            if not slow:
+                continue
+            try:
+                async with self._asking:
+                    await self.restore(slow)
+            except ConnectionError as error:
+                log.info("stream requests interrupted: %s", error)
+
+    async def restore(self, slow: list[StreamRequest]) -> None:
+        """Ask again for messages that fell below their rate, as the last round asked."""
+        if self.method == "data_stream":
+            self.request_data_streams()
+            return
+        for request in slow:
+            result = await self._set_interval(request)
+            if result != mavlink2.MAV_RESULT_ACCEPTED:
+                log.info(
+                    "%s at %g Hz not set again: %s",
+                    request.message,
+                    request.rate_hz,
+                    _result(result),
+                )
 
     def _on_link_change(self, change: LinkChange) -> None:
         if change.up:
@@ -183,6 +238,7 @@ class StreamRequester:
     async def request(self) -> Method:
         """One round: SET_MESSAGE_INTERVAL per message, or the fallback for all of them."""
         answered = False
+        self._accepted.clear()
         for request in self.plan:
             result = await self._set_interval(request)
             if result == mavlink2.MAV_RESULT_UNSUPPORTED or (result is None and not answered):
@@ -194,7 +250,9 @@ class StreamRequester:
                 self.request_data_streams()
                 return "data_stream"
             answered = True
-            if result != mavlink2.MAV_RESULT_ACCEPTED:
+            if result == mavlink2.MAV_RESULT_ACCEPTED:
+                self._accepted.add(request.message)
+            else:
                 # e.g. FAILED for a message this vehicle does not have (no second GPS)
                 log.info(
                     "%s at %g Hz not set: %s", request.message, request.rate_hz, _result(result)

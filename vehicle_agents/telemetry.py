@@ -23,6 +23,19 @@ def _system_status_name(status: int) -> str:
     return entry.name.removeprefix("MAV_STATE_") if entry is not None else "UNKNOWN"
 
 
+def mission_total(current: MavMessage) -> int | None:
+    """The items of the mission on board, or None when there is none or it is unknown.
+
+    MISSION_CURRENT.total is UINT16_MAX without a mission (PX4), 0 without one on
+    ArduPilot (home is not counted), and 0 too from an autopilot that predates the field;
+    mission_state NO_MISSION says the same. Without a known mission ``seq`` is no progress
+    (PX4 reports item 0 then, which would read as "flying item 1")."""
+    total = int(getattr(current, "total", 0) or 0)
+    if int(getattr(current, "mission_state", 0) or 0) == mavlink2.MISSION_STATE_NO_MISSION:
+        return None
+    return total if 0 < total < _UINT16_UNKNOWN else None
+
+
 def link_snapshot(link: FcuLink) -> VehicleState:
     """The state of the vehicle behind ``link``, with the link's own health."""
     return snapshot(
@@ -56,7 +69,8 @@ def snapshot(
         fields["mode"] = mode_name(heartbeat)
         fields["armed"] = is_armed(heartbeat)
         fields["system_status"] = _system_status_name(heartbeat.system_status)
-    if (position := latest.get("GLOBAL_POSITION_INT")) is not None:
+    now = time.monotonic() if now is None else now
+    if (position := positioning.global_position(latest, received_at, now)) is not None:
         fields["lat"] = position.lat / 1e7
         fields["lon"] = position.lon / 1e7
         fields["alt_msl"] = position.alt / 1000
@@ -79,15 +93,15 @@ def snapshot(
             fields["battery_remaining"] = float(status.battery_remaining)
     if (battery := latest.get("BATTERY_STATUS")) is not None and battery.battery_remaining >= 0:
         fields["battery_remaining"] = float(battery.battery_remaining)
-    now = time.monotonic() if now is None else now
     if (fix := positioning.choose(latest, received_at, now)) is not None:
         fields["position_source"] = fix.source
         fields["gps_fix"] = fix.fix_type
         fields["satellites"] = fix.satellites
-    if (current := latest.get("MISSION_CURRENT")) is not None:
+    if (current := latest.get("MISSION_CURRENT")) is not None and (
+        total := mission_total(current)
+    ) is not None:
         fields["mission_current"] = mission_number(int(current.seq), autopilot)
-        total = int(getattr(current, "total", 0) or 0)
-        fields["mission_total"] = total if 0 < total < 65535 else None
+        fields["mission_total"] = total
     if (home := latest.get("HOME_POSITION")) is not None:
         fields["home_lat"] = home.latitude / 1e7
         fields["home_lon"] = home.longitude / 1e7

@@ -86,6 +86,7 @@ class EventRecord(BaseModel):
     kind: str
     severity: int | None
     text: str
+    mission_item: int | None = None
 
 
 class EventPage(BaseModel):

@@ -221,6 +221,7 @@ class AgentSession(PeerConnection):
                     message.kind,
                     message.severity,
                     message.text,
+                    message.mission_item,
                 )
                 await self.hub.bus.publish(Topic.STORAGE, hello.vehicle_id, stored)
             case Unavailable():

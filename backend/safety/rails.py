@@ -235,14 +235,21 @@ def _known(value: float | None) -> float | None:
     return value if value is not None and math.isfinite(value) else None
 
 
+def _point(lat: float | None, lon: float | None) -> GeoPoint | None:
+    lat, lon = _known(lat), _known(lon)
+    if lat is None or lon is None or (lat, lon) == (0.0, 0.0):
+        # 0°N 0°E is an autopilot's "no position yet" (ArduPilot before its EKF origin),
+        # from an agent that passed it on: unknown, so the rules fail closed.
+        return None
+    return GeoPoint(lat, lon)
+
+
 def _position(vehicle: VehicleSnapshot) -> GeoPoint | None:
-    lat, lon = _known(vehicle.lat), _known(vehicle.lon)
-    return None if lat is None or lon is None else GeoPoint(lat, lon)
+    return _point(vehicle.lat, vehicle.lon)
 
 
 def _home(vehicle: VehicleSnapshot) -> GeoPoint | None:
-    lat, lon = _known(vehicle.home_lat), _known(vehicle.home_lon)
-    return None if lat is None or lon is None else GeoPoint(lat, lon)
+    return _point(vehicle.home_lat, vehicle.home_lon)
 
 
 def _altitude(vehicle: VehicleSnapshot) -> float | None:

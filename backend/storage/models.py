@@ -192,6 +192,9 @@ class EventRow(Base):
     kind: Mapped[str] = mapped_column(String(16))
     severity: Mapped[int | None] = mapped_column(SmallInteger)
     text: Mapped[str] = mapped_column(String(500))
+    # The mission item a "mission" event is about (hub numbering), so a flight log can be
+    # queried by item rather than by parsing the text.
+    mission_item: Mapped[int | None] = mapped_column(Integer)
 
 
 class CommandRow(Base):

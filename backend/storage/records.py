@@ -25,6 +25,7 @@ class StoredEvent:
     kind: str
     severity: int | None
     text: str
+    mission_item: int | None = None
 
 
 @dataclass(frozen=True)

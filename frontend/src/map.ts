@@ -11,6 +11,8 @@ function positionOf(vehicle: VehicleSummary): L.LatLng | null {
   const lat = vehicle.state?.lat;
   const lon = vehicle.state?.lon;
   if (lat === null || lat === undefined || lon === null || lon === undefined) return null;
+  // 0°N 0°E is an autopilot's "no position yet", never a place to draw a vehicle.
+  if (lat === 0 && lon === 0) return null;
   return L.latLng(lat, lon);
 }
 

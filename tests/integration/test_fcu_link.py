@@ -1,5 +1,6 @@
 """The flight controller link under stress: rate requests and their fallback, garbage on
-the wire, a link cut or silenced and restored, and a better GPS coming and going.
+the wire, a link cut or silenced and restored, a better GPS coming and going, and rates
+another GCS lowers restored.
 
 The simulator runs in-process; the agent is a real process talking to it over TCP, either
 directly or through ``FcuTap``, a `CuttableProxy` that reads what the agent asks for and can
@@ -9,6 +10,7 @@ corrupt, silence or cut what the flight controller sends back.
 from __future__ import annotations
 
 import asyncio
+import logging
 import threading
 import time
 from collections.abc import Callable
@@ -17,15 +19,19 @@ from typing import Any
 
 import httpx
 import pytest
+from pymavlink import mavutil
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
+from gcs.launcher import free_port
 from tests.helpers import FleetWatcher, agent_process, api_client
 from tests.simulator.test_sim_server import serving
 from tests.tcp_proxy import CuttableProxy, Filter
 from vehicle_agents.fcu_link import FcuLink
+from vehicle_agents.forwarding import MavlinkForwarder
 from vehicle_agents.simulator import ListenAddress, SimulatorConfig, SimulatorServer
 from vehicle_agents.simulator.config import MessageIntervalSupport
 from vehicle_agents.simulator.telemetry import SecondGps
+from vehicle_agents.stream_watch import RateWatchSettings
 from vehicle_agents.streams import DEFAULT_RATES_HZ, StreamRequester, StreamTimeouts
 
 pytestmark = pytest.mark.integration
@@ -337,3 +343,99 @@ def unplug(server: SimulatorServer) -> None:
 
 def plug_in(server: SimulatorServer, gps2: SecondGps) -> None:
     server.telemetry.gps2 = gps2
+
+
+# -- a second GCS lowers the rates: the agent notices and asks again -------------------
+
+
+def lower_rates_as_mavproxy(gcs: Any) -> None:
+    """MAVProxy's default: every stream at 4 Hz, one REQUEST_DATA_STREAM for all."""
+    gcs.mav.request_data_stream_send(SYSID, 1, mavlink2.MAV_DATA_STREAM_ALL, 4, 1)
+
+
+def lower_rates_per_message(gcs: Any) -> None:
+    """QGroundControl's or MAVSDK's way: one message, by SET_MESSAGE_INTERVAL."""
+    gcs.mav.command_long_send(
+        SYSID,
+        1,
+        SET_MESSAGE_INTERVAL,
+        0,
+        mavlink2.MAVLINK_MSG_ID_GLOBAL_POSITION_INT,
+        250_000,
+        0,
+        0,
+        0,
+        0,
+        0,
+    )
+
+
+@pytest.mark.parametrize(
+    "lower", [lower_rates_as_mavproxy, lower_rates_per_message], ids=["data_stream", "interval"]
+)
+def test_rates_another_gcs_lowers_are_restored(
+    lower: Callable[[Any], None], caplog: pytest.LogCaptureFixture
+) -> None:
+    gcs_port = free_port()
+    arrivals: list[float] = []
+
+    def rate_hz(until: float) -> float:
+        return sum(1 for t in arrivals if until - 1.0 < t <= until) / 1.0
+
+    async def run(port: int) -> None:
+        link = FcuLink(f"tcp:127.0.0.1:{port}")
+        requester = StreamRequester(
+            link,
+            {},
+            StreamTimeouts(ack_s=0.5, attempts=2, watch_every_s=0.2),
+            RateWatchSettings(window_s=1.0),
+        )
+        link.listeners.append(
+            lambda m: (
+                arrivals.append(time.monotonic()) if m.get_type() == "GLOBAL_POSITION_INT" else None
+            )
+        )
+        forwarder = MavlinkForwarder(link, [f"udpin:127.0.0.1:{gcs_port}"])
+        gcs = mavutil.mavlink_connection(
+            f"udpout:127.0.0.1:{gcs_port}", source_system=250, source_component=230
+        )
+
+        def next_position() -> Any:  # the test's tick: no sleeps, the vehicle's clock
+            return link.wait_for(lambda m: m.get_type() == "GLOBAL_POSITION_INT", 1.0)
+
+        try:
+            async with asyncio.TaskGroup() as tasks:
+                running = [
+                    tasks.create_task(link.run()),
+                    tasks.create_task(requester.run()),
+                    tasks.create_task(forwarder.run()),
+                ]
+                await asyncio.wait_for(link.wait_identified(), 10)
+                asked_at = time.monotonic()
+                while requester.rounds < 1 or time.monotonic() < asked_at + 1.2:
+                    await next_position()  # the rates set, and a window at them
+                    assert time.monotonic() < asked_at + 10, "no round of requests"
+                assert rate_hz(time.monotonic()) >= 8
+                lowered_at = time.monotonic()
+                gcs.mav.heartbeat_send(
+                    mavlink2.MAV_TYPE_GCS, mavlink2.MAV_AUTOPILOT_INVALID, 0, 0, 0
+                )
+                lower(gcs)
+                now = lowered_at
+                while rate_hz(now) < 8 or "GLOBAL_POSITION_INT back at" not in caplog.text:
+                    assert now < lowered_at + 15, f"rate stayed at {rate_hz(now)} Hz"
+                    await next_position()
+                    now = time.monotonic()
+                # it was lowered in between: some second after the other GCS asked was slow
+                ends = [lowered_at + 1.0 + 0.1 * i for i in range(int((now - lowered_at) * 10))]
+                assert min(rate_hz(t) for t in ends) <= 5.5
+                for task in running:
+                    task.cancel()
+        finally:
+            gcs.close()
+
+    caplog.set_level(logging.INFO, "vehicle_agents.stream_watch")
+    with serving(sim_config()) as (_server, address):
+        asyncio.run(run(address.port))
+    assert "GLOBAL_POSITION_INT arrives at" in caplog.text
+    assert "GLOBAL_POSITION_INT back at" in caplog.text

@@ -186,6 +186,13 @@ def test_px4_encodes_main_and_sub_modes_as_pymavlink_decodes_them() -> None:
     assert copter.mode is CopterMode.AUTO
 
 
+def test_px4_reports_no_mission_as_px4_does() -> None:
+    """MISSION_CURRENT.total is UINT16_MAX without a mission (mavlink_mission.cpp)."""
+    current = TelemetryBuilder(px4(), 0.0).mission_current()
+    assert (current.seq, current.total) == (0, 65535)
+    assert TelemetryBuilder(Copter(DEFAULT_HOME), 0.0).mission_current().total == 0
+
+
 def test_px4_declines_as_px4_does() -> None:
     copter = px4()
     assert copter.request_mode(1, 6, 0) is MavResult.TEMPORARILY_REJECTED  # OFFBOARD

@@ -2,9 +2,12 @@
 
 from __future__ import annotations
 
+import itertools
+
 import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
+from vehicle_agents.stream_watch import RateWatch, RateWatchSettings
 from vehicle_agents.streams import (
     DATA_STREAM_GROUPS,
     DEFAULT_RATES_HZ,
@@ -89,3 +92,60 @@ def test_groups_name_real_messages() -> None:
             message_id(name)
     grouped = {name for names in DATA_STREAM_GROUPS.values() for name in names}
     assert set(DEFAULT_RATES_HZ) - grouped == {"HOME_POSITION", "EXTENDED_SYS_STATE"}
+
+
+# -- the achieved rates, on an injected clock ---------------------------------------------
+
+
+class Clock:
+    def __init__(self) -> None:
+        self.now = 100.0
+
+    def __call__(self) -> float:
+        return self.now
+
+
+def arrive(watch: RateWatch, clock: Clock, rate_hz: float, seconds: float) -> None:
+    """GLOBAL_POSITION_INT at ``rate_hz`` for ``seconds``, the clock moving with it."""
+    message = mavlink2.MAVLink_global_position_int_message(0, 1, 1, 0, 0, 0, 0, 0, 0)
+    for _ in range(round(rate_hz * seconds)):
+        clock.now += 1 / rate_hz
+        watch.on_message(message)
+
+
+def test_a_message_slowed_by_another_gcs_is_asked_for_again_with_backoff() -> None:
+    clock = Clock()
+    watch = RateWatch(RateWatchSettings(window_s=2.0, retry_max_s=8.0), clock)
+    plan = stream_plan({})
+    watch.watch(plan)
+    arrive(watch, clock, 10, 3)
+    assert watch.due() == []  # at the rate asked for
+    assert watch.achieved_hz("GLOBAL_POSITION_INT") == pytest.approx(10, abs=0.5)
+    arrive(watch, clock, 4, 2)  # another GCS set 4 Hz
+    [again] = watch.due()
+    assert (again.message, again.rate_hz) == ("GLOBAL_POSITION_INT", 10.0)
+    assert watch.due() == []  # not again before the next window
+    # still slow: asked again after 2 s, then 4 s, then 8 s (the cap), then 8 s
+    asked_at = [clock.now]
+    for _ in range(60):
+        arrive(watch, clock, 4, 0.5)
+        if watch.due():
+            asked_at.append(clock.now)
+    gaps = [round(b - a) for a, b in itertools.pairwise(asked_at)]
+    assert gaps == [2, 4, 8, 8, 8], asked_at
+    assert watch.rerequests == len(asked_at)
+    arrive(watch, clock, 10, 10)  # restored
+    assert watch.due() == []
+
+
+def test_messages_not_yet_seen_or_stopped_are_not_judged() -> None:
+    clock = Clock()
+    watch = RateWatch(RateWatchSettings(window_s=1.0), clock)
+    watch.watch(stream_plan({"ATTITUDE": 0}))
+    arrive(watch, clock, 10, 5)  # only GLOBAL_POSITION_INT comes: no GPS2_RAW on board
+    assert watch.due() == []
+    assert watch.achieved_hz("ATTITUDE") is None  # stopped: nothing to hold it to
+    # a slow message is measured over enough of its own periods
+    watch.watch(stream_plan({"GLOBAL_POSITION_INT": 0.2}))
+    arrive(watch, clock, 0.2, 20)
+    assert watch.due() == []

@@ -332,8 +332,11 @@ class TelemetryBuilder:
     def mission_current(self) -> MavMessage:
         copter = self.copter
         on_wire = max(0, copter.mission_current - copter.mission_wire_offset)
+        total = copter.mission_count
+        if total == 0 and copter.autopilot == mavlink2.MAV_AUTOPILOT_PX4:
+            total = _UINT16_MAX  # PX4 without a mission (ArduPilot says 0: no items after home)
         return mavlink2.MAVLink_mission_current_message(
-            on_wire, copter.mission_count, int(copter.mission_state()), 0
+            on_wire, total, int(copter.mission_state()), 0
         )
 
     # -- replies -------------------------------------------------------------

@@ -164,6 +164,10 @@ export interface Event {
    */
   severity: number | null;
   text: string;
+  /**
+   * the mission item a 'mission' event is about (numbered as the hub does)
+   */
+  mission_item: number | null;
 }
 export interface CommandResult {
   type: "command_result";

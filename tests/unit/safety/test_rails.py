@@ -112,6 +112,21 @@ def test_takeoff_with_unknown_position_fails_closed() -> None:
     assert check_takeoff(SafetyRails(max_altitude_m=120), UNKNOWN, 20) == []
 
 
+def test_zero_zero_is_no_position_for_the_rails() -> None:
+    """ArduPilot's GLOBAL_POSITION_INT before its EKF has an origin, if an agent passed it
+    on: the rails fail closed instead of measuring from the Gulf of Guinea."""
+    null_island = GeoPoint(0.0, 0.0)
+    [violation] = check_takeoff(SafetyRails(geofence=u_fence()), vehicle(null_island), 20)
+    assert violation.rule == "position_unknown"
+    target = geo(60, 60)
+    rails = SafetyRails(max_distance_from_home_m=500)
+    assert check_goto(rails, vehicle(geo(50, 50)), target.lat, target.lon, 20) == []
+    [violation] = check_goto(
+        rails, vehicle(geo(50, 50), home=null_island), target.lat, target.lon, 20
+    )
+    assert violation.rule == "position_unknown"
+
+
 # --- Go to ----------------------------------------------------------------------------------
 
 

@@ -1,7 +1,7 @@
 """events: the mission item a mission event is about
 
-Revision ID: 0004_event_mission_item
-Revises: 0003
+Revision ID: 0005_event_mission_item
+Revises: 0004_audit_retention
 Create Date: 2026-11-25 04:40:00
 """
 
@@ -10,8 +10,8 @@ from collections.abc import Sequence
 import sqlalchemy as sa
 from alembic import op
 
-revision: str = "0004_event_mission_item"
-down_revision: str | None = "0003"
+revision: str = "0005_event_mission_item"
+down_revision: str | None = "0004_audit_retention"
 branch_labels: str | Sequence[str] | None = None
 depends_on: str | Sequence[str] | None = None
 

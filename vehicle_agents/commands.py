@@ -42,6 +42,7 @@ from gcs.protocol import (
     TakeoffCommand,
 )
 from vehicle_agents.fcu_link import FcuLink, MavMessage, next_match
+from vehicle_agents.mav_results import result_name
 from vehicle_agents.missions import MissionClient
 from vehicle_agents.modes import is_armed, mode_name
 from vehicle_agents.params import ParamClient
@@ -78,11 +79,6 @@ class CommandRefused(Exception):
     def __init__(self, outcome: CommandOutcome) -> None:
         super().__init__(outcome.message)
         self.outcome = outcome
-
-
-def _result_name(result: int) -> str:
-    entry = mavlink2.enums["MAV_RESULT"].get(result)
-    return entry.name if entry is not None else f"MAV_RESULT_{result}"
 
 
 def _command_name(command: int) -> str:
@@ -315,14 +311,14 @@ class CommandExecutor:
             if ack is None:
                 break
             if ack.result != mavlink2.MAV_RESULT_IN_PROGRESS:
-                log.info("%s: finished: %s", name, _result_name(ack.result))
+                log.info("%s: finished: %s", name, result_name(ack.result))
                 return self._outcome(name, ack, started, params)
             if _progress(ack) != progress:
                 progress = _progress(ack)
                 log.info("%s: in progress%s", name, _percent(progress))
         return CommandOutcome(
             status="timeout",
-            result=_result_name(mavlink2.MAV_RESULT_IN_PROGRESS),
+            result=result_name(mavlink2.MAV_RESULT_IN_PROGRESS),
             message=f"{name}: the flight controller said it was in progress"
             f"{_percent(progress)} but sent no final COMMAND_ACK within {limit:.1f} s",
         )
@@ -330,7 +326,7 @@ class CommandExecutor:
     def _outcome(
         self, name: str, ack: MavMessage, started: float, params: list[float] | None = None
     ) -> CommandOutcome:
-        result = _result_name(ack.result)
+        result = result_name(ack.result)
         if ack.result == mavlink2.MAV_RESULT_ACCEPTED:
             return CommandOutcome(status="accepted", result=result, message=f"{name}: accepted")
         # The autopilot explains a refusal in a STATUSTEXT (e.g. a failed pre-arm check)

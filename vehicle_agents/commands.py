@@ -134,9 +134,10 @@ class CommandExecutor:
                 return await self.command_long(mavlink2.MAV_CMD_DO_SET_HOME, [1])
             case SetHomeCommand(lat=float(lat), lon=float(lon), alt_msl=float(alt_msl)):
                 # As COMMAND_INT: a float32 COMMAND_LONG parameter holds a latitude only to
-                # about a metre. MAV_FRAME_GLOBAL: the altitude is above mean sea level.
+                # about a metre. The altitude is above mean sea level, in the frame the
+                # autopilot takes it in.
                 return await self.command_int(
-                    mavlink2.MAV_CMD_DO_SET_HOME, mavlink2.MAV_FRAME_GLOBAL, [0], lat, lon, alt_msl
+                    mavlink2.MAV_CMD_DO_SET_HOME, self._amsl_frame(), [0], lat, lon, alt_msl
                 )
             case SetHomeCommand():
                 return CommandOutcome(
@@ -222,10 +223,40 @@ class CommandExecutor:
             [setting.base_mode, setting.custom_mode, setting.custom_sub_mode],
         )
 
+    def _is_px4(self) -> bool:
+        return self.link.modes is not None and self.link.modes.autopilot == "px4"
+
+    def _amsl_frame(self) -> int:
+        """The COMMAND_INT frame for an altitude above mean sea level. PX4 takes position
+        commands only in MAV_FRAME_GLOBAL_INT and answers any other frame with
+        MAV_RESULT_COMMAND_UNSUPPORTED_MAV_FRAME; ArduPilot reads MAV_FRAME_GLOBAL and
+        GLOBAL_INT alike, and has flown with GLOBAL."""
+        return int(mavlink2.MAV_FRAME_GLOBAL_INT if self._is_px4() else mavlink2.MAV_FRAME_GLOBAL)
+
+    def _home_alt_msl(self) -> float | None:
+        """Home's altitude above mean sea level: from HOME_POSITION, else from where the
+        vehicle is (its altitude less its height above home)."""
+        if (home := self.link.latest.get("HOME_POSITION")) is not None:
+            return float(home.altitude) / 1000
+        if (position := self.link.latest.get("GLOBAL_POSITION_INT")) is not None:
+            return float(position.alt - position.relative_alt) / 1000
+        return None
+
     async def _goto(self, lat: float, lon: float, altitude: float) -> CommandOutcome:
+        frame = mavlink2.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT  # ArduPilot: above home, as asked
+        if self._is_px4():
+            # PX4 takes a reposition only above mean sea level (MAV_FRAME_GLOBAL_INT).
+            home_alt = self._home_alt_msl()
+            if home_alt is None:
+                return CommandOutcome(
+                    status="refused",
+                    message="goto: the vehicle has not reported its home or position yet, "
+                    "so the altitude above home cannot be given above sea level",
+                )
+            frame, altitude = mavlink2.MAV_FRAME_GLOBAL_INT, home_alt + altitude
         return await self.command_int(
             mavlink2.MAV_CMD_DO_REPOSITION,
-            mavlink2.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT,
+            frame,
             [
                 -1,  # default ground speed
                 mavlink2.MAV_DO_REPOSITION_FLAGS_CHANGE_MODE,

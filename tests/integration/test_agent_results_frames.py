@@ -9,17 +9,20 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
-from collections.abc import Awaitable, Callable
+from collections.abc import Awaitable, Callable, Iterator
 from typing import TypeVar
 
 import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
-from gcs.protocol import ChangeSpeedCommand, CommandOutcome
+from gcs.protocol import ChangeSpeedCommand, CommandOutcome, GotoCommand, SetHomeCommand
 from tests.mavlink_peer import Answer, ScriptedFlightController
+from tests.simulator.test_sim_server import serving
 from vehicle_agents.commands import CommandExecutor, CommandTimeouts
 from vehicle_agents.fcu_link import FcuLink, MavMessage
 from vehicle_agents.mav_results import result_name
+from vehicle_agents.simulator import ListenAddress, SimulatorConfig, SimulatorServer
+from vehicle_agents.simulator.config import DEFAULT_HOME
 
 pytestmark = pytest.mark.integration
 
@@ -89,3 +92,70 @@ def test_a_refusal_names_the_result_the_flight_controller_sent() -> None:
     assert outcomes[1].message.startswith(
         "MAV_CMD_DO_CHANGE_SPEED: MAV_RESULT_COMMAND_UNSUPPORTED_MAV_FRAME"
     )
+
+
+# -- frames of position commands, against the simulator's personalities ---------------
+
+
+@contextlib.contextmanager
+def simulated(autopilot: str) -> Iterator[SimulatorServer]:
+    config = SimulatorConfig(
+        listen=ListenAddress("tcp", "127.0.0.1", 0), speedup=10.0, autopilot=autopilot
+    )
+    with serving(config) as (server, _address):
+        yield server
+
+
+def fcu_url(server: SimulatorServer) -> str:
+    assert server.address is not None
+    return f"tcp:127.0.0.1:{server.address.port}"
+
+
+GOTO = GotoCommand(lat=DEFAULT_HOME.lat + 0.0003, lon=DEFAULT_HOME.lon + 0.0002, altitude=15)
+NEW_HOME = SetHomeCommand(
+    use_current=False,
+    lat=DEFAULT_HOME.lat + 0.0001,
+    lon=DEFAULT_HOME.lon - 0.0001,
+    alt_msl=DEFAULT_HOME.alt + 2,
+)
+
+
+@pytest.mark.parametrize("autopilot", ["px4", "ardupilot"])
+def test_goto_and_set_home_go_in_the_frame_each_autopilot_takes(autopilot: str) -> None:
+    """PX4 takes DO_REPOSITION and DO_SET_HOME only in MAV_FRAME_GLOBAL_INT: the agent
+    turns the altitude above home into one above sea level for it, and the vehicle
+    ends up where it was asked to, on either autopilot."""
+
+    async def body(executor: CommandExecutor) -> list[CommandOutcome]:
+        return [await executor.execute(GOTO), await executor.execute(NEW_HOME)]
+
+    with simulated(autopilot) as server:
+        goto, set_home = asyncio.run(on_link(fcu_url(server), body))
+        assert goto.status == "accepted", goto
+        assert set_home.status == "accepted", set_home
+        copter = server.copter
+        target = copter.guided_target  # (north, east, metres above the origin)
+        home = copter.home
+    assert target is not None
+    assert target[2] == pytest.approx(15.0, abs=0.01), "15 m above home, whatever the frame"
+    assert (home.lat, home.lon) == pytest.approx((NEW_HOME.lat, NEW_HOME.lon), abs=1e-7)
+    assert home.alt == pytest.approx(DEFAULT_HOME.alt + 2, abs=0.01)
+
+
+def test_the_px4_simulator_refuses_other_frames_as_px4_does() -> None:
+    """A reposition above home (MAV_FRAME_GLOBAL_RELATIVE_ALT_INT) gets MAV_RESULT 9."""
+
+    async def body(executor: CommandExecutor) -> CommandOutcome:
+        return await executor.command_int(
+            mavlink2.MAV_CMD_DO_REPOSITION,
+            mavlink2.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT,
+            [-1, mavlink2.MAV_DO_REPOSITION_FLAGS_CHANGE_MODE, 0, float("nan")],
+            GOTO.lat,
+            GOTO.lon,
+            GOTO.altitude,
+        )
+
+    with simulated("px4") as server:
+        outcome = asyncio.run(on_link(fcu_url(server), body))
+    assert outcome.status == "refused"
+    assert outcome.result == "MAV_RESULT_COMMAND_UNSUPPORTED_MAV_FRAME"

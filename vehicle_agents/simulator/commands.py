@@ -52,6 +52,9 @@ _RELATIVE_FRAMES = frozenset(
     }
 )
 
+# Commands whose COMMAND_INT frame says where the position is (PX4 checks it).
+_POSITION_COMMANDS = frozenset({MavCmd.DO_REPOSITION, MavCmd.DO_SET_HOME})
+
 
 @dataclass(frozen=True)
 class Reply:
@@ -172,7 +175,13 @@ class MessageHandler:
         if kind == "COMMAND_INT":
             if not self._for_us(msg.target_system):
                 return []
-            return self._command(Command.from_int(msg), msg, streams, now)
+            command = Command.from_int(msg)
+            if command.command in _POSITION_COMMANDS and not self.copter.position_frame_ok(
+                command.frame
+            ):
+                result = MavResult.COMMAND_UNSUPPORTED_MAV_FRAME
+                return self._finish(command.command, result, msg)
+            return self._command(command, msg, streams, now)
         if kind == "SET_MODE":
             if not self._for_us(msg.target_system):
                 return []

@@ -270,6 +270,9 @@ class Copter(Vehicle):
     def mission_wire_offset(self) -> int:
         return self.personality.mission_wire_offset
 
+    def position_frame_ok(self, frame: int) -> bool:
+        return self.personality.position_frame_ok(frame)
+
     def set_mode(self, number: int) -> MavResult:
         """Copter::set_mode for a GCS request."""
         if number == self.mode:

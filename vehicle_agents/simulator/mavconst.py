@@ -124,10 +124,8 @@ class MavResult(IntEnum):
     UNSUPPORTED = 3
     FAILED = 4
     IN_PROGRESS = 5
-    CANCELLED = 6
-    COMMAND_LONG_ONLY = 7
-    COMMAND_INT_ONLY = 8
-    COMMAND_UNSUPPORTED_MAV_FRAME = 9  # PX4: a position command in a frame it does not take
+    # PX4: a position command in a frame it does not take (newer than pymavlink's dialect)
+    COMMAND_UNSUPPORTED_MAV_FRAME = 9
 
 
 class Severity(IntEnum):

@@ -13,7 +13,9 @@ personality maps its flight modes to and from the autopilot's encoding, as a GCS
   land on the copter's behaviours: MANUAL, STABILIZED and ALTCTL hold altitude with the
   sticks centred (STABILIZE here), POSCTL and AUTO.LOITER ("Hold") hold position
   (LOITER), AUTO.MISSION flies the mission (AUTO), AUTO.RTL and AUTO.LAND are RTL and
-  LAND, and a reposition is flown in Hold, as PX4's navigator does.
+  LAND, and a reposition is flown in Hold, as PX4's navigator does. A reposition or a
+  set-home sent as COMMAND_INT is taken only in MAV_FRAME_GLOBAL_INT (MAV_RESULT 9,
+  COMMAND_UNSUPPORTED_MAV_FRAME, for any other frame).
 """
 
 from __future__ import annotations
@@ -24,6 +26,7 @@ from dataclasses import dataclass
 from vehicle_agents.simulator.mavconst import (
     CopterMode,
     MavAutopilot,
+    MavFrame,
     MavResult,
     MavState,
     ModeFlag,
@@ -101,6 +104,10 @@ class Personality(ABC):
     def disarm_declined_text(self) -> str | None:
         """What the autopilot says when it refuses a plain disarm in the air."""
         return None
+
+    def position_frame_ok(self, frame: int) -> bool:
+        """Whether a COMMAND_INT reposition or set-home in ``frame`` is taken."""
+        return True
 
 
 class ArduCopterPersonality(Personality):
@@ -258,6 +265,12 @@ class Px4Personality(Personality):
 
     def disarm_declined_text(self) -> str | None:
         return "Disarming denied: not landed"
+
+    def position_frame_ok(self, frame: int) -> bool:
+        """MavlinkReceiver::handle_message_command_int: a position command is taken in
+        MAV_FRAME_GLOBAL_INT (above mean sea level) only; any other frame is answered
+        with MAV_RESULT_COMMAND_UNSUPPORTED_MAV_FRAME."""
+        return frame == MavFrame.GLOBAL_INT
 
 
 def personality_for(autopilot: str) -> Personality:

@@ -434,6 +434,11 @@ class Vehicle(ABC):
         """How far the stored mission's numbers (home first) are from the wire's."""
         return 0
 
+    def position_frame_ok(self, frame: int) -> bool:
+        """Whether a COMMAND_INT reposition or set-home in ``frame`` is taken at all
+        (ArduPilot converts every global frame; a personality may be stricter)."""
+        return True
+
     @property
     def mission_count(self) -> int:
         """Mission commands stored after item 0 (home)."""

@@ -22,7 +22,8 @@ from vehicle_agents.commands import CommandExecutor, CommandTimeouts
 from vehicle_agents.fcu_link import FcuLink, MavMessage
 from vehicle_agents.mav_results import result_name
 from vehicle_agents.simulator import ListenAddress, SimulatorConfig, SimulatorServer
-from vehicle_agents.simulator.config import DEFAULT_HOME
+from vehicle_agents.simulator.config import DEFAULT_HOME, Autopilot
+from vehicle_agents.simulator.copter import Copter
 
 pytestmark = pytest.mark.integration
 
@@ -98,7 +99,7 @@ def test_a_refusal_names_the_result_the_flight_controller_sent() -> None:
 
 
 @contextlib.contextmanager
-def simulated(autopilot: str) -> Iterator[SimulatorServer]:
+def simulated(autopilot: Autopilot) -> Iterator[SimulatorServer]:
     config = SimulatorConfig(
         listen=ListenAddress("tcp", "127.0.0.1", 0), speedup=10.0, autopilot=autopilot
     )
@@ -121,7 +122,7 @@ NEW_HOME = SetHomeCommand(
 
 
 @pytest.mark.parametrize("autopilot", ["px4", "ardupilot"])
-def test_goto_and_set_home_go_in_the_frame_each_autopilot_takes(autopilot: str) -> None:
+def test_goto_and_set_home_go_in_the_frame_each_autopilot_takes(autopilot: Autopilot) -> None:
     """PX4 takes DO_REPOSITION and DO_SET_HOME only in MAV_FRAME_GLOBAL_INT: the agent
     turns the altitude above home into one above sea level for it, and the vehicle
     ends up where it was asked to, on either autopilot."""
@@ -134,6 +135,7 @@ def test_goto_and_set_home_go_in_the_frame_each_autopilot_takes(autopilot: str) 
         assert goto.status == "accepted", goto
         assert set_home.status == "accepted", set_home
         copter = server.copter
+        assert isinstance(copter, Copter)
         target = copter.guided_target  # (north, east, metres above the origin)
         home = copter.home
     assert target is not None

@@ -33,6 +33,7 @@ from vehicle_agents.simulator.mavconst import (
 )
 from vehicle_agents.simulator.mission import HOME_PLACEHOLDER, MAX_ITEMS, MissionItem, check_item
 from vehicle_agents.simulator.param_table import SetOutcome
+from vehicle_agents.simulator.param_wire import received_value
 from vehicle_agents.simulator.telemetry import MavMessage, TelemetryBuilder
 from vehicle_agents.simulator.vehicle import Vehicle
 
@@ -338,7 +339,11 @@ class MessageHandler:
             if found_index is None:
                 return []  # ArduPilot stays silent about a parameter it does not have
             return [Reply(self.telemetry.param_value(name, found_index))]
-        outcome = self.copter.set_param(name, float(msg.param_value))
+        definition = table.definition(name) if table.index(name) is not None else None
+        sent_type = int(definition.type) if definition is not None else int(msg.param_type)
+        outcome = self.copter.set_param(
+            name, received_value(msg, sent_type, self.copter.param_bytewise)
+        )
         if outcome is SetOutcome.UNKNOWN:
             log.info("PARAM_SET of unknown parameter %r ignored", name)
             return []

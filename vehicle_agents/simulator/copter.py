@@ -40,6 +40,7 @@ from vehicle_agents.simulator.mavconst import (
     Severity,
 )
 from vehicle_agents.simulator.mission import MissionItem
+from vehicle_agents.simulator.param_table import ParamTable
 from vehicle_agents.simulator.params import CopterParams
 from vehicle_agents.simulator.personality import (
     PX4_TAKEOFF_ALT_M,
@@ -108,8 +109,9 @@ class Copter(Vehicle):
         boot_at: float = 0.0,
         personality: Personality | None = None,
     ) -> None:
-        super().__init__(home, params, system_id=system_id, seed=seed, boot_at=boot_at)
+        # first: it decides the parameter table the base class builds
         self.personality = personality or ArduCopterPersonality()
+        super().__init__(home, params, system_id=system_id, seed=seed, boot_at=boot_at)
         self.mode = CopterMode.STABILIZE  # ArduCopter's INITIAL_MODE
         self.land_complete = True
 
@@ -272,6 +274,13 @@ class Copter(Vehicle):
 
     def position_frame_ok(self, frame: int) -> bool:
         return self.personality.position_frame_ok(frame)
+
+    @property
+    def param_bytewise(self) -> bool:
+        return self.personality.param_bytewise
+
+    def _new_param_table(self, params: CopterParams, system_id: int) -> ParamTable:
+        return self.personality.new_param_table(params, system_id)
 
     def set_mode(self, number: int) -> MavResult:
         """Copter::set_mode for a GCS request."""

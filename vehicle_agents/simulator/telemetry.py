@@ -15,6 +15,7 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 from vehicle_agents.simulator.mavconst import MsgId, SysSensor
 from vehicle_agents.simulator.mission import MissionItem
 from vehicle_agents.simulator.param_table import PARAM_ID_LEN
+from vehicle_agents.simulator.param_wire import ParamValueBytes, value_bytes
 from vehicle_agents.simulator.vehicle import PhotoTaken, StatusText, Vehicle
 
 MavMessage = Any  # pymavlink message classes are generated and untyped
@@ -315,8 +316,13 @@ class TelemetryBuilder:
     def autopilot_version(self) -> MavMessage:
         major, minor, patch = FIRMWARE_VERSION
         version = (major << 24) | (minor << 16) | (patch << 8) | FIRMWARE_TYPE_OFFICIAL
+        encoding = (
+            mavlink2.MAV_PROTOCOL_CAPABILITY_PARAM_ENCODE_BYTEWISE
+            if self.copter.param_bytewise
+            else mavlink2.MAV_PROTOCOL_CAPABILITY_PARAM_ENCODE_C_CAST
+        )
         return mavlink2.MAVLink_autopilot_version_message(
-            CAPABILITIES,
+            CAPABILITIES | encoding,
             version,
             0,
             0,
@@ -343,10 +349,11 @@ class TelemetryBuilder:
         table = self.copter.param_table
         value = table.get(name)
         assert value is not None, name
-        return mavlink2.MAVLink_param_value_message(
+        param_type = table.definition(name).type
+        return ParamValueBytes(
             name.encode("ascii")[:PARAM_ID_LEN],
-            value,
-            int(table.definition(name).type),
+            value_bytes(value, param_type, self.copter.param_bytewise),
+            int(param_type),
             table.count,
             PARAM_INDEX_NONE if index is None else index,
         )

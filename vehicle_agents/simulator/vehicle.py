@@ -434,6 +434,11 @@ class Vehicle(ABC):
         """How far the stored mission's numbers (home first) are from the wire's."""
         return 0
 
+    @property
+    def param_bytewise(self) -> bool:
+        """Integer parameters travel bytewise (PX4), not cast to float (ArduPilot)."""
+        return False
+
     def position_frame_ok(self, frame: int) -> bool:
         """Whether a COMMAND_INT reposition or set-home in ``frame`` is taken at all
         (ArduPilot converts every global frame; a personality may be stricter)."""

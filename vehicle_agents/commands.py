@@ -46,6 +46,7 @@ from vehicle_agents.mav_results import result_name
 from vehicle_agents.missions import MissionClient
 from vehicle_agents.modes import is_armed, mode_name
 from vehicle_agents.params import ParamClient
+from vehicle_agents.readiness import readiness
 
 log = logging.getLogger(__name__)
 
@@ -166,9 +167,26 @@ class CommandExecutor:
             return CommandOutcome(
                 status="refused", message=f"takeoff: a {modes.vehicle_type} does not take off"
             )
-        if modes is not None and modes.autopilot == "px4":
-            return await self._px4_takeoff(altitude)
-        return await self._guided_takeoff(altitude)
+        try:
+            if modes is not None and modes.autopilot == "px4":
+                outcome = await self._px4_takeoff(altitude)
+            else:
+                outcome = await self._guided_takeoff(altitude)
+        except CommandRefused as refusal:
+            outcome = refusal.outcome
+        return self._with_readiness(outcome)
+
+    def _with_readiness(self, outcome: CommandOutcome) -> CommandOutcome:
+        """A refused take-off also says why the vehicle is not ready to fly (a good GPS
+        fix the EKF does not use yet, a failing pre-arm check), when it is not."""
+        if outcome.status == "accepted":
+            return outcome
+        link = self.link
+        ready = readiness(link.latest, link.statustexts, time.time())
+        if ready.ready is not False or not ready.reason:
+            return outcome
+        message = f"{outcome.message}; not ready to fly: {ready.reason}"
+        return outcome.model_copy(update={"message": message})
 
     async def _px4_takeoff(self, altitude: float) -> CommandOutcome:
         """What QGroundControl does on PX4: arm, then MAV_CMD_NAV_TAKEOFF, which switches to

@@ -229,7 +229,9 @@ class Copter(Vehicle):
                 return self.personality.declined
         else:
             if needs_position and not self.position_ok:
-                self._say(Severity.CRITICAL, "Arm: GPS 1: Bad fix")
+                # a bad fix, or a good one the EKF does not use yet
+                text = "GPS 1: Bad fix" if self.gps_fix_type < 3 else "Need Position Estimate"
+                self._say(Severity.CRITICAL, f"Arm: {text}")
                 return self.personality.declined
             if not self.personality.allows_arming(self.mode):
                 self._say(Severity.CRITICAL, f"Arm: {self.mode.name} mode not armable")

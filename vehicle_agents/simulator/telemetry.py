@@ -112,6 +112,7 @@ class TelemetryBuilder:
             MsgId.HOME_POSITION: self.home_position,
             MsgId.EXTENDED_SYS_STATE: self.extended_sys_state,
             MsgId.MISSION_CURRENT: self.mission_current,
+            MsgId.EKF_STATUS_REPORT: self.ekf_status_report,
         }
         if self.gps2 is not None:  # a receiver that is not there has no messages
             builders[GPS2_RAW] = self.gps2_raw
@@ -145,7 +146,7 @@ class TelemetryBuilder:
         if copter.manual_mode:
             enabled &= ~(SysSensor.SENSOR_Z_ALTITUDE_CONTROL | SysSensor.SENSOR_XY_POSITION_CONTROL)
         healthy = present
-        if not copter.position_ok:
+        if copter.gps_fix_type < 3:
             healthy &= ~SysSensor.SENSOR_GPS
         if not copter.prearm_ok():
             healthy &= ~SysSensor.PREARM_CHECK
@@ -307,6 +308,24 @@ class TelemetryBuilder:
             round(origin.alt * 1000.0),
             self._time_usec,
         )
+
+    def ekf_status_report(self) -> MavMessage:
+        """Copter::send_ekf_status_report (AP_NavEKF3): attitude, velocity and height
+        always; an absolute horizontal position only once the EKF uses the GPS, and
+        constant-position mode until then."""
+        flags = (
+            mavlink2.EKF_ATTITUDE
+            | mavlink2.EKF_VELOCITY_HORIZ
+            | mavlink2.EKF_VELOCITY_VERT
+            | mavlink2.EKF_POS_HORIZ_REL
+            | mavlink2.EKF_POS_VERT_ABS
+            | mavlink2.EKF_PRED_POS_HORIZ_REL
+        )
+        if self.copter.position_ok:
+            flags |= mavlink2.EKF_POS_HORIZ_ABS | mavlink2.EKF_PRED_POS_HORIZ_ABS
+        else:
+            flags |= mavlink2.EKF_CONST_POS_MODE
+        return mavlink2.MAVLink_ekf_status_report_message(flags, 0.1, 0.1, 0.1, 0.05, 0.0, 0.0)
 
     def extended_sys_state(self) -> MavMessage:
         return mavlink2.MAVLink_extended_sys_state_message(

@@ -292,6 +292,14 @@ class VehicleState(Message):
         default=0, ge=0, le=255, description="GPS_FIX_TYPE: 0-1 none, 2 2D, 3 3D, 4+ DGPS/RTK"
     )
     satellites: int | None = Field(default=None, ge=0, le=255)
+    ready_to_fly: bool | None = Field(
+        default=None,
+        description="the autopilot's pre-arm checks and estimator allow a take-off "
+        "(EKF_STATUS_REPORT, SYS_STATUS, PreArm texts); null until it has said",
+    )
+    not_ready_reason: str | None = Field(
+        default=None, max_length=500, description="why it is not ready, when it is not"
+    )
     home_lat: float | None = None
     home_lon: float | None = None
     home_alt_msl: float | None = None

@@ -42,9 +42,11 @@ from gcs.protocol import (
     TakeoffCommand,
 )
 from vehicle_agents.fcu_link import FcuLink, MavMessage, next_match
+from vehicle_agents.mav_results import result_name
 from vehicle_agents.missions import MissionClient
 from vehicle_agents.modes import is_armed, mode_name
 from vehicle_agents.params import ParamClient
+from vehicle_agents.readiness import readiness
 
 log = logging.getLogger(__name__)
 
@@ -78,11 +80,6 @@ class CommandRefused(Exception):
     def __init__(self, outcome: CommandOutcome) -> None:
         super().__init__(outcome.message)
         self.outcome = outcome
-
-
-def _result_name(result: int) -> str:
-    entry = mavlink2.enums["MAV_RESULT"].get(result)
-    return entry.name if entry is not None else f"MAV_RESULT_{result}"
 
 
 def _command_name(command: int) -> str:
@@ -138,9 +135,10 @@ class CommandExecutor:
                 return await self.command_long(mavlink2.MAV_CMD_DO_SET_HOME, [1])
             case SetHomeCommand(lat=float(lat), lon=float(lon), alt_msl=float(alt_msl)):
                 # As COMMAND_INT: a float32 COMMAND_LONG parameter holds a latitude only to
-                # about a metre. MAV_FRAME_GLOBAL: the altitude is above mean sea level.
+                # about a metre. The altitude is above mean sea level, in the frame the
+                # autopilot takes it in.
                 return await self.command_int(
-                    mavlink2.MAV_CMD_DO_SET_HOME, mavlink2.MAV_FRAME_GLOBAL, [0], lat, lon, alt_msl
+                    mavlink2.MAV_CMD_DO_SET_HOME, self._amsl_frame(), [0], lat, lon, alt_msl
                 )
             case SetHomeCommand():
                 return CommandOutcome(
@@ -169,9 +167,26 @@ class CommandExecutor:
             return CommandOutcome(
                 status="refused", message=f"takeoff: a {modes.vehicle_type} does not take off"
             )
-        if modes is not None and modes.autopilot == "px4":
-            return await self._px4_takeoff(altitude)
-        return await self._guided_takeoff(altitude)
+        try:
+            if modes is not None and modes.autopilot == "px4":
+                outcome = await self._px4_takeoff(altitude)
+            else:
+                outcome = await self._guided_takeoff(altitude)
+        except CommandRefused as refusal:
+            outcome = refusal.outcome
+        return self._with_readiness(outcome)
+
+    def _with_readiness(self, outcome: CommandOutcome) -> CommandOutcome:
+        """A refused take-off also says why the vehicle is not ready to fly (a good GPS
+        fix the EKF does not use yet, a failing pre-arm check), when it is not."""
+        if outcome.status == "accepted":
+            return outcome
+        link = self.link
+        ready = readiness(link.latest, link.statustexts, time.time())
+        if ready.ready is not False or not ready.reason:
+            return outcome
+        message = f"{outcome.message}; not ready to fly: {ready.reason}"
+        return outcome.model_copy(update={"message": message})
 
     async def _px4_takeoff(self, altitude: float) -> CommandOutcome:
         """What QGroundControl does on PX4: arm, then MAV_CMD_NAV_TAKEOFF, which switches to
@@ -226,10 +241,40 @@ class CommandExecutor:
             [setting.base_mode, setting.custom_mode, setting.custom_sub_mode],
         )
 
+    def _is_px4(self) -> bool:
+        return self.link.modes is not None and self.link.modes.autopilot == "px4"
+
+    def _amsl_frame(self) -> int:
+        """The COMMAND_INT frame for an altitude above mean sea level. PX4 takes position
+        commands only in MAV_FRAME_GLOBAL_INT and answers any other frame with
+        MAV_RESULT_COMMAND_UNSUPPORTED_MAV_FRAME; ArduPilot reads MAV_FRAME_GLOBAL and
+        GLOBAL_INT alike, and has flown with GLOBAL."""
+        return int(mavlink2.MAV_FRAME_GLOBAL_INT if self._is_px4() else mavlink2.MAV_FRAME_GLOBAL)
+
+    def _home_alt_msl(self) -> float | None:
+        """Home's altitude above mean sea level: from HOME_POSITION, else from where the
+        vehicle is (its altitude less its height above home)."""
+        if (home := self.link.latest.get("HOME_POSITION")) is not None:
+            return float(home.altitude) / 1000
+        if (position := self.link.latest.get("GLOBAL_POSITION_INT")) is not None:
+            return float(position.alt - position.relative_alt) / 1000
+        return None
+
     async def _goto(self, lat: float, lon: float, altitude: float) -> CommandOutcome:
+        frame = mavlink2.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT  # ArduPilot: above home, as asked
+        if self._is_px4():
+            # PX4 takes a reposition only above mean sea level (MAV_FRAME_GLOBAL_INT).
+            home_alt = self._home_alt_msl()
+            if home_alt is None:
+                return CommandOutcome(
+                    status="refused",
+                    message="goto: the vehicle has not reported its home or position yet, "
+                    "so the altitude above home cannot be given above sea level",
+                )
+            frame, altitude = mavlink2.MAV_FRAME_GLOBAL_INT, home_alt + altitude
         return await self.command_int(
             mavlink2.MAV_CMD_DO_REPOSITION,
-            mavlink2.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT,
+            frame,
             [
                 -1,  # default ground speed
                 mavlink2.MAV_DO_REPOSITION_FLAGS_CHANGE_MODE,
@@ -315,14 +360,14 @@ class CommandExecutor:
             if ack is None:
                 break
             if ack.result != mavlink2.MAV_RESULT_IN_PROGRESS:
-                log.info("%s: finished: %s", name, _result_name(ack.result))
+                log.info("%s: finished: %s", name, result_name(ack.result))
                 return self._outcome(name, ack, started, params)
             if _progress(ack) != progress:
                 progress = _progress(ack)
                 log.info("%s: in progress%s", name, _percent(progress))
         return CommandOutcome(
             status="timeout",
-            result=_result_name(mavlink2.MAV_RESULT_IN_PROGRESS),
+            result=result_name(mavlink2.MAV_RESULT_IN_PROGRESS),
             message=f"{name}: the flight controller said it was in progress"
             f"{_percent(progress)} but sent no final COMMAND_ACK within {limit:.1f} s",
         )
@@ -330,7 +375,7 @@ class CommandExecutor:
     def _outcome(
         self, name: str, ack: MavMessage, started: float, params: list[float] | None = None
     ) -> CommandOutcome:
-        result = _result_name(ack.result)
+        result = result_name(ack.result)
         if ack.result == mavlink2.MAV_RESULT_ACCEPTED:
             return CommandOutcome(status="accepted", result=result, message=f"{name}: accepted")
         # The autopilot explains a refusal in a STATUSTEXT (e.g. a failed pre-arm check)

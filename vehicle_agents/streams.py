@@ -40,6 +40,7 @@ DEFAULT_RATES_HZ: Mapping[str, float] = {
     "BATTERY_STATUS": 1.0,
     "MISSION_CURRENT": 1.0,
     "EXTENDED_SYS_STATE": 1.0,
+    "EKF_STATUS_REPORT": 1.0,  # ready to fly: the EKF uses the GPS (ArduPilot)
     "HOME_POSITION": 0.2,
 }
 

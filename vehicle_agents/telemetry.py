@@ -13,6 +13,7 @@ from vehicle_agents import positioning
 from vehicle_agents.fcu_link import FcuLink, MavMessage
 from vehicle_agents.missions import mission_number
 from vehicle_agents.modes import is_armed, mode_name
+from vehicle_agents.readiness import readiness
 
 _UNKNOWN_INT16 = -1
 _UINT16_UNKNOWN = 65535
@@ -38,13 +39,15 @@ def mission_total(current: MavMessage) -> int | None:
 
 def link_snapshot(link: FcuLink) -> VehicleState:
     """The state of the vehicle behind ``link``, with the link's own health."""
-    return snapshot(
+    state = snapshot(
         link.latest,
         link.connected,
         received_at=link.received_at,
         receive_errors=link.counters.receive_errors,
         autopilot=link.modes.autopilot if link.modes else "ardupilot",
     )
+    ready = readiness(link.latest, link.statustexts, time.time())
+    return state.model_copy(update={"ready_to_fly": ready.ready, "not_ready_reason": ready.reason})
 
 
 def snapshot(

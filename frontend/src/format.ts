@@ -35,6 +35,21 @@ export function formatGps(state: VehicleState | null | undefined): string {
   return sats === null || sats === undefined ? fix : `${fix} · ${sats} sats`;
 }
 
+/** "ARMED", or "disarmed" with whether it may take off: a good fix is not enough (the
+ * autopilot's EKF may not use it yet); the reason, when not ready, is the cell's title. */
+export function formatArmed(state: VehicleState | null | undefined): string {
+  if (!state) return MISSING;
+  if (state.armed) return "ARMED";
+  if (state.ready_to_fly === true) return "disarmed · ready";
+  if (state.ready_to_fly === false) return "disarmed · not ready";
+  return "disarmed";
+}
+
+export function readinessTitle(state: VehicleState | null | undefined): string {
+  if (!state || state.armed || state.ready_to_fly !== false) return formatArmed(state);
+  return `Not ready to fly: ${state.not_ready_reason ?? "the autopilot's checks fail"}`;
+}
+
 export type LinkState = "online" | "no-fcu" | "offline";
 
 export function linkState(vehicle: VehicleSummary): LinkState {

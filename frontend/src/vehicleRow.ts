@@ -4,12 +4,14 @@ import type { CommandFeedback } from "./commands";
 import {
   LINK_LABELS,
   formatAltitude,
+  formatArmed,
   formatBattery,
   formatGps,
   formatLastSeen,
   formatSpeed,
   linkState,
   MISSING,
+  readinessTitle,
 } from "./format";
 import type { Command, VehicleSummary } from "./types";
 
@@ -139,8 +141,12 @@ export class VehicleRow {
     this.idText.title = `${vehicle.id}: ${vehicle.autopilot} ${vehicle.vehicle_type}`;
 
     setText(this.cells.mode, state?.mode ?? MISSING);
-    setText(this.cells.armed, state ? (state.armed ? "ARMED" : "disarmed") : MISSING);
+    setText(this.cells.armed, formatArmed(state));
     this.cells.armed.classList.toggle("is-armed", Boolean(state?.armed));
+    const notReady = Boolean(state && !state.armed && state.ready_to_fly === false);
+    this.cells.armed.classList.toggle("warn", notReady);
+    const readyTitle = readinessTitle(state);
+    if (this.cells.armed.title !== readyTitle) this.cells.armed.title = readyTitle;
     setText(this.cells.alt_rel, formatAltitude(state?.alt_rel));
     setText(this.cells.groundspeed, formatSpeed(state?.groundspeed));
     setText(this.cells.battery, formatBattery(state));

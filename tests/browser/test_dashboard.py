@@ -28,6 +28,8 @@ def test_dashboard_shows_the_fleet_and_takes_off(page: Page, fleet: LocalFleet) 
     row = page.locator(f'tr[data-vehicle-id="{VEHICLE}"]')
     expect(row.locator('[data-field="mode"]')).not_to_have_text("", timeout=10_000)
     expect(row.locator('[data-field="gps"]')).to_contain_text("3D")
+    # a good fix is not enough: the autopilot's readiness (its EKF, its pre-arm checks)
+    expect(row.locator('[data-field="armed"]')).to_have_text("disarmed · ready", timeout=30_000)
     start_altitude = _altitude(page)
     assert start_altitude < 1.0
 

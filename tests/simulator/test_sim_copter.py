@@ -8,6 +8,7 @@ import pytest
 
 from vehicle_agents.simulator import DEFAULT_HOME, DT, Copter, CopterMode, CopterParams, MavResult
 from vehicle_agents.simulator.mavconst import LandedState, MavState, ModeFlag, Severity
+from vehicle_agents.simulator.vehicle import EKF_GPS_DELAY_S
 
 
 def texts(copter: Copter) -> list[str]:
@@ -209,6 +210,13 @@ def test_arming_refused_without_gps_fix_in_a_position_mode() -> None:
     assert copter.arm(force=True) is MavResult.FAILED  # a position is mandatory even forced
     assert texts(copter) == ["Arm: Need Position Estimate"]
     copter.set_gps_fix(3)
+    # a good fix, but the EKF takes it only after 10 s of them (the field trial's wait)
+    assert copter.arm() is MavResult.FAILED
+    assert texts(copter) == ["Arm: Need Position Estimate"]
+    copter.advance(EKF_GPS_DELAY_S - 1.0)
+    assert not copter.position_ok
+    copter.advance(1.0)
+    assert copter.position_ok
     assert copter.arm() is MavResult.ACCEPTED
 
 

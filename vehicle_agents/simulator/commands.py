@@ -40,6 +40,7 @@ from vehicle_agents.simulator.mission import (
     stored_frame,
 )
 from vehicle_agents.simulator.param_table import SetOutcome
+from vehicle_agents.simulator.param_wire import received_value
 from vehicle_agents.simulator.telemetry import MavMessage, TelemetryBuilder
 from vehicle_agents.simulator.vehicle import Vehicle
 
@@ -58,6 +59,9 @@ _RELATIVE_FRAMES = frozenset(
         MavFrame.GLOBAL_TERRAIN_ALT_INT,
     }
 )
+
+# Commands whose COMMAND_INT frame says where the position is (PX4 checks it).
+_POSITION_COMMANDS = frozenset({MavCmd.DO_REPOSITION, MavCmd.DO_SET_HOME})
 
 
 @dataclass(frozen=True)
@@ -179,7 +183,13 @@ class MessageHandler:
         if kind == "COMMAND_INT":
             if not self._for_us(msg.target_system):
                 return []
-            return self._command(Command.from_int(msg), msg, streams, now)
+            command = Command.from_int(msg)
+            if command.command in _POSITION_COMMANDS and not self.copter.position_frame_ok(
+                command.frame
+            ):
+                result = MavResult.COMMAND_UNSUPPORTED_MAV_FRAME
+                return self._finish(command.command, result, msg)
+            return self._command(command, msg, streams, now)
         if kind == "SET_MODE":
             if not self._for_us(msg.target_system):
                 return []
@@ -336,7 +346,11 @@ class MessageHandler:
             if found_index is None:
                 return []  # ArduPilot stays silent about a parameter it does not have
             return [Reply(self.telemetry.param_value(name, found_index))]
-        outcome = self.copter.set_param(name, float(msg.param_value))
+        definition = table.definition(name) if table.index(name) is not None else None
+        sent_type = int(definition.type) if definition is not None else int(msg.param_type)
+        outcome = self.copter.set_param(
+            name, received_value(msg, sent_type, self.copter.param_bytewise)
+        )
         if outcome is SetOutcome.UNKNOWN:
             log.info("PARAM_SET of unknown parameter %r ignored", name)
             return []

@@ -40,6 +40,7 @@ from vehicle_agents.simulator.mavconst import (
     Severity,
 )
 from vehicle_agents.simulator.mission import MissionItem
+from vehicle_agents.simulator.param_table import ParamTable
 from vehicle_agents.simulator.params import CopterParams
 from vehicle_agents.simulator.personality import (
     PX4_TAKEOFF_ALT_M,
@@ -108,8 +109,9 @@ class Copter(Vehicle):
         boot_at: float = 0.0,
         personality: Personality | None = None,
     ) -> None:
-        super().__init__(home, params, system_id=system_id, seed=seed, boot_at=boot_at)
+        # first: it decides the parameter table the base class builds
         self.personality = personality or ArduCopterPersonality()
+        super().__init__(home, params, system_id=system_id, seed=seed, boot_at=boot_at)
         self.mode = CopterMode.STABILIZE  # ArduCopter's INITIAL_MODE
         self.land_complete = True
 
@@ -227,7 +229,9 @@ class Copter(Vehicle):
                 return self.personality.declined
         else:
             if needs_position and not self.position_ok:
-                self._say(Severity.CRITICAL, "Arm: GPS 1: Bad fix")
+                # a bad fix, or a good one the EKF does not use yet
+                text = "GPS 1: Bad fix" if self.gps_fix_type < 3 else "Need Position Estimate"
+                self._say(Severity.CRITICAL, f"Arm: {text}")
                 return self.personality.declined
             if not self.personality.allows_arming(self.mode):
                 self._say(Severity.CRITICAL, f"Arm: {self.mode.name} mode not armable")
@@ -269,6 +273,16 @@ class Copter(Vehicle):
     @property
     def mission_wire_offset(self) -> int:
         return self.personality.mission_wire_offset
+
+    def position_frame_ok(self, frame: int) -> bool:
+        return self.personality.position_frame_ok(frame)
+
+    @property
+    def param_bytewise(self) -> bool:
+        return self.personality.param_bytewise
+
+    def _new_param_table(self, params: CopterParams, system_id: int) -> ParamTable:
+        return self.personality.new_param_table(params, system_id)
 
     def set_mode(self, number: int) -> MavResult:
         """Copter::set_mode for a GCS request."""

@@ -124,6 +124,8 @@ class MavResult(IntEnum):
     UNSUPPORTED = 3
     FAILED = 4
     IN_PROGRESS = 5
+    # PX4: a position command in a frame it does not take (newer than pymavlink's dialect)
+    COMMAND_UNSUPPORTED_MAV_FRAME = 9
 
 
 class Severity(IntEnum):
@@ -218,6 +220,7 @@ class MsgId(IntEnum):
     VFR_HUD = 74
     COMMAND_ACK = 77
     CAMERA_FEEDBACK = 180
+    EKF_STATUS_REPORT = 193
     BATTERY_STATUS = 147
     AUTOPILOT_VERSION = 148
     HOME_POSITION = 242

@@ -70,6 +70,8 @@ PARAM_DEFS: tuple[ParamDef, ...] = (
     ParamDef("RTL_CLIMB_MIN", ParamType.INT16, 0, 3000, "rtl_climb_min", _CM),
     ParamDef("RTL_CONE_SLOPE", ParamType.REAL32, 0.0, 10.0, "rtl_cone_slope"),
     ParamDef("RTL_LOIT_TIME", ParamType.INT32, 0, 60000, "rtl_loit_time", 0.001),
+    # -1 is "none": a negative integer on the wire; reported, not simulated
+    ParamDef("SERIAL2_PROTOCOL", ParamType.INT8, -1, 50, default=2),
     ParamDef("SIM_BATT_DRAIN", ParamType.REAL32, 0.0, 1000.0, "sim_batt_drain"),
     ParamDef("SIM_GPS_NOISE", ParamType.REAL32, 0.0, 100.0, "sim_gps_noise"),
     ParamDef("SIM_WIND_DIR", ParamType.REAL32, 0.0, 360.0, "sim_wind_dir"),
@@ -143,7 +145,8 @@ class ParamTable:
             value = float(round(value))
         if not definition.low <= value <= definition.high:
             return SetOutcome.REFUSED
-        self._values[name] = _wire_float(value)
+        # an integer is stored as the integer (PX4's travel bytewise, exactly)
+        self._values[name] = value if definition.is_integer else _wire_float(value)
         return SetOutcome.STORED
 
     def apply(self, name: str, params: CopterParams) -> CopterParams:

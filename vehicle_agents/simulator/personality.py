@@ -13,7 +13,10 @@ personality maps its flight modes to and from the autopilot's encoding, as a GCS
   land on the copter's behaviours: MANUAL, STABILIZED and ALTCTL hold altitude with the
   sticks centred (STABILIZE here), POSCTL and AUTO.LOITER ("Hold") hold position
   (LOITER), AUTO.MISSION flies the mission (AUTO), AUTO.RTL and AUTO.LAND are RTL and
-  LAND, and a reposition is flown in Hold, as PX4's navigator does.
+  LAND, and a reposition is flown in Hold, as PX4's navigator does. A reposition or a
+  set-home sent as COMMAND_INT is taken only in MAV_FRAME_GLOBAL_INT (MAV_RESULT 9,
+  COMMAND_UNSUPPORTED_MAV_FRAME, for any other frame). Its parameters have PX4's names
+  and types, integers sent bytewise (`px4_params`, `param_wire`).
 """
 
 from __future__ import annotations
@@ -24,12 +27,16 @@ from dataclasses import dataclass
 from vehicle_agents.simulator.mavconst import (
     CopterMode,
     MavAutopilot,
+    MavFrame,
     MavResult,
     MavState,
     ModeFlag,
     Px4AutoMode,
     Px4MainMode,
 )
+from vehicle_agents.simulator.param_table import ParamTable
+from vehicle_agents.simulator.params import CopterParams
+from vehicle_agents.simulator.px4_params import Px4ParamTable
 
 # PX4's MIS_TAKEOFF_ALT: how high a take-off without an altitude climbs.
 PX4_TAKEOFF_ALT_M = 2.5
@@ -60,6 +67,8 @@ class Declined:
 
 class Personality(ABC):
     autopilot: MavAutopilot
+    # PARAM_VALUE/PARAM_SET: integers copied bytewise into the float (PX4), or cast (ArduPilot)
+    param_bytewise: bool
     declined: MavResult  # the answer to an arming, disarming or mode change it declines
     reboot_declined: MavResult  # the answer to a reboot while armed
     takeoff_alt_is_amsl: bool  # NAV_TAKEOFF param7: above mean sea level, or above home
@@ -102,9 +111,18 @@ class Personality(ABC):
         """What the autopilot says when it refuses a plain disarm in the air."""
         return None
 
+    def new_param_table(self, params: CopterParams, system_id: int) -> ParamTable:
+        """The parameters under the autopilot's names."""
+        return ParamTable(params, system_id)
+
+    def position_frame_ok(self, frame: int) -> bool:
+        """Whether a COMMAND_INT reposition or set-home in ``frame`` is taken."""
+        return True
+
 
 class ArduCopterPersonality(Personality):
     autopilot = MavAutopilot.ARDUPILOTMEGA
+    param_bytewise = False
     declined = MavResult.FAILED
     reboot_declined = MavResult.FAILED
     takeoff_alt_is_amsl = False
@@ -178,6 +196,7 @@ _AUTO_FLAGS = ModeFlag.AUTO_ENABLED | ModeFlag.STABILIZE_ENABLED | ModeFlag.GUID
 
 class Px4Personality(Personality):
     autopilot = MavAutopilot.PX4
+    param_bytewise = True
     declined = MavResult.TEMPORARILY_REJECTED
     reboot_declined = MavResult.DENIED
     takeoff_alt_is_amsl = True
@@ -258,6 +277,15 @@ class Px4Personality(Personality):
 
     def disarm_declined_text(self) -> str | None:
         return "Disarming denied: not landed"
+
+    def new_param_table(self, params: CopterParams, system_id: int) -> ParamTable:
+        return Px4ParamTable(params, system_id)
+
+    def position_frame_ok(self, frame: int) -> bool:
+        """MavlinkReceiver::handle_message_command_int: a position command is taken in
+        MAV_FRAME_GLOBAL_INT (above mean sea level) only; any other frame is answered
+        with MAV_RESULT_COMMAND_UNSUPPORTED_MAV_FRAME."""
+        return frame == MavFrame.GLOBAL_INT
 
 
 def personality_for(autopilot: str) -> Personality:

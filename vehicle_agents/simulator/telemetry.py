@@ -15,6 +15,7 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 from vehicle_agents.simulator.mavconst import MsgId, SysSensor
 from vehicle_agents.simulator.mission import MissionItem
 from vehicle_agents.simulator.param_table import PARAM_ID_LEN
+from vehicle_agents.simulator.param_wire import ParamValueBytes, value_bytes
 from vehicle_agents.simulator.vehicle import PhotoTaken, StatusText, Vehicle
 
 MavMessage = Any  # pymavlink message classes are generated and untyped
@@ -111,6 +112,7 @@ class TelemetryBuilder:
             MsgId.HOME_POSITION: self.home_position,
             MsgId.EXTENDED_SYS_STATE: self.extended_sys_state,
             MsgId.MISSION_CURRENT: self.mission_current,
+            MsgId.EKF_STATUS_REPORT: self.ekf_status_report,
         }
         if self.gps2 is not None:  # a receiver that is not there has no messages
             builders[GPS2_RAW] = self.gps2_raw
@@ -144,7 +146,7 @@ class TelemetryBuilder:
         if copter.manual_mode:
             enabled &= ~(SysSensor.SENSOR_Z_ALTITUDE_CONTROL | SysSensor.SENSOR_XY_POSITION_CONTROL)
         healthy = present
-        if not copter.position_ok:
+        if copter.gps_fix_type < 3:
             healthy &= ~SysSensor.SENSOR_GPS
         if not copter.prearm_ok():
             healthy &= ~SysSensor.PREARM_CHECK
@@ -307,6 +309,24 @@ class TelemetryBuilder:
             self._time_usec,
         )
 
+    def ekf_status_report(self) -> MavMessage:
+        """Copter::send_ekf_status_report (AP_NavEKF3): attitude, velocity and height
+        always; an absolute horizontal position only once the EKF uses the GPS, and
+        constant-position mode until then."""
+        flags = (
+            mavlink2.EKF_ATTITUDE
+            | mavlink2.EKF_VELOCITY_HORIZ
+            | mavlink2.EKF_VELOCITY_VERT
+            | mavlink2.EKF_POS_HORIZ_REL
+            | mavlink2.EKF_POS_VERT_ABS
+            | mavlink2.EKF_PRED_POS_HORIZ_REL
+        )
+        if self.copter.position_ok:
+            flags |= mavlink2.EKF_POS_HORIZ_ABS | mavlink2.EKF_PRED_POS_HORIZ_ABS
+        else:
+            flags |= mavlink2.EKF_CONST_POS_MODE
+        return mavlink2.MAVLink_ekf_status_report_message(flags, 0.1, 0.1, 0.1, 0.05, 0.0, 0.0)
+
     def extended_sys_state(self) -> MavMessage:
         return mavlink2.MAVLink_extended_sys_state_message(
             mavlink2.MAV_VTOL_STATE_UNDEFINED, int(self.copter.landed_state())
@@ -315,8 +335,13 @@ class TelemetryBuilder:
     def autopilot_version(self) -> MavMessage:
         major, minor, patch = FIRMWARE_VERSION
         version = (major << 24) | (minor << 16) | (patch << 8) | FIRMWARE_TYPE_OFFICIAL
+        encoding = (
+            mavlink2.MAV_PROTOCOL_CAPABILITY_PARAM_ENCODE_BYTEWISE
+            if self.copter.param_bytewise
+            else mavlink2.MAV_PROTOCOL_CAPABILITY_PARAM_ENCODE_C_CAST
+        )
         return mavlink2.MAVLink_autopilot_version_message(
-            CAPABILITIES,
+            CAPABILITIES | encoding,
             version,
             0,
             0,
@@ -346,10 +371,11 @@ class TelemetryBuilder:
         table = self.copter.param_table
         value = table.get(name)
         assert value is not None, name
-        return mavlink2.MAVLink_param_value_message(
+        param_type = table.definition(name).type
+        return ParamValueBytes(
             name.encode("ascii")[:PARAM_ID_LEN],
-            value,
-            int(table.definition(name).type),
+            value_bytes(value, param_type, self.copter.param_bytewise),
+            int(param_type),
             table.count,
             PARAM_INDEX_NONE if index is None else index,
         )

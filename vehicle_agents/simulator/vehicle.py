@@ -34,6 +34,9 @@ from vehicle_agents.simulator.physics import Airframe
 DT = 0.02  # physics step, sim seconds
 GPS_PERIOD_STEPS = 10  # a GPS fix every 0.2 s (5 Hz), each with fresh noise
 _STEP_EPSILON = 1e-6  # in steps: absorbs float error when summing many small increments
+# Sim seconds a new 3D fix must hold before the EKF uses it (AP_NavEKF3's GPS checks
+# pass for 10 s first): until then arming and take-off that need a position are refused.
+EKF_GPS_DELAY_S = 10.0
 # AP_AHRS::set_home refuses a home this far from the EKF origin (Copter::far_from_EKF_origin).
 FAR_FROM_ORIGIN_M = 50_000.0
 
@@ -112,6 +115,8 @@ class Vehicle(ABC):
         self.battery = Battery(capacity_mah=self.params.batt_capacity)
         self.armed = False
         self.gps_fix_type = 3
+        # when the 3D fix came; at boot the EKF has long been using it
+        self._fix_since: float | None = -EKF_GPS_DELAY_S
         self.satellites = 10
         self.home_ne = (0.0, 0.0)
         self.home_up = 0.0  # home's height above the ground at the origin
@@ -217,7 +222,14 @@ class Vehicle(ABC):
 
     @property
     def position_ok(self) -> bool:
-        return self.gps_fix_type >= 3
+        """The EKF has an absolute position: a 3D fix, in use once it has held for
+        EKF_GPS_DELAY_S (ArduPilot's EKF takes the GPS after 10 s of good fixes)."""
+        since = self._fix_since
+        return (
+            self.gps_fix_type >= 3
+            and since is not None
+            and self.time_s - since + 1e-9 >= EKF_GPS_DELAY_S
+        )
 
     @property
     def home(self) -> GeoPoint:
@@ -419,6 +431,10 @@ class Vehicle(ABC):
     # -- fault injection (tests, demo) -----------------------------------------
 
     def set_gps_fix(self, fix_type: int, satellites: int | None = None) -> None:
+        if fix_type < 3:
+            self._fix_since = None
+        elif self.gps_fix_type < 3:
+            self._fix_since = self.time_s  # the EKF starts its wait for a steady fix
         self.gps_fix_type = fix_type
         self.satellites = satellites if satellites is not None else (10 if fix_type >= 3 else 0)
 
@@ -433,6 +449,16 @@ class Vehicle(ABC):
     def mission_wire_offset(self) -> int:
         """How far the stored mission's numbers (home first) are from the wire's."""
         return 0
+
+    @property
+    def param_bytewise(self) -> bool:
+        """Integer parameters travel bytewise (PX4), not cast to float (ArduPilot)."""
+        return False
+
+    def position_frame_ok(self, frame: int) -> bool:
+        """Whether a COMMAND_INT reposition or set-home in ``frame`` is taken at all
+        (ArduPilot converts every global frame; a personality may be stricter)."""
+        return True
 
     @property
     def mission_count(self) -> int:
@@ -617,6 +643,10 @@ class Vehicle(ABC):
         twin.body.down = self.body.down
         twin.body.yaw = self.body.yaw
         twin.gps_fix_type, twin.satellites = self.gps_fix_type, self.satellites
+        if self.gps_fix_type >= 3 and not self.position_ok:  # still waiting: from its boot
+            twin._fix_since = twin.time_s
+        elif self.gps_fix_type < 3:
+            twin._fix_since = None
         return twin
 
     @abstractmethod

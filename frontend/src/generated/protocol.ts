@@ -102,6 +102,14 @@ export interface VehicleState {
    */
   gps_fix: number;
   satellites: number | null;
+  /**
+   * the autopilot's pre-arm checks and estimator allow a take-off (EKF_STATUS_REPORT, SYS_STATUS, PreArm texts); null until it has said
+   */
+  ready_to_fly: boolean | null;
+  /**
+   * why it is not ready, when it is not
+   */
+  not_ready_reason: string | null;
   home_lat: number | null;
   home_lon: number | null;
   home_alt_msl: number | null;

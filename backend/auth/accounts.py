@@ -21,6 +21,7 @@ from backend.auth.policy import (
     user_principal,
 )
 from backend.auth.secrets import (
+    USER_TOKEN_PREFIXES,
     generate_password,
     hash_password,
     new_token,
@@ -152,14 +153,13 @@ class Accounts:
             session.add(row)
         return IssuedToken(row.id, token, row.created_at, row.expires_at)
 
-    def resolve_user_token(self, token: str) -> Principal | None:
+    def _user_principal(self, session: Session, digest: str) -> Principal | None:
         query = (
             select(UserTokenRow, UserRow)
             .join(UserRow, UserRow.id == UserTokenRow.user_id)
-            .where(UserTokenRow.token_hash == token_digest(token))
+            .where(UserTokenRow.token_hash == digest)
         )
-        with Session(self.engine) as session:
-            found = session.execute(query).first()
+        found = session.execute(query).first()
         if found is None:
             return None
         token_row, user = found
@@ -169,7 +169,11 @@ class Accounts:
         if token_row.expires_at is not None and token_row.expires_at <= now:
             return None
         return user_principal(
-            user.username, Role(user.role), _parse_scopes(token_row.scopes), token_row.id
+            user.username,
+            Role(user.role),
+            _parse_scopes(token_row.scopes),
+            token_row.id,
+            token_row.expires_at,
         )
 
     def revoke_user_token(self, token_id: int, owner: str | None) -> None:
@@ -228,14 +232,27 @@ class Accounts:
             )
         return True
 
-    def resolve_agent_token(self, token: str) -> Principal | None:
-        with Session(self.engine) as session:
-            row = session.scalar(
-                select(AgentTokenRow).where(AgentTokenRow.token_hash == token_digest(token))
-            )
+    def _agent_principal(self, session: Session, digest: str) -> Principal | None:
+        row = session.scalar(select(AgentTokenRow).where(AgentTokenRow.token_hash == digest))
         if row is None or row.revoked_at is not None:
             return None
         return agent_principal(row.vehicle_id, row.id)
+
+    # -- the one resolver ----------------------------------------------------
+
+    def resolve_token(self, token: str) -> Principal | None:
+        """Whoever ``token`` speaks for: a user (session, access or API token) or a vehicle's
+        agent (enrolled here, or provisioned in any form the operator chose); None when it
+        is unknown, expired or revoked. Every route and socket resolves tokens here."""
+        digest = token_digest(token)
+        looks_like_user = token.startswith(USER_TOKEN_PREFIXES)
+        with Session(self.engine) as session:
+            # The prefix only orders the look-ups: a provisioned token may have any form.
+            if looks_like_user:
+                return self._user_principal(session, digest) or self._agent_principal(
+                    session, digest
+                )
+            return self._agent_principal(session, digest) or self._user_principal(session, digest)
 
     def agent_tokens(self, vehicle_id: str | None = None) -> Sequence[AgentTokenRow]:
         query = select(AgentTokenRow).order_by(AgentTokenRow.id)

@@ -120,7 +120,9 @@ class AgentSession(PeerConnection):
         token = bearer_token(self.websocket.headers.get("authorization"))
         principal = None
         if token is not None:
-            principal = await asyncio.to_thread(self.hub.accounts.resolve_agent_token, token)
+            principal = await asyncio.to_thread(self.hub.accounts.resolve_token, token)
+            if principal is not None and not principal.is_agent:
+                principal = None  # a user's token never speaks for a vehicle
         if principal is None:
             reason = (
                 "missing agent token (send 'Authorization: Bearer <token>')"

@@ -12,7 +12,7 @@ from sqlalchemy import Engine
 from sqlalchemy.exc import SQLAlchemyError
 
 from backend.audit import AuditEntry, AuditLog
-from backend.auth.accounts import Accounts
+from backend.auth.accounts import PROVISIONING, Accounts
 from backend.auth.rate_limit import Limit, RateLimiter
 from backend.fleet.commands import CommandDispatcher
 from backend.fleet.registry import FleetRegistry, VehicleRecord
@@ -91,7 +91,8 @@ class Hub:
         )
         log.info("hub store: %s", engine.url.render_as_string(hide_password=True))
         accounts = Accounts(engine)
-        await asyncio.to_thread(_bootstrap_accounts, accounts, settings)
+        audit = AuditLog(engine)
+        await asyncio.to_thread(_bootstrap_accounts, accounts, audit, settings)
         hub = cls(
             settings=settings,
             engine=engine,
@@ -102,7 +103,7 @@ class Hub:
             writer=writer,
             logbook=logbook,
             accounts=accounts,
-            audit=AuditLog(engine),
+            audit=audit,
             login_limiter=RateLimiter(Limit(settings.login_attempts_per_minute, 60.0)),
             command_limiter=RateLimiter(Limit(settings.commands_per_second, 1.0)),
             safety=SafetyGate(RailsRepository(engine), settings),
@@ -167,7 +168,7 @@ class Hub:
             await session.close(CloseCode.UNAUTHORIZED, "agent token revoked")
 
 
-def _bootstrap_accounts(accounts: Accounts, settings: HubSettings) -> None:
+def _bootstrap_accounts(accounts: Accounts, audit: AuditLog, settings: HubSettings) -> None:
     admin_password = settings.admin_password.get_secret_value() if settings.admin_password else None
     generated = accounts.ensure_first_admin(admin_password)
     if generated is not None:
@@ -177,6 +178,23 @@ def _bootstrap_accounts(accounts: Accounts, settings: HubSettings) -> None:
             "It is not shown again. Set GCS_ADMIN_PASSWORD to choose it instead.\n",
             flush=True,
         )
-    for vehicle_id, token in settings.enrolment_tokens().items():
+    configured = settings.enrolment_tokens()
+    for vehicle_id, token in configured.items():
         if accounts.provision_agent_token(vehicle_id, token):
             log.info("enrolled vehicle %s from GCS_AGENT_TOKENS", vehicle_id)
+    # A token rotated or removed in the configuration must stop working, not linger.
+    for row in accounts.revoke_unprovisioned(configured):
+        log.warning(
+            "revoked agent token %d of %s: no longer in GCS_AGENT_TOKENS", row.id, row.vehicle_id
+        )
+        audit.record(
+            AuditEntry(
+                actor=PROVISIONING,
+                role="system",
+                source="GCS_AGENT_TOKENS",
+                action="agent_token.revoke",
+                target=row.vehicle_id,
+                outcome="ok",
+                detail={"id": row.id, "reason": "no longer in GCS_AGENT_TOKENS"},
+            )
+        )

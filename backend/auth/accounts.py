@@ -32,6 +32,8 @@ from backend.errors import Conflict, NotFound
 from backend.storage.models import AgentTokenRow, UserRow, UserTokenRow
 
 FIRST_ADMIN = "admin"
+# ``created_by`` of the agent tokens that come from the hub's configuration.
+PROVISIONING = "provisioning"
 
 
 @dataclass(frozen=True)
@@ -226,11 +228,29 @@ class Accounts:
                     vehicle_id=vehicle_id,
                     token_hash=digest,
                     created_at=time.time(),
-                    created_by="provisioning",
+                    created_by=PROVISIONING,
                     revoked_at=None,
                 )
             )
         return True
+
+    def revoke_unprovisioned(self, configured: dict[str, str]) -> list[AgentTokenRow]:
+        """Provisioned tokens are exactly the configured ``vehicle: token`` set: revoke each
+        live provisioned token that is no longer in it (a rotated or removed one). Tokens
+        enrolled through the API are not touched. Returns the rows revoked."""
+        kept = {token_digest(token) for token in configured.values()}
+        now = time.time()
+        with Session(self.engine, expire_on_commit=False) as session, session.begin():
+            stale = session.scalars(
+                select(AgentTokenRow).where(
+                    AgentTokenRow.created_by == PROVISIONING,
+                    AgentTokenRow.revoked_at.is_(None),
+                )
+            ).all()
+            revoked = [row for row in stale if row.token_hash not in kept]
+            for row in revoked:
+                row.revoked_at = now
+        return revoked
 
     def _agent_principal(self, session: Session, digest: str) -> Principal | None:
         row = session.scalar(select(AgentTokenRow).where(AgentTokenRow.token_hash == digest))

@@ -12,9 +12,10 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from backend.auth.accounts import Accounts
 from backend.storage.database import make_engine
+from gcs.protocol import AGENT_WS_PATH, CloseCode
 from tests.conftest import ADMIN_PASSWORD, hub_settings
 from tests.helpers import access_token, api_client, running_hub
-from tests.integration.test_hub_bad_input import scripted_agent
+from tests.integration.test_hub_bad_input import _close_code, scripted_agent, websocket
 from vehicle_agents.tlog import TlogRecorder
 from vehicle_agents.tlog_uploads import TlogUploader, UploadBackoff
 
@@ -139,3 +140,48 @@ def test_upload_backoff_doubles_with_jitter_up_to_its_cap() -> None:
     backoff = UploadBackoff(initial_s=2.0, max_s=60.0)
     assert [backoff.delay(n, lambda: 1.0) for n in (1, 2, 3, 6, 20)] == [2, 4, 8, 60, 60]
     assert [backoff.delay(n, lambda: 0.0) for n in (1, 2, 3)] == [1, 2, 4]
+
+
+def _refused_agent(base: str, token: str) -> tuple[int | None, str]:
+    with websocket(base.replace("http://", "ws://") + AGENT_WS_PATH, _bearer(token)) as socket:
+        return _close_code(socket)
+
+
+def _bearer(token: str) -> dict[str, str]:
+    return {"Authorization": f"Bearer {token}"}
+
+
+def test_a_token_rotated_in_the_configuration_is_revoked_at_start(tmp_path: Path) -> None:
+    with running_hub(hub_settings(tmp_path, agent_tokens=f"alpha={OPERATOR_TOKEN}")) as base:
+        with scripted_agent(base, "alpha", OPERATOR_TOKEN):
+            pass
+        with api_client(base, access_token(base, "admin", ADMIN_PASSWORD)) as api:
+            enrolled = api.post("/api/v1/vehicles/bravo/agent-tokens").json()["token"]
+
+    # The operator rotates alpha's token and restarts the hub.
+    with running_hub(hub_settings(tmp_path, agent_tokens=f"alpha={LATER_TOKEN}")) as base:
+        code, reason = _refused_agent(base, OPERATOR_TOKEN)
+        assert code == CloseCode.UNAUTHORIZED, reason
+        upload = httpx.post(
+            f"{base}/api/v1/vehicles/alpha/tlogs", content=b"x", headers=_bearer(OPERATOR_TOKEN)
+        )
+        assert upload.status_code == 401
+        with scripted_agent(base, "alpha", LATER_TOKEN), scripted_agent(base, "bravo", enrolled):
+            pass  # the new token works, and a token enrolled through the API is untouched
+        with api_client(base, access_token(base, "admin", ADMIN_PASSWORD)) as api:
+            entries = api.get("/api/v1/audit", params={"action": "agent_token.revoke"}).json()
+            tokens = api.get("/api/v1/agent-tokens").json()
+    (entry,) = entries["entries"]
+    assert (entry["actor"], entry["target"], entry["outcome"]) == ("provisioning", "alpha", "ok")
+    assert "GCS_AGENT_TOKENS" in entry["detail"]["reason"]
+    assert {(t["vehicle_id"], t["created_by"], t["revoked"]) for t in tokens} == {
+        ("alpha", "provisioning", True),
+        ("alpha", "provisioning", False),
+        ("bravo", "admin", False),
+    }
+
+    # Removed from the configuration altogether: revoked as well.
+    with running_hub(hub_settings(tmp_path)) as base:
+        assert _refused_agent(base, LATER_TOKEN)[0] == CloseCode.UNAUTHORIZED
+        with scripted_agent(base, "bravo", enrolled):
+            pass

@@ -52,6 +52,9 @@ async def execute_command(
 
     try:
         record = hub.registry.get(vehicle_id)
+        critical = hub.safety.check_authority(principal, record, command)
+        if critical is not None:
+            details["safety_critical"] = critical
         violations = await asyncio.to_thread(hub.safety.check_command, record, command)
         if violations:
             if override_reason is None:

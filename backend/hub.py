@@ -13,6 +13,7 @@ from sqlalchemy.exc import SQLAlchemyError
 
 from backend.audit import AuditEntry, AuditLog
 from backend.auth.accounts import PROVISIONING, Accounts
+from backend.auth.principal_cache import PrincipalCache
 from backend.auth.rate_limit import Limit, RateLimiter
 from backend.fleet.commands import CommandDispatcher
 from backend.fleet.registry import FleetRegistry, VehicleRecord
@@ -21,11 +22,13 @@ from backend.realtime.bus import InProcessBus, ReliableSubscription, Topic
 from backend.settings import HubSettings
 from backend.storage.database import make_engine, migrate
 from backend.storage.logbook import Logbook
+from backend.storage.models import AuditRow, CommandRow
 from backend.storage.rails import RailsRepository
 from backend.storage.records import StoredEvent
 from backend.storage.repository import Repository
 from backend.storage.retention import RetentionPolicy
 from backend.storage.sequences import Gap, StreamKey
+from backend.storage.spool import RowSpool
 from backend.storage.writer import StorageWriter
 from gcs.protocol import CloseCode
 
@@ -64,6 +67,8 @@ class Hub:
     login_limiter: RateLimiter
     command_limiter: RateLimiter
     safety: SafetyGate
+    # Audit and command-log rows waiting out a database outage.
+    spool: RowSpool
     # Live agent connections by vehicle, so revoking a token can drop its connection.
     agent_sessions: dict[str, AgentConnection] = field(default_factory=dict)
     # Live client feeds, so a revoked token or disabled user stops seeing the fleet.
@@ -90,8 +95,10 @@ class Hub:
             settings.telemetry_flush_interval_s,
         )
         log.info("hub store: %s", engine.url.render_as_string(hide_password=True))
-        accounts = Accounts(engine)
-        audit = AuditLog(engine)
+        cache = PrincipalCache(settings.principal_cache_s, settings.principal_cache_outage_s)
+        accounts = Accounts(engine, cache)
+        spool = RowSpool(settings.data_dir / "spool.jsonl", engine, [AuditRow, CommandRow])
+        audit = AuditLog(engine, spool)
         await asyncio.to_thread(_bootstrap_accounts, accounts, audit, settings)
         hub = cls(
             settings=settings,
@@ -104,6 +111,7 @@ class Hub:
             logbook=logbook,
             accounts=accounts,
             audit=audit,
+            spool=spool,
             login_limiter=RateLimiter(Limit(settings.login_attempts_per_minute, 60.0)),
             command_limiter=RateLimiter(Limit(settings.commands_per_second, 1.0)),
             safety=SafetyGate(RailsRepository(engine), settings),
@@ -117,6 +125,7 @@ class Hub:
             async with asyncio.TaskGroup() as tasks:
                 tasks.create_task(self.writer.run())
                 tasks.create_task(self._apply_retention())
+                tasks.create_task(self._drain_spool())
         finally:
             self.engine.dispose()
 
@@ -146,6 +155,17 @@ class Hub:
                 if any(removed.values()):
                     log.info("retention removed %s", removed)
             await asyncio.sleep(self.settings.retention_interval_s)
+
+    async def _drain_spool(self) -> None:
+        """Store the rows spooled during a database outage as soon as it is over."""
+        while True:
+            if self.spool.pending:
+                try:
+                    await asyncio.to_thread(self.spool.drain)
+                except OSError as error:
+                    log.error("spooled rows could not be read or rewritten: %s", error)
+            # Polling: an outage's end announces nothing.
+            await asyncio.sleep(self.settings.spool_retry_s)
 
     async def store_event(self, vehicle_id: str, kind: str, text: str) -> None:
         """An event the hub itself observed (a link coming up or going down)."""

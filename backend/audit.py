@@ -13,6 +13,7 @@ from sqlalchemy import Engine, insert, select
 from sqlalchemy.orm import Session
 
 from backend.storage.models import AuditRow
+from backend.storage.spool import RowSpool
 
 log = logging.getLogger(__name__)
 
@@ -56,27 +57,31 @@ def _clipped(value: Any) -> Any:
 
 
 class AuditLog:
-    def __init__(self, engine: Engine) -> None:
+    def __init__(self, engine: Engine, spool: RowSpool | None = None) -> None:
         self.engine = engine
+        # Where rows wait while the database is unavailable (none: the error propagates).
+        self.spool = spool
 
     def record(self, entry: AuditEntry) -> None:
         detail = json.dumps(_clipped(entry.detail), default=str, sort_keys=True)
         if len(detail) > DETAIL_LIMIT:
             # Still valid JSON, whatever a peer put in it.
             detail = json.dumps({"truncated": detail[: DETAIL_LIMIT - 100]})
-        with self.engine.begin() as connection:
-            connection.execute(
-                insert(AuditRow).values(
-                    time=time.time(),
-                    actor=entry.actor[:80],
-                    role=entry.role,
-                    source=entry.source[:64],
-                    action=entry.action,
-                    target=entry.target[:128],
-                    outcome=entry.outcome,
-                    detail=detail,
-                )
-            )
+        values = {
+            "time": time.time(),
+            "actor": entry.actor[:80],
+            "role": entry.role,
+            "source": entry.source[:64],
+            "action": entry.action,
+            "target": entry.target[:128],
+            "outcome": entry.outcome,
+            "detail": detail,
+        }
+        if self.spool is not None:
+            self.spool.write(AuditRow.__tablename__, values)
+        else:
+            with self.engine.begin() as connection:
+                connection.execute(insert(AuditRow).values(**values))
         log.info("audit: %s %s %s -> %s", entry.actor, entry.action, entry.target, entry.outcome)
 
     def query(self, query: AuditQuery) -> Sequence[AuditRow]:

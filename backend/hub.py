@@ -12,8 +12,9 @@ from sqlalchemy import Engine
 from sqlalchemy.exc import SQLAlchemyError
 
 from backend.audit import AuditEntry, AuditLog
-from backend.auth.accounts import Accounts
+from backend.auth.accounts import PROVISIONING, Accounts
 from backend.auth.password_work import PasswordWork
+from backend.auth.principal_cache import PrincipalCache
 from backend.auth.rate_limit import Limit, RateLimiter
 from backend.fleet.commands import CommandDispatcher
 from backend.fleet.registry import FleetRegistry, VehicleRecord
@@ -22,11 +23,13 @@ from backend.realtime.bus import InProcessBus, ReliableSubscription, Topic
 from backend.settings import HubSettings
 from backend.storage.database import make_engine, migrate
 from backend.storage.logbook import Logbook
+from backend.storage.models import AuditRow, CommandRow
 from backend.storage.rails import RailsRepository
 from backend.storage.records import StoredEvent
 from backend.storage.repository import Repository
 from backend.storage.retention import RetentionPolicy
 from backend.storage.sequences import Gap, StreamKey
+from backend.storage.spool import RowSpool
 from backend.storage.writer import StorageWriter
 from gcs.protocol import CloseCode
 
@@ -68,6 +71,8 @@ class Hub:
     command_limiter: RateLimiter
     passwords: PasswordWork
     safety: SafetyGate
+    # Audit and command-log rows waiting out a database outage.
+    spool: RowSpool
     # Live agent connections by vehicle, so revoking a token can drop its connection.
     agent_sessions: dict[str, AgentConnection] = field(default_factory=dict)
     # Live client feeds, so a revoked token or disabled user stops seeing the fleet.
@@ -94,8 +99,11 @@ class Hub:
             settings.telemetry_flush_interval_s,
         )
         log.info("hub store: %s", engine.url.render_as_string(hide_password=True))
-        accounts = Accounts(engine)
-        await asyncio.to_thread(_bootstrap_accounts, accounts, settings)
+        cache = PrincipalCache(settings.principal_cache_s, settings.principal_cache_outage_s)
+        accounts = Accounts(engine, cache)
+        spool = RowSpool(settings.data_dir / "spool.jsonl", engine, [AuditRow, CommandRow])
+        audit = AuditLog(engine, spool)
+        await asyncio.to_thread(_bootstrap_accounts, accounts, audit, settings)
         hub = cls(
             settings=settings,
             engine=engine,
@@ -106,7 +114,8 @@ class Hub:
             writer=writer,
             logbook=logbook,
             accounts=accounts,
-            audit=AuditLog(engine),
+            audit=audit,
+            spool=spool,
             login_limiter=RateLimiter(Limit(settings.login_attempts_per_minute, 60.0)),
             login_address_limiter=RateLimiter(
                 Limit(settings.login_attempts_per_address_per_minute, 60.0)
@@ -126,6 +135,7 @@ class Hub:
             async with asyncio.TaskGroup() as tasks:
                 tasks.create_task(self.writer.run())
                 tasks.create_task(self._apply_retention())
+                tasks.create_task(self._drain_spool())
         finally:
             self.passwords.close()
             self.engine.dispose()
@@ -157,6 +167,17 @@ class Hub:
                     log.info("retention removed %s", removed)
             await asyncio.sleep(self.settings.retention_interval_s)
 
+    async def _drain_spool(self) -> None:
+        """Store the rows spooled during a database outage as soon as it is over."""
+        while True:
+            if self.spool.pending:
+                try:
+                    await asyncio.to_thread(self.spool.drain)
+                except OSError as error:
+                    log.error("spooled rows could not be read or rewritten: %s", error)
+            # Polling: an outage's end announces nothing.
+            await asyncio.sleep(self.settings.spool_retry_s)
+
     async def store_event(self, vehicle_id: str, kind: str, text: str) -> None:
         """An event the hub itself observed (a link coming up or going down)."""
         event = StoredEvent(vehicle_id, "hub", None, time.time(), kind, None, text)
@@ -178,7 +199,7 @@ class Hub:
             await session.close(CloseCode.UNAUTHORIZED, "agent token revoked")
 
 
-def _bootstrap_accounts(accounts: Accounts, settings: HubSettings) -> None:
+def _bootstrap_accounts(accounts: Accounts, audit: AuditLog, settings: HubSettings) -> None:
     admin_password = settings.admin_password.get_secret_value() if settings.admin_password else None
     generated = accounts.ensure_first_admin(settings.admin_username, admin_password)
     if generated is not None:
@@ -189,6 +210,23 @@ def _bootstrap_accounts(accounts: Accounts, settings: HubSettings) -> None:
             "It is not shown again. Set GCS_ADMIN_PASSWORD to choose it instead.\n",
             flush=True,
         )
-    for vehicle_id, token in settings.enrolment_tokens().items():
+    configured = settings.enrolment_tokens()
+    for vehicle_id, token in configured.items():
         if accounts.provision_agent_token(vehicle_id, token):
             log.info("enrolled vehicle %s from GCS_AGENT_TOKENS", vehicle_id)
+    # A token rotated or removed in the configuration must stop working, not linger.
+    for row in accounts.revoke_unprovisioned(configured):
+        log.warning(
+            "revoked agent token %d of %s: no longer in GCS_AGENT_TOKENS", row.id, row.vehicle_id
+        )
+        audit.record(
+            AuditEntry(
+                actor=PROVISIONING,
+                role="system",
+                source="GCS_AGENT_TOKENS",
+                action="agent_token.revoke",
+                target=row.vehicle_id,
+                outcome="ok",
+                detail={"id": row.id, "reason": "no longer in GCS_AGENT_TOKENS"},
+            )
+        )

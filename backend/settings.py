@@ -84,6 +84,15 @@ class HubSettings(BaseSettings):
     battery_reserve_pct: float = Field(default=20.0, ge=0, le=100)
 
     command_timeout_s: float = Field(default=15.0, gt=0, le=120)
+    principal_cache_s: float = Field(
+        default=10.0, ge=0, le=300, description="a resolved token answers without the database"
+    )
+    principal_cache_outage_s: float = Field(
+        default=3600.0, ge=0, description="a resolved token answers while the database is down"
+    )
+    spool_retry_s: float = Field(
+        default=2.0, gt=0, description="retry storing spooled audit and command rows"
+    )
     telemetry_batch_size: int = Field(default=500, ge=1)
     telemetry_flush_interval_s: float = Field(default=0.25, gt=0)
     telemetry_queue_limit: int = Field(default=20_000, ge=100)

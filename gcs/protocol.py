@@ -369,7 +369,15 @@ class LiveState(Message):
 
 
 EventKind = Literal[
-    "statustext", "mode", "armed", "disarmed", "link_up", "link_down", "failsafe", "mission"
+    "statustext",
+    "mode",
+    "armed",
+    "disarmed",
+    "link_up",
+    "link_down",
+    "failsafe",
+    "mission",
+    "upload",  # the agent's onboard .tlog could not be handed over (or was, after failing)
 ]
 
 

@@ -93,7 +93,12 @@ async def run_agent(settings: AgentSettings) -> None:
             recorder = TlogRecorder(settings.tlog_dir, vehicle_id)
             link.recorder = recorder.record
             url = f"{hub_http_base(settings.hub)}/api/v1/vehicles/{vehicle_id}/tlogs"
-            uploader = TlogUploader(recorder, url, settings.token.get_secret_value())
+            uploader = TlogUploader(
+                recorder,
+                url,
+                settings.token.get_secret_value(),
+                notify=lambda text, severity: events.emit("upload", text, severity),
+            )
             link.listeners.append(uploader.on_message)
             tasks.create_task(uploader.run())
 

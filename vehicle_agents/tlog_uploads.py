@@ -1,9 +1,16 @@
-"""After landing, hand each finished onboard .tlog to the hub, retrying until it takes it."""
+"""After landing, hand each finished onboard .tlog to the hub, retrying until it takes it.
+
+A failed upload never ends the uploader and never drops the file: the operator gets an
+event saying what went wrong, and the file is tried again with exponential backoff (with
+jitter, so a fleet that lands together does not retry in step)."""
 
 from __future__ import annotations
 
 import asyncio
 import logging
+import random
+from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
 
 from vehicle_agents.fcu_link import MavMessage
@@ -11,15 +18,45 @@ from vehicle_agents.tlog import TlogRecorder, TlogUploadError, upload_tlog
 
 log = logging.getLogger(__name__)
 
-RETRY_S = 30.0
+# MAV_SEVERITY of the events the uploader raises.
+SEVERITY_WARNING, SEVERITY_INFO = 4, 6
+EVENT_TEXT_ROOM = 400
+
+Notify = Callable[[str, int], None]
+"""Raise an event for the operator: its text and MAV_SEVERITY."""
+
+
+@dataclass(frozen=True)
+class UploadBackoff:
+    """Waits between failed attempts: doubling from ``initial_s`` up to ``max_s``."""
+
+    initial_s: float = 5.0
+    max_s: float = 600.0
+
+    def delay(self, failures: int, draw: Callable[[], float] = random.random) -> float:
+        """The wait after ``failures`` failures in a row: "equal jitter", between half the
+        exponential step and the whole of it, so retries spread out but never hammer."""
+        step: float = min(self.initial_s * 2.0 ** max(failures - 1, 0), self.max_s)
+        return step / 2 + draw() * step / 2
 
 
 class TlogUploader:
-    def __init__(self, recorder: TlogRecorder, url: str, token: str) -> None:
+    def __init__(
+        self,
+        recorder: TlogRecorder,
+        url: str,
+        token: str,
+        notify: Notify | None = None,
+        backoff: UploadBackoff | None = None,
+    ) -> None:
         self.recorder = recorder
         self.url = url
         self._token = token
+        self._notify = notify or (lambda text, severity: None)
+        self.backoff = backoff or UploadBackoff()
         self._landed = asyncio.Event()
+        # The last problem told to the operator, per file: a repeat is logged, not raised.
+        self._reported: dict[Path, str] = {}
 
     def on_message(self, message: MavMessage) -> None:
         """A finished file appears when the vehicle disarms; wake the uploader then."""
@@ -27,34 +64,48 @@ class TlogUploader:
             self._landed.set()
 
     async def run(self) -> None:
+        failures = 0
         while True:
             await self._landed.wait()
             self._landed.clear()
             while self.recorder.finished:
                 path = self.recorder.finished[0]
-                try:
-                    await asyncio.to_thread(upload_tlog, path, self.url, self._token)
-                except TlogUploadError as refusal:
-                    if refusal.status >= 500 or refusal.status == 429:
-                        log.warning(
-                            "hub could not take %s (%s); retrying", path.name, refusal.status
-                        )
-                        await asyncio.sleep(RETRY_S)
-                        continue
-                    # Refused for good (too large, token revoked): it stays on board.
-                    log.error("hub refused tlog %s: %s; kept on board", path.name, refusal)
-                    self.recorder.finished.popleft()
+                problem = await self._upload(path)
+                if problem is None:
+                    failures = 0
                     continue
-                except OSError as error:
-                    log.warning("tlog upload of %s failed; retrying: %s", path.name, error)
-                    await asyncio.sleep(RETRY_S)
-                    continue
-                self.recorder.finished.popleft()
-                try:
-                    _mark_uploaded(path)
-                except OSError as error:
-                    log.warning("uploaded %s but could not move it aside: %s", path.name, error)
-                log.info("uploaded onboard tlog %s", path.name)
+                failures += 1
+                # Kept, at the back of the queue: a file the hub refuses does not hold up
+                # the flights after it.
+                self.recorder.finished.rotate(-1)
+                wait = self.backoff.delay(failures)
+                self._report(path, problem, wait)
+                await asyncio.sleep(wait)
+
+    async def _upload(self, path: Path) -> str | None:
+        """None once the hub has the file, else what went wrong."""
+        try:
+            await asyncio.to_thread(upload_tlog, path, self.url, self._token)
+        except TlogUploadError as refusal:
+            return str(refusal)
+        except (OSError, ValueError) as error:
+            return f"uploading {path.name} failed: {error}"
+        self.recorder.finished.remove(path)
+        if self._reported.pop(path, None) is not None:
+            self._notify(f"onboard log {path.name} uploaded after earlier failures", SEVERITY_INFO)
+        try:
+            _mark_uploaded(path)
+        except OSError as error:
+            log.warning("uploaded %s but could not move it aside: %s", path.name, error)
+        log.info("uploaded onboard tlog %s", path.name)
+        return None
+
+    def _report(self, path: Path, problem: str, wait: float) -> None:
+        log.warning("%s; kept on board, retrying in %.0f s", problem, wait)
+        if self._reported.get(path) != problem:
+            self._reported[path] = problem
+            # An event's text is bounded; the hub's answer in ``problem`` is not.
+            self._notify(f"{problem[:EVENT_TEXT_ROOM]}; kept on board, retrying", SEVERITY_WARNING)
 
 
 def _mark_uploaded(path: Path) -> None:

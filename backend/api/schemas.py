@@ -15,6 +15,9 @@ class Health(BaseModel):
     telemetry_backlog: int
     telemetry_written: int
     write_retries: int
+    rows_spooled: int = Field(
+        default=0, description="audit and command-log rows waiting for the database"
+    )
 
 
 class ClientConfig(BaseModel):

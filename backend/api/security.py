@@ -19,7 +19,6 @@ from starlette.requests import HTTPConnection
 from backend.api.deps import get_hub
 from backend.audit import AuditEntry
 from backend.auth.policy import PUBLIC, Permission, Principal, authorize
-from backend.auth.secrets import TOKEN_PREFIXES
 from backend.errors import Forbidden, Unauthenticated
 
 SESSION_COOKIE = "gcs_session"
@@ -58,11 +57,9 @@ async def principal_of(connection: HTTPConnection) -> Principal | None:
     token = presented_token(connection)
     if token is None:
         return None
-    hub = get_hub(connection)
-    if token.startswith(TOKEN_PREFIXES["agent"]):
-        # An agent may use the REST routes that name its permission (a .tlog upload).
-        return await asyncio.to_thread(hub.accounts.resolve_agent_token, token)
-    return await asyncio.to_thread(hub.accounts.resolve_user_token, token)
+    # One resolver for every token: an agent may use the REST routes that name its
+    # permission (a .tlog upload) with whatever token it was enrolled or provisioned with.
+    return await asyncio.to_thread(get_hub(connection).accounts.resolve_token, token)
 
 
 async def get_principal(

@@ -23,6 +23,7 @@ async def health(hub: HubDep) -> Health:
         telemetry_backlog=hub.writer.backlog,
         telemetry_written=stats.written,
         write_retries=stats.retries,
+        rows_spooled=hub.spool.pending,
     )
 
 

@@ -5,12 +5,13 @@ Synchronous, like the other repositories: the API runs these in a worker thread.
 
 from __future__ import annotations
 
+import logging
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass
 
 from sqlalchemy import Engine, func, select, update
-from sqlalchemy.exc import IntegrityError
+from sqlalchemy.exc import IntegrityError, SQLAlchemyError
 from sqlalchemy.orm import Session
 
 from backend.auth.policy import (
@@ -20,7 +21,9 @@ from backend.auth.policy import (
     agent_principal,
     user_principal,
 )
+from backend.auth.principal_cache import PrincipalCache
 from backend.auth.secrets import (
+    USER_TOKEN_PREFIXES,
     generate_password,
     hash_password,
     new_token,
@@ -29,6 +32,11 @@ from backend.auth.secrets import (
 )
 from backend.errors import Conflict, NotFound
 from backend.storage.models import AgentTokenRow, UserRow, UserTokenRow
+
+log = logging.getLogger(__name__)
+
+# ``created_by`` of the agent tokens that come from the hub's configuration.
+PROVISIONING = "provisioning"
 
 
 @dataclass(frozen=True)
@@ -50,8 +58,11 @@ def _parse_scopes(text: str) -> frozenset[Permission] | None:
 
 
 class Accounts:
-    def __init__(self, engine: Engine) -> None:
+    def __init__(self, engine: Engine, cache: PrincipalCache | None = None) -> None:
         self.engine = engine
+        # No caching unless asked for (the hub asks): a zero-age cache never answers.
+        self.cache = cache or PrincipalCache(fresh_s=0.0, outage_s=0.0)
+        self._serving_from_cache = False
 
     # -- users -------------------------------------------------------------
 
@@ -98,6 +109,9 @@ class Accounts:
         disabled: bool | None = None,
         password: str | None = None,
     ) -> UserRow:
+        # A new role, a disabled account or a new password changes what every cached
+        # principal of this user may do: forget them all before the write.
+        self.cache.revoke(lambda who: not who.is_agent and who.name == username)
         with Session(self.engine, expire_on_commit=False) as session, session.begin():
             row = session.scalar(select(UserRow).where(UserRow.username == username))
             if row is None:
@@ -151,14 +165,13 @@ class Accounts:
             session.add(row)
         return IssuedToken(row.id, token, row.created_at, row.expires_at)
 
-    def resolve_user_token(self, token: str) -> Principal | None:
+    def _user_principal(self, session: Session, digest: str) -> Principal | None:
         query = (
             select(UserTokenRow, UserRow)
             .join(UserRow, UserRow.id == UserTokenRow.user_id)
-            .where(UserTokenRow.token_hash == token_digest(token))
+            .where(UserTokenRow.token_hash == digest)
         )
-        with Session(self.engine) as session:
-            found = session.execute(query).first()
+        found = session.execute(query).first()
         if found is None:
             return None
         token_row, user = found
@@ -168,11 +181,16 @@ class Accounts:
         if token_row.expires_at is not None and token_row.expires_at <= now:
             return None
         return user_principal(
-            user.username, Role(user.role), _parse_scopes(token_row.scopes), token_row.id
+            user.username,
+            Role(user.role),
+            _parse_scopes(token_row.scopes),
+            token_row.id,
+            token_row.expires_at,
         )
 
     def revoke_user_token(self, token_id: int, owner: str | None) -> None:
         """Revoke one token; ``owner`` limits it to that user's tokens (None: any, for admins)."""
+        self.cache.revoke(lambda who: not who.is_agent and who.token_id == token_id)
         with Session(self.engine) as session, session.begin():
             query = select(UserTokenRow).where(UserTokenRow.id == token_id)
             if owner is not None:
@@ -221,20 +239,76 @@ class Accounts:
                     vehicle_id=vehicle_id,
                     token_hash=digest,
                     created_at=time.time(),
-                    created_by="provisioning",
+                    created_by=PROVISIONING,
                     revoked_at=None,
                 )
             )
         return True
 
-    def resolve_agent_token(self, token: str) -> Principal | None:
-        with Session(self.engine) as session:
-            row = session.scalar(
-                select(AgentTokenRow).where(AgentTokenRow.token_hash == token_digest(token))
-            )
+    def revoke_unprovisioned(self, configured: dict[str, str]) -> list[AgentTokenRow]:
+        """Provisioned tokens are exactly the configured ``vehicle: token`` set: revoke each
+        live provisioned token that is no longer in it (a rotated or removed one). Tokens
+        enrolled through the API are not touched. Returns the rows revoked."""
+        kept = {token_digest(token) for token in configured.values()}
+        now = time.time()
+        with Session(self.engine, expire_on_commit=False) as session, session.begin():
+            stale = session.scalars(
+                select(AgentTokenRow).where(
+                    AgentTokenRow.created_by == PROVISIONING,
+                    AgentTokenRow.revoked_at.is_(None),
+                )
+            ).all()
+            revoked = [row for row in stale if row.token_hash not in kept]
+            for row in revoked:
+                row.revoked_at = now
+        ids = {row.id for row in revoked}
+        self.cache.revoke(lambda who: who.is_agent and who.token_id in ids)
+        return revoked
+
+    def _agent_principal(self, session: Session, digest: str) -> Principal | None:
+        row = session.scalar(select(AgentTokenRow).where(AgentTokenRow.token_hash == digest))
         if row is None or row.revoked_at is not None:
             return None
         return agent_principal(row.vehicle_id, row.id)
+
+    # -- the one resolver ----------------------------------------------------
+
+    def resolve_token(self, token: str) -> Principal | None:
+        """Whoever ``token`` speaks for: a user (session, access or API token) or a vehicle's
+        agent (enrolled here, or provisioned in any form the operator chose); None when it
+        is unknown, expired or revoked. Every route and socket resolves tokens here.
+
+        A principal resolved moments ago answers from the cache; while the database is
+        unavailable, so does one resolved before the outage (SQLAlchemyError otherwise)."""
+        digest = token_digest(token)
+        if (cached := self.cache.fresh(digest)) is not None:
+            return cached
+        generation = self.cache.generation
+        try:
+            principal = self._look_up(digest, token.startswith(USER_TOKEN_PREFIXES))
+        except SQLAlchemyError as error:
+            remembered = self.cache.during_outage(digest)
+            if remembered is None:
+                raise
+            if not self._serving_from_cache:  # once per outage, not once per request
+                self._serving_from_cache = True
+                log.warning("database unavailable (%s): tokens resolve from the cache", error)
+            return remembered
+        self._serving_from_cache = False
+        if principal is None:
+            self.cache.forget(digest)
+        else:
+            self.cache.put(digest, principal, generation)
+        return principal
+
+    def _look_up(self, digest: str, looks_like_user: bool) -> Principal | None:
+        with Session(self.engine) as session:
+            # The prefix only orders the look-ups: a provisioned token may have any form.
+            if looks_like_user:
+                return self._user_principal(session, digest) or self._agent_principal(
+                    session, digest
+                )
+            return self._agent_principal(session, digest) or self._user_principal(session, digest)
 
     def agent_tokens(self, vehicle_id: str | None = None) -> Sequence[AgentTokenRow]:
         query = select(AgentTokenRow).order_by(AgentTokenRow.id)
@@ -244,6 +318,7 @@ class Accounts:
             return session.scalars(query).all()
 
     def revoke_agent_token(self, token_id: int) -> AgentTokenRow:
+        self.cache.revoke(lambda who: who.is_agent and who.token_id == token_id)
         with Session(self.engine, expire_on_commit=False) as session, session.begin():
             row = session.get(AgentTokenRow, token_id)
             if row is None:

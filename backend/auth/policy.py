@@ -48,6 +48,9 @@ class Principal:
     permissions: frozenset[Permission]
     vehicle_id: str | None = None  # agents speak for exactly this vehicle
     token_id: int | None = None
+    # When the token stops being valid (Unix seconds; None: until revoked), so that a
+    # cached principal and a live socket end with it.
+    expires_at: float | None = None
     extra: dict[str, str] = field(default_factory=dict, compare=False)
 
     @property
@@ -56,7 +59,11 @@ class Principal:
 
 
 def user_principal(
-    name: str, role: Role, scopes: frozenset[Permission] | None, token_id: int
+    name: str,
+    role: Role,
+    scopes: frozenset[Permission] | None,
+    token_id: int,
+    expires_at: float | None = None,
 ) -> Principal:
     """A user's principal: the role's permissions, narrowed by the token's scopes."""
     allowed = ROLE_PERMISSIONS[role]
@@ -65,6 +72,7 @@ def user_principal(
         role=role.value,
         permissions=allowed if scopes is None else allowed & scopes,
         token_id=token_id,
+        expires_at=expires_at,
     )
 
 

@@ -14,6 +14,7 @@ _hasher = PasswordHasher()
 _DUMMY_HASH = _hasher.hash(secrets.token_urlsafe(16))
 
 TOKEN_PREFIXES = {"session": "gcs_s_", "access": "gcs_a_", "api": "gcs_p_", "agent": "gcs_v_"}
+USER_TOKEN_PREFIXES = tuple(prefix for kind, prefix in TOKEN_PREFIXES.items() if kind != "agent")
 
 
 def hash_password(password: str) -> str:

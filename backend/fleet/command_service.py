@@ -22,6 +22,8 @@ from backend.errors import (
 )
 from backend.fleet.mission_gate import check_current_item, starts_mission, unchecked_mission
 from backend.hub import Hub
+from backend.storage.logbook import command_row
+from backend.storage.models import CommandRow
 from gcs.protocol import Command, CommandOutcome
 
 log = logging.getLogger(__name__)
@@ -53,7 +55,18 @@ async def execute_command(
 
     try:
         record = hub.registry.get(vehicle_id)
-        violations = await asyncio.to_thread(hub.safety.check_command, record, command)
+        critical = hub.safety.check_authority(principal, record, command)
+        if critical is not None:
+            details["safety_critical"] = critical
+        try:
+            violations = await asyncio.to_thread(hub.safety.check_command, record, command)
+        except SQLAlchemyError:
+            # The rails live in the database: a command they govern is refused, never
+            # sent unchecked (land, RTL and hold need no rails and go through). The
+            # refusal is audited through the spool; the API answers 503.
+            details["error"] = "the database is unavailable: the safety rails cannot be read"
+            await audit("refused")
+            raise
         if starts_mission(command):
             # AUTO flies whatever is on board, perhaps loaded by another GCS: it flies
             # only after the same check as an upload (or an admin's audited override).
@@ -84,7 +97,7 @@ async def execute_command(
         await _log(
             hub, principal, vehicle_id, command, outcome.status, outcome.result, outcome.message
         )
-    except SQLAlchemyError as error:
+    except (SQLAlchemyError, OSError) as error:
         # The vehicle has acted: the operator must see its answer, not an error that
         # invites a second takeoff. The lost record goes to the hub's log instead.
         log.error(
@@ -118,12 +131,6 @@ async def _log(
     result: str | None,
     message: str,
 ) -> None:
-    await asyncio.to_thread(
-        hub.logbook.record_command,
-        vehicle_id,
-        principal.name,
-        command.model_dump(),
-        status,
-        result,
-        message,
-    )
+    row = command_row(vehicle_id, principal.name, command.model_dump(), status, result, message)
+    # Through the spool: a database outage delays the row, never loses it or the answer.
+    await asyncio.to_thread(hub.spool.write, CommandRow.__tablename__, row)

@@ -3,7 +3,8 @@ mission is checked against the effective rails (the site's, narrowed per vehicle
 
 from __future__ import annotations
 
-from backend.errors import InvalidRequest
+from backend.auth.policy import Permission, Principal
+from backend.errors import Forbidden, InvalidRequest
 from backend.fleet.registry import VehicleRecord
 from backend.safety import (
     PlanCheck,
@@ -17,6 +18,7 @@ from backend.safety import (
     check_takeoff,
     evaluate_plan,
 )
+from backend.safety.critical_params import critical_reason
 from backend.safety.rails import MISSION_ITEM
 from backend.safety.schemas import SafetyRailsModel
 from backend.settings import HubSettings
@@ -27,6 +29,7 @@ from gcs.protocol import (
     GotoCommand,
     MissionItem,
     MissionUploadCommand,
+    ParamSetCommand,
     SetHomeCommand,
     TakeoffCommand,
 )
@@ -124,6 +127,22 @@ class SafetyGate:
 
     def effective_rails(self, vehicle_id: str) -> SafetyRails:
         return self.site_rails().merged_with(self.vehicle_rails(vehicle_id))
+
+    def check_authority(
+        self, principal: Principal, record: VehicleRecord, command: Command
+    ) -> str | None:
+        """Raise Forbidden if ``command`` needs more authority than ``principal`` has: a
+        safety-critical parameter (failsafes, fence, arming checks) is an admin's to
+        change. Returns why the command was critical, for the audit log, if it was."""
+        if not isinstance(command, ParamSetCommand):
+            return None
+        reason = critical_reason(record.autopilot, command.param)
+        if reason is not None and Permission.ADMIN not in principal.permissions:
+            raise Forbidden(
+                f"{command.param} is safety-critical on {record.autopilot} ({reason}): "
+                "only an admin may change it"
+            )
+        return reason
 
     def check_command(self, record: VehicleRecord, command: Command) -> list[Violation]:
         """Violations of the rails; landing, RTL, hold, mode changes and disarming are never

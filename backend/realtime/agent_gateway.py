@@ -7,6 +7,7 @@ import contextlib
 import logging
 import time
 
+from sqlalchemy.exc import SQLAlchemyError
 from starlette.websockets import WebSocket, WebSocketDisconnect
 
 from backend.api.security import bearer_token
@@ -120,7 +121,9 @@ class AgentSession(PeerConnection):
         token = bearer_token(self.websocket.headers.get("authorization"))
         principal = None
         if token is not None:
-            principal = await asyncio.to_thread(self.hub.accounts.resolve_agent_token, token)
+            principal = await asyncio.to_thread(self.hub.accounts.resolve_token, token)
+            if principal is not None and not principal.is_agent:
+                principal = None  # a user's token never speaks for a vehicle
         if principal is None:
             reason = (
                 "missing agent token (send 'Authorization: Bearer <token>')"
@@ -160,7 +163,15 @@ class AgentSession(PeerConnection):
     async def _serve_vehicle(self, hello: Hello) -> None:
         hub = self.hub
         vehicle_id = hello.vehicle_id
-        await asyncio.to_thread(hub.repository.upsert_vehicle, hello, time.time())
+        try:
+            await asyncio.to_thread(hub.repository.upsert_vehicle, hello, time.time())
+        except SQLAlchemyError as error:
+            # A vehicle the store already has may reconnect during a database outage (its
+            # operators may need to land it); its row is refreshed at the next connection.
+            # A new one needs its row first: its telemetry is stored against it.
+            if vehicle_id not in {record.id for record in hub.registry.all()}:
+                raise
+            log.warning("could not refresh %s in the store (%s); serving it", vehicle_id, error)
         record = hub.registry.connect(hello)
         channel = AgentChannel(self.send)
         previous = hub.agent_sessions.get(vehicle_id)

@@ -5,6 +5,7 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import logging
+import time
 
 from starlette.websockets import WebSocket, WebSocketDisconnect
 
@@ -71,8 +72,10 @@ class ClientFeed(PeerConnection):
             )
             async with asyncio.TaskGroup() as tasks:
                 pusher = tasks.create_task(self._push(updates))
+                expiry = tasks.create_task(self._end_at_expiry(principal.expires_at, pusher))
                 await self._listen()
                 pusher.cancel()
+                expiry.cancel()
         except* FrameTooLarge as group:
             log.warning("closing client %s: %s", self.peer, group.exceptions[0])
             with contextlib.suppress(RuntimeError):
@@ -82,6 +85,15 @@ class ClientFeed(PeerConnection):
         finally:
             self.hub.bus.unsubscribe(Topic.VEHICLE_STATE, updates)
             self.hub.client_feeds.discard(self)
+
+    async def _end_at_expiry(self, expires_at: float | None, pusher: asyncio.Task[None]) -> None:
+        """A token's lifetime bounds the feed it opened, as a revocation does."""
+        if expires_at is None:
+            return
+        await asyncio.sleep(max(0.0, expires_at - time.time()))
+        pusher.cancel()  # nothing more goes out on an expired token
+        log.info("closing client %s: the token of %s expired", self.peer, self.user)
+        await self.close(CloseCode.UNAUTHORIZED, "token expired: log in again")
 
     async def _push(self, updates: LatestSubscription) -> None:
         interval = self.hub.settings.ui_update_interval_s

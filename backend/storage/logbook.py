@@ -202,19 +202,9 @@ class Logbook:
         result: str | None,
         message: str,
     ) -> None:
+        values = command_row(vehicle_id, actor, command, status, result, message)
         with self.engine.begin() as connection:
-            connection.execute(
-                insert(CommandRow).values(
-                    time=time.time(),
-                    vehicle_id=vehicle_id,
-                    actor=actor,
-                    name=str(command.get("name", "")),
-                    command_json=json.dumps(command)[:2000],
-                    status=status,
-                    result=result,
-                    message=message[:1000],
-                )
-            )
+            connection.execute(insert(CommandRow).values(**values))
 
     def commands(
         self,
@@ -310,4 +300,25 @@ def _summary(rows: Sequence[Any]) -> dict[str, Any]:
         "max_alt_m": max(altitudes) if altitudes else None,
         "battery_used_pct": batteries[0] - batteries[-1] if batteries else None,
         "samples": len(rows),
+    }
+
+
+def command_row(
+    vehicle_id: str,
+    actor: str,
+    command: dict[str, Any],
+    status: str,
+    result: str | None,
+    message: str,
+) -> dict[str, Any]:
+    """The command log's row for one command (written directly or through a spool)."""
+    return {
+        "time": time.time(),
+        "vehicle_id": vehicle_id,
+        "actor": actor,
+        "name": str(command.get("name", "")),
+        "command_json": json.dumps(command)[:2000],
+        "status": status,
+        "result": result,
+        "message": message[:1000],
     }

@@ -166,7 +166,15 @@ export interface Event {
    */
   time: number;
   kind:
-    "statustext" | "mode" | "armed" | "disarmed" | "link_up" | "link_down" | "failsafe" | "mission";
+    | "statustext"
+    | "mode"
+    | "armed"
+    | "disarmed"
+    | "link_up"
+    | "link_down"
+    | "failsafe"
+    | "mission"
+    | "upload";
   /**
    * MAV_SEVERITY: 0 emergency .. 7 debug
    */

@@ -1,0 +1,64 @@
+"""Flight-controller parameters that decide what a vehicle does when something goes wrong
+(failsafes, the geofence, arming checks). Only an admin may change them; for anyone else
+a write is refused with the reason. Pure data and one look-up, no I/O.
+
+Names follow each autopilot's parameter reference (ArduPilot 4.x, PX4 1.14+); a pattern
+is a shell-style glob over the whole name (``BATT*_FS_*`` covers every battery monitor).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from fnmatch import fnmatchcase
+
+
+@dataclass(frozen=True)
+class CriticalGroup:
+    what: str  # what these parameters protect, as the refusal says it
+    patterns: tuple[str, ...]
+
+
+ARDUPILOT: tuple[CriticalGroup, ...] = (
+    # ARMING_SKIPCHK replaces ARMING_CHECK from 4.7; both are listed for older firmware.
+    CriticalGroup("arming checks", ("ARMING_CHECK", "ARMING_SKIPCHK", "ARMING_REQUIRE")),
+    CriticalGroup(
+        "failsafes (radio, GCS, EKF, crash, dead reckoning)",
+        ("FS_*", "THR_FAILSAFE", "THR_FS_VALUE", "AFS_*"),
+    ),
+    CriticalGroup("battery failsafe", ("BATT*_FS_*", "BATT*_LOW_*", "BATT*_CRT_*")),
+    CriticalGroup("geofence", ("FENCE_*",)),
+)
+
+PX4: tuple[CriticalGroup, ...] = (
+    CriticalGroup(
+        "failsafe actions (data link, RC, battery, ...)",
+        (
+            "COM_*_ACT",
+            "COM_*_EXCEPT",
+            "COM_DL_LOSS_T",
+            "COM_RC_LOSS_T",
+            "NAV_DLL_ACT",
+            "NAV_RCL_ACT",
+        ),
+    ),
+    CriticalGroup("arming checks", ("COM_ARM_*",)),
+    CriticalGroup("circuit breakers (they switch safety checks off)", ("CBRK_*",)),
+    CriticalGroup("battery failsafe", ("BAT_LOW_THR", "BAT_CRIT_THR", "BAT_EMERGEN_THR")),
+    CriticalGroup("geofence", ("GF_*",)),
+    CriticalGroup("failure detector", ("FD_*",)),
+)
+
+BY_AUTOPILOT: dict[str, tuple[CriticalGroup, ...]] = {"ardupilot": ARDUPILOT, "px4": PX4}
+
+
+def critical_reason(autopilot: str, param: str) -> str | None:
+    """Why ``param`` is safety-critical on ``autopilot``, or None if it is not.
+
+    An autopilot we do not know gets both lists: better an admin's extra step than a
+    failsafe switched off by accident."""
+    groups = BY_AUTOPILOT.get(autopilot, ARDUPILOT + PX4)
+    name = param.upper()
+    for group in groups:
+        if any(fnmatchcase(name, pattern) for pattern in group.patterns):
+            return group.what
+    return None

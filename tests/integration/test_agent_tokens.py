@@ -1,0 +1,187 @@
+"""Agent tokens end to end: provisioned tokens in the operator's own form, the onboard
+.tlog uploader's retries, and rotation through GCS_AGENT_TOKENS."""
+
+from __future__ import annotations
+
+import asyncio
+from pathlib import Path
+from typing import Any
+
+import httpx
+from pymavlink.dialects.v20 import ardupilotmega as mavlink2
+
+from backend.auth.accounts import Accounts
+from backend.storage.database import make_engine
+from gcs.protocol import AGENT_WS_PATH, CloseCode
+from tests.conftest import ADMIN_PASSWORD, hub_settings
+from tests.helpers import access_token, api_client, running_hub
+from tests.integration.test_hub_bad_input import _close_code, scripted_agent, websocket
+from vehicle_agents.tlog import TlogRecorder
+from vehicle_agents.tlog_uploads import TlogUploader, UploadBackoff
+
+# Tokens as an operator writes them into a compose file: no gcs_v_ prefix.
+OPERATOR_TOKEN = "field-kit-alpha-0123456789abcdef"
+LATER_TOKEN = "field-kit-alpha-rotated-9876543210"
+FAST_RETRIES = UploadBackoff(initial_s=0.05, max_s=0.2)
+
+
+def _packed(message: Any) -> Any:
+    sender = mavlink2.MAVLink(None, srcSystem=1, srcComponent=1)
+    (parsed,) = mavlink2.MAVLink(None).parse_buffer(message.pack(sender))
+    return parsed
+
+
+def _heartbeat(armed: bool) -> Any:
+    mode = mavlink2.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED
+    if armed:
+        mode |= mavlink2.MAV_MODE_FLAG_SAFETY_ARMED
+    return _packed(
+        mavlink2.MAVLink_heartbeat_message(
+            mavlink2.MAV_TYPE_QUADROTOR, mavlink2.MAV_AUTOPILOT_ARDUPILOTMEGA, mode, 4, 4, 3
+        )
+    )
+
+
+def _recorded_flight(directory: Path, vehicle: str) -> TlogRecorder:
+    """A recorder holding one finished flight, recorded from real MAVLink bytes."""
+    recorder = TlogRecorder(directory, vehicle)
+    recorder.record(_heartbeat(armed=True), 1_700_000_000.0)
+    for index in range(20):
+        position = mavlink2.MAVLink_global_position_int_message(
+            index * 100, 473977420 + index, 85455940, 488000, 1000, 1, 2, 3, 9000
+        )
+        recorder.record(_packed(position), 1_700_000_000.1 + index / 10)
+    recorder.record(_heartbeat(armed=False), 1_700_000_003.0)
+    assert len(recorder.finished) == 1
+    return recorder
+
+
+def _tlogs(api: httpx.Client, vehicle: str) -> list[dict[str, Any]]:
+    response = api.get(f"/api/v1/vehicles/{vehicle}/tlogs")
+    assert response.status_code == 200, response.text
+    tlogs: list[dict[str, Any]] = response.json()
+    return tlogs
+
+
+def test_a_provisioned_token_without_prefix_uploads_a_tlog(tmp_path: Path) -> None:
+    settings = hub_settings(tmp_path, agent_tokens=f"alpha={OPERATOR_TOKEN}")
+    recorder = _recorded_flight(tmp_path / "onboard", "alpha")
+    with running_hub(settings) as base, scripted_agent(base, "alpha", OPERATOR_TOKEN):
+        response = httpx.post(
+            f"{base}/api/v1/vehicles/alpha/tlogs",
+            content=recorder.finished[0].read_bytes(),
+            headers={
+                "Authorization": f"Bearer {OPERATOR_TOKEN}",
+                "Content-Type": "application/octet-stream",
+                "X-Filename": recorder.finished[0].name,
+            },
+        )
+        assert response.status_code == 201, response.text
+        # The token still speaks for its own vehicle only.
+        other = httpx.post(
+            f"{base}/api/v1/vehicles/bravo/tlogs",
+            content=b"x",
+            headers={"Authorization": f"Bearer {OPERATOR_TOKEN}"},
+        )
+        assert other.status_code == 403
+
+
+def test_a_refused_upload_is_reported_kept_and_retried(tmp_path: Path) -> None:
+    """The hub refuses the uploader's token at first: the operator gets an event, the file
+    stays queued, and once the token is provisioned the next retry hands it over."""
+    settings = hub_settings(tmp_path, agent_tokens=f"alpha={OPERATOR_TOKEN}")
+    recorder = _recorded_flight(tmp_path / "onboard", "alpha")
+    flight = recorder.finished[0]
+    events: list[tuple[str, int]] = []
+
+    async def scenario(base: str) -> None:
+        reported = asyncio.Event()
+
+        def notify(text: str, severity: int) -> None:
+            events.append((text, severity))
+            reported.set()
+
+        url = f"{base}/api/v1/vehicles/alpha/tlogs"
+        uploader = TlogUploader(recorder, url, LATER_TOKEN, notify, FAST_RETRIES)
+        async with asyncio.TaskGroup() as tasks:
+            running = tasks.create_task(uploader.run())
+            uploader.on_message(_heartbeat(armed=False))
+            await asyncio.wait_for(reported.wait(), 20)
+            ((text, severity),) = events
+            assert "HTTP 401" in text
+            assert "kept on board" in text
+            assert severity == 4  # MAV_SEVERITY_WARNING
+            assert list(recorder.finished) == [flight]
+            assert flight.exists()
+            assert not running.done()  # a refusal does not end the uploader
+
+            reported.clear()
+            engine = make_engine(settings.sqlalchemy_url)
+            try:
+                await asyncio.to_thread(
+                    Accounts(engine).provision_agent_token, "alpha", LATER_TOKEN
+                )
+            finally:
+                engine.dispose()
+            await asyncio.wait_for(reported.wait(), 20)
+            running.cancel()
+        assert "uploaded after earlier failures" in events[-1][0]
+        assert not recorder.finished
+        assert (flight.parent / "uploaded" / flight.name).exists()
+
+    with running_hub(settings) as base, scripted_agent(base, "alpha", OPERATOR_TOKEN):
+        asyncio.run(scenario(base))
+        with api_client(base, access_token(base, "admin", ADMIN_PASSWORD)) as api:
+            (stored,) = _tlogs(api, "alpha")
+            assert stored["size"] == flight.parent.joinpath("uploaded", flight.name).stat().st_size
+
+
+def test_upload_backoff_doubles_with_jitter_up_to_its_cap() -> None:
+    backoff = UploadBackoff(initial_s=2.0, max_s=60.0)
+    assert [backoff.delay(n, lambda: 1.0) for n in (1, 2, 3, 6, 20)] == [2, 4, 8, 60, 60]
+    assert [backoff.delay(n, lambda: 0.0) for n in (1, 2, 3)] == [1, 2, 4]
+
+
+def _refused_agent(base: str, token: str) -> tuple[int | None, str]:
+    with websocket(base.replace("http://", "ws://") + AGENT_WS_PATH, _bearer(token)) as socket:
+        return _close_code(socket)
+
+
+def _bearer(token: str) -> dict[str, str]:
+    return {"Authorization": f"Bearer {token}"}
+
+
+def test_a_token_rotated_in_the_configuration_is_revoked_at_start(tmp_path: Path) -> None:
+    with running_hub(hub_settings(tmp_path, agent_tokens=f"alpha={OPERATOR_TOKEN}")) as base:
+        with scripted_agent(base, "alpha", OPERATOR_TOKEN):
+            pass
+        with api_client(base, access_token(base, "admin", ADMIN_PASSWORD)) as api:
+            enrolled = api.post("/api/v1/vehicles/bravo/agent-tokens").json()["token"]
+
+    # The operator rotates alpha's token and restarts the hub.
+    with running_hub(hub_settings(tmp_path, agent_tokens=f"alpha={LATER_TOKEN}")) as base:
+        code, reason = _refused_agent(base, OPERATOR_TOKEN)
+        assert code == CloseCode.UNAUTHORIZED, reason
+        upload = httpx.post(
+            f"{base}/api/v1/vehicles/alpha/tlogs", content=b"x", headers=_bearer(OPERATOR_TOKEN)
+        )
+        assert upload.status_code == 401
+        with scripted_agent(base, "alpha", LATER_TOKEN), scripted_agent(base, "bravo", enrolled):
+            pass  # the new token works, and a token enrolled through the API is untouched
+        with api_client(base, access_token(base, "admin", ADMIN_PASSWORD)) as api:
+            entries = api.get("/api/v1/audit", params={"action": "agent_token.revoke"}).json()
+            tokens = api.get("/api/v1/agent-tokens").json()
+    (entry,) = entries["entries"]
+    assert (entry["actor"], entry["target"], entry["outcome"]) == ("provisioning", "alpha", "ok")
+    assert "GCS_AGENT_TOKENS" in entry["detail"]["reason"]
+    assert {(t["vehicle_id"], t["created_by"], t["revoked"]) for t in tokens} == {
+        ("alpha", "provisioning", True),
+        ("alpha", "provisioning", False),
+        ("bravo", "admin", False),
+    }
+
+    # Removed from the configuration altogether: revoked as well.
+    with running_hub(hub_settings(tmp_path)) as base:
+        assert _refused_agent(base, LATER_TOKEN)[0] == CloseCode.UNAUTHORIZED
+        with scripted_agent(base, "bravo", enrolled):
+            pass

@@ -1,0 +1,52 @@
+"""A live socket lasts no longer than the token that opened it."""
+
+from __future__ import annotations
+
+import json
+import time
+from pathlib import Path
+
+import pytest
+from websockets.exceptions import ConnectionClosed
+from websockets.sync.client import connect
+
+from gcs.protocol import CLIENT_WS_PATH, CloseCode
+from tests.conftest import ADMIN_PASSWORD, hub_settings
+from tests.helpers import access_token, api_client, running_hub
+from tests.integration.test_hub_bad_input import _telemetry, scripted_agent
+
+TOKEN_TTL_S = 3.0
+
+
+def test_a_dashboard_socket_closes_with_4401_when_its_token_expires(tmp_path: Path) -> None:
+    with running_hub(hub_settings(tmp_path, access_token_ttl_s=TOKEN_TTL_S)) as base:
+        token = access_token(base, "admin", ADMIN_PASSWORD)
+        opened = time.time()
+        with api_client(base, token) as api:
+            agent_token = api.post("/api/v1/vehicles/v1/agent-tokens").json()["token"]
+        url = base.replace("http://", "ws://") + CLIENT_WS_PATH
+        headers = {"Authorization": f"Bearer {token}"}
+        with (
+            scripted_agent(base, "v1", agent_token) as agent,
+            connect(url, additional_headers=headers) as feed,
+        ):
+            assert json.loads(feed.recv(timeout=5))["type"] == "fleet"
+            sent = 0
+
+            def follow_while_reporting() -> None:
+                """The vehicle keeps reporting and the feed passes it on, until it ends."""
+                nonlocal sent
+                give_up = time.monotonic() + TOKEN_TTL_S + 5
+                while time.monotonic() < give_up:
+                    agent.send(_telemetry(sent))
+                    sent += 1
+                    feed.recv(timeout=TOKEN_TTL_S + 5)
+
+            with pytest.raises(ConnectionClosed) as closed:
+                follow_while_reporting()
+        ended = time.time()
+    assert closed.value.rcvd is not None
+    assert closed.value.rcvd.code == CloseCode.UNAUTHORIZED
+    assert "expired" in closed.value.rcvd.reason
+    assert sent > 1  # updates did flow until then
+    assert ended - opened >= TOKEN_TTL_S - 0.5  # not before the token's lifetime

@@ -37,8 +37,13 @@ export interface Hello {
   system_id: number;
   /**
    * Mode names set_mode accepts.
+   *
+   * @maxItems 64
    */
   modes?: string[];
+  /**
+   * @maxItems 32
+   */
   capabilities?: string[];
   agent_version: string;
   /**
@@ -187,7 +192,7 @@ export interface CommandOutcome {
     [k: string]: number | undefined;
   } | null;
   /**
-   * The vehicle's mission, for a mission download.
+   * The vehicle's mission, for a mission download (home first).
    */
   items: MissionItem[] | null;
 }
@@ -210,7 +215,7 @@ export interface MissionItem {
   lat: number;
   lon: number;
   /**
-   * metres
+   * metres (a float32)
    */
   alt: number;
   autocontinue: boolean;
@@ -356,6 +361,9 @@ export interface ParamSetCommand {
    * e.g. WPNAV_SPEED
    */
   param: string;
+  /**
+   * PARAM_SET.param_value is a float32
+   */
   value: number;
 }
 /**
@@ -416,12 +424,18 @@ export interface Ping {
 }
 export interface FleetSnapshot {
   type: "fleet";
+  /**
+   * @maxItems 10000
+   */
   vehicles: VehicleSummary[];
 }
 export interface VehicleSummary {
   id: string;
   autopilot: string;
   vehicle_type: string;
+  /**
+   * @maxItems 64
+   */
   modes: string[];
   connected: boolean;
   /**

@@ -46,7 +46,7 @@ CLIENT_WS_PATH = "/api/v1/ws"
 
 T = TypeVar("T")
 
-VehicleId = Annotated[str, Field(pattern=r"^[A-Za-z0-9_.-]{1,64}$")]
+VehicleId = Annotated[str, Field(pattern=r"^[A-Za-z0-9_.-]{1,64}$", max_length=64)]
 StreamId = Annotated[str, Field(min_length=1, max_length=64)]
 RequestId = Annotated[str, Field(min_length=1, max_length=64)]
 
@@ -200,7 +200,9 @@ class RebootCommand(Message):
     name: Literal["reboot"] = "reboot"
 
 
-ParamName = Annotated[str, Field(pattern=r"^[A-Z0-9_]{1,16}$", description="e.g. WPNAV_SPEED")]
+ParamName = Annotated[
+    str, Field(pattern=r"^[A-Z0-9_]{1,16}$", max_length=16, description="e.g. WPNAV_SPEED")
+]
 
 
 class ParamListCommand(Message):

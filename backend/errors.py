@@ -47,6 +47,12 @@ class InvalidRequest(GcsError):
         self.field = field
 
 
+class QuotaExceeded(GcsError):
+    """A request that would store more than its owner's configured share (413)."""
+
+    status_code = 413
+
+
 class VehicleOffline(GcsError):
     status_code = 409
 

@@ -63,6 +63,11 @@ class HubSettings(BaseSettings):
     )
     max_body_bytes: int = Field(default=1024 * 1024, ge=1024)
     max_tlog_bytes: int = Field(default=512 * 1024 * 1024, ge=1024, description="per upload")
+    max_tlog_bytes_per_vehicle: int = Field(
+        default=4 * 1024 * 1024 * 1024,
+        ge=1024,
+        description="all of one vehicle's stored .tlogs together; an upload beyond is a 413",
+    )
     login_attempts_per_minute: int = Field(
         default=5, ge=1, description="failed logins per address and user name together"
     )

@@ -24,7 +24,9 @@ from enum import IntEnum
 from typing import Annotated, Any, Literal, TypeAlias, TypeVar
 
 from pydantic import (
+    AfterValidator,
     BaseModel,
+    BeforeValidator,
     ConfigDict,
     Field,
     TypeAdapter,
@@ -32,6 +34,8 @@ from pydantic import (
     field_validator,
     model_validator,
 )
+
+from gcs.mavlink_wire import WIRE_RANGES, wire_problem
 
 PROTOCOL_VERSION = 1
 # Telemetry frames are a few hundred bytes; 64 KiB leaves room for later scan data
@@ -43,8 +47,56 @@ CLIENT_WS_PATH = "/api/v1/ws"
 
 T = TypeVar("T")
 
-VehicleId = Annotated[str, Field(pattern=r"^[A-Za-z0-9_.-]{1,64}$")]
+VehicleId = Annotated[str, Field(pattern=r"^[A-Za-z0-9_.-]{1,64}$", max_length=64)]
 StreamId = Annotated[str, Field(min_length=1, max_length=64)]
+RequestId = Annotated[str, Field(min_length=1, max_length=64)]
+
+# Every str and list in a message has a bound: one peer must not make the hub store or
+# every dashboard receive (a vehicle's modes go out with each of its updates) megabytes.
+MAX_NAME_CHARS = 32  # a mode, an autopilot, a vehicle type, a capability
+MAX_MODES = 64  # ArduCopter has 27, ArduPlane 25, PX4 about 15
+MAX_CAPABILITIES = 32
+MAX_MESSAGE_CHARS = 2000  # an outcome's message: the autopilot's reasons included
+MAX_PARAMS = 4096  # ArduPilot's largest parameter tables are about 1,800
+MAX_MISSION_ITEMS = 2000
+MAX_FLEET = 10_000
+MAX_COMMAND_TIMEOUT_S = 600.0
+Name = Annotated[str, Field(max_length=MAX_NAME_CHARS)]
+
+
+def _clip(text: object) -> object:
+    """Shortens a long explanation rather than losing the answer it belongs to (a refused
+    mission lists every item's problem)."""
+    if isinstance(text, str) and len(text) > MAX_MESSAGE_CHARS:
+        return text[: MAX_MESSAGE_CHARS - 1] + "…"
+    return text
+
+
+MessageText = Annotated[str, BeforeValidator(_clip), Field(max_length=MAX_MESSAGE_CHARS)]
+
+
+def _fits_float32(value: float) -> float:
+    problem = wire_problem("float", value)
+    if problem is not None:
+        raise ValueError(f"{problem}, the MAVLink field's type")
+    return value
+
+
+# Values that go into a MAVLink field of that type, finite and within its range (1e300
+# would make pymavlink raise while packing, inside the agent). The bounds are the wire
+# type's, from gcs.mavlink_wire; the schema shows them too.
+Float32 = Annotated[
+    float,
+    Field(
+        allow_inf_nan=False,
+        json_schema_extra={
+            "minimum": WIRE_RANGES["float"][0],
+            "maximum": WIRE_RANGES["float"][1],
+        },
+    ),
+    AfterValidator(_fits_float32),
+]
+UInt16 = Annotated[int, Field(ge=WIRE_RANGES["uint16_t"][0], le=WIRE_RANGES["uint16_t"][1])]
 
 
 class CloseCode(IntEnum):
@@ -100,7 +152,9 @@ class ReturnToLaunchCommand(Message):
 
 class SetModeCommand(Message):
     name: Literal["set_mode"] = "set_mode"
-    mode: str = Field(min_length=1, max_length=32, description="A mode name the vehicle lists.")
+    mode: str = Field(
+        min_length=1, max_length=MAX_NAME_CHARS, description="A mode name the vehicle lists."
+    )
 
 
 class GotoCommand(Message):
@@ -147,7 +201,9 @@ class RebootCommand(Message):
     name: Literal["reboot"] = "reboot"
 
 
-ParamName = Annotated[str, Field(pattern=r"^[A-Z0-9_]{1,16}$", description="e.g. WPNAV_SPEED")]
+ParamName = Annotated[
+    str, Field(pattern=r"^[A-Z0-9_]{1,16}$", max_length=16, description="e.g. WPNAV_SPEED")
+]
 
 
 class ParamListCommand(Message):
@@ -166,7 +222,7 @@ class ParamSetCommand(Message):
 
     name: Literal["param_set"] = "param_set"
     param: ParamName
-    value: float
+    value: Float32 = Field(description="PARAM_SET.param_value is a float32")
 
 
 # MISSION_ITEM_INT carries integer positions whatever its frame says, so the "_INT" frames
@@ -179,7 +235,7 @@ _PLAIN_FRAME = {5: 0, 6: 3, 11: 10}  # GLOBAL_INT, GLOBAL_RELATIVE_ALT_INT, GLOB
 class MissionItem(Message):
     """One mission item, as MISSION_ITEM_INT carries it (positions in degrees)."""
 
-    command: int = Field(ge=0, le=65535, description="MAV_CMD number, e.g. 16 NAV_WAYPOINT")
+    command: UInt16 = Field(description="MAV_CMD number, e.g. 16 NAV_WAYPOINT")
     frame: int = Field(
         default=3,
         ge=0,
@@ -188,13 +244,13 @@ class MissionItem(Message):
         "forms 5, 6 and 11 are accepted and become 0, 3 and 10, in uploads and downloads "
         "alike. A command without a position ignores its frame (ArduPilot gives back 0).",
     )
-    param1: float = 0.0
-    param2: float = 0.0
-    param3: float = 0.0
-    param4: float = 0.0
+    param1: Float32 = 0.0
+    param2: Float32 = 0.0
+    param3: Float32 = 0.0
+    param4: Float32 = 0.0
     lat: float = Field(default=0.0, ge=-90, le=90)
     lon: float = Field(default=0.0, ge=-180, le=180)
-    alt: float = Field(default=0.0, ge=-1000, le=10000, description="metres")
+    alt: float = Field(default=0.0, ge=-1000, le=10000, description="metres (a float32)")
     autocontinue: bool = True
 
     @field_validator("frame")
@@ -207,7 +263,7 @@ class MissionUploadCommand(Message):
     """Replace the vehicle's mission (item 0, home, is added by the agent)."""
 
     name: Literal["mission_upload"] = "mission_upload"
-    items: list[MissionItem] = Field(min_length=1, max_length=2000)
+    items: list[MissionItem] = Field(min_length=1, max_length=MAX_MISSION_ITEMS)
 
 
 class MissionDownloadCommand(Message):
@@ -220,7 +276,7 @@ class MissionClearCommand(Message):
 
 class MissionSetCurrentCommand(Message):
     name: Literal["mission_set_current"] = "mission_set_current"
-    seq: int = Field(ge=1, le=2000, description="1 is the first item after home")
+    seq: int = Field(ge=1, le=MAX_MISSION_ITEMS, description="1 is the first item after home")
 
 
 Command = Annotated[
@@ -253,14 +309,20 @@ class CommandOutcome(Message):
 
     status: CommandStatus
     result: str | None = Field(
-        default=None, description="The MAV_RESULT name from COMMAND_ACK, when there was one."
+        default=None,
+        max_length=64,
+        description="The MAV_RESULT name from COMMAND_ACK, when there was one.",
     )
-    message: str
-    values: dict[str, float] | None = Field(
-        default=None, description="Parameter values, for the parameter commands."
+    message: MessageText
+    values: dict[Annotated[str, Field(max_length=16)], float] | None = Field(
+        default=None,
+        max_length=MAX_PARAMS,
+        description="Parameter values, for the parameter commands.",
     )
     items: list[MissionItem] | None = Field(
-        default=None, description="The vehicle's mission, for a mission download."
+        default=None,
+        max_length=MAX_MISSION_ITEMS + 1,
+        description="The vehicle's mission, for a mission download (home first).",
     )
 
 
@@ -273,9 +335,9 @@ class VehicleState(Message):
     """One telemetry snapshot, assembled by the agent from the latest MAVLink messages."""
 
     fcu_connected: bool = True
-    mode: str = Field(default="UNKNOWN", max_length=32)
+    mode: str = Field(default="UNKNOWN", max_length=MAX_NAME_CHARS)
     armed: bool = False
-    system_status: str = Field(default="UNKNOWN", max_length=32)
+    system_status: str = Field(default="UNKNOWN", max_length=MAX_NAME_CHARS)
     lat: float | None = None
     lon: float | None = None
     alt_msl: float | None = Field(default=None, description="Metres above mean sea level.")
@@ -309,7 +371,7 @@ class VehicleState(Message):
     mission_total: int | None = None
     position_source: str | None = Field(
         default=None,
-        max_length=32,
+        max_length=MAX_NAME_CHARS,
         description="the position source in use, e.g. GPS_RAW_INT or GPS2_RAW (RTK)",
     )
     fcu_receive_errors: int = Field(
@@ -332,12 +394,14 @@ class Hello(Message):
     type: Literal["hello"] = "hello"
     protocol: int
     vehicle_id: VehicleId
-    autopilot: str = Field(description="ardupilot, px4 or generic")
-    vehicle_type: str = Field(description="multirotor, rover, fixed_wing, ...")
+    autopilot: Name = Field(description="ardupilot, px4 or generic")
+    vehicle_type: Name = Field(description="multirotor, rover, fixed_wing, ...")
     system_id: int = Field(ge=1, le=255)
-    modes: list[str] = Field(default_factory=list, description="Mode names set_mode accepts.")
-    capabilities: list[str] = Field(default_factory=list)
-    agent_version: str
+    modes: list[Name] = Field(
+        default_factory=list, max_length=MAX_MODES, description="Mode names set_mode accepts."
+    )
+    capabilities: list[Name] = Field(default_factory=list, max_length=MAX_CAPABILITIES)
+    agent_version: Name
     stream_id: StreamId = Field(description="Names this agent run's sequence counters.")
 
 
@@ -421,7 +485,7 @@ class Unavailable(Message):
 
 class CommandResult(Message):
     type: Literal["command_result"] = "command_result"
-    request_id: str
+    request_id: RequestId
     outcome: CommandOutcome
 
 
@@ -433,9 +497,11 @@ class Welcome(Message):
 
 class CommandRequest(Message):
     type: Literal["command"] = "command"
-    request_id: str
+    request_id: RequestId
     command: Command
-    timeout_s: float = Field(gt=0, description="How long the agent may try before giving up.")
+    timeout_s: float = Field(
+        gt=0, le=MAX_COMMAND_TIMEOUT_S, description="How long the agent may try before giving up."
+    )
 
 
 class Ack(Message):
@@ -465,7 +531,7 @@ class ErrorReply(Message):
     code: Literal[
         "bad_frame", "invalid_message", "unexpected_message", "too_many_errors", "forbidden"
     ]
-    message: str
+    message: MessageText
 
 
 # ---------------------------------------------------------------------------
@@ -475,9 +541,9 @@ class ErrorReply(Message):
 
 class VehicleSummary(Message):
     id: VehicleId
-    autopilot: str
-    vehicle_type: str
-    modes: list[str]
+    autopilot: Name
+    vehicle_type: Name
+    modes: list[Name] = Field(max_length=MAX_MODES)
     connected: bool
     last_seen: float | None = Field(default=None, description="Unix time of the last telemetry.")
     state: VehicleState | None = None
@@ -485,7 +551,7 @@ class VehicleSummary(Message):
 
 class FleetSnapshot(Message):
     type: Literal["fleet"] = "fleet"
-    vehicles: list[VehicleSummary]
+    vehicles: list[VehicleSummary] = Field(max_length=MAX_FLEET)
 
 
 class VehicleUpdate(Message):
@@ -495,12 +561,12 @@ class VehicleUpdate(Message):
 
 class Ping(Message):
     type: Literal["ping"] = "ping"
-    nonce: str | None = None
+    nonce: str | None = Field(default=None, max_length=64)
 
 
 class Pong(Message):
     type: Literal["pong"] = "pong"
-    nonce: str | None = None
+    nonce: str | None = Field(default=None, max_length=64)
 
 
 AgentToHub: TypeAlias = Annotated[

@@ -103,8 +103,9 @@ class CommandExecutor:
             return await self._dispatch(command)
         except CommandRefused as refusal:
             return refusal.outcome
-        except (ValueError, TypeError, ConnectionError, OSError) as error:
-            # A command must never take the agent (and the vehicle's link) down with it.
+        except Exception as error:
+            # A command must never take the agent (and the vehicle's link and its hub-link
+            # failsafe) down with it: whatever went wrong, it is answered as failed.
             log.exception("command %s failed inside the agent", command.name)
             return CommandOutcome(status="failed", message=f"{command.name}: agent error: {error}")
 

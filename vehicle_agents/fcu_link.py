@@ -13,6 +13,7 @@ import asyncio
 import collections
 import contextlib
 import logging
+import struct
 import threading
 import time
 from collections.abc import Callable, Iterator
@@ -22,6 +23,7 @@ from typing import Any
 from pymavlink import mavutil
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
+from gcs.mavlink_wire import out_of_range
 from vehicle_agents.modes import ModeTable, mode_table_for
 
 log = logging.getLogger(__name__)
@@ -319,7 +321,14 @@ class FcuLink:
     def send(self, message: MavMessage) -> None:
         if self._connection is None:
             raise ConnectionError("flight controller link is down")
-        self._connection.mav.send(message)
+        try:
+            self._connection.mav.send(message)
+        except (OverflowError, struct.error) as error:
+            # Packing failed before anything was written: a value its field's wire type
+            # cannot hold. The protocol bounds what the hub sends, so this is the second
+            # line; it names the field instead of letting the error escape as it is.
+            problems = wire_problems(message) or [str(error)]
+            raise FieldOutOfRange(message.get_type(), problems) from error
 
     def write_frame(self, frame: bytes) -> None:
         """Write an encoded MAVLink frame (a forwarded GCS's) to the vehicle unchanged."""
@@ -338,6 +347,21 @@ class FcuLink:
                 *padded,
             )
         )
+
+
+class FieldOutOfRange(ValueError):
+    """A message was not sent: a field's value does not fit its MAVLink wire type."""
+
+    def __init__(self, message_type: str, problems: list[str]) -> None:
+        super().__init__(f"{message_type} not sent: {'; '.join(problems)}")
+
+
+def wire_problems(message: MavMessage) -> list[str]:
+    """Each field of a pymavlink message whose value its wire type cannot hold."""
+    return out_of_range(
+        (name, c_type, getattr(message, name, None))
+        for name, c_type in zip(message.fieldnames, message.fieldtypes, strict=True)
+    )
 
 
 async def next_match(queue: asyncio.Queue[MavMessage], within_s: float) -> MavMessage | None:

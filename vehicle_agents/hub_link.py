@@ -3,11 +3,13 @@
 from __future__ import annotations
 
 import asyncio
+import json
 import logging
 import time
 from collections.abc import Awaitable, Callable
 from dataclasses import dataclass
 
+from pydantic import TypeAdapter, ValidationError
 from websockets.asyncio.client import ClientConnection, connect
 from websockets.exceptions import ConnectionClosed, InvalidHandshake
 
@@ -23,6 +25,7 @@ from gcs.protocol import (
     Hello,
     LiveState,
     ProtocolError,
+    RequestId,
     Resend,
     VehicleState,
     Welcome,
@@ -184,6 +187,19 @@ class HubLink:
             message = decode(hub_to_agent, frame)
         except ProtocolError as error:
             log.warning("unusable frame from hub: %s", error.message)
+            request_id = _command_request_id(frame)
+            if request_id is not None:
+                # The hub is waiting for this answer; nothing reached the vehicle.
+                outcome = CommandOutcome(
+                    status="failed", message=f"command refused by the agent: {error.message}"
+                )
+                result = CommandResult(request_id=request_id, outcome=outcome)
+                tasks.create_task(websocket.send(encode(result)))
+            return
+        except (RecursionError, ValueError) as error:
+            # What the JSON parser itself chokes on (30,000 '[', a 5,000-digit number):
+            # unusable like any other frame, never the end of the agent.
+            log.warning("unusable frame from hub: %s", type(error).__name__)
             return
         match message:
             case Ack():
@@ -218,5 +234,30 @@ class HubLink:
                 message=f"{request.command.name}: not finished within {allowed_s:.1f} s; "
                 "the agent stopped it there",
             )
+        except Exception as error:
+            # An error escaping here would end the session's TaskGroup, and with it the
+            # agent: the command fails, the link and the vehicle's failsafe go on.
+            log.exception("command %s failed inside the agent", request.request_id)
+            outcome = CommandOutcome(
+                status="failed", message=f"{request.command.name}: agent error: {error}"
+            )
         log.info("command %s: %s", request.request_id, outcome.message)
         await websocket.send(encode(CommandResult(request_id=request.request_id, outcome=outcome)))
+
+
+_request_id: TypeAdapter[str] = TypeAdapter(RequestId)
+
+
+def _command_request_id(frame: str | bytes) -> str | None:
+    """The request_id of a command frame that failed validation, so that it can still be
+    answered; None for anything else, or for an id that could not be echoed back."""
+    try:
+        raw = json.loads(frame)
+    except (ValueError, RecursionError):
+        return None
+    if not isinstance(raw, dict) or raw.get("type") != "command":
+        return None
+    try:
+        return _request_id.validate_python(raw.get("request_id"))
+    except ValidationError:
+        return None

@@ -30,7 +30,9 @@ def content_security_policy(basemap_url: str | None) -> str:
         f"img-src {tiles}; "
         "style-src 'self' 'unsafe-inline'; "  # Leaflet positions tiles with inline styles
         "script-src 'self'; "
-        "connect-src 'self' ws: wss:; "
+        # 'self' covers the hub's own ws:// and wss:// (CSP 3): an injected script can
+        # reach no other host, and so cannot send what it reads anywhere else.
+        "connect-src 'self'; "
         "frame-ancestors 'none'; base-uri 'none'; form-action 'self'"
     )
 

@@ -8,7 +8,7 @@ import time
 from collections.abc import Iterator
 from datetime import datetime
 from pathlib import Path as FilePath
-from typing import Annotated, Any, Literal
+from typing import Annotated, Any, BinaryIO, Literal
 
 from fastapi import Path, Query, Request, status
 from fastapi.responses import FileResponse, StreamingResponse
@@ -19,7 +19,7 @@ from backend.api.schemas import Sample
 from backend.api.security import SecuredRouter, requires
 from backend.api.time_ranges import optional_time_range, time_range
 from backend.auth.policy import Permission
-from backend.errors import InvalidRequest
+from backend.errors import InvalidRequest, QuotaExceeded
 from backend.exports import (
     ExportEvent,
     ExportFlight,
@@ -30,6 +30,7 @@ from backend.exports import (
 )
 from backend.hub import Hub
 from backend.storage.models import FlightRow
+from backend.storage.tlog_check import InvalidTlog, TlogChecker
 from gcs.protocol import VehicleId
 
 router = SecuredRouter(tags=["flight log"])
@@ -344,23 +345,50 @@ async def upload_tlog(
     request: Request,
     hub: HubDep,
 ) -> Tlog:
-    """An agent uploads the .tlog it recorded on board (body: the raw file)."""
+    """An agent uploads the .tlog it recorded on board (body: the raw file).
+
+    The body must be a .tlog (timestamped MAVLink frames: 422 otherwise, at the first
+    record that is not), and fit the vehicle's quota (``max_tlog_bytes_per_vehicle``
+    over all its files: 413 otherwise; ``max_tlog_bytes`` bounds one file)."""
     hub.registry.get(vehicle_id)
+    quota = hub.settings.max_tlog_bytes_per_vehicle
+    stored = sum(row.size for row in await asyncio.to_thread(hub.logbook.tlogs, vehicle_id))
+    if stored >= quota:
+        raise QuotaExceeded(_quota_used(vehicle_id, stored, quota))
     name = SAFE_FILENAME.sub("_", request.headers.get("x-filename", "flight.tlog"))[:100]
     folder = hub.settings.data_dir / "tlogs" / vehicle_id
     await asyncio.to_thread(folder.mkdir, parents=True, exist_ok=True)
     target = folder / f"{time.time_ns()}_{name}"
     size = 0
+    checker = TlogChecker()
     try:
         with target.open("xb") as file:  # streamed to disk chunk by chunk
             async for chunk in request.stream():
                 size += len(chunk)
-                await asyncio.to_thread(file.write, chunk)
+                if stored + size > quota:
+                    raise QuotaExceeded(_quota_used(vehicle_id, stored, quota))
+                await asyncio.to_thread(_check_and_write, checker, file, chunk)
+        checker.finish()
+    except InvalidTlog as error:
+        target.unlink(missing_ok=True)
+        raise InvalidRequest("body", str(error)) from None
     except BaseException:
         target.unlink(missing_ok=True)  # no half files from a cut upload
         raise
     tlog_id = await asyncio.to_thread(hub.logbook.add_tlog, vehicle_id, name, str(target), size)
     return Tlog.model_validate(await asyncio.to_thread(hub.logbook.tlog, tlog_id))
+
+
+def _check_and_write(checker: TlogChecker, file: BinaryIO, chunk: bytes) -> None:
+    checker.feed(chunk)  # before the write: nothing that is not a .tlog is kept
+    file.write(chunk)
+
+
+def _quota_used(vehicle_id: str, stored: int, quota: int) -> str:
+    return (
+        f"this upload would take {vehicle_id}'s stored .tlogs over their quota of "
+        f"{quota} bytes ({stored} bytes stored); ask an admin to remove old ones"
+    )
 
 
 @router.get(

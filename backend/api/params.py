@@ -13,6 +13,7 @@ from backend.auth.policy import Permission
 from backend.fleet.command_service import execute_expecting_acceptance
 from gcs.protocol import (
     Command,
+    Float32,
     ParamGetCommand,
     ParamListCommand,
     ParamName,
@@ -32,7 +33,9 @@ class ParamValues(BaseModel):
 
 
 class ParamUpdate(BaseModel):
-    value: float
+    # PARAM_SET carries a float32: a value it cannot hold is a 422 here, not an error
+    # inside the vehicle's agent.
+    value: Float32
 
 
 async def _ask(

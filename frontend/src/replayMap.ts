@@ -4,6 +4,7 @@
 // `<div class="replay-marker" data-lat data-lon data-heading>`.
 import * as L from "leaflet";
 import { formatAuditTime } from "./auditPanel";
+import { element } from "./dom";
 import type { FlightTrack, ReplayPoint } from "./replayTrack";
 import type { FlightEvent } from "./types";
 import { ICON_SIZE, vehicleSymbol } from "./vehicleMarker";
@@ -126,7 +127,13 @@ export class ReplayLayer {
       fillColor: TONE_COLOURS[tone],
       fillOpacity: 0.95,
     });
-    marker.bindTooltip(`${formatAuditTime(event.time)} · ${event.text || event.kind}`, { direction: "top" });
+    // An element, never a string: Leaflet puts a string tooltip in as HTML, and an event's
+    // text comes from the vehicle (a STATUSTEXT any MAVLink peer can send).
+    const tooltip = element("span", {
+      className: "event-tooltip",
+      textContent: `${formatAuditTime(event.time)} · ${event.text || event.kind}`,
+    });
+    marker.bindTooltip(tooltip, { direction: "top" });
     marker.on("click", () => this.onSeek(t));
     marker.on("add", () => {
       const element = marker.getElement() as SVGElement | undefined;

@@ -37,8 +37,13 @@ export interface Hello {
   system_id: number;
   /**
    * Mode names set_mode accepts.
+   *
+   * @maxItems 64
    */
   modes?: string[];
+  /**
+   * @maxItems 32
+   */
   capabilities?: string[];
   agent_version: string;
   /**
@@ -207,7 +212,7 @@ export interface CommandOutcome {
     [k: string]: number | undefined;
   } | null;
   /**
-   * The vehicle's mission, for a mission download.
+   * The vehicle's mission, for a mission download (home first).
    */
   items: MissionItem[] | null;
 }
@@ -230,7 +235,7 @@ export interface MissionItem {
   lat: number;
   lon: number;
   /**
-   * metres
+   * metres (a float32)
    */
   alt: number;
   autocontinue: boolean;
@@ -376,6 +381,9 @@ export interface ParamSetCommand {
    * e.g. WPNAV_SPEED
    */
   param: string;
+  /**
+   * PARAM_SET.param_value is a float32
+   */
   value: number;
 }
 /**
@@ -436,12 +444,18 @@ export interface Ping {
 }
 export interface FleetSnapshot {
   type: "fleet";
+  /**
+   * @maxItems 10000
+   */
   vehicles: VehicleSummary[];
 }
 export interface VehicleSummary {
   id: string;
   autopilot: string;
   vehicle_type: string;
+  /**
+   * @maxItems 64
+   */
   modes: string[];
   connected: boolean;
   /**

@@ -1,0 +1,166 @@
+"""No command from the hub, however malformed, ends the agent.
+
+A scripted hub (a real WebSocket server) sends a real `gcs agent` process commands that
+are out of every MAVLink field's range, not numbers, unknown, or not commands at all.
+Each one that carries a request id is answered as failed, and afterwards the agent is
+still running and still carries a good command to its flight controller (a scripted
+MAVLink peer). The executor's own guard is checked in-process too, with commands that
+skip the protocol's validation, as a bug in the agent would.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import queue
+import threading
+from pathlib import Path
+from typing import Any
+
+import pytest
+from pymavlink.dialects.v20 import ardupilotmega as mavlink2
+from websockets.exceptions import ConnectionClosed
+from websockets.sync.server import Server, ServerConnection, serve
+
+from gcs.protocol import (
+    AGENT_WS_PATH,
+    ChangeSpeedCommand,
+    CommandOutcome,
+    GotoCommand,
+    Welcome,
+    encode,
+)
+from tests.helpers import agent_process
+from tests.integration.test_agent_commands import with_executor
+from tests.mavlink_peer import Answer, ScriptedFlightController
+from vehicle_agents.commands import CommandExecutor
+
+pytestmark = pytest.mark.integration
+
+VEHICLE = "bounds_1"
+ANSWER_S = 15.0
+
+
+class ScriptedHub:
+    """The hub's end of the agent's WebSocket: welcomes the agent, then passes its
+    command results to the test; telemetry and events are read past."""
+
+    def __init__(self) -> None:
+        self.results: queue.Queue[dict[str, Any]] = queue.Queue()
+        self.connections: queue.Queue[ServerConnection] = queue.Queue()
+        self._server: Server = serve(self._handle, "127.0.0.1", 0)
+        self.url = f"ws://127.0.0.1:{self._server.socket.getsockname()[1]}"
+        self._thread = threading.Thread(target=self._server.serve_forever, daemon=True)
+
+    def __enter__(self) -> ScriptedHub:
+        self._thread.start()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self._server.shutdown()
+        self._thread.join(10)
+
+    def _handle(self, connection: ServerConnection) -> None:
+        assert connection.request is not None
+        assert connection.request.path == AGENT_WS_PATH
+        hello = json.loads(connection.recv(timeout=10))
+        connection.send(encode(Welcome(vehicle_id=hello["vehicle_id"])))
+        self.connections.put(connection)
+        with contextlib.suppress(ConnectionClosed):
+            for frame in connection:
+                message = json.loads(frame)
+                if message["type"] == "command_result":
+                    self.results.put(message)
+
+    def answer_to(self, connection: ServerConnection, frame: str) -> dict[str, Any]:
+        connection.send(frame)
+        request_id = json.loads(frame)["request_id"]
+        while True:
+            result = self.results.get(timeout=ANSWER_S)
+            if result["request_id"] == request_id:
+                outcome: dict[str, Any] = result["outcome"]
+                return outcome
+
+
+def _command(request_id: str, command: object, timeout_s: object = 5.0) -> str:
+    # JSON as a peer could write it: json.dumps spells NaN and Infinity as JavaScript does
+    frame = {"type": "command", "request_id": request_id, "command": command}
+    return json.dumps({**frame, "timeout_s": timeout_s})
+
+
+NAN, INF = float("nan"), float("inf")
+WAYPOINT = {"command": 16, "lat": -35.36, "lon": 149.16, "alt": 20}
+MALFORMED: dict[str, object] = {
+    "param_set 1e300": {"name": "param_set", "param": "WPNAV_SPEED", "value": 1e300},
+    "param_set NaN": {"name": "param_set", "param": "WPNAV_SPEED", "value": NAN},
+    "param_set -Infinity": {"name": "param_set", "param": "WPNAV_SPEED", "value": -INF},
+    "mission param1 1e300": {"name": "mission_upload", "items": [{**WAYPOINT, "param1": 1e300}]},
+    "mission param4 NaN": {"name": "mission_upload", "items": [{**WAYPOINT, "param4": NAN}]},
+    "mission lat 1e300": {"name": "mission_upload", "items": [{**WAYPOINT, "lat": 1e300}]},
+    "mission command 70000": {"name": "mission_upload", "items": [{**WAYPOINT, "command": 70000}]},
+    "set_current 70000": {"name": "mission_set_current", "seq": 70000},
+    "set_current 1e300": {"name": "mission_set_current", "seq": 1e300},
+    "goto NaN": {"name": "goto", "lat": NAN, "lon": 149.0, "altitude": 10},
+    "goto lon 1e300": {"name": "goto", "lat": -35.0, "lon": 1e300, "altitude": 10},
+    "takeoff Infinity": {"name": "takeoff", "altitude": INF},
+    "change_speed 1e300": {"name": "change_speed", "speed": 1e300},
+    "set_home alt 1e300": {
+        "name": "set_home",
+        "use_current": False,
+        "lat": -35.0,
+        "lon": 149.0,
+        "alt_msl": 1e300,
+    },
+    "unknown command": {"name": "self_destruct"},
+    "not an object": 12,
+    "set_mode with a list": {"name": "set_mode", "mode": ["GUIDED"] * 1000},
+}
+
+
+def test_malformed_commands_are_answered_as_failed_and_the_agent_goes_on(
+    tmp_path: Path,
+) -> None:
+    change_speed = mavlink2.MAV_CMD_DO_CHANGE_SPEED
+    with (
+        ScriptedFlightController() as fcu,
+        ScriptedHub() as hub,
+        agent_process(hub.url, "t" * 32, VEHICLE, fcu.port, tmp_path) as agent,
+    ):
+        fcu.scripts[change_speed] = lambda _m: [Answer(0.0, mavlink2.MAV_RESULT_ACCEPTED)]
+        connection = hub.connections.get(timeout=30)
+        for number, (case, command) in enumerate(MALFORMED.items()):
+            outcome = hub.answer_to(connection, _command(f"bad-{number}", command))
+            assert outcome["status"] == "failed", (case, outcome)
+            assert "refused by the agent" in outcome["message"], (case, outcome)
+        for number, timeout_s in enumerate([1e300, -1, NAN, "soon"]):
+            frame = _command(f"deadline-{number}", {"name": "hold"}, timeout_s)
+            assert hub.answer_to(connection, frame)["status"] == "failed", timeout_s
+        # no request id to answer: read past, as any unusable frame
+        for frame in ["[" * 30_000, "{", '{"type": "command"}', json.dumps({"type": 5})]:
+            connection.send(frame)
+
+        good = _command("good", {"name": "change_speed", "speed": 3.0})
+        assert hub.answer_to(connection, good)["status"] == "accepted"
+        assert agent.poll() is None, "the agent is still running"
+        assert hub.connections.empty(), "and it never had to reconnect"
+        assert not [m for m in fcu.received if m.get_type() in ("PARAM_SET", "MISSION_COUNT")]
+
+
+def test_the_executor_answers_a_value_that_slipped_past_validation_as_failed() -> None:
+    """The agent's second line: a value no MAVLink field can hold fails the command,
+    naming the field, instead of raising out of the executor."""
+
+    async def both(executor: CommandExecutor) -> tuple[CommandOutcome, CommandOutcome]:
+        speed = await executor.execute(ChangeSpeedCommand.model_construct(speed=1e300))
+        goto = GotoCommand.model_construct(lat=1e300, lon=0.0, altitude=10.0)
+        return speed, await executor.execute(goto)
+
+    with ScriptedFlightController() as fcu:
+        speed, goto = with_executor(fcu, both)
+        sent = fcu.kinds()
+    assert speed.status == "failed"
+    assert "COMMAND_LONG not sent: param2: 1e+300 does not fit a float32" in speed.message
+    assert goto.status == "failed"
+    assert "COMMAND_INT not sent: x:" in goto.message
+    assert "COMMAND_LONG" not in sent
+    assert "COMMAND_INT" not in sent

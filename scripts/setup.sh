@@ -2,6 +2,8 @@
 # Installs everything the project needs, idempotently:
 #   scripts/setup.sh          the hub, agent and dashboard (for `make demo`)
 #   scripts/setup.sh --dev    plus test tools, Chromium and docker-compose (for `make test`)
+# Python packages come from the locks in requirements/ (scripts/lock.sh writes them),
+# npm packages from frontend/package-lock.json.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -39,11 +41,13 @@ if [ ! -x .venv/bin/python ]; then
     echo "==> creating .venv"
     python3 -m venv .venv
 fi
-extra="hub"
-[ $dev -eq 1 ] && extra="dev"
-echo "==> installing Python packages ([$extra])"
+lock="requirements/hub.txt"
+[ $dev -eq 1 ] && lock="requirements/dev.txt"
+echo "==> installing Python packages ($lock)"
 .venv/bin/python -m pip install -q --upgrade pip
-.venv/bin/python -m pip install -q -e ".[$extra]"
+# The exact versions and hashes scripts/lock.sh wrote, then the project itself on top.
+.venv/bin/python -m pip install -q --require-hashes -r "$lock"
+.venv/bin/python -m pip install -q --no-deps -e .
 
 cd frontend
 if [ ! -d node_modules ] || [ package-lock.json -nt node_modules/.package-lock.json ]; then

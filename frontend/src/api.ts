@@ -19,6 +19,7 @@ import type {
   FlightQuery,
   FlightTelemetry,
   HubConfig,
+  SafetyViolation,
 } from "./types";
 
 export class ApiError extends Error {
@@ -32,14 +33,6 @@ export class ApiError extends Error {
   ) {
     super(message);
   }
-}
-
-/** One broken safety rule in a 422 refusal. */
-export interface SafetyViolation {
-  rule: string;
-  message: string;
-  limit?: number | null;
-  value?: number | null;
 }
 
 export function apiUrl(path: string): URL {

@@ -2,6 +2,7 @@
 // first, a page at a time ("Load older" asks for entries before the last id shown).
 import { fetchAudit } from "./api";
 import { actionButton, element } from "./dom";
+import { Pager } from "./pager";
 import type { AuditEntry } from "./types";
 
 const PAGE_SIZE = 50;
@@ -31,28 +32,22 @@ export function formatAuditDetail(detail: Record<string, unknown> | null): strin
 export class AuditPanel {
   readonly element: HTMLElement;
   private readonly body: HTMLTableSectionElement;
-  private readonly status: HTMLElement;
-  private readonly moreButton: HTMLButtonElement;
-  private readonly refreshButton: HTMLButtonElement;
   private readonly actorFilter: HTMLInputElement;
   private readonly actionFilter: HTMLInputElement;
-  private lastId: number | null = null;
+  private readonly pager: Pager<AuditEntry>;
   /** The filters of the list on show, so "Load older" pages the same query. */
   private filters: { actor?: string; action?: string } = {};
-  /** Bumped by every refresh so a slow older page cannot land in a newer list. */
-  private generation = 0;
-  private loading = false;
 
   constructor(onClose: () => void) {
     this.actorFilter = element("input", { name: "actor", type: "search", placeholder: "any actor" });
     this.actionFilter = element("input", { name: "action", type: "search", placeholder: "any action" });
-    this.refreshButton = actionButton("audit-refresh", "Refresh", () => void this.refresh());
+    const refreshButton = actionButton("audit-refresh", "Refresh", () => void this.refresh());
     const filters = element(
       "form",
       { className: "audit-filters" },
       element("label", {}, "Actor ", this.actorFilter),
       element("label", {}, "Action ", this.actionFilter),
-      this.refreshButton,
+      refreshButton,
     );
     filters.addEventListener("submit", (event) => {
       event.preventDefault();
@@ -64,10 +59,10 @@ export class AuditPanel {
     this.body = element("tbody");
     const table = element("table", { className: "audit-table" }, element("thead", {}, head), this.body);
 
-    this.status = element("p", { className: "audit-status" });
-    this.status.dataset.field = "audit-status";
-    this.status.setAttribute("role", "status");
-    this.moreButton = actionButton("audit-more", "Load older", () => void this.loadOlder());
+    const status = element("p", { className: "audit-status" });
+    status.dataset.field = "audit-status";
+    status.setAttribute("role", "status");
+    const moreButton = actionButton("audit-more", "Load older", () => void this.pager.loadOlder());
 
     this.element = element(
       "aside",
@@ -79,13 +74,36 @@ export class AuditPanel {
         actionButton("close-audit", "Close", onClose),
       ),
       filters,
-      element("div", { className: "audit-scroll" }, table, this.status, this.moreButton),
+      element("div", { className: "audit-scroll" }, table, status, moreButton),
     );
     this.element.setAttribute("aria-label", "Audit log");
     this.element.addEventListener("keydown", (event) => {
       if (event.key === "Escape") onClose();
     });
     this.element.hidden = true;
+
+    this.pager = new Pager<AuditEntry>({
+      fetch: async (beforeId) => {
+        const { entries } = await fetchAudit({ limit: PAGE_SIZE, beforeId, ...this.filters });
+        // The audit log gives no cursor: a full page may have older entries before its last.
+        const more = entries.length === PAGE_SIZE;
+        return { items: entries, nextBeforeId: more ? entries[entries.length - 1].id : null };
+      },
+      clear: () => this.body.replaceChildren(),
+      show: (entries) => {
+        for (const entry of entries) this.body.append(this.row(entry));
+      },
+      describe: (more) => {
+        const shown = this.body.rows.length;
+        if (shown === 0) return "No entries.";
+        return more ? "" : `${shown} ${shown === 1 ? "entry" : "entries"}; that is all.`;
+      },
+      describeError: (message) => `Could not load the audit log: ${message}`,
+      status,
+      moreButton,
+      refreshButton,
+      busy: this.element,
+    });
   }
 
   get isOpen(): boolean {
@@ -103,48 +121,11 @@ export class AuditPanel {
 
   /** Reloads the newest page with the current filters. */
   async refresh(): Promise<void> {
-    const generation = ++this.generation;
-    this.lastId = null;
     this.filters = {
       actor: this.actorFilter.value.trim() || undefined,
       action: this.actionFilter.value.trim() || undefined,
     };
-    this.body.replaceChildren();
-    this.moreButton.hidden = true;
-    await this.load(generation);
-  }
-
-  private async loadOlder(): Promise<void> {
-    if (this.loading || this.lastId === null) return;
-    await this.load(this.generation);
-  }
-
-  private async load(generation: number): Promise<void> {
-    this.setLoading(true);
-    this.setStatus("Loading…");
-    try {
-      const { entries } = await fetchAudit({
-        limit: PAGE_SIZE,
-        beforeId: this.lastId ?? undefined,
-        ...this.filters,
-      });
-      if (generation !== this.generation) return;
-      for (const entry of entries) this.body.append(this.row(entry));
-      if (entries.length > 0) this.lastId = entries[entries.length - 1].id;
-      const more = entries.length === PAGE_SIZE;
-      this.moreButton.hidden = !more;
-      const shown = this.body.rows.length;
-      this.setStatus(
-        shown === 0 ? "No entries." : more ? "" : `${shown} ${shown === 1 ? "entry" : "entries"}; that is all.`,
-      );
-    } catch (error) {
-      if (generation !== this.generation) return;
-      this.setStatus(`Could not load the audit log: ${error instanceof Error ? error.message : String(error)}`);
-      // Let the user retry the same page.
-      this.moreButton.hidden = this.lastId === null;
-    } finally {
-      if (generation === this.generation) this.setLoading(false);
-    }
+    await this.pager.refresh();
   }
 
   private row(entry: AuditEntry): HTMLTableRowElement {
@@ -168,17 +149,5 @@ export class AuditPanel {
     }
     tr.cells[0].title = new Date(entry.time * 1000).toISOString();
     return tr;
-  }
-
-  private setLoading(loading: boolean): void {
-    this.loading = loading;
-    this.moreButton.disabled = loading;
-    this.refreshButton.disabled = loading;
-    this.element.setAttribute("aria-busy", String(loading));
-  }
-
-  private setStatus(text: string): void {
-    this.status.textContent = text;
-    this.status.hidden = text === "";
   }
 }

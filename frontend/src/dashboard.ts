@@ -14,7 +14,13 @@ import { FleetMap } from "./map";
 import { ReplayPanel } from "./replayPanel";
 import { type CurrentUser, type HubConfig, type HubToClient, can } from "./types";
 
-const OFFLINE_CONFIG: HubConfig = { basemap_url: null, basemap_attribution: "", basemap_max_zoom: 19 };
+// Without the hub's config there is no protocol version to compare: assume ours.
+const OFFLINE_CONFIG: HubConfig = {
+  basemap_url: null,
+  basemap_attribution: "",
+  basemap_max_zoom: 19,
+  protocol: PROTOCOL_VERSION,
+};
 /** setTimeout's ceiling (about 24.8 days). */
 const MAX_TIMER_MS = 2 ** 31 - 1;
 

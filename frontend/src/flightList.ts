@@ -4,6 +4,7 @@ import { fetchFlights } from "./api";
 import { formatAuditTime } from "./auditPanel";
 import { actionButton, element, field } from "./dom";
 import { MISSING } from "./format";
+import { Pager } from "./pager";
 import { formatClock } from "./replayTrack";
 import type { Flight } from "./types";
 
@@ -46,19 +47,13 @@ export function flightCells(flight: Flight): Record<Column, string> {
 export class FlightList {
   readonly element: HTMLElement;
   private readonly body: HTMLTableSectionElement;
-  private readonly status: HTMLElement;
-  private readonly moreButton: HTMLButtonElement;
-  private readonly refreshButton: HTMLButtonElement;
   private readonly vehicleFilter: HTMLInputElement;
   private readonly vehicleChoices: HTMLDataListElement;
+  private readonly pager: Pager<Flight>;
   private readonly rows = new Map<number, HTMLTableRowElement>();
   private readonly flights = new WeakMap<HTMLTableRowElement, Flight>();
-  private nextBeforeId: number | null = null;
   /** The vehicle of the list on show, so "Load older" pages the same query. */
   private vehicleId: string | undefined;
-  /** Bumped by every refresh so a slow older page cannot land in a newer list. */
-  private generation = 0;
-  private loading = false;
   private selectedId: number | null = null;
 
   constructor(private readonly onPick: (flight: Flight) => void) {
@@ -75,18 +70,18 @@ export class FlightList {
     this.vehicleFilter.addEventListener("change", () => {
       if ((this.vehicleFilter.value.trim() || undefined) !== this.vehicleId) void this.refresh();
     });
-    this.refreshButton = actionButton("flights-refresh", "Refresh", () => void this.refresh());
+    const refreshButton = actionButton("flights-refresh", "Refresh", () => void this.refresh());
     const filters = element(
       "form",
       { className: "flight-filters" },
       element("label", {}, "Vehicle ", this.vehicleFilter),
       this.vehicleChoices,
-      this.refreshButton,
+      refreshButton,
     );
     filters.addEventListener("submit", (event) => {
       event.preventDefault();
       // Enter also fires "change", which may have started this very refresh.
-      if (!this.loading) void this.refresh();
+      if (!this.pager.loading) void this.refresh();
     });
 
     const head = element("tr");
@@ -101,18 +96,42 @@ export class FlightList {
     });
     const table = element("table", { className: "flight-table" }, element("thead", {}, head), this.body);
 
-    this.status = field("p", "flights-status", { className: "panel-status" });
-    this.status.setAttribute("role", "status");
-    this.moreButton = actionButton("flights-more", "Load older", () => void this.loadOlder());
-    this.moreButton.hidden = true;
+    const status = field("p", "flights-status", { className: "panel-status" });
+    status.setAttribute("role", "status");
+    const moreButton = actionButton("flights-more", "Load older", () => void this.pager.loadOlder());
+    moreButton.hidden = true;
 
     this.element = element(
       "section",
       { className: "flight-list" },
       filters,
-      element("div", { className: "flight-scroll" }, table, this.status, this.moreButton),
+      element("div", { className: "flight-scroll" }, table, status, moreButton),
     );
     this.element.setAttribute("aria-label", "Stored flights");
+
+    this.pager = new Pager<Flight>({
+      fetch: async (beforeId) => {
+        const page = await fetchFlights({ limit: PAGE_SIZE, vehicleId: this.vehicleId, beforeId });
+        return { items: page.flights, nextBeforeId: page.next_before_id ?? null };
+      },
+      clear: () => {
+        this.body.replaceChildren();
+        this.rows.clear();
+      },
+      show: (flights) => this.show(flights),
+      describe: (more) => {
+        const shown = this.rows.size;
+        if (shown === 0) {
+          return this.vehicleId ? `No stored flights of ${this.vehicleId}.` : "No stored flights yet.";
+        }
+        return more ? "" : `${shown} ${shown === 1 ? "flight" : "flights"}; that is all.`;
+      },
+      describeError: (message) => `Could not load the flights: ${message}`,
+      status,
+      moreButton,
+      refreshButton,
+      busy: this.element,
+    });
   }
 
   /** Offers these vehicle ids in the filter's suggestions. */
@@ -136,58 +155,19 @@ export class FlightList {
 
   /** Reloads the newest page with the current filter. */
   async refresh(): Promise<void> {
-    const generation = ++this.generation;
-    this.nextBeforeId = null;
     this.vehicleId = this.vehicleFilter.value.trim() || undefined;
-    this.body.replaceChildren();
-    this.rows.clear();
-    this.moreButton.hidden = true;
-    await this.load(generation);
+    await this.pager.refresh();
   }
 
-  private async loadOlder(): Promise<void> {
-    if (this.loading || this.nextBeforeId === null) return;
-    await this.load(this.generation);
-  }
-
-  private async load(generation: number): Promise<void> {
-    this.setLoading(true);
-    this.setStatus("Loading…");
-    try {
-      const page = await fetchFlights({
-        limit: PAGE_SIZE,
-        vehicleId: this.vehicleId,
-        beforeId: this.nextBeforeId ?? undefined,
-      });
-      if (generation !== this.generation) return;
-      for (const flight of page.flights) {
-        if (this.rows.has(flight.id)) continue;
-        const row = this.row(flight);
-        this.rows.set(flight.id, row);
-        this.body.append(row);
-      }
-      this.suggestVehicles(page.flights.map((flight) => flight.vehicle_id));
-      this.nextBeforeId = page.next_before_id ?? null;
-      this.moreButton.hidden = this.nextBeforeId === null;
-      const shown = this.rows.size;
-      this.setStatus(
-        shown === 0
-          ? this.vehicleId
-            ? `No stored flights of ${this.vehicleId}.`
-            : "No stored flights yet."
-          : this.nextBeforeId !== null
-            ? ""
-            : `${shown} ${shown === 1 ? "flight" : "flights"}; that is all.`,
-      );
-      this.select(this.selectedId);
-    } catch (error) {
-      if (generation !== this.generation) return;
-      this.setStatus(`Could not load the flights: ${error instanceof Error ? error.message : String(error)}`);
-      // Let the user retry the same page.
-      this.moreButton.hidden = this.nextBeforeId === null;
-    } finally {
-      if (generation === this.generation) this.setLoading(false);
+  private show(flights: Flight[]): void {
+    for (const flight of flights) {
+      if (this.rows.has(flight.id)) continue;
+      const row = this.row(flight);
+      this.rows.set(flight.id, row);
+      this.body.append(row);
     }
+    this.suggestVehicles(flights.map((flight) => flight.vehicle_id));
+    this.select(this.selectedId);
   }
 
   private pickFrom(target: EventTarget | null): void {
@@ -209,17 +189,5 @@ export class FlightList {
     tr.cells[1].title = new Date(flight.start_time * 1000).toISOString();
     this.flights.set(tr, flight);
     return tr;
-  }
-
-  private setLoading(loading: boolean): void {
-    this.loading = loading;
-    this.moreButton.disabled = loading;
-    this.refreshButton.disabled = loading;
-    this.element.setAttribute("aria-busy", String(loading));
-  }
-
-  private setStatus(text: string): void {
-    this.status.textContent = text;
-    this.status.hidden = text === "";
   }
 }

@@ -356,7 +356,10 @@ export interface paths {
          * @description Send one command to many vehicles at once, concurrently; one result per vehicle.
          *
          *     Each vehicle goes through the same checks as a single command (policy, safety
-         *     rails, audit), so one refusal does not hold back the others.
+         *     rails, audit), so one refusal does not hold back the others. A selection naming
+         *     a vehicle the hub does not know is refused whole (422), before anything is sent.
+         *     Each vehicle reached counts as one command in the caller's rate limit; a call is
+         *     accepted while the caller has budget left, so a fleet-wide RTL is never split.
          */
         post: operations["send_group_command_api_v1_fleet_commands_post"];
         delete?: never;
@@ -587,6 +590,10 @@ export interface paths {
         /**
          * Upload Tlog
          * @description An agent uploads the .tlog it recorded on board (body: the raw file).
+         *
+         *     The body must be a .tlog (timestamped MAVLink frames: 422 otherwise, at the first
+         *     record that is not), and fit the vehicle's quota (``max_tlog_bytes_per_vehicle``
+         *     over all its files: 413 otherwise; ``max_tlog_bytes`` bounds one file).
          */
         post: operations["upload_tlog_api_v1_vehicles__vehicle_id__tlogs_post"];
         delete?: never;
@@ -942,7 +949,7 @@ export interface components {
             } | null;
             /**
              * Items
-             * @description The vehicle's mission, for a mission download.
+             * @description The vehicle's mission, for a mission download (home first).
              */
             items?: components["schemas"]["MissionItem"][] | null;
         };
@@ -1022,6 +1029,8 @@ export interface components {
             severity: number | null;
             /** Text */
             text: string;
+            /** Mission Item */
+            mission_item?: number | null;
         };
         /** Flight */
         Flight: {
@@ -1144,6 +1153,12 @@ export interface components {
             telemetry_written: number;
             /** Write Retries */
             write_retries: number;
+            /**
+             * Rows Spooled
+             * @description audit and command-log rows waiting for the database
+             * @default 0
+             */
+            rows_spooled: number;
         };
         /**
          * HoldCommand
@@ -1328,7 +1343,7 @@ export interface components {
             lon: number;
             /**
              * Alt
-             * @description metres
+             * @description metres (a float32)
              * @default 0
              */
             alt: number;
@@ -1411,7 +1426,10 @@ export interface components {
              * @description e.g. WPNAV_SPEED
              */
             param: string;
-            /** Value */
+            /**
+             * Value
+             * @description PARAM_SET.param_value is a float32
+             */
             value: number;
         };
         /** ParamUpdate */
@@ -1679,7 +1697,10 @@ export interface components {
         UserCreate: {
             /** Username */
             username: string;
-            /** Password */
+            /**
+             * Password
+             * @description at least 12 characters, and not a common or guessable one
+             */
             password: string;
             role: components["schemas"]["Role"];
         };
@@ -1796,6 +1817,16 @@ export interface components {
             gps_fix: number;
             /** Satellites */
             satellites?: number | null;
+            /**
+             * Ready To Fly
+             * @description the autopilot's pre-arm checks and estimator allow a take-off (EKF_STATUS_REPORT, SYS_STATUS, PreArm texts); null until it has said
+             */
+            ready_to_fly?: boolean | null;
+            /**
+             * Not Ready Reason
+             * @description why it is not ready, when it is not
+             */
+            not_ready_reason?: string | null;
             /** Home Lat */
             home_lat?: number | null;
             /** Home Lon */

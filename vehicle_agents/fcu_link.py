@@ -24,6 +24,7 @@ from pymavlink import mavutil
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from gcs.mavlink_wire import out_of_range
+from gcs.retry import Backoff, Retries
 from vehicle_agents.modes import ModeTable, mode_table_for
 
 log = logging.getLogger(__name__)
@@ -37,8 +38,7 @@ class FcuTimeouts:
     """Every wait on the flight controller, named, with defaults."""
 
     heartbeat_s: float = 3.0  # no heartbeat for this long: the link is lost
-    reconnect_initial_s: float = 0.5
-    reconnect_max_s: float = 5.0
+    reconnect: Backoff = Backoff(initial_s=0.5, max_s=5.0)
     read_poll_s: float = 0.25  # how often the reader thread checks for shutdown
 
 
@@ -132,16 +132,15 @@ class FcuLink:
     async def run(self) -> None:
         """Keep the link up for as long as the task lives: connect, read, reconnect."""
         self._loop = asyncio.get_running_loop()
-        backoff = self.timeouts.reconnect_initial_s
+        retries = Retries(self.timeouts.reconnect)
         while True:
             try:
                 self._connection = await asyncio.to_thread(self._open)
             except OSError as error:
                 log.warning("flight controller %s unreachable: %s", self.url, error)
-                await asyncio.sleep(backoff)
-                backoff = min(backoff * 2, self.timeouts.reconnect_max_s)
+                await retries.wait()
                 continue
-            backoff = self.timeouts.reconnect_initial_s
+            retries.reset()
             log.info("flight controller link open: %s", self.url)
             stop = threading.Event()
             reason = "connection closed"
@@ -161,7 +160,7 @@ class FcuLink:
             # (not reached when the agent is stopping: a shutdown is no lost link)
             self._set_up(False, reason)
             self.counters.reconnects += 1
-            await asyncio.sleep(backoff)
+            await retries.wait()
 
     def _open(self) -> Any:
         connection = mavutil.mavlink_connection(

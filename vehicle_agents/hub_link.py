@@ -33,6 +33,7 @@ from gcs.protocol import (
     encode,
     hub_to_agent,
 )
+from gcs.retry import Backoff, Retries
 from vehicle_agents.outbox import Outbox
 
 log = logging.getLogger(__name__)
@@ -43,10 +44,10 @@ CommandHandler = Callable[[Command], Awaitable[CommandOutcome]]
 @dataclass(frozen=True)
 class HubTimeouts:
     welcome_s: float = 5.0
-    reconnect_initial_s: float = 0.5
-    reconnect_max_s: float = 10.0
-    # A refused token will not fix itself quickly; retry slowly instead of hammering.
-    unauthorized_retry_s: float = 30.0
+    reconnect: Backoff = Backoff(initial_s=0.5, max_s=10.0)
+    # A refused token will not fix itself quickly; retry slowly instead of hammering
+    # (on average 7.5 s, then 15 s, then 30 s from the third refusal in a row).
+    unauthorized: Backoff = Backoff(initial_s=15.0, max_s=60.0)
     ping_interval_s: float = 5.0
     live_state_interval_s: float = 0.5
 
@@ -93,9 +94,11 @@ class HubLink:
         self._ever_welcomed = False
 
     async def run(self) -> None:
-        backoff = self.timeouts.reconnect_initial_s
+        # Jittered, so a fleet that lost its hub does not knock again all at once.
+        unreachable = Retries(self.timeouts.reconnect)
+        refused = Retries(self.timeouts.unauthorized)
         while True:
-            delay = backoff
+            retries = unreachable
             try:
                 await self._session()
             except* HubClosed as group:
@@ -103,7 +106,7 @@ class HubLink:
                 assert isinstance(closed, HubClosed)
                 if closed.code == CloseCode.UNAUTHORIZED:
                     log.error("hub refused this agent's token: %s", closed.reason)
-                    delay = self.timeouts.unauthorized_retry_s
+                    retries = refused
                 else:
                     log.warning("hub closed the link (%s %s)", closed.code, closed.reason)
             except* ConnectionClosed as group:
@@ -115,11 +118,10 @@ class HubLink:
                 self.connected.clear()
                 self.disconnected.set()
             if self._ever_welcomed:
-                backoff = self.timeouts.reconnect_initial_s
+                unreachable.reset()
+                refused.reset()
                 self._ever_welcomed = False
-            else:
-                backoff = min(backoff * 2, self.timeouts.reconnect_max_s)
-            await asyncio.sleep(delay)
+            await retries.wait()
 
     async def _session(self) -> None:
         async with connect(

@@ -2,17 +2,16 @@
 
 A failed upload never ends the uploader and never drops the file: the operator gets an
 event saying what went wrong, and the file is tried again with exponential backoff (with
-jitter, so a fleet that lands together does not retry in step)."""
+full jitter, so a fleet that lands together does not retry in step)."""
 
 from __future__ import annotations
 
 import asyncio
 import logging
-import random
 from collections.abc import Callable
-from dataclasses import dataclass
 from pathlib import Path
 
+from gcs.retry import Backoff, Retries
 from vehicle_agents.fcu_link import MavMessage
 from vehicle_agents.tlog import TlogRecorder, TlogUploadError, upload_tlog
 
@@ -26,18 +25,8 @@ Notify = Callable[[str, int], None]
 """Raise an event for the operator: its text and MAV_SEVERITY."""
 
 
-@dataclass(frozen=True)
-class UploadBackoff:
-    """Waits between failed attempts: doubling from ``initial_s`` up to ``max_s``."""
-
-    initial_s: float = 5.0
-    max_s: float = 600.0
-
-    def delay(self, failures: int, draw: Callable[[], float] = random.random) -> float:
-        """The wait after ``failures`` failures in a row: "equal jitter", between half the
-        exponential step and the whole of it, so retries spread out but never hammer."""
-        step: float = min(self.initial_s * 2.0 ** max(failures - 1, 0), self.max_s)
-        return step / 2 + draw() * step / 2
+# Waits between failed uploads: up to 5 s after the first, doubling to 10 min.
+UPLOAD_BACKOFF = Backoff(initial_s=5.0, max_s=600.0)
 
 
 class TlogUploader:
@@ -47,13 +36,13 @@ class TlogUploader:
         url: str,
         token: str,
         notify: Notify | None = None,
-        backoff: UploadBackoff | None = None,
+        backoff: Backoff = UPLOAD_BACKOFF,
     ) -> None:
         self.recorder = recorder
         self.url = url
         self._token = token
         self._notify = notify or (lambda text, severity: None)
-        self.backoff = backoff or UploadBackoff()
+        self.backoff = backoff
         self._landed = asyncio.Event()
         # The last problem told to the operator, per file: a repeat is logged, not raised.
         self._reported: dict[Path, str] = {}
@@ -64,7 +53,7 @@ class TlogUploader:
             self._landed.set()
 
     async def run(self) -> None:
-        failures = 0
+        retries = Retries(self.backoff)
         while True:
             await self._landed.wait()
             self._landed.clear()
@@ -72,15 +61,14 @@ class TlogUploader:
                 path = self.recorder.finished[0]
                 problem = await self._upload(path)
                 if problem is None:
-                    failures = 0
+                    retries.reset()
                     continue
-                failures += 1
                 # Kept, at the back of the queue: a file the hub refuses does not hold up
                 # the flights after it.
                 self.recorder.finished.rotate(-1)
-                wait = self.backoff.delay(failures)
+                wait = retries.next_delay()
                 self._report(path, problem, wait)
-                await asyncio.sleep(wait)
+                await retries.sleep(wait)
 
     async def _upload(self, path: Path) -> str | None:
         """None once the hub has the file, else what went wrong."""

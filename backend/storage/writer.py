@@ -24,6 +24,7 @@ from backend.storage.logbook import Logbook
 from backend.storage.records import LostFrames, StoredEvent, StoredRecord, TelemetryEnvelope
 from backend.storage.repository import Repository
 from backend.storage.sequences import Gap, SequenceLedger, StreamKey
+from gcs.retry import Backoff, Retries
 
 # Told, after each commit, how far each touched agent stream is stored without a hole
 # (its ack) and which holes newly appeared (to ask the agent for).
@@ -57,16 +58,14 @@ class StorageWriter:
         source: ReliableSubscription,
         batch_size: int,
         flush_interval_s: float,
-        retry_backoff_s: float = 0.5,
-        max_backoff_s: float = 10.0,
+        retry: Backoff = Backoff(initial_s=0.5, max_s=10.0),
     ) -> None:
         self._repository = repository
         self._logbook = logbook
         self._source = source
         self._batch_size = batch_size
         self._flush_interval_s = flush_interval_s
-        self._retry_backoff_s = retry_backoff_s
-        self._max_backoff_s = max_backoff_s
+        self._retry = retry
         self._batch: list[StoredRecord] = []
         self._writing: asyncio.Future[None] | None = None
         self.tracker = FlightTracker(open_flights=logbook.open_flights())
@@ -113,7 +112,7 @@ class StorageWriter:
                 break
 
     async def _write_until_stored(self) -> None:
-        backoff = self._retry_backoff_s
+        retries = Retries(self._retry)
         while True:
             try:
                 started = time.monotonic()
@@ -129,8 +128,7 @@ class StorageWriter:
                         "database unavailable, holding %d records: %s", len(self._batch), error
                     )
                 self.stats.database_available = False
-                await asyncio.sleep(backoff)
-                backoff = min(backoff * 2, self._max_backoff_s)
+                await retries.wait()
                 continue
             except SQLAlchemyError as error:
                 # Not the database going away: something in this batch it will never take.

@@ -13,16 +13,17 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 from backend.auth.accounts import Accounts
 from backend.storage.database import make_engine
 from gcs.protocol import AGENT_WS_PATH, CloseCode
+from gcs.retry import Backoff
 from tests.conftest import ADMIN_PASSWORD, hub_settings
 from tests.helpers import access_token, api_client, running_hub
 from tests.integration.test_hub_bad_input import _close_code, scripted_agent, websocket
 from vehicle_agents.tlog import TlogRecorder
-from vehicle_agents.tlog_uploads import TlogUploader, UploadBackoff
+from vehicle_agents.tlog_uploads import UPLOAD_BACKOFF, TlogUploader
 
 # Tokens as an operator writes them into a compose file: no gcs_v_ prefix.
 OPERATOR_TOKEN = "field-kit-alpha-0123456789abcdef"
 LATER_TOKEN = "field-kit-alpha-rotated-9876543210"
-FAST_RETRIES = UploadBackoff(initial_s=0.05, max_s=0.2)
+FAST_RETRIES = Backoff(initial_s=0.05, max_s=0.2)
 
 
 def _packed(message: Any) -> Any:
@@ -136,10 +137,8 @@ def test_a_refused_upload_is_reported_kept_and_retried(tmp_path: Path) -> None:
             assert stored["size"] == flight.parent.joinpath("uploaded", flight.name).stat().st_size
 
 
-def test_upload_backoff_doubles_with_jitter_up_to_its_cap() -> None:
-    backoff = UploadBackoff(initial_s=2.0, max_s=60.0)
-    assert [backoff.delay(n, lambda: 1.0) for n in (1, 2, 3, 6, 20)] == [2, 4, 8, 60, 60]
-    assert [backoff.delay(n, lambda: 0.0) for n in (1, 2, 3)] == [1, 2, 4]
+def test_upload_backoff_doubles_from_5_s_to_10_min() -> None:
+    assert [UPLOAD_BACKOFF.cap(n) for n in (1, 2, 3, 8, 20)] == [5, 10, 20, 600, 600]
 
 
 def _refused_agent(base: str, token: str) -> tuple[int | None, str]:

@@ -1,0 +1,92 @@
+"""The one retry policy: full jitter under a doubling cap, so a fleet does not knock in step."""
+
+from __future__ import annotations
+
+import asyncio
+import random
+import statistics
+from collections import Counter
+from collections.abc import Iterator
+
+import pytest
+
+from gcs.retry import Backoff, Retries
+
+AGENTS = 1000
+ROUNDS = 6
+
+
+@pytest.fixture(autouse=True)
+def seeded() -> Iterator[None]:
+    # tenacity draws from the module-level generator: seeded for a repeatable run, and
+    # given back as it was.
+    state = random.getstate()
+    random.seed(14_8)
+    yield
+    random.setstate(state)
+
+
+def test_the_cap_doubles_from_initial_to_max() -> None:
+    backoff = Backoff(initial_s=0.5, max_s=10.0)
+    assert [backoff.cap(n) for n in range(1, 8)] == [0.5, 1, 2, 4, 8, 10, 10]
+
+
+@pytest.mark.parametrize("failures", [1, 3, 9])
+def test_waits_are_uniform_between_zero_and_the_cap(failures: int) -> None:
+    backoff = Backoff(initial_s=0.5, max_s=10.0)
+    cap = backoff.cap(failures)
+    waits = [backoff.delay(failures) for _ in range(4000)]
+    assert all(0 <= wait <= cap for wait in waits)
+    # Full jitter, not "equal jitter" (which never waits less than half the cap) and not
+    # a fixed step: the whole of [0, cap] is used, evenly.
+    assert min(waits) < 0.01 * cap
+    assert max(waits) > 0.99 * cap
+    assert statistics.mean(waits) == pytest.approx(cap / 2, rel=0.05)
+    tenths = Counter(min(int(wait / cap * 10), 9) for wait in waits)
+    assert all(300 <= tenths[tenth] <= 500 for tenth in range(10)), tenths
+
+
+def test_a_success_starts_the_waits_over() -> None:
+    retries = Retries(Backoff(initial_s=1.0, max_s=100.0))
+    for _ in range(5):
+        retries.next_delay()
+    assert retries.backoff.cap(retries.failures) == 16
+    retries.reset()
+    assert retries.next_delay() <= 1.0
+
+
+def test_a_fleet_that_lost_its_hub_does_not_knock_again_in_step() -> None:
+    """A thousand agents lose the hub at the same instant and keep failing: in every
+    round, their attempts spread over the round's window instead of landing together."""
+    attempts: list[list[float]] = [[] for _ in range(ROUNDS)]
+
+    async def agent() -> None:
+        clock = 0.0
+
+        async def sleep(delay: float) -> None:  # virtual time: the test takes no real time
+            nonlocal clock
+            clock += delay
+
+        retries = Retries(Backoff(initial_s=0.5, max_s=10.0), sleep)
+        for round_ in range(ROUNDS):
+            await retries.wait()
+            attempts[round_].append(clock)
+
+    async def fleet() -> None:
+        async with asyncio.TaskGroup() as tasks:
+            for _ in range(AGENTS):
+                tasks.create_task(agent())
+
+    asyncio.run(fleet())
+    for round_, instants in enumerate(attempts, start=1):
+        # Lock-step would put all 1,000 in one 10 ms slot; the first round's window is
+        # 0.5 s wide (50 slots, 20 agents each on average), later ones wider still.
+        busiest = Counter(int(at / 0.01) for at in instants).most_common(1)[0][1]
+        assert busiest <= AGENTS * 0.05, (round_, busiest)
+
+
+def test_a_policy_must_grow_from_a_positive_start() -> None:
+    with pytest.raises(ValueError, match="initial_s"):
+        Backoff(initial_s=0.0, max_s=1.0)
+    with pytest.raises(ValueError, match="initial_s"):
+        Backoff(initial_s=2.0, max_s=1.0)

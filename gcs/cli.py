@@ -111,6 +111,14 @@ def _demo(args: argparse.Namespace) -> int:
     )
     fleet = LocalFleet(plan)
     log = logging.getLogger("gcs.demo")
+    # Every way of asking the launcher to end stops the fleet the way Ctrl-C does: also
+    # SIGINT where the shell started us with it ignored (`gcs demo &` in a script), and
+    # SIGHUP (the terminal closed), unless ignored on purpose (nohup).
+    stopping = [signal.SIGINT, signal.SIGTERM]
+    if signal.getsignal(signal.SIGHUP) is not signal.SIG_IGN:
+        stopping.append(signal.SIGHUP)
+    for signum in stopping:
+        signal.signal(signum, _interrupt)
     try:
         fleet.start()
         fleet.wait_until_ready()
@@ -123,19 +131,21 @@ def _demo(args: argparse.Namespace) -> int:
             "Press Ctrl-C to stop.\n",
             flush=True,
         )
-        signal.signal(signal.SIGTERM, _interrupt)
         while True:
             fleet.check_alive()
             time.sleep(1.0)  # supervising: notice a child that died
     except KeyboardInterrupt:
         log.info("stopping")
     finally:
+        # A second signal must not cut the orderly stop short (the stop is bounded).
+        for signum in stopping:
+            signal.signal(signum, signal.SIG_IGN)
         fleet.stop()
     return 0
 
 
 def _interrupt(signum: int, frame: object) -> None:
-    """SIGTERM stops the demo the way Ctrl-C does."""
+    """A stopping signal stops the demo the way Ctrl-C does."""
     raise KeyboardInterrupt
 
 

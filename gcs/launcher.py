@@ -6,6 +6,7 @@
 from __future__ import annotations
 
 import contextlib
+import ctypes
 import hmac
 import json
 import logging
@@ -19,11 +20,14 @@ import sys
 import time
 import urllib.error
 import urllib.request
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import IO
 
 log = logging.getLogger(__name__)
+
+PR_SET_PDEATHSIG = 1  # linux/prctl.h
 
 # ArduPilot's SITL home (CMAC, Canberra): a place every ArduPilot developer knows.
 DEFAULT_HOME = (-35.363262, 149.165237, 584.0)
@@ -98,6 +102,23 @@ class FleetPlan:
         east = index * VEHICLE_SPACING_M
         dlon = math.degrees(east / (EARTH_RADIUS_M * math.cos(math.radians(lat))))
         return lat, lon + dlon, alt
+
+
+def end_with_parent(signum: int = signal.SIGTERM) -> Callable[[], None] | None:
+    """A ``preexec_fn`` by which a child gets ``signum`` when the thread that started it
+    ends, however it ends (Linux's PR_SET_PDEATHSIG, kept across exec). The child's own
+    SIGTERM handling then stops it cleanly. None where the kernel has no such thing."""
+    if not sys.platform.startswith("linux"):
+        return None
+    prctl = ctypes.CDLL(None, use_errno=True).prctl
+    parent = os.getpid()
+
+    def arm() -> None:  # runs in the child, between fork and exec
+        prctl(PR_SET_PDEATHSIG, signum, 0, 0, 0)
+        if os.getppid() != parent:  # the parent died before the line above: too late
+            os.kill(os.getpid(), signum)
+
+    return arm
 
 
 @dataclass
@@ -208,6 +229,9 @@ class LocalFleet:
             # Own session: a Ctrl-C reaches only the launcher, which stops the
             # children in order (agents before the hub, so the hub stores everything).
             start_new_session=True,
+            # ...and should the launcher die without stopping them (SIGKILL, a crash),
+            # they end too instead of living on as orphans.
+            preexec_fn=end_with_parent(),
         )
         self.processes.append(ManagedProcess(name, process, log_path, log_file))
 

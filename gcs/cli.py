@@ -10,6 +10,7 @@ import argparse
 import asyncio
 import contextlib
 import logging
+import os
 import signal
 import sys
 import time
@@ -53,7 +54,10 @@ def _hub(args: argparse.Namespace) -> int:
         "forwarded_allow_ips": args.forwarded_allow_ips,
     }
     settings = HubSettings(**{key: value for key, value in overrides.items() if value is not None})
-    settings.data_dir.mkdir(parents=True, exist_ok=True)
+    # Everything the hub writes (database, uploaded .tlogs) is for its own user only.
+    os.umask(0o077)
+    settings.data_dir.mkdir(mode=0o700, parents=True, exist_ok=True)
+    settings.data_dir.chmod(0o700)
     uvicorn.run(
         create_app(settings),
         host=settings.host,

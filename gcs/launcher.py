@@ -82,7 +82,7 @@ class FleetPlan:
             stored = json.loads(path.read_text())
             return cls(data_dir=data_dir, **values, **stored)  # type: ignore[arg-type]
         plan = cls(data_dir=data_dir, **values)  # type: ignore[arg-type]
-        data_dir.mkdir(parents=True, exist_ok=True)
+        data_dir.mkdir(mode=0o700, parents=True, exist_ok=True)
         path.touch(mode=0o600)
         path.write_text(json.dumps({"admin_password": plan.admin_password, "secret": plan.secret}))
         return plan
@@ -142,7 +142,9 @@ class LocalFleet:
         return self.plan.vehicle_id(index)
 
     def start(self, hub_env: dict[str, str] | None = None) -> None:
-        self.log_dir.mkdir(parents=True, exist_ok=True)
+        # The data folder and the logs are the operator's alone (0700 folders, 0600 files).
+        self.plan.data_dir.mkdir(mode=0o700, parents=True, exist_ok=True)
+        self.log_dir.mkdir(mode=0o700, parents=True, exist_ok=True)
         self.start_hub(hub_env)
         for index in range(self.plan.vehicles):
             self.start_vehicle(index)
@@ -156,8 +158,9 @@ class LocalFleet:
             # A local demo on plain HTTP: no Secure cookies, no production secret checks.
             "GCS_ENVIRONMENT": "development",
             "GCS_ADMIN_PASSWORD": plan.admin_password,
-            "GCS_AGENT_TOKENS": tokens,
         }
+        if tokens:  # a hub alone (no vehicles) has none to enrol
+            env["GCS_AGENT_TOKENS"] = tokens
         self.spawn(
             "hub",
             ["hub", "--port", str(plan.port), "--data-dir", str(plan.data_dir)],
@@ -219,6 +222,8 @@ class LocalFleet:
 
     def spawn(self, name: str, args: list[str], env: dict[str, str] | None = None) -> None:
         log_path = self.log_dir / f"{name}.log"
+        log_path.touch(mode=0o600)
+        log_path.chmod(0o600)  # also one written before logs were private
         log_file = log_path.open("ab")
         process = subprocess.Popen(
             [sys.executable, "-m", "gcs", *args],

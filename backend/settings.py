@@ -11,6 +11,7 @@ from pydantic import AliasChoices, Field, SecretStr, model_validator
 from pydantic_settings import BaseSettings, SettingsConfigDict
 
 from backend.storage.retention import RetentionPolicy
+from gcs.addresses import is_loopback
 from gcs.protocol import MAX_FRAME_BYTES
 
 REPO_ROOT = Path(__file__).resolve().parent.parent
@@ -39,6 +40,10 @@ class HubSettings(BaseSettings):
     )
     environment: Literal["development", "production"] = Field(
         default="production", description="development relaxes cookie and secret checks"
+    )
+    allow_development_on_network: bool = Field(
+        default=False,
+        description="let a development hub listen beyond loopback (a trusted field LAN)",
     )
     admin_password: SecretStr | None = Field(
         default=None, description="password of the first admin; generated and printed if unset"
@@ -100,6 +105,13 @@ class HubSettings(BaseSettings):
     @model_validator(mode="after")
     def _no_default_secrets_in_production(self) -> HubSettings:
         if self.environment == "development":
+            if not self.on_loopback and not self.allow_development_on_network:
+                raise ValueError(
+                    f"refusing to listen on {self.host} in development mode, where default "
+                    "passwords, short agent tokens and plain-HTTP cookies pass: anyone who "
+                    "can reach the port could take the fleet. Use GCS_ENVIRONMENT=production, "
+                    "or set GCS_ALLOW_DEVELOPMENT_ON_NETWORK=true on a network you trust"
+                )
             return self
         problems = []
         if self.admin_password is not None:
@@ -139,6 +151,11 @@ class HubSettings(BaseSettings):
             commands_days=self.retention_commands_days,
             flights_days=self.retention_flights_days,
         )
+
+    @property
+    def on_loopback(self) -> bool:
+        """Listening on this machine only, where nothing else on the network reaches."""
+        return is_loopback(self.host)
 
     @property
     def cookie_secure(self) -> bool:

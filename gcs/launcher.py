@@ -25,6 +25,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import IO
 
+from gcs.addresses import WILDCARDS, is_loopback
+
 log = logging.getLogger(__name__)
 
 PR_SET_PDEATHSIG = 1  # linux/prctl.h
@@ -44,6 +46,7 @@ def free_port() -> int:
 @dataclass(frozen=True)
 class FleetPlan:
     vehicles: int = 3
+    host: str = "127.0.0.1"  # where the hub listens; the fleet's own links use loopback
     port: int = 8000
     data_dir: Path = Path("data")
     speedup: float = 1.0
@@ -58,12 +61,28 @@ class FleetPlan:
     autopilots: tuple[str, ...] = ()
 
     @property
+    def local_host(self) -> str:
+        """How processes on this machine reach the hub: loopback, unless the hub
+        listens on one address only (not a wildcard)."""
+        if self.host in WILDCARDS or is_loopback(self.host):
+            return "127.0.0.1"
+        return f"[{self.host}]" if ":" in self.host else self.host
+
+    @property
     def hub_http(self) -> str:
-        return f"http://127.0.0.1:{self.port}"
+        return f"http://{self.local_host}:{self.port}"
 
     @property
     def hub_ws(self) -> str:
-        return f"ws://127.0.0.1:{self.port}"
+        return f"ws://{self.local_host}:{self.port}"
+
+    @property
+    def public_http(self) -> str:
+        """The address to give a browser on another machine (a placeholder where the hub
+        listens on every interface, as it cannot know which one the tablet sees)."""
+        if self.host in WILDCARDS:
+            return f"http://<this machine's address>:{self.port}"
+        return self.hub_http
 
     @staticmethod
     def vehicle_id(index: int) -> str:
@@ -159,11 +178,22 @@ class LocalFleet:
             "GCS_ENVIRONMENT": "development",
             "GCS_ADMIN_PASSWORD": plan.admin_password,
         }
+        if not is_loopback(plan.host):
+            # Asked for with --host: the hub still warns loudly at start.
+            env["GCS_ALLOW_DEVELOPMENT_ON_NETWORK"] = "true"
         if tokens:  # a hub alone (no vehicles) has none to enrol
             env["GCS_AGENT_TOKENS"] = tokens
         self.spawn(
             "hub",
-            ["hub", "--port", str(plan.port), "--data-dir", str(plan.data_dir)],
+            [
+                "hub",
+                "--host",
+                plan.host,
+                "--port",
+                str(plan.port),
+                "--data-dir",
+                str(plan.data_dir),
+            ],
             {**env, **(hub_env or {})},
         )
 

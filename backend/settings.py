@@ -60,6 +60,13 @@ class HubSettings(BaseSettings):
     )
     max_body_bytes: int = Field(default=1024 * 1024, ge=1024)
     max_tlog_bytes: int = Field(default=512 * 1024 * 1024, ge=1024, description="per upload")
+    # Slow clients (see README "Limits"): a body must come within body_timeout_s plus a
+    # second per body_min_rate_bps bytes; idle keep-alive connections close after
+    # keep_alive_timeout_s; past max_connections, new requests get 503.
+    body_timeout_s: float = Field(default=10.0, gt=0)
+    body_min_rate_bps: float = Field(default=1024.0, gt=0)
+    keep_alive_timeout_s: int = Field(default=5, ge=1)
+    max_connections: int = Field(default=1000, ge=1)
     login_attempts_per_minute: int = Field(default=5, ge=1)
     commands_per_second: int = Field(default=20, ge=1)
 

@@ -76,6 +76,9 @@ def _hub(args: argparse.Namespace) -> int:
         port=settings.port,
         log_level=args.log_level.lower(),
         ws_max_size=settings.max_frame_bytes,
+        # Bounds on what slow or idle clients can hold (a body timeout is in the app).
+        limit_concurrency=settings.max_connections,
+        timeout_keep_alive=settings.keep_alive_timeout_s,
         ssl_certfile=args.ssl_certfile,
         ssl_keyfile=args.ssl_keyfile,
         # Client addresses (audit, login limits) come from X-Forwarded-For only when

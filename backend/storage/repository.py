@@ -113,6 +113,37 @@ class Repository:
         with self.engine.connect() as connection:
             return [(int(first), int(last)) for first, last in connection.execute(query)]
 
+    def open_gaps_of(self, vehicle_id: str) -> list[tuple[str, str, int, int]]:
+        """The lowest open range of each of a vehicle's streams, as (stream, kind,
+        first, last): what to ask a reconnecting agent for."""
+        lowest = (
+            select(
+                SequenceGapRow.stream_id,
+                SequenceGapRow.kind,
+                func.min(SequenceGapRow.first_seq).label("first_seq"),
+            )
+            .where(SequenceGapRow.vehicle_id == vehicle_id)
+            .group_by(SequenceGapRow.stream_id, SequenceGapRow.kind)
+            .subquery()
+        )
+        query = select(
+            SequenceGapRow.stream_id,
+            SequenceGapRow.kind,
+            SequenceGapRow.first_seq,
+            SequenceGapRow.last_seq,
+        ).join(
+            lowest,
+            (SequenceGapRow.stream_id == lowest.c.stream_id)
+            & (SequenceGapRow.kind == lowest.c.kind)
+            & (SequenceGapRow.first_seq == lowest.c.first_seq)
+            & (SequenceGapRow.vehicle_id == vehicle_id),
+        )
+        with self.engine.connect() as connection:
+            return [
+                (str(stream), str(kind), int(first), int(last))
+                for stream, kind, first, last in connection.execute(query)
+            ]
+
     def replace_open_gaps(
         self,
         holes: dict[tuple[str, str, str], list[tuple[int, int]]],

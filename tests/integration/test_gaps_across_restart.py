@@ -54,3 +54,36 @@ def test_an_open_gap_survives_a_hub_killed_and_restarted(tmp_path: Path) -> None
     texts = [event["text"] for event in events.json()["events"]]
     assert texts == ["telemetry samples 3-6 of stream s1 never arrived: outbox full"]
     assert sorted(sample["seq"] for sample in samples) == [0, 1, 2, 7, 8, 9, 10]
+
+
+def test_a_reconnecting_agent_is_asked_for_open_gaps_before_it_sends_anything(
+    tmp_path: Path,
+) -> None:
+    """An agent restarted without its outbox never sends on the old stream again; the
+    hub must still ask it, or that loss would never be recorded."""
+    plan = FleetPlan(vehicles=0, port=free_port(), data_dir=tmp_path)
+    with LocalFleet(plan) as fleet:
+        fleet.start()
+        fleet.wait_until_ready()
+        admin = access_token(plan.hub_http, "admin", plan.admin_password)
+        with api_client(plan.hub_http, admin) as api:
+            token = api.post("/api/v1/vehicles/quiet/agent-tokens").json()["token"]
+        with scripted_agent(plan.hub_http, "quiet", token, delivery=True) as agent:
+            for seq in (0, 5):
+                agent.send(_telemetry(seq))
+            _next(agent, lambda frame: frame["type"] == "resend")
+            fleet.kill("hub")
+
+        fleet.start_hub()
+        fleet.wait_until_ready()
+        with scripted_agent(plan.hub_http, "quiet", token, delivery=True) as agent:
+            resend = _next(agent, lambda frame: frame["type"] == "resend")
+            assert (resend["first_seq"], resend["last_seq"]) == (1, 4)
+            agent.send(
+                encode(
+                    Unavailable(
+                        stream_id="s1", kind="telemetry", first_seq=1, last_seq=4, reason="gone"
+                    )
+                )
+            )
+            _next(agent, _acked("telemetry", 5))

@@ -2,11 +2,13 @@
 .PHONY: demo test lint setup setup-dev
 
 VEHICLES ?= 3
+# 0.0.0.0 lets a tablet on the field LAN reach the demo (it warns: plain HTTP).
+HOST ?= 127.0.0.1
 PORT ?= 8000
 SPEEDUP ?= 1
 
 demo: setup
-	.venv/bin/gcs demo --vehicles $(VEHICLES) --port $(PORT) --speedup $(SPEEDUP)
+	.venv/bin/gcs demo --vehicles $(VEHICLES) --host $(HOST) --port $(PORT) --speedup $(SPEEDUP)
 
 test: setup-dev
 	.venv/bin/python -m pytest

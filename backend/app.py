@@ -26,6 +26,7 @@ from backend.api import (
     websockets,
 )
 from backend.api.hardening import SecurityMiddleware, content_security_policy
+from backend.api.slow_clients import SlowBodyTimeout
 from backend.errors import (
     GcsError,
     InvalidRequest,
@@ -90,6 +91,9 @@ def create_app(settings: HubSettings | None = None) -> FastAPI:
         csp=content_security_policy(settings.basemap_url),
         hsts=settings.environment == "production",
         large_bodies={r"^/api/v1/vehicles/[^/]+/tlogs$": settings.max_tlog_bytes},
+    )
+    app.add_middleware(
+        SlowBodyTimeout, grace_s=settings.body_timeout_s, min_rate_bps=settings.body_min_rate_bps
     )
     _mount_dashboard(app, settings)
     return app

@@ -12,6 +12,7 @@ from pydantic_settings import BaseSettings, SettingsConfigDict
 
 from backend.auth.password_policy import password_problem
 from backend.storage.retention import AUDIT_MIN_RETENTION_DAYS, RetentionPolicy
+from gcs.addresses import is_loopback
 from gcs.protocol import MAX_FRAME_BYTES
 
 REPO_ROOT = Path(__file__).resolve().parent.parent
@@ -41,6 +42,10 @@ class HubSettings(BaseSettings):
     environment: Literal["development", "production"] = Field(
         default="production", description="development relaxes cookie and secret checks"
     )
+    allow_development_on_network: bool = Field(
+        default=False,
+        description="let a development hub listen beyond loopback (a trusted field LAN)",
+    )
     admin_username: str = Field(
         default="admin",
         pattern=r"^[A-Za-z0-9_.@-]{1,64}$",
@@ -63,6 +68,13 @@ class HubSettings(BaseSettings):
     )
     max_body_bytes: int = Field(default=1024 * 1024, ge=1024)
     max_tlog_bytes: int = Field(default=512 * 1024 * 1024, ge=1024, description="per upload")
+    # Slow clients (see README "Limits"): a body must come within body_timeout_s plus a
+    # second per body_min_rate_bps bytes; idle keep-alive connections close after
+    # keep_alive_timeout_s; past max_connections, new requests get 503.
+    body_timeout_s: float = Field(default=10.0, gt=0)
+    body_min_rate_bps: float = Field(default=1024.0, gt=0)
+    keep_alive_timeout_s: int = Field(default=5, ge=1)
+    max_connections: int = Field(default=1000, ge=1)
     max_tlog_bytes_per_vehicle: int = Field(
         default=4 * 1024 * 1024 * 1024,
         ge=1024,
@@ -138,6 +150,13 @@ class HubSettings(BaseSettings):
     @model_validator(mode="after")
     def _no_default_secrets_in_production(self) -> HubSettings:
         if self.environment == "development":
+            if not self.on_loopback and not self.allow_development_on_network:
+                raise ValueError(
+                    f"refusing to listen on {self.host} in development mode, where default "
+                    "passwords, short agent tokens and plain-HTTP cookies pass: anyone who "
+                    "can reach the port could take the fleet. Use GCS_ENVIRONMENT=production, "
+                    "or set GCS_ALLOW_DEVELOPMENT_ON_NETWORK=true on a network you trust"
+                )
             return self
         problems = []
         if self.admin_password is not None:
@@ -179,6 +198,11 @@ class HubSettings(BaseSettings):
             flights_days=self.retention_flights_days,
             audit_days=self.retention_audit_days,
         )
+
+    @property
+    def on_loopback(self) -> bool:
+        """Listening on this machine only, where nothing else on the network reaches."""
+        return is_loopback(self.host)
 
     @property
     def cookie_secure(self) -> bool:

@@ -10,12 +10,16 @@ import argparse
 import asyncio
 import contextlib
 import logging
+import os
 import signal
 import sys
 import time
 from collections.abc import Coroutine
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from backend.settings import HubSettings
 
 LOG_FORMAT = "%(asctime)s %(levelname)-7s %(name)s: %(message)s"
 
@@ -42,6 +46,7 @@ def run_until_signalled(main: Coroutine[Any, Any, None]) -> int:
 
 def _hub(args: argparse.Namespace) -> int:
     import uvicorn
+    from pydantic import ValidationError
 
     from backend.app import create_app
     from backend.settings import HubSettings
@@ -52,14 +57,28 @@ def _hub(args: argparse.Namespace) -> int:
         "data_dir": args.data_dir,
         "forwarded_allow_ips": args.forwarded_allow_ips,
     }
-    settings = HubSettings(**{key: value for key, value in overrides.items() if value is not None})
-    settings.data_dir.mkdir(parents=True, exist_ok=True)
+    try:
+        settings = HubSettings(
+            **{key: value for key, value in overrides.items() if value is not None}
+        )
+    except (ValidationError, ValueError, OSError) as error:
+        # A configuration mistake or a refusal: say which, not a traceback.
+        print(f"gcs hub: invalid settings: {error}", file=sys.stderr)
+        return 2
+    _warn_about_exposure(settings, tls=args.ssl_certfile is not None)
+    # Everything the hub writes (database, uploaded .tlogs) is for its own user only.
+    os.umask(0o077)
+    settings.data_dir.mkdir(mode=0o700, parents=True, exist_ok=True)
+    settings.data_dir.chmod(0o700)
     uvicorn.run(
         create_app(settings),
         host=settings.host,
         port=settings.port,
         log_level=args.log_level.lower(),
         ws_max_size=settings.max_frame_bytes,
+        # Bounds on what slow or idle clients can hold (a body timeout is in the app).
+        limit_concurrency=settings.max_connections,
+        timeout_keep_alive=settings.keep_alive_timeout_s,
         ssl_certfile=args.ssl_certfile,
         ssl_keyfile=args.ssl_keyfile,
         # Client addresses (audit, login limits) come from X-Forwarded-For only when
@@ -68,6 +87,28 @@ def _hub(args: argparse.Namespace) -> int:
         forwarded_allow_ips=settings.forwarded_allow_ips,
     )
     return 0
+
+
+def _warn_about_exposure(settings: HubSettings, tls: bool) -> None:
+    """Say loudly, at start, what a hub reachable from the network lacks."""
+    log = logging.getLogger("gcs.hub")
+    if settings.on_loopback:
+        return
+    if settings.environment == "development":
+        log.warning(
+            "DEVELOPMENT MODE ON THE NETWORK (%s:%d): default passwords, short agent tokens "
+            "and plain-HTTP cookies are accepted; anyone who reaches this port can log in "
+            "and command the fleet. Only on a network you trust.",
+            settings.host,
+            settings.port,
+        )
+    if not tls:
+        log.warning(
+            "serving plain HTTP on %s:%d: passwords and tokens cross the network in clear "
+            "unless a TLS proxy is in front (see deploy/nginx.conf)",
+            settings.host,
+            settings.port,
+        )
 
 
 def _agent(args: argparse.Namespace) -> int:
@@ -107,35 +148,59 @@ def _demo(args: argparse.Namespace) -> int:
     from gcs.launcher import FleetPlan, LocalFleet
 
     plan = FleetPlan.reusing_secrets(
-        args.data_dir, vehicles=args.vehicles, port=args.port, speedup=args.speedup
+        args.data_dir, vehicles=args.vehicles, host=args.host, port=args.port, speedup=args.speedup
     )
     fleet = LocalFleet(plan)
     log = logging.getLogger("gcs.demo")
+    # Every way of asking the launcher to end stops the fleet the way Ctrl-C does: also
+    # SIGINT where the shell started us with it ignored (`gcs demo &` in a script), and
+    # SIGHUP (the terminal closed), unless ignored on purpose (nohup).
+    stopping = [signal.SIGINT, signal.SIGTERM]
+    if signal.getsignal(signal.SIGHUP) is not signal.SIG_IGN:
+        stopping.append(signal.SIGHUP)
+    for signum in stopping:
+        signal.signal(signum, _interrupt)
     try:
         fleet.start()
         fleet.wait_until_ready()
         print(
             f"\nFleet GCS demo: {plan.vehicles} simulated vehicles (speed-up {plan.speedup:g}x)\n"
-            f"  dashboard  {plan.hub_http}/\n"
+            f"  dashboard  {plan.public_http}/\n"
             f"  log in     admin / {plan.admin_password}\n"
-            f"  API docs   {plan.hub_http}/docs\n"
+            f"  API docs   {plan.public_http}/docs\n"
             f"  logs       {fleet.log_dir}/\n"
+            f"{_exposure_note(plan.host)}"
             "Press Ctrl-C to stop.\n",
             flush=True,
         )
-        signal.signal(signal.SIGTERM, _interrupt)
         while True:
             fleet.check_alive()
             time.sleep(1.0)  # supervising: notice a child that died
     except KeyboardInterrupt:
         log.info("stopping")
     finally:
+        # A second signal must not cut the orderly stop short (the stop is bounded).
+        for signum in stopping:
+            signal.signal(signum, signal.SIG_IGN)
         fleet.stop()
     return 0
 
 
+def _exposure_note(host: str) -> str:
+    """What the banner says when the demo is reachable from the network."""
+    from gcs.addresses import is_loopback
+
+    if is_loopback(host):
+        return ""
+    return (
+        f"WARNING: listening on {host} with plain HTTP and development settings: anyone\n"
+        "on this network who has the password can command the fleet, and can read it on\n"
+        "the wire. Use it only on a field LAN you trust.\n"
+    )
+
+
 def _interrupt(signum: int, frame: object) -> None:
-    """SIGTERM stops the demo the way Ctrl-C does."""
+    """A stopping signal stops the demo the way Ctrl-C does."""
     raise KeyboardInterrupt
 
 
@@ -190,6 +255,11 @@ def build_parser() -> argparse.ArgumentParser:
 
     demo = commands.add_parser("demo", help="hub + simulated fleet + agents, one command")
     demo.add_argument("--vehicles", type=int, default=3)
+    demo.add_argument(
+        "--host",
+        default="127.0.0.1",
+        help="address to listen on (127.0.0.1); 0.0.0.0 lets a tablet on the LAN connect",
+    )
     demo.add_argument("--port", type=int, default=8000)
     demo.add_argument("--data-dir", type=Path, default=Path("data"))
     demo.add_argument("--speedup", type=float, default=1.0)

@@ -6,6 +6,7 @@
 from __future__ import annotations
 
 import contextlib
+import ctypes
 import hmac
 import json
 import logging
@@ -19,11 +20,16 @@ import sys
 import time
 import urllib.error
 import urllib.request
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import IO
 
+from gcs.addresses import WILDCARDS, is_loopback
+
 log = logging.getLogger(__name__)
+
+PR_SET_PDEATHSIG = 1  # linux/prctl.h
 
 # ArduPilot's SITL home (CMAC, Canberra): a place every ArduPilot developer knows.
 DEFAULT_HOME = (-35.363262, 149.165237, 584.0)
@@ -40,6 +46,7 @@ def free_port() -> int:
 @dataclass(frozen=True)
 class FleetPlan:
     vehicles: int = 3
+    host: str = "127.0.0.1"  # where the hub listens; the fleet's own links use loopback
     port: int = 8000
     data_dir: Path = Path("data")
     speedup: float = 1.0
@@ -54,12 +61,28 @@ class FleetPlan:
     autopilots: tuple[str, ...] = ()
 
     @property
+    def local_host(self) -> str:
+        """How processes on this machine reach the hub: loopback, unless the hub
+        listens on one address only (not a wildcard)."""
+        if self.host in WILDCARDS or is_loopback(self.host):
+            return "127.0.0.1"
+        return f"[{self.host}]" if ":" in self.host else self.host
+
+    @property
     def hub_http(self) -> str:
-        return f"http://127.0.0.1:{self.port}"
+        return f"http://{self.local_host}:{self.port}"
 
     @property
     def hub_ws(self) -> str:
-        return f"ws://127.0.0.1:{self.port}"
+        return f"ws://{self.local_host}:{self.port}"
+
+    @property
+    def public_http(self) -> str:
+        """The address to give a browser on another machine (a placeholder where the hub
+        listens on every interface, as it cannot know which one the tablet sees)."""
+        if self.host in WILDCARDS:
+            return f"http://<this machine's address>:{self.port}"
+        return self.hub_http
 
     @staticmethod
     def vehicle_id(index: int) -> str:
@@ -78,7 +101,7 @@ class FleetPlan:
             stored = json.loads(path.read_text())
             return cls(data_dir=data_dir, **values, **stored)  # type: ignore[arg-type]
         plan = cls(data_dir=data_dir, **values)  # type: ignore[arg-type]
-        data_dir.mkdir(parents=True, exist_ok=True)
+        data_dir.mkdir(mode=0o700, parents=True, exist_ok=True)
         path.touch(mode=0o600)
         path.write_text(json.dumps({"admin_password": plan.admin_password, "secret": plan.secret}))
         return plan
@@ -98,6 +121,23 @@ class FleetPlan:
         east = index * VEHICLE_SPACING_M
         dlon = math.degrees(east / (EARTH_RADIUS_M * math.cos(math.radians(lat))))
         return lat, lon + dlon, alt
+
+
+def end_with_parent(signum: int = signal.SIGTERM) -> Callable[[], None] | None:
+    """A ``preexec_fn`` by which a child gets ``signum`` when the thread that started it
+    ends, however it ends (Linux's PR_SET_PDEATHSIG, kept across exec). The child's own
+    SIGTERM handling then stops it cleanly. None where the kernel has no such thing."""
+    if not sys.platform.startswith("linux"):
+        return None
+    prctl = ctypes.CDLL(None, use_errno=True).prctl
+    parent = os.getpid()
+
+    def arm() -> None:  # runs in the child, between fork and exec
+        prctl(PR_SET_PDEATHSIG, signum, 0, 0, 0)
+        if os.getppid() != parent:  # the parent died before the line above: too late
+            os.kill(os.getpid(), signum)
+
+    return arm
 
 
 @dataclass
@@ -121,7 +161,9 @@ class LocalFleet:
         return self.plan.vehicle_id(index)
 
     def start(self, hub_env: dict[str, str] | None = None) -> None:
-        self.log_dir.mkdir(parents=True, exist_ok=True)
+        # The data folder and the logs are the operator's alone (0700 folders, 0600 files).
+        self.plan.data_dir.mkdir(mode=0o700, parents=True, exist_ok=True)
+        self.log_dir.mkdir(mode=0o700, parents=True, exist_ok=True)
         self.start_hub(hub_env)
         for index in range(self.plan.vehicles):
             self.start_vehicle(index)
@@ -135,11 +177,23 @@ class LocalFleet:
             # A local demo on plain HTTP: no Secure cookies, no production secret checks.
             "GCS_ENVIRONMENT": "development",
             "GCS_ADMIN_PASSWORD": plan.admin_password,
-            "GCS_AGENT_TOKENS": tokens,
         }
+        if not is_loopback(plan.host):
+            # Asked for with --host: the hub still warns loudly at start.
+            env["GCS_ALLOW_DEVELOPMENT_ON_NETWORK"] = "true"
+        if tokens:  # a hub alone (no vehicles) has none to enrol
+            env["GCS_AGENT_TOKENS"] = tokens
         self.spawn(
             "hub",
-            ["hub", "--port", str(plan.port), "--data-dir", str(plan.data_dir)],
+            [
+                "hub",
+                "--host",
+                plan.host,
+                "--port",
+                str(plan.port),
+                "--data-dir",
+                str(plan.data_dir),
+            ],
             {**env, **(hub_env or {})},
         )
 
@@ -198,6 +252,8 @@ class LocalFleet:
 
     def spawn(self, name: str, args: list[str], env: dict[str, str] | None = None) -> None:
         log_path = self.log_dir / f"{name}.log"
+        log_path.touch(mode=0o600)
+        log_path.chmod(0o600)  # also one written before logs were private
         log_file = log_path.open("ab")
         process = subprocess.Popen(
             [sys.executable, "-m", "gcs", *args],
@@ -208,6 +264,9 @@ class LocalFleet:
             # Own session: a Ctrl-C reaches only the launcher, which stops the
             # children in order (agents before the hub, so the hub stores everything).
             start_new_session=True,
+            # ...and should the launcher die without stopping them (SIGKILL, a crash),
+            # they end too instead of living on as orphans.
+            preexec_fn=end_with_parent(),
         )
         self.processes.append(ManagedProcess(name, process, log_path, log_file))
 

@@ -23,7 +23,7 @@ from websockets.sync.client import ClientConnection, connect
 
 from backend.app import create_app
 from backend.settings import HubSettings
-from gcs.launcher import FleetPlan, LocalFleet, free_port
+from gcs.launcher import FleetPlan, LocalFleet, end_with_parent, free_port
 from gcs.protocol import CLIENT_WS_PATH
 
 Vehicles = dict[str, dict[str, Any]]
@@ -212,6 +212,7 @@ def agent_process(
             env={**os.environ, "GCS_AGENT_TOKEN": token},
             stdout=log,
             stderr=None if log is None else subprocess.STDOUT,
+            preexec_fn=end_with_parent(),  # never outlives a killed pytest
         )
         try:
             yield agent

@@ -6,8 +6,11 @@ import os
 import shutil
 import subprocess
 from pathlib import Path
+from typing import Any
 
 import pytest
+import yaml
+from pydantic import ValidationError
 
 ROOT = Path(__file__).resolve().parent.parent
 COMPOSE = shutil.which("docker-compose")
@@ -56,3 +59,46 @@ def test_compose_refuses_to_run_without_its_secrets(missing: str) -> None:
     )
     assert result.returncode != 0
     assert missing in result.stderr
+
+
+def _hub_settings_from_compose(env: dict[str, str], monkeypatch: pytest.MonkeyPatch) -> Any:
+    """The hub's settings exactly as the compose file would start it: its environment
+    and its command line, through the hub's own validation."""
+    from backend.settings import HubSettings
+
+    result = _config(env)
+    assert result.returncode == 0, result.stderr
+    hub = yaml.safe_load(result.stdout)["services"]["hub"]
+    for name in list(os.environ):
+        if name.startswith("GCS_") or name.endswith("_FILE") or name == "DATABASE_URL":
+            monkeypatch.delenv(name)
+    for name, value in hub["environment"].items():
+        monkeypatch.setenv(name, str(value))
+    command = hub["command"]
+    return HubSettings(host=command[command.index("--host") + 1])
+
+
+def test_compose_runs_the_hub_in_production_mode(
+    monkeypatch: pytest.MonkeyPatch, tmp_path: Path
+) -> None:
+    monkeypatch.chdir(tmp_path)
+    settings = _hub_settings_from_compose(COMPOSE_SECRETS, monkeypatch)
+    assert settings.environment == "production"
+    assert settings.host == "0.0.0.0"
+    ports = yaml.safe_load(_config(COMPOSE_SECRETS).stdout)["services"]["hub"]["ports"]
+    # Published on loopback only (compose v1 renders "ip:published:target", v2 a mapping).
+    host_ips = [p.split(":")[0] if isinstance(p, str) else p.get("host_ip") for p in ports]
+    assert host_ips == ["127.0.0.1"]
+
+
+@pytest.mark.parametrize(
+    "weak",
+    [{"GCS_ADMIN_PASSWORD": "admin"}, {"SIM_1_TOKEN": "short-token"}],
+    ids=["admin-password", "short-agent-token"],
+)
+def test_compose_hub_refuses_weak_secrets(
+    weak: dict[str, str], monkeypatch: pytest.MonkeyPatch, tmp_path: Path
+) -> None:
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(ValidationError, match="refusing default secrets in production"):
+        _hub_settings_from_compose({**COMPOSE_SECRETS, **weak}, monkeypatch)

@@ -30,6 +30,7 @@ from gcs.protocol import (
     LiveState,
     ProtocolError,
     Resend,
+    SequencedKind,
     Telemetry,
     Unavailable,
     Welcome,
@@ -160,6 +161,17 @@ class AgentSession(PeerConnection):
             return None
         return message
 
+    async def _ask_for_open_gaps(self, vehicle_id: str) -> None:
+        """Gaps stored as still open (perhaps by a hub that died since) are asked for at
+        once: an agent with nothing more to send on that stream must still answer, so
+        that a loss is recorded as one."""
+        rows = await asyncio.to_thread(self.hub.repository.open_gaps_of, vehicle_id)
+        kinds: dict[str, SequencedKind] = {"telemetry": "telemetry", "event": "event"}
+        for stream_id, kind, first, last in rows:
+            if kind in kinds:
+                key = StreamKey(vehicle_id, stream_id, kinds[kind])
+                self.request_resend(Gap(key, first, last))
+
     async def _serve_vehicle(self, hello: Hello) -> None:
         hub = self.hub
         vehicle_id = hello.vehicle_id
@@ -193,6 +205,7 @@ class AgentSession(PeerConnection):
             # Not a TaskGroup: the receive loop's own exceptions (disconnect, oversized
             # frame) must reach serve() as they are, not wrapped in a group.
             news = asyncio.create_task(self._send_sequence_news())
+            await self._ask_for_open_gaps(vehicle_id)
             try:
                 while frame := await self.receive():
                     await self._handle_frame(hello, channel, frame)

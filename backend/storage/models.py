@@ -197,6 +197,19 @@ class EventRow(Base):
     mission_item: Mapped[int | None] = mapped_column(Integer)
 
 
+class SequenceGapRow(Base):
+    """A range of an agent stream still asked for: neither stored nor reported lost.
+    Kept so that a restarted hub goes on waiting for it (and records it if lost)."""
+
+    __tablename__ = "sequence_gaps"
+
+    vehicle_id: Mapped[str] = mapped_column(String(64), primary_key=True)
+    stream_id: Mapped[str] = mapped_column(String(64), primary_key=True)
+    kind: Mapped[str] = mapped_column(String(16), primary_key=True)
+    first_seq: Mapped[int] = mapped_column(BigInteger, primary_key=True)
+    last_seq: Mapped[int] = mapped_column(BigInteger)
+
+
 class CommandRow(Base):
     __tablename__ = "commands"
     __table_args__ = (Index("ix_commands_vehicle_time", "vehicle_id", "time"),)

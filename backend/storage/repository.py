@@ -7,11 +7,17 @@ from collections.abc import Sequence
 from dataclasses import asdict
 from typing import Any
 
-from sqlalchemy import Connection, Engine, func, select
+from sqlalchemy import Connection, Engine, delete, func, insert, select
 from sqlalchemy.orm import Session
 
 from backend.storage.database import dialect_insert, transaction
-from backend.storage.models import TELEMETRY_STATE_COLUMNS, EventRow, TelemetryRow, VehicleRow
+from backend.storage.models import (
+    TELEMETRY_STATE_COLUMNS,
+    EventRow,
+    SequenceGapRow,
+    TelemetryRow,
+    VehicleRow,
+)
 from backend.storage.records import StoredEvent, TelemetryEnvelope
 from gcs.protocol import Hello
 
@@ -92,6 +98,84 @@ class Repository:
         with self.engine.connect() as connection:
             found = connection.scalar(query)
         return None if found is None else int(found)
+
+    def open_gaps(self, vehicle_id: str, stream_id: str, kind: str) -> list[tuple[int, int]]:
+        """The ranges of an agent stream still waited for when they were last stored."""
+        query = (
+            select(SequenceGapRow.first_seq, SequenceGapRow.last_seq)
+            .where(
+                SequenceGapRow.vehicle_id == vehicle_id,
+                SequenceGapRow.stream_id == stream_id,
+                SequenceGapRow.kind == kind,
+            )
+            .order_by(SequenceGapRow.first_seq)
+        )
+        with self.engine.connect() as connection:
+            return [(int(first), int(last)) for first, last in connection.execute(query)]
+
+    def open_gaps_of(self, vehicle_id: str) -> list[tuple[str, str, int, int]]:
+        """The lowest open range of each of a vehicle's streams, as (stream, kind,
+        first, last): what to ask a reconnecting agent for."""
+        lowest = (
+            select(
+                SequenceGapRow.stream_id,
+                SequenceGapRow.kind,
+                func.min(SequenceGapRow.first_seq).label("first_seq"),
+            )
+            .where(SequenceGapRow.vehicle_id == vehicle_id)
+            .group_by(SequenceGapRow.stream_id, SequenceGapRow.kind)
+            .subquery()
+        )
+        query = select(
+            SequenceGapRow.stream_id,
+            SequenceGapRow.kind,
+            SequenceGapRow.first_seq,
+            SequenceGapRow.last_seq,
+        ).join(
+            lowest,
+            (SequenceGapRow.stream_id == lowest.c.stream_id)
+            & (SequenceGapRow.kind == lowest.c.kind)
+            & (SequenceGapRow.first_seq == lowest.c.first_seq)
+            & (SequenceGapRow.vehicle_id == vehicle_id),
+        )
+        with self.engine.connect() as connection:
+            return [
+                (str(stream), str(kind), int(first), int(last))
+                for stream, kind, first, last in connection.execute(query)
+            ]
+
+    def replace_open_gaps(
+        self,
+        holes: dict[tuple[str, str, str], list[tuple[int, int]]],
+        connection: Connection | None = None,
+    ) -> None:
+        """Each (vehicle, stream, kind)'s open ranges become exactly ``holes``; in the
+        caller's transaction, so they change with the batch that changed them."""
+        if not holes:
+            return
+        with transaction(self.engine, connection) as active:
+            for (vehicle_id, stream_id, kind), ranges in holes.items():
+                active.execute(
+                    delete(SequenceGapRow).where(
+                        SequenceGapRow.vehicle_id == vehicle_id,
+                        SequenceGapRow.stream_id == stream_id,
+                        SequenceGapRow.kind == kind,
+                    )
+                )
+                if ranges:
+                    active.execute(
+                        insert(SequenceGapRow),
+                        [
+                            {
+                                "vehicle_id": vehicle_id,
+                                "stream_id": stream_id,
+                                "kind": kind,
+                                "first_seq": first,
+                                "last_seq": last,
+                            }
+                            for first, last in ranges
+                        ],
+                    )
 
     def count_telemetry(self, vehicle_id: str | None = None) -> int:
         query = select(func.count()).select_from(TelemetryRow)

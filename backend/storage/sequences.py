@@ -4,12 +4,16 @@ An agent numbers its telemetry and its events, each from 0, per run (its stream)
 writer keeps, per (vehicle, stream, kind), the highest number below which everything
 is stored, plus the numbers stored above a gap. From that it knows what is a duplicate,
 which gap to ask the agent to fill, and how far it may tell the agent to forget.
+
+The gaps still open (asked for, not yet filled nor reported lost) are stored with each
+batch, so that a hub restarted after a crash still waits for them instead of taking
+the store's highest number as the end of an unbroken run: every loss is then recorded.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable, Iterable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 from gcs.protocol import SequencedKind
 
@@ -32,19 +36,53 @@ class Gap:
 class SequenceTracker:
     contiguous: int  # every number up to this one is stored (or known lost)
     ahead: set[int] = field(default_factory=set)  # stored beyond a gap, waiting for it
-    # Ranges beyond a gap that the agent said it no longer has, as (first, last): kept as
-    # ranges, so a loss of a million frames costs what a loss of one does.
-    lost: list[tuple[int, int]] = field(default_factory=list)
+    # Ranges beyond a gap that need no more waiting, as (first, last): the agent said it
+    # no longer has them, or the store held them when the hub restarted. Kept as ranges,
+    # so a loss of a million frames costs what a loss of one does.
+    settled: list[tuple[int, int]] = field(default_factory=list)
     highest: int = -1
 
     def __post_init__(self) -> None:
         self.highest = max(self.highest, self.contiguous, *self.ahead)
 
+    @classmethod
+    def restored(cls, highest: int | None, holes: list[tuple[int, int]]) -> SequenceTracker:
+        """A stream as the store left it: everything up to ``highest`` is stored, except
+        the ``holes`` that were still open (sorted, disjoint, all below ``highest``)."""
+        if highest is None:
+            return cls(contiguous=-1)
+        holes = sorted((first, last) for first, last in holes if first <= last < highest)
+        if not holes:
+            return cls(contiguous=highest)
+        settled = []
+        for (_, last), (following, _) in zip(holes, [*holes[1:], (highest + 1, 0)], strict=True):
+            if last + 1 <= following - 1:
+                settled.append((last + 1, following - 1))
+        return cls(contiguous=holes[0][0] - 1, settled=settled, highest=highest)
+
+    def copy(self) -> SequenceTracker:
+        return replace(self, ahead=set(self.ahead), settled=list(self.settled))
+
+    def holes(self) -> list[tuple[int, int]]:
+        """Every range still waited for, lowest first (empty when nothing is missing)."""
+        if self.contiguous >= self.highest:
+            return []
+        covered = sorted([(seq, seq) for seq in self.ahead] + self.settled)
+        holes = []
+        start = self.contiguous + 1
+        for first, last in covered:
+            if first > start:
+                holes.append((start, first - 1))
+            start = max(start, last + 1)
+        if start <= self.highest:  # only while the tracker is inconsistent; never stored
+            holes.append((start, self.highest))
+        return holes
+
     def holds(self, seq: int) -> bool:
         return (
             seq <= self.contiguous
             or seq in self.ahead
-            or any(first <= seq <= last for first, last in self.lost)
+            or any(first <= seq <= last for first, last in self.settled)
         )
 
     def add(self, seq: int) -> tuple[int, int] | None:
@@ -64,7 +102,7 @@ class SequenceTracker:
         first = max(first, self.contiguous + 1)
         last = min(last, self.highest)
         if first <= last:
-            self.lost.append((first, last))
+            self.settled.append((first, last))
             self._absorb()
 
     def first_gap(self) -> tuple[int, int] | None:
@@ -73,7 +111,7 @@ class SequenceTracker:
             return None
         start = self.contiguous + 1
         above = [seq for seq in self.ahead if seq > start]
-        above += [first for first, _ in self.lost if first > start]
+        above += [first for first, _ in self.settled if first > start]
         return start, min(above, default=self.highest + 1) - 1
 
     def _absorb(self) -> None:
@@ -83,29 +121,83 @@ class SequenceTracker:
                 self.ahead.remove(following)
                 self.contiguous = following
                 continue
-            reached = [last for first, last in self.lost if first <= following]
+            reached = [last for first, last in self.settled if first <= following]
             if not reached:
                 return
             self.contiguous = max(self.contiguous, *reached)
-            self.lost = [(f, last) for f, last in self.lost if last > self.contiguous]
+            self.settled = [(f, last) for f, last in self.settled if last > self.contiguous]
             self.ahead = {seq for seq in self.ahead if seq > self.contiguous}
+
+
+Holes = list[tuple[int, int]]
+
+
+@dataclass
+class LedgerChange:
+    """What one batch does to the ledger, worked out before its transaction commits:
+    the trackers it leaves, the gaps it opens, and the streams whose open gaps to store."""
+
+    trackers: dict[StreamKey, SequenceTracker]
+    opened: list[Gap]
+    holes: dict[StreamKey, Holes]
 
 
 class SequenceLedger:
     """All streams' trackers; ``load`` finds a stream's past on first sight (after a hub
-    restart, what the database holds)."""
+    restart, what the database holds): its highest stored number, and through
+    ``load_holes`` the gaps that were still open."""
 
-    def __init__(self, load: Callable[[StreamKey], int | None]) -> None:
+    def __init__(
+        self,
+        load: Callable[[StreamKey], int | None],
+        load_holes: Callable[[StreamKey], Holes] = lambda key: [],
+    ) -> None:
         self._load = load
+        self._load_holes = load_holes
         self._trackers: dict[StreamKey, SequenceTracker] = {}
+        self._stored_holes: dict[StreamKey, Holes] = {}  # as the store has them now
 
     def tracker(self, key: StreamKey) -> SequenceTracker:
         tracker = self._trackers.get(key)
         if tracker is None:
-            stored = self._load(key)
-            tracker = SequenceTracker(contiguous=-1 if stored is None else stored)
+            holes = self._load_holes(key)
+            tracker = SequenceTracker.restored(self._load(key), holes)
+            self._stored_holes[key] = tracker.holes()
             self._trackers[key] = tracker
         return tracker
+
+    def preview(
+        self,
+        stored: Iterable[tuple[StreamKey, int]],
+        losses: Iterable[tuple[StreamKey, int, int]] = (),
+    ) -> LedgerChange:
+        """The ledger after ``stored`` numbers and ``losses`` (first, last), on copies:
+        nothing changes until ``commit``, so a batch whose transaction fails leaves the
+        ledger as it was."""
+        trackers: dict[StreamKey, SequenceTracker] = {}
+
+        def copy_of(key: StreamKey) -> SequenceTracker:
+            if key not in trackers:
+                trackers[key] = self.tracker(key).copy()
+            return trackers[key]
+
+        opened = []
+        for key, seq in stored:
+            if (gap := copy_of(key).add(seq)) is not None:
+                opened.append(Gap(key, *gap))
+        for key, first, last in losses:
+            copy_of(key).give_up(first, last)
+        holes = {}
+        for key, tracker in trackers.items():
+            now_open = tracker.holes()
+            if now_open != self._stored_holes.get(key, []):
+                holes[key] = now_open
+        return LedgerChange(trackers, opened, holes)
+
+    def commit(self, change: LedgerChange) -> None:
+        """The batch is stored (with ``change.holes``): its trackers become the ledger's."""
+        self._trackers.update(change.trackers)
+        self._stored_holes.update(change.holes)
 
     def fresh(self, keys: Iterable[tuple[StreamKey, int]]) -> list[bool]:
         """For each (stream, number), whether it is new: not stored, and not earlier in
@@ -124,12 +216,10 @@ class SequenceLedger:
         return seq > self.tracker(key).highest
 
     def record(self, stored: Iterable[tuple[StreamKey, int]]) -> list[Gap]:
-        gaps = []
-        for key, seq in stored:
-            opened = self.tracker(key).add(seq)
-            if opened is not None:
-                gaps.append(Gap(key, *opened))
-        return gaps
+        """``preview`` and take its trackers at once, where no holes are stored with it."""
+        change = self.preview(stored)
+        self._trackers.update(change.trackers)
+        return change.opened
 
     def give_up(self, key: StreamKey, first: int, last: int) -> None:
         self.tracker(key).give_up(first, last)

@@ -70,7 +70,8 @@ class StorageWriter:
         self._writing: asyncio.Future[None] | None = None
         self.tracker = FlightTracker(open_flights=logbook.open_flights())
         self.sequences = SequenceLedger(
-            lambda key: repository.highest_seq(key.vehicle_id, key.stream_id, key.kind)
+            lambda key: repository.highest_seq(key.vehicle_id, key.stream_id, key.kind),
+            lambda key: repository.open_gaps(key.vehicle_id, key.stream_id, key.kind),
         )
         self.on_sequences: SequenceNews | None = None
         self._gap_asked_at: dict[StreamKey, float] = {}
@@ -159,9 +160,20 @@ class StorageWriter:
         new_events = [e for e in events if e.seq is None or next(fresh)]
         forward = self._moving_forward(new_telemetry)
         loss_events = [_loss_event(loss) for loss in losses]
+        stored = [(_key(e), e.telemetry.seq) for e in new_telemetry]
+        stored += [(_key(e), e.seq) for e in new_events if e.seq is not None]
+        change = self.sequences.preview(
+            stored, [(_key(loss), loss.first_seq, loss.last_seq) for loss in losses]
+        )
         tracker = self.tracker.copy()
         with self._repository.engine.begin() as connection:
             self._repository.insert_telemetry(new_telemetry, connection)
+            # The gaps still open go with the batch that opened or closed them, so a hub
+            # that dies between two batches restarts knowing what it still waits for.
+            self._repository.replace_open_gaps(
+                {(k.vehicle_id, k.stream_id, k.kind): holes for k, holes in change.holes.items()},
+                connection,
+            )
             plan = tracker.plan(forward)
             events_written = self._repository.insert_events(
                 new_events + plan.events + loss_events, connection
@@ -178,11 +190,8 @@ class StorageWriter:
                         flight_id = tracker.open_flights.pop(vehicle)
                         self._logbook.close_flight(flight_id, at, connection)
         self.tracker = tracker
-        stored = [(_key(e), e.telemetry.seq) for e in new_telemetry]
-        stored += [(_key(e), e.seq) for e in new_events if e.seq is not None]
-        gaps = self.sequences.record(stored)
-        for loss in losses:
-            self.sequences.give_up(_key(loss), loss.first_seq, loss.last_seq)
+        self.sequences.commit(change)
+        gaps = change.opened
         touched = {key for key, _ in sequenced} | {_key(loss) for loss in losses}
         gaps = self._gaps_to_ask(gaps, touched)
         acks = {key: self.sequences.contiguous(key) for key in touched}

@@ -13,7 +13,7 @@ import httpx
 import pytest
 
 from gcs.launcher import free_port
-from tests.helpers import FleetWatcher, access_token
+from tests.helpers import FleetWatcher, access_token, poll_until
 
 pytestmark = pytest.mark.integration
 
@@ -88,3 +88,97 @@ def test_demo_runs_the_fleet_and_stops_cleanly_on_ctrl_c(tmp_path: Path) -> None
             demo.wait()
         if demo.stdout is not None:
             demo.stdout.close()
+
+
+def _alive(pids: set[int]) -> set[int]:
+    """Those of ``pids`` still running (a zombie has ended; only its entry is left)."""
+    alive = set()
+    for pid in pids:
+        try:
+            state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+        except OSError:
+            continue
+        if state != "Z":
+            alive.add(pid)
+    return alive
+
+
+def _ignore_sigint() -> None:
+    """What a non-interactive shell does to a job it starts with `&`."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+@pytest.mark.parametrize(
+    "signum", [signal.SIGINT, signal.SIGTERM, signal.SIGHUP, signal.SIGKILL], ids=lambda s: s.name
+)
+def test_no_child_outlives_the_launcher_whatever_ends_it(
+    tmp_path: Path, signum: signal.Signals
+) -> None:
+    demo = subprocess.Popen(
+        [
+            *(sys.executable, "-m", "gcs", "demo", "--vehicles", "1"),
+            *("--port", str(free_port()), "--data-dir", str(tmp_path)),
+        ],
+        stdout=subprocess.PIPE,
+        text=True,
+        # Started as `gcs demo &` from a script is: SIGINT ignored from the start.
+        preexec_fn=_ignore_sigint,
+    )
+    try:
+        assert demo.stdout is not None
+        for line in demo.stdout:  # until the banner: every child has started
+            if "Press Ctrl-C" in line:
+                break
+        children = _children(demo.pid)
+        assert len(children) == 3  # hub, simulator, agent
+
+        demo.send_signal(signum)
+        code = demo.wait(30)
+        assert code == (-signal.SIGKILL if signum == signal.SIGKILL else 0)
+        poll_until(lambda: not _alive(children), 30, f"children gone after {signum.name}")
+    finally:
+        if demo.poll() is None:
+            demo.kill()
+            demo.wait()
+        if demo.stdout is not None:
+            demo.stdout.close()
+
+
+PYTEST_STARTS_A_FLEET = """
+from pathlib import Path
+
+from tests.helpers import running_fleet
+
+
+def test_fleet_until_killed(tmp_path: Path) -> None:
+    with running_fleet(tmp_path, vehicles=1):
+        Path({pid_file!r}).write_text("started")
+        Path({pid_file!r}).with_suffix(".never").read_text()  # blocks: a FIFO nobody opens
+"""
+
+
+def test_no_child_outlives_a_killed_pytest(tmp_path: Path) -> None:
+    """The fixtures start fleets through LocalFleet; pytest killed (-9) mid-test must not
+    leave its hub, simulator and agent behind."""
+    marker = tmp_path / "started.txt"
+    os.mkfifo(marker.with_suffix(".never"))
+    test_file = tmp_path / "test_killed.py"
+    test_file.write_text(PYTEST_STARTS_A_FLEET.format(pid_file=str(marker)))
+    root = Path(__file__).resolve().parents[2]
+    runner = subprocess.Popen(
+        [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", str(test_file)],
+        cwd=root,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
+    try:
+        poll_until(marker.exists, 60, "the fleet started inside pytest")
+        children = _children(runner.pid)
+        assert len(children) == 3
+        runner.kill()
+        runner.wait(10)
+        poll_until(lambda: not _alive(children), 30, "the killed pytest's children gone")
+    finally:
+        if runner.poll() is None:
+            runner.kill()
+            runner.wait()

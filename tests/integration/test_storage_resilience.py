@@ -9,7 +9,7 @@ from typing import Any
 
 import httpx
 
-from tests.conftest import ADMIN_PASSWORD, hub_settings, scratch_postgres
+from tests.conftest import ADMIN_PASSWORD, POSTGRES_ADDRESS, hub_settings, scratch_postgres
 from tests.helpers import access_token, api_client, running_hub
 from tests.integration.test_hub_bad_input import _telemetry, scripted_agent
 from tests.tcp_proxy import CuttableProxy
@@ -33,9 +33,10 @@ def _stored(api: httpx.Client, vehicle: str) -> int:
 
 def test_writer_holds_samples_while_postgres_is_unreachable(tmp_path: Path) -> None:
     with scratch_postgres() as url:
-        proxy = CuttableProxy(("127.0.0.1", 5432))
+        host, _, port = POSTGRES_ADDRESS.rpartition(":")
+        proxy = CuttableProxy((host, int(port)))
         proxy.start()
-        proxied = url.replace("127.0.0.1:5432", f"127.0.0.1:{proxy.port}")
+        proxied = url.replace(POSTGRES_ADDRESS, f"127.0.0.1:{proxy.port}")
         settings = hub_settings(tmp_path, database_url=proxied, telemetry_batch_size=20)
         with running_hub(settings) as base:
             token = access_token(base, "admin", ADMIN_PASSWORD)

@@ -57,7 +57,7 @@ def test_a_huge_loss_is_recorded_as_a_range_at_once() -> None:
     tracker.add(2**40)
     tracker.give_up(0, 2**40 - 1)
     assert tracker.contiguous == 2**40
-    assert tracker.lost == []
+    assert tracker.settled == []
 
 
 def test_a_loss_beyond_another_gap_waits_for_that_gap() -> None:
@@ -79,3 +79,34 @@ def test_a_set_aside_record_releases_the_ack() -> None:
     ledger.set_aside(KEY, 4)
     assert ledger.contiguous(KEY) == 4
     assert ledger.open_gaps([KEY]) == []
+
+
+def test_a_stream_restored_with_open_holes_waits_for_them_and_no_more() -> None:
+    tracker = SequenceTracker.restored(20, [(3, 6), (10, 10)])
+    assert tracker.holes() == [(3, 6), (10, 10)]
+    assert tracker.first_gap() == (3, 6)
+    assert tracker.contiguous == 2
+    assert tracker.holds(8)
+    assert tracker.holds(20)
+    assert not tracker.holds(4)
+    tracker.give_up(3, 6)
+    assert tracker.holes() == [(10, 10)]
+    tracker.add(10)
+    assert (tracker.contiguous, tracker.holes()) == (20, [])
+    assert SequenceTracker.restored(20, []).contiguous == 20
+    assert SequenceTracker.restored(None, []).contiguous == -1
+
+
+def test_a_preview_changes_nothing_until_committed_and_names_the_holes_to_store() -> None:
+    ledger = SequenceLedger(lambda key: 2)
+    change = ledger.preview([(KEY, 5), (KEY, 6)])
+    assert [(gap.first_seq, gap.last_seq) for gap in change.opened] == [(3, 4)]
+    assert change.holes == {KEY: [(3, 4)]}
+    assert ledger.contiguous(KEY) == 2
+    assert not ledger.tracker(KEY).holds(5)
+    ledger.commit(change)
+    assert ledger.tracker(KEY).holds(5)
+    unchanged = ledger.preview([(KEY, 7)])  # the holes are the same: nothing to store
+    assert unchanged.holes == {}
+    closed = ledger.preview([], [(KEY, 3, 4)])
+    assert closed.holes == {KEY: []}

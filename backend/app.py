@@ -26,6 +26,8 @@ from backend.api import (
     websockets,
 )
 from backend.api.hardening import SecurityMiddleware, content_security_policy
+from backend.api.responses import document_errors
+from backend.api.routing import DashboardMount, install_method_not_allowed
 from backend.errors import (
     GcsError,
     InvalidRequest,
@@ -67,10 +69,13 @@ def create_app(settings: HubSettings | None = None) -> FastAPI:
         description="Live fleet state, commands and telemetry history for drone fleets.",
         lifespan=lifespan,
     )
-    routers = (system, auth, vehicles, params, missions, fleet_commands, safety, logs, admin)
-    for router in (module.router for module in routers):
+    modules = (system, auth, vehicles, params, missions, fleet_commands, safety, logs, admin)
+    routers = [module.router for module in modules]
+    document_errors(app, routers)
+    for router in routers:
         app.include_router(router, prefix=API_PREFIX)
     app.include_router(websockets.router)
+    install_method_not_allowed(app, routers, API_PREFIX)
     app.add_exception_handler(GcsError, _gcs_error_response)  # type: ignore[arg-type]
     app.add_exception_handler(OperationalError, _database_unavailable)  # type: ignore[arg-type]
     if settings.cors_origins:
@@ -95,7 +100,9 @@ def create_app(settings: HubSettings | None = None) -> FastAPI:
 async def _gcs_error_response(request: Request, error: GcsError) -> JSONResponse:
     if isinstance(error, InvalidRequest):
         # The same shape as FastAPI's own 422s, so clients handle one format.
-        detail = [{"loc": ["body", error.field], "msg": error.message, "type": "value_error"}]
+        detail = [
+            {"loc": [error.location, error.field], "msg": error.message, "type": "value_error"}
+        ]
         return JSONResponse({"detail": detail}, status_code=error.status_code)
     headers: dict[str, str] = {}
     body: dict[str, object] = {"detail": error.message}
@@ -121,7 +128,8 @@ async def _database_unavailable(request: Request, error: OperationalError) -> JS
 
 def _mount_dashboard(app: FastAPI, settings: HubSettings) -> None:
     if (settings.frontend_dir / "index.html").is_file():
-        app.mount("/", StaticFiles(directory=settings.frontend_dir, html=True), name="dashboard")
+        files = StaticFiles(directory=settings.frontend_dir, html=True)
+        app.router.routes.append(DashboardMount(files, API_PREFIX))
         return
     log.warning("dashboard not built: %s has no index.html", settings.frontend_dir)
 

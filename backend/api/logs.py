@@ -157,7 +157,9 @@ async def telemetry_series(
     start_at, end_at = time_range(start, end, 3600)
     if end_at - start_at > MAX_SERIES_SPAN_S:
         raise InvalidRequest(
-            "start", f"the range is over {MAX_SERIES_SPAN_S / 86400:.0f} days; ask for less"
+            "start",
+            f"the range is over {MAX_SERIES_SPAN_S / 86400:.0f} days; ask for less",
+            "query",
         )
     vehicles = list(dict.fromkeys(vehicle_id or [r.id for r in hub.registry.all()]))
     for requested in vehicles:

@@ -71,7 +71,9 @@ def optional_time_range(
 
 def _in_order(start_at: float, end_at: float) -> None:
     if start_at > end_at:
-        raise InvalidRequest("start", f"start ({start_at:.6f}) is after end ({end_at:.6f})")
+        raise InvalidRequest(
+            "start", f"start ({start_at:.6f}) is after end ({end_at:.6f})", "query"
+        )
 
 
 def _timestamp(moment: Moment, field: str, widen_s: float) -> float:
@@ -84,5 +86,5 @@ def _timestamp(moment: Moment, field: str, widen_s: float) -> float:
     except (OverflowError, ValueError, OSError):
         seconds = -1.0
     if not 0 <= seconds <= MAX_UNIX_TIME:
-        raise InvalidRequest(field, f"{field} {moment} is out of range")
+        raise InvalidRequest(field, f"{field} {moment} is out of range", "query")
     return seconds + widen_s

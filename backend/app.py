@@ -25,6 +25,7 @@ from backend.api import (
     vehicles,
     websockets,
 )
+from backend.api.docs import install_docs
 from backend.api.hardening import SecurityMiddleware, content_security_policy
 from backend.api.responses import document_errors
 from backend.api.routing import DashboardMount, install_method_not_allowed
@@ -68,6 +69,8 @@ def create_app(settings: HubSettings | None = None) -> FastAPI:
         version="0.1.0",
         description="Live fleet state, commands and telemetry history for drone fleets.",
         lifespan=lifespan,
+        docs_url=None,  # install_docs serves /docs and /redoc without a CDN
+        redoc_url=None,
     )
     modules = (system, auth, vehicles, params, missions, fleet_commands, safety, logs, admin)
     routers = [module.router for module in modules]
@@ -76,6 +79,7 @@ def create_app(settings: HubSettings | None = None) -> FastAPI:
         app.include_router(router, prefix=API_PREFIX)
     app.include_router(websockets.router)
     install_method_not_allowed(app, routers, API_PREFIX)
+    install_docs(app, content_security_policy(settings.basemap_url))
     app.add_exception_handler(GcsError, _gcs_error_response)  # type: ignore[arg-type]
     app.add_exception_handler(OperationalError, _database_unavailable)  # type: ignore[arg-type]
     if settings.cors_origins:

@@ -39,21 +39,10 @@ class ValidationProblem(BaseModel):
     type: str
 
 
-class ValidationErrors(BaseModel):
-    """A value the route cannot take: each problem names its field and the rule."""
-
-    detail: list[ValidationProblem]
-
-
-class SafetyRefusal(BaseModel):
-    """A command or mission that breaks the safety rails: every violated rule is listed."""
-
-    detail: str
-    violations: list[dict[str, Any]]
-
-
 class Unprocessable(BaseModel):
-    """Either shape of a 422."""
+    """A value the route cannot take (``detail`` lists each problem, naming its field and
+    rule), or a command or mission the safety rails refuse (``detail`` says so in one
+    sentence and ``violations`` lists every violated rule)."""
 
     detail: str | list[ValidationProblem]
     violations: list[dict[str, Any]] | None = None

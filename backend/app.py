@@ -25,7 +25,10 @@ from backend.api import (
     vehicles,
     websockets,
 )
+from backend.api.docs import install_docs
 from backend.api.hardening import SecurityMiddleware, content_security_policy
+from backend.api.responses import document_errors
+from backend.api.routing import DashboardMount, install_method_not_allowed
 from backend.api.slow_clients import SlowBodyTimeout
 from backend.errors import (
     GcsError,
@@ -70,11 +73,17 @@ def create_app(settings: HubSettings | None = None) -> FastAPI:
         version="0.1.0",
         description="Live fleet state, commands and telemetry history for drone fleets.",
         lifespan=lifespan,
+        docs_url=None,  # install_docs serves /docs and /redoc without a CDN
+        redoc_url=None,
     )
-    routers = (system, auth, vehicles, params, missions, fleet_commands, safety, logs, admin)
-    for router in (module.router for module in routers):
+    modules = (system, auth, vehicles, params, missions, fleet_commands, safety, logs, admin)
+    routers = [module.router for module in modules]
+    document_errors(app, routers)
+    for router in routers:
         app.include_router(router, prefix=API_PREFIX)
     app.include_router(websockets.router)
+    install_method_not_allowed(app, routers, API_PREFIX)
+    install_docs(app, content_security_policy(settings.basemap_url))
     app.add_exception_handler(GcsError, _gcs_error_response)  # type: ignore[arg-type]
     app.add_exception_handler(OperationalError, _database_unavailable)  # type: ignore[arg-type]
     if settings.cors_origins:
@@ -102,7 +111,9 @@ def create_app(settings: HubSettings | None = None) -> FastAPI:
 async def _gcs_error_response(request: Request, error: GcsError) -> JSONResponse:
     if isinstance(error, InvalidRequest):
         # The same shape as FastAPI's own 422s, so clients handle one format.
-        detail = [{"loc": ["body", error.field], "msg": error.message, "type": "value_error"}]
+        detail = [
+            {"loc": [error.location, error.field], "msg": error.message, "type": "value_error"}
+        ]
         return JSONResponse({"detail": detail}, status_code=error.status_code)
     headers: dict[str, str] = {}
     body: dict[str, object] = {"detail": error.message}
@@ -128,7 +139,8 @@ async def _database_unavailable(request: Request, error: OperationalError) -> JS
 
 def _mount_dashboard(app: FastAPI, settings: HubSettings) -> None:
     if (settings.frontend_dir / "index.html").is_file():
-        app.mount("/", StaticFiles(directory=settings.frontend_dir, html=True), name="dashboard")
+        files = StaticFiles(directory=settings.frontend_dir, html=True)
+        app.router.routes.append(DashboardMount(files, API_PREFIX))
         return
     log.warning("dashboard not built: %s has no index.html", settings.frontend_dir)
 

@@ -42,9 +42,10 @@ class VehicleNotFound(NotFound):
 class InvalidRequest(GcsError):
     status_code = 422
 
-    def __init__(self, field: str, message: str) -> None:
+    def __init__(self, field: str, message: str, location: str = "body") -> None:
         super().__init__(message)
         self.field = field
+        self.location = location  # body, query or path, as in FastAPI's own 422s
 
 
 class QuotaExceeded(GcsError):

@@ -613,7 +613,9 @@ def decode(adapter: TypeAdapter[T], frame: str | bytes) -> T:
     """Parse one frame, raising ProtocolError with a message that names the problem."""
     try:
         raw = json.loads(frame)
-    except (json.JSONDecodeError, UnicodeDecodeError) as error:
+    except (ValueError, RecursionError) as error:
+        # ValueError covers JSONDecodeError, UnicodeDecodeError and an integer over the
+        # interpreter's digit limit; RecursionError, nesting deeper than the parser goes.
         raise ProtocolError("bad_frame", f"frame is not valid JSON: {error}") from None
     if not isinstance(raw, dict) or "type" not in raw:
         raise ProtocolError("invalid_message", "frame must be a JSON object with a 'type' field")

@@ -6,6 +6,7 @@ import re
 from urllib.parse import urlsplit
 
 from starlette.datastructures import Headers
+from starlette.exceptions import HTTPException
 from starlette.requests import HTTPConnection
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
@@ -82,12 +83,15 @@ class SecurityMiddleware:
                 received += len(message.get("body", b""))
                 if received > limit:
                     # A chunked body that lies about nothing but keeps growing.
-                    raise BodyTooLarge
+                    raise BodyTooLarge(limit)
             return message
 
         async def send_with_headers(message: Message) -> None:
             if message["type"] == "http.response.start":
-                message["headers"] = list(message.get("headers", [])) + self.headers
+                headers = list(message.get("headers", []))
+                # A page that states its own policy keeps it (the ReDoc page adds a worker).
+                own = {name.lower() for name, _ in headers}
+                message["headers"] = headers + [h for h in self.headers if h[0] not in own]
             await send(message)
 
         try:
@@ -107,8 +111,13 @@ class SecurityMiddleware:
         await send({"type": "http.response.body", "body": body})
 
 
-class BodyTooLarge(Exception):
-    pass
+class BodyTooLarge(HTTPException):
+    """Raised from ``receive``: an HTTPException, so that the route that was reading the
+    body lets it through (FastAPI turns any other error there into a 400) and the app
+    answers it as a 413."""
+
+    def __init__(self, limit: int) -> None:
+        super().__init__(413, f"request body is over the {limit}-byte limit")
 
 
 def origin_allowed(connection: HTTPConnection, allowed_origins: list[str]) -> bool:
@@ -120,5 +129,8 @@ def origin_allowed(connection: HTTPConnection, allowed_origins: list[str]) -> bo
         return True
     if origin in allowed_origins:
         return True
-    host = connection.headers.get("host", "")
-    return urlsplit(origin).netloc == host
+    # The page's own origin is scheme and host: an http:// page (a MITM on the field LAN
+    # can serve one) must not open the socket of a hub served over https://, nor the reverse.
+    secure = connection.url.scheme in ("https", "wss")
+    own = f"{'https' if secure else 'http'}://{connection.headers.get('host', '')}"
+    return origin.lower() == own.lower()

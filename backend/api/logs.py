@@ -6,7 +6,6 @@ import asyncio
 import re
 import time
 from collections.abc import Iterator
-from datetime import datetime
 from pathlib import Path as FilePath
 from typing import Annotated, Any, BinaryIO, Literal
 
@@ -17,7 +16,13 @@ from pydantic import BaseModel, ConfigDict
 from backend.api.deps import HubDep
 from backend.api.schemas import Sample
 from backend.api.security import SecuredRouter, requires
-from backend.api.time_ranges import optional_time_range, time_range
+from backend.api.time_ranges import (
+    Moment,
+    TimeQuery,
+    optional_time_range,
+    time_query,
+    time_range,
+)
 from backend.auth.policy import Permission
 from backend.errors import InvalidRequest, QuotaExceeded
 from backend.exports import (
@@ -41,7 +46,6 @@ MAX_POINTS = 10_000
 MAX_SERIES_SPAN_S = 7 * 86400
 MAX_ID = 2**62  # ids are 64-bit in the database
 Metric = Literal["alt_rel", "alt_msl", "groundspeed", "battery_remaining", "climb_rate"]
-TimeQuery = Annotated[datetime | None, Query(description="ISO 8601 or Unix seconds")]
 SAFE_FILENAME = re.compile(r"[^A-Za-z0-9_.-]")
 
 
@@ -144,8 +148,8 @@ def _next(rows: list[Any], limit: int) -> int | None:
 async def telemetry_series(
     hub: HubDep,
     vehicle_id: Annotated[list[str] | None, Query(description="repeat; all if unset")] = None,
-    start: TimeQuery = None,
-    end: TimeQuery = None,
+    start: Annotated[Moment | None, time_query("end - 1 h")] = None,
+    end: Annotated[Moment | None, time_query("now")] = None,
     points: Annotated[int, Query(ge=2, le=MAX_POINTS)] = 1000,
     metric: Metric = "alt_rel",
 ) -> Series:
@@ -155,7 +159,9 @@ async def telemetry_series(
     start_at, end_at = time_range(start, end, 3600)
     if end_at - start_at > MAX_SERIES_SPAN_S:
         raise InvalidRequest(
-            "start", f"the range is over {MAX_SERIES_SPAN_S / 86400:.0f} days; ask for less"
+            "start",
+            f"the range is over {MAX_SERIES_SPAN_S / 86400:.0f} days; ask for less",
+            "query",
         )
     vehicles = list(dict.fromkeys(vehicle_id or [r.id for r in hub.registry.all()]))
     for requested in vehicles:

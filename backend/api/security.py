@@ -17,6 +17,7 @@ from fastapi.security import OAuth2PasswordBearer
 from starlette.requests import HTTPConnection
 
 from backend.api.deps import get_hub
+from backend.api.finite_json import FiniteJsonRoute
 from backend.audit import AuditEntry
 from backend.auth.policy import PUBLIC, Permission, Principal, authorize
 from backend.errors import Forbidden, Unauthenticated
@@ -94,6 +95,10 @@ def _authorizer(permission: Permission) -> Callable[..., Any]:
 
 class SecuredRouter(APIRouter):
     """An APIRouter whose every route must declare ``openapi_extra=requires(...)``."""
+
+    def __init__(self, **kwargs: Any) -> None:
+        kwargs.setdefault("route_class", FiniteJsonRoute)  # NaN and Infinity are refused
+        super().__init__(**kwargs)
 
     def add_api_route(self, path: str, endpoint: Callable[..., Any], **kwargs: Any) -> None:
         extra = kwargs.get("openapi_extra") or {}

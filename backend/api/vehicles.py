@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import asyncio
-from datetime import datetime
 from typing import Annotated
 
 from fastapi import Body, Path, Query, Request
@@ -11,7 +10,7 @@ from fastapi import Body, Path, Query, Request
 from backend.api.deps import HubDep
 from backend.api.schemas import CommandResponse, TelemetryPage, TelemetrySample
 from backend.api.security import CurrentPrincipal, SecuredRouter, client_address, requires
-from backend.api.time_ranges import time_range
+from backend.api.time_ranges import Moment, time_query, time_range
 from backend.auth.policy import Permission
 from backend.fleet.command_service import execute_command
 from gcs.protocol import Command, VehicleSummary
@@ -87,12 +86,8 @@ async def send_command(
 async def telemetry_history(
     vehicle_id: VehicleIdPath,
     hub: HubDep,
-    start: Annotated[
-        datetime | None, Query(description="ISO 8601 or Unix seconds; default: end - 10 min")
-    ] = None,
-    end: Annotated[
-        datetime | None, Query(description="ISO 8601 or Unix seconds; default: now")
-    ] = None,
+    start: Annotated[Moment | None, time_query("end - 10 min")] = None,
+    end: Annotated[Moment | None, time_query("now")] = None,
     limit: Annotated[int, Query(ge=1, le=MAX_TELEMETRY_PAGE)] = 1000,
 ) -> TelemetryPage:
     """Stored telemetry samples in a time range, oldest first."""

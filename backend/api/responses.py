@@ -1,0 +1,174 @@
+"""What each route can answer besides success, written into the OpenAPI document.
+
+The rules follow from where errors arise, so a new route is documented by them:
+- a route behind a permission: 401, 403, and 503 (its token is looked up in the database);
+- a route with parameters or a body: 422 (the body names each field and rule);
+- a path parameter, or a ``vehicle_id`` query: 404;
+- a request body: 413.
+``ROUTE_STATUSES`` adds what only some routes do: talk to a vehicle (409 offline or
+refused, 504 no answer in time), rate limits (429), conflicts (409).
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Iterable
+from typing import Any
+
+from fastapi import APIRouter, FastAPI
+from fastapi.dependencies.utils import get_flat_params
+from fastapi.openapi.utils import get_openapi
+from fastapi.routing import APIRoute
+from pydantic import BaseModel, ConfigDict, Field
+
+from backend.api.security import PERMISSION_KEY
+from backend.auth.policy import PUBLIC
+
+
+class ErrorMessage(BaseModel):
+    """Every error but a 422: one sentence that names what went wrong."""
+
+    detail: str
+
+
+class ValidationProblem(BaseModel):
+    model_config = ConfigDict(extra="allow")  # FastAPI adds input and ctx
+
+    loc: list[str | int] = Field(description="Where: body, query or path, then the field")
+    msg: str = Field(description="The rule the value broke")
+    type: str
+
+
+class Unprocessable(BaseModel):
+    """A value the route cannot take (``detail`` lists each problem, naming its field and
+    rule), or a command or mission the safety rails refuse (``detail`` says so in one
+    sentence and ``violations`` lists every violated rule)."""
+
+    detail: str | list[ValidationProblem]
+    violations: list[dict[str, Any]] | None = None
+
+
+RETRY_AFTER = {"Retry-After": {"description": "Seconds to wait", "schema": {"type": "integer"}}}
+
+STATUSES: dict[int, dict[str, Any]] = {
+    401: {"description": "Not authenticated, or the token is invalid, expired or revoked"},
+    403: {"description": "The role or token lacks the permission this route needs"},
+    404: {"description": "No such vehicle, flight, log, user or token (named in the message)"},
+    409: {
+        "description": "The vehicle is not connected, its flight controller refused, "
+        "or the resource exists"
+    },
+    413: {"description": "The request body is over the size limit"},
+    422: {
+        "description": "A value the route cannot take (each field and rule named), or a "
+        "command refused by the safety rails (every rule listed)",
+        "model": Unprocessable,
+    },
+    429: {
+        "description": "Too many attempts; try again after Retry-After seconds",
+        "headers": RETRY_AFTER,
+    },
+    503: {
+        "description": "The database is unavailable; try again after Retry-After seconds",
+        "headers": RETRY_AFTER,
+    },
+    504: {"description": "The agent or the flight controller did not answer in time"},
+}
+
+VEHICLE_LINK = frozenset({409, 504})
+# (path pattern, methods or None for all, statuses) for what the rules cannot see.
+ROUTE_STATUSES: list[tuple[str, frozenset[str] | None, frozenset[int]]] = [
+    (
+        r"/vehicles/\{vehicle_id\}/(commands|params(/\{param\})?|mission(/current)?)",
+        None,
+        VEHICLE_LINK,
+    ),
+    (
+        r"(/vehicles/\{vehicle_id\})?/commands|/fleet/commands",
+        frozenset({"POST"}),
+        frozenset({429}),
+    ),
+    (r"/fleet/commands", frozenset({"POST"}), frozenset({404})),
+    (r"/auth/(login|token)", frozenset({"POST"}), frozenset({401, 429, 503})),
+    (r"/users", frozenset({"POST"}), frozenset({409})),
+    (r"/vehicles/\{vehicle_id\}/tlogs", frozenset({"POST"}), frozenset({413})),
+]
+
+
+def _statuses(route: APIRoute) -> set[int]:
+    statuses: set[int] = set()
+    extra = route.openapi_extra or {}
+    if extra.get(PERMISSION_KEY, PUBLIC) != PUBLIC:
+        statuses |= {401, 403, 503}
+    params = get_flat_params(route.dependant)
+    if params or route.body_field is not None:
+        statuses.add(422)
+    if route.dependant.path_params or any(p.name == "vehicle_id" for p in params):
+        statuses.add(404)
+    if route.body_field is not None:
+        statuses.add(413)
+    for pattern, methods, more in ROUTE_STATUSES:
+        if re.fullmatch(pattern, route.path) and (
+            methods is None or (route.methods or set()) & methods
+        ):
+            statuses |= more
+    return statuses
+
+
+def document_errors(app: FastAPI, routers: Iterable[APIRouter]) -> None:
+    """Write each route's error statuses, with their body models, into its responses.
+
+    Called on the routers before the app includes them (the app may keep its own
+    per-route copies), with their paths as the routers know them (no API prefix)."""
+    for router in routers:
+        for route in router.routes:
+            if isinstance(route, APIRoute) and route.include_in_schema:
+                _document(route)
+    app.openapi = lambda: _openapi(app)  # type: ignore[method-assign]
+
+
+def _document(route: APIRoute) -> None:
+    for status in _statuses(route):
+        documented = dict(route.responses.get(status, {}))
+        default = STATUSES[status]
+        documented.setdefault("description", default["description"])
+        documented.setdefault("model", default.get("model", ErrorMessage))
+        if "headers" in default:
+            documented.setdefault("headers", default["headers"])
+        route.responses[status] = documented
+
+
+def _openapi(app: FastAPI) -> dict[str, Any]:
+    if app.openapi_schema is None:
+        document = get_openapi(
+            title=app.title,
+            version=app.version,
+            description=app.description,
+            routes=app.routes,
+        )
+        _require_discriminators(document)
+        app.openapi_schema = document
+    return app.openapi_schema
+
+
+def _require_discriminators(document: dict[str, Any]) -> None:
+    """A tagged union's tag is required on the wire (pydantic cannot pick a member without
+    it), though each member's model gives it a default; say so in each member's schema."""
+    schemas = document.get("components", {}).get("schemas", {})
+
+    def visit(node: object) -> None:
+        if isinstance(node, dict):
+            discriminator = node.get("discriminator")
+            if isinstance(discriminator, dict):
+                tag = discriminator["propertyName"]
+                for ref in discriminator.get("mapping", {}).values():
+                    member = schemas.get(ref.rsplit("/", 1)[-1])
+                    if member is not None and tag not in member.get("required", []):
+                        member["required"] = [tag, *member.get("required", [])]
+            for value in node.values():
+                visit(value)
+        elif isinstance(node, list):
+            for value in node:
+                visit(value)
+
+    visit(document)

@@ -1,0 +1,58 @@
+"""/docs (Swagger UI) and /redoc render in headless Chromium from the hub alone: no request
+leaves the hub, and the hub's Content-Security-Policy refuses nothing."""
+
+from __future__ import annotations
+
+from urllib.parse import urlsplit
+
+import pytest
+from playwright.sync_api import Page, Route
+
+pytestmark = pytest.mark.browser
+
+
+def _offline_and_watched(page: Page, hub: str) -> tuple[list[str], list[str]]:
+    """Abort every request that is not to the hub; collect those and any CSP refusals."""
+    own = urlsplit(hub).netloc
+    elsewhere: list[str] = []
+    refused: list[str] = []
+
+    def route(request_route: Route) -> None:
+        url = request_route.request.url
+        if urlsplit(url).netloc == own or url.startswith(("data:", "blob:")):
+            request_route.continue_()
+        else:
+            elsewhere.append(url)
+            request_route.abort()
+
+    page.route("**/*", route)
+    page.on(
+        "console",
+        lambda message: (
+            refused.append(message.text) if "Content Security Policy" in message.text else None
+        ),
+    )
+    return elsewhere, refused
+
+
+def test_swagger_ui_renders_offline_under_the_csp(page: Page, hub: str) -> None:
+    elsewhere, refused = _offline_and_watched(page, hub)
+    page.goto(f"{hub}/docs")
+    page.locator(
+        ".opblock-summary-path", has_text="/api/v1/vehicles/{vehicle_id}/commands"
+    ).first.wait_for(timeout=15_000)
+    assert page.locator(".opblock").count() >= 40
+    assert elsewhere == []
+    assert refused == []
+
+
+def test_redoc_renders_offline_under_the_csp(page: Page, hub: str) -> None:
+    elsewhere, refused = _offline_and_watched(page, hub)
+    page.goto(f"{hub}/redoc")
+    # ReDoc's sidebar always asks its vendor's CDN for a logo (and hides it when refused).
+    vendor_logo = "https://cdn.redoc.ly/redoc/logo-mini.svg"
+    page.get_by_text("Send a command and return the flight controller's answer.").first.wait_for(
+        timeout=15_000
+    )
+    assert [url for url in elsewhere if url != vendor_logo] == []
+    assert [text for text in refused if vendor_logo not in text] == []

@@ -1,0 +1,60 @@
+"""NaN and Infinity are not JSON numbers: a body holding one gets a 422 that names where it
+is (and that can itself be serialised), never a 500. Bodies the parser cannot read at all
+are 422 too, like any other unparsable body."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import httpx
+import pytest
+
+from tests.helpers import api_client
+from tests.integration.test_hub_bad_input import scripted_agent
+
+Enrol = Callable[[str], str]
+JSON = {"Content-Type": "application/json"}
+
+
+def _refused(response: httpx.Response, location: list[object]) -> None:
+    assert response.status_code == 422, response.text
+    detail = response.json()["detail"]
+    assert [item["loc"] for item in detail] == [location]
+    assert "finite number" in detail[0]["msg"]
+
+
+@pytest.mark.parametrize("constant", ["NaN", "Infinity", "-Infinity"])
+def test_non_finite_numbers_are_refused_naming_the_field(
+    hub: str, enrol: Enrol, admin_token: str, constant: str
+) -> None:
+    with scripted_agent(hub, "v1", enrol("v1")), api_client(hub, admin_token) as api:
+        param = api.put(
+            "/api/v1/vehicles/v1/params/WPNAV_SPEED",
+            content=f'{{"value": {constant}}}',
+            headers=JSON,
+        )
+        _refused(param, ["body", "value"])
+        takeoff = api.post(
+            "/api/v1/vehicles/v1/commands",
+            content=f'{{"name": "takeoff", "altitude": {constant}}}',
+            headers=JSON,
+        )
+        _refused(takeoff, ["body", "altitude"])
+        mission = api.post(
+            "/api/v1/vehicles/v1/mission",
+            content=f'{{"items": [{{"command": 16, "x": 1, "y": {constant}}}]}}',
+            headers=JSON,
+        )
+        _refused(mission, ["body", "items", 0, "y"])
+
+
+@pytest.mark.parametrize(
+    "body",
+    [b"[" * 30_000, b'{"value": ' + b"9" * 5_000 + b"}", b'{"value": "\xff"}'],
+    ids=["deep nesting", "huge integer", "not utf-8"],
+)
+def test_unparsable_bodies_are_422(hub: str, admin_token: str, body: bytes) -> None:
+    with api_client(hub, admin_token) as api:
+        response = api.put("/api/v1/vehicles/v1/params/WPNAV_SPEED", content=body, headers=JSON)
+    assert response.status_code == 422, response.text
+    assert response.json()["detail"][0]["loc"] == ["body"]

@@ -79,6 +79,7 @@ def test_every_failed_check_is_a_422_naming_the_item_and_the_rule(
     watcher.wait_until(ready(vehicle), 60, f"{vehicle} ready")
     refused = api.post(f"/api/v1/vehicles/{vehicle}/mission", json={"items": items})
     assert refused.status_code == 422, refused.text
+    assert len(refused.json()["violations"]) == 1, refused.text
     [violation] = refused.json()["violations"]
     assert violation["rule"] == rule
     assert violation["message"].startswith(message)
@@ -188,7 +189,7 @@ def test_auto_flies_only_a_checked_mission(
     try:
         refused = api.post(commands, json=auto)
         assert refused.status_code == 422, refused.text
-        [violation] = refused.json()["violations"]
+        [violation] = refused.json()["violations"], refused.text
         assert violation["rule"] == "max_altitude"
         assert "item 2 altitude" in violation["message"]
 

@@ -31,7 +31,7 @@ from backend.storage.retention import RetentionPolicy
 from backend.storage.sequences import Gap, StreamKey
 from backend.storage.spool import RowSpool
 from backend.storage.writer import StorageWriter
-from gcs.protocol import CloseCode
+from protocol.messages import CloseCode
 
 log = logging.getLogger(__name__)
 

@@ -12,8 +12,8 @@ from pydantic_settings import BaseSettings, SettingsConfigDict
 
 from backend.auth.password_policy import password_problem
 from backend.storage.retention import AUDIT_MIN_RETENTION_DAYS, RetentionPolicy
-from gcs.addresses import is_loopback
-from gcs.protocol import MAX_FRAME_BYTES
+from common.addresses import is_loopback
+from protocol.messages import MAX_FRAME_BYTES
 
 REPO_ROOT = Path(__file__).resolve().parent.parent
 

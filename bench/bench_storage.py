@@ -23,7 +23,7 @@ from backend.storage.database import make_engine, migrate
 from backend.storage.logbook import Logbook
 from backend.storage.records import TelemetryEnvelope
 from backend.storage.repository import Repository
-from gcs.protocol import PROTOCOL_VERSION, Hello, Telemetry, VehicleState
+from protocol.messages import PROTOCOL_VERSION, Hello, Telemetry, VehicleState
 from tests.conftest import scratch_postgres
 
 BATCH = 500  # the hub writer's default batch

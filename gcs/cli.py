@@ -139,7 +139,7 @@ def _agent(args: argparse.Namespace) -> int:
 
 
 def _sim(args: argparse.Namespace, rest: list[str]) -> int:
-    from vehicle_agents.simulator import main as simulator_main
+    from simulator import main as simulator_main
 
     return simulator_main(rest)
 
@@ -188,7 +188,7 @@ def _demo(args: argparse.Namespace) -> int:
 
 def _exposure_note(host: str) -> str:
     """What the banner says when the demo is reachable from the network."""
-    from gcs.addresses import is_loopback
+    from common.addresses import is_loopback
 
     if is_loopback(host):
         return ""

@@ -25,7 +25,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import IO
 
-from gcs.addresses import WILDCARDS, is_loopback
+from common.addresses import WILDCARDS, is_loopback
 
 log = logging.getLogger(__name__)
 

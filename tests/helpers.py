@@ -24,7 +24,7 @@ from websockets.sync.client import ClientConnection, connect
 from backend.app import create_app
 from backend.settings import HubSettings
 from gcs.launcher import FleetPlan, LocalFleet, end_with_parent, free_port
-from gcs.protocol import CLIENT_WS_PATH
+from protocol.messages import CLIENT_WS_PATH
 
 Vehicles = dict[str, dict[str, Any]]
 

@@ -9,7 +9,7 @@ import time
 import uuid
 from collections.abc import Callable
 
-from gcs.protocol import (
+from protocol.messages import (
     PROTOCOL_VERSION,
     Event,
     EventKind,

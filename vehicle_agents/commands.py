@@ -19,7 +19,7 @@ from dataclasses import dataclass
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
-from gcs.protocol import (
+from protocol.messages import (
     ArmCommand,
     ChangeSpeedCommand,
     Command,

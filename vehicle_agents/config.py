@@ -12,7 +12,7 @@ from urllib.parse import urlsplit, urlunsplit
 from pydantic import Field, SecretStr, field_validator
 from pydantic_settings import BaseSettings, SettingsConfigDict
 
-from gcs.protocol import AGENT_WS_PATH
+from protocol.messages import AGENT_WS_PATH
 
 
 class AgentSettings(BaseSettings):

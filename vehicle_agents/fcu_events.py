@@ -11,7 +11,7 @@ from collections.abc import Callable
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
-from gcs.protocol import EventKind
+from protocol.messages import EventKind
 from vehicle_agents.fcu_link import LinkChange
 
 EmitEvent = Callable[[EventKind, str, int | None], None]

@@ -20,11 +20,11 @@ from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from typing import Any
 
-from pymavlink import mavutil
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
-from gcs.mavlink_wire import out_of_range
-from gcs.retry import Backoff, Retries
+from common.retry import Backoff, Retries
+from protocol.mavlink_wire import out_of_range
+from vehicle_agents.mavlink_dialect import mavutil
 from vehicle_agents.modes import ModeTable, mode_table_for
 
 log = logging.getLogger(__name__)
@@ -163,7 +163,7 @@ class FcuLink:
             await retries.wait()
 
     def _open(self) -> Any:
-        connection = mavutil.mavlink_connection(
+        connection = mavutil().mavlink_connection(
             self.url,
             source_system=self.source_system,
             source_component=self.source_component,

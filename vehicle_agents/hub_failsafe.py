@@ -16,7 +16,7 @@ from typing import Literal
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
-from gcs.protocol import EventKind, HoldCommand, ReturnToLaunchCommand
+from protocol.messages import EventKind, HoldCommand, ReturnToLaunchCommand
 from vehicle_agents.commands import CommandExecutor
 from vehicle_agents.fcu_link import FcuLink
 from vehicle_agents.modes import is_armed, mode_name

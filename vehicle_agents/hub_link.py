@@ -13,7 +13,8 @@ from pydantic import TypeAdapter, ValidationError
 from websockets.asyncio.client import ClientConnection, connect
 from websockets.exceptions import ConnectionClosed, InvalidHandshake
 
-from gcs.protocol import (
+from common.retry import Backoff, Retries
+from protocol.messages import (
     MAX_FRAME_BYTES,
     Ack,
     CloseCode,
@@ -33,7 +34,6 @@ from gcs.protocol import (
     encode,
     hub_to_agent,
 )
-from gcs.retry import Backoff, Retries
 from vehicle_agents.outbox import Outbox
 
 log = logging.getLogger(__name__)

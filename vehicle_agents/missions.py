@@ -17,7 +17,7 @@ from dataclasses import dataclass
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
-from gcs.protocol import CommandOutcome, MissionItem
+from protocol.messages import CommandOutcome, MissionItem
 from vehicle_agents.fcu_link import FcuLink, MavMessage, MessagePredicate
 
 MISSION = mavlink2.MAV_MISSION_TYPE_MISSION

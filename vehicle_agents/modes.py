@@ -5,8 +5,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
-from pymavlink import mavutil
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
+
+from vehicle_agents.mavlink_dialect import mavutil
 
 _AUTOPILOT_NAMES = {
     mavlink2.MAV_AUTOPILOT_ARDUPILOTMEGA: "ardupilot",
@@ -78,17 +79,17 @@ def mode_table_for(heartbeat: Any) -> ModeTable:
     autopilot = autopilot_name(heartbeat.autopilot)
     settings: dict[str, ModeSetting] = {}
     if autopilot == "px4":
-        for name, (base, main, sub) in mavutil.px4_map.items():
+        for name, (base, main, sub) in mavutil().px4_map.items():
             settings[name] = ModeSetting(base, main, sub)
     else:
         flag = mavlink2.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED
-        for name, number in (mavutil.mode_mapping_byname(heartbeat.type) or {}).items():
+        for name, number in (mavutil().mode_mapping_byname(heartbeat.type) or {}).items():
             settings[name] = ModeSetting(flag, number)
     return ModeTable(autopilot, vehicle_type_name(heartbeat.type), settings)
 
 
 def mode_name(heartbeat: Any) -> str:
-    return str(mavutil.mode_string_v10(heartbeat))
+    return str(mavutil().mode_string_v10(heartbeat))
 
 
 def is_armed(heartbeat: Any) -> bool:

@@ -27,7 +27,7 @@ from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
-from gcs.protocol import Ack, Resend, SequencedKind, Unavailable
+from protocol.messages import Ack, Resend, SequencedKind, Unavailable
 
 log = logging.getLogger(__name__)
 

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
-from gcs.protocol import CommandOutcome
+from protocol.messages import CommandOutcome
 from vehicle_agents import param_encoding
 from vehicle_agents.fcu_link import FcuLink, MavMessage, next_match
 from vehicle_agents.param_encoding import ParamEncoding, ParamSetBytes

@@ -8,7 +8,7 @@ from collections.abc import Mapping
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
-from gcs.protocol import VehicleState
+from protocol.messages import VehicleState
 from vehicle_agents import positioning
 from vehicle_agents.fcu_link import FcuLink, MavMessage
 from vehicle_agents.missions import mission_number

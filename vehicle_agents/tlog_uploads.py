@@ -11,7 +11,7 @@ import logging
 from collections.abc import Callable
 from pathlib import Path
 
-from gcs.retry import Backoff, Retries
+from common.retry import Backoff, Retries
 from vehicle_agents.fcu_link import MavMessage
 from vehicle_agents.tlog import TlogRecorder, TlogUploadError, upload_tlog
 

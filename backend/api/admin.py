@@ -16,7 +16,7 @@ from backend.audit import AuditQuery
 from backend.auth.password_policy import MIN_LENGTH, password_problem
 from backend.auth.policy import Permission, Role
 from backend.storage.models import UserRow
-from gcs.protocol import VehicleId
+from protocol.messages import VehicleId
 
 router = SecuredRouter(tags=["admin"])
 

@@ -14,7 +14,7 @@ from backend.auth.policy import Permission, Principal, authorize
 from backend.errors import GcsError, InvalidRequest, SafetyViolation
 from backend.fleet.command_service import execute_command
 from backend.hub import Hub
-from gcs.protocol import Command, CommandOutcome, VehicleId
+from protocol.messages import Command, CommandOutcome, VehicleId
 
 router = SecuredRouter(prefix="/fleet", tags=["vehicles"])
 

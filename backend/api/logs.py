@@ -36,7 +36,7 @@ from backend.exports import (
 from backend.hub import Hub
 from backend.storage.models import FlightRow
 from backend.storage.tlog_check import InvalidTlog, TlogChecker
-from gcs.protocol import VehicleId
+from protocol.messages import VehicleId
 
 router = SecuredRouter(tags=["flight log"])
 

@@ -13,7 +13,7 @@ from backend.api.security import CurrentPrincipal, SecuredRouter, client_address
 from backend.auth.policy import Permission
 from backend.fleet.command_service import execute_expecting_acceptance
 from backend.safety.schemas import Mission
-from gcs.protocol import (
+from protocol.messages import (
     Command,
     CommandOutcome,
     MissionClearCommand,

@@ -11,7 +11,7 @@ from backend.api.deps import HubDep
 from backend.api.security import CurrentPrincipal, SecuredRouter, client_address, requires
 from backend.auth.policy import Permission
 from backend.fleet.command_service import execute_expecting_acceptance
-from gcs.protocol import (
+from protocol.messages import (
     Command,
     Float32,
     ParamGetCommand,

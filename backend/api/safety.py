@@ -16,7 +16,7 @@ from backend.safety.schemas import (
     SafetyRailsModel,
 )
 from backend.storage.rails import SITE, vehicle_scope
-from gcs.protocol import VehicleId
+from protocol.messages import VehicleId
 
 router = SecuredRouter(tags=["safety"])
 

@@ -1,10 +1,10 @@
-"""REST request and response bodies (the WebSocket messages live in gcs.protocol)."""
+"""REST request and response bodies (the WebSocket messages live in protocol.messages)."""
 
 from __future__ import annotations
 
 from pydantic import BaseModel, ConfigDict, Field
 
-from gcs.protocol import Command, CommandOutcome
+from protocol.messages import Command, CommandOutcome
 
 
 class Health(BaseModel):

@@ -6,7 +6,7 @@ from backend.api.deps import HubDep
 from backend.api.schemas import ClientConfig, Health
 from backend.api.security import SecuredRouter, requires
 from backend.auth.policy import PUBLIC, Permission
-from gcs.protocol import PROTOCOL_VERSION
+from protocol.messages import PROTOCOL_VERSION
 
 router = SecuredRouter(tags=["system"])
 

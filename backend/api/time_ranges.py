@@ -17,7 +17,7 @@ from fastapi import Query
 from pydantic import BeforeValidator, Field
 
 from backend.errors import InvalidRequest
-from gcs.protocol import MAX_UNIX_TIME
+from protocol.messages import MAX_UNIX_TIME
 
 
 def _not_a_number(value: object) -> object:

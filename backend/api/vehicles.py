@@ -13,7 +13,7 @@ from backend.api.security import CurrentPrincipal, SecuredRouter, client_address
 from backend.api.time_ranges import Moment, time_query, time_range
 from backend.auth.policy import Permission
 from backend.fleet.command_service import execute_command
-from gcs.protocol import Command, VehicleSummary
+from protocol.messages import Command, VehicleSummary
 
 router = SecuredRouter(prefix="/vehicles", tags=["vehicles"])
 

@@ -7,7 +7,7 @@ from fastapi import APIRouter, WebSocket
 from backend.api.deps import HubDep
 from backend.realtime.agent_gateway import AgentSession
 from backend.realtime.client_feed import ClientFeed
-from gcs.protocol import AGENT_WS_PATH, CLIENT_WS_PATH
+from protocol.messages import AGENT_WS_PATH, CLIENT_WS_PATH
 
 router = APIRouter()
 

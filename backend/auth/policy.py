@@ -95,7 +95,7 @@ def authorize(principal: Principal, needed: Permission, vehicle_id: str | None =
 
 
 # What each WebSocket message type needs, by the ``type`` field. A message type missing
-# here is refused, and the test suite checks every type in gcs.protocol is listed.
+# here is refused, and the test suite checks every type in protocol.messages is listed.
 CLIENT_MESSAGE_PERMISSIONS: dict[str, Permission] = {"ping": Permission.READ}
 AGENT_MESSAGE_PERMISSIONS: dict[str, Permission] = {
     "hello": Permission.AGENT,

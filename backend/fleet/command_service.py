@@ -24,7 +24,7 @@ from backend.fleet.mission_gate import check_current_item, starts_mission, unche
 from backend.hub import Hub
 from backend.storage.logbook import command_row
 from backend.storage.models import CommandRow
-from gcs.protocol import Command, CommandOutcome
+from protocol.messages import Command, CommandOutcome
 
 log = logging.getLogger(__name__)
 

@@ -12,7 +12,7 @@ from starlette.websockets import WebSocketDisconnect
 
 from backend.errors import CommandTimedOut, InvalidRequest, VehicleOffline
 from backend.fleet.registry import FleetRegistry
-from gcs.protocol import (
+from protocol.messages import (
     Command,
     CommandOutcome,
     CommandRequest,

@@ -15,7 +15,7 @@ from backend.fleet.registry import VehicleRecord
 from backend.hub import Hub
 from backend.safety import Violation
 from backend.safety.rails import MISSION_UNCHECKED
-from gcs.protocol import (
+from protocol.messages import (
     Command,
     MissionDownloadCommand,
     MissionItem,

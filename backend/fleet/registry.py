@@ -7,7 +7,7 @@ from dataclasses import dataclass, field
 
 from backend.errors import VehicleNotFound
 from backend.storage.models import VehicleRow
-from gcs.protocol import Hello, Telemetry, VehicleState, VehicleSummary
+from protocol.messages import Hello, Telemetry, VehicleState, VehicleSummary
 
 
 @dataclass

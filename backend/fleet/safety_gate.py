@@ -23,7 +23,7 @@ from backend.safety.rails import MISSION_ITEM
 from backend.safety.schemas import SafetyRailsModel
 from backend.settings import HubSettings
 from backend.storage.rails import SITE, RailsRepository, vehicle_scope
-from gcs.protocol import (
+from protocol.messages import (
     ArmCommand,
     Command,
     GotoCommand,

@@ -19,7 +19,7 @@ from backend.realtime.bus import Topic
 from backend.realtime.frames import FrameTooLarge, PeerConnection
 from backend.storage.records import LostFrames, StoredEvent, TelemetryEnvelope
 from backend.storage.sequences import Gap, StreamKey
-from gcs.protocol import (
+from protocol.messages import (
     PROTOCOL_VERSION,
     Ack,
     CloseCode,

@@ -21,7 +21,7 @@ from backend.errors import Forbidden
 from backend.hub import Hub
 from backend.realtime.bus import LatestSubscription, Topic
 from backend.realtime.frames import FrameTooLarge, PeerConnection
-from gcs.protocol import (
+from protocol.messages import (
     CloseCode,
     ErrorReply,
     FleetSnapshot,

@@ -8,7 +8,7 @@ import logging
 
 from starlette.websockets import WebSocket, WebSocketDisconnect
 
-from gcs.protocol import CloseCode, ErrorReply, Message, encode
+from protocol.messages import CloseCode, ErrorReply, Message, encode
 
 log = logging.getLogger(__name__)
 

@@ -22,7 +22,7 @@ from backend.safety.rails import (
     SafetyRails,
     Violation,
 )
-from gcs.protocol import MissionItem
+from protocol.messages import MissionItem
 
 MAX_ALTITUDE_M = 10_000.0
 MAX_DISTANCE_M = 1_000_000.0

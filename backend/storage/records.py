@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from gcs.protocol import SequencedKind, Telemetry
+from protocol.messages import SequencedKind, Telemetry
 
 
 @dataclass(frozen=True)

@@ -19,7 +19,7 @@ from backend.storage.models import (
     VehicleRow,
 )
 from backend.storage.records import StoredEvent, TelemetryEnvelope
-from gcs.protocol import Hello
+from protocol.messages import Hello
 
 
 class Repository:

@@ -15,7 +15,7 @@ from __future__ import annotations
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field, replace
 
-from gcs.protocol import SequencedKind
+from protocol.messages import SequencedKind
 
 
 @dataclass(frozen=True)

@@ -24,7 +24,7 @@ from backend.storage.logbook import Logbook
 from backend.storage.records import LostFrames, StoredEvent, StoredRecord, TelemetryEnvelope
 from backend.storage.repository import Repository
 from backend.storage.sequences import Gap, SequenceLedger, StreamKey
-from gcs.retry import Backoff, Retries
+from common.retry import Backoff, Retries
 
 # Told, after each commit, how far each touched agent stream is stored without a hole
 # (its ack) and which holes newly appeared (to ask the agent for).

@@ -7,9 +7,9 @@ import type { HubToClient, Ping } from "./types";
 
 export type ConnectionState = "connecting" | "connected" | "reconnecting" | "stopped";
 
-/** `gcs.protocol.CloseCode.UNAUTHORIZED`: no session, or it expired or was revoked. */
+/** `protocol.messages.CloseCode.UNAUTHORIZED`: no session, or it expired or was revoked. */
 export const CLOSE_UNAUTHORIZED = 4401;
-/** `gcs.protocol.CloseCode.FORBIDDEN`: logged in, but not allowed (e.g. the page's origin). */
+/** `protocol.messages.CloseCode.FORBIDDEN`: logged in, but not allowed (e.g. the page's origin). */
 export const CLOSE_FORBIDDEN = 4403;
 
 export interface FleetSocketHandlers {

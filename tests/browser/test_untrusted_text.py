@@ -19,7 +19,7 @@ import pytest
 from playwright.sync_api import Page, expect
 
 from backend.settings import REPO_ROOT
-from gcs.protocol import Event, Telemetry, VehicleState, encode
+from protocol.messages import Event, Telemetry, VehicleState, encode
 from tests.browser.conftest import log_in
 from tests.conftest import ADMIN_PASSWORD, hub_settings
 from tests.helpers import poll_until, running_hub

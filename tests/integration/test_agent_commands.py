@@ -20,7 +20,7 @@ from typing import Any, TypeVar
 import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
-from gcs.protocol import (
+from protocol.messages import (
     ChangeSpeedCommand,
     Command,
     CommandOutcome,

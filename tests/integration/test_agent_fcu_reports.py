@@ -20,7 +20,7 @@ from typing import Any
 import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
-from gcs.protocol import VehicleState
+from protocol.messages import VehicleState
 from tests.helpers import FleetWatcher, agent_process, api_client, poll_until, state_of
 from tests.mavlink_peer import ScriptedFlightController
 from vehicle_agents.agent import EventSource

@@ -18,7 +18,7 @@ import httpx
 import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
-from gcs.protocol import AGENT_WS_PATH, MAX_FRAME_BYTES, CloseCode
+from protocol.messages import AGENT_WS_PATH, MAX_FRAME_BYTES, CloseCode
 from tests.conftest import ADMIN_PASSWORD, hub_settings
 from tests.helpers import access_token, api_client, running_hub
 from tests.integration.test_hub_bad_input import _close_code, _hello, scripted_agent, websocket

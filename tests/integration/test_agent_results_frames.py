@@ -15,15 +15,15 @@ from typing import TypeVar
 import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
-from gcs.protocol import ChangeSpeedCommand, CommandOutcome, GotoCommand, SetHomeCommand
+from protocol.messages import ChangeSpeedCommand, CommandOutcome, GotoCommand, SetHomeCommand
+from simulator import ListenAddress, SimulatorConfig, SimulatorServer
+from simulator.config import DEFAULT_HOME, Autopilot
+from simulator.copter import Copter
 from tests.mavlink_peer import Answer, ScriptedFlightController
 from tests.simulator.test_sim_server import serving
 from vehicle_agents.commands import CommandExecutor, CommandTimeouts
 from vehicle_agents.fcu_link import FcuLink, MavMessage
 from vehicle_agents.mav_results import result_name
-from vehicle_agents.simulator import ListenAddress, SimulatorConfig, SimulatorServer
-from vehicle_agents.simulator.config import DEFAULT_HOME, Autopilot
-from vehicle_agents.simulator.copter import Copter
 
 pytestmark = pytest.mark.integration
 

@@ -22,7 +22,7 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 from websockets.exceptions import ConnectionClosed
 from websockets.sync.server import Server, ServerConnection, serve
 
-from gcs.protocol import (
+from protocol.messages import (
     AGENT_WS_PATH,
     ChangeSpeedCommand,
     CommandOutcome,

@@ -12,8 +12,8 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from backend.auth.accounts import Accounts
 from backend.storage.database import make_engine
-from gcs.protocol import AGENT_WS_PATH, CloseCode
-from gcs.retry import Backoff
+from common.retry import Backoff
+from protocol.messages import AGENT_WS_PATH, CloseCode
 from tests.conftest import ADMIN_PASSWORD, hub_settings
 from tests.helpers import access_token, api_client, running_hub
 from tests.integration.test_hub_bad_input import _close_code, scripted_agent, websocket

@@ -27,7 +27,7 @@ from backend.auth.policy import (
     Permission,
     Role,
 )
-from gcs.protocol import AGENT_WS_PATH, CLIENT_WS_PATH, AgentToHub, ClientToHub, CloseCode
+from protocol.messages import AGENT_WS_PATH, CLIENT_WS_PATH, AgentToHub, ClientToHub, CloseCode
 from tests.helpers import access_token
 
 PASSWORD = "correct horse battery"

@@ -11,7 +11,7 @@ import httpx
 import pytest
 
 from backend.safety.critical_params import critical_reason
-from gcs.protocol import (
+from protocol.messages import (
     AGENT_WS_PATH,
     PROTOCOL_VERSION,
     CommandOutcome,

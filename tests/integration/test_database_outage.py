@@ -12,7 +12,7 @@ from contextlib import ExitStack, contextmanager
 from pathlib import Path
 from typing import Any
 
-from gcs.protocol import CommandOutcome, CommandResult, encode
+from protocol.messages import CommandOutcome, CommandResult, encode
 from tests.conftest import ADMIN_PASSWORD, hub_settings, scratch_postgres
 from tests.helpers import access_token, api_client, poll_until, running_hub
 from tests.integration.test_hub_bad_input import ScriptedAgent, scripted_agent

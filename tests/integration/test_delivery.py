@@ -10,7 +10,7 @@ from typing import Any
 
 import httpx
 
-from gcs.protocol import Event, LiveState, Telemetry, Unavailable, VehicleState, encode
+from protocol.messages import Event, LiveState, Telemetry, Unavailable, VehicleState, encode
 from tests.integration.test_hub_bad_input import ScriptedAgent, _telemetry, scripted_agent
 
 Enrol = Callable[[str], str]

@@ -23,14 +23,14 @@ from pymavlink import mavutil
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from gcs.launcher import free_port
+from simulator import ListenAddress, SimulatorConfig, SimulatorServer
+from simulator.config import MessageIntervalSupport
+from simulator.telemetry import SecondGps
 from tests.helpers import FleetWatcher, agent_process, api_client
 from tests.simulator.test_sim_server import serving
 from tests.tcp_proxy import CuttableProxy, Filter
 from vehicle_agents.fcu_link import FcuLink
 from vehicle_agents.forwarding import MavlinkForwarder
-from vehicle_agents.simulator import ListenAddress, SimulatorConfig, SimulatorServer
-from vehicle_agents.simulator.config import MessageIntervalSupport
-from vehicle_agents.simulator.telemetry import SecondGps
 from vehicle_agents.stream_watch import RateWatchSettings
 from vehicle_agents.streams import DEFAULT_RATES_HZ, StreamRequester, StreamTimeouts
 

@@ -22,7 +22,7 @@ from backend.storage.records import StoredRecord, TelemetryEnvelope
 from backend.storage.repository import Repository
 from backend.storage.retention import RetentionPolicy
 from backend.storage.writer import StorageWriter
-from gcs.protocol import PROTOCOL_VERSION, Hello, Telemetry, VehicleState
+from protocol.messages import PROTOCOL_VERSION, Hello, Telemetry, VehicleState
 from tests.conftest import ADMIN_PASSWORD, hub_settings
 from tests.helpers import access_token, api_client, running_hub
 from tests.mavutil_state import mavutil_in_mavlink2

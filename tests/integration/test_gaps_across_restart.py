@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 from gcs.launcher import FleetPlan, LocalFleet, free_port
-from gcs.protocol import Unavailable, encode
+from protocol.messages import Unavailable, encode
 from tests.helpers import access_token, api_client
 from tests.integration.test_delivery import _acked, _next
 from tests.integration.test_hub_bad_input import _telemetry, scripted_agent

@@ -10,7 +10,7 @@ from contextlib import ExitStack
 import httpx
 from websockets.sync.client import ClientConnection
 
-from gcs.protocol import CommandOutcome, CommandResult, encode
+from protocol.messages import CommandOutcome, CommandResult, encode
 from tests.integration.test_hub_bad_input import scripted_agent
 from tests.integration.test_security import _report_position
 

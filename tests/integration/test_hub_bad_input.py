@@ -15,7 +15,7 @@ import pytest
 from websockets.exceptions import ConnectionClosed
 from websockets.sync.client import ClientConnection, connect
 
-from gcs.protocol import (
+from protocol.messages import (
     AGENT_WS_PATH,
     CLIENT_WS_PATH,
     MAX_FRAME_BYTES,

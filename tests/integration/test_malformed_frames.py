@@ -9,7 +9,7 @@ from collections.abc import Callable
 
 import pytest
 
-from gcs.protocol import CLIENT_WS_PATH, ProtocolError, agent_to_hub, decode
+from protocol.messages import CLIENT_WS_PATH, ProtocolError, agent_to_hub, decode
 from tests.helpers import api_client
 from tests.integration.test_hub_bad_input import (
     _telemetry,

@@ -11,12 +11,12 @@ from typing import TypeVar
 
 import pytest
 
-from gcs.protocol import MissionItem
+from protocol.messages import MissionItem
+from simulator import ListenAddress, SimulatorConfig
+from simulator.config import Autopilot
 from tests.simulator.test_sim_server import SYSID, serving
 from vehicle_agents.fcu_link import FcuLink
 from vehicle_agents.missions import MissionClient
-from vehicle_agents.simulator import ListenAddress, SimulatorConfig
-from vehicle_agents.simulator.config import Autopilot
 
 pytestmark = pytest.mark.integration
 

@@ -14,16 +14,16 @@ from typing import TypeVar
 
 import pytest
 
-from gcs.protocol import (
+from protocol.messages import (
     CommandOutcome,
     ParamGetCommand,
     ParamListCommand,
     ParamSetCommand,
 )
+from simulator.config import Autopilot
 from tests.integration.test_agent_results_frames import fcu_url, on_link, simulated
 from vehicle_agents.commands import CommandExecutor
 from vehicle_agents.param_encoding import ParamEncoding, decode, encode
-from vehicle_agents.simulator.config import Autopilot
 
 pytestmark = pytest.mark.integration
 T = TypeVar("T")

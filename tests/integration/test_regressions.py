@@ -12,7 +12,7 @@ import pytest
 
 from backend.storage.flights import FlightTracker
 from backend.storage.records import TelemetryEnvelope
-from gcs.protocol import CLIENT_WS_PATH, CloseCode, Telemetry, VehicleState
+from protocol.messages import CLIENT_WS_PATH, CloseCode, Telemetry, VehicleState
 from tests.helpers import FleetWatcher, api_client
 from tests.integration.test_hub_bad_input import _close_code, _telemetry, scripted_agent, websocket
 

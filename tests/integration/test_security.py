@@ -15,7 +15,7 @@ from sqlalchemy import create_engine, text
 from websockets.sync.client import ClientConnection
 
 from backend.settings import HubSettings
-from gcs.protocol import (
+from protocol.messages import (
     CommandOutcome,
     CommandResult,
     Telemetry,

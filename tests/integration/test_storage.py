@@ -13,7 +13,7 @@ from backend.storage.database import migrate
 from backend.storage.models import Base
 from backend.storage.records import TelemetryEnvelope
 from backend.storage.repository import Repository
-from gcs.protocol import PROTOCOL_VERSION, Hello, Telemetry, VehicleState
+from protocol.messages import PROTOCOL_VERSION, Hello, Telemetry, VehicleState
 
 
 def _hello(vehicle_id: str) -> Hello:

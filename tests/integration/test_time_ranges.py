@@ -11,7 +11,7 @@ from pathlib import Path
 import httpx
 import pytest
 
-from gcs.protocol import Telemetry, VehicleState, encode
+from protocol.messages import Telemetry, VehicleState, encode
 from tests.conftest import ADMIN_PASSWORD, hub_settings
 from tests.helpers import access_token, api_client, poll_until, running_hub
 from tests.integration.test_hub_bad_input import scripted_agent

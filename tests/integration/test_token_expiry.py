@@ -10,7 +10,7 @@ import pytest
 from websockets.exceptions import ConnectionClosed
 from websockets.sync.client import connect
 
-from gcs.protocol import CLIENT_WS_PATH, CloseCode
+from protocol.messages import CLIENT_WS_PATH, CloseCode
 from tests.conftest import ADMIN_PASSWORD, hub_settings
 from tests.helpers import access_token, api_client, running_hub
 from tests.integration.test_hub_bad_input import _telemetry, scripted_agent

@@ -10,7 +10,7 @@ import pytest
 from websockets.exceptions import ConnectionClosed
 from websockets.sync.client import connect
 
-from gcs.protocol import CLIENT_WS_PATH, CloseCode
+from protocol.messages import CLIENT_WS_PATH, CloseCode
 from tests.helpers import api_client
 
 

@@ -10,15 +10,15 @@ from typing import Any
 import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
+from simulator import DEFAULT_HOME, Copter, CopterMode, MavResult
+from simulator import server as server_module
+from simulator.config import ListenAddress, SimulatorConfig
+from simulator.geo import METRES_PER_DEGREE
+from simulator.mavconst import FORCE_REBOOT_MAGIC, MavCmd, MavFrame, ModeFlag
+from simulator.mission import MissionItem
 from tests.simulator.test_sim_commands import Vehicle, ack_of, kinds
 from tests.simulator.test_sim_copter import airborne, run_until, texts
 from tests.simulator.test_sim_server import SYSID, mavlink_client, serving, wait_for
-from vehicle_agents.simulator import DEFAULT_HOME, Copter, CopterMode, MavResult
-from vehicle_agents.simulator import server as server_module
-from vehicle_agents.simulator.config import ListenAddress, SimulatorConfig
-from vehicle_agents.simulator.geo import METRES_PER_DEGREE
-from vehicle_agents.simulator.mavconst import FORCE_REBOOT_MAGIC, MavCmd, MavFrame, ModeFlag
-from vehicle_agents.simulator.mission import MissionItem
 
 NORTH = 1 / METRES_PER_DEGREE  # degrees of latitude per metre
 

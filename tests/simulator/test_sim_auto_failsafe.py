@@ -6,12 +6,12 @@ import math
 
 import pytest
 
+from simulator import DEFAULT_HOME, Copter, CopterMode, MavResult
+from simulator.copter import ItemReached, PhotoTaken
+from simulator.mavconst import MavCmd, MavFrame, MavState, MissionState
+from simulator.mission import MissionItem
+from simulator.param_table import SetOutcome
 from tests.simulator.test_sim_copter import airborne, run_until, texts
-from vehicle_agents.simulator import DEFAULT_HOME, Copter, CopterMode, MavResult
-from vehicle_agents.simulator.copter import ItemReached, PhotoTaken
-from vehicle_agents.simulator.mavconst import MavCmd, MavFrame, MavState, MissionState
-from vehicle_agents.simulator.mission import MissionItem
-from vehicle_agents.simulator.param_table import SetOutcome
 
 REL = MavFrame.GLOBAL_RELATIVE_ALT_INT
 

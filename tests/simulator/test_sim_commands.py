@@ -8,9 +8,9 @@ from typing import Any
 import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
-from vehicle_agents.simulator import DEFAULT_HOME, Copter
-from vehicle_agents.simulator.commands import MessageHandler, Reply
-from vehicle_agents.simulator.mavconst import (
+from simulator import DEFAULT_HOME, Copter
+from simulator.commands import MessageHandler, Reply
+from simulator.mavconst import (
     FORCE_ARM_MAGIC,
     FORCE_DISARM_MAGIC,
     CopterMode,
@@ -24,8 +24,8 @@ from vehicle_agents.simulator.mavconst import (
     Severity,
     SysSensor,
 )
-from vehicle_agents.simulator.streams import StreamSchedule
-from vehicle_agents.simulator.telemetry import DEFAULT_RATES_HZ, TelemetryBuilder
+from simulator.streams import StreamSchedule
+from simulator.telemetry import DEFAULT_RATES_HZ, TelemetryBuilder
 
 SYSID = 3
 GCS_SYSID, GCS_COMPID = 255, 190

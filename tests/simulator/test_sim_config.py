@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from vehicle_agents.simulator import (
+from simulator import (
     DEFAULT_HOME,
     GeoPoint,
     ListenAddress,
@@ -14,8 +14,8 @@ from vehicle_agents.simulator import (
     SimulatorConfig,
     main,
 )
-from vehicle_agents.simulator.config import parse_args
-from vehicle_agents.simulator.streams import StreamSchedule
+from simulator.config import parse_args
+from simulator.streams import StreamSchedule
 
 
 def test_defaults() -> None:

@@ -6,9 +6,9 @@ import math
 
 import pytest
 
-from vehicle_agents.simulator import DEFAULT_HOME, DT, Copter, CopterMode, CopterParams, MavResult
-from vehicle_agents.simulator.mavconst import LandedState, MavState, ModeFlag, Severity
-from vehicle_agents.simulator.vehicle import EKF_GPS_DELAY_S
+from simulator import DEFAULT_HOME, DT, Copter, CopterMode, CopterParams, MavResult
+from simulator.mavconst import LandedState, MavState, ModeFlag, Severity
+from simulator.vehicle import EKF_GPS_DELAY_S
 
 
 def texts(copter: Copter) -> list[str]:

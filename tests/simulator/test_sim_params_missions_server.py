@@ -7,9 +7,9 @@ from typing import Any
 from pymavlink import mavutil
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
+from simulator import ListenAddress, SimulatorConfig
+from simulator.param_table import PARAM_DEFS
 from tests.simulator.test_sim_server import SYSID, mavlink_client, serving, wait_for
-from vehicle_agents.simulator import ListenAddress, SimulatorConfig
-from vehicle_agents.simulator.param_table import PARAM_DEFS
 
 
 def _config() -> SimulatorConfig:

@@ -19,7 +19,7 @@ import pytest
 from pymavlink import mavutil
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
-from vehicle_agents.simulator import ListenAddress, SimulatorConfig, SimulatorServer
+from simulator import ListenAddress, SimulatorConfig, SimulatorServer
 
 REPO_ROOT = Path(__file__).resolve().parents[2]
 SYSID = 7
@@ -71,13 +71,13 @@ def mavlink_client(url: str) -> Iterator[Any]:
 
 @contextmanager
 def simulator_process(*args: str) -> Iterator[tuple[int, queue.Queue[str]]]:
-    """``python -m vehicle_agents.simulator`` on a free port; yields (port, log lines)."""
+    """``python -m simulator`` on a free port; yields (port, log lines)."""
     port = free_port()
     process = subprocess.Popen(
         [
             sys.executable,
             "-m",
-            "vehicle_agents.simulator",
+            "simulator",
             "--listen",
             f"tcp:127.0.0.1:{port}",
             "--system-id",
@@ -291,7 +291,7 @@ def test_cannot_listen_exits_1(capfd: pytest.CaptureFixture[str]) -> None:
         taken.listen()
         port = taken.getsockname()[1]
         result = subprocess.run(
-            [sys.executable, "-m", "vehicle_agents.simulator", "--listen", f"tcp:127.0.0.1:{port}"],
+            [sys.executable, "-m", "simulator", "--listen", f"tcp:127.0.0.1:{port}"],
             cwd=REPO_ROOT,
             capture_output=True,
             text=True,

@@ -8,23 +8,23 @@ from typing import Any
 import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
-from tests.simulator.test_sim_server import mavlink_client, serving, wait_for
-from vehicle_agents.simulator import DEFAULT_HOME, Copter, ListenAddress, SimulatorConfig
-from vehicle_agents.simulator.commands import MessageHandler, Reply
-from vehicle_agents.simulator.config import MessageIntervalSupport, parse_args
-from vehicle_agents.simulator.mavconst import MavCmd, MavResult, MsgId
-from vehicle_agents.simulator.streams import (
+from simulator import DEFAULT_HOME, Copter, ListenAddress, SimulatorConfig
+from simulator.commands import MessageHandler, Reply
+from simulator.config import MessageIntervalSupport, parse_args
+from simulator.mavconst import MavCmd, MavResult, MsgId
+from simulator.streams import (
     DataStream,
     StreamRequests,
     StreamSchedule,
     request_data_stream,
 )
-from vehicle_agents.simulator.telemetry import (
+from simulator.telemetry import (
     DEFAULT_RATES_HZ,
     GPS2_RAW,
     SecondGps,
     TelemetryBuilder,
 )
+from tests.simulator.test_sim_server import mavlink_client, serving, wait_for
 
 SYSID = 7  # the system id tests.simulator.test_sim_server's helpers expect
 

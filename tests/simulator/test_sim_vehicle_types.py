@@ -10,12 +10,10 @@ import pytest
 from pymavlink import mavutil
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
-from tests.simulator.test_sim_copter import run_until, texts
-from tests.simulator.test_sim_server import command, mavlink_client, simulator_process, wait_for
-from vehicle_agents.simulator import DEFAULT_HOME, Copter, CopterMode, MavResult, main
-from vehicle_agents.simulator.config import parse_args
-from vehicle_agents.simulator.geo import METRES_PER_DEGREE
-from vehicle_agents.simulator.mavconst import (
+from simulator import DEFAULT_HOME, Copter, CopterMode, MavResult, main
+from simulator.config import parse_args
+from simulator.geo import METRES_PER_DEGREE
+from simulator.mavconst import (
     LandedState,
     MavAutopilot,
     MavCmd,
@@ -28,11 +26,13 @@ from vehicle_agents.simulator.mavconst import (
     Px4MainMode,
     RoverMode,
 )
-from vehicle_agents.simulator.mission import MissionItem
-from vehicle_agents.simulator.personality import Px4Personality
-from vehicle_agents.simulator.rover import Rover
-from vehicle_agents.simulator.telemetry import TelemetryBuilder
-from vehicle_agents.simulator.vehicle import ItemReached
+from simulator.mission import MissionItem
+from simulator.personality import Px4Personality
+from simulator.rover import Rover
+from simulator.telemetry import TelemetryBuilder
+from simulator.vehicle import ItemReached
+from tests.simulator.test_sim_copter import run_until, texts
+from tests.simulator.test_sim_server import command, mavlink_client, simulator_process, wait_for
 
 NORTH = 1 / METRES_PER_DEGREE
 EAST = 1 / (METRES_PER_DEGREE * math.cos(math.radians(DEFAULT_HOME.lat)))

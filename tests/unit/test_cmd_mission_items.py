@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from gcs.protocol import MissionItem
+from protocol.messages import MissionItem
 from vehicle_agents.missions import mission_problems
 
 TAKEOFF, WAYPOINT, LOITER_TIME, LOITER_TURNS, LAND, RTL = 22, 16, 19, 18, 21, 20

@@ -1,4 +1,4 @@
-"""The dashboard's TypeScript types are generated from gcs/protocol.py and kept in step."""
+"""The dashboard's TypeScript types are generated from protocol/messages.py and kept in step."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-from gcs.protocol import json_schema
+from protocol.messages import json_schema
 
 FRONTEND = Path(__file__).resolve().parents[2] / "frontend"
 

@@ -8,7 +8,7 @@ import asyncio
 import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
-from gcs.protocol import EventKind
+from protocol.messages import EventKind
 from vehicle_agents.commands import CommandExecutor
 from vehicle_agents.fcu_link import FcuLink
 from vehicle_agents.hub_failsafe import HubLinkFailsafe

@@ -12,8 +12,8 @@ import pytest
 from pydantic import BaseModel, ValidationError
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
-from gcs.mavlink_wire import DEGE7, FLOAT32_MAX, WIRE_RANGES, out_of_range
-from gcs.protocol import (
+from protocol.mavlink_wire import DEGE7, FLOAT32_MAX, WIRE_RANGES, out_of_range
+from protocol.messages import (
     ChangeSpeedCommand,
     GotoCommand,
     MissionItem,

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from gcs.protocol import Ack, Resend
+from protocol.messages import Ack, Resend
 from vehicle_agents.outbox import Outbox, SpillFile
 
 

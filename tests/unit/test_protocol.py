@@ -4,7 +4,7 @@ import json
 
 import pytest
 
-from gcs.protocol import (
+from protocol.messages import (
     CommandRequest,
     ProtocolError,
     TakeoffCommand,

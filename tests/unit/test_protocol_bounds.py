@@ -8,7 +8,7 @@ from typing import Any
 import pytest
 from pydantic import ValidationError
 
-from gcs.protocol import MAX_MODES, MAX_NAME_CHARS, PROTOCOL_VERSION, Hello, json_schema
+from protocol.messages import MAX_MODES, MAX_NAME_CHARS, PROTOCOL_VERSION, Hello, json_schema
 
 
 def _unbounded(schema: Any, where: str, found: list[str]) -> list[str]:

@@ -4,7 +4,7 @@ import pytest
 
 from backend.errors import VehicleNotFound
 from backend.fleet.registry import FleetRegistry
-from gcs.protocol import PROTOCOL_VERSION, Hello, Telemetry, VehicleState
+from protocol.messages import PROTOCOL_VERSION, Hello, Telemetry, VehicleState
 
 
 def _hello(stream: str = "s1") -> Hello:

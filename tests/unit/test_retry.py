@@ -10,7 +10,7 @@ from collections.abc import Iterator
 
 import pytest
 
-from gcs.retry import Backoff, Retries
+from common.retry import Backoff, Retries
 
 AGENTS = 1000
 ROUNDS = 6

@@ -14,7 +14,7 @@ from backend.safety import SafetyRails, check_set_home
 from backend.safety.schemas import SafetyRailsModel
 from backend.settings import HubSettings
 from backend.storage.rails import vehicle_scope
-from gcs.protocol import HoldCommand, SetHomeCommand, VehicleState
+from protocol.messages import HoldCommand, SetHomeCommand, VehicleState
 from tests.unit.safety.shapes import UNKNOWN, geo, north_of, u_fence, vehicle
 
 

@@ -13,7 +13,7 @@ from backend.safety.schemas import (
     MissionCheckResponse,
     SafetyRailsModel,
 )
-from gcs.protocol import MissionItem
+from protocol.messages import MissionItem
 from tests.unit.safety.shapes import U_SHAPE, geo, u_fence, vehicle, wp
 
 

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from vehicle_agents.simulator.mavconst import MavCmd, MavFrame
+from simulator.mavconst import MavCmd, MavFrame
 
 # Navigation commands the simulated AUTO mode flies, and the "do" commands it runs.
 NAV_COMMANDS = frozenset(

@@ -9,8 +9,8 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Literal
 
-from vehicle_agents.simulator.clock import MAX_SPEEDUP
-from vehicle_agents.simulator.geo import GeoPoint
+from simulator.clock import MAX_SPEEDUP
+from simulator.geo import GeoPoint
 
 # ArduPilot's SITL home, CMAC (Canberra Model Aircraft Club).
 DEFAULT_HOME = GeoPoint(-35.363262, 149.165237, 584.0)

@@ -1,4 +1,4 @@
-"""``python -m vehicle_agents.simulator`` / ``gcs sim``: run one simulated vehicle."""
+"""``python -m simulator`` / ``gcs sim``: run one simulated vehicle."""
 
 from __future__ import annotations
 
@@ -7,10 +7,10 @@ import contextlib
 import logging
 import signal
 
-from vehicle_agents.simulator.config import SimulatorConfig, parse_args
-from vehicle_agents.simulator.server import SimulatorServer
+from simulator.config import SimulatorConfig, parse_args
+from simulator.server import SimulatorServer
 
-log = logging.getLogger("vehicle_agents.simulator")
+log = logging.getLogger("simulator")
 
 LOG_FORMAT = "%(asctime)s %(levelname)-7s %(name)s: %(message)s"
 

@@ -15,9 +15,9 @@ from dataclasses import dataclass
 from enum import Enum, IntEnum
 from typing import Self, TypeVar
 
-from vehicle_agents.simulator.battery import Battery
-from vehicle_agents.simulator.geo import GeoPoint, LocalFrame
-from vehicle_agents.simulator.mavconst import (
+from simulator.battery import Battery
+from simulator.geo import GeoPoint, LocalFrame
+from simulator.mavconst import (
     LandedState,
     MavCmd,
     MavFrame,
@@ -26,10 +26,10 @@ from vehicle_agents.simulator.mavconst import (
     MissionState,
     Severity,
 )
-from vehicle_agents.simulator.mission import ABSOLUTE_FRAMES, MissionItem
-from vehicle_agents.simulator.param_table import ParamTable, SetOutcome
-from vehicle_agents.simulator.params import CopterParams
-from vehicle_agents.simulator.physics import Airframe
+from simulator.mission import ABSOLUTE_FRAMES, MissionItem
+from simulator.param_table import ParamTable, SetOutcome
+from simulator.params import CopterParams
+from simulator.physics import Airframe
 
 DT = 0.02  # physics step, sim seconds
 GPS_PERIOD_STEPS = 10  # a GPS fix every 0.2 s (5 Hz), each with fresh noise

@@ -12,10 +12,10 @@ from collections.abc import Mapping
 from enum import IntEnum
 from typing import Any
 
-from vehicle_agents.simulator.commands import MessageHandler, Reply
-from vehicle_agents.simulator.config import MessageIntervalSupport
-from vehicle_agents.simulator.mavconst import MavCmd, MavResult, MsgId
-from vehicle_agents.simulator.telemetry import GPS2_RAW
+from simulator.commands import MessageHandler, Reply
+from simulator.config import MessageIntervalSupport
+from simulator.mavconst import MavCmd, MavResult, MsgId
+from simulator.telemetry import GPS2_RAW
 
 MIN_INTERVAL_S = 0.01  # 100 Hz at most per message
 

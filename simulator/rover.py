@@ -22,9 +22,9 @@ import math
 import struct
 from typing import Self
 
-from vehicle_agents.simulator.battery import current_draw
-from vehicle_agents.simulator.geo import GeoPoint
-from vehicle_agents.simulator.mavconst import (
+from simulator.battery import current_draw
+from simulator.geo import GeoPoint
+from simulator.mavconst import (
     SUPPORTED_ROVER_MODES,
     LandedState,
     MavAutopilot,
@@ -36,11 +36,11 @@ from vehicle_agents.simulator.mavconst import (
     RoverMode,
     Severity,
 )
-from vehicle_agents.simulator.mission import MissionItem
-from vehicle_agents.simulator.param_table import ParamDef, ParamTable, ParamType
-from vehicle_agents.simulator.params import CopterParams
-from vehicle_agents.simulator.physics import Setpoint
-from vehicle_agents.simulator.vehicle import DT, AutoPhase, Vehicle
+from simulator.mission import MissionItem
+from simulator.param_table import ParamDef, ParamTable, ParamType
+from simulator.params import CopterParams
+from simulator.physics import Setpoint
+from simulator.vehicle import DT, AutoPhase, Vehicle
 
 # Rover's defaults for what the shared parameter fields mean on a rover.
 ROVER_DEFAULTS = dataclasses.replace(

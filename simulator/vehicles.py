@@ -2,11 +2,11 @@
 
 from __future__ import annotations
 
-from vehicle_agents.simulator.config import SimulatorConfig
-from vehicle_agents.simulator.copter import Copter
-from vehicle_agents.simulator.personality import personality_for
-from vehicle_agents.simulator.rover import Rover
-from vehicle_agents.simulator.vehicle import Vehicle
+from simulator.config import SimulatorConfig
+from simulator.copter import Copter
+from simulator.personality import personality_for
+from simulator.rover import Rover
+from simulator.vehicle import Vehicle
 
 # Wall seconds a rebooting flight controller says nothing, like a board restarting: long
 # enough for a GCS to notice the silence (the agent gives up on a link after 3 s).

@@ -2,7 +2,7 @@
 
 This module is the single source of truth. The agent and the hub both import it, and
 the dashboard's expectations are checked against the JSON schema it exports
-(`python -m gcs.protocol`). Frames are JSON text, one message per frame, and every
+(`python -m protocol.messages`). Frames are JSON text, one message per frame, and every
 message names its ``type``. The agent announces ``PROTOCOL_VERSION`` in its hello;
 the hub refuses a version it does not speak.
 
@@ -35,7 +35,7 @@ from pydantic import (
     model_validator,
 )
 
-from gcs.mavlink_wire import WIRE_RANGES, wire_problem
+from protocol.mavlink_wire import WIRE_RANGES, wire_problem
 
 PROTOCOL_VERSION = 1
 # Telemetry frames are a few hundred bytes; 64 KiB leaves room for later scan data
@@ -84,7 +84,7 @@ def _fits_float32(value: float) -> float:
 
 # Values that go into a MAVLink field of that type, finite and within its range (1e300
 # would make pymavlink raise while packing, inside the agent). The bounds are the wire
-# type's, from gcs.mavlink_wire; the schema shows them too.
+# type's, from protocol.mavlink_wire; the schema shows them too.
 Float32 = Annotated[
     float,
     Field(

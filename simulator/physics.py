@@ -16,7 +16,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from vehicle_agents.simulator.params import CopterParams
+from simulator.params import CopterParams
 
 GRAVITY = 9.80665
 DRAG_PER_S = 0.15  # linear drag: the tilt needed to hold a speed (about 4 deg at 5 m/s)

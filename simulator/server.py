@@ -18,19 +18,19 @@ from typing import Any
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
-from vehicle_agents.simulator.clock import Clock, SimClock
-from vehicle_agents.simulator.commands import MessageHandler
-from vehicle_agents.simulator.config import ListenAddress, SimulatorConfig
-from vehicle_agents.simulator.mavconst import MsgId
-from vehicle_agents.simulator.streams import StreamRequests, StreamSchedule
-from vehicle_agents.simulator.telemetry import (
+from simulator.clock import Clock, SimClock
+from simulator.commands import MessageHandler
+from simulator.config import ListenAddress, SimulatorConfig
+from simulator.mavconst import MsgId
+from simulator.streams import StreamRequests, StreamSchedule
+from simulator.telemetry import (
     DEFAULT_RATES_HZ,
     MavMessage,
     SecondGps,
     TelemetryBuilder,
 )
-from vehicle_agents.simulator.vehicle import ItemReached, Vehicle
-from vehicle_agents.simulator.vehicles import REBOOT_SILENCE_S, build_vehicle
+from simulator.vehicle import ItemReached, Vehicle
+from simulator.vehicles import REBOOT_SILENCE_S, build_vehicle
 
 log = logging.getLogger(__name__)
 

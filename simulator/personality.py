@@ -24,7 +24,7 @@ from __future__ import annotations
 from abc import ABC, abstractmethod
 from dataclasses import dataclass
 
-from vehicle_agents.simulator.mavconst import (
+from simulator.mavconst import (
     CopterMode,
     MavAutopilot,
     MavFrame,
@@ -34,9 +34,9 @@ from vehicle_agents.simulator.mavconst import (
     Px4AutoMode,
     Px4MainMode,
 )
-from vehicle_agents.simulator.param_table import ParamTable
-from vehicle_agents.simulator.params import CopterParams
-from vehicle_agents.simulator.px4_params import Px4ParamTable
+from simulator.param_table import ParamTable
+from simulator.params import CopterParams
+from simulator.px4_params import Px4ParamTable
 
 # PX4's MIS_TAKEOFF_ALT: how high a take-off without an altitude climbs.
 PX4_TAKEOFF_ALT_M = 2.5

@@ -26,9 +26,9 @@ import math
 from enum import Enum
 from typing import Self
 
-from vehicle_agents.simulator.battery import current_draw
-from vehicle_agents.simulator.geo import GeoPoint
-from vehicle_agents.simulator.mavconst import (
+from simulator.battery import current_draw
+from simulator.geo import GeoPoint
+from simulator.mavconst import (
     SUPPORTED_MODES,
     CopterMode,
     LandedState,
@@ -39,18 +39,18 @@ from vehicle_agents.simulator.mavconst import (
     MavType,
     Severity,
 )
-from vehicle_agents.simulator.mission import MissionItem
-from vehicle_agents.simulator.param_table import ParamTable
-from vehicle_agents.simulator.params import CopterParams
-from vehicle_agents.simulator.personality import (
+from simulator.mission import MissionItem
+from simulator.param_table import ParamTable
+from simulator.params import CopterParams
+from simulator.personality import (
     PX4_TAKEOFF_ALT_M,
     ArduCopterPersonality,
     Declined,
     ModeRequest,
     Personality,
 )
-from vehicle_agents.simulator.physics import Setpoint, sqrt_controller
-from vehicle_agents.simulator.vehicle import (
+from simulator.physics import Setpoint, sqrt_controller
+from simulator.vehicle import (
     DT,
     AutoPhase,
     Event,

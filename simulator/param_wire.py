@@ -15,7 +15,7 @@ from typing import Any
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
-from vehicle_agents.simulator.param_table import ParamType
+from simulator.param_table import ParamType
 
 _V2_MAGIC = 0xFD
 _V2_HEADER, _V1_HEADER = 10, 6

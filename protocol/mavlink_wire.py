@@ -4,7 +4,7 @@ A value the hub passes on to a flight controller ends up packed into a MAVLink f
 a fixed C type (``float``, ``int32_t`` ...). One that does not fit makes pymavlink raise
 while packing (``OverflowError`` for a float32, ``struct.error`` for an integer), so the
 hub refuses it at its edge, and the agent checks again before anything is sent. The
-wire protocol's bounded types (`gcs.protocol`) and the agent's check both read this
+wire protocol's bounded types (`protocol.messages`) and the agent's check both read this
 table; a unit test checks the protocol against pymavlink's own field types.
 
 Standard library only: the protocol module that imports this is the leaf of the project.

@@ -12,11 +12,11 @@ from typing import Any
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
-from vehicle_agents.simulator.mavconst import MsgId, SysSensor
-from vehicle_agents.simulator.mission import MissionItem
-from vehicle_agents.simulator.param_table import PARAM_ID_LEN
-from vehicle_agents.simulator.param_wire import ParamValueBytes, value_bytes
-from vehicle_agents.simulator.vehicle import PhotoTaken, StatusText, Vehicle
+from simulator.mavconst import MsgId, SysSensor
+from simulator.mission import MissionItem
+from simulator.param_table import PARAM_ID_LEN
+from simulator.param_wire import ParamValueBytes, value_bytes
+from simulator.vehicle import PhotoTaken, StatusText, Vehicle
 
 MavMessage = Any  # pymavlink message classes are generated and untyped
 

@@ -18,7 +18,7 @@ from dataclasses import dataclass
 from enum import IntEnum, StrEnum
 from typing import Any
 
-from vehicle_agents.simulator.params import CopterParams
+from simulator.params import CopterParams
 
 PARAM_ID_LEN = 16  # PARAM_VALUE.param_id: 16 chars, NUL-padded when shorter
 

@@ -19,7 +19,7 @@ import math
 from dataclasses import dataclass, replace
 from typing import Any, Protocol
 
-from vehicle_agents.simulator.mavconst import (
+from simulator.mavconst import (
     DO_REPOSITION_FLAGS_CHANGE_MODE,
     FORCE_ARM_MAGIC,
     FORCE_DISARM_MAGIC,
@@ -31,7 +31,7 @@ from vehicle_agents.simulator.mavconst import (
     MavResult,
     Severity,
 )
-from vehicle_agents.simulator.mission import (
+from simulator.mission import (
     HOME_PLACEHOLDER,
     MAX_ITEMS,
     MissionItem,
@@ -39,10 +39,10 @@ from vehicle_agents.simulator.mission import (
     px4_download_frame,
     stored_frame,
 )
-from vehicle_agents.simulator.param_table import SetOutcome
-from vehicle_agents.simulator.param_wire import received_value
-from vehicle_agents.simulator.telemetry import MavMessage, TelemetryBuilder
-from vehicle_agents.simulator.vehicle import Vehicle
+from simulator.param_table import SetOutcome
+from simulator.param_wire import received_value
+from simulator.telemetry import MavMessage, TelemetryBuilder
+from simulator.vehicle import Vehicle
 
 log = logging.getLogger(__name__)
 

@@ -9,8 +9,8 @@ onto the copter's own parameters where the meaning is the same.
 
 from __future__ import annotations
 
-from vehicle_agents.simulator.param_table import ParamDef, ParamTable, ParamType
-from vehicle_agents.simulator.params import CopterParams
+from simulator.param_table import ParamDef, ParamTable, ParamType
+from simulator.params import CopterParams
 
 INT32_MIN, INT32_MAX = -(2**31), 2**31 - 1
 

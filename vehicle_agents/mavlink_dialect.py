@@ -1,0 +1,24 @@
+"""The MAVLink dialect the agent speaks, fixed where the agent builds its link."""
+
+from __future__ import annotations
+
+import os
+from typing import Any
+
+DIALECT = "ardupilotmega"
+
+
+def mavutil() -> Any:
+    """pymavlink's `mavutil`, speaking MAVLink 2 in the ArduPilot dialect.
+
+    `mavutil` picks its dialect from the environment when it is first imported: left alone,
+    it loads "all" and loads it again for MAVLink 2 on the first frame (about 6 MB more on
+    a small board), and its messages would come from another module than the dialect the
+    agent decodes with. So nothing in the agent imports it at module level; the link and
+    the mode tables ask for it here. An operator's own MAVLINK_DIALECT still wins.
+    """
+    os.environ.setdefault("MAVLINK20", "1")
+    os.environ.setdefault("MAVLINK_DIALECT", DIALECT)
+    from pymavlink import mavutil as module
+
+    return module

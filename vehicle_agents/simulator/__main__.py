@@ -1,5 +1,0 @@
-import sys
-
-from vehicle_agents.simulator import main
-
-sys.exit(main())

@@ -34,6 +34,7 @@ from pydantic import (
     field_validator,
     model_validator,
 )
+from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from protocol.mavlink_wire import WIRE_RANGES, wire_problem
 
@@ -229,7 +230,11 @@ class ParamSetCommand(Message):
 # add nothing there (MAVLink deprecates them), and autopilots do not keep them: ArduPilot
 # stores "relative altitude" and gives back 3 for an item sent as 6, PX4 gives back 6 for
 # one sent as 3. One form on both sides of the hub, so a round trip returns what was sent.
-_PLAIN_FRAME = {5: 0, 6: 3, 11: 10}  # GLOBAL_INT, GLOBAL_RELATIVE_ALT_INT, GLOBAL_TERRAIN_ALT_INT
+_PLAIN_FRAME: dict[int, int] = {
+    mavlink2.MAV_FRAME_GLOBAL_INT: mavlink2.MAV_FRAME_GLOBAL,
+    mavlink2.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT: mavlink2.MAV_FRAME_GLOBAL_RELATIVE_ALT,
+    mavlink2.MAV_FRAME_GLOBAL_TERRAIN_ALT_INT: mavlink2.MAV_FRAME_GLOBAL_TERRAIN_ALT,
+}
 
 
 class MissionItem(Message):
@@ -237,7 +242,7 @@ class MissionItem(Message):
 
     command: UInt16 = Field(description="MAV_CMD number, e.g. 16 NAV_WAYPOINT")
     frame: int = Field(
-        default=3,
+        default=mavlink2.MAV_FRAME_GLOBAL_RELATIVE_ALT,
         ge=0,
         le=21,
         description="MAV_FRAME: 0 above sea level, 3 above home, 10 above terrain. The _INT "

@@ -99,4 +99,4 @@ def px4_download_frame(frame: int) -> int:
 
 
 # Item 0 as ArduPilot stores it: home, whose position the vehicle keeps itself.
-HOME_PLACEHOLDER = MissionItem(seq=0, frame=0, command=16)
+HOME_PLACEHOLDER = MissionItem(seq=0, frame=MavFrame.GLOBAL, command=MavCmd.NAV_WAYPOINT)

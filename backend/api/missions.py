@@ -12,7 +12,7 @@ from backend.api.deps import HubDep
 from backend.api.security import CurrentPrincipal, SecuredRouter, client_address, requires
 from backend.auth.policy import Permission
 from backend.fleet.command_service import execute_expecting_acceptance
-from backend.safety.schemas import Mission
+from backend.missions.schemas import Mission
 from protocol.messages import (
     Command,
     CommandOutcome,

@@ -10,11 +10,8 @@ from fastapi import Path, Request, Response, status
 from backend.api.deps import HubDep
 from backend.api.security import CurrentPrincipal, SecuredRouter, audit_entry, requires
 from backend.auth.policy import Permission
-from backend.safety.schemas import (
-    Mission,
-    MissionCheckResponse,
-    SafetyRailsModel,
-)
+from backend.missions.schemas import Mission, MissionCheckResponse
+from backend.safety.schemas import SafetyRailsModel
 from backend.storage.rails import SITE, vehicle_scope
 from protocol.messages import VehicleId
 

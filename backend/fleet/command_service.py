@@ -20,8 +20,9 @@ from backend.errors import (
     VehicleOffline,
     VehicleRefused,
 )
-from backend.fleet.mission_gate import check_current_item, starts_mission, unchecked_mission
+from backend.fleet.mission_gate import check_current_item, unchecked_mission
 from backend.hub import Hub
+from backend.missions.gate import starts_mission
 from backend.storage.logbook import command_row
 from backend.storage.models import CommandRow
 from protocol.messages import Command, CommandOutcome

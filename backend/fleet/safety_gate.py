@@ -4,22 +4,19 @@ mission is checked against the effective rails (the site's, narrowed per vehicle
 from __future__ import annotations
 
 from backend.auth.policy import Permission, Principal
-from backend.errors import Forbidden, InvalidRequest
+from backend.errors import Forbidden
 from backend.fleet.registry import VehicleRecord
+from backend.missions import PlanCheck, check_mission
 from backend.safety import (
-    PlanCheck,
     SafetyRails,
     VehicleSnapshot,
     Violation,
-    Waypoint,
     check_arm,
     check_goto,
     check_set_home,
     check_takeoff,
-    evaluate_plan,
 )
 from backend.safety.critical_params import critical_reason
-from backend.safety.rails import MISSION_ITEM
 from backend.safety.schemas import SafetyRailsModel
 from backend.settings import HubSettings
 from backend.storage.rails import SITE, RailsRepository, vehicle_scope
@@ -33,56 +30,9 @@ from protocol.messages import (
     SetHomeCommand,
     TakeoffCommand,
 )
-from vehicle_agents.missions import mission_problems
 
 # Below this height a vehicle counts as on the ground for the launch rules.
 LANDED_BELOW_M = 0.5
-# MAV_CMD numbers of the navigation commands that fly somewhere.
-NAV_WAYPOINT, NAV_LOITER_UNLIM, NAV_LOITER_TURNS, NAV_LOITER_TIME = 16, 17, 18, 19
-NAV_LAND, NAV_TAKEOFF, NAV_SPLINE_WAYPOINT = 21, 22, 82
-NAV_LOITER_TO_ALT, NAV_VTOL_TAKEOFF, NAV_VTOL_LAND, NAV_PAYLOAD_PLACE = 31, 84, 85, 94
-DO_SET_HOME = 179  # with a position: home moves there mid-mission, so RTL goes there
-POSITIONED = {
-    NAV_WAYPOINT,
-    NAV_LOITER_UNLIM,
-    NAV_LOITER_TURNS,
-    NAV_LOITER_TIME,
-    NAV_LAND,
-    NAV_SPLINE_WAYPOINT,
-    NAV_LOITER_TO_ALT,
-    NAV_VTOL_TAKEOFF,
-    NAV_VTOL_LAND,
-    NAV_PAYLOAD_PLACE,
-    DO_SET_HOME,
-}
-# Frames whose altitude is above mean sea level rather than above home.
-AMSL_FRAMES = {0, 5}  # MAV_FRAME_GLOBAL, MAV_FRAME_GLOBAL_INT
-
-
-def mission_waypoints(items: list[MissionItem], record: VehicleRecord) -> list[Waypoint]:
-    """The places a mission will take the vehicle, for the rails to check.
-
-    A take-off climbs where the vehicle stands; a land with no position lands in place."""
-    here = record.state
-    home_alt = here.home_alt_msl if here else None
-    points: list[Waypoint] = []
-    for number, item in enumerate(items, 1):
-        has_position = (item.lat, item.lon) != (0.0, 0.0)
-        alt = item.alt
-        if item.frame in AMSL_FRAMES:
-            if home_alt is None:
-                # The rails measure from home: refuse rather than guess.
-                raise InvalidRequest(
-                    "items",
-                    f"item {number}: its altitude is above sea level, and the vehicle has "
-                    "not reported home's altitude to check it against",
-                )
-            alt = item.alt - home_alt
-        if item.command in POSITIONED and has_position:
-            points.append(Waypoint(item.lat, item.lon, alt, number))
-        elif item.command == NAV_TAKEOFF and here and here.lat is not None and here.lon is not None:
-            points.append(Waypoint(here.lat, here.lon, item.alt, number))
-    return points
 
 
 def snapshot_of(record: VehicleRecord) -> VehicleSnapshot:
@@ -167,15 +117,12 @@ class SafetyGate:
                 return check_set_home(rails, vehicle, lat, lon, alt_msl)
 
     def check_mission(self, record: VehicleRecord, items: list[MissionItem]) -> PlanCheck:
-        """The mission check, the same for a check, an upload and a switch to AUTO: what
-        each item's command needs, then every rail the mission's places break, and the
-        battery estimate when it can be made. Items number from 1 (home is 0)."""
-        problems = tuple(
-            Violation(MISSION_ITEM, problem)
-            for problem in mission_problems(items, record.vehicle_type, record.autopilot)
+        """The mission check (`backend.missions.check`) for this vehicle, against its
+        effective rails."""
+        return check_mission(
+            items,
+            snapshot_of(record),
+            lambda: self.effective_rails(record.id),
+            record.vehicle_type,
+            record.autopilot,
         )
-        waypoints = mission_waypoints(items, record)
-        if not waypoints:
-            return PlanCheck(problems, None)  # no place to go: nothing for the rails
-        plan = evaluate_plan(self.effective_rails(record.id), snapshot_of(record), waypoints)
-        return PlanCheck(problems + plan.violations, plan.estimate)

@@ -1,8 +1,11 @@
-"""Safety rails: pure checks of commands and missions against site and vehicle limits.
+"""Safety rails: pure checks of commands against site and vehicle limits, and the parts
+the mission rails (`backend.missions`) share with them.
 
 No I/O here; the API and storage layers call these and turn violations into refusals.
 """
 
+from backend.safety.commands import check_arm, check_goto, check_set_home, check_takeoff
+from backend.safety.geofence import Geofence, GeoPoint
 from backend.safety.geometry import (
     MAX_POLYGON_RADIUS_M,
     MAX_POLYGON_VERTICES,
@@ -16,52 +19,28 @@ from backend.safety.geometry import (
     segment_relation,
     validate_polygon,
 )
-from backend.safety.rails import (
-    RULES,
-    BatteryEstimate,
-    BatteryModel,
-    Geofence,
-    GeoPoint,
-    PlanCheck,
-    RuleName,
-    SafetyRails,
-    VehicleSnapshot,
-    Violation,
-    Waypoint,
-    check_arm,
-    check_goto,
-    check_plan,
-    check_set_home,
-    check_takeoff,
-    estimate_plan,
-    evaluate_plan,
-)
+from backend.safety.rails import SafetyRails
+from backend.safety.snapshot import VehicleSnapshot
+from backend.safety.violations import RULES, RuleName, Violation
 
 __all__ = [
     "MAX_POLYGON_RADIUS_M",
     "MAX_POLYGON_VERTICES",
     "RULES",
-    "BatteryEstimate",
-    "BatteryModel",
     "FencePolygon",
     "GeoPoint",
     "Geofence",
     "InvalidGeofence",
     "LocalFrame",
-    "PlanCheck",
     "RuleName",
     "SafetyRails",
     "VehicleSnapshot",
     "Violation",
-    "Waypoint",
     "check_arm",
     "check_goto",
-    "check_plan",
     "check_set_home",
     "check_takeoff",
     "distance_to_boundary",
-    "estimate_plan",
-    "evaluate_plan",
     "haversine_m",
     "point_in_polygon",
     "segment_leaves_polygon",

@@ -1,4 +1,5 @@
-"""REST bodies for safety rails and mission checks, with conversions to the rails' dataclasses.
+"""REST bodies for safety rails and their violations, with conversions to the rails'
+dataclasses (the mission bodies are `backend.missions.schemas`).
 
 Unknown fields are rejected: a misspelt limit that was silently ignored would leave a vehicle
 without the rail its operator thinks it has. NaN and infinities are rejected for the same
@@ -11,22 +12,13 @@ from typing import Self
 
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
+from backend.safety.geofence import Geofence, GeoPoint
 from backend.safety.geometry import MAX_POLYGON_VERTICES, validate_polygon
-from backend.safety.rails import (
-    DEFAULT_BATTERY_RESERVE_PCT,
-    BatteryEstimate,
-    Geofence,
-    GeoPoint,
-    PlanCheck,
-    RuleName,
-    SafetyRails,
-    Violation,
-)
-from protocol.messages import MissionItem
+from backend.safety.rails import DEFAULT_BATTERY_RESERVE_PCT, SafetyRails
+from backend.safety.violations import RuleName, Violation
 
 MAX_ALTITUDE_M = 10_000.0
 MAX_DISTANCE_M = 1_000_000.0
-MAX_WAYPOINTS = 2000
 
 
 class _Strict(BaseModel):
@@ -132,17 +124,6 @@ class SafetyRailsModel(_Strict):
         )
 
 
-class Mission(_Strict):
-    """One mission, the same body for the check, the upload and the download."""
-
-    items: list[MissionItem] = Field(
-        min_length=1,
-        max_length=MAX_WAYPOINTS,
-        description="Flown in order from the vehicle's position; item 1 is the first "
-        "(home, item 0, is the vehicle's own and is not sent)",
-    )
-
-
 class ViolationModel(_Strict):
     rule: RuleName = Field(description="Stable name of the rule that was broken")
     message: str = Field(description="What is wrong, with the numbers and units")
@@ -159,41 +140,3 @@ class ViolationModel(_Strict):
                 "value": violation.value,
             }
         )
-
-
-class BatteryEstimateModel(_Strict):
-    distance_m: float = Field(description="Horizontal distance including the return home")
-    flight_time_s: float
-    required_pct: float = Field(description="Battery the flight needs, percent of capacity")
-    available_pct: float | None = Field(description="Battery remaining now; null if unknown")
-
-    @classmethod
-    def from_estimate(cls, estimate: BatteryEstimate) -> BatteryEstimateModel:
-        return cls(
-            distance_m=estimate.distance_m,
-            flight_time_s=estimate.flight_time_s,
-            required_pct=estimate.required_pct,
-            available_pct=estimate.available_pct,
-        )
-
-
-class MissionCheckResponse(_Strict):
-    ok: bool = Field(description="True when no rule is violated")
-    violations: list[ViolationModel]
-    estimate: BatteryEstimateModel | None = Field(
-        description="Null when the vehicle's position, home or altitude is not known"
-    )
-
-    @classmethod
-    def build(
-        cls, violations: list[Violation], estimate: BatteryEstimate | None
-    ) -> MissionCheckResponse:
-        return cls(
-            ok=not violations,
-            violations=[ViolationModel.from_violation(v) for v in violations],
-            estimate=BatteryEstimateModel.from_estimate(estimate) if estimate else None,
-        )
-
-    @classmethod
-    def from_plan_check(cls, check: PlanCheck) -> MissionCheckResponse:
-        return cls.build(list(check.violations), check.estimate)

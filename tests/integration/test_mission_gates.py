@@ -10,7 +10,7 @@ from typing import Any
 
 import httpx
 import pytest
-from pymavlink import mavutil
+from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from gcs.launcher import LocalFleet
 from tests.helpers import FleetWatcher, api_client, ready, state_of
@@ -18,9 +18,11 @@ from tests.simulator.test_sim_server import mavlink_client
 
 pytestmark = pytest.mark.integration
 
-TAKEOFF, WAYPOINT, RTL = 22, 16, 20
+TAKEOFF = mavlink2.MAV_CMD_NAV_TAKEOFF
+WAYPOINT = mavlink2.MAV_CMD_NAV_WAYPOINT
+RTL = mavlink2.MAV_CMD_NAV_RETURN_TO_LAUNCH
 NORTH = 1 / 111_320
-RELATIVE_INT = 6
+RELATIVE_INT = mavlink2.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT
 
 
 @pytest.fixture
@@ -160,7 +162,9 @@ def _load_as_another_gcs(port: int, system_id: int, items: list[Any]) -> None:
 
 
 def _wire_item(system_id: int, seq: int, command: int, lat: float, lon: float, alt: float) -> Any:
-    return mavutil.mavlink.MAVLink_mission_item_int_message(
+    # The MAVLink 2 message (with mission_type) whatever dialect mavutil holds right now:
+    # it switches to MAVLink 2 only when a connection first hears a MAVLink 2 frame.
+    return mavlink2.MAVLink_mission_item_int_message(
         system_id, 1, seq, RELATIVE_INT, command, 0, 1, 0, 0, 0, 0,
         round(lat * 1e7), round(lon * 1e7), alt, 0,
     )  # fmt: skip

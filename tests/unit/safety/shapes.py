@@ -5,7 +5,8 @@ from __future__ import annotations
 
 import math
 
-from backend.safety import Geofence, GeoPoint, LocalFrame, VehicleSnapshot, Waypoint
+from backend.missions import Waypoint
+from backend.safety import Geofence, GeoPoint, LocalFrame, VehicleSnapshot
 from backend.safety.geometry import EARTH_MEAN_RADIUS_M
 
 ORIGIN = (47.0, 8.0)

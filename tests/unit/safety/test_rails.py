@@ -4,6 +4,7 @@ import math
 
 import pytest
 
+from backend.missions import check_plan, evaluate_plan
 from backend.safety import (
     RULES,
     Geofence,
@@ -13,9 +14,7 @@ from backend.safety import (
     Violation,
     check_arm,
     check_goto,
-    check_plan,
     check_takeoff,
-    evaluate_plan,
     haversine_m,
 )
 from tests.unit.safety.shapes import UNKNOWN, geo, north_of, u_fence, vehicle, wp

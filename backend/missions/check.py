@@ -1,0 +1,36 @@
+"""The mission check, the same for a check, an upload and a switch to AUTO: what each
+item's command needs, then every rail the mission's places break, and the battery
+estimate when it can be made."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+
+from backend.missions.rails import PlanCheck, evaluate_plan
+from backend.missions.waypoints import mission_waypoints
+from backend.safety.rails import SafetyRails
+from backend.safety.snapshot import VehicleSnapshot
+from backend.safety.violations import MISSION_ITEM, Violation
+from protocol.messages import MissionItem
+from protocol.mission_rules import mission_problems
+
+
+def check_mission(
+    items: Sequence[MissionItem],
+    vehicle: VehicleSnapshot,
+    rails: Callable[[], SafetyRails],
+    vehicle_type: str,
+    autopilot: str,
+) -> PlanCheck:
+    """Items number from 1 (home is 0). ``rails`` gives the vehicle's effective rails; it
+    is read only when the mission goes somewhere (a mission of settings alone needs none).
+    Raises InvalidRequest when an item's altitude cannot be put above home."""
+    problems = tuple(
+        Violation(MISSION_ITEM, problem)
+        for problem in mission_problems(items, vehicle_type, autopilot)
+    )
+    waypoints = mission_waypoints(items, vehicle)
+    if not waypoints:
+        return PlanCheck(problems, None)  # no place to go: nothing for the rails
+    plan = evaluate_plan(rails(), vehicle, waypoints)
+    return PlanCheck(problems + plan.violations, plan.estimate)

@@ -1,0 +1,163 @@
+"""The mission rails: every waypoint and leg of a mission, from the vehicle's position,
+against every rail, each rule reported once with its worst offender, and whether the
+battery lasts the flight and the return home."""
+
+from __future__ import annotations
+
+import itertools
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+from backend.missions.battery import (
+    DEFAULT_BATTERY_MODEL,
+    BatteryEstimate,
+    BatteryModel,
+    estimate_plan,
+    missing_for_estimate,
+)
+from backend.missions.waypoints import Waypoint
+from backend.safety.geofence import Geofence, GeoPoint, outside_message
+from backend.safety.geometry import haversine_m
+from backend.safety.limits import (
+    check_altitudes,
+    check_distance,
+    check_launch_battery,
+    require_target,
+)
+from backend.safety.rails import SafetyRails
+from backend.safety.snapshot import VehicleSnapshot, home, position
+from backend.safety.violations import (
+    BATTERY_SUFFICIENCY,
+    GEOFENCE,
+    MAX_DISTANCE_FROM_HOME,
+    Report,
+    Violation,
+    count,
+    others,
+)
+
+
+@dataclass(frozen=True)
+class PlanCheck:
+    violations: tuple[Violation, ...]
+    estimate: BatteryEstimate | None
+
+    @property
+    def ok(self) -> bool:
+        return not self.violations
+
+
+def _plan_geofence(
+    fence: Geofence, vehicle: VehicleSnapshot, waypoints: Sequence[Waypoint], report: Report
+) -> None:
+    points = [GeoPoint(wp.lat, wp.lon) for wp in waypoints]
+    inside = [fence.contains(p) for p in points]
+    outside = [(fence.distance_outside_m(p), i) for i, p in enumerate(points) if not inside[i]]
+    here = position(vehicle)
+    if here is None:
+        report.unknown("position", GEOFENCE)
+    # Legs with an end outside are already reported through that end; a first leg from a
+    # vehicle outside the fence is allowed so that a mission can bring it back.
+    stops: list[tuple[str, GeoPoint | None, bool]] = [
+        ("the vehicle's position", here, here is not None and fence.contains(here))
+    ]
+    stops += [(waypoints[i].name(i + 1), p, inside[i]) for i, p in enumerate(points)]
+    legs = [
+        f"the leg from {a_label} to {b_label}"
+        for (a_label, a, a_in), (b_label, b, b_in) in itertools.pairwise(stops)
+        if a is not None and b is not None and a_in and b_in and fence.leg_leaves(a, b)
+    ]
+    if outside:
+        distance, worst = max(outside)
+        message = outside_message(waypoints[worst].name(worst + 1), distance)
+        message += others(len(outside), "waypoints are outside it")
+        if legs:
+            verb = "leaves" if len(legs) == 1 else "leave"
+            message += f"; {count(len(legs), 'leg')} between waypoints inside it also {verb} it"
+        report.add(GEOFENCE, message, None, distance)
+    elif legs:
+        report.add(
+            GEOFENCE,
+            f"{legs[0]} leaves the geofence{others(len(legs), 'legs leave it')}",
+            None,
+            None,
+        )
+
+
+def _plan_distance(
+    rails: SafetyRails, vehicle: VehicleSnapshot, waypoints: Sequence[Waypoint], report: Report
+) -> None:
+    if rails.max_distance_from_home_m is None:
+        return
+    start = home(vehicle)
+    if start is None:
+        report.unknown("home position", MAX_DISTANCE_FROM_HOME)
+        return
+    limit = rails.max_distance_from_home_m
+    distances = [haversine_m(start.lat, start.lon, wp.lat, wp.lon) for wp in waypoints]
+    far = max(range(len(distances)), key=distances.__getitem__)
+    suffix = others(sum(d > limit for d in distances), "waypoints are beyond it")
+    check_distance(rails, waypoints[far].name(far + 1), distances[far], suffix, report)
+
+
+def _plan_battery(
+    rails: SafetyRails,
+    vehicle: VehicleSnapshot,
+    waypoints: Sequence[Waypoint],
+    model: BatteryModel,
+    report: Report,
+) -> BatteryEstimate | None:
+    missing = missing_for_estimate(vehicle)
+    for item in missing:
+        report.unknown(item, BATTERY_SUFFICIENCY)
+    if missing:
+        return None
+    estimate = estimate_plan(vehicle, waypoints, model)
+    available = estimate.available_pct
+    needed = estimate.required_pct + rails.battery_reserve_pct
+    if available is None:
+        report.unknown("battery level", BATTERY_SUFFICIENCY)
+    elif needed > available:
+        report.add(
+            BATTERY_SUFFICIENCY,
+            f"mission needs about {estimate.required_pct:.0f}% of the battery plus a "
+            f"{rails.battery_reserve_pct:.0f}% reserve; {available:.0f}% remains",
+            available,
+            needed,
+        )
+    return estimate
+
+
+def evaluate_plan(
+    rails: SafetyRails,
+    vehicle: VehicleSnapshot,
+    waypoints: Sequence[Waypoint],
+    model: BatteryModel = DEFAULT_BATTERY_MODEL,
+) -> PlanCheck:
+    """check_plan's violations together with the battery estimate (None when the vehicle's
+    position, home or altitude is not known)."""
+    if not waypoints:
+        raise ValueError("a mission needs at least one waypoint")
+    for i, wp in enumerate(waypoints, start=1):
+        require_target(wp.name(i), wp.lat, wp.lon, wp.alt_rel)
+    report = Report()
+    check_launch_battery(rails, vehicle, report)
+    check_altitudes(
+        rails, [(f"{wp.name(i)} altitude", wp.alt_rel) for i, wp in enumerate(waypoints, 1)], report
+    )
+    if rails.geofence is not None:
+        _plan_geofence(rails.geofence, vehicle, waypoints, report)
+    _plan_distance(rails, vehicle, waypoints, report)
+    estimate = _plan_battery(rails, vehicle, waypoints, model, report)
+    return PlanCheck(tuple(report.violations()), estimate)
+
+
+def check_plan(
+    rails: SafetyRails,
+    vehicle: VehicleSnapshot,
+    waypoints: Sequence[Waypoint],
+    model: BatteryModel = DEFAULT_BATTERY_MODEL,
+) -> list[Violation]:
+    """Every waypoint and leg (from the vehicle's position) against every rule, each rule
+    reported once with its worst offender."""
+    return list(evaluate_plan(rails, vehicle, waypoints, model).violations)

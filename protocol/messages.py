@@ -108,7 +108,12 @@ class CloseCode(IntEnum):
     BAD_HELLO = 4400  # first frame was not a valid hello, or wrong protocol version
     UNAUTHORIZED = 4401  # missing, wrong, expired or revoked credentials
     FORBIDDEN = 4403  # authenticated, but not allowed (role, vehicle, origin)
-    SUPERSEDED = 4409  # another agent connected for the same vehicle
+    # Another agent, still answering, holds this vehicle id: two aircraft (a cloned SD
+    # card, a second agent started by mistake) must never share one. The agent gives up.
+    VEHICLE_ID_IN_USE = 4409
+    # This connection was replaced: the same agent run reconnected, or the connection
+    # fell silent and another agent took the id over. The agent reconnects.
+    SUPERSEDED = 4410
 
 
 # Sequence numbers and times are stored in 64-bit columns; NaN compares false against
@@ -402,7 +407,11 @@ class Hello(Message):
     )
     capabilities: list[Name] = Field(default_factory=list, max_length=MAX_CAPABILITIES)
     agent_version: Name
-    stream_id: StreamId = Field(description="Names this agent run's sequence counters.")
+    stream_id: StreamId = Field(
+        description="Names this agent run's sequence counters, and the run itself: a new "
+        "hello from the same run replaces its stale connection, one from another run is "
+        "refused while the first still answers (close 4409)."
+    )
 
 
 ReplayedStream = Annotated[
@@ -441,6 +450,7 @@ EventKind = Literal[
     "link_down",
     "failsafe",
     "mission",
+    "id_clash",  # the hub refused a second agent for this vehicle id (never sent by agents)
     "upload",  # the agent's onboard .tlog could not be handed over (or was, after failing)
 ]
 
@@ -569,12 +579,14 @@ class Pong(Message):
     nonce: str | None = Field(default=None, max_length=64)
 
 
+# The hub pings an agent to learn whether it is still there (another agent wants its
+# vehicle id); the agent answers with a pong.
 AgentToHub: TypeAlias = Annotated[
-    Hello | Telemetry | LiveState | Event | CommandResult | Unavailable,
+    Hello | Telemetry | LiveState | Event | CommandResult | Unavailable | Pong,
     Field(discriminator="type"),
 ]
 HubToAgent: TypeAlias = Annotated[
-    Welcome | CommandRequest | Ack | Resend | ErrorReply, Field(discriminator="type")
+    Welcome | CommandRequest | Ack | Resend | ErrorReply | Ping, Field(discriminator="type")
 ]
 ClientToHub: TypeAlias = Annotated[Ping, Field(discriminator="type")]
 HubToClient: TypeAlias = Annotated[

@@ -336,6 +336,11 @@ class CommandOutcome(Message):
 # ---------------------------------------------------------------------------
 
 
+# MAV_LANDED_STATE without its UNDEFINED (that is null): in_air, takeoff and landing are
+# all airborne.
+LandedState = Literal["on_ground", "takeoff", "in_air", "landing"]
+
+
 class VehicleState(Message):
     """One telemetry snapshot, assembled by the agent from the latest MAVLink messages."""
 
@@ -343,6 +348,19 @@ class VehicleState(Message):
     mode: str = Field(default="UNKNOWN", max_length=MAX_NAME_CHARS)
     armed: bool = False
     system_status: str = Field(default="UNKNOWN", max_length=MAX_NAME_CHARS)
+    landed_state: LandedState | None = Field(
+        default=None,
+        description="Whether it flies: on_ground, or airborne (takeoff, in_air, landing). "
+        "Use this, not the altitude (a field above or below home misleads it). Null until "
+        "known.",
+    )
+    landed_state_source: Literal["autopilot", "derived"] | None = Field(
+        default=None,
+        description="autopilot: EXTENDED_SYS_STATE.landed_state (ArduCopter, ArduPlane, "
+        "PX4); derived: the agent's guess from armed, the altitude above home and the climb "
+        "rate, where the autopilot does not say (ArduPilot Rover, old firmware): never "
+        "takeoff or landing, and a ground vehicle is always on_ground",
+    )
     lat: float | None = None
     lon: float | None = None
     alt_msl: float | None = Field(default=None, description="Metres above mean sea level.")

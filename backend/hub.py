@@ -38,6 +38,10 @@ log = logging.getLogger(__name__)
 
 class AgentConnection(Protocol):
     token_id: int | None
+    stream_id: str | None
+    peer: str
+
+    async def answers_within(self, timeout_s: float) -> bool: ...
 
     async def close(self, code: int, reason: str) -> None: ...
 
@@ -75,6 +79,8 @@ class Hub:
     spool: RowSpool
     # Live agent connections by vehicle, so revoking a token can drop its connection.
     agent_sessions: dict[str, AgentConnection] = field(default_factory=dict)
+    # Held while an agent's hello is judged against the one holding its vehicle id.
+    agent_admissions: dict[str, asyncio.Lock] = field(default_factory=dict)
     # Live client feeds, so a revoked token or disabled user stops seeing the fleet.
     client_feeds: set[ClientConnection] = field(default_factory=set)
 
@@ -178,9 +184,12 @@ class Hub:
             # Polling: an outage's end announces nothing.
             await asyncio.sleep(self.settings.spool_retry_s)
 
-    async def store_event(self, vehicle_id: str, kind: str, text: str) -> None:
-        """An event the hub itself observed (a link coming up or going down)."""
-        event = StoredEvent(vehicle_id, "hub", None, time.time(), kind, None, text)
+    async def store_event(
+        self, vehicle_id: str, kind: str, text: str, severity: int | None = None
+    ) -> None:
+        """An event the hub itself observed (a link coming up or going down, a refused
+        second agent); ``severity`` is a MAV_SEVERITY."""
+        event = StoredEvent(vehicle_id, "hub", None, time.time(), kind, severity, text)
         await self.bus.publish(Topic.STORAGE, vehicle_id, event)
 
     async def record(self, entry: AuditEntry) -> None:

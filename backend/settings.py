@@ -116,6 +116,13 @@ class HubSettings(BaseSettings):
     ui_update_interval_s: float = Field(default=0.1, gt=0, description="per-client coalescing")
     max_frame_bytes: int = Field(default=MAX_FRAME_BYTES, ge=1024)
     max_bad_frames: int = Field(default=20, ge=1, description="before a connection is closed")
+    agent_liveness_timeout_s: float = Field(
+        default=3.0,
+        gt=0,
+        le=4.0,  # the newcomer waits this long for its welcome; our agent waits 5 s
+        description="a second agent for a vehicle id takes it over only if the first "
+        "sends nothing for this long after a ping; otherwise it is refused (close 4409)",
+    )
 
     retention_telemetry_days: float | None = Field(default=None, gt=0)
     retention_events_days: float | None = Field(default=None, gt=0)

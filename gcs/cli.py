@@ -22,6 +22,9 @@ if TYPE_CHECKING:
     from backend.settings import HubSettings
 
 LOG_FORMAT = "%(asctime)s %(levelname)-7s %(name)s: %(message)s"
+# sysexits' EX_CONFIG: a configuration error that restarting will not fix (gcs-agent.service
+# does not restart on it). The agent exits with it when its vehicle id is another's.
+EXIT_VEHICLE_ID_IN_USE = 78
 
 
 def _configure_logging(level: str) -> None:
@@ -116,6 +119,7 @@ def _agent(args: argparse.Namespace) -> int:
 
     from vehicle_agents.agent import run_agent
     from vehicle_agents.config import load_agent_settings
+    from vehicle_agents.hub_link import VehicleIdInUse
 
     overrides = {
         "fcu": args.fcu,
@@ -135,7 +139,11 @@ def _agent(args: argparse.Namespace) -> int:
         # A configuration mistake: say which setting, not a traceback.
         print(f"gcs agent: invalid settings: {error}", file=sys.stderr)
         return 2
-    return run_until_signalled(run_agent(settings))
+    try:
+        return run_until_signalled(run_agent(settings))
+    except VehicleIdInUse as refused:
+        logging.getLogger("gcs.agent").error("stopping: %s", refused)
+        return EXIT_VEHICLE_ID_IN_USE
 
 
 def _sim(args: argparse.Namespace, rest: list[str]) -> int:

@@ -109,7 +109,12 @@ class CloseCode(IntEnum):
     BAD_HELLO = 4400  # first frame was not a valid hello, or wrong protocol version
     UNAUTHORIZED = 4401  # missing, wrong, expired or revoked credentials
     FORBIDDEN = 4403  # authenticated, but not allowed (role, vehicle, origin)
-    SUPERSEDED = 4409  # another agent connected for the same vehicle
+    # Another agent, still answering, holds this vehicle id: two aircraft (a cloned SD
+    # card, a second agent started by mistake) must never share one. The agent gives up.
+    VEHICLE_ID_IN_USE = 4409
+    # This connection was replaced: the same agent run reconnected, or the connection
+    # fell silent and another agent took the id over. The agent reconnects.
+    SUPERSEDED = 4410
 
 
 # Sequence numbers and times are stored in 64-bit columns; NaN compares false against
@@ -336,6 +341,11 @@ class CommandOutcome(Message):
 # ---------------------------------------------------------------------------
 
 
+# MAV_LANDED_STATE without its UNDEFINED (that is null): in_air, takeoff and landing are
+# all airborne.
+LandedState = Literal["on_ground", "takeoff", "in_air", "landing"]
+
+
 class VehicleState(Message):
     """One telemetry snapshot, assembled by the agent from the latest MAVLink messages."""
 
@@ -343,6 +353,19 @@ class VehicleState(Message):
     mode: str = Field(default="UNKNOWN", max_length=MAX_NAME_CHARS)
     armed: bool = False
     system_status: str = Field(default="UNKNOWN", max_length=MAX_NAME_CHARS)
+    landed_state: LandedState | None = Field(
+        default=None,
+        description="Whether it flies: on_ground, or airborne (takeoff, in_air, landing). "
+        "Use this, not the altitude (a field above or below home misleads it). Null until "
+        "known.",
+    )
+    landed_state_source: Literal["autopilot", "derived"] | None = Field(
+        default=None,
+        description="autopilot: EXTENDED_SYS_STATE.landed_state (ArduCopter, ArduPlane, "
+        "PX4); derived: the agent's guess from armed, the altitude above home and the climb "
+        "rate, where the autopilot does not say (ArduPilot Rover, old firmware): never "
+        "takeoff or landing, and a ground vehicle is always on_ground",
+    )
     lat: float | None = None
     lon: float | None = None
     alt_msl: float | None = Field(default=None, description="Metres above mean sea level.")
@@ -407,7 +430,11 @@ class Hello(Message):
     )
     capabilities: list[Name] = Field(default_factory=list, max_length=MAX_CAPABILITIES)
     agent_version: Name
-    stream_id: StreamId = Field(description="Names this agent run's sequence counters.")
+    stream_id: StreamId = Field(
+        description="Names this agent run's sequence counters, and the run itself: a new "
+        "hello from the same run replaces its stale connection, one from another run is "
+        "refused while the first still answers (close 4409)."
+    )
 
 
 ReplayedStream = Annotated[
@@ -446,6 +473,7 @@ EventKind = Literal[
     "link_down",
     "failsafe",
     "mission",
+    "id_clash",  # the hub refused a second agent for this vehicle id (never sent by agents)
     "upload",  # the agent's onboard .tlog could not be handed over (or was, after failing)
 ]
 
@@ -574,12 +602,14 @@ class Pong(Message):
     nonce: str | None = Field(default=None, max_length=64)
 
 
+# The hub pings an agent to learn whether it is still there (another agent wants its
+# vehicle id); the agent answers with a pong.
 AgentToHub: TypeAlias = Annotated[
-    Hello | Telemetry | LiveState | Event | CommandResult | Unavailable,
+    Hello | Telemetry | LiveState | Event | CommandResult | Unavailable | Pong,
     Field(discriminator="type"),
 ]
 HubToAgent: TypeAlias = Annotated[
-    Welcome | CommandRequest | Ack | Resend | ErrorReply, Field(discriminator="type")
+    Welcome | CommandRequest | Ack | Resend | ErrorReply | Ping, Field(discriminator="type")
 ]
 ClientToHub: TypeAlias = Annotated[Ping, Field(discriminator="type")]
 HubToClient: TypeAlias = Annotated[

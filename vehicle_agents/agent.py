@@ -25,7 +25,7 @@ from vehicle_agents.fcu_events import FcuLinkEvents
 from vehicle_agents.fcu_link import FcuLink, MavMessage
 from vehicle_agents.forwarding import MavlinkForwarder
 from vehicle_agents.hub_failsafe import HubLinkFailsafe
-from vehicle_agents.hub_link import HubLink
+from vehicle_agents.hub_link import HubLink, VehicleIdInUse
 from vehicle_agents.mission_progress import ReachedItems
 from vehicle_agents.missions import mission_number
 from vehicle_agents.outbox import Outbox, SpillFile
@@ -41,6 +41,15 @@ CAPABILITIES = ["telemetry", "commands", "events"]
 
 
 async def run_agent(settings: AgentSettings) -> None:
+    """Runs until cancelled; raises VehicleIdInUse (on its own, not in a group) when the
+    hub keeps another agent with this vehicle id, which no retry would change."""
+    try:
+        await _run(settings)
+    except* VehicleIdInUse as refused:
+        raise refused.exceptions[0] from None
+
+
+async def _run(settings: AgentSettings) -> None:
     link = FcuLink(settings.fcu, source_system=settings.source_system)
     streams = StreamRequester(link, settings.stream_rates_hz)  # checks the rates first
     async with asyncio.TaskGroup() as tasks:

@@ -25,6 +25,8 @@ from protocol.messages import (
     ErrorReply,
     Hello,
     LiveState,
+    Ping,
+    Pong,
     ProtocolError,
     RequestId,
     Resend,
@@ -59,6 +61,12 @@ BEHIND_FRAMES = 20
 
 class HubRefused(Exception):
     """The hub answered the hello with something other than a welcome."""
+
+
+class VehicleIdInUse(Exception):
+    """The hub refused this agent: another agent, still connected, holds its vehicle id.
+    Retrying would not help (the hub keeps the first agent); a person must give one of
+    the two aircraft its own id."""
 
 
 class HubClosed(Exception):
@@ -104,6 +112,15 @@ class HubLink:
             except* HubClosed as group:
                 closed = group.exceptions[0]
                 assert isinstance(closed, HubClosed)
+                if closed.code == CloseCode.VEHICLE_ID_IN_USE:
+                    raise VehicleIdInUse(
+                        f"the hub refused vehicle id {self._hello.vehicle_id!r}: "
+                        f"{closed.reason}. Another agent that uses this id is connected "
+                        "(a second agent on this computer, or a cloned SD card on another "
+                        "aircraft). Give each aircraft its own vehicle id (--vehicle-id, "
+                        "GCS_AGENT_VEHICLE_ID or vehicle_id in the config file); this agent "
+                        "stops rather than take turns with the other one."
+                    ) from None
                 if closed.code == CloseCode.UNAUTHORIZED:
                     log.error("hub refused this agent's token: %s", closed.reason)
                     retries = refused
@@ -219,6 +236,10 @@ class HubLink:
                 tasks.create_task(self._run_command(message, websocket))
             case ErrorReply(code=code, message=text):
                 log.warning("hub reported %s: %s", code, text)
+            case Ping(nonce=nonce):
+                # The hub asks whether this agent is still there (another agent wants
+                # its vehicle id): answered at once, ahead of the outbox.
+                tasks.create_task(websocket.send(encode(Pong(nonce=nonce))))
             case Welcome():
                 log.warning("unexpected second welcome from hub")
 

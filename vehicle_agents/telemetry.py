@@ -11,6 +11,7 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 from protocol.messages import VehicleState
 from vehicle_agents import positioning
 from vehicle_agents.fcu_link import FcuLink, MavMessage
+from vehicle_agents.landed import landed_state
 from vehicle_agents.missions import mission_number
 from vehicle_agents.modes import is_armed, mode_name
 from vehicle_agents.readiness import readiness
@@ -45,6 +46,7 @@ def link_snapshot(link: FcuLink) -> VehicleState:
         received_at=link.received_at,
         receive_errors=link.counters.receive_errors,
         autopilot=link.modes.autopilot if link.modes else "ardupilot",
+        vehicle_type=link.modes.vehicle_type if link.modes else "multirotor",
     )
     ready = readiness(link.latest, link.statustexts, time.time())
     return state.model_copy(update={"ready_to_fly": ready.ready, "not_ready_reason": ready.reason})
@@ -57,6 +59,7 @@ def snapshot(
     received_at: Mapping[str, float] | None = None,
     receive_errors: int = 0,
     autopilot: str = "ardupilot",
+    vehicle_type: str = "multirotor",
     now: float | None = None,
 ) -> VehicleState:
     """A VehicleState from whatever has arrived; fields stay None until their message does.
@@ -109,4 +112,16 @@ def snapshot(
         fields["home_lat"] = home.latitude / 1e7
         fields["home_lon"] = home.longitude / 1e7
         fields["home_alt_msl"] = home.altitude / 1000
-    return VehicleState.model_validate(fields)
+    state = VehicleState.model_validate(fields)
+    landed = landed_state(
+        latest,
+        received_at,
+        now,
+        armed=state.armed if heartbeat is not None else None,
+        alt_rel=state.alt_rel,
+        climb_rate=state.climb_rate,
+        vehicle_type=vehicle_type,
+    )
+    if landed is None:
+        return state
+    return state.model_copy(update={"landed_state": landed[0], "landed_state_source": landed[1]})

@@ -15,6 +15,7 @@ from backend.auth.policy import AGENT_MESSAGE_PERMISSIONS, Principal, authorize_
 from backend.errors import Forbidden
 from backend.fleet.commands import AgentChannel
 from backend.hub import Hub
+from backend.realtime.agent_admission import Clash, judge
 from backend.realtime.bus import Topic
 from backend.realtime.frames import FrameTooLarge, PeerConnection
 from backend.storage.records import LostFrames, StoredEvent, TelemetryEnvelope
@@ -28,6 +29,8 @@ from protocol.messages import (
     Event,
     Hello,
     LiveState,
+    Ping,
+    Pong,
     ProtocolError,
     Resend,
     SequencedKind,
@@ -48,6 +51,10 @@ class AgentSession(PeerConnection):
         super().__init__(websocket, hub.settings.max_frame_bytes, hub.settings.max_bad_frames)
         self.hub = hub
         self.token_id: int | None = None
+        self.stream_id: str | None = None  # the agent run's, from its hello
+        # For the liveness check when another agent wants this vehicle id.
+        self._frame_arrived = asyncio.Event()
+        self._handling = False
         # Acks (the newest per stream wins) and resend requests from the storage writer,
         # sent by this session's own task so the writer never waits on a socket.
         self._acks: dict[str, dict[str, int]] = {}
@@ -77,6 +84,25 @@ class AgentSession(PeerConnection):
             )
         )
         self._news.set()
+
+    async def answers_within(self, timeout_s: float) -> bool:
+        """Whether the agent is still there: it sends a frame (the pong to this ping, or
+        anything else) within ``timeout_s``. A session busy storing a frame it received
+        (the writer is behind) is busy, not gone."""
+        loop = asyncio.get_running_loop()
+        deadline = loop.time() + timeout_s
+        self._frame_arrived.clear()
+        try:
+            await asyncio.wait_for(self.send(Ping(nonce="are-you-there")), timeout_s)
+        except Exception as error:
+            # Any failure to send (closed, reset, stuck) is the answer: it cannot be reached.
+            log.info("agent at %s cannot be pinged: %r", self.peer, error)
+            return False
+        try:
+            await asyncio.wait_for(self._frame_arrived.wait(), max(0.0, deadline - loop.time()))
+        except TimeoutError:
+            return self._handling
+        return True
 
     async def _send_sequence_news(self) -> None:
         while True:
@@ -175,22 +201,51 @@ class AgentSession(PeerConnection):
     async def _serve_vehicle(self, hello: Hello) -> None:
         hub = self.hub
         vehicle_id = hello.vehicle_id
-        try:
-            await asyncio.to_thread(hub.repository.upsert_vehicle, hello, time.time())
-        except SQLAlchemyError as error:
-            # A vehicle the store already has may reconnect during a database outage (its
-            # operators may need to land it); its row is refreshed at the next connection.
-            # A new one needs its row first: its telemetry is stored against it.
-            if vehicle_id not in {record.id for record in hub.registry.all()}:
-                raise
-            log.warning("could not refresh %s in the store (%s); serving it", vehicle_id, error)
-        record = hub.registry.connect(hello)
-        channel = AgentChannel(self.send)
-        previous = hub.agent_sessions.get(vehicle_id)
-        if previous is not None:
-            await previous.close(CloseCode.SUPERSEDED, "another agent connected for this vehicle")
-        hub.agent_sessions[vehicle_id] = self
-        hub.dispatcher.attach(vehicle_id, channel)
+        # One admission at a time per vehicle id, so that two newcomers cannot both take
+        # over; the first agent keeps the id while it answers (see agent_admission).
+        async with hub.agent_admissions.setdefault(vehicle_id, asyncio.Lock()):
+            previous = hub.agent_sessions.get(vehicle_id)
+            verdict = None
+            if previous is not None:
+                verdict = await judge(
+                    previous,
+                    vehicle_id,
+                    hello.stream_id,
+                    self.peer,
+                    hub.settings.agent_liveness_timeout_s,
+                )
+            if isinstance(verdict, Clash):
+                # Before the store or the registry hear of this hello: the vehicle stays
+                # the first agent's, its state and commands included.
+                log.error("vehicle id clash: %s", verdict.event)
+                await hub.store_event(vehicle_id, "id_clash", verdict.event, severity=3)
+                await self.close(CloseCode.VEHICLE_ID_IN_USE, verdict.reason)
+                return
+            try:
+                await asyncio.to_thread(hub.repository.upsert_vehicle, hello, time.time())
+            except SQLAlchemyError as error:
+                # A vehicle the store already has may reconnect during a database outage
+                # (its operators may need to land it); its row is refreshed at the next
+                # connection. A new one needs its row first: its telemetry is stored
+                # against it.
+                if vehicle_id not in {record.id for record in hub.registry.all()}:
+                    raise
+                log.warning("could not refresh %s in the store (%s); serving it", vehicle_id, error)
+            self.stream_id = hello.stream_id
+            record = hub.registry.connect(hello)
+            channel = AgentChannel(self.send)
+            # Ours before the old one closes, so that its ending leaves the vehicle online.
+            hub.agent_sessions[vehicle_id] = self
+            hub.dispatcher.attach(vehicle_id, channel)
+        if previous is not None and verdict is not None:
+            log.warning(
+                "agent %s: its old connection %s: %s", vehicle_id, previous.peer, verdict.reason
+            )
+            try:
+                await previous.close(CloseCode.SUPERSEDED, verdict.reason)
+            except Exception as error:
+                # The old peer's failure, not this session's: it is gone either way.
+                log.info("old connection of %s already gone: %r", vehicle_id, error)
         log.info(
             "agent %s connected from %s (%s %s)",
             vehicle_id,
@@ -208,7 +263,12 @@ class AgentSession(PeerConnection):
             await self._ask_for_open_gaps(vehicle_id)
             try:
                 while frame := await self.receive():
-                    await self._handle_frame(hello, channel, frame)
+                    self._frame_arrived.set()
+                    self._handling = True
+                    try:
+                        await self._handle_frame(hello, channel, frame)
+                    finally:
+                        self._handling = False
             finally:
                 news.cancel()
                 # The session is over; a send that failed on its way out changes nothing.
@@ -271,6 +331,8 @@ class AgentSession(PeerConnection):
                     log.info(
                         "late or unknown command result %s from %s", request_id, hello.vehicle_id
                     )
+            case Pong():
+                pass  # its arrival answered answers_within()
             case Hello():
                 await self.reject(
                     ErrorReply(code="unexpected_message", message="hello was already received")

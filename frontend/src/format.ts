@@ -45,6 +45,25 @@ export function formatArmed(state: VehicleState | null | undefined): string {
   return "disarmed";
 }
 
+const LANDED_LABELS: Record<NonNullable<VehicleState["landed_state"]>, string> = {
+  on_ground: "on ground",
+  takeoff: "taking off",
+  in_air: "in air",
+  landing: "landing",
+};
+
+/** `landed_state`, the field that says whether it flies; "~" marks the agent's guess
+ * (the autopilot does not report one). */
+export function formatLanded(state: VehicleState | null | undefined): string {
+  if (!state?.landed_state) return MISSING;
+  const label = LANDED_LABELS[state.landed_state];
+  return state.landed_state_source === "derived" ? `~${label}` : label;
+}
+
+export function isAirborne(state: VehicleState | null | undefined): boolean {
+  return Boolean(state?.landed_state && state.landed_state !== "on_ground");
+}
+
 export function readinessTitle(state: VehicleState | null | undefined): string {
   if (!state || state.armed || state.ready_to_fly !== false) return formatArmed(state);
   return `Not ready to fly: ${state.not_ready_reason ?? "the autopilot's checks fail"}`;

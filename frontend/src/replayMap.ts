@@ -13,7 +13,7 @@ const FIT_MAX_ZOOM = 18;
 
 /** A colour class for an event: by kind, and by MAVLink severity for status texts. */
 export function eventTone(event: Pick<FlightEvent, "kind" | "severity">): "danger" | "warn" | "ok" | "info" | "muted" {
-  if (event.kind === "failsafe") return "danger";
+  if (event.kind === "failsafe" || event.kind === "id_clash") return "danger";
   if (event.kind === "link_down") return "warn";
   if (event.kind === "link_up") return "ok";
   if (event.kind === "mode" || event.kind === "armed" || event.kind === "disarmed") return "info";

@@ -7,8 +7,10 @@ import {
   formatArmed,
   formatBattery,
   formatGps,
+  formatLanded,
   formatLastSeen,
   formatSpeed,
+  isAirborne,
   linkState,
   MISSING,
   readinessTitle,
@@ -17,7 +19,7 @@ import type { Command, VehicleSummary } from "./types";
 
 export type CommandRunner = (vehicleId: string, command: Command) => Promise<CommandFeedback>;
 
-const TELEMETRY_FIELDS = ["mode", "armed", "alt_rel", "groundspeed", "battery", "gps"] as const;
+const TELEMETRY_FIELDS = ["mode", "armed", "landed_state", "alt_rel", "groundspeed", "battery", "gps"] as const;
 type TelemetryField = (typeof TELEMETRY_FIELDS)[number];
 
 const ACTIONS = [
@@ -147,6 +149,8 @@ export class VehicleRow {
     this.cells.armed.classList.toggle("warn", notReady);
     const readyTitle = readinessTitle(state);
     if (this.cells.armed.title !== readyTitle) this.cells.armed.title = readyTitle;
+    setText(this.cells.landed_state, formatLanded(state));
+    this.cells.landed_state.classList.toggle("is-airborne", isAirborne(state));
     setText(this.cells.alt_rel, formatAltitude(state?.alt_rel));
     setText(this.cells.groundspeed, formatSpeed(state?.groundspeed));
     setText(this.cells.battery, formatBattery(state));

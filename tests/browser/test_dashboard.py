@@ -30,6 +30,8 @@ def test_dashboard_shows_the_fleet_and_takes_off(page: Page, fleet: LocalFleet) 
     expect(row.locator('[data-field="gps"]')).to_contain_text("3D")
     # a good fix is not enough: the autopilot's readiness (its EKF, its pre-arm checks)
     expect(row.locator('[data-field="armed"]')).to_have_text("disarmed · ready", timeout=30_000)
+    # Whether it flies, as the autopilot says (EXTENDED_SYS_STATE), not guessed ("~").
+    expect(row.locator('[data-field="landed_state"]')).to_have_text("on ground")
     start_altitude = _altitude(page)
     assert start_altitude < 1.0
 
@@ -47,4 +49,7 @@ def test_dashboard_shows_the_fleet_and_takes_off(page: Page, fleet: LocalFleet) 
         timeout=60_000,
     )
     assert _altitude(page) >= 3
+    expect(row.locator('[data-field="landed_state"]')).to_have_text(
+        re.compile("^(taking off|in air)$"), timeout=30_000
+    )
     expect(row.locator('[data-field="armed"]')).to_contain_text(re.compile("armed", re.I))

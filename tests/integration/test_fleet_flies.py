@@ -76,6 +76,11 @@ def test_arm_takeoff_land_through_rest(
         assert mode.json()["outcome"]["status"] == "accepted", mode.text
         armed = api.post(f"/api/v1/vehicles/{vehicle}/commands", json={"name": "arm"})
         assert armed.status_code == 200, armed.text
+        # Whether it flies: the autopilot's own answer (EXTENDED_SYS_STATE), not a guess.
+        on_pad = watcher.wait_until(lambda v: v[vehicle]["state"]["armed"], 10, f"{vehicle} armed")[
+            vehicle
+        ]["state"]
+        assert (on_pad["landed_state"], on_pad["landed_state_source"]) == ("on_ground", "autopilot")
         assert armed.json()["outcome"]["status"] == "accepted"
         assert armed.json()["outcome"]["result"] == "MAV_RESULT_ACCEPTED"
 
@@ -101,6 +106,11 @@ def test_arm_takeoff_land_through_rest(
             f"{vehicle} to hold {TAKEOFF_ALTITUDE_M} m ± 1 m",
         )
         assert watcher.state(vehicle)["armed"] is True
+        # EXTENDED_SYS_STATE comes at 1 Hz: the take-off ends within a second of the hold.
+        watcher.wait_until(
+            lambda v: v[vehicle]["state"]["landed_state"] == "in_air", 5, f"{vehicle} in air"
+        )
+        assert watcher.state(vehicle)["landed_state_source"] == "autopilot"
         # The other vehicles stayed on the ground.
         # The vehicles that were on the ground stayed there (the fleet is shared with
         # the browser test, which may have flown another one).
@@ -115,6 +125,9 @@ def test_arm_takeoff_land_through_rest(
             lambda v: not v[vehicle]["state"]["armed"], 90, f"{vehicle} to land and disarm"
         )
         assert (watcher.state(vehicle)["alt_rel"] or 0) < 0.5
+        watcher.wait_until(
+            lambda v: v[vehicle]["state"]["landed_state"] == "on_ground", 5, f"{vehicle} landed"
+        )
 
         # The climb is in the stored history.
         history = api.get(

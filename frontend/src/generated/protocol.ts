@@ -14,8 +14,8 @@
  * Any frame of protocol version 1, in either direction.
  */
 export type AnyMessage = AgentToHub | HubToAgent | ClientToHub | HubToClient;
-export type AgentToHub = Hello | Telemetry | LiveState | Event | CommandResult | Unavailable;
-export type HubToAgent = Welcome | CommandRequest | Ack | Resend | ErrorReply;
+export type AgentToHub = Hello | Telemetry | LiveState | Event | CommandResult | Unavailable | Pong;
+export type HubToAgent = Welcome | CommandRequest | Ack | Resend | ErrorReply | Ping;
 export type ClientToHub = Ping;
 export type HubToClient = FleetSnapshot | VehicleUpdate | Pong | ErrorReply;
 
@@ -47,7 +47,7 @@ export interface Hello {
   capabilities?: string[];
   agent_version: string;
   /**
-   * Names this agent run's sequence counters.
+   * Names this agent run's sequence counters, and the run itself: a new hello from the same run replaces its stale connection, one from another run is refused while the first still answers (close 4409).
    */
   stream_id: string;
 }
@@ -72,6 +72,14 @@ export interface VehicleState {
   mode: string;
   armed: boolean;
   system_status: string;
+  /**
+   * Whether it flies: on_ground, or airborne (takeoff, in_air, landing). Use this, not the altitude (a field above or below home misleads it). Null until known.
+   */
+  landed_state: ("on_ground" | "takeoff" | "in_air" | "landing") | null;
+  /**
+   * autopilot: EXTENDED_SYS_STATE.landed_state (ArduCopter, ArduPlane, PX4); derived: the agent's guess from armed, the altitude above home and the climb rate, where the autopilot does not say (ArduPilot Rover, old firmware): never takeoff or landing, and a ground vehicle is always on_ground
+   */
+  landed_state_source: ("autopilot" | "derived") | null;
   lat: number | null;
   lon: number | null;
   /**
@@ -179,6 +187,7 @@ export interface Event {
     | "link_down"
     | "failsafe"
     | "mission"
+    | "id_clash"
     | "upload";
   /**
    * MAV_SEVERITY: 0 emergency .. 7 debug
@@ -251,6 +260,10 @@ export interface Unavailable {
   first_seq: number;
   last_seq: number;
   reason: string;
+}
+export interface Pong {
+  type: "pong";
+  nonce: string | null;
 }
 export interface Welcome {
   type: "welcome";
@@ -467,10 +480,6 @@ export interface VehicleSummary {
 export interface VehicleUpdate {
   type: "vehicle";
   vehicle: VehicleSummary;
-}
-export interface Pong {
-  type: "pong";
-  nonce: string | null;
 }
 
 export const PROTOCOL_VERSION = 1;

@@ -109,12 +109,10 @@ class CloseCode(IntEnum):
     BAD_HELLO = 4400  # first frame was not a valid hello, or wrong protocol version
     UNAUTHORIZED = 4401  # missing, wrong, expired or revoked credentials
     FORBIDDEN = 4403  # authenticated, but not allowed (role, vehicle, origin)
-    # Another agent, still answering, holds this vehicle id: two aircraft (a cloned SD
-    # card, a second agent started by mistake) must never share one. The agent gives up.
-    VEHICLE_ID_IN_USE = 4409
-    # This connection was replaced: the same agent run reconnected, or the connection
-    # fell silent and another agent took the id over. The agent reconnects.
-    SUPERSEDED = 4410
+    # Two aircraft (a cloned SD card, a second agent started by mistake) must never share
+    # one vehicle id, so the agent gives up on 4409 and reconnects on 4410.
+    VEHICLE_ID_IN_USE = 4409  # another agent, still answering, holds this vehicle id
+    SUPERSEDED = 4410  # replaced by the same agent run reconnecting, or this one fell silent
 
 
 # Sequence numbers and times are stored in 64-bit columns; NaN compares false against

@@ -10,7 +10,7 @@ import time
 from starlette.websockets import WebSocket, WebSocketDisconnect
 
 from backend.api.hardening import origin_allowed
-from backend.api.security import principal_of
+from backend.api.security import presented_token, principal_of
 from backend.auth.policy import (
     CLIENT_MESSAGE_PERMISSIONS,
     Permission,
@@ -52,7 +52,15 @@ class ClientFeed(PeerConnection):
             return
         principal = await principal_of(self.websocket)
         if principal is None:
-            await self.close(CloseCode.UNAUTHORIZED, "not authenticated: log in first")
+            # The reason says how to get in: a script reads it, and a close reason has at
+            # most 123 bytes, so the details are in docs/websockets.md.
+            reason = (
+                "not authenticated: send 'Authorization: Bearer <token>' or the dashboard's "
+                "session cookie (docs/websockets.md)"
+                if presented_token(self.websocket) is None
+                else "the token is invalid, expired or revoked: log in again"
+            )
+            await self.close(CloseCode.UNAUTHORIZED, reason)
             return
         try:
             authorize(principal, Permission.READ)

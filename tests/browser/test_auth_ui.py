@@ -246,7 +246,7 @@ def test_a_websocket_refused_with_4401_brings_back_the_login_screen(
     page.route("**/api/v1/config", revoke_after_config)
     _log_in(page, fleet.plan.hub_http, username, password)
     expect(page.locator("#login")).to_be_visible(timeout=FLEET_TIMEOUT_MS)
-    expect(page.locator('[data-field="login-error"]')).to_contain_text("log in first")
+    expect(page.locator('[data-field="login-error"]')).to_contain_text("log in again")
     status = page.locator("#connection-status")
     expect(status).to_be_hidden()
     # It gave up ("stopped") rather than waiting to reconnect ("reconnecting").

@@ -1,0 +1,390 @@
+"""Write docs/websockets.md from the wire protocol (protocol/messages.py) and the hub's
+settings: the two sockets, how each authenticates, every message with its fields, the
+keep-alive and the close codes.
+
+    .venv/bin/python scripts/gen_websocket_docs.py          # rewrite the page
+    .venv/bin/python scripts/gen_websocket_docs.py --check  # exit 1 if it is stale
+
+tests/unit/test_websocket_docs.py fails when the page and the protocol module differ.
+The prose is here; every name, number, field and close code comes from the code.
+"""
+
+from __future__ import annotations
+
+import argparse
+import inspect
+import io
+import json
+import sys
+import tokenize
+import typing
+from pathlib import Path
+from typing import Any
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from backend.api.security import SESSION_COOKIE  # noqa: E402
+from backend.auth.policy import AGENT_MESSAGE_PERMISSIONS, CLIENT_MESSAGE_PERMISSIONS  # noqa: E402
+from backend.realtime.agent_gateway import HELLO_TIMEOUT_S  # noqa: E402
+from backend.settings import HubSettings  # noqa: E402
+from protocol import messages  # noqa: E402
+from protocol.messages import CloseCode  # noqa: E402
+
+PAGE = ROOT / "docs" / "websockets.md"
+# uvicorn's defaults, which `gcs hub` keeps: a WebSocket ping every 20 s, and a peer
+# that has not answered one within 20 s is gone.
+HUB_PING_INTERVAL_S = 20
+HUB_PING_TIMEOUT_S = 20
+
+Schema = dict[str, Any]
+
+# The standard codes of RFC 6455 (section 7.4.1), for those the protocol module leaves
+# uncommented; the application's own (4xxx) must say what they mean there.
+RFC6455_MEANINGS = {
+    1000: "normal closure: the connection has done its job",
+    1008: "policy violation",
+    1009: "a frame over the size limit",
+}
+
+
+def close_code_meanings() -> dict[CloseCode, str]:
+    """Each close code's meaning: the comment on its line in protocol/messages.py."""
+    meanings: dict[CloseCode, str] = {}
+    source = inspect.getsource(CloseCode)
+    line_comments: dict[int, str] = {}
+    names: dict[int, str] = {}
+    for token in tokenize.generate_tokens(io.StringIO(source).readline):
+        row = token.start[0]
+        if token.type == tokenize.COMMENT:
+            line_comments[row] = token.string.lstrip("# ").strip()
+        elif token.type == tokenize.NAME and token.start[1] == 4 and row not in names:
+            names[row] = token.string
+    for row, name in names.items():
+        if name in CloseCode.__members__ and row in line_comments:
+            meanings[CloseCode[name]] = line_comments[row]
+    for code in CloseCode:
+        if code not in meanings and code in RFC6455_MEANINGS:
+            meanings[code] = RFC6455_MEANINGS[code]
+    missing = [code.name for code in CloseCode if code not in meanings]
+    if missing:
+        raise SystemExit(
+            f"CloseCode members without a comment saying what they mean: {', '.join(missing)}"
+        )
+    return meanings
+
+
+def union_members(alias: Any) -> list[str]:
+    """The message classes of a direction's discriminated union, in declaration order."""
+    union = typing.get_args(alias)[0]
+    return [member.__name__ for member in typing.get_args(union) or (union,)]
+
+
+def all_definitions() -> dict[str, Schema]:
+    definitions: dict[str, Schema] = {}
+    for adapter in (
+        messages.agent_to_hub,
+        messages.hub_to_agent,
+        messages.client_to_hub,
+        messages.hub_to_client,
+        messages.command_adapter,
+    ):
+        definitions.update(adapter.json_schema()["$defs"])
+    return definitions
+
+
+def anchor(name: str) -> str:
+    return name.lower()
+
+
+def type_of(schema: Schema) -> str:
+    if "$ref" in schema:
+        name = schema["$ref"].rsplit("/", 1)[1]
+        return f"[{name}](#{anchor(name)})"
+    if "const" in schema:
+        return f"`{json.dumps(schema['const'])}`"
+    if "enum" in schema:
+        return " or ".join(f"`{json.dumps(value)}`" for value in schema["enum"])
+    if "anyOf" in schema:
+        return " or ".join(type_of(option) for option in schema["anyOf"])
+    if "oneOf" in schema:
+        mapping = schema.get("discriminator", {}).get("mapping", {})
+        key = schema.get("discriminator", {}).get("propertyName", "type")
+        return f"one of the [commands](#commands), by `{key}`" if mapping else "one of several"
+    kind = schema.get("type")
+    if kind == "array":
+        return f"list of {type_of(schema['items'])}"
+    if kind == "object" and isinstance(schema.get("additionalProperties"), dict):
+        return f"object of {type_of(schema['additionalProperties'])}"
+    return str(kind)
+
+
+def number(value: float) -> str:
+    return str(value) if isinstance(value, int) else f"{value:g}"
+
+
+def limits_of(schema: Schema) -> list[str]:
+    """The constraints a value must meet, in words."""
+    limits: list[str] = []
+    for option in schema.get("anyOf", [schema]):
+        bounds = []
+        for key, word in (
+            ("minimum", "≥"),
+            ("exclusiveMinimum", ">"),
+            ("maximum", "≤"),
+            ("exclusiveMaximum", "<"),
+        ):
+            if key in option:
+                bounds.append(f"{word} {number(option[key])}")
+        if bounds:
+            limits.append(" and ".join(bounds))
+        for unit, low_key, high_key in (
+            ("chars", "minLength", "maxLength"),
+            ("items", "minItems", "maxItems"),
+        ):
+            low, high = option.get(low_key, 0), option.get(high_key)
+            if low and high is not None:
+                limits.append(f"{low} to {high} {unit}")
+            elif low:
+                limits.append(f"at least {low} {unit}")
+            elif high is not None:
+                limits.append(f"at most {high} {unit}")
+        if "pattern" in option:
+            limits.append(f"matches `{option['pattern']}`")
+    return limits
+
+
+def cell(text: str) -> str:
+    return text.replace("|", "\\|").replace("\n", " ")
+
+
+def field_table(schema: Schema) -> list[str]:
+    properties: dict[str, Schema] = schema.get("properties", {})
+    if not properties:
+        return ["No fields."]
+    required = set(schema.get("required", []))
+    lines = ["| field | type | required or default | meaning |", "| --- | --- | --- | --- |"]
+    for name, prop in properties.items():
+        if name in required:
+            presence = "required"
+        elif "default" in prop:
+            presence = f"`{json.dumps(prop['default'])}`"
+        else:
+            presence = "optional"
+        description = " ".join(prop.get("description", "").split()).rstrip(".")
+        meaning = "; ".join(part for part in (description, ", ".join(limits_of(prop))) if part)
+        lines.append(f"| `{name}` | {cell(type_of(prop))} | {presence} | {cell(meaning)} |")
+    return lines
+
+
+def description_of(schema: Schema) -> list[str]:
+    text = schema.get("description")
+    return [" ".join(text.split()), ""] if text else []
+
+
+def message_section(name: str, schema: Schema, direction: str) -> list[str]:
+    tag = schema["properties"]["type"]["const"]
+    return [
+        f'<a id="{anchor(name)}"></a>',
+        f"#### `{tag}` ({direction})",
+        "",
+        *description_of(schema),
+        *field_table(schema),
+        "",
+    ]
+
+
+def type_section(name: str, schema: Schema) -> list[str]:
+    return [f"### {name}", "", *description_of(schema), *field_table(schema), ""]
+
+
+def render() -> str:
+    definitions = all_definitions()
+    meanings = close_code_meanings()
+    defaults = HubSettings.model_fields
+    max_bad_frames = defaults["max_bad_frames"].default
+    ui_interval_s = defaults["ui_update_interval_s"].default
+    client_to_hub = union_members(messages.ClientToHub)
+    hub_to_client = union_members(messages.HubToClient)
+    agent_to_hub = union_members(messages.AgentToHub)
+    hub_to_agent = union_members(messages.HubToAgent)
+    commands = union_members(messages.Command)
+    shown = set(client_to_hub + hub_to_client + agent_to_hub + hub_to_agent + commands)
+    shared = sorted(name for name in definitions if name not in shown)
+    client_permissions = ", ".join(
+        f"`{kind}` needs `{permission}`" for kind, permission in CLIENT_MESSAGE_PERMISSIONS.items()
+    )
+    agent_kinds = ", ".join(f"`{kind}`" for kind in AGENT_MESSAGE_PERMISSIONS)
+
+    out = [
+        "# The WebSockets: the live feed and the agent link",
+        "",
+        "<!-- Written by scripts/gen_websocket_docs.py from protocol/messages.py; do not edit.",
+        "     After changing the protocol, run: .venv/bin/python scripts/gen_websocket_docs.py -->",
+        "",
+        "The hub has two WebSockets besides its REST API (which `/docs` describes):",
+        "",
+        f"- `{messages.CLIENT_WS_PATH}`, the **live feed** for dashboards and integrations: the "
+        "fleet, then each vehicle as it changes.",
+        f"- `{messages.AGENT_WS_PATH}`, the **agent link**, for the vehicle agents only: "
+        "telemetry and events up, commands down.",
+        "",
+        "On both, every frame is one JSON object as text, and its `type` names the message. "
+        f"A frame is at most {messages.MAX_FRAME_BYTES:,} bytes (the hub closes with "
+        f"{CloseCode.MESSAGE_TOO_BIG:d} beyond). A frame the hub cannot use is answered with an "
+        f"[`error`](#errorreply) and the connection stays open; after {max_bad_frames} of them "
+        f"(`GCS_MAX_BAD_FRAMES`) the hub closes it with {CloseCode.POLICY_VIOLATION:d}. "
+        "The message schemas are also published as JSON Schema: "
+        "`python -m protocol.messages`.",
+        "",
+        "## The live feed",
+        "",
+        "### Authenticating",
+        "",
+        "The feed takes the same credentials as the REST API, on the upgrade request, and "
+        "needs the `read` permission (every role has it):",
+        "",
+        "- **A script** sends `Authorization: Bearer <token>`. The token is an access token "
+        "from `POST /api/v1/auth/token` (a form with `username` and `password`; it expires) "
+        "or an API token from `POST /api/v1/auth/api-tokens` (long-lived, scoped, revocable). "
+        "With Python's `websockets`: "
+        "`connect(url, additional_headers={'Authorization': f'Bearer {token}'})`.",
+        "- **A browser** cannot set headers on a WebSocket: it logs in with "
+        f"`POST /api/v1/auth/login`, and sends the HTTP-only `{SESSION_COOKIE}` cookie that "
+        "sets. The page's `Origin` must be the hub's own (same scheme and host) or one of "
+        f"`GCS_CORS_ORIGINS`, else the hub closes with {CloseCode.FORBIDDEN:d}.",
+        "- A token in the URL is not accepted: URLs end up in logs.",
+        "",
+        f"Without a credential the hub closes with {CloseCode.UNAUTHORIZED:d}, and the reason says "
+        "what to send; with an invalid, expired or revoked one, also "
+        f"{CloseCode.UNAUTHORIZED:d}. An open feed lasts as long as its credential: the hub "
+        f"closes it with {CloseCode.UNAUTHORIZED:d} when the token expires, is revoked, or its "
+        "user logs out or is disabled. Log in again before reconnecting; retrying with the "
+        "same token cannot succeed.",
+        "",
+        "### The conversation",
+        "",
+        "1. The hub sends [`fleet`](#fleetsnapshot): every vehicle it knows, connected or not.",
+        "2. Then [`vehicle`](#vehicleupdate) for each vehicle that changes, coalesced: at most "
+        f"one per vehicle every {ui_interval_s:g} s (`GCS_UI_UPDATE_INTERVAL_S`), always the "
+        "newest state; an update not yet sent is replaced, never queued.",
+        "3. The client may send [`ping`](#ping) at any time; the hub answers "
+        "[`pong`](#pong) with the same `nonce`. Nothing else is accepted from a client "
+        f"({client_permissions}).",
+        "",
+        "Commands are not sent on the feed: they go through the REST API "
+        "(`POST /api/v1/vehicles/{id}/commands`, `POST /api/v1/fleet/commands`), which "
+        "answers with the flight controller's verdict.",
+        "",
+        "### Messages",
+        "",
+    ]
+    for name in client_to_hub:
+        out += message_section(name, definitions[name], "client → hub")
+    for name in hub_to_client:
+        if name != "ErrorReply":
+            out += message_section(name, definitions[name], "hub → client")
+    out += [
+        "## The agent link",
+        "",
+        "### Authenticating",
+        "",
+        "An agent sends `Authorization: Bearer <agent token>` on the upgrade request. An "
+        "agent token belongs to one vehicle: an admin makes it with "
+        "`POST /api/v1/vehicles/{id}/agent-tokens` (or provisions it with `GCS_AGENT_TOKENS`). "
+        f"A missing, wrong or revoked token, or a user's token, is closed with "
+        f"{CloseCode.UNAUTHORIZED:d}; a `hello` for another vehicle with "
+        f"{CloseCode.FORBIDDEN:d}. Revoking the token closes its live connection at once "
+        f"({CloseCode.UNAUTHORIZED:d}).",
+        "",
+        "### The conversation",
+        "",
+        f"1. The agent sends [`hello`](#hello) within {HELLO_TIMEOUT_S:g} s, announcing "
+        f"protocol {messages.PROTOCOL_VERSION}; anything else, or another protocol version, "
+        f"is closed with {CloseCode.BAD_HELLO:d}.",
+        "2. The hub answers [`welcome`](#welcome).",
+        "3. The agent streams [`telemetry`](#telemetry) and [`event`](#event), each numbered "
+        "per kind in its stream (`seq`), and [`live_state`](#livestate) while it replays a "
+        "backlog. The hub sends [`ack`](#ack) once frames are stored (after the commit), "
+        "and [`resend`](#resend) when it sees a gap; the agent replays those frames or "
+        "answers [`unavailable`](#unavailable) for frames its full outbox had to drop.",
+        "4. The hub sends [`command`](#commandrequest); the agent answers "
+        "[`command_result`](#commandresult) with the same `request_id`.",
+        "",
+        f"Agent messages ({agent_kinds}) need the agent permission of the vehicle the "
+        "connection is for.",
+        "",
+        "### Messages",
+        "",
+    ]
+    for name in agent_to_hub:
+        out += message_section(name, definitions[name], "agent → hub")
+    for name in hub_to_agent:
+        if name != "ErrorReply":
+            out += message_section(name, definitions[name], "hub → agent")
+    out += [
+        "## Errors on either socket",
+        "",
+        *message_section("ErrorReply", definitions["ErrorReply"], "hub → agent or client"),
+        "## Keep-alive",
+        "",
+        f"The hub sends a WebSocket ping every {HUB_PING_INTERVAL_S} s and drops a peer "
+        f"that has not answered within {HUB_PING_TIMEOUT_S} s (close 1011). WebSocket "
+        "libraries and browsers answer pings by themselves. The feed's [`ping`](#ping) "
+        "message is for a client that wants to see the hub answer (a round trip through "
+        "its handler).",
+        "",
+        "## Close codes",
+        "",
+        "| code | name | meaning |",
+        "| --- | --- | --- |",
+    ]
+    out += [f"| {code:d} | `{code.name}` | {cell(meanings[code])} |" for code in CloseCode]
+    out += [
+        "",
+        "The close frame's reason says more (at most 123 bytes).",
+        "",
+        "## Types used in messages",
+        "",
+    ]
+    for name in shared:
+        out += type_section(name, definitions[name])
+    out += [
+        '<a id="commands"></a>',
+        "### Commands",
+        "",
+        "A command's `name` picks it; the same bodies are what "
+        "`POST /api/v1/vehicles/{id}/commands` takes.",
+        "",
+    ]
+    for name in commands:
+        schema = definitions[name]
+        tag = schema["properties"]["name"]["const"]
+        out += [
+            f'<a id="{anchor(name)}"></a>',
+            f"#### `{tag}`",
+            "",
+            *description_of(schema),
+            *field_table(schema),
+            "",
+        ]
+    return "\n".join(out).rstrip() + "\n"
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--check", action="store_true", help="exit 1 if the page is stale")
+    args = parser.parse_args()
+    page = render()
+    if args.check:
+        if PAGE.read_text() != page:
+            print(f"{PAGE} is stale: run scripts/gen_websocket_docs.py", file=sys.stderr)
+            return 1
+        return 0
+    PAGE.write_text(page)
+    print(f"wrote {PAGE.relative_to(ROOT)}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

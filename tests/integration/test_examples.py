@@ -1,0 +1,128 @@
+"""The numbered examples in examples/, run as a user runs them, against the demo fleet,
+so that they cannot rot: each must finish with status 0, and stop with a clear reason
+and a non-zero status when the hub says no."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from gcs.launcher import LocalFleet
+from tests.helpers import FleetWatcher, ready
+
+pytestmark = pytest.mark.integration
+
+EXAMPLES = Path(__file__).parents[2] / "examples"
+# A take-off, a flight to a point and a landing at the fleet's speed-up, with room to spare.
+EXAMPLE_TIMEOUT_S = 240
+
+
+@pytest.fixture(autouse=True)
+def fleet_up(fleet: LocalFleet, fleet_admin_token: str) -> None:
+    """Every vehicle of the demo fleet connected and reporting, as a user finds it."""
+    with FleetWatcher(fleet.plan.hub_http, fleet_admin_token) as watcher:
+        for index in range(fleet.plan.vehicles):
+            watcher.wait_until(ready(fleet.vehicle_id(index)), 60, f"vehicle {index} ready")
+
+
+def run_example(
+    name: str, fleet: LocalFleet, *args: str, cwd: Path | None = None, **env: str
+) -> subprocess.CompletedProcess[str]:
+    """``python examples/<name> args`` with the hub's address and the admin's login in
+    the environment (``env`` adds to or overrides them; an empty value removes one)."""
+    environment = {key: value for key, value in os.environ.items() if not key.startswith("GCS_")}
+    environment.update(
+        GCS_HUB=fleet.plan.hub_http, GCS_USERNAME="admin", GCS_PASSWORD=fleet.plan.admin_password
+    )
+    environment.update(env)
+    environment = {key: value for key, value in environment.items() if value}
+    return subprocess.run(
+        [sys.executable, str(EXAMPLES / name), *args],
+        env=environment,
+        cwd=cwd,
+        capture_output=True,
+        text=True,
+        timeout=EXAMPLE_TIMEOUT_S,
+        check=False,
+    )
+
+
+def succeeded(run: subprocess.CompletedProcess[str]) -> str:
+    assert run.returncode == 0, f"exit {run.returncode}\n{run.stdout}\n{run.stderr}"
+    return run.stdout
+
+
+def failed(run: subprocess.CompletedProcess[str]) -> str:
+    """The one line an example ends with when the hub refused something."""
+    assert run.returncode == 1, f"exit {run.returncode}\n{run.stdout}\n{run.stderr}"
+    assert "Traceback" not in run.stderr, run.stderr
+    return run.stderr.strip()
+
+
+def test_log_in_list_the_fleet_and_make_a_token(fleet: LocalFleet) -> None:
+    name = "01_log_in_and_list_the_fleet.py"
+    out = succeeded(run_example(name, fleet, "--api-token", "examples", "--scopes", "read"))
+    assert "logged in as admin (admin)" in out
+    assert all(fleet.vehicle_id(i) in out for i in range(fleet.plan.vehicles)), out
+    token = out.rsplit("export GCS_TOKEN=", 1)[1].strip()
+
+    # The token works on its own, for what its scope allows.
+    out = succeeded(run_example(name, fleet, GCS_TOKEN=token, GCS_USERNAME="", GCS_PASSWORD=""))
+    assert "logged in as admin (admin): read" in out
+    refused = failed(run_example("04_command_a_group.py", fleet, GCS_TOKEN=token))
+    assert refused.startswith("error: POST /api/v1/fleet/commands answered 403:"), refused
+
+
+def test_without_credentials_the_example_says_how_to_log_in(fleet: LocalFleet) -> None:
+    run = run_example("01_log_in_and_list_the_fleet.py", fleet, GCS_USERNAME="", GCS_PASSWORD="")
+    assert failed(run) == "error: set GCS_TOKEN, or GCS_USERNAME and GCS_PASSWORD, to log in"
+
+    run = run_example("01_log_in_and_list_the_fleet.py", fleet, GCS_PASSWORD="not-the-password")
+    assert failed(run).startswith("error: POST /api/v1/auth/token answered 401:")
+
+
+def test_watch_the_fleet(fleet: LocalFleet) -> None:
+    out = succeeded(run_example("02_watch_the_fleet.py", fleet, "--updates", "5"))
+    lines = out.splitlines()
+    assert lines[0].startswith("fleet: ")
+    assert "pong: hello" in lines
+    assert sum(line.startswith(fleet.vehicle_id(0)[:4]) for line in lines) >= 5
+
+
+def test_the_feed_refusal_says_how_to_authenticate(fleet: LocalFleet) -> None:
+    run = run_example("02_watch_the_fleet.py", fleet, GCS_TOKEN="not-a-token")
+    assert failed(run).startswith("error: the hub closed the live feed: 4401 ")
+
+
+def test_command_a_vehicle_then_export_its_flight(fleet: LocalFleet, tmp_path: Path) -> None:
+    vehicle = fleet.vehicle_id(0)
+    out = succeeded(run_example("03_command_a_vehicle.py", fleet, vehicle))
+    assert f"{vehicle} takeoff:" in out
+    assert f"{vehicle} landed and disarmed" in out
+
+    out = succeeded(run_example("05_export_a_flight.py", fleet, "--vehicle", vehicle, cwd=tmp_path))
+    (export,) = tmp_path.glob(f"{vehicle}_flight*.geojson")
+    assert f"wrote {export.name}" in out or f"wrote {export}" in out
+    features = json.loads(export.read_text())["features"]
+    track = next(f for f in features if f["geometry"]["type"] == "LineString")
+    assert len(track["geometry"]["coordinates"]) > 10
+
+
+def test_a_refused_command_names_the_field(fleet: LocalFleet) -> None:
+    run = run_example("03_command_a_vehicle.py", fleet, fleet.vehicle_id(1), "--altitude", "900")
+    message = failed(run)
+    assert message.startswith("error: POST /api/v1/vehicles/"), message
+    assert "altitude" in message, message
+    assert "500" in message, message
+
+
+def test_command_a_group(fleet: LocalFleet) -> None:
+    out = succeeded(run_example("04_command_a_group.py", fleet, "--altitude", "5"))
+    vehicles = [fleet.vehicle_id(i) for i in range(fleet.plan.vehicles)]
+    assert f"airborne: {', '.join(vehicles)}" in out
+    assert f"landed and disarmed: {', '.join(vehicles)}" in out

@@ -6,12 +6,7 @@ from __future__ import annotations
 from typing import Any
 
 from simulator.commands.base import Command, HandlerBase, Reply, as_int
-from simulator.mavconst import (
-    FORCE_ARM_MAGIC,
-    FORCE_DISARM_MAGIC,
-    FORCE_REBOOT_MAGIC,
-    MavResult,
-)
+from simulator.mavconst import FORCE_ARM_MAGIC, FORCE_DISARM_MAGIC, FORCE_REBOOT_MAGIC, MavResult
 
 MSG_ID_SET_MODE = 11  # ArduPilot acknowledges SET_MODE with a COMMAND_ACK for "command" 11
 

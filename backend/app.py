@@ -6,6 +6,7 @@ import asyncio
 import contextlib
 import logging
 from collections.abc import AsyncIterator
+from types import ModuleType
 
 from fastapi import FastAPI, Request
 from fastapi.middleware.cors import CORSMiddleware
@@ -76,7 +77,8 @@ def create_app(settings: HubSettings | None = None) -> FastAPI:
         docs_url=None,  # install_docs serves /docs and /redoc without a CDN
         redoc_url=None,
     )
-    modules = (system, auth, vehicles, params, missions, fleet_commands, safety, logs, admin)
+    modules: tuple[ModuleType, ...] = (system, auth, vehicles, params, missions, fleet_commands)
+    modules += (safety, *logs.ROUTE_MODULES, admin)
     routers = [module.router for module in modules]
     document_errors(app, routers)
     for router in routers:

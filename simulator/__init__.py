@@ -7,11 +7,12 @@ Run it with ``python -m simulator`` or ``gcs sim``; embed it with
 from simulator.cli import main, run
 from simulator.clock import Clock, ManualClock, SimClock
 from simulator.config import DEFAULT_HOME, ListenAddress, SimulatorConfig
-from simulator.copter import DT, Copter, StatusText
+from simulator.copter import Copter
 from simulator.geo import GeoPoint, LocalFrame
 from simulator.mavconst import CopterMode, MavResult
 from simulator.params import CopterParams
 from simulator.server import SimulatorServer
+from simulator.vehicle import DT, StatusText
 
 __all__ = [
     "DEFAULT_HOME",

@@ -11,11 +11,11 @@ import subprocess
 import sys
 import threading
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Sequence
 from contextlib import ExitStack, contextmanager
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
 import httpx
 import uvicorn
@@ -24,7 +24,9 @@ from websockets.sync.client import ClientConnection, connect
 from backend.app import create_app
 from backend.settings import HubSettings
 from gcs.launcher import FleetPlan, LocalFleet, end_with_parent, free_port
-from protocol.messages import CLIENT_WS_PATH
+from protocol.messages import CLIENT_WS_PATH, PROTOCOL_VERSION, Hello
+
+T = TypeVar("T")
 
 Vehicles = dict[str, dict[str, Any]]
 
@@ -240,10 +242,34 @@ def spilled_frames(fleet: LocalFleet, vehicle: str) -> list[SpilledFrame]:
     return [SpilledFrame(*row) for row in rows]
 
 
-def poll_until(condition: Callable[[], object], timeout_s: float, what: str) -> None:
-    """Until ``condition()`` is true, for state that announces nothing (a file, a table)."""
+def poll_until(
+    condition: Callable[[], T], timeout_s: float, what: str, *, every_s: float = 0.2
+) -> T:
+    """``condition()``'s first true value, for state that announces nothing (a file, a
+    table, the hub's store behind its batching writer)."""
     deadline = time.monotonic() + timeout_s
-    while not condition():
+    while not (value := condition()):
         if time.monotonic() > deadline:
             raise AssertionError(f"timed out after {timeout_s:.0f} s waiting for {what}")
-        time.sleep(0.2)  # polling: there is no event to wait on
+        time.sleep(every_s)  # polling: there is no event to wait on
+    return value
+
+
+def agent_hello(
+    vehicle_id: str = "v1",
+    *,
+    stream_id: str = "s",
+    system_id: int = 1,
+    modes: Sequence[str] = ("GUIDED", "LAND", "LOITER"),
+) -> Hello:
+    """The first message of an agent for an ArduPilot multirotor, for tests that play one."""
+    return Hello(
+        protocol=PROTOCOL_VERSION,
+        vehicle_id=vehicle_id,
+        autopilot="ardupilot",
+        vehicle_type="multirotor",
+        system_id=system_id,
+        modes=list(modes),
+        agent_version="test",
+        stream_id=stream_id,
+    )

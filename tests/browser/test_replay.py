@@ -12,7 +12,7 @@ from playwright.sync_api import Page, expect
 
 from gcs.launcher import LocalFleet
 from tests.browser.conftest import log_in
-from tests.helpers import FleetWatcher, api_client
+from tests.helpers import FleetWatcher, api_client, poll_until
 
 pytestmark = [pytest.mark.browser, pytest.mark.integration]
 
@@ -80,20 +80,16 @@ def stored_flight(fleet: LocalFleet, fleet_admin_token: str) -> dict[str, Any]:
         )
 
         # The hub's writer closes the flight when it stores the disarmed sample.
-        deadline = time.monotonic() + 30
-        while True:
+        def closed() -> list[dict[str, Any]]:
             response = api.get("/api/v1/flights", params={"vehicle_id": VEHICLE, "limit": 5})
             assert response.status_code == 200, response.text
-            closed = [
+            return [
                 flight
                 for flight in response.json()["flights"]
                 if flight["end_time"] is not None and flight["start_time"] >= flown_from - 5
             ]
-            if closed:
-                flight: dict[str, Any] = closed[0]
-                return flight
-            assert time.monotonic() < deadline, f"no closed flight of {VEHICLE}: {response.text}"
-            time.sleep(0.25)
+
+        return poll_until(closed, 30, f"a closed flight of {VEHICLE}", every_s=0.25)[0]
 
 
 def test_a_stored_flight_replays_on_the_map(

@@ -20,8 +20,8 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from protocol.messages import AGENT_WS_PATH, MAX_FRAME_BYTES, CloseCode
 from tests.conftest import ADMIN_PASSWORD, hub_settings
-from tests.helpers import access_token, api_client, running_hub
-from tests.integration.test_hub_bad_input import _close_code, _hello, scripted_agent, websocket
+from tests.helpers import access_token, agent_hello, api_client, running_hub
+from tests.integration.test_hub_bad_input import _close_code, scripted_agent, websocket
 
 pytestmark = pytest.mark.integration
 
@@ -92,7 +92,7 @@ def test_uploads_must_be_tlogs_and_fit_the_quota(
 
 def test_a_hello_with_60_kb_of_modes_is_refused(hub: str, enrol: Callable[[str], str]) -> None:
     token = enrol(VEHICLE)
-    hello = _hello(VEHICLE).model_dump() | {"modes": ["M" * 30] * 1800}
+    hello = agent_hello(VEHICLE, stream_id="s1").model_dump() | {"modes": ["M" * 30] * 1800}
     assert 55_000 < len(json.dumps(hello)) < MAX_FRAME_BYTES
     url = hub.replace("http://", "ws://") + AGENT_WS_PATH
     with websocket(url, {"Authorization": f"Bearer {token}"}) as socket:

@@ -26,7 +26,7 @@ from gcs.launcher import free_port
 from simulator import ListenAddress, SimulatorConfig, SimulatorServer
 from simulator.config import MessageIntervalSupport
 from simulator.telemetry import SecondGps
-from tests.helpers import FleetWatcher, agent_process, api_client
+from tests.helpers import FleetWatcher, agent_process, api_client, poll_until
 from tests.simulator.test_sim_server import serving
 from tests.tcp_proxy import CuttableProxy, Filter
 from vehicle_agents.fcu_link import FcuLink
@@ -210,13 +210,15 @@ def wait_for_events(
     api: httpx.Client, vehicle: str, kind: str, count: int, timeout_s: float
 ) -> list[dict[str, Any]]:
     """The agent has sent them; the hub's batching writer stores them: poll the store."""
-    deadline = time.monotonic() + timeout_s
-    while True:
+
+    def enough() -> list[dict[str, Any]] | None:
         events = fcu_link_events(api, vehicle, kind)
-        if len(events) >= count:
-            return events
-        assert time.monotonic() < deadline, f"{count} {kind} events expected, got {events}"
-        time.sleep(0.1)  # the writer flushes every 0.25 s
+        return events if len(events) >= count else None
+
+    # the writer flushes every 0.25 s
+    events = poll_until(enough, timeout_s, f"{count} {kind} events", every_s=0.1)
+    assert events is not None  # poll_until returns a true value
+    return events
 
 
 def state_of(vehicle: str) -> Callable[[dict[str, dict[str, Any]]], dict[str, Any]]:

@@ -10,7 +10,7 @@ import httpx
 import pytest
 
 from gcs.launcher import LocalFleet
-from tests.helpers import FleetWatcher, api_client
+from tests.helpers import FleetWatcher, api_client, poll_until
 from tests.mavutil_state import mavutil_in_mavlink2
 
 pytestmark = pytest.mark.integration
@@ -20,22 +20,20 @@ TAKEOFF_ALTITUDE_M = 10.0
 
 def wait_for_closed_flight(api: httpx.Client, vehicle: str, since: float) -> dict[str, Any]:
     """The live feed shows the disarm before the writer has stored it; poll the store."""
-    deadline = time.monotonic() + 10
-    while True:
+
+    def closed() -> list[dict[str, Any]]:
         flights = api.get("/api/v1/flights", params={"vehicle_id": vehicle}).json()["flights"]
-        closed = [f for f in flights if f["start_time"] >= since and f["end_time"] is not None]
-        if closed:
-            return dict(closed[0])
-        assert time.monotonic() < deadline, f"no closed flight of {vehicle}: {flights}"
-        time.sleep(0.1)  # the batching writer flushes every 0.25 s
+        return [f for f in flights if f["start_time"] >= since and f["end_time"] is not None]
+
+    # the batching writer flushes every 0.25 s
+    return dict(poll_until(closed, 10, f"a closed flight of {vehicle}", every_s=0.1)[0])
 
 
 def watch_for_tlog(api: httpx.Client, vehicle: str) -> dict[str, Any]:
     """The agent uploads after landing; poll the hub's list until it arrives."""
-    deadline = time.monotonic() + 30
-    while not (tlogs := api.get(f"/api/v1/vehicles/{vehicle}/tlogs").json()):
-        assert time.monotonic() < deadline, "the onboard .tlog never arrived"
-        time.sleep(0.2)  # polling the hub; the upload happens in the agent process
+    tlogs = poll_until(
+        lambda: api.get(f"/api/v1/vehicles/{vehicle}/tlogs").json(), 30, "the onboard .tlog"
+    )
     return dict(tlogs[-1])
 
 

@@ -22,26 +22,13 @@ from backend.storage.records import StoredRecord, TelemetryEnvelope
 from backend.storage.repository import Repository
 from backend.storage.retention import RetentionPolicy
 from backend.storage.writer import StorageWriter
-from protocol.messages import PROTOCOL_VERSION, Hello, Telemetry, VehicleState
+from protocol.messages import Telemetry, VehicleState
 from tests.conftest import ADMIN_PASSWORD, hub_settings
-from tests.helpers import access_token, api_client, running_hub
+from tests.helpers import access_token, agent_hello, api_client, running_hub
 from tests.mavutil_state import mavutil_in_mavlink2
 
 HOME = (-35.363262, 149.165237)
 HOUR_AT_10HZ = 36_000
-
-
-def _hello(vehicle_id: str = "v1") -> Hello:
-    return Hello(
-        protocol=PROTOCOL_VERSION,
-        vehicle_id=vehicle_id,
-        autopilot="ardupilot",
-        vehicle_type="multirotor",
-        system_id=3,
-        modes=["GUIDED", "LAND"],
-        agent_version="t",
-        stream_id="s",
-    )
 
 
 def _sample(
@@ -84,7 +71,7 @@ def _flight_samples(start: float) -> list[TelemetryEnvelope]:
 def _store(engine: Engine, records: list[StoredRecord]) -> None:
     """Through the real writer: queue everything, stop it, and its shutdown flush stores it."""
     migrate(engine)
-    Repository(engine).upsert_vehicle(_hello(), now=0)
+    Repository(engine).upsert_vehicle(agent_hello(system_id=3), now=0)
 
     async def scenario() -> None:
         queue = ReliableSubscription(len(records) + 1)
@@ -126,7 +113,7 @@ def test_a_flight_is_detected_from_arm_to_disarm(engine: Engine) -> None:
 def test_an_hour_at_10hz_downsamples_keeping_min_and_max(engine: Engine) -> None:
     migrate(engine)
     repository = Repository(engine)
-    repository.upsert_vehicle(_hello(), now=0)
+    repository.upsert_vehicle(agent_hello(system_id=3), now=0)
     batch = []
     for i in range(HOUR_AT_10HZ):
         alt = 50 + 30 * math.sin(i / 900)

@@ -19,33 +19,18 @@ from protocol.messages import (
     AGENT_WS_PATH,
     CLIENT_WS_PATH,
     MAX_FRAME_BYTES,
-    PROTOCOL_VERSION,
     CloseCode,
-    Hello,
     Telemetry,
     VehicleState,
     encode,
 )
-from tests.helpers import api_client
+from tests.helpers import agent_hello, api_client, poll_until
 
 Enrol = Callable[[str], str]
 
 
 def _ws(base_url: str, path: str) -> str:
     return base_url.replace("http://", "ws://") + path
-
-
-def _hello(vehicle_id: str) -> Hello:
-    return Hello(
-        protocol=PROTOCOL_VERSION,
-        vehicle_id=vehicle_id,
-        autopilot="ardupilot",
-        vehicle_type="multirotor",
-        system_id=1,
-        modes=["GUIDED", "LAND", "LOITER"],
-        agent_version="test",
-        stream_id="s1",
-    )
 
 
 def _telemetry(seq: int, alt: float = 1.0) -> str:
@@ -91,7 +76,7 @@ def scripted_agent(
     """A real WebSocket peer speaking the agent protocol, frame by frame."""
     headers = {"Authorization": f"Bearer {token}"}
     with websocket(_ws(base_url, AGENT_WS_PATH), headers) as socket:
-        socket.send(encode(_hello(vehicle_id)))
+        socket.send(encode(agent_hello(vehicle_id, stream_id="s1")))
         assert json.loads(socket.recv(timeout=5))["type"] == "welcome"
         yield ScriptedAgent(socket, delivery)
 
@@ -115,10 +100,9 @@ def _stored_count(api: httpx.Client, vehicle_id: str) -> int:
 
 
 def _wait_stored(api: httpx.Client, vehicle_id: str, count: int) -> None:
-    deadline = time.monotonic() + 10
-    while _stored_count(api, vehicle_id) < count:
-        assert time.monotonic() < deadline, f"{count} samples of {vehicle_id} never stored"
-        time.sleep(0.05)  # the batching writer flushes every 0.25 s; poll the real store
+    # the batching writer flushes every 0.25 s; poll the real store
+    what = f"{count} samples of {vehicle_id} stored"
+    poll_until(lambda: _stored_count(api, vehicle_id) >= count, 10, what, every_s=0.05)
 
 
 def test_unknown_vehicle_is_404(hub: str, enrol: Enrol, admin_token: str) -> None:
@@ -288,7 +272,7 @@ def test_agent_token_cannot_speak_for_another_vehicle(
     enrol("bravo")
     headers = {"Authorization": f"Bearer {token_a}"}
     with websocket(_ws(hub, AGENT_WS_PATH), headers) as socket:
-        socket.send(encode(_hello("bravo")))
+        socket.send(encode(agent_hello("bravo", stream_id="s1")))
         code, reason = _close_code(socket)
     assert code == CloseCode.FORBIDDEN
     assert "alpha" in reason

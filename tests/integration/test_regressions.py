@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import concurrent.futures
 import json
-import time
 from collections.abc import Callable
 
 import httpx
@@ -13,7 +12,7 @@ import pytest
 from backend.storage.flights import FlightTracker
 from backend.storage.records import TelemetryEnvelope
 from protocol.messages import CLIENT_WS_PATH, CloseCode, Telemetry, VehicleState
-from tests.helpers import FleetWatcher, api_client
+from tests.helpers import FleetWatcher, api_client, poll_until
 from tests.integration.test_hub_bad_input import _close_code, _telemetry, scripted_agent, websocket
 
 Enrol = Callable[[str], str]
@@ -56,10 +55,12 @@ def test_nan_and_oversized_numbers_are_refused_at_the_edge(
             agent.send(bad)
             assert json.loads(agent.recv(timeout=5))["code"] in ("bad_frame", "invalid_message")
         agent.send(_telemetry(2))
-        deadline = time.monotonic() + 10
-        while admin_api.get("/api/v1/health").json()["telemetry_written"] < 1:
-            assert time.monotonic() < deadline, "the writer stopped"
-            time.sleep(0.05)  # polling the store; the writer flushes every 0.25 s
+        poll_until(  # polling the store; the writer flushes every 0.25 s
+            lambda: admin_api.get("/api/v1/health").json()["telemetry_written"] >= 1,
+            10,
+            "the writer to store a sample (it stopped?)",
+            every_s=0.05,
+        )
 
 
 def test_a_reconnecting_agent_keeps_its_vehicle_online(

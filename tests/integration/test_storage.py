@@ -13,20 +13,8 @@ from backend.storage.database import migrate
 from backend.storage.models import Base
 from backend.storage.records import TelemetryEnvelope
 from backend.storage.repository import Repository
-from protocol.messages import PROTOCOL_VERSION, Hello, Telemetry, VehicleState
-
-
-def _hello(vehicle_id: str) -> Hello:
-    return Hello(
-        protocol=PROTOCOL_VERSION,
-        vehicle_id=vehicle_id,
-        autopilot="ardupilot",
-        vehicle_type="multirotor",
-        system_id=1,
-        modes=["GUIDED"],
-        agent_version="t",
-        stream_id="s",
-    )
+from protocol.messages import Telemetry, VehicleState
+from tests.helpers import agent_hello
 
 
 def _sample(vehicle_id: str, seq: int, time: float) -> TelemetryEnvelope:
@@ -45,8 +33,8 @@ def test_migrations_match_the_models(engine: Engine) -> None:
 def test_batches_are_idempotent_and_ranges_ordered(engine: Engine) -> None:
     migrate(engine)
     repository = Repository(engine)
-    repository.upsert_vehicle(_hello("v1"), now=100.0)
-    repository.upsert_vehicle(_hello("v1"), now=200.0)  # a reconnect updates, not duplicates
+    repository.upsert_vehicle(agent_hello("v1"), now=100.0)
+    repository.upsert_vehicle(agent_hello("v1"), now=200.0)  # a reconnect updates, not duplicates
     assert [row.last_seen for row in repository.vehicles()] == [200.0]
 
     batch = [_sample("v1", seq, 1000.0 + seq) for seq in range(50)]

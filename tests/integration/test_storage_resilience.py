@@ -2,28 +2,16 @@
 
 from __future__ import annotations
 
-import time
-from collections.abc import Callable
 from pathlib import Path
-from typing import Any
 
 import httpx
 
 from tests.conftest import ADMIN_PASSWORD, POSTGRES_ADDRESS, hub_settings, scratch_postgres
-from tests.helpers import access_token, api_client, running_hub
+from tests.helpers import access_token, api_client, poll_until, running_hub
 from tests.integration.test_hub_bad_input import _telemetry, scripted_agent
 from tests.tcp_proxy import CuttableProxy
 
 SAMPLES = 200
-
-
-def _poll(check: Callable[[], Any], what: str, timeout_s: float = 30) -> Any:
-    """Poll the hub's REST view until ``check`` is truthy (storage has no push feed)."""
-    deadline = time.monotonic() + timeout_s
-    while not (value := check()):
-        assert time.monotonic() < deadline, f"timed out waiting for {what}"
-        time.sleep(0.05)
-    return value
 
 
 def _stored(api: httpx.Client, vehicle: str) -> int:
@@ -45,14 +33,21 @@ def test_writer_holds_samples_while_postgres_is_unreachable(tmp_path: Path) -> N
                 with scripted_agent(base, "v1", agent_token) as agent:
                     for seq in range(SAMPLES // 2):
                         agent.send(_telemetry(seq))
-                    _poll(lambda: _stored(api, "v1") == SAMPLES // 2, "the first half stored")
+                    poll_until(
+                        lambda: _stored(api, "v1") == SAMPLES // 2,
+                        30,
+                        "the first half",
+                        every_s=0.05,
+                    )
 
                     proxy.cut()
                     for seq in range(SAMPLES // 2, SAMPLES):
                         agent.send(_telemetry(seq))
-                    health = _poll(
+                    health = poll_until(
                         lambda: (h := api.get("/api/v1/health").json())["write_retries"] and h,
+                        30,
                         "the writer to notice the outage",
+                        every_s=0.05,
                     )
                     assert health["status"] == "degraded"
                     assert health["telemetry_backlog"] > 0  # held, not dropped
@@ -64,7 +59,12 @@ def test_writer_holds_samples_while_postgres_is_unreachable(tmp_path: Path) -> N
                     assert "database" in unavailable.json()["detail"]
 
                     proxy.start()
-                    _poll(lambda: _stored(api, "v1") == SAMPLES, "every sample stored")
+                    poll_until(
+                        lambda: _stored(api, "v1") == SAMPLES,
+                        30,
+                        "every sample stored",
+                        every_s=0.05,
+                    )
                     assert api.get("/api/v1/health").json()["status"] == "ok"
         proxy.cut()
 
@@ -79,7 +79,12 @@ def test_stopping_the_hub_stores_everything_it_received(tmp_path: Path) -> None:
                 for seq in range(SAMPLES):
                     agent.send(_telemetry(seq))
                 # Received means taken off the socket and queued for the writer.
-                _poll(lambda: _received(api) >= SAMPLES, "the hub to take every sample")
+                poll_until(
+                    lambda: _received(api) >= SAMPLES,
+                    30,
+                    "the hub to take every sample",
+                    every_s=0.05,
+                )
                 assert api.get("/api/v1/metrics").json()["telemetry_written"] == 0
     # ...and the writer, which would have waited 30 s to flush, stored it all on shutdown.
     with (

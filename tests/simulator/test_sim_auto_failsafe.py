@@ -7,10 +7,10 @@ import math
 import pytest
 
 from simulator import DEFAULT_HOME, Copter, CopterMode, MavResult
-from simulator.copter import ItemReached, PhotoTaken
 from simulator.mavconst import MavCmd, MavFrame, MavState, MissionState
 from simulator.mission import MissionItem
 from simulator.param_table import SetOutcome
+from simulator.vehicle import ItemReached, PhotoTaken
 from tests.simulator.test_sim_copter import airborne, run_until, texts
 
 REL = MavFrame.GLOBAL_RELATIVE_ALT_INT

@@ -4,19 +4,8 @@ import pytest
 
 from backend.errors import VehicleNotFound
 from backend.fleet.registry import FleetRegistry
-from protocol.messages import PROTOCOL_VERSION, Hello, Telemetry, VehicleState
-
-
-def _hello(stream: str = "s1") -> Hello:
-    return Hello(
-        protocol=PROTOCOL_VERSION,
-        vehicle_id="v",
-        autopilot="ardupilot",
-        vehicle_type="multirotor",
-        system_id=1,
-        agent_version="t",
-        stream_id=stream,
-    )
+from protocol.messages import Telemetry, VehicleState
+from tests.helpers import agent_hello
 
 
 def _sample(seq: int, time: float, alt: float) -> Telemetry:
@@ -25,7 +14,7 @@ def _sample(seq: int, time: float, alt: float) -> Telemetry:
 
 def test_duplicates_are_dropped_per_stream() -> None:
     registry = FleetRegistry()
-    registry.connect(_hello())
+    registry.connect(agent_hello("v", stream_id="s1"))
     assert registry.apply("v", "s1", _sample(0, 1.0, 1.0))
     assert registry.apply("v", "s1", _sample(1, 2.0, 2.0))
     assert not registry.apply("v", "s1", _sample(1, 2.0, 2.0))

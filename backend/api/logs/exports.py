@@ -1,0 +1,88 @@
+"""A flight exported as CSV, GeoJSON or a MAVLink .tlog, streamed."""
+
+from __future__ import annotations
+
+import asyncio
+from collections.abc import Iterator
+from typing import Literal
+
+from fastapi.responses import StreamingResponse
+
+from backend.api.deps import HubDep
+from backend.api.logs.common import MAX_PAGE, FlightIdPath, flight_end
+from backend.api.security import SecuredRouter, requires
+from backend.auth.policy import Permission
+from backend.exports import (
+    ExportEvent,
+    ExportFlight,
+    ExportSample,
+    csv_chunks,
+    geojson_chunks,
+    tlog_chunks,
+)
+from backend.hub import Hub
+from backend.storage.models import FlightRow
+
+router = SecuredRouter(tags=["flight log"])
+
+
+def _export_parts(
+    hub: Hub, flight: FlightRow
+) -> tuple[ExportFlight, Iterator[ExportSample], Iterator[ExportEvent]]:
+    record = hub.registry.get(flight.vehicle_id)
+    end = flight_end(flight)
+    export_flight = ExportFlight(
+        id=flight.id,
+        vehicle_id=flight.vehicle_id,
+        autopilot=record.autopilot,
+        vehicle_type=record.vehicle_type,
+        system_id=record.system_id,
+        start_time=flight.start_time,
+        end_time=flight.end_time,
+    )
+    samples = (
+        ExportSample(**row)
+        for row in hub.logbook.iter_series(flight.vehicle_id, flight.start_time, end)
+    )
+    events = (
+        ExportEvent(time=row.time, kind=row.kind, severity=row.severity, text=row.text)
+        for row in reversed(
+            hub.logbook.events(flight.vehicle_id, None, flight.start_time, end, None, MAX_PAGE)
+        )
+    )
+    return export_flight, samples, events
+
+
+EXPORT_TYPES = {
+    "csv": "text/csv",
+    "geojson": "application/geo+json",
+    "tlog": "application/octet-stream",
+}
+
+
+@router.get(
+    "/flights/{flight_id}/export.{format}",
+    openapi_extra=requires(Permission.READ),
+    response_class=StreamingResponse,
+    responses={200: {"content": {media: {} for media in EXPORT_TYPES.values()}}},
+)
+async def export_flight(
+    flight_id: FlightIdPath, format: Literal["csv", "geojson", "tlog"], hub: HubDep
+) -> StreamingResponse:
+    """A flight as CSV, GeoJSON or a MAVLink .tlog (pymavlink, QGroundControl, MAVProxy),
+    streamed from the database cursor; nothing is buffered whole."""
+    flight = await asyncio.to_thread(hub.logbook.flight, flight_id)
+    export, samples, events = await asyncio.to_thread(_export_parts, hub, flight)
+    chunks: Iterator[str] | Iterator[bytes]
+    if format == "csv":
+        chunks = csv_chunks(samples)
+    elif format == "geojson":
+        chunks = geojson_chunks(export, samples, events)
+    else:
+        chunks = tlog_chunks(export, samples, events)
+    filename = f"{flight.vehicle_id}_flight{flight.id}.{format}"
+    return StreamingResponse(
+        chunks,  # a sync iterator: Starlette runs it in a worker thread
+        media_type=EXPORT_TYPES[format],
+        headers={"Content-Disposition": f'attachment; filename="{filename}"'},
+    )

@@ -1,0 +1,40 @@
+"""The storage path's health."""
+
+from __future__ import annotations
+
+from pydantic import BaseModel
+
+from backend.api.deps import HubDep
+from backend.api.security import SecuredRouter, requires
+from backend.auth.policy import Permission
+
+router = SecuredRouter(tags=["flight log"])
+
+
+class Metrics(BaseModel):
+    telemetry_written: int
+    events_written: int
+    batches: int
+    write_retries: int
+    database_available: bool
+    writer_backlog: int
+    writer_capacity: int
+    last_batch_s: float
+    connected_agents: int
+
+
+@router.get("/metrics", response_model=Metrics, openapi_extra=requires(Permission.READ))
+async def metrics(hub: HubDep) -> Metrics:
+    """The storage path's health: backlog against capacity shows backpressure building."""
+    stats = hub.writer.stats
+    return Metrics(
+        telemetry_written=stats.written,
+        events_written=stats.events_written,
+        batches=stats.batches,
+        write_retries=stats.retries,
+        database_available=stats.database_available,
+        writer_backlog=hub.writer.backlog,
+        writer_capacity=hub.writer.capacity,
+        last_batch_s=stats.last_batch_s,
+        connected_agents=len(hub.agent_sessions),
+    )

@@ -1,0 +1,122 @@
+"""Incoming MAVLink to vehicle calls, and the replies the autopilot would send.
+
+No I/O: `MessageHandler.handle` takes one decoded message and returns `Reply` objects
+(a COMMAND_ACK and requested messages go back to the sender only; STATUSTEXTs go to
+everyone, as ArduPilot sends them on every link). Semantics follow GCS_Common.cpp and
+GCS_Mavlink.cpp of ArduPilot 4.x; COMMAND_LONG is handled as ArduPilot does, by reading
+it as a COMMAND_INT in the MAV_FRAME_GLOBAL_RELATIVE_ALT frame (MAV_FRAME_GLOBAL, above
+mean sea level, for DO_SET_HOME). What differs by vehicle or autopilot (modes, take-off,
+which answer a refusal gets) is the vehicle's to decide.
+
+A reboot is accepted by the vehicle and carried out by the transport, which sends the
+COMMAND_ACK first, as ArduPilot acknowledges before it restarts.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from simulator.commands.arming import ArmingAndModes
+from simulator.commands.base import Command, Reply, as_int, log
+from simulator.commands.missions import MISSION_MESSAGES, Missions
+from simulator.commands.navigation import POSITION_COMMANDS, Navigation
+from simulator.commands.params import Parameters
+from simulator.commands.requests import Requests, StreamControl
+from simulator.mavconst import MavCmd, MavResult
+
+
+class MessageHandler(ArmingAndModes, Navigation, Parameters, Missions, Requests):
+    """Dispatches one vehicle's incoming messages."""
+
+    def handle(self, msg: Any, streams: StreamControl, now: float) -> list[Reply]:
+        """Replies to ``msg``; ``now`` is the wall clock, for stream scheduling."""
+        kind = msg.get_type()
+        if kind == "COMMAND_LONG":
+            if not self._for_us(msg.target_system):
+                return []
+            return self._command(Command.from_long(msg), msg, streams, now)
+        if kind == "COMMAND_INT":
+            if not self._for_us(msg.target_system):
+                return []
+            command = Command.from_int(msg)
+            if command.command in POSITION_COMMANDS and not self.copter.position_frame_ok(
+                command.frame
+            ):
+                result = MavResult.COMMAND_UNSUPPORTED_MAV_FRAME
+                return self._finish(command.command, result, msg)
+            return self._command(command, msg, streams, now)
+        if kind == "SET_MODE":
+            if not self._for_us(msg.target_system):
+                return []
+            return self._set_mode_message(msg)
+        if kind in ("PARAM_REQUEST_LIST", "PARAM_REQUEST_READ", "PARAM_SET"):
+            if not self._for_us(msg.target_system):
+                return []
+            return self._param(kind, msg)
+        if kind in MISSION_MESSAGES:
+            if not self._for_us(msg.target_system):
+                return []
+            return self._mission(kind, msg)
+        if kind == "SET_POSITION_TARGET_GLOBAL_INT":
+            if self._for_us(msg.target_system):
+                self._position_target(msg)
+            return self._texts()
+        # HEARTBEAT, REQUEST_DATA_STREAM (accepted and ignored: streams keep their rates),
+        # and anything else the simulator does not model
+        return []
+
+    # -- commands ------------------------------------------------------------
+
+    def _command(self, cmd: Command, msg: Any, streams: StreamControl, now: float) -> list[Reply]:
+        log.debug(
+            "command %d from %d/%d: %s",
+            cmd.command,
+            msg.get_srcSystem(),
+            msg.get_srcComponent(),
+            cmd,
+        )
+        copter = self.copter
+        extra_before: list[Reply] = []
+        extra_after: list[Reply] = []
+        match cmd.command:
+            case MavCmd.COMPONENT_ARM_DISARM:
+                result = self._arm_disarm(cmd)
+            case MavCmd.NAV_TAKEOFF:
+                result = copter.nav_takeoff(cmd.z, cmd.frame)
+            case MavCmd.NAV_LAND:
+                result = copter.nav_land()
+            case MavCmd.NAV_RETURN_TO_LAUNCH:
+                result = copter.return_to_launch()
+            case MavCmd.DO_SET_MODE:
+                result = self._do_set_mode(cmd)
+            case MavCmd.DO_REPOSITION:
+                result = self._reposition(cmd)
+            case MavCmd.DO_CHANGE_SPEED:
+                result = copter.change_speed(as_int(cmd.param1), cmd.param2)
+            case MavCmd.DO_SET_HOME:
+                result = self._set_home(cmd)
+                if result is MavResult.ACCEPTED:
+                    # Copter::set_home sends the new home to every GCS straight away
+                    extra_after.append(Reply(self.telemetry.home_position(), False))
+            case MavCmd.PREFLIGHT_REBOOT_SHUTDOWN:
+                result = self._reboot(cmd)
+            case MavCmd.REQUEST_MESSAGE:
+                requested = self.telemetry.build(as_int(cmd.param1))
+                result = MavResult.ACCEPTED if requested is not None else MavResult.FAILED
+                if requested is not None:
+                    extra_after.append(Reply(requested))
+            case MavCmd.GET_HOME_POSITION:
+                extra_before.append(Reply(self.telemetry.home_position()))
+                result = MavResult.ACCEPTED
+            case MavCmd.REQUEST_AUTOPILOT_CAPABILITIES:
+                result = MavResult.ACCEPTED if cmd.param1 == 1.0 else MavResult.FAILED
+                if result is MavResult.ACCEPTED:
+                    extra_after.append(Reply(self.telemetry.autopilot_version()))
+            case MavCmd.SET_MESSAGE_INTERVAL:
+                result = self._set_message_interval(cmd, streams, now)
+            case MavCmd.GET_MESSAGE_INTERVAL:
+                extra_after.append(self._message_interval(cmd, streams))
+                result = MavResult.ACCEPTED
+            case _:
+                result = MavResult.UNSUPPORTED
+        return extra_before + self._finish(cmd.command, result, msg) + extra_after

@@ -1,0 +1,96 @@
+"""The simulated multirotor: its jobs combined, and the physics step that runs them."""
+
+from __future__ import annotations
+
+from typing import Self
+
+from simulator.battery import current_draw
+from simulator.copter.arming import Arming
+from simulator.copter.auto import Auto
+from simulator.copter.failsafes import Failsafes
+from simulator.copter.guided import Guided
+from simulator.copter.landing import ReturnAndLand
+from simulator.copter.modes import Modes
+from simulator.copter.state import BRAKE_DECEL, BRAKE_SPEED_Z
+from simulator.geo import GeoPoint
+from simulator.mavconst import CopterMode
+from simulator.physics import Setpoint
+from simulator.vehicle import DT, AutoPhase
+
+
+class Copter(Arming, Modes, Guided, Auto, ReturnAndLand, Failsafes):
+    """One multirotor: state, the rules for changing it, and the physics that moves it."""
+
+    def _reborn(self, origin: GeoPoint, boot_at: float) -> Self:
+        return type(self)(
+            origin,
+            self.params,
+            system_id=self.system_id,
+            seed=self.seed,
+            boot_at=boot_at,
+            personality=type(self.personality)(),
+        )
+
+    # -- stepping ----------------------------------------------------------
+
+    def _step(self) -> None:
+        p = self.params
+        setpoint = self._control()
+        self.body.step(setpoint, DT, p)
+        self._detect_landing(setpoint)
+        self._check_auto_disarm()
+        amps = current_draw(self.armed, self.flying, self.body.throttle, p.hover_throttle)
+        self.battery.step(DT, amps, p.sim_batt_drain)
+        self._check_battery()
+        self._step_sensors()
+
+    def _control(self) -> Setpoint | None:
+        """This step's demand on the position controller; None for no thrust."""
+        if not self.armed:
+            return None
+        if (
+            self.mode is CopterMode.AUTO
+            and self._auto_phase is AutoPhase.IDLE
+            and self.mission_count > 0
+        ):
+            self._auto_begin()
+        if self.land_complete:
+            if self.mode in (CopterMode.LAND, CopterMode.BRAKE):
+                # ModeLand::run and ModeBrake::run disarm as soon as they find it landed
+                self._disarm()
+                return None
+            if not self._takeoff_ready():
+                return None
+            self._start_takeoff()
+        if self._taking_off and self.body.alt >= self._hold_alt - 0.1:
+            self._taking_off = False  # take-off complete: hold there
+        if self.mode is CopterMode.STABILIZE:
+            # sticks centred: level out and hold the altitude
+            return Setpoint(None, self._hold_alt)
+        if self.mode is CopterMode.LAND:
+            return self._landing_setpoint(self._land_ne)
+        if self.mode is CopterMode.RTL:
+            return self._rtl_setpoint()
+        if self.mode is CopterMode.BRAKE:
+            return Setpoint(
+                self._hold_ne,
+                self._hold_alt,
+                speed_xy=max(self.params.wpnav_speed, self.body.groundspeed),
+                speed_up=BRAKE_SPEED_Z,
+                speed_down=BRAKE_SPEED_Z,
+                face_travel=False,
+                accel_xy=BRAKE_DECEL,
+            )
+        if self.mode is CopterMode.AUTO and self._auto_phase is not AutoPhase.IDLE:
+            return self._auto_setpoint()
+        if self.mode is CopterMode.GUIDED:
+            return Setpoint(
+                self._hold_ne,
+                self._hold_alt,
+                speed_xy=self._speed_xy,
+                speed_up=self._speed_up,
+                speed_down=self._speed_down,
+            )
+        # LOITER, and AUTO without a mission (only reachable by a forced arm): hold
+        speed = self.params.wpnav_speed
+        return Setpoint(self._hold_ne, self._hold_alt, speed_xy=speed, face_travel=False)

@@ -26,8 +26,8 @@ import math
 from enum import Enum
 from typing import Self
 
+from common.geodesy import GeoPoint
 from simulator.battery import current_draw
-from simulator.geo import GeoPoint
 from simulator.mavconst import (
     SUPPORTED_MODES,
     CopterMode,
@@ -428,7 +428,7 @@ class Copter(Vehicle):
             return MavResult.FAILED
         if not (-90.0 <= lat <= 90.0 and -180.0 <= lon <= 180.0) or not math.isfinite(relative_alt):
             return MavResult.DENIED
-        self._hold_ne = self.frame.to_local(lat, lon)
+        self._hold_ne = self.ne_of(lat, lon)
         self._hold_alt = self._relative_to_origin(relative_alt)
         self._taking_off = False
         return MavResult.ACCEPTED

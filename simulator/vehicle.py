@@ -15,8 +15,8 @@ from dataclasses import dataclass
 from enum import Enum, IntEnum
 from typing import Self, TypeVar
 
+from common.geodesy import GeoPoint, LocalFrame
 from simulator.battery import Battery
-from simulator.geo import GeoPoint, LocalFrame
 from simulator.mavconst import (
     LandedState,
     MavCmd,
@@ -110,7 +110,7 @@ class Vehicle(ABC):
         self.boot_at = boot_at
         # The EKF origin: local north/east/down are measured from here, and the ground
         # is flat at its altitude.
-        self.frame = LocalFrame(home)
+        self.frame = LocalFrame(home.lat, home.lon, home.alt)
         self.body = Airframe()
         self.battery = Battery(capacity_mah=self.params.batt_capacity)
         self.armed = False
@@ -233,14 +233,26 @@ class Vehicle(ABC):
 
     @property
     def home(self) -> GeoPoint:
-        return self.frame.to_global(self.home_ne[0], self.home_ne[1], self.home_up)
+        return self.geo_of(north=self.home_ne[0], east=self.home_ne[1], up=self.home_up)
 
     def position(self) -> GeoPoint:
-        return self.frame.to_global(self.body.north, self.body.east, self.body.alt)
+        return self.geo_of(north=self.body.north, east=self.body.east, up=self.body.alt)
+
+    def geo_of(self, *, north: float, east: float, up: float = 0.0) -> GeoPoint:
+        """The position `north`/`east` metres from the EKF origin and `up` above it. By
+        keyword: the simulator keeps ArduPilot's north-east order, common.geodesy's frames
+        east-north."""
+        lat, lon = self.frame.to_geo(east, north)
+        return GeoPoint(lat, lon, self.frame.origin.alt + up)
+
+    def ne_of(self, lat: float, lon: float) -> tuple[float, float]:
+        """(north, east) metres of a position from the EKF origin, in the simulator's order."""
+        east, north = self.frame.to_local(lat, lon)
+        return north, east
 
     @property
     def altitude_msl(self) -> float:
-        return self.frame.home.alt + self.body.alt
+        return self.frame.origin.alt + self.body.alt
 
     @property
     def relative_alt(self) -> float:
@@ -250,8 +262,8 @@ class Vehicle(ABC):
     def gps_position(self) -> GeoPoint:
         """What the GPS reports: the true position plus SIM_GPS_NOISE."""
         north, east, up = self.gps_error
-        return self.frame.to_global(
-            self.body.north + north, self.body.east + east, self.body.alt + up
+        return self.geo_of(
+            north=self.body.north + north, east=self.body.east + east, up=self.body.alt + up
         )
 
     def drain_events(self) -> list[Event]:
@@ -368,10 +380,10 @@ class Vehicle(ABC):
         refused far from the EKF origin."""
         if not (-90.0 <= lat <= 90.0 and -180.0 <= lon <= 180.0) or not math.isfinite(alt_msl):
             return MavResult.DENIED
-        north, east = self.frame.to_local(lat, lon)
+        north, east = self.ne_of(lat, lon)
         if math.hypot(north, east) > FAR_FROM_ORIGIN_M:
             return MavResult.FAILED
-        self._move_home(north, east, alt_msl - self.frame.home.alt)
+        self._move_home(north, east, alt_msl - self.frame.origin.alt)
         self.home_locked = True
         return MavResult.ACCEPTED
 
@@ -541,7 +553,7 @@ class Vehicle(ABC):
         """A mission item's position; none given (0, 0) means where the vehicle stops."""
         if not item.has_position:
             return self.body.stopping_point(self.params.wpnav_accel)
-        return self.frame.to_local(item.x / 1e7, item.y / 1e7)
+        return self.ne_of(item.x / 1e7, item.y / 1e7)
 
     def _auto_begin(self) -> None:
         """ModeAuto::run with a mission not yet started: start or resume it."""
@@ -635,7 +647,7 @@ class Vehicle(ABC):
         starts again: the initial mode, a new EKF origin where it is, home not yet
         locked, sim time from zero."""
         here = self.position()
-        twin = self._reborn(GeoPoint(here.lat, here.lon, self.frame.home.alt), boot_at)
+        twin = self._reborn(GeoPoint(here.lat, here.lon, self.frame.origin.alt), boot_at)
         twin.params = self.params
         twin.param_table = self.param_table
         twin.battery = self.battery

@@ -8,9 +8,7 @@ from backend.safety.geometry import (
     MAX_POLYGON_VERTICES,
     FencePolygon,
     InvalidGeofence,
-    LocalFrame,
     distance_to_boundary,
-    haversine_m,
     point_in_polygon,
     segment_leaves_polygon,
     segment_relation,
@@ -21,7 +19,6 @@ from backend.safety.rails import (
     BatteryEstimate,
     BatteryModel,
     Geofence,
-    GeoPoint,
     PlanCheck,
     RuleName,
     SafetyRails,
@@ -36,6 +33,7 @@ from backend.safety.rails import (
     estimate_plan,
     evaluate_plan,
 )
+from common.geodesy import GeoPoint, LocalFrame, haversine_m
 
 __all__ = [
     "MAX_POLYGON_RADIUS_M",

@@ -18,7 +18,8 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field, fields
 from typing import Final, Literal, TypeVar
 
-from backend.safety.geometry import FencePolygon, InvalidGeofence, haversine_m
+from backend.safety.geometry import FencePolygon, InvalidGeofence
+from common.geodesy import GeoPoint, haversine_m
 
 RuleName = Literal[
     "geofence",
@@ -66,12 +67,6 @@ RULES: Final[tuple[RuleName, ...]] = (
 DEFAULT_BATTERY_RESERVE_PCT: Final = 20.0
 
 _T = TypeVar("_T")
-
-
-@dataclass(frozen=True)
-class GeoPoint:
-    lat: float
-    lon: float
 
 
 @dataclass(frozen=True)

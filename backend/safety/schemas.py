@@ -16,12 +16,12 @@ from backend.safety.rails import (
     DEFAULT_BATTERY_RESERVE_PCT,
     BatteryEstimate,
     Geofence,
-    GeoPoint,
     PlanCheck,
     RuleName,
     SafetyRails,
     Violation,
 )
+from common.geodesy import GeoPoint
 from protocol.messages import MissionItem
 
 MAX_ALTITUDE_M = 10_000.0

@@ -6,7 +6,7 @@ from __future__ import annotations
 import math
 
 from backend.safety import Geofence, GeoPoint, LocalFrame, VehicleSnapshot, Waypoint
-from backend.safety.geometry import EARTH_MEAN_RADIUS_M
+from common.geodesy import EARTH_MEAN_RADIUS_M
 
 ORIGIN = (47.0, 8.0)
 FRAME = LocalFrame(*ORIGIN)

@@ -184,13 +184,12 @@ class AgentSession(PeerConnection):
             if vehicle_id not in {record.id for record in hub.registry.all()}:
                 raise
             log.warning("could not refresh %s in the store (%s); serving it", vehicle_id, error)
-        record = hub.registry.connect(hello)
         channel = AgentChannel(self.send)
+        record = hub.registry.connect(hello, channel)
         previous = hub.agent_sessions.get(vehicle_id)
         if previous is not None:
             await previous.close(CloseCode.SUPERSEDED, "another agent connected for this vehicle")
         hub.agent_sessions[vehicle_id] = self
-        hub.dispatcher.attach(vehicle_id, channel)
         log.info(
             "agent %s connected from %s (%s %s)",
             vehicle_id,
@@ -219,8 +218,8 @@ class AgentSession(PeerConnection):
             # A superseded session leaves the vehicle to its successor, still online.
             if hub.agent_sessions.get(vehicle_id) is self:
                 del hub.agent_sessions[vehicle_id]
-                record = hub.registry.disconnect(vehicle_id)
-                await hub.publish_state(record)
+            if (offline := hub.registry.disconnect(vehicle_id, channel)) is not None:
+                await hub.publish_state(offline)
                 await hub.store_event(vehicle_id, "link_down", "agent disconnected")
             log.info("agent %s disconnected", vehicle_id)
 

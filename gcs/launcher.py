@@ -10,7 +10,6 @@ import ctypes
 import hmac
 import json
 import logging
-import math
 import os
 import secrets
 import signal
@@ -26,6 +25,7 @@ from pathlib import Path
 from typing import IO
 
 from common.addresses import WILDCARDS, is_loopback
+from common.geodesy import LocalFrame
 
 log = logging.getLogger(__name__)
 
@@ -34,7 +34,6 @@ PR_SET_PDEATHSIG = 1  # linux/prctl.h
 # ArduPilot's SITL home (CMAC, Canberra): a place every ArduPilot developer knows.
 DEFAULT_HOME = (-35.363262, 149.165237, 584.0)
 VEHICLE_SPACING_M = 15.0
-EARTH_RADIUS_M = 6_378_137.0
 
 
 def free_port() -> int:
@@ -118,9 +117,8 @@ class FleetPlan:
     def vehicle_home(self, index: int) -> tuple[float, float, float]:
         """Homes in a row, a few metres apart, so the vehicles do not share a spot."""
         lat, lon, alt = self.home
-        east = index * VEHICLE_SPACING_M
-        dlon = math.degrees(east / (EARTH_RADIUS_M * math.cos(math.radians(lat))))
-        return lat, lon + dlon, alt
+        lat, lon = LocalFrame(lat, lon, alt).to_geo(index * VEHICLE_SPACING_M, 0.0)
+        return lat, lon, alt
 
 
 def end_with_parent(signum: int = signal.SIGTERM) -> Callable[[], None] | None:

@@ -4,11 +4,11 @@ Run it with ``python -m simulator`` or ``gcs sim``; embed it with
 `SimulatorServer`; drive the pure flight logic directly with `Copter`.
 """
 
+from common.geodesy import GeoPoint, LocalFrame
 from simulator.cli import main, run
 from simulator.clock import Clock, ManualClock, SimClock
 from simulator.config import DEFAULT_HOME, ListenAddress, SimulatorConfig
 from simulator.copter import Copter
-from simulator.geo import GeoPoint, LocalFrame
 from simulator.mavconst import CopterMode, MavResult
 from simulator.params import CopterParams
 from simulator.server import SimulatorServer

@@ -9,8 +9,8 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Literal
 
+from common.geodesy import GeoPoint
 from simulator.clock import MAX_SPEEDUP
-from simulator.geo import GeoPoint
 
 # ArduPilot's SITL home, CMAC (Canberra Model Aircraft Club).
 DEFAULT_HOME = GeoPoint(-35.363262, 149.165237, 584.0)
@@ -91,6 +91,8 @@ def _home(text: str) -> GeoPoint:
         if len(parts) != 3:
             raise ValueError
         lat, lon, alt = (float(part) for part in parts)
+        if not (-90.0 <= lat <= 90.0 and -180.0 <= lon <= 180.0):
+            raise ValueError
         return GeoPoint(lat, lon, alt)
     except ValueError:
         raise argparse.ArgumentTypeError(

@@ -22,8 +22,8 @@ import math
 import struct
 from typing import Self
 
+from common.geodesy import GeoPoint
 from simulator.battery import current_draw
-from simulator.geo import GeoPoint
 from simulator.mavconst import (
     SUPPORTED_ROVER_MODES,
     LandedState,
@@ -259,7 +259,7 @@ class Rover(Vehicle):
             return MavResult.FAILED
         if not (-90.0 <= lat <= 90.0 and -180.0 <= lon <= 180.0):
             return MavResult.DENIED
-        self._target_ne = self.frame.to_local(lat, lon)
+        self._target_ne = self.ne_of(lat, lon)
         return MavResult.ACCEPTED
 
     def guided_hold(self) -> None:

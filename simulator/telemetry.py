@@ -301,7 +301,7 @@ class TelemetryBuilder:
         )
 
     def gps_global_origin(self) -> MavMessage:
-        origin = self.copter.frame.home
+        origin = self.copter.frame.origin
         return mavlink2.MAVLink_gps_global_origin_message(
             round(origin.lat * 1e7),
             round(origin.lon * 1e7),

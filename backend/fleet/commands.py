@@ -91,14 +91,9 @@ class CommandDispatcher:
     def __init__(self, registry: FleetRegistry, timeout_s: float) -> None:
         self._registry = registry
         self._timeout_s = timeout_s
-        self._channels: dict[str, AgentChannel] = {}
-
-    def attach(self, vehicle_id: str, channel: AgentChannel) -> None:
-        self._channels[vehicle_id] = channel
 
     def detach(self, vehicle_id: str, channel: AgentChannel) -> None:
-        if self._channels.get(vehicle_id) is channel:
-            del self._channels[vehicle_id]
+        """The agent behind `channel` is gone: its unanswered commands fail now."""
         channel.fail_all(f"vehicle {vehicle_id!r} disconnected before answering")
 
     async def execute(self, vehicle_id: str, command: Command) -> CommandOutcome:
@@ -109,7 +104,7 @@ class CommandDispatcher:
                 f"unknown mode {command.mode!r} for {vehicle_id}; "
                 f"it has: {', '.join(record.modes) or 'none reported'}",
             )
-        channel = self._channels.get(vehicle_id)
+        channel = record.channel
         if channel is None:
             raise VehicleOffline(f"vehicle {vehicle_id!r} is not connected")
         outcome = await channel.request(command, allowed_time(command, self._timeout_s))

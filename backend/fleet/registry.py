@@ -4,10 +4,14 @@ from __future__ import annotations
 
 from collections.abc import Iterable
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 from backend.errors import VehicleNotFound
 from backend.storage.models import VehicleRow
 from protocol.messages import Hello, Telemetry, VehicleState, VehicleSummary
+
+if TYPE_CHECKING:
+    from backend.fleet.commands import AgentChannel
 
 
 @dataclass
@@ -17,12 +21,18 @@ class VehicleRecord:
     vehicle_type: str
     modes: list[str]
     system_id: int = 1
-    connected: bool = False
     last_seen: float | None = None
     state: VehicleState | None = None
     # Highest telemetry number seen per agent stream: older samples do not move the
     # live state backwards (storage has its own, gap-aware bookkeeping).
     last_seq: dict[str, int] = field(default_factory=dict)
+    # The connected agent's command channel, None while no agent is connected: the one
+    # record of whether the vehicle is online (commands go down this channel).
+    channel: AgentChannel | None = field(default=None, repr=False, compare=False)
+
+    @property
+    def connected(self) -> bool:
+        return self.channel is not None
 
     def summary(self) -> VehicleSummary:
         return VehicleSummary(
@@ -64,7 +74,8 @@ class FleetRegistry:
     def all(self) -> list[VehicleRecord]:
         return sorted(self._vehicles.values(), key=lambda record: record.id)
 
-    def connect(self, hello: Hello) -> VehicleRecord:
+    def connect(self, hello: Hello, channel: AgentChannel) -> VehicleRecord:
+        """The vehicle is online through `channel`, which replaces any earlier agent's."""
         record = self._vehicles.get(hello.vehicle_id)
         if record is None:
             record = VehicleRecord(
@@ -80,12 +91,16 @@ class FleetRegistry:
             record.vehicle_type = hello.vehicle_type
             record.modes = list(hello.modes)
             record.system_id = hello.system_id
-        record.connected = True
+        record.channel = channel
         return record
 
-    def disconnect(self, vehicle_id: str) -> VehicleRecord:
+    def disconnect(self, vehicle_id: str, channel: AgentChannel) -> VehicleRecord | None:
+        """The agent behind `channel` is gone: the record, now offline, or None when a
+        newer agent had already taken the vehicle over (it stays online)."""
         record = self.get(vehicle_id)
-        record.connected = False
+        if record.channel is not channel:
+            return None
+        record.channel = None
         return record
 
     def apply_live(self, vehicle_id: str, time: float, state: VehicleState) -> bool:

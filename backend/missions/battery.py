@@ -8,10 +8,10 @@ from collections.abc import Sequence
 from dataclasses import dataclass, fields
 
 from backend.missions.waypoints import Waypoint
-from backend.safety.geometry import haversine_m
 from backend.safety.limits import require_target
 from backend.safety.snapshot import VehicleSnapshot, altitude, home, known, position
 from backend.safety.violations import and_join
+from common.geodesy import haversine_m
 
 
 @dataclass(frozen=True)

@@ -16,8 +16,7 @@ from backend.missions.battery import (
     missing_for_estimate,
 )
 from backend.missions.waypoints import Waypoint
-from backend.safety.geofence import Geofence, GeoPoint, outside_message
-from backend.safety.geometry import haversine_m
+from backend.safety.geofence import Geofence, outside_message
 from backend.safety.limits import (
     check_altitudes,
     check_distance,
@@ -35,6 +34,7 @@ from backend.safety.violations import (
     count,
     others,
 )
+from common.geodesy import GeoPoint, haversine_m
 
 
 @dataclass(frozen=True)

@@ -232,11 +232,10 @@ class AgentSession(PeerConnection):
                     raise
                 log.warning("could not refresh %s in the store (%s); serving it", vehicle_id, error)
             self.stream_id = hello.stream_id
-            record = hub.registry.connect(hello)
             channel = AgentChannel(self.send)
+            record = hub.registry.connect(hello, channel)
             # Ours before the old one closes, so that its ending leaves the vehicle online.
             hub.agent_sessions[vehicle_id] = self
-            hub.dispatcher.attach(vehicle_id, channel)
         if previous is not None and verdict is not None:
             log.warning(
                 "agent %s: its old connection %s: %s", vehicle_id, previous.peer, verdict.reason
@@ -279,8 +278,8 @@ class AgentSession(PeerConnection):
             # A superseded session leaves the vehicle to its successor, still online.
             if hub.agent_sessions.get(vehicle_id) is self:
                 del hub.agent_sessions[vehicle_id]
-                record = hub.registry.disconnect(vehicle_id)
-                await hub.publish_state(record)
+            if (offline := hub.registry.disconnect(vehicle_id, channel)) is not None:
+                await hub.publish_state(offline)
                 await hub.store_event(vehicle_id, "link_down", "agent disconnected")
             log.info("agent %s disconnected", vehicle_id)
 

@@ -5,15 +5,13 @@ No I/O here; the API and storage layers call these and turn violations into refu
 """
 
 from backend.safety.commands import check_arm, check_goto, check_set_home, check_takeoff
-from backend.safety.geofence import Geofence, GeoPoint
+from backend.safety.geofence import Geofence
 from backend.safety.geometry import (
     MAX_POLYGON_RADIUS_M,
     MAX_POLYGON_VERTICES,
     FencePolygon,
     InvalidGeofence,
-    LocalFrame,
     distance_to_boundary,
-    haversine_m,
     point_in_polygon,
     segment_leaves_polygon,
     segment_relation,
@@ -22,6 +20,7 @@ from backend.safety.geometry import (
 from backend.safety.rails import SafetyRails
 from backend.safety.snapshot import VehicleSnapshot
 from backend.safety.violations import RULES, RuleName, Violation
+from common.geodesy import GeoPoint, LocalFrame, haversine_m
 
 __all__ = [
     "MAX_POLYGON_RADIUS_M",

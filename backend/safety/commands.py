@@ -9,8 +9,7 @@ from __future__ import annotations
 
 from typing import Final
 
-from backend.safety.geofence import GeoPoint, check_inside, check_way_to
-from backend.safety.geometry import haversine_m
+from backend.safety.geofence import check_inside, check_way_to
 from backend.safety.limits import (
     check_altitudes,
     check_distance,
@@ -21,6 +20,7 @@ from backend.safety.limits import (
 from backend.safety.rails import SafetyRails
 from backend.safety.snapshot import VehicleSnapshot, home, known, position
 from backend.safety.violations import HOME_ALTITUDE, MAX_DISTANCE_FROM_HOME, Report, Violation
+from common.geodesy import GeoPoint, haversine_m
 
 # Every altitude a vehicle is given is measured from home's: moving home up or down
 # moves them all, ceilings included. A new home may differ from the old by this much.

@@ -8,12 +8,7 @@ from dataclasses import dataclass, field
 
 from backend.safety.geometry import FencePolygon, InvalidGeofence
 from backend.safety.violations import GEOFENCE, Report
-
-
-@dataclass(frozen=True)
-class GeoPoint:
-    lat: float
-    lon: float
+from common.geodesy import GeoPoint
 
 
 @dataclass(frozen=True)

@@ -1,5 +1,5 @@
-"""Geometry for the safety rails: distances on the Earth, a local flat-earth plane, and
-polygon tests on that plane.
+"""Geometry for the safety rails: polygon tests on a local plane (common/geodesy.py's
+LocalFrame, tangent to the Earth).
 
 Geofences are small (at most MAX_POLYGON_RADIUS_M from their centre), so every polygon test
 runs on a plane tangent to the Earth at the polygon's centre, in metres. On that plane a
@@ -16,14 +16,10 @@ import math
 from collections.abc import Sequence
 from typing import Final
 
+from common.geodesy import LocalFrame, haversine_m
+
 XY = tuple[float, float]
 LatLon = tuple[float, float]
-
-WGS84_A_M: Final = 6_378_137.0
-WGS84_F: Final = 1 / 298.257223563
-_E2: Final = WGS84_F * (2 - WGS84_F)
-# IUGG mean radius: the sphere that best fits the ellipsoid, for haversine distances.
-EARTH_MEAN_RADIUS_M: Final = 6_371_008.8
 
 MAX_POLYGON_VERTICES: Final = 1000
 # Beyond this the tangent plane bends a polygon's edges by metres away from the geodesics
@@ -42,73 +38,6 @@ class InvalidGeofence(ValueError):
     def __init__(self, message: str) -> None:
         super().__init__(message)
         self.message = message
-
-
-def haversine_m(lat1: float, lon1: float, lat2: float, lon2: float) -> float:
-    """Great-circle distance in metres on the mean-radius sphere (within 0.6% of the
-    ellipsoidal distance, which is ample for range limits and battery estimates)."""
-    phi1, phi2 = math.radians(lat1), math.radians(lat2)
-    dphi = phi2 - phi1
-    dlam = math.radians(lon2 - lon1)
-    h = math.sin(dphi / 2) ** 2 + math.cos(phi1) * math.cos(phi2) * math.sin(dlam / 2) ** 2
-    return 2 * EARTH_MEAN_RADIUS_M * math.asin(min(1.0, math.sqrt(h)))
-
-
-def _ecef(lat: float, lon: float) -> tuple[float, float, float]:
-    phi, lam = math.radians(lat), math.radians(lon)
-    sin_phi = math.sin(phi)
-    n = WGS84_A_M / math.sqrt(1 - _E2 * sin_phi * sin_phi)
-    return (
-        n * math.cos(phi) * math.cos(lam),
-        n * math.cos(phi) * math.sin(lam),
-        n * (1 - _E2) * sin_phi,
-    )
-
-
-class LocalFrame:
-    """Metres east and north on the plane tangent to the WGS84 ellipsoid at a reference point.
-
-    Points are placed exactly in Earth-centred coordinates and then dropped onto the tangent
-    plane. Unlike scaling degrees by cos(latitude), this keeps the error to the distance
-    cubed over 6R² (4 mm at 10 km, 4 m at 100 km) and needs no special case at the
-    antimeridian. Only the near side of the Earth maps one-to-one, so callers keep to a few
-    hundred kilometres from the reference.
-    """
-
-    __slots__ = ("_origin", "_rot", "lat", "lon")
-
-    def __init__(self, lat: float, lon: float) -> None:
-        self.lat = lat
-        self.lon = lon
-        self._origin = _ecef(lat, lon)
-        phi, lam = math.radians(lat), math.radians(lon)
-        sp, cp, sl, cl = math.sin(phi), math.cos(phi), math.sin(lam), math.cos(lam)
-        self._rot = ((-sl, cl, 0.0), (-sp * cl, -sp * sl, cp))
-
-    def to_local(self, lat: float, lon: float) -> XY:
-        x, y, z = _ecef(lat, lon)
-        dx, dy, dz = x - self._origin[0], y - self._origin[1], z - self._origin[2]
-        east_row, north_row = self._rot
-        east = east_row[0] * dx + east_row[1] * dy
-        north = north_row[0] * dx + north_row[1] * dy + north_row[2] * dz
-        return east, north
-
-    def to_geo(self, east: float, north: float) -> LatLon:
-        # No closed form for the inverse: start from the radii of curvature at the reference
-        # and correct with the forward map, which converges to micrometres in a few rounds.
-        lat, lon = self.lat, self.lon
-        for _ in range(20):
-            e, n = self.to_local(lat, lon)
-            de, dn = east - e, north - n
-            if math.hypot(de, dn) < 1e-9:
-                break
-            phi = math.radians(lat)
-            w = math.sqrt(1 - _E2 * math.sin(phi) ** 2)
-            meridian_r = WGS84_A_M * (1 - _E2) / w**3
-            normal_r = WGS84_A_M / w
-            lat = max(-90.0, min(90.0, lat + math.degrees(dn / meridian_r)))
-            lon += math.degrees(de / (normal_r * max(math.cos(phi), 1e-12)))
-        return lat, (lon + 180.0) % 360.0 - 180.0
 
 
 # --- Plane geometry -------------------------------------------------------------------------
@@ -422,7 +351,10 @@ class FencePolygon:
     def _near(self, lat: float, lon: float) -> bool:
         # Anything well beyond the farthest vertex is outside, and must be kept off the
         # plane: a point on the far side of the Earth would land back near its centre.
-        return haversine_m(self.frame.lat, self.frame.lon, lat, lon) <= self.radius_m * 1.01 + 10
+        return (
+            haversine_m(self.frame.origin.lat, self.frame.origin.lon, lat, lon)
+            <= self.radius_m * 1.01 + 10
+        )
 
     def contains(self, lat: float, lon: float) -> bool:
         return self._near(lat, lon) and self._plane.contains(self.frame.to_local(lat, lon))
@@ -431,7 +363,7 @@ class FencePolygon:
         """How far a point is from the fence, in metres; 0 inside."""
         if self.contains(lat, lon):
             return 0.0
-        from_centre = haversine_m(self.frame.lat, self.frame.lon, lat, lon)
+        from_centre = haversine_m(self.frame.origin.lat, self.frame.origin.lon, lat, lon)
         if from_centre > 4 * MAX_POLYGON_RADIUS_M:
             # Too far for the plane; no part of the fence is nearer than this.
             return from_centre - self.radius_m

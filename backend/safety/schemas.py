@@ -12,10 +12,11 @@ from typing import Self
 
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
-from backend.safety.geofence import Geofence, GeoPoint
+from backend.safety.geofence import Geofence
 from backend.safety.geometry import MAX_POLYGON_VERTICES, validate_polygon
 from backend.safety.rails import DEFAULT_BATTERY_RESERVE_PCT, SafetyRails
 from backend.safety.violations import RuleName, Violation
+from common.geodesy import GeoPoint
 
 MAX_ALTITUDE_M = 10_000.0
 MAX_DISTANCE_M = 1_000_000.0

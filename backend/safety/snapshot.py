@@ -7,7 +7,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from backend.safety.geofence import GeoPoint
+from common.geodesy import GeoPoint
 
 
 @dataclass(frozen=True)

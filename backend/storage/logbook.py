@@ -15,7 +15,6 @@ from sqlalchemy import Connection, Engine, and_, delete, func, insert, or_, sele
 from sqlalchemy.orm import Session
 
 from backend.errors import NotFound
-from backend.safety.geometry import haversine_m
 from backend.storage.database import dialect_insert, transaction
 from backend.storage.downsample import minmax_downsample
 from backend.storage.models import (
@@ -28,6 +27,7 @@ from backend.storage.models import (
     TlogRow,
 )
 from backend.storage.retention import RetentionPolicy
+from common.geodesy import haversine_m
 
 # The columns a chart, a replay or an export needs.
 SERIES_COLUMNS = ("time", *TELEMETRY_STATE_COLUMNS)

@@ -64,21 +64,16 @@ class TelemetryRow(Base):
     satellites: Mapped[int | None] = mapped_column(SmallInteger)
 
 
-# The state fields copied from a telemetry snapshot into a row, in one place.
-TELEMETRY_STATE_COLUMNS = (
-    "mode",
-    "armed",
-    "lat",
-    "lon",
-    "alt_msl",
-    "alt_rel",
-    "heading_deg",
-    "groundspeed",
-    "climb_rate",
-    "battery_voltage",
-    "battery_remaining",
-    "gps_fix",
-    "satellites",
+# A sample's delivery identity and time. Every other column of TelemetryRow is a field of
+# the vehicle's state, copied by name from the agent's snapshot (protocol's VehicleState).
+TELEMETRY_KEY_COLUMNS = ("id", "vehicle_id", "stream_id", "seq", "time")
+# The stored state fields, read off the model above so that a column added there is stored,
+# read back, charted and exported with no second list to keep (the exporters' ExportSample
+# and the API's Sample are typed mirrors, held to this by tests/unit/test_telemetry_fields.py).
+TELEMETRY_STATE_COLUMNS: tuple[str, ...] = tuple(
+    column.name
+    for column in TelemetryRow.__table__.columns
+    if column.name not in TELEMETRY_KEY_COLUMNS
 )
 
 

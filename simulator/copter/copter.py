@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from typing import Self
 
+from common.geodesy import GeoPoint
 from simulator.battery import current_draw
 from simulator.copter.arming import Arming
 from simulator.copter.auto import Auto
@@ -12,7 +13,6 @@ from simulator.copter.guided import Guided
 from simulator.copter.landing import ReturnAndLand
 from simulator.copter.modes import Modes
 from simulator.copter.state import BRAKE_DECEL, BRAKE_SPEED_Z
-from simulator.geo import GeoPoint
 from simulator.mavconst import CopterMode
 from simulator.physics import Setpoint
 from simulator.vehicle import DT, AutoPhase

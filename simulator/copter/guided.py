@@ -76,7 +76,7 @@ class Guided(CopterState):
             return MavResult.FAILED
         if not (-90.0 <= lat <= 90.0 and -180.0 <= lon <= 180.0) or not math.isfinite(relative_alt):
             return MavResult.DENIED
-        self._hold_ne = self.frame.to_local(lat, lon)
+        self._hold_ne = self.ne_of(lat, lon)
         self._hold_alt = self._relative_to_origin(relative_alt)
         self._taking_off = False
         return MavResult.ACCEPTED

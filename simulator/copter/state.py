@@ -6,7 +6,7 @@ from __future__ import annotations
 from abc import abstractmethod
 from enum import Enum
 
-from simulator.geo import GeoPoint
+from common.geodesy import GeoPoint
 from simulator.mavconst import CopterMode, LandedState, MavResult, MavState, MavType
 from simulator.param_table import ParamTable
 from simulator.params import CopterParams

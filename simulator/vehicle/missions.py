@@ -100,7 +100,7 @@ class MissionRunner(Camera, GcsCommands):
         """A mission item's position; none given (0, 0) means where the vehicle stops."""
         if not item.has_position:
             return self.body.stopping_point(self.params.wpnav_accel)
-        return self.frame.to_local(item.x / 1e7, item.y / 1e7)
+        return self.ne_of(item.x / 1e7, item.y / 1e7)
 
     def _auto_begin(self) -> None:
         """ModeAuto::run with a mission not yet started: start or resume it."""

@@ -9,8 +9,8 @@ from abc import ABC, abstractmethod
 from enum import Enum, IntEnum
 from typing import TypeVar
 
+from common.geodesy import GeoPoint, LocalFrame
 from simulator.battery import Battery
-from simulator.geo import GeoPoint, LocalFrame
 from simulator.mavconst import LandedState, MavResult, MavState, Severity
 from simulator.mission import MissionItem
 from simulator.param_table import ParamTable, SetOutcome
@@ -66,7 +66,7 @@ class VehicleState(ABC):
         self.boot_at = boot_at
         # The EKF origin: local north/east/down are measured from here, and the ground
         # is flat at its altitude.
-        self.frame = LocalFrame(home)
+        self.frame = LocalFrame(home.lat, home.lon, home.alt)
         self.body = Airframe()
         self.battery = Battery(capacity_mah=self.params.batt_capacity)
         self.armed = False
@@ -181,14 +181,26 @@ class VehicleState(ABC):
 
     @property
     def home(self) -> GeoPoint:
-        return self.frame.to_global(self.home_ne[0], self.home_ne[1], self.home_up)
+        return self.geo_of(north=self.home_ne[0], east=self.home_ne[1], up=self.home_up)
 
     def position(self) -> GeoPoint:
-        return self.frame.to_global(self.body.north, self.body.east, self.body.alt)
+        return self.geo_of(north=self.body.north, east=self.body.east, up=self.body.alt)
+
+    def geo_of(self, *, north: float, east: float, up: float = 0.0) -> GeoPoint:
+        """The position `north`/`east` metres from the EKF origin and `up` above it. By
+        keyword: the simulator keeps ArduPilot's north-east order, common.geodesy's frames
+        east-north."""
+        lat, lon = self.frame.to_geo(east, north)
+        return GeoPoint(lat, lon, self.frame.origin.alt + up)
+
+    def ne_of(self, lat: float, lon: float) -> tuple[float, float]:
+        """(north, east) metres of a position from the EKF origin, in the simulator's order."""
+        east, north = self.frame.to_local(lat, lon)
+        return north, east
 
     @property
     def altitude_msl(self) -> float:
-        return self.frame.home.alt + self.body.alt
+        return self.frame.origin.alt + self.body.alt
 
     @property
     def relative_alt(self) -> float:
@@ -198,8 +210,8 @@ class VehicleState(ABC):
     def gps_position(self) -> GeoPoint:
         """What the GPS reports: the true position plus SIM_GPS_NOISE."""
         north, east, up = self.gps_error
-        return self.frame.to_global(
-            self.body.north + north, self.body.east + east, self.body.alt + up
+        return self.geo_of(
+            north=self.body.north + north, east=self.body.east + east, up=self.body.alt + up
         )
 
     def drain_events(self) -> list[Event]:
@@ -243,10 +255,10 @@ class VehicleState(ABC):
         refused far from the EKF origin."""
         if not (-90.0 <= lat <= 90.0 and -180.0 <= lon <= 180.0) or not math.isfinite(alt_msl):
             return MavResult.DENIED
-        north, east = self.frame.to_local(lat, lon)
+        north, east = self.ne_of(lat, lon)
         if math.hypot(north, east) > FAR_FROM_ORIGIN_M:
             return MavResult.FAILED
-        self._move_home(north, east, alt_msl - self.frame.home.alt)
+        self._move_home(north, east, alt_msl - self.frame.origin.alt)
         self.home_locked = True
         return MavResult.ACCEPTED
 

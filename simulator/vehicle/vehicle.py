@@ -5,7 +5,7 @@ from __future__ import annotations
 from abc import abstractmethod
 from typing import Self
 
-from simulator.geo import GeoPoint
+from common.geodesy import GeoPoint
 from simulator.vehicle.missions import MissionRunner
 from simulator.vehicle.state import GPS_PERIOD_STEPS
 
@@ -31,7 +31,7 @@ class Vehicle(MissionRunner):
         starts again: the initial mode, a new EKF origin where it is, home not yet
         locked, sim time from zero."""
         here = self.position()
-        twin = self._reborn(GeoPoint(here.lat, here.lon, self.frame.home.alt), boot_at)
+        twin = self._reborn(GeoPoint(here.lat, here.lon, self.frame.origin.alt), boot_at)
         twin.params = self.params
         twin.param_table = self.param_table
         twin.battery = self.battery

@@ -10,21 +10,21 @@ from typing import Any
 import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
-from simulator import DEFAULT_HOME, Copter, CopterMode, MavResult
+from simulator import DEFAULT_HOME, Copter, CopterMode, LocalFrame, MavResult
 from simulator import server as server_module
 from simulator.config import ListenAddress, SimulatorConfig
-from simulator.geo import METRES_PER_DEGREE
 from simulator.mavconst import FORCE_REBOOT_MAGIC, MavCmd, MavFrame, ModeFlag
 from simulator.mission import MissionItem
 from tests.simulator.test_sim_commands import Vehicle, ack_of, kinds
 from tests.simulator.test_sim_copter import airborne, run_until, texts
 from tests.simulator.test_sim_server import SYSID, mavlink_client, serving, wait_for
 
-NORTH = 1 / METRES_PER_DEGREE  # degrees of latitude per metre
+_FRAME = LocalFrame(DEFAULT_HOME.lat, DEFAULT_HOME.lon, DEFAULT_HOME.alt)
+NORTH = _FRAME.to_geo(0.0, 1.0)[0] - DEFAULT_HOME.lat  # degrees of latitude per metre
 
 
 def east_deg(metres: float) -> float:
-    return metres / (METRES_PER_DEGREE * math.cos(math.radians(DEFAULT_HOME.lat)))
+    return _FRAME.to_geo(metres, 0.0)[1] - DEFAULT_HOME.lon
 
 
 def cruising_north(copter: Copter) -> None:
@@ -165,8 +165,8 @@ def test_set_home_to_a_point_then_rtl_flies_there_and_lands() -> None:
     assert ack_of(vehicle.command(MavCmd.NAV_RETURN_TO_LAUNCH)).result == MavResult.ACCEPTED
     run_until(vehicle.copter, lambda c: not c.armed, 120)
     landed = vehicle.copter.position()
-    north, east = vehicle.copter.frame.to_local(landed.lat, landed.lon)
-    assert math.dist((north, east), vehicle.copter.frame.to_local(lat, lon)) < 1.0
+    north, east = vehicle.copter.ne_of(landed.lat, landed.lon)
+    assert math.dist((north, east), vehicle.copter.ne_of(lat, lon)) < 1.0
 
 
 def test_set_home_is_locked_against_arming_and_refused_far_from_the_origin() -> None:

@@ -17,7 +17,7 @@ REL = MavFrame.GLOBAL_RELATIVE_ALT_INT
 
 
 def at(copter: Copter, north: float, east: float) -> tuple[int, int]:
-    point = copter.frame.to_global(north, east, 0.0)
+    point = copter.geo_of(north=north, east=east)
     return round(point.lat * 1e7), round(point.lon * 1e7)
 
 
@@ -103,7 +103,7 @@ def test_wpnav_speed_changes_guided_cruise_speed() -> None:
     copter = airborne(10.0)
     assert copter.set_param("WPNAV_SPEED", 800.0) is SetOutcome.STORED
     assert copter.params.wpnav_speed == 8.0
-    target = copter.frame.to_global(200.0, 0.0, 0.0)
+    target = copter.geo_of(north=200.0, east=0.0)
     copter.guided_goto(target.lat, target.lon, 10.0)
     copter.advance(15.0)
     assert copter.body.groundspeed == pytest.approx(8.0, abs=0.01)
@@ -116,7 +116,7 @@ def test_wpnav_speed_changes_guided_cruise_speed() -> None:
 def test_rtl_alt_parameter_sets_the_return_altitude() -> None:
     copter = airborne(5.0)
     copter.set_param("RTL_ALT", 2500)
-    target = copter.frame.to_global(30.0, 0.0, 0.0)
+    target = copter.geo_of(north=30.0, east=0.0)
     copter.guided_goto(target.lat, target.lon, 5.0)
     copter.advance(15.0)
     copter.set_mode(CopterMode.RTL)

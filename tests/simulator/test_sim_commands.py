@@ -205,7 +205,7 @@ def test_takeoff_as_command_int_needs_a_relative_frame() -> None:
 def test_do_reposition_in_guided() -> None:
     vehicle = Vehicle()
     vehicle.fly()
-    target = vehicle.copter.frame.to_global(40.0, -30.0, 0.0)
+    target = vehicle.copter.geo_of(north=40.0, east=-30.0)
     lat, lon = round(target.lat * 1e7), round(target.lon * 1e7)
     frame = MavFrame.GLOBAL_RELATIVE_ALT_INT
     ack = ack_of(
@@ -242,7 +242,7 @@ def test_do_reposition_absolute_altitude_and_mode_change() -> None:
 def test_do_reposition_as_command_long_is_relative() -> None:
     vehicle = Vehicle()
     vehicle.fly()
-    target = vehicle.copter.frame.to_global(10.0, 10.0, 0.0)
+    target = vehicle.copter.geo_of(north=10.0, east=10.0)
     ack = ack_of(vehicle.command(MavCmd.DO_REPOSITION, -1, 0, 0, 0, target.lat, target.lon, 12.0))
     assert ack.result == mavlink2.MAV_RESULT_ACCEPTED
     # float32 degrees resolve about a metre at this longitude: why COMMAND_INT exists
@@ -251,7 +251,7 @@ def test_do_reposition_as_command_long_is_relative() -> None:
 
 def test_set_position_target_global_int() -> None:
     vehicle = Vehicle()
-    target = vehicle.copter.frame.to_global(25.0, 5.0, 0.0)
+    target = vehicle.copter.geo_of(north=25.0, east=5.0)
     lat, lon = round(target.lat * 1e7), round(target.lon * 1e7)
 
     def position_target(frame: int) -> list[Reply]:
@@ -317,7 +317,7 @@ def test_do_change_speed_in_guided() -> None:
     assert ack_of(vehicle.command(MavCmd.DO_CHANGE_SPEED, 1, 3.0)).result == 4
     vehicle.fly()
     assert ack_of(vehicle.command(MavCmd.DO_CHANGE_SPEED, 1, 3.0)).result == 0
-    target = vehicle.copter.frame.to_global(100.0, 0.0, 0.0)
+    target = vehicle.copter.geo_of(north=100.0, east=0.0)
     vehicle.copter.guided_goto(target.lat, target.lon, 10.0)
     vehicle.copter.advance(10.0)
     assert vehicle.copter.body.groundspeed == pytest.approx(3.0, abs=0.01)

@@ -4,8 +4,10 @@ from __future__ import annotations
 
 import pytest
 
+import common.geodesy
 from simulator import (
     DEFAULT_HOME,
+    Copter,
     GeoPoint,
     ListenAddress,
     LocalFrame,
@@ -136,13 +138,16 @@ def test_manual_clock() -> None:
 
 
 def test_local_frame_round_trip() -> None:
-    frame = LocalFrame(DEFAULT_HOME)
-    point = frame.to_global(1234.5, -678.9, 12.0)
+    copter = Copter(DEFAULT_HOME)
+    point = copter.geo_of(north=1234.5, east=-678.9, up=12.0)
     assert point.alt == pytest.approx(596.0)
-    assert frame.to_local(point.lat, point.lon) == pytest.approx((1234.5, -678.9), abs=1e-6)
-    # ArduPilot's scaling: 1e-7 degree of latitude is 1.1131884502145034 cm
-    north, _ = frame.to_local(DEFAULT_HOME.lat + 1e-5, DEFAULT_HOME.lon)
-    assert north == pytest.approx(1.1131884502145034)
+    assert copter.ne_of(point.lat, point.lon) == pytest.approx((1234.5, -678.9), abs=1e-6)
+    # WGS84, not a sphere: 1e-5 degree of latitude there is 1.10947 m on the ellipsoid
+    # (pyproj's Geod), scaled by (R + 584 m) / R at the home's height.
+    north, east = copter.ne_of(DEFAULT_HOME.lat + 1e-5, DEFAULT_HOME.lon)
+    assert north == pytest.approx(1.1094724 * (1 + 584.0 / 6_371_000), abs=1e-6)
+    assert east == pytest.approx(0.0, abs=1e-9)
+    assert LocalFrame is common.geodesy.LocalFrame
 
 
 def test_stream_schedule_is_wall_clock() -> None:

@@ -131,7 +131,7 @@ def test_land_descends_fast_then_slow_and_disarms_on_touchdown() -> None:
 
 def test_land_holds_its_horizontal_position() -> None:
     copter = airborne(10.0)
-    target = copter.frame.to_global(30.0, 0.0, 0.0)
+    target = copter.geo_of(north=30.0, east=0.0)
     copter.guided_goto(target.lat, target.lon, 10.0)
     run_until(copter, lambda c: c.body.north > 15.0, 30)
     copter.set_mode(CopterMode.LAND)  # lands near where it can stop, not at the target
@@ -142,7 +142,7 @@ def test_land_holds_its_horizontal_position() -> None:
 
 def test_rtl_climbs_returns_home_and_lands() -> None:
     copter = airborne(5.0)
-    target = copter.frame.to_global(80.0, -60.0, 0.0)  # 100 m away
+    target = copter.geo_of(north=80.0, east=-60.0)  # 100 m away
     copter.guided_goto(target.lat, target.lon, 5.0)
     run_until(copter, lambda c: c.body.groundspeed < 0.05 and c.body.north > 79.9, 60)
 
@@ -166,7 +166,7 @@ def test_rtl_climbs_returns_home_and_lands() -> None:
 
 def test_rtl_near_home_climbs_only_the_cone() -> None:
     copter = airborne(3.0)
-    target = copter.frame.to_global(2.0, 0.0, 0.0)
+    target = copter.geo_of(north=2.0, east=0.0)
     copter.guided_goto(target.lat, target.lon, 3.0)
     copter.advance(10.0)
     copter.set_mode(CopterMode.RTL)
@@ -265,7 +265,7 @@ def test_auto_disarm_after_disarm_delay_without_takeoff() -> None:
 
 def test_guided_goto_reaches_target_facing_the_direction_of_travel() -> None:
     copter = airborne(10.0)
-    target = copter.frame.to_global(-40.0, 30.0, 0.0)  # 50 m south-east
+    target = copter.geo_of(north=-40.0, east=30.0)  # 50 m south-east
     assert copter.guided_goto(target.lat, target.lon, 25.0) is MavResult.ACCEPTED
     copter.advance(6.0)  # accelerated, turned at ATC_SLEW_YAW, cruising
     assert copter.body.groundspeed == pytest.approx(5.0, abs=0.01)  # WPNAV_SPEED
@@ -286,7 +286,7 @@ def test_guided_goto_outside_guided_is_refused() -> None:
 
 def test_acceleration_tilts_the_vehicle() -> None:
     copter = airborne(10.0)
-    target = copter.frame.to_global(100.0, 0.0, 0.0)
+    target = copter.geo_of(north=100.0, east=0.0)
     copter.guided_goto(target.lat, target.lon, 10.0)
     copter.advance(1.0)
     assert copter.body.pitch < math.radians(-5.0)  # nose down to accelerate north
@@ -296,7 +296,7 @@ def test_acceleration_tilts_the_vehicle() -> None:
 
 def test_stabilize_holds_altitude_and_brakes() -> None:
     copter = airborne(10.0)
-    target = copter.frame.to_global(100.0, 0.0, 0.0)
+    target = copter.geo_of(north=100.0, east=0.0)
     copter.guided_goto(target.lat, target.lon, 10.0)
     copter.advance(10.0)
     assert copter.set_mode(CopterMode.STABILIZE) is MavResult.ACCEPTED
@@ -333,15 +333,15 @@ def test_position_modes_refused_in_flight_without_gps() -> None:
 
 def test_same_mode_keeps_the_guided_target() -> None:
     copter = airborne(10.0)
-    target = copter.frame.to_global(50.0, 0.0, 0.0)
+    target = copter.geo_of(north=50.0, east=0.0)
     copter.guided_goto(target.lat, target.lon, 10.0)
     assert copter.set_mode(CopterMode.GUIDED) is MavResult.ACCEPTED
-    assert copter.guided_target == pytest.approx((50.0, 0.0, 10.0))
+    assert copter.guided_target == pytest.approx((50.0, 0.0, 10.0), abs=1e-6)  # ECEF round trip
 
 
 def test_home_moves_to_where_it_arms() -> None:
     copter = airborne(10.0)
-    target = copter.frame.to_global(20.0, 20.0, 0.0)
+    target = copter.geo_of(north=20.0, east=20.0)
     copter.guided_goto(target.lat, target.lon, 0.0)  # down to the ground over there
     run_until(copter, lambda c: not c.armed, 60)  # lands, then DISARM_DELAY
     assert copter.home_ne == (0.0, 0.0)
@@ -389,7 +389,7 @@ def _flight(slices: list[float]) -> tuple[object, ...]:
     copter.takeoff(12.0)
     for dt in slices[: len(slices) // 2]:
         copter.advance(dt)
-    target = copter.frame.to_global(30.0, 40.0, 0.0)
+    target = copter.geo_of(north=30.0, east=40.0)
     copter.guided_goto(target.lat, target.lon, 20.0)
     for dt in slices[len(slices) // 2 :]:
         copter.advance(dt)

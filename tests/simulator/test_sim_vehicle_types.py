@@ -10,9 +10,8 @@ import pytest
 from pymavlink import mavutil
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
-from simulator import DEFAULT_HOME, Copter, CopterMode, MavResult, main
+from simulator import DEFAULT_HOME, Copter, CopterMode, LocalFrame, MavResult, main
 from simulator.config import parse_args
-from simulator.geo import METRES_PER_DEGREE
 from simulator.mavconst import (
     LandedState,
     MavAutopilot,
@@ -34,8 +33,10 @@ from simulator.vehicle import ItemReached
 from tests.simulator.test_sim_copter import run_until, texts
 from tests.simulator.test_sim_server import command, mavlink_client, simulator_process, wait_for
 
-NORTH = 1 / METRES_PER_DEGREE
-EAST = 1 / (METRES_PER_DEGREE * math.cos(math.radians(DEFAULT_HOME.lat)))
+# Degrees per metre north and east of home.
+_FRAME = LocalFrame(DEFAULT_HOME.lat, DEFAULT_HOME.lon, DEFAULT_HOME.alt)
+NORTH = _FRAME.to_geo(0.0, 1.0)[0] - DEFAULT_HOME.lat
+EAST = _FRAME.to_geo(1.0, 0.0)[1] - DEFAULT_HOME.lon
 
 
 def waypoint(seq: int, north: float, east: float, hold_s: float = 0.0) -> MissionItem:

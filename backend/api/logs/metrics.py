@@ -36,5 +36,5 @@ async def metrics(hub: HubDep) -> Metrics:
         writer_backlog=hub.writer.backlog,
         writer_capacity=hub.writer.capacity,
         last_batch_s=stats.last_batch_s,
-        connected_agents=len(hub.agent_sessions),
+        connected_agents=sum(record.connected for record in hub.registry.all()),
     )

@@ -6,8 +6,8 @@ from __future__ import annotations
 import math
 
 from backend.missions import Waypoint
-from backend.safety import Geofence, GeoPoint, LocalFrame, VehicleSnapshot
-from backend.safety.geometry import EARTH_MEAN_RADIUS_M
+from backend.safety import Geofence, GeoPoint, VehicleSnapshot
+from common.geodesy import EARTH_MEAN_RADIUS_M, LocalFrame
 
 ORIGIN = (47.0, 8.0)
 FRAME = LocalFrame(*ORIGIN)

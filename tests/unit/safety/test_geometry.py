@@ -14,7 +14,8 @@ from backend.safety import (
     segment_relation,
     validate_polygon,
 )
-from backend.safety.geometry import WGS84_A_M, WGS84_F, FencePolygon, PlanarPolygon
+from backend.safety.geometry import FencePolygon, PlanarPolygon
+from common.geodesy import WGS84_A_M, WGS84_F
 from tests.unit.safety.shapes import FRAME, U_SHAPE
 
 E2 = WGS84_F * (2 - WGS84_F)

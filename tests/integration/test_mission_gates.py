@@ -193,7 +193,8 @@ def test_auto_flies_only_a_checked_mission(
     try:
         refused = api.post(commands, json=auto)
         assert refused.status_code == 422, refused.text
-        [violation] = refused.json()["violations"], refused.text
+        assert len(refused.json()["violations"]) == 1, refused.text
+        [violation] = refused.json()["violations"]
         assert violation["rule"] == "max_altitude"
         assert "item 2 altitude" in violation["message"]
 

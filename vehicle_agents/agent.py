@@ -41,6 +41,7 @@ CAPABILITIES = ["telemetry", "commands", "events"]
 
 
 async def run_agent(settings: AgentSettings) -> None:
+    token = settings.token_value()  # refused before anything starts
     link = FcuLink(settings.fcu, source_system=settings.source_system)
     streams = StreamRequester(link, settings.stream_rates_hz)  # checks the rates first
     async with asyncio.TaskGroup() as tasks:
@@ -71,7 +72,7 @@ async def run_agent(settings: AgentSettings) -> None:
         executor = CommandExecutor(link)
         hub = HubLink(
             settings.hub,
-            settings.token.get_secret_value(),
+            token,
             hello,
             outbox,
             executor.execute,
@@ -96,7 +97,7 @@ async def run_agent(settings: AgentSettings) -> None:
             uploader = TlogUploader(
                 recorder,
                 url,
-                settings.token.get_secret_value(),
+                token,
                 notify=lambda text, severity: events.emit("upload", text, severity),
             )
             link.listeners.append(uploader.on_message)

@@ -24,8 +24,8 @@ def mavutil() -> Any:
     if "pymavlink.mavutil" not in sys.modules:
         # mavutil also imports the MAVLink 1 "all" dialect if it is there (for PyInstaller;
         # it carries on without it). The agent never uses it: leaving it out saves about
-        # 5.5 MB of RSS and a quarter of the start-up's imports. None in sys.modules makes
-        # that one import fail, as it does where the dialect is not installed.
+        # 5.4 MB of RSS. None in sys.modules makes that one import fail, as it does where
+        # the dialect is not installed.
         sys.modules.setdefault(UNUSED_ON_IMPORT, None)  # type: ignore[arg-type]
     from pymavlink import mavutil as module
 

@@ -1,8 +1,8 @@
 """Remove the MAVLink dialects the agent never loads from an installed pymavlink.
 
-pymavlink's wheel carries every dialect generated twice (MAVLink 1 and 2), about 90 MB
-of its 94 MB, and pip compiles each to bytecode. The agent loads one: ardupilotmega
-(which holds common and minimal) over MAVLink 2 (`vehicle_agents/mavlink_dialect.py`).
+pymavlink's wheel carries every dialect generated twice (MAVLink 1 and 2), and pip
+compiles each to bytecode: 88 of the 92 MB it takes once installed. The agent loads one,
+ardupilotmega (which holds common and minimal) over MAVLink 2 (`mavlink_dialect.py`).
 pip cannot leave parts of a package out, so this deletes them after the install:
 
     sudo /opt/gcs/.venv/bin/python -m vehicle_agents.slim_install
@@ -78,7 +78,8 @@ def main(argv: list[str] | None = None) -> int:
             print(path)
         return 0
     freed = slim(folder, keep)
-    print(f"{folder}: removed {freed / 1e6:.1f} MB of dialects the agent does not load")
+    mib = freed / 2**20  # as du -m counts
+    print(f"{folder}: removed {mib:.1f} MB of dialects the agent does not load")
     return 0
 
 

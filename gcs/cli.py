@@ -7,44 +7,40 @@ imports FastAPI or SQLAlchemy.
 from __future__ import annotations
 
 import argparse
-import asyncio
-import contextlib
 import logging
 import os
 import signal
 import sys
 import time
-from collections.abc import Coroutine
+from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
     from backend.settings import HubSettings
 
-LOG_FORMAT = "%(asctime)s %(levelname)-7s %(name)s: %(message)s"
-# sysexits' EX_CONFIG: a configuration error that restarting will not fix (gcs-agent.service
-# does not restart on it). The agent exits with it when its vehicle id is another's.
-EXIT_VEHICLE_ID_IN_USE = 78
+LOG_FORMAT = "%(asctime)s %(levelname)-7s %(name)s: %(message)s"  # as vehicle_agents.cli
 
 
 def _configure_logging(level: str) -> None:
     logging.basicConfig(level=level.upper(), format=LOG_FORMAT)
 
 
-def run_until_signalled(main: Coroutine[Any, Any, None]) -> int:
-    """Run a coroutine until it ends or SIGINT/SIGTERM cancels it; exit code 0 on a signal."""
+# The extra each subcommand needs beyond the agent's base dependencies.
+EXTRAS = {"hub": "hub", "demo": "hub", "sim": "simulator"}
 
-    async def runner() -> None:
-        task = asyncio.current_task()
-        assert task is not None
-        loop = asyncio.get_running_loop()
-        for signum in (signal.SIGINT, signal.SIGTERM):
-            loop.add_signal_handler(signum, task.cancel)
-        await main
 
-    with contextlib.suppress(asyncio.CancelledError):
-        asyncio.run(runner())
-    return 0
+def _needs_extra(command: str, error: ModuleNotFoundError) -> int:
+    """Say which extra to install when a subcommand's packages are not there."""
+    extra = EXTRAS[command]
+    print(
+        f"gcs {command}: this install lacks {error.name!r}, which `gcs {command}` needs: "
+        f"install the {extra!r} extra, e.g. pip install 'fleet-gcs[{extra}]' "
+        f"(or pip install --require-hashes -r requirements/{extra}.txt from a checkout). "
+        "An agent-only install runs only `gcs agent` / `gcs-agent`.",
+        file=sys.stderr,
+    )
+    return 2
 
 
 def _hub(args: argparse.Namespace) -> int:
@@ -115,35 +111,9 @@ def _warn_about_exposure(settings: HubSettings, tls: bool) -> None:
 
 
 def _agent(args: argparse.Namespace) -> int:
-    from pydantic import ValidationError
+    from vehicle_agents.cli import run
 
-    from vehicle_agents.agent import run_agent
-    from vehicle_agents.config import load_agent_settings
-    from vehicle_agents.hub_link import VehicleIdInUse
-
-    overrides = {
-        "fcu": args.fcu,
-        "hub": args.hub,
-        "token": args.token,
-        "vehicle_id": args.vehicle_id,
-        "telemetry_rate_hz": args.telemetry_rate,
-        "tlog_dir": args.tlog_dir,
-        "outbox_dir": args.outbox_dir,
-        "hub_failsafe_action": args.hub_failsafe,
-        "hub_failsafe_timeout_s": args.hub_failsafe_timeout,
-        "mavlink_forward": args.mavlink_forward,
-    }
-    try:
-        settings = load_agent_settings(overrides, args.config)
-    except (ValidationError, ValueError, OSError) as error:
-        # A configuration mistake: say which setting, not a traceback.
-        print(f"gcs agent: invalid settings: {error}", file=sys.stderr)
-        return 2
-    try:
-        return run_until_signalled(run_agent(settings))
-    except VehicleIdInUse as refused:
-        logging.getLogger("gcs.agent").error("stopping: %s", refused)
-        return EXIT_VEHICLE_ID_IN_USE
+    return run(args, prog="gcs agent")
 
 
 def _sim(args: argparse.Namespace, rest: list[str]) -> int:
@@ -227,35 +197,10 @@ def build_parser() -> argparse.ArgumentParser:
         "--forwarded-allow-ips", help="proxies trusted for X-Forwarded-For (127.0.0.1)"
     )
 
+    from vehicle_agents.cli import add_agent_arguments
+
     agent = commands.add_parser("agent", help="bridge one flight controller to the hub")
-    agent.add_argument(
-        "--config", type=Path, help="TOML settings file (default /etc/gcs/agent.toml if present)"
-    )
-    agent.add_argument("--fcu", help="pymavlink URL, e.g. tcp:127.0.0.1:5760, /dev/ttyACM0")
-    agent.add_argument("--hub", help="hub URL, e.g. ws://hub.local:8000")
-    agent.add_argument("--token", help="agent token (better: GCS_AGENT_TOKEN)")
-    agent.add_argument("--vehicle-id")
-    agent.add_argument("--telemetry-rate", type=float, help="snapshots per second (10)")
-    agent.add_argument(
-        "--tlog-dir", type=Path, help="record an onboard .tlog per flight; upload after landing"
-    )
-    agent.add_argument(
-        "--outbox-dir", type=Path, help="keep unsent telemetry on disk here (survives outages)"
-    )
-    agent.add_argument(
-        "--hub-failsafe",
-        choices=["continue", "hold", "rtl"],
-        help="action when the hub link is lost (continue)",
-    )
-    agent.add_argument(
-        "--hub-failsafe-timeout", type=float, help="seconds without the hub before acting (10)"
-    )
-    agent.add_argument(
-        "--mavlink-forward",
-        action="append",
-        metavar="ENDPOINT",
-        help="MAVLink endpoint for a third-party GCS (repeatable), e.g. udpout:10.0.0.5:14550",
-    )
+    add_agent_arguments(agent)
 
     commands.add_parser(
         "sim", help="run a simulated MAVLink copter (see `gcs sim --help`)", add_help=False
@@ -278,9 +223,23 @@ def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args, rest = parser.parse_known_args(argv if argv is not None else sys.argv[1:])
     _configure_logging(args.log_level)
-    if args.command == "sim":
-        return _sim(args, rest)
-    if rest:
+    if args.command != "sim" and rest:
         parser.error(f"unrecognized arguments: {' '.join(rest)}")
-    handlers = {"hub": _hub, "agent": _agent, "demo": _demo}
-    return handlers[args.command](args)
+    handlers: dict[str, Callable[[argparse.Namespace], int]] = {
+        "hub": _hub,
+        "agent": _agent,
+        "demo": _demo,
+        "sim": lambda args: _sim(args, rest),
+    }
+    try:
+        return handlers[args.command](args)
+    except ModuleNotFoundError as error:
+        if args.command not in EXTRAS or not _is_third_party(error):
+            raise
+        return _needs_extra(args.command, error)
+
+
+def _is_third_party(error: ModuleNotFoundError) -> bool:
+    """A dependency missing from the install, not a module of ours (that is a bug)."""
+    ours = {"protocol", "common", "vehicle_agents", "simulator", "backend", "gcs"}
+    return (error.name or "").partition(".")[0] not in ours

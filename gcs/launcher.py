@@ -236,7 +236,7 @@ class LocalFleet:
                 self.plan.hub_ws,
                 "--vehicle-id",
                 self.vehicle_id(index),
-                "--telemetry-rate",
+                "--telemetry-rate-hz",
                 str(self.plan.telemetry_rate_hz),
                 # Each simulated vehicle keeps an onboard .tlog, as a real one would.
                 "--tlog-dir",

@@ -50,6 +50,7 @@ async def run_agent(settings: AgentSettings) -> None:
 
 
 async def _run(settings: AgentSettings) -> None:
+    token = settings.token_value()  # refused before anything starts
     link = FcuLink(settings.fcu, source_system=settings.source_system)
     streams = StreamRequester(link, settings.stream_rates_hz)  # checks the rates first
     async with asyncio.TaskGroup() as tasks:
@@ -80,7 +81,7 @@ async def _run(settings: AgentSettings) -> None:
         executor = CommandExecutor(link)
         hub = HubLink(
             settings.hub,
-            settings.token.get_secret_value(),
+            token,
             hello,
             outbox,
             executor.execute,
@@ -105,7 +106,7 @@ async def _run(settings: AgentSettings) -> None:
             uploader = TlogUploader(
                 recorder,
                 url,
-                settings.token.get_secret_value(),
+                token,
                 notify=lambda text, severity: events.emit("upload", text, severity),
             )
             link.listeners.append(uploader.on_message)

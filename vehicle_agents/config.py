@@ -1,15 +1,20 @@
 """The agent's settings: CLI flags, over environment variables (GCS_AGENT_*), over a TOML
-config file (``/etc/gcs/agent.toml`` or ``--config``), over defaults."""
+config file (``/etc/gcs/agent.toml`` or ``--config``), over defaults.
+
+Each setting has one name in all three: the field name is the file's key, ``--`` plus the
+name with dashes is the flag, and ``GCS_AGENT_`` plus the upper-case name is the variable.
+"""
 
 from __future__ import annotations
 
+import difflib
 import os
 import tomllib
 from pathlib import Path
 from typing import Any, Literal
 from urllib.parse import urlsplit, urlunsplit
 
-from pydantic import Field, SecretStr, field_validator
+from pydantic import Field, SecretStr, ValidationError, field_validator
 from pydantic_settings import BaseSettings, SettingsConfigDict
 
 from protocol.messages import AGENT_WS_PATH
@@ -25,11 +30,21 @@ class AgentSettings(BaseSettings):
         description="pymavlink connection URL of the flight controller",
     )
     hub: str = Field(default="ws://127.0.0.1:8000", description="hub WebSocket URL")
-    token: SecretStr = Field(description="this agent's token for the hub")
-    vehicle_id: str | None = Field(
-        default=None, description="defaults to <model>_<first 4 hex of /etc/machine-id>"
+    # Optional here so that `--print-id` runs before enrolment; `load_agent_settings`
+    # requires it for a running agent, naming the three ways to give it.
+    token: SecretStr | None = Field(
+        default=None,
+        description="this vehicle's agent token, from the hub's enrolment",
     )
-    telemetry_rate_hz: float = Field(default=10.0, gt=0, le=50)
+    vehicle_id: str | None = Field(
+        default=None,
+        description="default <vehicle type>_<first 4 hex of /etc/machine-id>, the type as "
+        "the flight controller's heartbeat names it (multirotor, rover, fixed_wing, ...); "
+        "--print-id shows it",
+    )
+    telemetry_rate_hz: float = Field(
+        default=10.0, gt=0, le=50, description="telemetry snapshots sent per second"
+    )
     # Not 255, which is QGroundControl's, Mission Planner's and MAVProxy's default: with
     # --mavlink-forward they join the agent's MAVLink network, where a system id must name
     # one system: the vehicle addresses its answers by it, and routers (ours, mavlink-router,
@@ -58,7 +73,9 @@ class AgentSettings(BaseSettings):
         description="what the vehicle does when the hub link has been lost for "
         "hub_failsafe_timeout_s (the flight controller's own failsafes still apply)",
     )
-    hub_failsafe_timeout_s: float = Field(default=10.0, gt=0, le=3600)
+    hub_failsafe_timeout_s: float = Field(
+        default=10.0, gt=0, le=3600, description="seconds without the hub before acting"
+    )
     mavlink_forward: list[str] = Field(
         default_factory=list,
         description="MAVLink endpoints for third-party GCSs, e.g. udpout:10.0.0.5:14550 or "
@@ -67,8 +84,14 @@ class AgentSettings(BaseSettings):
     stream_rates_hz: dict[str, float] = Field(
         default_factory=dict,
         description="extra or changed MAVLink message rates to request, e.g. "
-        "{ATTITUDE = 10}; merged over the agent's defaults",
+        "{ATTITUDE = 10} (0 stops a message); merged over the agent's defaults",
     )
+
+    def token_value(self) -> str:
+        """The token, which a running agent cannot do without."""
+        if self.token is None:
+            raise SettingsError("no agent token: give it as " + ways_to_give("token"))
+        return self.token.get_secret_value()
 
     @field_validator("stream_rates_hz")
     @classmethod
@@ -110,19 +133,54 @@ DEFAULT_CONFIG_FILE = Path("/etc/gcs/agent.toml")
 ENV_PREFIX = "GCS_AGENT_"
 
 
+class SettingsError(ValueError):
+    """A setting is missing or unknown; the message says how to give it."""
+
+
+def flag_for(name: str) -> str:
+    """The command-line flag of a setting: ``telemetry_rate_hz`` -> ``--telemetry-rate-hz``."""
+    return "--" + name.replace("_", "-")
+
+
+def ways_to_give(name: str) -> str:
+    """The three places a setting can come from, by their names."""
+    return f"{flag_for(name)}, {ENV_PREFIX}{name.upper()} or `{name} = ...` in the config file"
+
+
+def describe_errors(error: ValidationError) -> str:
+    """One line per refused setting, naming how to give it, instead of pydantic's dump."""
+    lines = []
+    for problem in error.errors():
+        name = str(problem["loc"][0]) if problem["loc"] else ""
+        if name in AgentSettings.model_fields:
+            lines.append(f"  {name}: {problem['msg']} (give it as {ways_to_give(name)})")
+        else:
+            lines.append(f"  {name}: {problem['msg']}")
+    return "\n".join(lines)
+
+
+def _unknown_key(path: Path, key: str) -> str:
+    close = difflib.get_close_matches(key, AgentSettings.model_fields, n=1, cutoff=0.6)
+    hint = f"did you mean {close[0]!r}?" if close else "see the table in the README"
+    return f"{path}: unknown setting {key!r}; {hint}"
+
+
 def load_agent_settings(
-    overrides: dict[str, Any], config_file: Path | None = None
+    overrides: dict[str, Any], config_file: Path | None = None, *, require_token: bool = True
 ) -> AgentSettings:
     """Settings with the precedence operators expect: flags, then the environment, then
-    the config file (keys as in the environment, lower-case, without the prefix)."""
+    the config file (keys as in the environment, lower-case, without the prefix).
+
+    ValidationError for a bad value, SettingsError for an unknown key in the file or (with
+    ``require_token``) no token anywhere."""
     path = config_file or (DEFAULT_CONFIG_FILE if DEFAULT_CONFIG_FILE.is_file() else None)
     from_file: dict[str, Any] = {}
     if path is not None:
         with path.open("rb") as file:
             from_file = tomllib.load(file)
-        unknown = set(from_file) - set(AgentSettings.model_fields)
+        unknown = sorted(set(from_file) - set(AgentSettings.model_fields))
         if unknown:
-            raise ValueError(f"{path}: unknown settings {sorted(unknown)}")
+            raise SettingsError("; ".join(_unknown_key(path, key) for key in unknown))
     # A value from the file is passed explicitly, which would outrank the environment;
     # so it is dropped wherever the environment sets that field.
     from_file = {
@@ -131,4 +189,10 @@ def load_agent_settings(
         if f"{ENV_PREFIX}{name.upper()}" not in os.environ
     }
     given = {name: value for name, value in overrides.items() if value is not None}
-    return AgentSettings(**{**from_file, **given})
+    settings = AgentSettings(**{**from_file, **given})
+    if require_token and settings.token is None:
+        raise SettingsError(
+            "no agent token: give it as " + ways_to_give("token") + " (an admin creates it "
+            "with POST /api/v1/vehicles/{vehicle_id}/agent-tokens; `--print-id` shows the id)"
+        )
+    return settings

@@ -20,10 +20,10 @@ import httpx
 import pytest
 from pymavlink.dialects.v20 import common as mavlink2
 
-from gcs.cli import EXIT_VEHICLE_ID_IN_USE
 from tests.helpers import FleetWatcher, agent_process, api_client, connected, poll_until
 from tests.mavlink_peer import ScriptedFlightController
 from tests.tcp_proxy import CuttableProxy
+from vehicle_agents.cli import EXIT_VEHICLE_ID_IN_USE
 
 pytestmark = pytest.mark.integration
 

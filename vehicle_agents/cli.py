@@ -1,0 +1,193 @@
+"""The agent's command line: `gcs-agent` (the agent-only install) and `gcs agent`.
+
+Every setting has one name, the field of `AgentSettings`: the config-file key
+(``telemetry_rate_hz``), the flag (``--telemetry-rate-hz``) and the environment variable
+(``GCS_AGENT_TELEMETRY_RATE_HZ``) are all derived from it, so they cannot drift apart.
+"""
+
+from __future__ import annotations
+
+import argparse
+import asyncio
+import contextlib
+import logging
+import signal
+import sys
+from collections.abc import Coroutine
+from pathlib import Path
+from typing import Any
+
+from pydantic import ValidationError
+
+from vehicle_agents.config import (
+    ENV_PREFIX,
+    AgentSettings,
+    SettingsError,
+    describe_errors,
+    flag_for,
+    load_agent_settings,
+)
+
+LOG_FORMAT = "%(asctime)s %(levelname)-7s %(name)s: %(message)s"
+# How long --print-id waits for the flight controller's heartbeat, which names its type.
+PRINT_ID_TIMEOUT_S = 30.0
+# sysexits' EX_CONFIG: a configuration error that restarting will not fix (gcs-agent.service
+# does not restart on it). The agent exits with it when its vehicle id is another's.
+EXIT_VEHICLE_ID_IN_USE = 78
+
+# The flag of each setting: argparse's type and how it is given. Its name is the field's.
+_FLAG_KINDS: dict[str, dict[str, Any]] = {
+    "fcu": {"metavar": "URL"},
+    "hub": {"metavar": "URL"},
+    "token": {"metavar": "TOKEN"},
+    "vehicle_id": {"metavar": "ID"},
+    "telemetry_rate_hz": {"type": float, "metavar": "HZ"},
+    "source_system": {"type": int, "metavar": "SYSID"},
+    "tlog_dir": {"type": Path, "metavar": "DIR"},
+    "outbox_limit": {"type": int, "metavar": "FRAMES"},
+    "outbox_dir": {"type": Path, "metavar": "DIR"},
+    "hub_failsafe_action": {"choices": ["continue", "hold", "rtl"]},
+    "hub_failsafe_timeout_s": {"type": float, "metavar": "SECONDS"},
+    "mavlink_forward": {"action": "append", "metavar": "ENDPOINT"},
+    "stream_rates_hz": {"action": "append", "metavar": "MESSAGE=HZ"},
+}
+# Flags of earlier releases, still accepted (hidden) so existing units and scripts run.
+_OLD_FLAGS = {
+    "--telemetry-rate": "telemetry_rate_hz",
+    "--hub-failsafe": "hub_failsafe_action",
+    "--hub-failsafe-timeout": "hub_failsafe_timeout_s",
+}
+
+
+def add_agent_arguments(parser: argparse.ArgumentParser) -> None:
+    """The agent's flags, one per setting, on ``parser`` (shared by `gcs agent`)."""
+    parser.add_argument(
+        "--config",
+        type=Path,
+        help="TOML settings file, keys as the flags below without '--' and with '_' "
+        "(default /etc/gcs/agent.toml if present)",
+    )
+    parser.add_argument(
+        "--print-id",
+        action="store_true",
+        help="print this vehicle's id (what an admin enrols) and exit; without --vehicle-id "
+        "it waits for the flight controller's heartbeat, which names the vehicle type",
+    )
+    for name, field in AgentSettings.model_fields.items():
+        default = (
+            "required"
+            if field.is_required()
+            else _shown(field.get_default(call_default_factory=True))
+        )
+        parser.add_argument(
+            flag_for(name),
+            dest=name,
+            help=f"{field.description or ''} ({ENV_PREFIX}{name.upper()}; {default})",
+            **_FLAG_KINDS[name],
+        )
+    for flag, name in _OLD_FLAGS.items():
+        parser.add_argument(flag, dest=name, help=argparse.SUPPRESS, **_FLAG_KINDS[name])
+
+
+def _shown(default: Any) -> str:
+    if default is None:
+        return "unset"
+    if default in ([], {}):
+        return "none"
+    return f"default {default}"
+
+
+def overrides_from(args: argparse.Namespace) -> dict[str, Any]:
+    """The settings given as flags (None where a flag was not given)."""
+    given = {name: getattr(args, name) for name in AgentSettings.model_fields}
+    rates = given["stream_rates_hz"]
+    if rates is not None:
+        given["stream_rates_hz"] = dict(_rate(text) for text in rates)
+    return given
+
+
+def _rate(text: str) -> tuple[str, str]:
+    name, sep, value = text.partition("=")
+    if not sep:
+        raise SettingsError(f"--stream-rates-hz takes MESSAGE=HZ, e.g. ATTITUDE=20: {text!r}")
+    return name.strip(), value.strip()
+
+
+def run(args: argparse.Namespace, prog: str = "gcs-agent") -> int:
+    """Run the agent (or print its id) with the parsed flags; the exit code."""
+    try:
+        settings = load_agent_settings(
+            overrides_from(args), args.config, require_token=not args.print_id
+        )
+    except ValidationError as error:
+        print(f"{prog}: invalid settings:\n{describe_errors(error)}", file=sys.stderr)
+        return 2
+    except (SettingsError, ValueError, OSError) as error:
+        # A configuration mistake: say which setting, not a traceback.
+        print(f"{prog}: invalid settings: {error}", file=sys.stderr)
+        return 2
+    if args.print_id:
+        return print_id(settings, prog)
+    from vehicle_agents.agent import run_agent
+    from vehicle_agents.hub_link import VehicleIdInUse
+
+    try:
+        return run_until_signalled(run_agent(settings))
+    except VehicleIdInUse as refused:
+        logging.getLogger("gcs.agent").error("stopping: %s", refused)
+        return EXIT_VEHICLE_ID_IN_USE
+
+
+def print_id(settings: AgentSettings, prog: str) -> int:
+    """Print the vehicle id the agent will use; 1 if the flight controller never answered."""
+    if settings.vehicle_id is not None:
+        print(settings.vehicle_id)
+        return 0
+    from vehicle_agents.identity import identify
+
+    try:
+        vehicle_id = asyncio.run(identify(settings, PRINT_ID_TIMEOUT_S))
+    except TimeoutError:
+        from vehicle_agents.config import default_vehicle_id
+
+        print(
+            f"{prog}: no heartbeat from {settings.fcu} within {PRINT_ID_TIMEOUT_S:g} s, and "
+            "the default id starts with the vehicle type it names; it will be "
+            f"{default_vehicle_id('<type>')} (<type>: multirotor, rover, fixed_wing, ...). "
+            "Check --fcu, or choose an id with --vehicle-id.",
+            file=sys.stderr,
+        )
+        return 1
+    print(vehicle_id)
+    return 0
+
+
+def run_until_signalled(main: Coroutine[Any, Any, None]) -> int:
+    """Run a coroutine until it ends or SIGINT/SIGTERM cancels it; exit code 0 on a signal."""
+
+    async def runner() -> None:
+        task = asyncio.current_task()
+        assert task is not None
+        loop = asyncio.get_running_loop()
+        for signum in (signal.SIGINT, signal.SIGTERM):
+            loop.add_signal_handler(signum, task.cancel)
+        await main
+
+    with contextlib.suppress(asyncio.CancelledError):
+        asyncio.run(runner())
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="gcs-agent", description="Bridge one flight controller (MAVLink) to the hub."
+    )
+    parser.add_argument("--log-level", default="INFO")
+    add_agent_arguments(parser)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    logging.basicConfig(level=args.log_level.upper(), format=LOG_FORMAT)
+    return run(args)

@@ -1,9 +1,9 @@
 """The MAVLink mission protocol: upload, download, clear and set-current.
 
-Before anything is sent, every item is checked against what its MAV_CMD needs (a place
-for a waypoint, a global frame for a position, times and speeds that mean something);
-a mission with a bad item is refused whole, naming each item and what is wrong with it,
-and the vehicle never hears of it. Upload then follows the vehicle's lead (MISSION_COUNT,
+Before anything is sent, every item is checked against what its MAV_CMD needs (the item
+rules, `protocol.mission_rules`, the same the hub checks); a mission with a bad item is
+refused whole, naming each item and what is wrong with it, and the vehicle never hears
+of it. Upload then follows the vehicle's lead (MISSION_COUNT,
 then it asks for each item), with a timeout and retries per item; a rejected item ends
 the upload with the vehicle's reason, and the vehicle keeps its previous mission, as
 ArduPilot and PX4 do.
@@ -12,12 +12,12 @@ ArduPilot and PX4 do.
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
 from dataclasses import dataclass
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from protocol.messages import CommandOutcome, MissionItem
+from protocol.mission_rules import mission_problems
 from vehicle_agents.fcu_link import FcuLink, MavMessage, MessagePredicate
 
 MISSION = mavlink2.MAV_MISSION_TYPE_MISSION
@@ -32,141 +32,6 @@ class MissionTimeouts:
 def _result_name(result: int) -> str:
     entry = mavlink2.enums["MAV_MISSION_RESULT"].get(result)
     return entry.name if entry is not None else f"MAV_MISSION_RESULT {result}"
-
-
-def known_command(command: int) -> bool:
-    return command in mavlink2.enums["MAV_CMD"]
-
-
-# -- what each command needs ------------------------------------------------------------
-
-_CMD = mavlink2
-# Waypoints are places: latitude and longitude 0, 0 is never where one is meant to be.
-_WAYPOINTS = frozenset({_CMD.MAV_CMD_NAV_WAYPOINT, _CMD.MAV_CMD_NAV_SPLINE_WAYPOINT})
-# Positioned commands that ArduPilot reads as "where the vehicle is" at 0, 0 (loiter here,
-# land here); PX4 has no such reading and would fly to 0, 0.
-_HERE_AT_ZERO = frozenset(
-    {
-        _CMD.MAV_CMD_NAV_LOITER_UNLIM,
-        _CMD.MAV_CMD_NAV_LOITER_TURNS,
-        _CMD.MAV_CMD_NAV_LOITER_TIME,
-        _CMD.MAV_CMD_NAV_LOITER_TO_ALT,
-        _CMD.MAV_CMD_NAV_LAND,
-        _CMD.MAV_CMD_NAV_VTOL_LAND,
-        _CMD.MAV_CMD_NAV_PAYLOAD_PLACE,
-    }
-)
-_TAKEOFFS = frozenset({_CMD.MAV_CMD_NAV_TAKEOFF, _CMD.MAV_CMD_NAV_VTOL_TAKEOFF})
-# Commands whose position or altitude is read in the item's frame.
-_POSITIONED = _WAYPOINTS | _HERE_AT_ZERO | _TAKEOFFS
-# What a vehicle on the ground or water cannot do.
-_AIRBORNE_ONLY = _TAKEOFFS | frozenset(
-    {
-        _CMD.MAV_CMD_NAV_LAND,
-        _CMD.MAV_CMD_NAV_VTOL_LAND,
-        _CMD.MAV_CMD_NAV_LOITER_TO_ALT,
-        _CMD.MAV_CMD_NAV_PAYLOAD_PLACE,
-    }
-)
-_GROUND_VEHICLES = frozenset({"rover", "boat", "submarine"})
-GLOBAL_FRAMES = frozenset(
-    {
-        _CMD.MAV_FRAME_GLOBAL,
-        _CMD.MAV_FRAME_GLOBAL_RELATIVE_ALT,
-        _CMD.MAV_FRAME_GLOBAL_INT,
-        _CMD.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT,
-        _CMD.MAV_FRAME_GLOBAL_TERRAIN_ALT,
-        _CMD.MAV_FRAME_GLOBAL_TERRAIN_ALT_INT,
-    }
-)
-_RELATIVE_FRAMES = frozenset(
-    {_CMD.MAV_FRAME_GLOBAL_RELATIVE_ALT, _CMD.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT}
-)
-# DO_CHANGE_SPEED's speed: -1 leaves it unchanged, -2 restores the default (MAVLink spec).
-_SPEED_SENTINELS = (-1.0, -2.0)
-
-
-def _command_label(command: int) -> str:
-    entry = mavlink2.enums["MAV_CMD"].get(command)
-    return entry.name.removeprefix("MAV_CMD_") if entry is not None else f"MAV_CMD {command}"
-
-
-def _frame_label(frame: int) -> str:
-    entry = mavlink2.enums["MAV_FRAME"].get(frame)
-    return entry.name if entry is not None else f"frame {frame}"
-
-
-def item_problems(
-    item: MissionItem, count: int, vehicle_type: str = "multirotor", autopilot: str = "ardupilot"
-) -> list[str]:
-    """What is wrong with one item of a mission of ``count`` items, for this vehicle."""
-    command = item.command
-    if not known_command(command):
-        return [f"unknown MAV_CMD {command}"]
-    problems: list[str] = []
-    if vehicle_type in _GROUND_VEHICLES and command in _AIRBORNE_ONLY:
-        problems.append(f"a {vehicle_type} cannot do this")
-    if command in _POSITIONED and item.frame not in GLOBAL_FRAMES:
-        problems.append(
-            f"{_frame_label(item.frame)} is not a global frame; positions in a mission are "
-            "latitude, longitude and altitude (MAV_FRAME_GLOBAL, _RELATIVE_ALT or "
-            "_TERRAIN_ALT, or their _INT forms)"
-        )
-    at_zero = item.lat == 0.0 and item.lon == 0.0
-    if at_zero and (command in _WAYPOINTS or (command in _HERE_AT_ZERO and autopilot == "px4")):
-        problems.append("latitude and longitude are 0, 0: not a place to go (give its position)")
-    if command in _TAKEOFFS and item.frame in _RELATIVE_FRAMES and item.alt <= 0.0:
-        problems.append(f"take-off altitude {item.alt:g} m is not above home")
-    problems += _parameter_problems(item, count)
-    return problems
-
-
-def _parameter_problems(item: MissionItem, count: int) -> list[str]:
-    command, p1, p2 = item.command, item.param1, item.param2
-    problems: list[str] = []
-    if command == _CMD.MAV_CMD_NAV_WAYPOINT:
-        if p1 < 0.0:
-            problems.append(f"hold time {p1:g} s is negative")
-        if p2 < 0.0:
-            problems.append(f"acceptance radius {p2:g} m is negative")
-    elif command == _CMD.MAV_CMD_NAV_LOITER_TIME and p1 < 0.0:
-        problems.append(f"loiter time {p1:g} s is negative")
-    elif command == _CMD.MAV_CMD_NAV_LOITER_TURNS and not p1 > 0.0:
-        problems.append(f"{p1:g} turns: a loiter needs at least part of a turn")
-    elif command == _CMD.MAV_CMD_CONDITION_DELAY and p1 < 0.0:
-        problems.append(f"delay {p1:g} s is negative")
-    elif command == _CMD.MAV_CMD_CONDITION_DISTANCE and p1 < 0.0:
-        problems.append(f"distance {p1:g} m is negative")
-    elif command == _CMD.MAV_CMD_DO_SET_CAM_TRIGG_DIST and p1 < 0.0:
-        problems.append(f"trigger distance {p1:g} m is negative")
-    elif command == _CMD.MAV_CMD_DO_CHANGE_SPEED:
-        if p1 not in (0.0, 1.0, 2.0, 3.0):
-            problems.append(
-                f"speed type {p1:g} is not 0 (air), 1 (ground), 2 (climb) or 3 (descent)"
-            )
-        if not (math.isfinite(p2) and p2 > 0.0) and p2 not in _SPEED_SENTINELS:
-            problems.append(
-                f"speed {p2:g} m/s: a speed must be above 0 (or -1 to keep it, -2 for the default)"
-            )
-    elif command == _CMD.MAV_CMD_DO_JUMP:
-        target, repeat = p1, p2
-        # mission item n is sequence number n (0 is home)
-        if target != int(target) or not 1 <= target <= count:
-            problems.append(f"jump target {target:g} is not an item of this mission (1..{count})")
-        if repeat != int(repeat) or repeat < -1:
-            problems.append(f"repeat count {repeat:g} is not a whole number >= -1")
-    return problems
-
-
-def mission_problems(
-    items: Sequence[MissionItem], vehicle_type: str = "multirotor", autopilot: str = "ardupilot"
-) -> list[str]:
-    """Every problem of every item, each naming its item (1 is the first after home)."""
-    return [
-        f"item {number} ({_command_label(item.command)}): {problem}"
-        for number, item in enumerate(items, start=1)
-        for problem in item_problems(item, len(items), vehicle_type, autopilot)
-    ]
 
 
 class MissionClient:
@@ -204,7 +69,9 @@ class MissionClient:
         """Home as item 0, from HOME_POSITION when the vehicle has reported it."""
         home = self.link.latest.get("HOME_POSITION")
         if home is None:
-            return MissionItem(command=mavlink2.MAV_CMD_NAV_WAYPOINT, frame=0)
+            return MissionItem(
+                command=mavlink2.MAV_CMD_NAV_WAYPOINT, frame=mavlink2.MAV_FRAME_GLOBAL
+            )
         return MissionItem(
             command=mavlink2.MAV_CMD_NAV_WAYPOINT,
             frame=mavlink2.MAV_FRAME_GLOBAL,
@@ -225,7 +92,9 @@ class MissionClient:
             )
         # Item 0 is home on ArduPilot; the vehicle keeps its own, so a placeholder will do.
         # PX4 has no home item: a placeholder there would be a waypoint at 0°N 0°E.
-        placeholder = MissionItem(command=mavlink2.MAV_CMD_NAV_WAYPOINT, frame=0)
+        placeholder = MissionItem(
+            command=mavlink2.MAV_CMD_NAV_WAYPOINT, frame=mavlink2.MAV_FRAME_GLOBAL
+        )
         sequence = [placeholder] * home_slots(autopilot) + list(items)
         system, component = self._target()
         count = mavlink2.MAVLink_mission_count_message(system, component, len(sequence), MISSION)

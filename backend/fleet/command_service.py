@@ -20,8 +20,8 @@ from backend.errors import (
     VehicleOffline,
     VehicleRefused,
 )
+from backend.fleet.collaborators import CommandServices
 from backend.fleet.mission_gate import check_current_item, starts_mission, unchecked_mission
-from backend.hub import Hub
 from backend.storage.logbook import command_row
 from backend.storage.models import CommandRow
 from protocol.messages import Command, CommandOutcome
@@ -30,7 +30,7 @@ log = logging.getLogger(__name__)
 
 
 async def execute_command(
-    hub: Hub,
+    hub: CommandServices,
     principal: Principal,
     source: str,
     vehicle_id: str,
@@ -107,7 +107,7 @@ async def execute_command(
 
 
 async def execute_expecting_acceptance(
-    hub: Hub,
+    hub: CommandServices,
     principal: Principal,
     source: str,
     vehicle_id: str,
@@ -123,7 +123,7 @@ async def execute_expecting_acceptance(
 
 
 async def _log(
-    hub: Hub,
+    hub: CommandServices,
     principal: Principal,
     vehicle_id: str,
     command: Command,

@@ -11,8 +11,8 @@ from __future__ import annotations
 import asyncio
 
 from backend.errors import CommandTimedOut, InvalidRequest, VehicleRefused
+from backend.fleet.collaborators import MissionServices
 from backend.fleet.registry import VehicleRecord
-from backend.hub import Hub
 from backend.safety import Violation
 from backend.safety.rails import MISSION_UNCHECKED
 from protocol.messages import (
@@ -32,7 +32,7 @@ def starts_mission(command: Command) -> bool:
     return isinstance(command, SetModeCommand) and command.mode.upper() in MISSION_MODES
 
 
-async def on_board_mission(hub: Hub, vehicle_id: str) -> list[MissionItem]:
+async def on_board_mission(hub: MissionServices, vehicle_id: str) -> list[MissionItem]:
     """The vehicle's mission now, without home (item 1 first). Raises GcsError when it
     cannot be read (VehicleRefused, or the dispatcher's own errors)."""
     outcome = await hub.dispatcher.execute(vehicle_id, MissionDownloadCommand())
@@ -41,7 +41,9 @@ async def on_board_mission(hub: Hub, vehicle_id: str) -> list[MissionItem]:
     return list(outcome.items[1:])
 
 
-async def unchecked_mission(hub: Hub, record: VehicleRecord) -> tuple[list[Violation], int]:
+async def unchecked_mission(
+    hub: MissionServices, record: VehicleRecord
+) -> tuple[list[Violation], int]:
     """Every problem of the mission on board (the mission check, as for an upload), and
     its number of items; a mission that cannot be read or is empty is a violation too."""
     try:
@@ -55,7 +57,7 @@ async def unchecked_mission(hub: Hub, record: VehicleRecord) -> tuple[list[Viola
     return list(check.violations), len(items)
 
 
-async def check_current_item(hub: Hub, record: VehicleRecord, command: Command) -> None:
+async def check_current_item(hub: MissionServices, record: VehicleRecord, command: Command) -> None:
     """Refuse at once a current item beyond the mission, naming its length.
 
     The vehicle's MISSION_CURRENT.total is trusted to let an item through; an item beyond

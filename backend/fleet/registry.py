@@ -4,10 +4,33 @@ from __future__ import annotations
 
 from collections.abc import Iterable
 from dataclasses import dataclass, field
+from typing import Protocol
 
 from backend.errors import VehicleNotFound
-from backend.storage.models import VehicleRow
 from protocol.messages import Hello, Telemetry, VehicleState, VehicleSummary
+
+
+class KnownVehicle(Protocol):
+    """A vehicle as stored by an earlier run (the store's vehicle row is one); the live
+    state is plain data and imports nothing of the store."""
+
+    @property
+    def id(self) -> str: ...
+
+    @property
+    def autopilot(self) -> str: ...
+
+    @property
+    def vehicle_type(self) -> str: ...
+
+    @property
+    def modes(self) -> str: ...  # comma-separated
+
+    @property
+    def system_id(self) -> int: ...
+
+    @property
+    def last_seen(self) -> float: ...
 
 
 @dataclass
@@ -43,7 +66,7 @@ class FleetRegistry:
     def __len__(self) -> int:
         return len(self._vehicles)
 
-    def load(self, rows: Iterable[VehicleRow]) -> None:
+    def load(self, rows: Iterable[KnownVehicle]) -> None:
         """Vehicles known from earlier runs, offline until their agent connects."""
         for row in rows:
             self._vehicles[row.id] = VehicleRecord(

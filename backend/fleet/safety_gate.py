@@ -33,7 +33,7 @@ from protocol.messages import (
     SetHomeCommand,
     TakeoffCommand,
 )
-from vehicle_agents.missions import mission_problems
+from protocol.mission_rules import mission_problems
 
 # Below this height a vehicle counts as on the ground for the launch rules.
 LANDED_BELOW_M = 0.5

@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 from protocol.messages import MissionItem
-from vehicle_agents.missions import mission_problems
+from protocol.mission_rules import mission_problems
 
 TAKEOFF, WAYPOINT, LOITER_TIME, LOITER_TURNS, LAND, RTL = 22, 16, 19, 18, 21, 20
 CHANGE_SPEED, JUMP, DELAY, CAM_TRIGG_DIST = 178, 177, 112, 206

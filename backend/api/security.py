@@ -38,8 +38,7 @@ def client_address(connection: HTTPConnection) -> str:
 
 
 async def principal_of(connection: HTTPConnection) -> Principal | None:
-    accounts = get_hub(connection).accounts
-    return await presented_principal(connection.headers, connection.cookies, accounts)
+    return await presented_principal(connection, get_hub(connection).accounts)
 
 
 async def get_principal(
@@ -47,7 +46,7 @@ async def get_principal(
 ) -> Principal:
     principal = await principal_of(request)
     if principal is None:
-        if presented_token(request.headers, request.cookies) is None:
+        if presented_token(request) is None:
             raise Unauthenticated("not authenticated: log in or send a bearer token")
         raise Unauthenticated("the token is invalid, expired or revoked")
     request.state.principal = principal

@@ -2,19 +2,31 @@
 
 The REST routes (``backend.api.security``) and the dashboards' live feed
 (``backend.realtime.client_feed``) read them the same way: a bearer token in the
-Authorization header, else the dashboard's session cookie. Headers and cookies come in as
-plain mappings, so this knows nothing of HTTP and both layers may import it.
+Authorization header, else the dashboard's session cookie. A connection is anything with
+headers and cookies (Starlette's requests and WebSockets are), so this knows nothing of
+HTTP and both layers may import it.
 """
 
 from __future__ import annotations
 
 import asyncio
 from collections.abc import Mapping
+from typing import Protocol
 
 from backend.auth.accounts import Accounts
 from backend.auth.policy import Principal
 
 SESSION_COOKIE = "gcs_session"
+
+
+class Presenting(Protocol):
+    """A connection as far as its credentials go."""
+
+    @property
+    def headers(self) -> Mapping[str, str]: ...
+
+    @property
+    def cookies(self) -> Mapping[str, str]: ...
 
 
 def bearer_token(header: str | None) -> str | None:
@@ -25,18 +37,16 @@ def bearer_token(header: str | None) -> str | None:
     return token.strip() if scheme.lower() == "bearer" and token.strip() else None
 
 
-def presented_token(headers: Mapping[str, str], cookies: Mapping[str, str]) -> str | None:
+def presented_token(connection: Presenting) -> str | None:
     """A bearer token from the Authorization header, else the dashboard's session cookie."""
-    header = headers.get("authorization")
+    header = connection.headers.get("authorization")
     if header:
         return bearer_token(header)
-    return cookies.get(SESSION_COOKIE)
+    return connection.cookies.get(SESSION_COOKIE)
 
 
-async def presented_principal(
-    headers: Mapping[str, str], cookies: Mapping[str, str], accounts: Accounts
-) -> Principal | None:
-    token = presented_token(headers, cookies)
+async def presented_principal(connection: Presenting, accounts: Accounts) -> Principal | None:
+    token = presented_token(connection)
     if token is None:
         return None
     # One resolver for every token: an agent may use the REST routes that name its

@@ -66,8 +66,7 @@ class ClientFeed(PeerConnection):
             log.warning("refused client from %s: origin %s not allowed", self.peer, origin)
             await self.close(CloseCode.FORBIDDEN, f"origin {origin} is not allowed")
             return
-        headers, cookies = self.websocket.headers, self.websocket.cookies
-        principal = await presented_principal(headers, cookies, self.hub.accounts)
+        principal = await presented_principal(self.websocket, self.hub.accounts)
         if principal is None:
             await self.close(CloseCode.UNAUTHORIZED, "not authenticated: log in first")
             return

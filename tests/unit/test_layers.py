@@ -52,16 +52,31 @@ UPWARD = {
 }
 
 
-@pytest.mark.parametrize(("module", "imported"), UPWARD.values(), ids=UPWARD.keys())
-def test_an_upward_import_breaks_a_contract(tmp_path: Path, module: str, imported: str) -> None:
+@pytest.fixture(scope="module")
+def tree(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A copy of our packages, to plant an import in."""
+    copy = tmp_path_factory.mktemp("tree")
     for package in PACKAGES:
         shutil.copytree(
-            ROOT / package, tmp_path / package, ignore=shutil.ignore_patterns("__pycache__")
+            ROOT / package, copy / package, ignore=shutil.ignore_patterns("__pycache__")
         )
-    planted = tmp_path / module
-    before = planted.read_text() if planted.exists() else ""
-    planted.write_text(f"{before}\nimport {imported}  # noqa\n")
-    result = lint_imports(tmp_path)
+    untouched = lint_imports(copy)  # so what breaks a contract below is the planted import
+    assert untouched.returncode == 0, untouched.stdout + untouched.stderr
+    return copy
+
+
+@pytest.mark.parametrize(("module", "imported"), UPWARD.values(), ids=UPWARD.keys())
+def test_an_upward_import_breaks_a_contract(tree: Path, module: str, imported: str) -> None:
+    planted = tree / module
+    before = planted.read_text() if planted.exists() else None
+    planted.write_text(f"{before or ''}\nimport {imported}  # noqa\n")
+    try:
+        result = lint_imports(tree)
+    finally:
+        if before is None:
+            planted.unlink()
+        else:
+            planted.write_text(before)
     assert result.returncode == 1, result.stdout + result.stderr
     assert "BROKEN" in result.stdout
     assert imported.split(".")[0] in result.stdout

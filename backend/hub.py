@@ -6,7 +6,6 @@ import asyncio
 import logging
 import time
 from dataclasses import dataclass, field
-from typing import Protocol
 
 from sqlalchemy import Engine
 from sqlalchemy.exc import SQLAlchemyError
@@ -20,6 +19,7 @@ from backend.fleet.commands import CommandDispatcher
 from backend.fleet.registry import FleetRegistry, VehicleRecord
 from backend.fleet.safety_gate import SafetyGate
 from backend.realtime.bus import InProcessBus, ReliableSubscription, Topic
+from backend.realtime.collaborators import AgentConnection, ClientConnection
 from backend.settings import HubSettings
 from backend.storage.database import make_engine, migrate
 from backend.storage.logbook import Logbook
@@ -34,27 +34,6 @@ from backend.storage.writer import StorageWriter
 from protocol.messages import CloseCode
 
 log = logging.getLogger(__name__)
-
-
-class AgentConnection(Protocol):
-    token_id: int | None
-    stream_id: str | None
-    peer: str
-
-    async def answers_within(self, timeout_s: float) -> bool: ...
-
-    async def close(self, code: int, reason: str) -> None: ...
-
-    def acknowledge(self, key: StreamKey, seq: int) -> None: ...
-
-    def request_resend(self, gap: Gap) -> None: ...
-
-
-class ClientConnection(Protocol):
-    user: str
-    token_id: int | None
-
-    async def close(self, code: int, reason: str) -> None: ...
 
 
 @dataclass

@@ -24,7 +24,7 @@ from typing import Any
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from backend.api.security import SESSION_COOKIE  # noqa: E402
+from backend.auth.credentials import SESSION_COOKIE  # noqa: E402
 from backend.auth.policy import AGENT_MESSAGE_PERMISSIONS, CLIENT_MESSAGE_PERMISSIONS  # noqa: E402
 from backend.realtime.agent_gateway import HELLO_TIMEOUT_S  # noqa: E402
 from backend.settings import HubSettings  # noqa: E402

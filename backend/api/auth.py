@@ -11,13 +11,13 @@ from pydantic import BaseModel, Field
 
 from backend.api.deps import HubDep
 from backend.api.security import (
-    SESSION_COOKIE,
     CurrentPrincipal,
     SecuredRouter,
     audit_entry,
     client_address,
     requires,
 )
+from backend.auth.credentials import SESSION_COOKIE
 from backend.auth.policy import PUBLIC, ROLE_PERMISSIONS, Permission, Role, user_principal
 from backend.errors import Forbidden, RateLimited, Unauthenticated
 from backend.hub import Hub

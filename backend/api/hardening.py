@@ -1,4 +1,5 @@
-"""Transport hardening: security headers, request-size limits, WebSocket origin checks."""
+"""Transport hardening: security headers and request-size limits (the WebSocket origin
+check is the live feed's own, in backend/realtime/client_feed.py)."""
 
 from __future__ import annotations
 
@@ -7,7 +8,6 @@ from urllib.parse import urlsplit
 
 from starlette.datastructures import Headers
 from starlette.exceptions import HTTPException
-from starlette.requests import HTTPConnection
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
 SECURITY_HEADERS = {
@@ -118,19 +118,3 @@ class BodyTooLarge(HTTPException):
 
     def __init__(self, limit: int) -> None:
         super().__init__(413, f"request body is over the {limit}-byte limit")
-
-
-def origin_allowed(connection: HTTPConnection, allowed_origins: list[str]) -> bool:
-    """Browsers send Origin on WebSockets and CORS does not cover them, so check here:
-    the page's own origin and the configured ones may connect; non-browser clients
-    (agents, scripts) send no Origin and authenticate with tokens instead."""
-    origin = connection.headers.get("origin")
-    if origin is None:
-        return True
-    if origin in allowed_origins:
-        return True
-    # The page's own origin is scheme and host: an http:// page (a MITM on the field LAN
-    # can serve one) must not open the socket of a hub served over https://, nor the reverse.
-    secure = connection.url.scheme in ("https", "wss")
-    own = f"{'https' if secure else 'http'}://{connection.headers.get('host', '')}"
-    return origin.lower() == own.lower()

@@ -7,7 +7,6 @@ and a new route without a policy fails at import time, not in production.
 
 from __future__ import annotations
 
-import asyncio
 from collections.abc import Callable
 from typing import Annotated, Any
 
@@ -19,10 +18,10 @@ from starlette.requests import HTTPConnection
 from backend.api.deps import get_hub
 from backend.api.finite_json import FiniteJsonRoute
 from backend.audit import AuditEntry
+from backend.auth.credentials import presented_principal, presented_token
 from backend.auth.policy import PUBLIC, Permission, Principal, authorize
 from backend.errors import Forbidden, Unauthenticated
 
-SESSION_COOKIE = "gcs_session"
 PERMISSION_KEY = "x-required-permission"
 
 # Declares the bearer scheme in the OpenAPI document (the docs' "Authorize" button).
@@ -38,29 +37,8 @@ def client_address(connection: HTTPConnection) -> str:
     return connection.client.host if connection.client else "unknown"
 
 
-def bearer_token(header: str | None) -> str | None:
-    """The token of an ``Authorization: Bearer <token>`` header, if that is what it is."""
-    if header is None:
-        return None
-    scheme, _, token = header.partition(" ")
-    return token.strip() if scheme.lower() == "bearer" and token.strip() else None
-
-
-def presented_token(connection: HTTPConnection) -> str | None:
-    """A bearer token from the Authorization header, else the dashboard's session cookie."""
-    header = connection.headers.get("authorization")
-    if header:
-        return bearer_token(header)
-    return connection.cookies.get(SESSION_COOKIE)
-
-
 async def principal_of(connection: HTTPConnection) -> Principal | None:
-    token = presented_token(connection)
-    if token is None:
-        return None
-    # One resolver for every token: an agent may use the REST routes that name its
-    # permission (a .tlog upload) with whatever token it was enrolled or provisioned with.
-    return await asyncio.to_thread(get_hub(connection).accounts.resolve_token, token)
+    return await presented_principal(connection, get_hub(connection).accounts)
 
 
 async def get_principal(

@@ -20,8 +20,8 @@ from backend.errors import (
     VehicleOffline,
     VehicleRefused,
 )
+from backend.fleet.collaborators import CommandServices
 from backend.fleet.mission_gate import check_current_item, unchecked_mission
-from backend.hub import Hub
 from backend.missions.gate import starts_mission
 from backend.storage.logbook import command_row
 from backend.storage.models import CommandRow
@@ -31,7 +31,7 @@ log = logging.getLogger(__name__)
 
 
 async def execute_command(
-    hub: Hub,
+    hub: CommandServices,
     principal: Principal,
     source: str,
     vehicle_id: str,
@@ -108,7 +108,7 @@ async def execute_command(
 
 
 async def execute_expecting_acceptance(
-    hub: Hub,
+    hub: CommandServices,
     principal: Principal,
     source: str,
     vehicle_id: str,
@@ -124,7 +124,7 @@ async def execute_expecting_acceptance(
 
 
 async def _log(
-    hub: Hub,
+    hub: CommandServices,
     principal: Principal,
     vehicle_id: str,
     command: Command,

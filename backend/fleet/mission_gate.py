@@ -11,8 +11,8 @@ from __future__ import annotations
 import asyncio
 
 from backend.errors import CommandTimedOut, InvalidRequest, VehicleRefused
+from backend.fleet.collaborators import MissionServices
 from backend.fleet.registry import VehicleRecord
-from backend.hub import Hub
 from backend.missions.gate import (
     current_item_problem,
     current_item_trusted,
@@ -28,7 +28,7 @@ from protocol.messages import (
 )
 
 
-async def on_board_mission(hub: Hub, vehicle_id: str) -> list[MissionItem]:
+async def on_board_mission(hub: MissionServices, vehicle_id: str) -> list[MissionItem]:
     """The vehicle's mission now, without home (item 1 first). Raises GcsError when it
     cannot be read (VehicleRefused, or the dispatcher's own errors)."""
     outcome = await hub.dispatcher.execute(vehicle_id, MissionDownloadCommand())
@@ -37,7 +37,9 @@ async def on_board_mission(hub: Hub, vehicle_id: str) -> list[MissionItem]:
     return list(outcome.items[1:])
 
 
-async def unchecked_mission(hub: Hub, record: VehicleRecord) -> tuple[list[Violation], int]:
+async def unchecked_mission(
+    hub: MissionServices, record: VehicleRecord
+) -> tuple[list[Violation], int]:
     """Every problem of the mission on board (the mission check, as for an upload), and
     its number of items; a mission that cannot be read or is empty is a violation too."""
     try:
@@ -50,9 +52,12 @@ async def unchecked_mission(hub: Hub, record: VehicleRecord) -> tuple[list[Viola
     return list(check.violations), len(items)
 
 
-async def check_current_item(hub: Hub, record: VehicleRecord, command: Command) -> None:
-    """Refuse at once a current item beyond the mission, naming its length; the mission
-    on board is read only when the vehicle's own total does not let the item through."""
+async def check_current_item(hub: MissionServices, record: VehicleRecord, command: Command) -> None:
+    """Refuse at once a current item beyond the mission, naming its length.
+
+    The vehicle's MISSION_CURRENT.total is trusted to let an item through; an item beyond
+    it (or an unknown total) is confirmed against the mission on board first, since the
+    total trails a fresh upload by up to a telemetry period."""
     if not isinstance(command, MissionSetCurrentCommand):
         return
     total = record.state.mission_total if record.state else None

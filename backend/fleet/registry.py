@@ -4,14 +4,36 @@ from __future__ import annotations
 
 from collections.abc import Iterable
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Protocol
 
 from backend.errors import VehicleNotFound
-from backend.storage.models import VehicleRow
 from protocol.messages import Hello, Telemetry, VehicleState, VehicleSummary
 
 if TYPE_CHECKING:
     from backend.fleet.commands import AgentChannel
+
+
+class KnownVehicle(Protocol):
+    """A vehicle as stored by an earlier run (the store's vehicle row is one); the live
+    state is plain data and imports nothing of the store."""
+
+    @property
+    def id(self) -> str: ...
+
+    @property
+    def autopilot(self) -> str: ...
+
+    @property
+    def vehicle_type(self) -> str: ...
+
+    @property
+    def modes(self) -> str: ...  # comma-separated
+
+    @property
+    def system_id(self) -> int: ...
+
+    @property
+    def last_seen(self) -> float: ...
 
 
 @dataclass
@@ -53,7 +75,7 @@ class FleetRegistry:
     def __len__(self) -> int:
         return len(self._vehicles)
 
-    def load(self, rows: Iterable[VehicleRow]) -> None:
+    def load(self, rows: Iterable[KnownVehicle]) -> None:
         """Vehicles known from earlier runs, offline until their agent connects."""
         for row in rows:
             self._vehicles[row.id] = VehicleRecord(

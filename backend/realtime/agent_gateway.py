@@ -10,13 +10,13 @@ import time
 from sqlalchemy.exc import SQLAlchemyError
 from starlette.websockets import WebSocket, WebSocketDisconnect
 
-from backend.api.security import bearer_token
+from backend.auth.credentials import bearer_token
 from backend.auth.policy import AGENT_MESSAGE_PERMISSIONS, Principal, authorize_message
 from backend.errors import Forbidden
 from backend.fleet.commands import AgentChannel
-from backend.hub import Hub
 from backend.realtime.agent_admission import Clash, judge
 from backend.realtime.bus import Topic
+from backend.realtime.collaborators import GatewayServices
 from backend.realtime.frames import FrameTooLarge, PeerConnection
 from backend.storage.records import LostFrames, StoredEvent, TelemetryEnvelope
 from backend.storage.sequences import Gap, StreamKey
@@ -47,7 +47,7 @@ HELLO_TIMEOUT_S = 10.0
 
 
 class AgentSession(PeerConnection):
-    def __init__(self, websocket: WebSocket, hub: Hub) -> None:
+    def __init__(self, websocket: WebSocket, hub: GatewayServices) -> None:
         super().__init__(websocket, hub.settings.max_frame_bytes, hub.settings.max_bad_frames)
         self.hub = hub
         self.token_id: int | None = None

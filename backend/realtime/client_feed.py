@@ -7,10 +7,10 @@ import contextlib
 import logging
 import time
 
+from starlette.requests import HTTPConnection
 from starlette.websockets import WebSocket, WebSocketDisconnect
 
-from backend.api.hardening import origin_allowed
-from backend.api.security import presented_token, principal_of
+from backend.auth.credentials import presented_principal, presented_token
 from backend.auth.policy import (
     CLIENT_MESSAGE_PERMISSIONS,
     Permission,
@@ -18,8 +18,8 @@ from backend.auth.policy import (
     authorize_message,
 )
 from backend.errors import Forbidden
-from backend.hub import Hub
 from backend.realtime.bus import LatestSubscription, Topic
+from backend.realtime.collaborators import FeedServices
 from backend.realtime.frames import FrameTooLarge, PeerConnection
 from protocol.messages import (
     CloseCode,
@@ -36,8 +36,24 @@ from protocol.messages import (
 log = logging.getLogger(__name__)
 
 
+def origin_allowed(connection: HTTPConnection, allowed_origins: list[str]) -> bool:
+    """Browsers send Origin on WebSockets and CORS does not cover them, so check here:
+    the page's own origin and the configured ones may connect; non-browser clients
+    (agents, scripts) send no Origin and authenticate with tokens instead."""
+    origin = connection.headers.get("origin")
+    if origin is None:
+        return True
+    if origin in allowed_origins:
+        return True
+    # The page's own origin is scheme and host: an http:// page (a MITM on the field LAN
+    # can serve one) must not open the socket of a hub served over https://, nor the reverse.
+    secure = connection.url.scheme in ("https", "wss")
+    own = f"{'https' if secure else 'http'}://{connection.headers.get('host', '')}"
+    return origin.lower() == own.lower()
+
+
 class ClientFeed(PeerConnection):
-    def __init__(self, websocket: WebSocket, hub: Hub) -> None:
+    def __init__(self, websocket: WebSocket, hub: FeedServices) -> None:
         super().__init__(websocket, hub.settings.max_frame_bytes, hub.settings.max_bad_frames)
         self.hub = hub
         self.user = ""
@@ -50,7 +66,7 @@ class ClientFeed(PeerConnection):
             log.warning("refused client from %s: origin %s not allowed", self.peer, origin)
             await self.close(CloseCode.FORBIDDEN, f"origin {origin} is not allowed")
             return
-        principal = await principal_of(self.websocket)
+        principal = await presented_principal(self.websocket, self.hub.accounts)
         if principal is None:
             # The reason says how to get in: a script reads it, and a close reason has at
             # most 123 bytes, so the details are in docs/websockets.md.

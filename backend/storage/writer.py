@@ -14,11 +14,11 @@ import logging
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Protocol
 
 from sqlalchemy.exc import OperationalError, SQLAlchemyError
 from sqlalchemy.exc import TimeoutError as PoolTimeout
 
-from backend.realtime.bus import ReliableSubscription
 from backend.storage.flights import FlightClosed, FlightOpened, FlightTracker
 from backend.storage.logbook import Logbook
 from backend.storage.records import LostFrames, StoredEvent, StoredRecord, TelemetryEnvelope
@@ -33,6 +33,20 @@ GAP_REASK_S = 10.0  # how often a gap that is still open is asked for again
 SequenceNews = Callable[[dict[StreamKey, int], list[Gap]], None]
 
 log = logging.getLogger(__name__)
+
+
+class Inbox(Protocol):
+    """Where the writer's records wait: the bus's reliable subscription, whose bound is the
+    backpressure (backend.realtime.bus). Declared here, as storage imports no layer above."""
+
+    @property
+    def maxsize(self) -> int: ...
+
+    def qsize(self) -> int: ...
+
+    async def get(self) -> StoredRecord: ...
+
+    def get_nowait(self) -> StoredRecord: ...
 
 
 @dataclass
@@ -55,7 +69,7 @@ class StorageWriter:
         self,
         repository: Repository,
         logbook: Logbook,
-        source: ReliableSubscription,
+        source: Inbox,
         batch_size: int,
         flush_interval_s: float,
         retry: Backoff = Backoff(initial_s=0.5, max_s=10.0),

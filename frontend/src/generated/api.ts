@@ -1788,6 +1788,16 @@ export interface components {
              * @default UNKNOWN
              */
             system_status: string;
+            /**
+             * Landed State
+             * @description Whether it flies: on_ground, or airborne (takeoff, in_air, landing). Use this, not the altitude (a field above or below home misleads it). Null until known.
+             */
+            landed_state?: ("on_ground" | "takeoff" | "in_air" | "landing") | null;
+            /**
+             * Landed State Source
+             * @description autopilot: EXTENDED_SYS_STATE.landed_state (ArduCopter, ArduPlane, PX4); derived: the agent's guess from armed, the altitude above home and the climb rate, where the autopilot does not say (ArduPilot Rover, old firmware): never takeoff or landing, and a ground vehicle is always on_ground
+             */
+            landed_state_source?: ("autopilot" | "derived") | null;
             /** Lat */
             lat?: number | null;
             /** Lon */

@@ -1,0 +1,38 @@
+"""What the command path needs of the hub, as a structural type.
+
+The hub (``backend.hub.Hub``) wires these collaborators once per process and sits above
+this layer, so the fleet's services never import it: they declare here what they use, and
+the API layer hands them the hub, which provides all of it.
+"""
+
+from __future__ import annotations
+
+from typing import Protocol
+
+from backend.audit import AuditEntry
+from backend.fleet.commands import CommandDispatcher
+from backend.fleet.registry import FleetRegistry
+from backend.fleet.safety_gate import SafetyGate
+from backend.storage.spool import RowSpool
+
+
+class MissionServices(Protocol):
+    """What the checks against the mission on board use (``backend.fleet.mission_gate``)."""
+
+    @property
+    def dispatcher(self) -> CommandDispatcher: ...
+
+    @property
+    def safety(self) -> SafetyGate: ...
+
+
+class CommandServices(MissionServices, Protocol):
+    """What sending one command uses (``backend.fleet.command_service``)."""
+
+    @property
+    def registry(self) -> FleetRegistry: ...
+
+    @property
+    def spool(self) -> RowSpool: ...
+
+    async def record(self, entry: AuditEntry) -> None: ...

@@ -1,0 +1,98 @@
+"""What the live sessions and the hub need of each other, as structural types.
+
+The hub (``backend.hub.Hub``) wires the sessions' collaborators once per process and sits
+above this layer, so the sessions never import it: each declares here what it uses, and the
+API layer hands them the hub, which provides all of it. The hub, in turn, keeps the live
+sessions by the two connection types, so it never imports the sessions either.
+"""
+
+from __future__ import annotations
+
+import asyncio
+from typing import Protocol
+
+from backend.auth.accounts import Accounts
+from backend.fleet.commands import CommandDispatcher
+from backend.fleet.registry import FleetRegistry, VehicleRecord
+from backend.realtime.bus import Bus
+from backend.settings import HubSettings
+from backend.storage.repository import Repository
+from backend.storage.sequences import Gap, StreamKey
+
+
+class AgentConnection(Protocol):
+    """An agent's live session, as the hub keeps it (to acknowledge, to revoke)."""
+
+    token_id: int | None
+    stream_id: str | None
+    peer: str
+
+    async def answers_within(self, timeout_s: float) -> bool: ...
+
+    async def close(self, code: int, reason: str) -> None: ...
+
+    def acknowledge(self, key: StreamKey, seq: int) -> None: ...
+
+    def request_resend(self, gap: Gap) -> None: ...
+
+
+class ClientConnection(Protocol):
+    """A dashboard's or integration's live feed, as the hub keeps it (to revoke)."""
+
+    user: str
+    token_id: int | None
+
+    async def close(self, code: int, reason: str) -> None: ...
+
+
+class FeedServices(Protocol):
+    """What a client feed uses of the hub."""
+
+    @property
+    def settings(self) -> HubSettings: ...
+
+    @property
+    def registry(self) -> FleetRegistry: ...
+
+    @property
+    def bus(self) -> Bus: ...
+
+    @property
+    def accounts(self) -> Accounts: ...
+
+    @property
+    def client_feeds(self) -> set[ClientConnection]: ...
+
+
+class GatewayServices(Protocol):
+    """What an agent's session uses of the hub."""
+
+    @property
+    def settings(self) -> HubSettings: ...
+
+    @property
+    def registry(self) -> FleetRegistry: ...
+
+    @property
+    def bus(self) -> Bus: ...
+
+    @property
+    def accounts(self) -> Accounts: ...
+
+    @property
+    def repository(self) -> Repository: ...
+
+    @property
+    def dispatcher(self) -> CommandDispatcher: ...
+
+    @property
+    def agent_sessions(self) -> dict[str, AgentConnection]: ...
+
+    @property
+    def agent_admissions(self) -> dict[str, asyncio.Lock]: ...
+
+    async def store_event(
+        self, vehicle_id: str, kind: str, text: str, severity: int | None = None
+    ) -> None: ...
+
+    async def publish_state(self, record: VehicleRecord) -> None: ...

@@ -1,0 +1,82 @@
+"""Imports point one way: the import-linter contracts in pyproject.toml hold, and an import
+that points up breaks one of them (so it fails this test, not a review)."""
+
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[2]
+CONFIG = ROOT / "pyproject.toml"
+PACKAGES = ("protocol", "common", "vehicle_agents", "simulator", "backend", "gcs")
+LINT_IMPORTS = Path(sys.executable).with_name("lint-imports")
+
+
+def lint_imports(tree: Path) -> subprocess.CompletedProcess[str]:
+    """`lint-imports` over the packages found first in `tree`, with our contracts."""
+    environment = {**os.environ, "PYTHONPATH": str(tree)}
+    return subprocess.run(
+        [str(LINT_IMPORTS), "--no-cache", str(CONFIG)],
+        capture_output=True,
+        text=True,
+        cwd=tree,
+        env=environment,
+        timeout=120,
+        check=False,
+    )
+
+
+def test_every_import_keeps_its_layer() -> None:
+    result = lint_imports(ROOT)
+    assert result.returncode == 0, result.stdout + result.stderr
+    assert "0 broken" in result.stdout
+
+
+# An import each contract forbids: the module that imports, and what it imports.
+UPWARD = {
+    "storage imports the api": ("backend/storage/upward.py", "backend.api.security"),
+    "realtime imports the hub": ("backend/realtime/upward.py", "backend.hub"),
+    "the domain imports the fleet": ("backend/safety/upward.py", "backend.fleet.registry"),
+    "the hub imports the agent": ("backend/fleet/upward.py", "vehicle_agents.missions"),
+    "the agent imports the hub": ("vehicle_agents/upward.py", "backend.errors"),
+    "the simulator imports the agent": ("simulator/upward.py", "vehicle_agents.config"),
+    "the protocol imports common": ("protocol/upward.py", "common.retry"),
+    "the hub imports the command line": ("backend/api/upward.py", "gcs.launcher"),
+    "the agent imports the database": ("vehicle_agents/upward.py", "sqlalchemy"),
+    "the registry imports the store": ("backend/fleet/registry.py", "backend.storage.models"),
+}
+
+
+@pytest.fixture(scope="module")
+def tree(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A copy of our packages, to plant an import in."""
+    copy = tmp_path_factory.mktemp("tree")
+    for package in PACKAGES:
+        shutil.copytree(
+            ROOT / package, copy / package, ignore=shutil.ignore_patterns("__pycache__")
+        )
+    untouched = lint_imports(copy)  # so what breaks a contract below is the planted import
+    assert untouched.returncode == 0, untouched.stdout + untouched.stderr
+    return copy
+
+
+@pytest.mark.parametrize(("module", "imported"), UPWARD.values(), ids=UPWARD.keys())
+def test_an_upward_import_breaks_a_contract(tree: Path, module: str, imported: str) -> None:
+    planted = tree / module
+    before = planted.read_text() if planted.exists() else None
+    planted.write_text(f"{before or ''}\nimport {imported}  # noqa\n")
+    try:
+        result = lint_imports(tree)
+    finally:
+        if before is None:
+            planted.unlink()
+        else:
+            planted.write_text(before)
+    assert result.returncode == 1, result.stdout + result.stderr
+    assert "BROKEN" in result.stdout
+    assert imported.split(".")[0] in result.stdout

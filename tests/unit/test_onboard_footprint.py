@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -23,8 +24,16 @@ def test_the_agent_loads_one_dialect() -> None:
         "                and m is not None)\n"
         "print(module.mavlink.__name__, loaded)\n"
     )
+    # As the agent starts: an earlier test's import of mavutil in this process sets
+    # MAVLINK_DIALECT=all in the environment a child would inherit.
+    env = {k: v for k, v in os.environ.items() if k not in ("MAVLINK_DIALECT", "MAVLINK20")}
     done = subprocess.run(
-        [sys.executable, "-c", script], capture_output=True, text=True, timeout=60, check=True
+        [sys.executable, "-c", script],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        check=True,
+        env=env,
     )
     dialect = "pymavlink.dialects.v20.ardupilotmega"
     assert done.stdout.strip() == f"{dialect} ['{dialect}']"

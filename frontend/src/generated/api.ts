@@ -2055,7 +2055,7 @@ export interface operations {
                     "application/json": components["schemas"]["Unprocessable"];
                 };
             };
-            /** @description Too many attempts; try again after Retry-After seconds */
+            /** @description Too many attempts, or too many requests to vehicles (commands, parameters, missions share one budget per user); try again after Retry-After seconds */
             429: {
                 headers: {
                     /** @description Seconds to wait */
@@ -2128,7 +2128,7 @@ export interface operations {
                     "application/json": components["schemas"]["Unprocessable"];
                 };
             };
-            /** @description Too many attempts; try again after Retry-After seconds */
+            /** @description Too many attempts, or too many requests to vehicles (commands, parameters, missions share one budget per user); try again after Retry-After seconds */
             429: {
                 headers: {
                     /** @description Seconds to wait */
@@ -2810,6 +2810,17 @@ export interface operations {
                     "application/json": components["schemas"]["Unprocessable"];
                 };
             };
+            /** @description Too many attempts, or too many requests to vehicles (commands, parameters, missions share one budget per user); try again after Retry-After seconds */
+            429: {
+                headers: {
+                    /** @description Seconds to wait */
+                    "Retry-After"?: number;
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
             /** @description The database is unavailable; try again after Retry-After seconds */
             503: {
                 headers: {
@@ -2897,6 +2908,17 @@ export interface operations {
                 };
                 content: {
                     "application/json": components["schemas"]["Unprocessable"];
+                };
+            };
+            /** @description Too many attempts, or too many requests to vehicles (commands, parameters, missions share one budget per user); try again after Retry-After seconds */
+            429: {
+                headers: {
+                    /** @description Seconds to wait */
+                    "Retry-After"?: number;
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
                 };
             };
             /** @description The database is unavailable; try again after Retry-After seconds */
@@ -3001,6 +3023,17 @@ export interface operations {
                     "application/json": components["schemas"]["Unprocessable"];
                 };
             };
+            /** @description Too many attempts, or too many requests to vehicles (commands, parameters, missions share one budget per user); try again after Retry-After seconds */
+            429: {
+                headers: {
+                    /** @description Seconds to wait */
+                    "Retry-After"?: number;
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
             /** @description The database is unavailable; try again after Retry-After seconds */
             503: {
                 headers: {
@@ -3086,6 +3119,17 @@ export interface operations {
                 };
                 content: {
                     "application/json": components["schemas"]["Unprocessable"];
+                };
+            };
+            /** @description Too many attempts, or too many requests to vehicles (commands, parameters, missions share one budget per user); try again after Retry-After seconds */
+            429: {
+                headers: {
+                    /** @description Seconds to wait */
+                    "Retry-After"?: number;
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
                 };
             };
             /** @description The database is unavailable; try again after Retry-After seconds */
@@ -3191,6 +3235,17 @@ export interface operations {
                     "application/json": components["schemas"]["Unprocessable"];
                 };
             };
+            /** @description Too many attempts, or too many requests to vehicles (commands, parameters, missions share one budget per user); try again after Retry-After seconds */
+            429: {
+                headers: {
+                    /** @description Seconds to wait */
+                    "Retry-After"?: number;
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
             /** @description The database is unavailable; try again after Retry-After seconds */
             503: {
                 headers: {
@@ -3276,6 +3331,17 @@ export interface operations {
                 };
                 content: {
                     "application/json": components["schemas"]["Unprocessable"];
+                };
+            };
+            /** @description Too many attempts, or too many requests to vehicles (commands, parameters, missions share one budget per user); try again after Retry-After seconds */
+            429: {
+                headers: {
+                    /** @description Seconds to wait */
+                    "Retry-After"?: number;
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
                 };
             };
             /** @description The database is unavailable; try again after Retry-After seconds */
@@ -3378,6 +3444,17 @@ export interface operations {
                     "application/json": components["schemas"]["Unprocessable"];
                 };
             };
+            /** @description Too many attempts, or too many requests to vehicles (commands, parameters, missions share one budget per user); try again after Retry-After seconds */
+            429: {
+                headers: {
+                    /** @description Seconds to wait */
+                    "Retry-After"?: number;
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
             /** @description The database is unavailable; try again after Retry-After seconds */
             503: {
                 headers: {
@@ -3470,7 +3547,7 @@ export interface operations {
                     "application/json": components["schemas"]["Unprocessable"];
                 };
             };
-            /** @description Too many attempts; try again after Retry-After seconds */
+            /** @description Too many attempts, or too many requests to vehicles (commands, parameters, missions share one budget per user); try again after Retry-After seconds */
             429: {
                 headers: {
                     /** @description Seconds to wait */

@@ -18,8 +18,16 @@ from backend.api.security import (
     client_address,
     requires,
 )
-from backend.auth.policy import PUBLIC, ROLE_PERMISSIONS, Permission, Role, user_principal
-from backend.errors import Forbidden, RateLimited, Unauthenticated
+from backend.auth.policy import (
+    PUBLIC,
+    ROLE_PERMISSIONS,
+    USER_SCOPES,
+    Permission,
+    Role,
+    scope_list,
+    user_principal,
+)
+from backend.errors import Forbidden, InvalidRequest, RateLimited, Unauthenticated
 from backend.hub import Hub
 from backend.storage.models import UserRow
 
@@ -125,7 +133,7 @@ async def login(body: LoginRequest, request: Request, response: Response, hub: H
         samesite="strict",
         path="/",
     )
-    who = user_principal(user.username, Role(user.role), None, issued.id)
+    who = user_principal(user.username, Role(user.role), None, issued.id, token_kind="session")
     await hub.record(audit_entry(request, who, "login", user.username, "ok", kind="session"))
     return _identity(user, issued.expires_at)
 
@@ -142,7 +150,7 @@ async def token(
     scopes = _requested_scopes(form.scopes, Role(user.role))
     ttl = hub.settings.access_token_ttl_s
     issued = await asyncio.to_thread(hub.accounts.issue_user_token, user, "access", ttl, scopes)
-    who = user_principal(user.username, Role(user.role), scopes, issued.id)
+    who = user_principal(user.username, Role(user.role), scopes, issued.id, token_kind="access")
     await hub.record(audit_entry(request, who, "login", user.username, "ok", kind="access"))
     return AccessToken(access_token=issued.token, expires_in=int(ttl))
 
@@ -150,13 +158,21 @@ async def token(
 def _requested_scopes(requested: list[str], role: Role) -> frozenset[Permission] | None:
     if not requested:
         return None
-    try:
-        scopes = frozenset(Permission(scope) for scope in requested)
-    except ValueError:
-        raise Forbidden(f"unknown scope in {requested}") from None
+    valid = {scope.value for scope in USER_SCOPES}
+    unknown = [scope for scope in dict.fromkeys(requested) if scope not in valid]
+    if unknown:
+        named = ", ".join(repr(scope) for scope in unknown)
+        raise InvalidRequest(
+            "scope",
+            f"unknown scope {named}; valid scopes: {scope_list(frozenset(USER_SCOPES))}",
+        )
+    scopes = frozenset(Permission(scope) for scope in requested)
     beyond = scopes - ROLE_PERMISSIONS[role]
     if beyond:
-        raise Forbidden(f"the {role.value} role cannot have scopes {sorted(beyond)}")
+        raise Forbidden(
+            f"the {role.value} role cannot have the scopes {scope_list(beyond)}; "
+            f"it may have {scope_list(ROLE_PERMISSIONS[role])}"
+        )
     return scopes
 
 
@@ -215,7 +231,11 @@ async def create_api_token(
     scopes = frozenset(body.scopes) if body.scopes is not None else role_scopes
     # A token never carries more than the session that created it.
     if not scopes <= principal.permissions:
-        raise Forbidden(f"cannot grant {sorted(scopes - principal.permissions)}")
+        raise Forbidden(
+            f"cannot grant the scopes {scope_list(scopes - principal.permissions)}: a new token "
+            f"carries at most the permissions of the one that creates it "
+            f"({scope_list(principal.permissions)})"
+        )
     ttl = body.expires_in_days * 86400 if body.expires_in_days else None
     issued = await asyncio.to_thread(
         hub.accounts.issue_user_token, user, "api", ttl, scopes, body.name

@@ -23,7 +23,7 @@ from fastapi.routing import APIRoute
 from pydantic import BaseModel, ConfigDict, Field
 
 from backend.api.security import PERMISSION_KEY
-from backend.auth.policy import PUBLIC
+from backend.auth.policy import PUBLIC, USER_SCOPES
 
 
 class ErrorMessage(BaseModel):
@@ -149,8 +149,21 @@ def _openapi(app: FastAPI) -> dict[str, Any]:
             routes=app.routes,
         )
         _require_discriminators(document)
+        _name_required_scopes(document)
         app.openapi_schema = document
     return app.openapi_schema
+
+
+def _name_required_scopes(document: dict[str, Any]) -> None:
+    """Each operation's security requirement names the scope it needs (its permission),
+    so the docs' "Authorize" dialog and generated clients know which scope to ask for."""
+    user_scopes = {scope.value for scope in USER_SCOPES}
+    for operations in document.get("paths", {}).values():
+        for operation in operations.values():
+            needed = operation.get(PERMISSION_KEY)
+            for requirement in operation.get("security", []):
+                for scheme in requirement:
+                    requirement[scheme] = [needed] if needed in user_scopes else []
 
 
 def _require_discriminators(document: dict[str, Any]) -> None:

@@ -19,14 +19,19 @@ from starlette.requests import HTTPConnection
 from backend.api.deps import get_hub
 from backend.api.finite_json import FiniteJsonRoute
 from backend.audit import AuditEntry
-from backend.auth.policy import PUBLIC, Permission, Principal, authorize
+from backend.auth.policy import PUBLIC, USER_SCOPES, Permission, Principal, authorize
 from backend.errors import Forbidden, Unauthenticated
 
 SESSION_COOKIE = "gcs_session"
 PERMISSION_KEY = "x-required-permission"
 
 # Declares the bearer scheme in the OpenAPI document (the docs' "Authorize" button).
-bearer_scheme = OAuth2PasswordBearer(tokenUrl="/api/v1/auth/token", auto_error=False)
+# Its scopes are the permissions a user's token may be narrowed to.
+bearer_scheme = OAuth2PasswordBearer(
+    tokenUrl="/api/v1/auth/token",
+    scopes={scope.value: text for scope, text in USER_SCOPES.items()},
+    auto_error=False,
+)
 
 
 def requires(permission: Permission | str) -> dict[str, Any]:

@@ -18,6 +18,7 @@ from backend.api.security import (
     client_address,
     requires,
 )
+from backend.audit import AuditAction
 from backend.auth.policy import (
     PUBLIC,
     ROLE_PERMISSIONS,
@@ -102,7 +103,9 @@ async def _login(hub: Hub, request: Request, username: str, password: str) -> Us
             hub.login_address_limiter.forget_one(address)
             raise
     if user is None:
-        await hub.record(audit_entry(request, None, "login", username[:MAX_USERNAME], "denied"))
+        await hub.record(
+            audit_entry(request, None, AuditAction.LOGIN, username[:MAX_USERNAME], "denied")
+        )
         raise Unauthenticated(WRONG_CREDENTIALS)
     hub.login_limiter.reset(pair)
     hub.login_address_limiter.forget_one(address)
@@ -134,7 +137,9 @@ async def login(body: LoginRequest, request: Request, response: Response, hub: H
         path="/",
     )
     who = user_principal(user.username, Role(user.role), None, issued.id, token_kind="session")
-    await hub.record(audit_entry(request, who, "login", user.username, "ok", kind="session"))
+    await hub.record(
+        audit_entry(request, who, AuditAction.LOGIN, user.username, "ok", kind="session")
+    )
     return _identity(user, issued.expires_at)
 
 
@@ -151,7 +156,9 @@ async def token(
     ttl = hub.settings.access_token_ttl_s
     issued = await asyncio.to_thread(hub.accounts.issue_user_token, user, "access", ttl, scopes)
     who = user_principal(user.username, Role(user.role), scopes, issued.id, token_kind="access")
-    await hub.record(audit_entry(request, who, "login", user.username, "ok", kind="access"))
+    await hub.record(
+        audit_entry(request, who, AuditAction.LOGIN, user.username, "ok", kind="access")
+    )
     return AccessToken(access_token=issued.token, expires_in=int(ttl))
 
 
@@ -184,7 +191,7 @@ async def logout(request: Request, principal: CurrentPrincipal, hub: HubDep) -> 
     if principal.token_id is not None:
         await asyncio.to_thread(hub.accounts.revoke_user_token, principal.token_id, None)
         await hub.drop_user_feeds(token_id=principal.token_id)
-    await hub.record(audit_entry(request, principal, "logout", principal.name, "ok"))
+    await hub.record(audit_entry(request, principal, AuditAction.LOGOUT, principal.name, "ok"))
     response = Response(status_code=status.HTTP_204_NO_CONTENT)
     response.delete_cookie(SESSION_COOKIE, path="/")
     return response
@@ -241,7 +248,9 @@ async def create_api_token(
         hub.accounts.issue_user_token, user, "api", ttl, scopes, body.name
     )
     await hub.record(
-        audit_entry(request, principal, "token.create", body.name, "ok", scopes=sorted(scopes))
+        audit_entry(
+            request, principal, AuditAction.TOKEN_CREATE, body.name, "ok", scopes=sorted(scopes)
+        )
     )
     return IssuedApiToken(
         id=issued.id,
@@ -267,5 +276,5 @@ async def revoke_api_token(
 ) -> Response:
     await asyncio.to_thread(hub.accounts.revoke_user_token, token_id, principal.name)
     await hub.drop_user_feeds(token_id=token_id)
-    await hub.record(audit_entry(request, principal, "token.revoke", str(token_id), "ok"))
+    await hub.record(audit_entry(request, principal, AuditAction.TOKEN_REVOKE, str(token_id), "ok"))
     return Response(status_code=status.HTTP_204_NO_CONTENT)

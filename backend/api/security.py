@@ -18,7 +18,7 @@ from starlette.requests import HTTPConnection
 
 from backend.api.deps import get_hub
 from backend.api.finite_json import FiniteJsonRoute
-from backend.audit import AuditEntry
+from backend.audit import AuditAction, AuditEntry, principal_audit_entry
 from backend.auth.policy import PUBLIC, USER_SCOPES, Permission, Principal, authorize
 from backend.errors import Forbidden, Unauthenticated
 
@@ -91,7 +91,7 @@ def _authorizer(permission: Permission) -> Callable[..., Any]:
             if permission != Permission.READ:
                 # A refused attempt to act is itself worth a line in the audit log.
                 action = f"{request.method} {request.url.path}"
-                entry = audit_entry(request, principal, "denied", action, "denied")
+                entry = audit_entry(request, principal, AuditAction.DENIED, action, "denied")
                 await get_hub(request).record(entry)
             raise refusal
 
@@ -124,17 +124,21 @@ class SecuredRouter(APIRouter):
 def audit_entry(
     request: HTTPConnection,
     principal: Principal | None,
-    action: str,
+    action: AuditAction,
     target: str,
     outcome: str,
     **detail: Any,
 ) -> AuditEntry:
-    return AuditEntry(
-        actor=principal.name if principal else "anonymous",
-        role=principal.role if principal else "",
-        source=client_address(request),
-        action=action,
-        target=target,
-        outcome=outcome,
-        detail=detail,
+    if principal is None:
+        return AuditEntry(
+            actor="anonymous",
+            role="",
+            source=client_address(request),
+            action=action,
+            target=target,
+            outcome=outcome,
+            detail=detail,
+        )
+    return principal_audit_entry(
+        principal, client_address(request), action, target, outcome, detail
     )

@@ -107,6 +107,7 @@ def agent_principal(vehicle_id: str, token_id: int) -> Principal:
         permissions=frozenset({Permission.AGENT}),
         vehicle_id=vehicle_id,
         token_id=token_id,
+        token_kind="agent",
     )
 
 

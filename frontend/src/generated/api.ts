@@ -743,7 +743,8 @@ export interface paths {
         };
         /**
          * Audit Log
-         * @description Audit entries, newest first.
+         * @description Audit entries, newest first, a page at a time (``next_before_id``). An unknown
+         *     filter or action is refused (422, naming the valid ones).
          */
         get: operations["audit_log_api_v1_audit_get"];
         put?: never;
@@ -821,10 +822,21 @@ export interface components {
              */
             name: "arm";
         };
+        /**
+         * AuditAction
+         * @description Every action the audit log records (the OpenAPI document lists them as an enum).
+         * @enum {string}
+         */
+        AuditAction: "login" | "logout" | "token.create" | "token.revoke" | "user.create" | "user.update" | "agent_token.create" | "agent_token.revoke" | "rails.update" | "rails.clear" | "command" | "denied";
         /** AuditPage */
         AuditPage: {
             /** Entries */
             entries: components["schemas"]["AuditRecord"][];
+            /**
+             * Next Before Id
+             * @description Pass as before_id for the next (older) page; null on the last page
+             */
+            next_before_id: number | null;
         };
         /** AuditRecord */
         AuditRecord: {
@@ -832,22 +844,45 @@ export interface components {
             id: number;
             /** Time */
             time: number;
-            /** Actor */
+            /**
+             * Actor
+             * @description The user (or agent:<vehicle>, provisioning, anonymous)
+             */
             actor: string;
             /** Role */
             role: string;
-            /** Source */
+            /**
+             * Source
+             * @description The client's address
+             */
             source: string;
-            /** Action */
-            action: string;
+            action: components["schemas"]["AuditAction"];
             /** Target */
             target: string;
-            /** Outcome */
+            /**
+             * Outcome
+             * @description ok, refused, failed or denied
+             */
             outcome: string;
             /** Detail */
             detail: {
                 [key: string]: unknown;
             };
+            /**
+             * Token Kind
+             * @description The credential the actor used: a dashboard session, an access token (/auth/token), an API token or an agent token; null for anonymous attempts, the hub itself, and entries from before it was recorded
+             */
+            token_kind?: ("session" | "access" | "api" | "agent") | null;
+            /**
+             * Token Id
+             * @description That token's id (an API token's as in /auth/api-tokens, an agent token's as in /agent-tokens)
+             */
+            token_id?: number | null;
+            /**
+             * Token
+             * @description An API token's name, so an integration's acts are told from its user's
+             */
+            token?: string | null;
         };
         /** BatteryEstimateModel */
         BatteryEstimateModel: {
@@ -5188,7 +5223,8 @@ export interface operations {
         parameters: {
             query?: {
                 actor?: string | null;
-                action?: string | null;
+                /** @description One of the actions listed */
+                action?: components["schemas"]["AuditAction"] | null;
                 target?: string | null;
                 /** @description Unix seconds */
                 since?: number | null;

@@ -48,7 +48,9 @@ class Identity(BaseModel):
     username: str
     role: str
     permissions: list[str]
-    expires_at: float | None = None
+    expires_at: float | None = Field(
+        default=None, description="When the token (or session) used ends; null: never"
+    )
 
 
 class AccessToken(BaseModel):
@@ -143,7 +145,29 @@ async def login(body: LoginRequest, request: Request, response: Response, hub: H
     return _identity(user, issued.expires_at)
 
 
-@router.post("/token", response_model=AccessToken, openapi_extra=requires(PUBLIC))
+FORM_TYPES = ("application/x-www-form-urlencoded", "multipart/form-data")
+
+
+def _form_only(request: Request) -> None:
+    """The password flow takes a form (RFC 6749 4.3.2): a JSON body would otherwise be
+    answered "username: Field required", which sends a client looking in the wrong place."""
+    media_type = request.headers.get("content-type", "").split(";")[0].strip().lower()
+    if media_type not in FORM_TYPES:
+        raise InvalidRequest(
+            "content-type",
+            "this route takes a form (application/x-www-form-urlencoded) with username, "
+            f"password and optionally scope, as OAuth2's password flow; got {media_type or 'none'}"
+            " (for a JSON login use POST /api/v1/auth/login)",
+            "header",
+        )
+
+
+@router.post(
+    "/token",
+    response_model=AccessToken,
+    openapi_extra=requires(PUBLIC),
+    dependencies=[Depends(_form_only)],
+)
 async def token(
     form: Annotated[OAuth2PasswordRequestForm, Depends()], request: Request, hub: HubDep
 ) -> AccessToken:
@@ -203,6 +227,7 @@ async def me(principal: CurrentPrincipal) -> Identity:
         username=principal.name,
         role=principal.role,
         permissions=sorted(principal.permissions),
+        expires_at=principal.expires_at,
     )
 
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import asyncio
+import json
 import re
 import time
 from collections.abc import Iterator
@@ -11,7 +12,7 @@ from typing import Annotated, Any, BinaryIO, Literal
 
 from fastapi import Path, Query, Request, status
 from fastapi.responses import FileResponse, StreamingResponse
-from pydantic import BaseModel, ConfigDict
+from pydantic import BaseModel, ConfigDict, Field, field_validator
 
 from backend.api.deps import HubDep
 from backend.api.schemas import Sample
@@ -107,10 +108,24 @@ class CommandRecord(BaseModel):
     vehicle_id: str
     actor: str
     name: str
-    command_json: str
+    # Stored as JSON text; answered as the object it is, as in the audit log's detail.
+    command: dict[str, Any] = Field(
+        validation_alias="command_json", description='The command as sent, e.g. {"name": "land"}'
+    )
     status: str
     result: str | None
     message: str
+
+    @field_validator("command", mode="before")
+    @classmethod
+    def _parsed(cls, stored: object) -> object:
+        if not isinstance(stored, str):
+            return stored
+        try:
+            value = json.loads(stored)
+        except json.JSONDecodeError:
+            return {"unparsed": stored}  # cut short at the column's size
+        return value if isinstance(value, dict) else {"value": value}
 
 
 class CommandPage(BaseModel):

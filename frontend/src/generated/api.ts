@@ -1007,8 +1007,13 @@ export interface components {
             actor: string;
             /** Name */
             name: string;
-            /** Command Json */
-            command_json: string;
+            /**
+             * Command
+             * @description The command as sent, e.g. {"name": "land"}
+             */
+            command: {
+                [key: string]: unknown;
+            };
             /** Status */
             status: string;
             /** Result */
@@ -1217,7 +1222,10 @@ export interface components {
             role: string;
             /** Permissions */
             permissions: string[];
-            /** Expires At */
+            /**
+             * Expires At
+             * @description When the token (or session) used ends; null: never
+             */
             expires_at?: number | null;
         };
         /** IssuedAgentToken */

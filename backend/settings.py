@@ -137,7 +137,11 @@ class HubSettings(BaseSettings):
     )
     basemap_attribution: str = ""
     basemap_max_zoom: int = Field(default=19, ge=1, le=24)
-    frontend_dir: Path = REPO_ROOT / "frontend" / "dist"
+    frontend_dir: Path | None = Field(
+        default=None,
+        description="the built dashboard (its index.html); unset: frontend/dist of the "
+        "checkout the hub runs from. A hub installed from a wheel has no checkout: set it",
+    )
 
     @model_validator(mode="before")
     @classmethod

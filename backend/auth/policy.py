@@ -131,8 +131,7 @@ def _lacking(principal: Principal, needed: Permission) -> str:
             token = f"token {principal.token_name!r}" if principal.token_name else "token"
             return (
                 f"this {token} lacks the '{needed}' permission: its scopes are "
-                f"{scope_list(principal.scopes)} (the {principal.role} role has '{needed}'; "
-                "use a token with that scope)"
+                f"{scope_list(principal.scopes)} (the {principal.role} role has it)"
             )
     return f"{principal.name} ({principal.role} role) lacks the '{needed}' permission"
 

@@ -5,7 +5,11 @@ document lists the scopes."""
 from __future__ import annotations
 
 import httpx
+import pytest
+from websockets.exceptions import ConnectionClosed
+from websockets.sync.client import connect
 
+from protocol.messages import CLIENT_WS_PATH, CloseCode
 from tests.conftest import ADMIN_PASSWORD
 
 SCOPES = ["admin", "audit", "command", "read"]
@@ -86,3 +90,18 @@ def test_the_openapi_security_scheme_lists_the_scopes(hub: str) -> None:
     assert all(flow["scopes"].values())
     commands = document["paths"]["/api/v1/vehicles/{vehicle_id}/commands"]["post"]
     assert commands["security"] == [{"OAuth2PasswordBearer": ["command"]}]
+
+
+def test_a_long_refusal_still_closes_the_live_feed_with_its_code(
+    hub: str, admin_api: httpx.Client
+) -> None:
+    name = "a-display-with-a-long-name-" + "x" * 100  # the refusal is over 123 bytes
+    created = admin_api.post("/api/v1/auth/api-tokens", json={"name": name, "scopes": ["audit"]})
+    headers = {"Authorization": f"Bearer {created.json()['token']}"}
+    url = hub.replace("http", "ws", 1) + CLIENT_WS_PATH
+    with connect(url, additional_headers=headers) as feed, pytest.raises(ConnectionClosed) as end:
+        feed.recv(timeout=5)
+    assert end.value.rcvd is not None
+    assert end.value.rcvd.code == CloseCode.FORBIDDEN
+    assert end.value.rcvd.reason.startswith(f"this token '{name[:40]}")
+    assert end.value.rcvd.reason.endswith("…")

@@ -4,8 +4,10 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import html
 import logging
 from collections.abc import AsyncIterator
+from pathlib import Path
 from types import ModuleType
 
 from fastapi import FastAPI, Request
@@ -40,7 +42,7 @@ from backend.errors import (
 )
 from backend.hub import Hub
 from backend.log_escaping import escape_control_characters_in_logs
-from backend.settings import HubSettings
+from backend.settings import REPO_ROOT, HubSettings
 
 log = logging.getLogger(__name__)
 
@@ -48,8 +50,11 @@ API_PREFIX = "/api/v1"
 
 _DASHBOARD_MISSING = """<!doctype html><title>Fleet GCS</title>
 <h1>The dashboard is not built</h1>
-<p>Run <code>npm ci &amp;&amp; npm run build</code> in <code>frontend/</code>
-(or <code>make demo</code>), then reload. The API is up: see <a href="/docs">/docs</a>.</p>"""
+<p>{problem}</p>
+<p>In a checkout, run <code>npm ci &amp;&amp; npm run build</code> in <code>frontend/</code>
+(or <code>make demo</code>); a hub installed with pip has no checkout: build the dashboard
+from the source and set <code>GCS_FRONTEND_DIR</code> to its <code>frontend/dist</code>.
+Then restart the hub. The API is up: see <a href="/docs">/docs</a>.</p>"""
 
 
 def create_app(settings: HubSettings | None = None) -> FastAPI:
@@ -139,13 +144,33 @@ async def _database_unavailable(request: Request, error: OperationalError) -> JS
     )
 
 
+def dashboard_dir(configured: Path | None, package_root: Path) -> tuple[Path | None, str]:
+    """Where the built dashboard is, or None and why not (a sentence naming the setting).
+
+    ``GCS_FRONTEND_DIR`` when set; else ``frontend/dist`` of the checkout the hub runs
+    from. An installed hub's package root is site-packages, which holds no dashboard: it
+    is not searched there, and the answer says to set the variable."""
+    if configured is not None:
+        if (configured / "index.html").is_file():
+            return configured, ""
+        return None, f"GCS_FRONTEND_DIR={configured} has no index.html"
+    if not (package_root / "pyproject.toml").is_file():
+        return None, "GCS_FRONTEND_DIR is not set, and this hub does not run from a checkout"
+    built = package_root / "frontend" / "dist"
+    if (built / "index.html").is_file():
+        return built, ""
+    return None, f"{built} has no index.html (GCS_FRONTEND_DIR is not set)"
+
+
 def _mount_dashboard(app: FastAPI, settings: HubSettings) -> None:
-    if (settings.frontend_dir / "index.html").is_file():
-        files = StaticFiles(directory=settings.frontend_dir, html=True)
+    directory, problem = dashboard_dir(settings.frontend_dir, REPO_ROOT)
+    if directory is not None:
+        files = StaticFiles(directory=directory, html=True)
         app.router.routes.append(DashboardMount(files, API_PREFIX))
         return
-    log.warning("dashboard not built: %s has no index.html", settings.frontend_dir)
+    log.warning("dashboard not served: %s", problem)
+    page = _DASHBOARD_MISSING.format(problem=html.escape(problem[0].upper() + problem[1:] + "."))
 
     @app.get("/", include_in_schema=False)
     async def dashboard_missing() -> HTMLResponse:
-        return HTMLResponse(_DASHBOARD_MISSING, status_code=503)
+        return HTMLResponse(page, status_code=503)

@@ -7,11 +7,13 @@ import logging
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass
+from enum import StrEnum
 from typing import Any
 
 from sqlalchemy import Engine, insert, select
 from sqlalchemy.orm import Session
 
+from backend.auth.policy import Principal
 from backend.storage.models import AuditRow
 from backend.storage.spool import RowSpool
 
@@ -20,21 +22,66 @@ log = logging.getLogger(__name__)
 DETAIL_LIMIT = 2000
 
 
+class AuditAction(StrEnum):
+    """Every action the audit log records (the OpenAPI document lists them as an enum)."""
+
+    LOGIN = "login"  # a password login, ok or denied; target: the user name
+    LOGOUT = "logout"
+    TOKEN_CREATE = "token.create"  # an API token; target: its name
+    TOKEN_REVOKE = "token.revoke"  # target: the token's id
+    USER_CREATE = "user.create"
+    USER_UPDATE = "user.update"  # role, disabled or password changed
+    AGENT_TOKEN_CREATE = "agent_token.create"  # a vehicle enrolled; target: the vehicle
+    AGENT_TOKEN_REVOKE = "agent_token.revoke"
+    RAILS_UPDATE = "rails.update"  # safety rails; target: "site" or the vehicle
+    RAILS_CLEAR = "rails.clear"
+    COMMAND = "command"  # anything sent to a vehicle: commands, parameters, missions
+    DENIED = "denied"  # a route refused for want of a permission; target: method and path
+
+
 @dataclass(frozen=True)
 class AuditEntry:
     actor: str
     role: str
     source: str
-    action: str
+    action: AuditAction
     target: str
     outcome: str  # ok, refused, failed, denied
     detail: dict[str, Any]
+    # The credential the actor used: session, access, api or agent; its id; an API
+    # token's name. So a scoped integration's acts are told from its user's own.
+    token_kind: str | None = None
+    token_id: int | None = None
+    token_name: str | None = None
+
+
+def principal_audit_entry(
+    principal: Principal,
+    source: str,
+    action: AuditAction,
+    target: str,
+    outcome: str,
+    detail: dict[str, Any],
+) -> AuditEntry:
+    """An entry for what ``principal`` did, naming the token it used."""
+    return AuditEntry(
+        actor=principal.name,
+        role=principal.role,
+        source=source,
+        action=action,
+        target=target,
+        outcome=outcome,
+        detail=detail,
+        token_kind=principal.token_kind or None,
+        token_id=principal.token_id,
+        token_name=principal.token_name or None,
+    )
 
 
 @dataclass(frozen=True)
 class AuditQuery:
     actor: str | None = None
-    action: str | None = None
+    action: AuditAction | None = None
     target: str | None = None
     since: float | None = None
     until: float | None = None
@@ -76,6 +123,9 @@ class AuditLog:
             "target": entry.target[:128],
             "outcome": entry.outcome,
             "detail": detail,
+            "token_kind": entry.token_kind,
+            "token_id": entry.token_id,
+            "token_name": entry.token_name[:128] if entry.token_name is not None else None,
         }
         if self.spool is not None:
             self.spool.write(AuditRow.__tablename__, values)

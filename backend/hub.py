@@ -10,7 +10,7 @@ from dataclasses import dataclass, field
 from sqlalchemy import Engine
 from sqlalchemy.exc import SQLAlchemyError
 
-from backend.audit import AuditEntry, AuditLog
+from backend.audit import AuditAction, AuditEntry, AuditLog
 from backend.auth.accounts import PROVISIONING, Accounts
 from backend.auth.password_work import PasswordWork
 from backend.auth.principal_cache import PrincipalCache
@@ -212,7 +212,7 @@ def _bootstrap_accounts(accounts: Accounts, audit: AuditLog, settings: HubSettin
                 actor=PROVISIONING,
                 role="system",
                 source="GCS_AGENT_TOKENS",
-                action="agent_token.revoke",
+                action=AuditAction.AGENT_TOKEN_REVOKE,
                 target=row.vehicle_id,
                 outcome="ok",
                 detail={"id": row.id, "reason": "no longer in GCS_AGENT_TOKENS"},

@@ -92,7 +92,11 @@ class HubSettings(BaseSettings):
     password_hash_max_pending: int = Field(
         default=8, ge=1, description="password checks running or waiting; beyond, 429"
     )
-    commands_per_second: int = Field(default=20, ge=1)
+    commands_per_second: int = Field(
+        default=20,
+        ge=1,
+        description="requests that reach a vehicle, per user (commands, parameters, missions)",
+    )
 
     max_altitude_m: float | None = Field(default=120.0, description="site ceiling above home")
     min_altitude_m: float | None = Field(default=None, description="site floor for targets")
@@ -140,7 +144,11 @@ class HubSettings(BaseSettings):
     )
     basemap_attribution: str = ""
     basemap_max_zoom: int = Field(default=19, ge=1, le=24)
-    frontend_dir: Path = REPO_ROOT / "frontend" / "dist"
+    frontend_dir: Path | None = Field(
+        default=None,
+        description="the built dashboard (its index.html); unset: frontend/dist of the "
+        "checkout the hub runs from. A hub installed from a wheel has no checkout: set it",
+    )
 
     @model_validator(mode="before")
     @classmethod

@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import argparse
 import asyncio
-import contextlib
 import logging
 import signal
 import sys
@@ -132,7 +131,7 @@ def run(args: argparse.Namespace, prog: str = "gcs-agent") -> int:
     from vehicle_agents.hub_link import VehicleIdInUse
 
     try:
-        return run_until_signalled(run_agent(settings))
+        return run_until_signalled(run_agent(settings), give_up=(VehicleIdInUse,))
     except VehicleIdInUse as refused:
         logging.getLogger("gcs.agent").error("stopping: %s", refused)
         return EXIT_VEHICLE_ID_IN_USE
@@ -162,19 +161,43 @@ def print_id(settings: AgentSettings, prog: str) -> int:
     return 0
 
 
-def run_until_signalled(main: Coroutine[Any, Any, None]) -> int:
-    """Run a coroutine until it ends or SIGINT/SIGTERM cancels it; exit code 0 on a signal."""
+def run_until_signalled(
+    main: Coroutine[Any, Any, None],
+    name: str = "agent",
+    give_up: tuple[type[Exception], ...] = (),
+) -> int:
+    """Run a coroutine until it ends or SIGINT/SIGTERM cancels it; exit code 0 on a signal,
+    1 on an error, and the exceptions in ``give_up`` raised for the caller to answer. Either
+    way the log's last line says that ``name`` stopped, and why: an onboard computer's
+    journal otherwise shows a process that just went quiet."""
+    log = logging.getLogger(f"gcs.{name}")
+    signals: list[str] = []
 
     async def runner() -> None:
         task = asyncio.current_task()
         assert task is not None
         loop = asyncio.get_running_loop()
+
+        def stop(signum: signal.Signals) -> None:
+            signals.append(signum.name)
+            log.info("%s: %s received, stopping", name, signum.name)
+            task.cancel()
+
         for signum in (signal.SIGINT, signal.SIGTERM):
-            loop.add_signal_handler(signum, task.cancel)
+            loop.add_signal_handler(signum, stop, signum)
         await main
 
-    with contextlib.suppress(asyncio.CancelledError):
+    try:
         asyncio.run(runner())
+    except asyncio.CancelledError:
+        log.info("%s stopped: %s", name, f"on {signals[0]}" if signals else "cancelled")
+        return 0
+    except give_up:
+        raise
+    except Exception as error:
+        log.critical("%s stopped: %s: %s", name, type(error).__name__, error, exc_info=True)
+        return 1
+    log.info("%s stopped: its work ended", name)
     return 0
 
 

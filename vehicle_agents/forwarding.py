@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import ipaddress
 import logging
 import socket
 import threading
@@ -156,6 +157,14 @@ class EndpointCounters:
         return {f.name: getattr(self, f.name) for f in fields(self)}
 
 
+def _source_host(family: int, destination: str) -> str:
+    """Where a udpout socket listens for the GCS's answers: loopback for a GCS on this
+    computer, every interface otherwise (the route picks the source address)."""
+    if ipaddress.ip_address(destination.split("%")[0]).is_loopback:
+        return "::1" if family == socket.AF_INET6 else "127.0.0.1"
+    return "::" if family == socket.AF_INET6 else "0.0.0.0"
+
+
 class Endpoint:
     """One UDP socket towards one GCS."""
 
@@ -181,7 +190,9 @@ class Endpoint:
                 sock.bind(address)
             else:
                 # Bound now, so the GCS's answers (to the port it sees us send from) are read.
-                sock.bind(("::" if family == socket.AF_INET6 else "0.0.0.0", 0))
+                # To a GCS on this computer, from loopback only: a wildcard port would take
+                # frames from any host on the network straight to the flight controller.
+                sock.bind((_source_host(family, str(address[0])), 0))
                 self.peer = address
         except OSError:
             sock.close()

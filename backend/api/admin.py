@@ -4,17 +4,18 @@ from __future__ import annotations
 
 import asyncio
 import json
-from typing import Annotated, Any
+from typing import Annotated, Any, Literal
 
-from fastapi import Path, Query, Request, Response, status
+from fastapi import Depends, Path, Query, Request, Response, status
 from pydantic import BaseModel, Field, ValidationInfo, field_validator
 from pydantic_core import PydanticCustomError
 
 from backend.api.deps import HubDep
 from backend.api.security import CurrentPrincipal, SecuredRouter, audit_entry, requires
-from backend.audit import AuditQuery
+from backend.audit import AuditAction, AuditQuery
 from backend.auth.password_policy import MIN_LENGTH, password_problem
 from backend.auth.policy import Permission, Role
+from backend.errors import InvalidRequest
 from backend.storage.models import UserRow
 from protocol.messages import VehicleId
 
@@ -87,17 +88,49 @@ class IssuedAgentToken(AgentToken):
 class AuditRecord(BaseModel):
     id: int
     time: float
-    actor: str
+    actor: str = Field(description="The user (or agent:<vehicle>, provisioning, anonymous)")
     role: str
-    source: str
-    action: str
+    source: str = Field(description="The client's address")
+    action: AuditAction
     target: str
-    outcome: str
+    outcome: str = Field(description="ok, refused, failed or denied")
     detail: dict[str, Any]
+    token_kind: Literal["session", "access", "api", "agent"] | None = Field(
+        default=None,
+        description="The credential the actor used: a dashboard session, an access token "
+        "(/auth/token), an API token or an agent token; null for anonymous attempts, the "
+        "hub itself, and entries from before it was recorded",
+    )
+    token_id: int | None = Field(
+        default=None,
+        description="That token's id (an API token's as in /auth/api-tokens, an agent "
+        "token's as in /agent-tokens)",
+    )
+    token: str | None = Field(
+        default=None,
+        description="An API token's name, so an integration's acts are told from its user's",
+    )
 
 
 class AuditPage(BaseModel):
     entries: list[AuditRecord]
+    next_before_id: int | None = Field(
+        description="Pass as before_id for the next (older) page; null on the last page"
+    )
+
+
+# The audit log's query parameters: any other is refused (422), so a misspelt filter
+# does not silently answer with the whole log.
+AUDIT_FILTERS = ("actor", "action", "target", "since", "until", "before_id", "limit")
+
+
+def _known_filters_only(request: Request) -> None:
+    unknown = sorted(set(request.query_params) - set(AUDIT_FILTERS))
+    if unknown:
+        valid = ", ".join(AUDIT_FILTERS)
+        raise InvalidRequest(
+            unknown[0], f"unknown filter {unknown[0]!r}; valid filters: {valid}", "query"
+        )
 
 
 def _detail(stored: str) -> dict[str, Any]:
@@ -131,7 +164,9 @@ async def create_user(
     # Hashing runs on the password threads, bounded like a login.
     row = await hub.passwords.run(hub.accounts.create_user, body.username, body.password, body.role)
     await hub.record(
-        audit_entry(request, principal, "user.create", body.username, "ok", role=body.role)
+        audit_entry(
+            request, principal, AuditAction.USER_CREATE, body.username, "ok", role=body.role
+        )
     )
     return _user(row)
 
@@ -152,7 +187,9 @@ async def update_user(
     changes = body.model_dump(exclude_none=True, exclude={"password"})
     if body.password is not None:
         changes["password"] = "changed"
-    await hub.record(audit_entry(request, principal, "user.update", username, "ok", **changes))
+    await hub.record(
+        audit_entry(request, principal, AuditAction.USER_UPDATE, username, "ok", **changes)
+    )
     return _user(row)
 
 
@@ -171,7 +208,9 @@ async def enrol_vehicle(
     """Enrol a vehicle (new or known): a token its agent presents. Stored only as a hash."""
     issued = await asyncio.to_thread(hub.accounts.enrol_vehicle, vehicle_id, principal.name)
     await hub.record(
-        audit_entry(request, principal, "agent_token.create", vehicle_id, "ok", id=issued.id)
+        audit_entry(
+            request, principal, AuditAction.AGENT_TOKEN_CREATE, vehicle_id, "ok", id=issued.id
+        )
     )
     return IssuedAgentToken(
         id=issued.id,
@@ -217,16 +256,23 @@ async def revoke_agent_token(
     row = await asyncio.to_thread(hub.accounts.revoke_agent_token, token_id)
     await hub.drop_agent_token(row.id, row.vehicle_id)
     await hub.record(
-        audit_entry(request, principal, "agent_token.revoke", row.vehicle_id, "ok", id=row.id)
+        audit_entry(
+            request, principal, AuditAction.AGENT_TOKEN_REVOKE, row.vehicle_id, "ok", id=row.id
+        )
     )
     return Response(status_code=status.HTTP_204_NO_CONTENT)
 
 
-@router.get("/audit", response_model=AuditPage, openapi_extra=requires(Permission.AUDIT))
+@router.get(
+    "/audit",
+    response_model=AuditPage,
+    openapi_extra=requires(Permission.AUDIT),
+    dependencies=[Depends(_known_filters_only)],
+)
 async def audit_log(
     hub: HubDep,
     actor: Annotated[str | None, Query(max_length=80)] = None,
-    action: Annotated[str | None, Query(max_length=48)] = None,
+    action: Annotated[AuditAction | None, Query(description="One of the actions listed")] = None,
     target: Annotated[str | None, Query(max_length=128)] = None,
     since: Annotated[float | None, Query(description="Unix seconds")] = None,
     until: Annotated[float | None, Query(description="Unix seconds")] = None,
@@ -235,7 +281,8 @@ async def audit_log(
     ] = None,
     limit: Annotated[int, Query(ge=1, le=1000)] = 100,
 ) -> AuditPage:
-    """Audit entries, newest first."""
+    """Audit entries, newest first, a page at a time (``next_before_id``). An unknown
+    filter or action is refused (422, naming the valid ones)."""
     query = AuditQuery(actor, action, target, since, until, before_id, limit)
     rows = await asyncio.to_thread(hub.audit.query, query)
     return AuditPage(
@@ -250,7 +297,11 @@ async def audit_log(
                 target=row.target,
                 outcome=row.outcome,
                 detail=_detail(row.detail),
+                token_kind=row.token_kind,
+                token_id=row.token_id,
+                token=row.token_name,
             )
             for row in rows
-        ]
+        ],
+        next_before_id=rows[-1].id if len(rows) == limit else None,
     )

@@ -17,9 +17,18 @@ from backend.api.security import (
     client_address,
     requires,
 )
+from backend.audit import AuditAction
 from backend.auth.credentials import SESSION_COOKIE
-from backend.auth.policy import PUBLIC, ROLE_PERMISSIONS, Permission, Role, user_principal
-from backend.errors import Forbidden, RateLimited, Unauthenticated
+from backend.auth.policy import (
+    PUBLIC,
+    ROLE_PERMISSIONS,
+    USER_SCOPES,
+    Permission,
+    Role,
+    scope_list,
+    user_principal,
+)
+from backend.errors import Forbidden, InvalidRequest, RateLimited, Unauthenticated
 from backend.hub import Hub
 from backend.storage.models import UserRow
 
@@ -39,7 +48,9 @@ class Identity(BaseModel):
     username: str
     role: str
     permissions: list[str]
-    expires_at: float | None = None
+    expires_at: float | None = Field(
+        default=None, description="When the token (or session) used ends; null: never"
+    )
 
 
 class AccessToken(BaseModel):
@@ -94,7 +105,9 @@ async def _login(hub: Hub, request: Request, username: str, password: str) -> Us
             hub.login_address_limiter.forget_one(address)
             raise
     if user is None:
-        await hub.record(audit_entry(request, None, "login", username[:MAX_USERNAME], "denied"))
+        await hub.record(
+            audit_entry(request, None, AuditAction.LOGIN, username[:MAX_USERNAME], "denied")
+        )
         raise Unauthenticated(WRONG_CREDENTIALS)
     hub.login_limiter.reset(pair)
     hub.login_address_limiter.forget_one(address)
@@ -125,12 +138,36 @@ async def login(body: LoginRequest, request: Request, response: Response, hub: H
         samesite="strict",
         path="/",
     )
-    who = user_principal(user.username, Role(user.role), None, issued.id)
-    await hub.record(audit_entry(request, who, "login", user.username, "ok", kind="session"))
+    who = user_principal(user.username, Role(user.role), None, issued.id, token_kind="session")
+    await hub.record(
+        audit_entry(request, who, AuditAction.LOGIN, user.username, "ok", kind="session")
+    )
     return _identity(user, issued.expires_at)
 
 
-@router.post("/token", response_model=AccessToken, openapi_extra=requires(PUBLIC))
+FORM_TYPES = ("application/x-www-form-urlencoded", "multipart/form-data")
+
+
+def _form_only(request: Request) -> None:
+    """The password flow takes a form (RFC 6749 4.3.2): a JSON body would otherwise be
+    answered "username: Field required", which sends a client looking in the wrong place."""
+    media_type = request.headers.get("content-type", "").split(";")[0].strip().lower()
+    if media_type not in FORM_TYPES:
+        raise InvalidRequest(
+            "content-type",
+            "this route takes a form (application/x-www-form-urlencoded) with username, "
+            f"password and optionally scope, as OAuth2's password flow; got {media_type or 'none'}"
+            " (for a JSON login use POST /api/v1/auth/login)",
+            "header",
+        )
+
+
+@router.post(
+    "/token",
+    response_model=AccessToken,
+    openapi_extra=requires(PUBLIC),
+    dependencies=[Depends(_form_only)],
+)
 async def token(
     form: Annotated[OAuth2PasswordRequestForm, Depends()], request: Request, hub: HubDep
 ) -> AccessToken:
@@ -142,21 +179,31 @@ async def token(
     scopes = _requested_scopes(form.scopes, Role(user.role))
     ttl = hub.settings.access_token_ttl_s
     issued = await asyncio.to_thread(hub.accounts.issue_user_token, user, "access", ttl, scopes)
-    who = user_principal(user.username, Role(user.role), scopes, issued.id)
-    await hub.record(audit_entry(request, who, "login", user.username, "ok", kind="access"))
+    who = user_principal(user.username, Role(user.role), scopes, issued.id, token_kind="access")
+    await hub.record(
+        audit_entry(request, who, AuditAction.LOGIN, user.username, "ok", kind="access")
+    )
     return AccessToken(access_token=issued.token, expires_in=int(ttl))
 
 
 def _requested_scopes(requested: list[str], role: Role) -> frozenset[Permission] | None:
     if not requested:
         return None
-    try:
-        scopes = frozenset(Permission(scope) for scope in requested)
-    except ValueError:
-        raise Forbidden(f"unknown scope in {requested}") from None
+    valid = {scope.value for scope in USER_SCOPES}
+    unknown = [scope for scope in dict.fromkeys(requested) if scope not in valid]
+    if unknown:
+        named = ", ".join(repr(scope) for scope in unknown)
+        raise InvalidRequest(
+            "scope",
+            f"unknown scope {named}; valid scopes: {scope_list(frozenset(USER_SCOPES))}",
+        )
+    scopes = frozenset(Permission(scope) for scope in requested)
     beyond = scopes - ROLE_PERMISSIONS[role]
     if beyond:
-        raise Forbidden(f"the {role.value} role cannot have scopes {sorted(beyond)}")
+        raise Forbidden(
+            f"the {role.value} role cannot have the scopes {scope_list(beyond)}; "
+            f"it may have {scope_list(ROLE_PERMISSIONS[role])}"
+        )
     return scopes
 
 
@@ -168,7 +215,7 @@ async def logout(request: Request, principal: CurrentPrincipal, hub: HubDep) -> 
     if principal.token_id is not None:
         await asyncio.to_thread(hub.accounts.revoke_user_token, principal.token_id, None)
         await hub.drop_user_feeds(token_id=principal.token_id)
-    await hub.record(audit_entry(request, principal, "logout", principal.name, "ok"))
+    await hub.record(audit_entry(request, principal, AuditAction.LOGOUT, principal.name, "ok"))
     response = Response(status_code=status.HTTP_204_NO_CONTENT)
     response.delete_cookie(SESSION_COOKIE, path="/")
     return response
@@ -180,6 +227,7 @@ async def me(principal: CurrentPrincipal) -> Identity:
         username=principal.name,
         role=principal.role,
         permissions=sorted(principal.permissions),
+        expires_at=principal.expires_at,
     )
 
 
@@ -215,13 +263,19 @@ async def create_api_token(
     scopes = frozenset(body.scopes) if body.scopes is not None else role_scopes
     # A token never carries more than the session that created it.
     if not scopes <= principal.permissions:
-        raise Forbidden(f"cannot grant {sorted(scopes - principal.permissions)}")
+        raise Forbidden(
+            f"cannot grant the scopes {scope_list(scopes - principal.permissions)}: a new token "
+            f"carries at most the permissions of the one that creates it "
+            f"({scope_list(principal.permissions)})"
+        )
     ttl = body.expires_in_days * 86400 if body.expires_in_days else None
     issued = await asyncio.to_thread(
         hub.accounts.issue_user_token, user, "api", ttl, scopes, body.name
     )
     await hub.record(
-        audit_entry(request, principal, "token.create", body.name, "ok", scopes=sorted(scopes))
+        audit_entry(
+            request, principal, AuditAction.TOKEN_CREATE, body.name, "ok", scopes=sorted(scopes)
+        )
     )
     return IssuedApiToken(
         id=issued.id,
@@ -247,5 +301,5 @@ async def revoke_api_token(
 ) -> Response:
     await asyncio.to_thread(hub.accounts.revoke_user_token, token_id, principal.name)
     await hub.drop_user_feeds(token_id=token_id)
-    await hub.record(audit_entry(request, principal, "token.revoke", str(token_id), "ok"))
+    await hub.record(audit_entry(request, principal, AuditAction.TOKEN_REVOKE, str(token_id), "ok"))
     return Response(status_code=status.HTTP_204_NO_CONTENT)

@@ -10,6 +10,7 @@ from pydantic import BaseModel, Field
 
 from backend.api.deps import HubDep
 from backend.api.security import CurrentPrincipal, SecuredRouter, client_address, requires
+from backend.api.vehicle_budget import check_vehicle_budget, spend_vehicle_budget
 from backend.auth.policy import Permission, Principal, authorize
 from backend.errors import GcsError, InvalidRequest, SafetyViolation
 from backend.fleet.command_service import execute_command
@@ -68,13 +69,13 @@ async def send_group_command(
     Each vehicle reached counts as one command in the caller's rate limit; a call is
     accepted while the caller has budget left, so a fleet-wide RTL is never split.
     """
-    hub.command_limiter.check(principal.name, "commands")
+    check_vehicle_budget(hub, principal)
     if body.vehicle_ids is not None:
         targets = list(dict.fromkeys(body.vehicle_ids))
         _refuse_unknown(hub, targets)
     else:
         targets = [r.id for r in hub.registry.all() if r.connected]
-    hub.command_limiter.hit(principal.name, len(targets))
+    spend_vehicle_budget(hub, principal, len(targets))
     source = client_address(request)
     results = await asyncio.gather(
         *(

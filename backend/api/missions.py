@@ -10,6 +10,7 @@ from pydantic import BaseModel, Field
 
 from backend.api.deps import HubDep
 from backend.api.security import CurrentPrincipal, SecuredRouter, client_address, requires
+from backend.api.vehicle_budget import spend_vehicle_budget
 from backend.auth.policy import Permission
 from backend.fleet.command_service import execute_expecting_acceptance
 from backend.missions.schemas import Mission
@@ -51,6 +52,7 @@ async def _run(
     command: Command,
     override_reason: str | None = None,
 ) -> MissionResult:
+    spend_vehicle_budget(hub, principal)
     outcome = await execute_expecting_acceptance(
         hub, principal, client_address(request), vehicle_id, command, override_reason
     )

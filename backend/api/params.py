@@ -9,6 +9,7 @@ from pydantic import BaseModel
 
 from backend.api.deps import HubDep
 from backend.api.security import CurrentPrincipal, SecuredRouter, client_address, requires
+from backend.api.vehicle_budget import spend_vehicle_budget
 from backend.auth.policy import Permission
 from backend.fleet.command_service import execute_expecting_acceptance
 from protocol.messages import (
@@ -41,6 +42,7 @@ class ParamUpdate(BaseModel):
 async def _ask(
     hub: HubDep, request: Request, principal: CurrentPrincipal, vehicle_id: str, command: Command
 ) -> ParamValues:
+    spend_vehicle_budget(hub, principal)
     outcome = await execute_expecting_acceptance(
         hub, principal, client_address(request), vehicle_id, command
     )

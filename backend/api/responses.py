@@ -6,7 +6,8 @@ The rules follow from where errors arise, so a new route is documented by them:
 - a path parameter, or a ``vehicle_id`` query: 404;
 - a request body: 413.
 ``ROUTE_STATUSES`` adds what only some routes do: talk to a vehicle (409 offline or
-refused, 504 no answer in time), rate limits (429), conflicts (409).
+refused, 504 no answer in time, 429 over the caller's budget of requests to vehicles),
+rate limits (429), conflicts (409).
 """
 
 from __future__ import annotations
@@ -22,7 +23,7 @@ from fastapi.routing import APIRoute
 from pydantic import BaseModel, ConfigDict, Field
 
 from backend.api.security import PERMISSION_KEY
-from backend.auth.policy import PUBLIC
+from backend.auth.policy import PUBLIC, USER_SCOPES
 
 
 class ErrorMessage(BaseModel):
@@ -65,7 +66,8 @@ STATUSES: dict[int, dict[str, Any]] = {
         "model": Unprocessable,
     },
     429: {
-        "description": "Too many attempts; try again after Retry-After seconds",
+        "description": "Too many attempts, or too many requests to vehicles (commands, "
+        "parameters, missions share one budget per user); try again after Retry-After seconds",
         "headers": RETRY_AFTER,
     },
     503: {
@@ -75,7 +77,7 @@ STATUSES: dict[int, dict[str, Any]] = {
     504: {"description": "The agent or the flight controller did not answer in time"},
 }
 
-VEHICLE_LINK = frozenset({409, 504})
+VEHICLE_LINK = frozenset({409, 429, 504})
 # (path pattern, methods or None for all, statuses) for what the rules cannot see.
 ROUTE_STATUSES: list[tuple[str, frozenset[str] | None, frozenset[int]]] = [
     (
@@ -147,8 +149,21 @@ def _openapi(app: FastAPI) -> dict[str, Any]:
             routes=app.routes,
         )
         _require_discriminators(document)
+        _name_required_scopes(document)
         app.openapi_schema = document
     return app.openapi_schema
+
+
+def _name_required_scopes(document: dict[str, Any]) -> None:
+    """Each operation's security requirement names the scope it needs (its permission),
+    so the docs' "Authorize" dialog and generated clients know which scope to ask for."""
+    user_scopes = {scope.value for scope in USER_SCOPES}
+    for operations in document.get("paths", {}).values():
+        for operation in operations.values():
+            needed = operation.get(PERMISSION_KEY)
+            for requirement in operation.get("security", []):
+                for scheme in requirement:
+                    requirement[scheme] = [needed] if needed in user_scopes else []
 
 
 def _require_discriminators(document: dict[str, Any]) -> None:

@@ -9,6 +9,7 @@ from fastapi import Path, Request, Response, status
 
 from backend.api.deps import HubDep
 from backend.api.security import CurrentPrincipal, SecuredRouter, audit_entry, requires
+from backend.audit import AuditAction
 from backend.auth.policy import Permission
 from backend.missions.schemas import Mission, MissionCheckResponse
 from backend.safety.schemas import SafetyRailsModel
@@ -36,7 +37,9 @@ async def set_site_rails(
 ) -> SafetyRailsModel:
     await asyncio.to_thread(hub.safety.repository.put, SITE, body.model_dump_json(), principal.name)
     await hub.record(
-        audit_entry(request, principal, "rails.update", SITE, "ok", rails=body.model_dump())
+        audit_entry(
+            request, principal, AuditAction.RAILS_UPDATE, SITE, "ok", rails=body.model_dump()
+        )
     )
     return body
 
@@ -75,7 +78,9 @@ async def set_vehicle_rails(
         principal.name,
     )
     await hub.record(
-        audit_entry(request, principal, "rails.update", vehicle_id, "ok", rails=body.model_dump())
+        audit_entry(
+            request, principal, AuditAction.RAILS_UPDATE, vehicle_id, "ok", rails=body.model_dump()
+        )
     )
     return body
 
@@ -90,7 +95,7 @@ async def clear_vehicle_rails(
 ) -> Response:
     hub.registry.get(vehicle_id)
     await asyncio.to_thread(hub.safety.repository.delete, vehicle_scope(vehicle_id))
-    await hub.record(audit_entry(request, principal, "rails.clear", vehicle_id, "ok"))
+    await hub.record(audit_entry(request, principal, AuditAction.RAILS_CLEAR, vehicle_id, "ok"))
     return Response(status_code=status.HTTP_204_NO_CONTENT)
 
 

@@ -17,15 +17,20 @@ from starlette.requests import HTTPConnection
 
 from backend.api.deps import get_hub
 from backend.api.finite_json import FiniteJsonRoute
-from backend.audit import AuditEntry
+from backend.audit import AuditAction, AuditEntry, principal_audit_entry
 from backend.auth.credentials import presented_principal, presented_token
-from backend.auth.policy import PUBLIC, Permission, Principal, authorize
+from backend.auth.policy import PUBLIC, USER_SCOPES, Permission, Principal, authorize
 from backend.errors import Forbidden, Unauthenticated
 
 PERMISSION_KEY = "x-required-permission"
 
 # Declares the bearer scheme in the OpenAPI document (the docs' "Authorize" button).
-bearer_scheme = OAuth2PasswordBearer(tokenUrl="/api/v1/auth/token", auto_error=False)
+# Its scopes are the permissions a user's token may be narrowed to.
+bearer_scheme = OAuth2PasswordBearer(
+    tokenUrl="/api/v1/auth/token",
+    scopes={scope.value: text for scope, text in USER_SCOPES.items()},
+    auto_error=False,
+)
 
 
 def requires(permission: Permission | str) -> dict[str, Any]:
@@ -64,7 +69,7 @@ def _authorizer(permission: Permission) -> Callable[..., Any]:
             if permission != Permission.READ:
                 # A refused attempt to act is itself worth a line in the audit log.
                 action = f"{request.method} {request.url.path}"
-                entry = audit_entry(request, principal, "denied", action, "denied")
+                entry = audit_entry(request, principal, AuditAction.DENIED, action, "denied")
                 await get_hub(request).record(entry)
             raise refusal
 
@@ -97,17 +102,21 @@ class SecuredRouter(APIRouter):
 def audit_entry(
     request: HTTPConnection,
     principal: Principal | None,
-    action: str,
+    action: AuditAction,
     target: str,
     outcome: str,
     **detail: Any,
 ) -> AuditEntry:
-    return AuditEntry(
-        actor=principal.name if principal else "anonymous",
-        role=principal.role if principal else "",
-        source=client_address(request),
-        action=action,
-        target=target,
-        outcome=outcome,
-        detail=detail,
+    if principal is None:
+        return AuditEntry(
+            actor="anonymous",
+            role="",
+            source=client_address(request),
+            action=action,
+            target=target,
+            outcome=outcome,
+            detail=detail,
+        )
+    return principal_audit_entry(
+        principal, client_address(request), action, target, outcome, detail
     )

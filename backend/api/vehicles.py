@@ -11,6 +11,7 @@ from backend.api.deps import HubDep
 from backend.api.schemas import CommandResponse, TelemetryPage, TelemetrySample
 from backend.api.security import CurrentPrincipal, SecuredRouter, client_address, requires
 from backend.api.time_ranges import Moment, time_query, time_range
+from backend.api.vehicle_budget import spend_vehicle_budget
 from backend.auth.policy import Permission
 from backend.fleet.command_service import execute_command
 from protocol.messages import Command, VehicleSummary
@@ -70,8 +71,7 @@ async def send_command(
     flight controller is an answer (status ``refused``, with its reason), so it comes back
     as 200; a missing answer is 504.
     """
-    hub.command_limiter.check(principal.name, "commands")
-    hub.command_limiter.hit(principal.name)
+    spend_vehicle_budget(hub, principal)
     outcome = await execute_command(
         hub, principal, client_address(request), vehicle_id, command, override_reason
     )

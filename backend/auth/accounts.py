@@ -186,6 +186,8 @@ class Accounts:
             _parse_scopes(token_row.scopes),
             token_row.id,
             token_row.expires_at,
+            token_kind=token_row.kind,
+            token_name=token_row.name,
         )
 
     def revoke_user_token(self, token_id: int, owner: str | None) -> None:

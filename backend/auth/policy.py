@@ -26,6 +26,20 @@ class Permission(StrEnum):
     AGENT = "agent"  # speaking for one vehicle (agent tokens only)
 
 
+# What each scope of a user's token allows: the OAuth2 scopes of the OpenAPI document.
+USER_SCOPES: dict[Permission, str] = {
+    Permission.READ: "Fleet state, telemetry, flights, configuration, one's own tokens",
+    Permission.COMMAND: "Vehicle commands, parameters, missions, mission checks",
+    Permission.AUDIT: "The audit log",
+    Permission.ADMIN: "Users, vehicle enrolment, safety rails, safety overrides",
+}
+
+
+def scope_list(scopes: frozenset[Permission] | set[Permission]) -> str:
+    """Scopes as a reader writes them: ``'admin', 'audit'`` (sorted, no enum reprs)."""
+    return ", ".join(f"'{scope.value}'" for scope in sorted(scopes)) or "none"
+
+
 # Routes anyone may call (logging in, the health probe).
 PUBLIC = "public"
 
@@ -48,6 +62,11 @@ class Principal:
     permissions: frozenset[Permission]
     vehicle_id: str | None = None  # agents speak for exactly this vehicle
     token_id: int | None = None
+    # A user's token: its kind (session, access or api), its name (api tokens) and the
+    # scopes it was narrowed to (None: the role's permissions, unnarrowed).
+    token_kind: str = ""
+    token_name: str = ""
+    scopes: frozenset[Permission] | None = None
     # When the token stops being valid (Unix seconds; None: until revoked), so that a
     # cached principal and a live socket end with it.
     expires_at: float | None = None
@@ -64,6 +83,8 @@ def user_principal(
     scopes: frozenset[Permission] | None,
     token_id: int,
     expires_at: float | None = None,
+    token_kind: str = "",
+    token_name: str = "",
 ) -> Principal:
     """A user's principal: the role's permissions, narrowed by the token's scopes."""
     allowed = ROLE_PERMISSIONS[role]
@@ -72,6 +93,9 @@ def user_principal(
         role=role.value,
         permissions=allowed if scopes is None else allowed & scopes,
         token_id=token_id,
+        token_kind=token_kind,
+        token_name=token_name,
+        scopes=scopes,
         expires_at=expires_at,
     )
 
@@ -83,15 +107,33 @@ def agent_principal(vehicle_id: str, token_id: int) -> Principal:
         permissions=frozenset({Permission.AGENT}),
         vehicle_id=vehicle_id,
         token_id=token_id,
+        token_kind="agent",
     )
 
 
 def authorize(principal: Principal, needed: Permission, vehicle_id: str | None = None) -> None:
     """Raise Forbidden unless ``principal`` may do what ``needed`` covers (on ``vehicle_id``)."""
     if needed not in principal.permissions:
-        raise Forbidden(f"{principal.name} ({principal.role}) lacks the '{needed}' permission")
+        raise Forbidden(_lacking(principal, needed))
     if principal.is_agent and vehicle_id is not None and vehicle_id != principal.vehicle_id:
         raise Forbidden(f"this agent token belongs to {principal.vehicle_id!r}, not {vehicle_id!r}")
+
+
+def _lacking(principal: Principal, needed: Permission) -> str:
+    """Blame what is short: the token's scopes when the role has the permission, else the
+    role (an admin's read-only token lacks 'command' because of its scopes)."""
+    if principal.scopes is not None and needed not in principal.scopes:
+        role_permissions = next(
+            (granted for role, granted in ROLE_PERMISSIONS.items() if role == principal.role),
+            frozenset(),
+        )
+        if needed in role_permissions:
+            token = f"token {principal.token_name!r}" if principal.token_name else "token"
+            return (
+                f"this {token} lacks the '{needed}' permission: its scopes are "
+                f"{scope_list(principal.scopes)} (the {principal.role} role has it)"
+            )
+    return f"{principal.name} ({principal.role} role) lacks the '{needed}' permission"
 
 
 # What each WebSocket message type needs, by the ``type`` field. A message type missing

@@ -10,7 +10,7 @@ from dataclasses import asdict
 
 from sqlalchemy.exc import SQLAlchemyError
 
-from backend.audit import AuditEntry
+from backend.audit import AuditAction, principal_audit_entry
 from backend.auth.policy import Permission, Principal
 from backend.errors import (
     CommandTimedOut,
@@ -43,14 +43,8 @@ async def execute_command(
 
     async def audit(outcome: str) -> None:
         await hub.record(
-            AuditEntry(
-                actor=principal.name,
-                role=principal.role,
-                source=source,
-                action="command",
-                target=vehicle_id,
-                outcome=outcome,
-                detail=details,
+            principal_audit_entry(
+                principal, source, AuditAction.COMMAND, vehicle_id, outcome, details
             )
         )
 

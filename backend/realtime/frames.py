@@ -18,6 +18,19 @@ class FrameTooLarge(Exception):
         super().__init__(f"frame of {size} bytes is over the {limit}-byte limit")
 
 
+# A close frame's reason: 123 bytes of UTF-8 at most (RFC 6455 5.5: a control frame's
+# payload is 125 bytes, 2 of them the code). A longer one breaks the connection instead.
+MAX_CLOSE_REASON_BYTES = 123
+
+
+def close_reason(reason: str) -> str:
+    """``reason`` cut to fit a close frame, on a character boundary, marked with "…"."""
+    if len(reason.encode()) <= MAX_CLOSE_REASON_BYTES:
+        return reason
+    room = MAX_CLOSE_REASON_BYTES - len("…".encode())
+    return reason.encode()[:room].decode(errors="ignore") + "…"
+
+
 class PeerConnection:
     def __init__(self, websocket: WebSocket, max_frame_bytes: int, max_bad_frames: int) -> None:
         self.websocket = websocket
@@ -34,7 +47,7 @@ class PeerConnection:
 
     async def close(self, code: int, reason: str) -> None:
         async with self._send_lock:
-            await self.websocket.close(code, reason)
+            await self.websocket.close(code, close_reason(reason))
 
     async def receive(self) -> str | bytes | None:
         """The next frame, or None once the peer has gone."""

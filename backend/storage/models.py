@@ -136,6 +136,11 @@ class AuditRow(Base):
     target: Mapped[str] = mapped_column(String(128), default="")
     outcome: Mapped[str] = mapped_column(String(16), doc="ok, refused, failed or denied")
     detail: Mapped[str] = mapped_column(String(2000), default="")
+    # The credential used: session, access, api or agent (NULL: anonymous, the hub itself,
+    # or an entry from before it was recorded), its id, and an API token's name.
+    token_kind: Mapped[str | None] = mapped_column(String(16))
+    token_id: Mapped[int | None] = mapped_column(BigInteger)
+    token_name: Mapped[str | None] = mapped_column(String(128))
 
 
 class SafetyRailsRow(Base):

@@ -1,12 +1,38 @@
-// The audit log drawer: who did what, when, from where and how it ended, newest
-// first, a page at a time ("Load older" asks for entries before the last id shown).
+// The audit log drawer: who did what, with which token, when, from where and how it
+// ended, newest first, a page at a time ("Load older" follows the hub's `next_before_id`).
 import { fetchAudit } from "./api";
 import { actionButton, element } from "./dom";
 import { Pager } from "./pager";
-import type { AuditEntry } from "./types";
+import type { AuditAction, AuditEntry } from "./types";
 
 const PAGE_SIZE = 50;
-const COLUMNS = ["time", "actor", "role", "source", "action", "target", "outcome", "detail"] as const;
+const COLUMNS = ["time", "actor", "token", "role", "source", "action", "target", "outcome", "detail"] as const;
+
+// Every action the hub records, offered as the action filter's choices (the hub refuses
+// any other). A Record, so the compiler says when the generated enum gains one.
+const ACTIONS: Record<AuditAction, true> = {
+  login: true,
+  logout: true,
+  "token.create": true,
+  "token.revoke": true,
+  "user.create": true,
+  "user.update": true,
+  "agent_token.create": true,
+  "agent_token.revoke": true,
+  "rails.update": true,
+  "rails.clear": true,
+  command: true,
+  denied: true,
+};
+
+/** The credential an entry was made with: an API token by name, else its kind. */
+export function formatAuditToken(entry: AuditEntry): string {
+  if (entry.token) return `${entry.token} (API token ${entry.token_id ?? "?"})`;
+  if (entry.token_kind === "api" || entry.token_kind === "agent") {
+    return `${entry.token_kind} token ${entry.token_id ?? "?"}`;
+  }
+  return entry.token_kind ?? "";
+}
 
 function pad(value: number): string {
   return String(value).padStart(2, "0");
@@ -40,13 +66,17 @@ export class AuditPanel {
 
   constructor(onClose: () => void) {
     this.actorFilter = element("input", { name: "actor", type: "search", placeholder: "any actor" });
+    const actionChoices = element("datalist", { id: "audit-actions" });
+    for (const action of Object.keys(ACTIONS)) actionChoices.append(element("option", { value: action }));
     this.actionFilter = element("input", { name: "action", type: "search", placeholder: "any action" });
+    this.actionFilter.setAttribute("list", actionChoices.id);
     const refreshButton = actionButton("audit-refresh", "Refresh", () => void this.refresh());
     const filters = element(
       "form",
       { className: "audit-filters" },
       element("label", {}, "Actor ", this.actorFilter),
       element("label", {}, "Action ", this.actionFilter),
+      actionChoices,
       refreshButton,
     );
     filters.addEventListener("submit", (event) => {
@@ -84,10 +114,8 @@ export class AuditPanel {
 
     this.pager = new Pager<AuditEntry>({
       fetch: async (beforeId) => {
-        const { entries } = await fetchAudit({ limit: PAGE_SIZE, beforeId, ...this.filters });
-        // The audit log gives no cursor: a full page may have older entries before its last.
-        const more = entries.length === PAGE_SIZE;
-        return { items: entries, nextBeforeId: more ? entries[entries.length - 1].id : null };
+        const page = await fetchAudit({ limit: PAGE_SIZE, beforeId, ...this.filters });
+        return { items: page.entries, nextBeforeId: page.next_before_id ?? null };
       },
       clear: () => this.body.replaceChildren(),
       show: (entries) => {
@@ -135,6 +163,7 @@ export class AuditPanel {
     const values: Record<(typeof COLUMNS)[number], string> = {
       time: formatAuditTime(entry.time),
       actor: entry.actor,
+      token: formatAuditToken(entry),
       role: entry.role,
       source: entry.source,
       action: entry.action,

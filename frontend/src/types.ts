@@ -44,6 +44,7 @@ export function can(user: CurrentUser, permission: Permission): boolean {
 /** One row of `GET /api/v1/audit`. */
 export type AuditEntry = Schemas["AuditRecord"];
 export type AuditPage = Schemas["AuditPage"];
+export type AuditAction = Schemas["AuditAction"];
 
 export interface AuditQuery {
   limit: number;

@@ -155,6 +155,7 @@ def test_an_operator_sees_safety_refusals_and_pages_the_audit_log(
     newest = entries.first
     expect(newest.locator('[data-field="action"]')).to_have_text("command")
     expect(newest.locator('[data-field="actor"]')).to_have_text(username)
+    expect(newest.locator('[data-field="token"]')).to_have_text("session")
     expect(newest.locator('[data-field="role"]')).to_have_text("operator")
     expect(newest.locator('[data-field="target"]')).to_have_text(VEHICLE)
     expect(newest.locator('[data-field="outcome"]')).to_have_text("refused")

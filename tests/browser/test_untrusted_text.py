@@ -69,8 +69,9 @@ def _fly_with_hostile_event(base: str, enrol: Callable[[str], str], api: httpx.C
 
 
 def test_an_event_text_with_tags_renders_as_literal_text(page: Page, tmp_path: Path) -> None:
-    settings = hub_settings(tmp_path, frontend_dir=REPO_ROOT / "frontend" / "dist")
-    if not (settings.frontend_dir / "index.html").is_file():
+    dashboard = REPO_ROOT / "frontend" / "dist"
+    settings = hub_settings(tmp_path, frontend_dir=dashboard)
+    if not (dashboard / "index.html").is_file():
         pytest.fail("the dashboard is not built: run scripts/setup.sh (npm run build)")
     with running_hub(settings) as base:
         admin = httpx.post(

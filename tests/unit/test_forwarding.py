@@ -416,3 +416,18 @@ async def test_an_endpoint_that_cannot_open_is_left_out(
         await link.tap(from_vehicle(heartbeat()))
         assert (await qgc.receive()).get_type() == "HEARTBEAT"
     assert "disabled" in caplog.text
+
+
+@in_event_loop
+async def test_a_udpout_endpoint_to_this_computer_listens_on_loopback_only() -> None:
+    local = Endpoint(EndpointAddress.parse(f"udpout:127.0.0.1:{free_port()}"))
+    remote = Endpoint(EndpointAddress.parse("udpout:192.0.2.1:14550"))  # TEST-NET-1
+    await local.open()
+    await remote.open()
+    try:
+        assert local.local_address[0] == "127.0.0.1"
+        # A GCS elsewhere answers to the address the route gives: any interface.
+        assert remote.local_address[0] == "0.0.0.0"
+    finally:
+        local.close()
+        remote.close()

@@ -3,10 +3,11 @@
 from __future__ import annotations
 
 import asyncio
-from typing import Annotated
+import json
+from typing import Annotated, Any
 
 from fastapi import Query
-from pydantic import BaseModel, ConfigDict
+from pydantic import BaseModel, ConfigDict, Field, field_validator
 
 from backend.api.deps import HubDep
 from backend.api.logs.common import MAX_ID, MAX_PAGE, next_before_id
@@ -42,10 +43,24 @@ class CommandRecord(BaseModel):
     vehicle_id: str
     actor: str
     name: str
-    command_json: str
+    # Stored as JSON text; answered as the object it is, as in the audit log's detail.
+    command: dict[str, Any] = Field(
+        validation_alias="command_json", description='The command as sent, e.g. {"name": "land"}'
+    )
     status: str
     result: str | None
     message: str
+
+    @field_validator("command", mode="before")
+    @classmethod
+    def _parsed(cls, stored: object) -> object:
+        if not isinstance(stored, str):
+            return stored
+        try:
+            value = json.loads(stored)
+        except json.JSONDecodeError:
+            return {"unparsed": stored}  # cut short at the column's size
+        return value if isinstance(value, dict) else {"value": value}
 
 
 class CommandPage(BaseModel):

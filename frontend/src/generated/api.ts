@@ -743,7 +743,8 @@ export interface paths {
         };
         /**
          * Audit Log
-         * @description Audit entries, newest first.
+         * @description Audit entries, newest first, a page at a time (``next_before_id``). An unknown
+         *     filter or action is refused (422, naming the valid ones).
          */
         get: operations["audit_log_api_v1_audit_get"];
         put?: never;
@@ -821,10 +822,21 @@ export interface components {
              */
             name: "arm";
         };
+        /**
+         * AuditAction
+         * @description Every action the audit log records (the OpenAPI document lists them as an enum).
+         * @enum {string}
+         */
+        AuditAction: "login" | "logout" | "token.create" | "token.revoke" | "user.create" | "user.update" | "agent_token.create" | "agent_token.revoke" | "rails.update" | "rails.clear" | "command" | "denied";
         /** AuditPage */
         AuditPage: {
             /** Entries */
             entries: components["schemas"]["AuditRecord"][];
+            /**
+             * Next Before Id
+             * @description Pass as before_id for the next (older) page; null on the last page
+             */
+            next_before_id: number | null;
         };
         /** AuditRecord */
         AuditRecord: {
@@ -832,22 +844,45 @@ export interface components {
             id: number;
             /** Time */
             time: number;
-            /** Actor */
+            /**
+             * Actor
+             * @description The user (or agent:<vehicle>, provisioning, anonymous)
+             */
             actor: string;
             /** Role */
             role: string;
-            /** Source */
+            /**
+             * Source
+             * @description The client's address
+             */
             source: string;
-            /** Action */
-            action: string;
+            action: components["schemas"]["AuditAction"];
             /** Target */
             target: string;
-            /** Outcome */
+            /**
+             * Outcome
+             * @description ok, refused, failed or denied
+             */
             outcome: string;
             /** Detail */
             detail: {
                 [key: string]: unknown;
             };
+            /**
+             * Token Kind
+             * @description The credential the actor used: a dashboard session, an access token (/auth/token), an API token or an agent token; null for anonymous attempts, the hub itself, and entries from before it was recorded
+             */
+            token_kind?: ("session" | "access" | "api" | "agent") | null;
+            /**
+             * Token Id
+             * @description That token's id (an API token's as in /auth/api-tokens, an agent token's as in /agent-tokens)
+             */
+            token_id?: number | null;
+            /**
+             * Token
+             * @description An API token's name, so an integration's acts are told from its user's
+             */
+            token?: string | null;
         };
         /** BatteryEstimateModel */
         BatteryEstimateModel: {
@@ -972,8 +1007,13 @@ export interface components {
             actor: string;
             /** Name */
             name: string;
-            /** Command Json */
-            command_json: string;
+            /**
+             * Command
+             * @description The command as sent, e.g. {"name": "land"}
+             */
+            command: {
+                [key: string]: unknown;
+            };
             /** Status */
             status: string;
             /** Result */
@@ -1182,7 +1222,10 @@ export interface components {
             role: string;
             /** Permissions */
             permissions: string[];
-            /** Expires At */
+            /**
+             * Expires At
+             * @description When the token (or session) used ends; null: never
+             */
             expires_at?: number | null;
         };
         /** IssuedAgentToken */
@@ -2065,7 +2108,7 @@ export interface operations {
                     "application/json": components["schemas"]["Unprocessable"];
                 };
             };
-            /** @description Too many attempts; try again after Retry-After seconds */
+            /** @description Too many attempts, or too many requests to vehicles (commands, parameters, missions share one budget per user); try again after Retry-After seconds */
             429: {
                 headers: {
                     /** @description Seconds to wait */
@@ -2138,7 +2181,7 @@ export interface operations {
                     "application/json": components["schemas"]["Unprocessable"];
                 };
             };
-            /** @description Too many attempts; try again after Retry-After seconds */
+            /** @description Too many attempts, or too many requests to vehicles (commands, parameters, missions share one budget per user); try again after Retry-After seconds */
             429: {
                 headers: {
                     /** @description Seconds to wait */
@@ -2820,6 +2863,17 @@ export interface operations {
                     "application/json": components["schemas"]["Unprocessable"];
                 };
             };
+            /** @description Too many attempts, or too many requests to vehicles (commands, parameters, missions share one budget per user); try again after Retry-After seconds */
+            429: {
+                headers: {
+                    /** @description Seconds to wait */
+                    "Retry-After"?: number;
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
             /** @description The database is unavailable; try again after Retry-After seconds */
             503: {
                 headers: {
@@ -2907,6 +2961,17 @@ export interface operations {
                 };
                 content: {
                     "application/json": components["schemas"]["Unprocessable"];
+                };
+            };
+            /** @description Too many attempts, or too many requests to vehicles (commands, parameters, missions share one budget per user); try again after Retry-After seconds */
+            429: {
+                headers: {
+                    /** @description Seconds to wait */
+                    "Retry-After"?: number;
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
                 };
             };
             /** @description The database is unavailable; try again after Retry-After seconds */
@@ -3011,6 +3076,17 @@ export interface operations {
                     "application/json": components["schemas"]["Unprocessable"];
                 };
             };
+            /** @description Too many attempts, or too many requests to vehicles (commands, parameters, missions share one budget per user); try again after Retry-After seconds */
+            429: {
+                headers: {
+                    /** @description Seconds to wait */
+                    "Retry-After"?: number;
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
             /** @description The database is unavailable; try again after Retry-After seconds */
             503: {
                 headers: {
@@ -3096,6 +3172,17 @@ export interface operations {
                 };
                 content: {
                     "application/json": components["schemas"]["Unprocessable"];
+                };
+            };
+            /** @description Too many attempts, or too many requests to vehicles (commands, parameters, missions share one budget per user); try again after Retry-After seconds */
+            429: {
+                headers: {
+                    /** @description Seconds to wait */
+                    "Retry-After"?: number;
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
                 };
             };
             /** @description The database is unavailable; try again after Retry-After seconds */
@@ -3201,6 +3288,17 @@ export interface operations {
                     "application/json": components["schemas"]["Unprocessable"];
                 };
             };
+            /** @description Too many attempts, or too many requests to vehicles (commands, parameters, missions share one budget per user); try again after Retry-After seconds */
+            429: {
+                headers: {
+                    /** @description Seconds to wait */
+                    "Retry-After"?: number;
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
             /** @description The database is unavailable; try again after Retry-After seconds */
             503: {
                 headers: {
@@ -3286,6 +3384,17 @@ export interface operations {
                 };
                 content: {
                     "application/json": components["schemas"]["Unprocessable"];
+                };
+            };
+            /** @description Too many attempts, or too many requests to vehicles (commands, parameters, missions share one budget per user); try again after Retry-After seconds */
+            429: {
+                headers: {
+                    /** @description Seconds to wait */
+                    "Retry-After"?: number;
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
                 };
             };
             /** @description The database is unavailable; try again after Retry-After seconds */
@@ -3388,6 +3497,17 @@ export interface operations {
                     "application/json": components["schemas"]["Unprocessable"];
                 };
             };
+            /** @description Too many attempts, or too many requests to vehicles (commands, parameters, missions share one budget per user); try again after Retry-After seconds */
+            429: {
+                headers: {
+                    /** @description Seconds to wait */
+                    "Retry-After"?: number;
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
             /** @description The database is unavailable; try again after Retry-After seconds */
             503: {
                 headers: {
@@ -3480,7 +3600,7 @@ export interface operations {
                     "application/json": components["schemas"]["Unprocessable"];
                 };
             };
-            /** @description Too many attempts; try again after Retry-After seconds */
+            /** @description Too many attempts, or too many requests to vehicles (commands, parameters, missions share one budget per user); try again after Retry-After seconds */
             429: {
                 headers: {
                     /** @description Seconds to wait */
@@ -5121,7 +5241,8 @@ export interface operations {
         parameters: {
             query?: {
                 actor?: string | null;
-                action?: string | null;
+                /** @description One of the actions listed */
+                action?: components["schemas"]["AuditAction"] | null;
                 target?: string | null;
                 /** @description Unix seconds */
                 since?: number | null;

@@ -1,0 +1,40 @@
+"""The systemd units in deploy/ give the hub a state directory that is its data directory,
+and the README walks through the hub's user and folders."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+ROOT = Path(__file__).parents[2]
+
+
+def _settings(unit: Path) -> dict[str, list[str]]:
+    """Every ``key=value`` of a unit (keys may repeat, as Environment= does)."""
+    found: dict[str, list[str]] = {}
+    for line in unit.read_text().splitlines():
+        if "=" in line and not line.startswith(("#", "[")):
+            key, _, value = line.partition("=")
+            found.setdefault(key.strip(), []).append(value.strip())
+    return found
+
+
+def test_the_hub_unit_has_its_data_directory_as_state_directory() -> None:
+    unit = _settings(ROOT / "deploy" / "gcs-hub.service")
+    environment = dict(value.split("=", 1) for value in unit["Environment"])
+    (state,) = unit["StateDirectory"]
+    assert environment["GCS_DATA_DIR"] == f"/var/lib/{state}"
+    assert unit["User"] == [state]
+    assert unit["ProtectSystem"] == ["strict"]
+    assert "GCS_FRONTEND_DIR" in environment
+
+
+def test_the_readme_gives_the_hub_service_steps() -> None:
+    readme = (ROOT / "README.md").read_text()
+    steps = readme[readme.index("**Running the hub as a service.**") :]
+    for step in (
+        "useradd --system",
+        "install -d -m 750 -o root -g gcs /etc/gcs",
+        "deploy/gcs-hub.service /etc/systemd/system/",
+        "systemctl enable --now gcs-hub",
+    ):
+        assert step in steps, step

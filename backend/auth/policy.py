@@ -146,6 +146,7 @@ AGENT_MESSAGE_PERMISSIONS: dict[str, Permission] = {
     "event": Permission.AGENT,
     "command_result": Permission.AGENT,
     "unavailable": Permission.AGENT,
+    "pong": Permission.AGENT,
 }
 
 

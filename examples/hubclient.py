@@ -131,7 +131,9 @@ class LiveFeed:
                 self.vehicles = {vehicle["id"]: vehicle for vehicle in message["vehicles"]}
                 self._snapshot = True
             elif message["type"] == "vehicle":  # then one vehicle at a time, as it changes
-                self.vehicles[message["vehicle"]["id"]] = message["vehicle"]
+                # An update leaves out what it sent before (modes, ...): keep it.
+                vehicle = message["vehicle"]
+                self.vehicles[vehicle["id"]] = {**self.vehicles.get(vehicle["id"], {}), **vehicle}
             elif message["type"] == "error":
                 raise SystemExit(f"error: the hub said {message['code']}: {message['message']}")
 

@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
     from backend.settings import HubSettings
+    from gcs.launcher import LocalFleet
 
 LOG_FORMAT = "%(asctime)s %(levelname)-7s %(name)s: %(message)s"  # as vehicle_agents.cli
 
@@ -147,6 +148,7 @@ def _demo(args: argparse.Namespace) -> int:
             f"  log in     admin / {plan.admin_password}\n"
             f"  API docs   {plan.public_http}/docs\n"
             f"  logs       {fleet.log_dir}/\n"
+            f"{_simulator_ports(fleet)}"
             f"{_exposure_note(plan.host)}"
             "Press Ctrl-C to stop.\n",
             flush=True,
@@ -162,6 +164,15 @@ def _demo(args: argparse.Namespace) -> int:
             signal.signal(signum, signal.SIG_IGN)
         fleet.stop()
     return 0
+
+
+def _simulator_ports(fleet: LocalFleet) -> str:
+    """Each simulator's MAVLink address, for QGroundControl or MAVProxy beside the agent."""
+    lines = "".join(
+        f"    {fleet.vehicle_id(index):10} {fleet.sim_address(index)}\n"
+        for index in sorted(fleet.sim_ports)
+    )
+    return f"  MAVLink    each simulator, for QGroundControl (TCP) or MAVProxy --master:\n{lines}"
 
 
 def _exposure_note(host: str) -> str:

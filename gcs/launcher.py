@@ -158,6 +158,11 @@ class LocalFleet:
     def vehicle_id(self, index: int) -> str:
         return self.plan.vehicle_id(index)
 
+    def sim_address(self, index: int) -> str:
+        """Where vehicle ``index``'s simulator takes MAVLink clients: its agent, and any
+        ground station beside it (it serves any number, as SITL's port 5760 does)."""
+        return f"tcp:127.0.0.1:{self.sim_ports[index]}"
+
     def start(self, hub_env: dict[str, str] | None = None) -> None:
         # The data folder and the logs are the operator's alone (0700 folders, 0600 files).
         self.plan.data_dir.mkdir(mode=0o700, parents=True, exist_ok=True)
@@ -212,7 +217,7 @@ class LocalFleet:
             [
                 "sim",
                 "--listen",
-                f"tcp:127.0.0.1:{sim_port}",
+                self.sim_address(index),
                 "--system-id",
                 str(index + 1),
                 "--home",

@@ -12,7 +12,9 @@ Delivery rules per message type (the realtime path honours them):
   while the hub is away) until an ``ack`` says it is committed, and replays the rest on
   reconnect; the hub drops duplicates, asks for gaps with ``resend``, and the agent answers
   ``unavailable`` for frames its bounded outbox had to drop.
-- ``vehicle`` updates to clients: coalesced; a newer state replaces an unsent one.
+- ``vehicle`` updates to clients: coalesced; a newer state replaces an unsent one. What
+  does not change while an agent stays connected (its modes, autopilot and vehicle type)
+  goes out once per client connection, and again only when it changes.
 - ``command`` / ``command_result``: request/response, correlated by ``request_id``.
 """
 
@@ -53,7 +55,7 @@ StreamId = Annotated[str, Field(min_length=1, max_length=64)]
 RequestId = Annotated[str, Field(min_length=1, max_length=64)]
 
 # Every str and list in a message has a bound: one peer must not make the hub store or
-# every dashboard receive (a vehicle's modes go out with each of its updates) megabytes.
+# every dashboard receive (a vehicle's modes are in the snapshot every client gets) megabytes.
 MAX_NAME_CHARS = 32  # a mode, an autopilot, a vehicle type, a capability
 MAX_MODES = 64  # ArduCopter has 27, ArduPlane 25, PX4 about 15
 MAX_CAPABILITIES = 32
@@ -580,6 +582,47 @@ class VehicleSummary(Message):
     state: VehicleState | None = None
 
 
+def _unchanged(value: object) -> bool:
+    return value is None
+
+
+# What a vehicle's agent says once, in its hello, and what therefore does not change while
+# it stays connected: a live update leaves it out unless it changed.
+_SAID_ONCE = (
+    "Left out when this feed has already sent it and it has not changed since: keep the "
+    "value from the fleet snapshot or an earlier update."
+)
+_SAID_ONCE_FIELDS = ("autopilot", "vehicle_type", "modes")
+
+
+def _said_once_schema(schema: dict[str, Any]) -> None:
+    """On the wire these fields are a value or absent, never null: say so in the schema
+    (the dashboard's types are generated from it)."""
+    for name in _SAID_ONCE_FIELDS:
+        field = schema["properties"][name]
+        del field["default"]
+        field.update(next(kind for kind in field.pop("anyOf") if kind.get("type") != "null"))
+
+
+class VehicleChange(Message):
+    """One vehicle's live update. It carries ``autopilot``, ``vehicle_type`` and ``modes``
+    (a third of the frame, ten times a second) only the first time this connection shows
+    the vehicle and when they change (its agent reconnected with another hello); the fleet
+    snapshot a new connection starts with always has them."""
+
+    model_config = ConfigDict(json_schema_extra=_said_once_schema)
+
+    id: VehicleId
+    autopilot: Name | None = Field(default=None, exclude_if=_unchanged, description=_SAID_ONCE)
+    vehicle_type: Name | None = Field(default=None, exclude_if=_unchanged, description=_SAID_ONCE)
+    modes: list[Name] | None = Field(
+        default=None, max_length=MAX_MODES, exclude_if=_unchanged, description=_SAID_ONCE
+    )
+    connected: bool
+    last_seen: float | None = Field(default=None, description="Unix time of the last telemetry.")
+    state: VehicleState | None = None
+
+
 class FleetSnapshot(Message):
     type: Literal["fleet"] = "fleet"
     vehicles: list[VehicleSummary] = Field(max_length=MAX_FLEET)
@@ -587,7 +630,7 @@ class FleetSnapshot(Message):
 
 class VehicleUpdate(Message):
     type: Literal["vehicle"] = "vehicle"
-    vehicle: VehicleSummary
+    vehicle: VehicleChange
 
 
 class Ping(Message):

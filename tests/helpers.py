@@ -105,7 +105,9 @@ class FleetWatcher:
             if message["type"] == "fleet":
                 self.vehicles = {vehicle["id"]: vehicle for vehicle in message["vehicles"]}
             elif message["type"] == "vehicle":
-                self.vehicles[message["vehicle"]["id"]] = message["vehicle"]
+                # An update leaves out what it sent before (modes, ...): keep it.
+                vehicle = message["vehicle"]
+                self.vehicles[vehicle["id"]] = {**self.vehicles.get(vehicle["id"], {}), **vehicle}
         return self.vehicles
 
     def state(self, vehicle_id: str) -> dict[str, Any]:

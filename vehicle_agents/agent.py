@@ -33,6 +33,7 @@ from vehicle_agents.statustext import StatusTextJoiner
 from vehicle_agents.streams import StreamRequester
 from vehicle_agents.telemetry import link_snapshot
 from vehicle_agents.tlog import TlogRecorder
+from vehicle_agents.tlog_pruning import MIB, TlogRetention
 from vehicle_agents.tlog_uploads import TlogUploader
 
 log = logging.getLogger(__name__)
@@ -108,6 +109,10 @@ async def _run(settings: AgentSettings) -> None:
                 url,
                 token,
                 notify=lambda text, severity: events.emit("upload", text, severity),
+                retention=TlogRetention(
+                    keep_days=settings.tlog_keep_days,
+                    keep_bytes=round(settings.tlog_keep_mb * MIB),
+                ),
             )
             link.listeners.append(uploader.on_message)
             tasks.create_task(uploader.run())

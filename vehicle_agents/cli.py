@@ -43,6 +43,8 @@ _FLAG_KINDS: dict[str, dict[str, Any]] = {
     "telemetry_rate_hz": {"type": float, "metavar": "HZ"},
     "source_system": {"type": int, "metavar": "SYSID"},
     "tlog_dir": {"type": Path, "metavar": "DIR"},
+    "tlog_keep_days": {"type": float, "metavar": "DAYS"},
+    "tlog_keep_mb": {"type": float, "metavar": "MIB"},
     "outbox_limit": {"type": int, "metavar": "FRAMES"},
     "outbox_dir": {"type": Path, "metavar": "DIR"},
     "hub_failsafe_action": {"choices": ["continue", "hold", "rtl"]},

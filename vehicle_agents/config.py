@@ -57,6 +57,18 @@ class AgentSettings(BaseSettings):
     tlog_dir: Path | None = Field(
         default=None, description="keep an onboard .tlog per flight here, upload after landing"
     )
+    tlog_keep_days: float = Field(
+        default=7.0,
+        ge=0,
+        description="uploaded onboard .tlogs older than this are deleted (0: right after "
+        "upload); a file not yet uploaded is always kept",
+    )
+    tlog_keep_mb: float = Field(
+        default=2048.0,
+        ge=0,
+        description="all onboard .tlogs together are held under this many MiB by deleting "
+        "the oldest uploaded ones; a file not yet uploaded is always kept",
+    )
     outbox_limit: int = Field(
         default=36000,
         ge=10,

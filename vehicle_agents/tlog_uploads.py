@@ -2,18 +2,21 @@
 
 A failed upload never ends the uploader and never drops the file: the operator gets an
 event saying what went wrong, and the file is tried again with exponential backoff (with
-full jitter, so a fleet that lands together does not retry in step)."""
+full jitter, so a fleet that lands together does not retry in step). Uploaded files are
+kept on board, within the age and size limits of a `TlogRetention`."""
 
 from __future__ import annotations
 
 import asyncio
 import logging
+import time
 from collections.abc import Callable
 from pathlib import Path
 
 from common.retry import Backoff, Retries
 from vehicle_agents.fcu_link import MavMessage
 from vehicle_agents.tlog import TlogRecorder, TlogUploadError, upload_tlog
+from vehicle_agents.tlog_pruning import UPLOADED_DIR, TlogRetention, prune_uploaded_tlogs
 
 log = logging.getLogger(__name__)
 
@@ -27,6 +30,8 @@ Notify = Callable[[str, int], None]
 
 # Waits between failed uploads: up to 5 s after the first, doubling to 10 min.
 UPLOAD_BACKOFF = Backoff(initial_s=5.0, max_s=600.0)
+# Uploaded files also age out while the vehicle sits on the ground for days.
+PRUNE_EVERY_S = 3600.0
 
 
 class TlogUploader:
@@ -37,12 +42,16 @@ class TlogUploader:
         token: str,
         notify: Notify | None = None,
         backoff: Backoff = UPLOAD_BACKOFF,
+        retention: TlogRetention | None = None,
+        clock: Callable[[], float] = time.time,
     ) -> None:
         self.recorder = recorder
         self.url = url
         self._token = token
         self._notify = notify or (lambda text, severity: None)
         self.backoff = backoff
+        self.retention = retention or TlogRetention()
+        self._clock = clock
         self._landed = asyncio.Event()
         # The last problem told to the operator, per file: a repeat is logged, not raised.
         self._reported: dict[Path, str] = {}
@@ -55,13 +64,19 @@ class TlogUploader:
     async def run(self) -> None:
         retries = Retries(self.backoff)
         while True:
-            await self._landed.wait()
+            await self.prune()  # at start, then hourly and after each upload
+            try:
+                async with asyncio.timeout(PRUNE_EVERY_S):
+                    await self._landed.wait()
+            except TimeoutError:
+                continue
             self._landed.clear()
             while self.recorder.finished:
                 path = self.recorder.finished[0]
                 problem = await self._upload(path)
                 if problem is None:
                     retries.reset()
+                    await self.prune()
                     continue
                 # Kept, at the back of the queue: a file the hub refuses does not hold up
                 # the flights after it.
@@ -88,6 +103,16 @@ class TlogUploader:
         log.info("uploaded onboard tlog %s", path.name)
         return None
 
+    async def prune(self) -> list[Path]:
+        """Delete the uploaded files the retention no longer keeps; the ones deleted."""
+        return await asyncio.to_thread(
+            prune_uploaded_tlogs,
+            self.recorder.directory,
+            self.retention,
+            self._clock(),
+            self.recorder.recording,
+        )
+
     def _report(self, path: Path, problem: str, wait: float) -> None:
         log.warning("%s; kept on board, retrying in %.0f s", problem, wait)
         if self._reported.get(path) != problem:
@@ -98,6 +123,6 @@ class TlogUploader:
 
 def _mark_uploaded(path: Path) -> None:
     """Keep the file (the onboard copy is the last resort) but out of the upload queue."""
-    done = path.parent / "uploaded"
+    done = path.parent / UPLOADED_DIR
     done.mkdir(exist_ok=True)
     path.rename(done / path.name)

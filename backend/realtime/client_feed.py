@@ -28,6 +28,8 @@ from protocol.messages import (
     Ping,
     Pong,
     ProtocolError,
+    VehicleChange,
+    VehicleSummary,
     VehicleUpdate,
     client_to_hub,
     decode,
@@ -50,6 +52,32 @@ def origin_allowed(connection: HTTPConnection, allowed_origins: list[str]) -> bo
     secure = connection.url.scheme in ("https", "wss")
     own = f"{'https' if secure else 'http'}://{connection.headers.get('host', '')}"
     return origin.lower() == own.lower()
+
+
+# A vehicle's autopilot, vehicle type and modes: what its hello said.
+VehicleInfo = tuple[str, str, tuple[str, ...]]
+
+
+def _info(summary: VehicleSummary) -> VehicleInfo:
+    return (summary.autopilot, summary.vehicle_type, tuple(summary.modes))
+
+
+def vehicle_change(summary: VehicleSummary, sent: dict[str, VehicleInfo]) -> VehicleChange:
+    """The update for `summary`, with its hello's info only if this feed has not sent
+    it yet (`sent`, what it has sent per vehicle, is brought up to date)."""
+    info = _info(summary)
+    changed = sent.get(summary.id) != info
+    sent[summary.id] = info
+    # The summary's fields are validated already; this runs per client per update.
+    return VehicleChange.model_construct(
+        id=summary.id,
+        autopilot=summary.autopilot if changed else None,
+        vehicle_type=summary.vehicle_type if changed else None,
+        modes=list(summary.modes) if changed else None,
+        connected=summary.connected,
+        last_seen=summary.last_seen,
+        state=summary.state,
+    )
 
 
 class ClientFeed(PeerConnection):
@@ -91,11 +119,11 @@ class ClientFeed(PeerConnection):
         # Subscribe before the snapshot, so no change falls between the two.
         self.hub.bus.subscribe(Topic.VEHICLE_STATE, updates)
         try:
-            await self.send(
-                FleetSnapshot(vehicles=[record.summary() for record in self.hub.registry.all()])
-            )
+            fleet = [record.summary() for record in self.hub.registry.all()]
+            await self.send(FleetSnapshot(vehicles=fleet))
+            sent = {summary.id: _info(summary) for summary in fleet}
             async with asyncio.TaskGroup() as tasks:
-                pusher = tasks.create_task(self._push(updates))
+                pusher = tasks.create_task(self._push(updates, sent))
                 expiry = tasks.create_task(self._end_at_expiry(principal.expires_at, pusher))
                 await self._listen()
                 pusher.cancel()
@@ -119,11 +147,11 @@ class ClientFeed(PeerConnection):
         log.info("closing client %s: the token of %s expired", self.peer, self.user)
         await self.close(CloseCode.UNAUTHORIZED, "token expired: log in again")
 
-    async def _push(self, updates: LatestSubscription) -> None:
+    async def _push(self, updates: LatestSubscription, sent: dict[str, VehicleInfo]) -> None:
         interval = self.hub.settings.ui_update_interval_s
         while True:
             for summary in await updates.drain():
-                await self.send(VehicleUpdate(vehicle=summary))
+                await self.send(VehicleUpdate(vehicle=vehicle_change(summary, sent)))
             # Pacing, not synchronisation: updates arriving meanwhile coalesce per vehicle.
             await asyncio.sleep(interval)
 

@@ -1,6 +1,6 @@
 // The dashboard's copy of the fleet. Changes are batched and handed to the views
 // once per animation frame, so dozens of vehicles at 10 Hz cost one render pass.
-import type { VehicleSummary } from "./types";
+import type { VehicleChange, VehicleSummary } from "./types";
 
 export interface FleetChanges {
   changed: VehicleSummary[];
@@ -37,8 +37,16 @@ export class FleetStore {
     this.schedule();
   }
 
-  upsert(vehicle: VehicleSummary): void {
-    this.put(vehicle);
+  /** A live update: it leaves out what the hub has sent already (modes, autopilot,
+   *  vehicle type), so those are kept from the snapshot or an earlier update. */
+  upsert(change: VehicleChange): void {
+    const known = this.vehicles.get(change.id);
+    this.put({
+      ...change,
+      autopilot: change.autopilot ?? known?.autopilot ?? "",
+      vehicle_type: change.vehicle_type ?? known?.vehicle_type ?? "",
+      modes: change.modes ?? known?.modes ?? [],
+    });
     this.schedule();
   }
 

@@ -11,6 +11,7 @@ export type {
   HubToClient,
   Ping,
   Pong,
+  VehicleChange,
   VehicleState,
   VehicleSummary,
   VehicleUpdate,

@@ -143,6 +143,9 @@ export class VehicleRow {
     this.idText.title = `${vehicle.id}: ${vehicle.autopilot} ${vehicle.vehicle_type}`;
 
     setText(this.cells.mode, state?.mode ?? MISSING);
+    // The modes come once per connection (the store keeps them): the ones set_mode takes.
+    const modesTitle = `${state?.mode ?? MISSING}; modes: ${vehicle.modes.join(", ") || "none reported"}`;
+    if (this.cells.mode.title !== modesTitle) this.cells.mode.title = modesTitle;
     setText(this.cells.armed, formatArmed(state));
     this.cells.armed.classList.toggle("is-armed", Boolean(state?.armed));
     const notReady = Boolean(state && !state.armed && state.ready_to_fly === false);

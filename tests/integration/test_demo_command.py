@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -11,6 +12,7 @@ from pathlib import Path
 
 import httpx
 import pytest
+from pymavlink import mavutil
 
 from gcs.launcher import free_port
 from tests.helpers import FleetWatcher, access_token, poll_until
@@ -72,6 +74,11 @@ def test_demo_runs_the_fleet_and_stops_cleanly_on_ctrl_c(tmp_path: Path) -> None
                 "both demo vehicles online",
             )
         assert httpx.get(f"http://127.0.0.1:{port}/api/v1/health").json()["connected"] == 2
+        # Each simulator's MAVLink port, where QGroundControl can attach beside the agent.
+        for system_id, vehicle in ((1, "sim_1"), (2, "sim_2")):
+            address = re.search(rf"^\s+{vehicle}\s+(tcp:127\.0\.0\.1:\d+)$", banner, re.M)
+            assert address, f"no MAVLink port for {vehicle} in the banner:\n{banner}"
+            assert _heartbeat_source(address.group(1)) == system_id
 
         demo.send_signal(signal.SIGINT)
         assert demo.wait(30) == 0
@@ -88,6 +95,17 @@ def test_demo_runs_the_fleet_and_stops_cleanly_on_ctrl_c(tmp_path: Path) -> None
             demo.wait()
         if demo.stdout is not None:
             demo.stdout.close()
+
+
+def _heartbeat_source(address: str) -> int:
+    """The system id of the first HEARTBEAT a ground station gets at ``address``."""
+    qgc = mavutil.mavlink_connection(address, source_system=255, source_component=190)
+    try:
+        heartbeat = qgc.recv_match(type="HEARTBEAT", blocking=True, timeout=10)
+        assert heartbeat is not None, f"no HEARTBEAT at {address}"
+        return int(heartbeat.get_srcSystem())
+    finally:
+        qgc.close()
 
 
 def _alive(pids: set[int]) -> set[int]:

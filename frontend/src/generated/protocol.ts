@@ -479,7 +479,36 @@ export interface VehicleSummary {
 }
 export interface VehicleUpdate {
   type: "vehicle";
-  vehicle: VehicleSummary;
+  vehicle: VehicleChange;
+}
+/**
+ * One vehicle's live update. It carries ``autopilot``, ``vehicle_type`` and ``modes``
+ * (a third of the frame, ten times a second) only the first time this connection shows
+ * the vehicle and when they change (its agent reconnected with another hello); the fleet
+ * snapshot a new connection starts with always has them.
+ */
+export interface VehicleChange {
+  id: string;
+  /**
+   * Left out when this feed has already sent it and it has not changed since: keep the value from the fleet snapshot or an earlier update.
+   */
+  autopilot?: string;
+  /**
+   * Left out when this feed has already sent it and it has not changed since: keep the value from the fleet snapshot or an earlier update.
+   */
+  vehicle_type?: string;
+  /**
+   * Left out when this feed has already sent it and it has not changed since: keep the value from the fleet snapshot or an earlier update.
+   *
+   * @maxItems 64
+   */
+  modes?: string[];
+  connected: boolean;
+  /**
+   * Unix time of the last telemetry.
+   */
+  last_seen: number | null;
+  state: VehicleState | null;
 }
 
 export const PROTOCOL_VERSION = 1;

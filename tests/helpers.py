@@ -76,6 +76,8 @@ class FleetWatcher:
             connect(ws_url, additional_headers={"Authorization": f"Bearer {token}"})
         )
         self.vehicles: dict[str, dict[str, Any]] = {}
+        self.events: list[dict[str, Any]] = []  # every live event received, in order
+        self.dropped_events = 0
 
     def close(self) -> None:
         self._stack.close()
@@ -106,6 +108,9 @@ class FleetWatcher:
                 self.vehicles = {vehicle["id"]: vehicle for vehicle in message["vehicles"]}
             elif message["type"] == "vehicle":
                 self.vehicles[message["vehicle"]["id"]] = message["vehicle"]
+            elif message["type"] == "events":
+                self.events += message["events"]
+                self.dropped_events += message["dropped"]
         return self.vehicles
 
     def state(self, vehicle_id: str) -> dict[str, Any]:

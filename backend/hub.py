@@ -20,6 +20,7 @@ from backend.fleet.registry import FleetRegistry, VehicleRecord
 from backend.fleet.safety_gate import SafetyGate
 from backend.realtime.bus import InProcessBus, ReliableSubscription, Topic
 from backend.realtime.collaborators import AgentConnection, ClientConnection
+from backend.realtime.live_events import live_event
 from backend.settings import HubSettings
 from backend.storage.database import make_engine, migrate
 from backend.storage.logbook import Logbook
@@ -170,6 +171,11 @@ class Hub:
         second agent); ``severity`` is a MAV_SEVERITY."""
         event = StoredEvent(vehicle_id, "hub", None, time.time(), kind, severity, text)
         await self.bus.publish(Topic.STORAGE, vehicle_id, event)
+        await self.publish_event(event)
+
+    async def publish_event(self, event: StoredEvent) -> None:
+        """To the dashboards' live feeds (whether or not it is stored)."""
+        await self.bus.publish(Topic.VEHICLE_EVENT, event.vehicle_id, live_event(event))
 
     async def record(self, entry: AuditEntry) -> None:
         await asyncio.to_thread(self.audit.record, entry)

@@ -633,6 +633,44 @@ class VehicleUpdate(Message):
     vehicle: VehicleChange
 
 
+# A batch of live events stays well inside a frame: an event is at most about 800 bytes.
+MAX_LIVE_EVENTS = 64
+
+
+class LiveEvent(Message):
+    """An event as the live feed carries it: the agent's (a STATUSTEXT, a mode change, a
+    failsafe, ...) or the hub's own (a link up or down, a command's result)."""
+
+    vehicle_id: VehicleId
+    time: float = Field(ge=0, le=MAX_UNIX_TIME, description="Unix time, seconds.")
+    kind: Name = Field(
+        description="an agent's event kind, or one of the hub's: command, data_lost, ..."
+    )
+    severity: int | None = Field(
+        default=None, ge=0, le=7, description="MAV_SEVERITY: 0 emergency .. 7 debug"
+    )
+    text: str = Field(max_length=500)
+    mission_item: int | None = Field(default=None, ge=0, le=65535)
+    repeat: int = Field(
+        default=1,
+        ge=1,
+        description="how many identical events (same vehicle, kind, severity and text) "
+        "this one stands for: repeats within one batch are sent once; time is the newest",
+    )
+
+
+class EventBatch(Message):
+    """The events since the last batch, oldest first: at most one batch every
+    GCS_UI_UPDATE_INTERVAL_S. A client that reads too slowly loses the least severe events
+    first; ``dropped`` says how many."""
+
+    type: Literal["events"] = "events"
+    events: list[LiveEvent] = Field(max_length=MAX_LIVE_EVENTS)
+    dropped: int = Field(
+        default=0, ge=0, description="events left out since the last batch: the queue was full"
+    )
+
+
 class Ping(Message):
     type: Literal["ping"] = "ping"
     nonce: str | None = Field(default=None, max_length=64)
@@ -654,7 +692,7 @@ HubToAgent: TypeAlias = Annotated[
 ]
 ClientToHub: TypeAlias = Annotated[Ping, Field(discriminator="type")]
 HubToClient: TypeAlias = Annotated[
-    FleetSnapshot | VehicleUpdate | Pong | ErrorReply, Field(discriminator="type")
+    FleetSnapshot | VehicleUpdate | EventBatch | Pong | ErrorReply, Field(discriminator="type")
 ]
 
 agent_to_hub: TypeAdapter[AgentToHub] = TypeAdapter(AgentToHub)

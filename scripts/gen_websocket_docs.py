@@ -27,6 +27,7 @@ sys.path.insert(0, str(ROOT))
 from backend.auth.credentials import SESSION_COOKIE  # noqa: E402
 from backend.auth.policy import AGENT_MESSAGE_PERMISSIONS, CLIENT_MESSAGE_PERMISSIONS  # noqa: E402
 from backend.realtime.agent_gateway import HELLO_TIMEOUT_S  # noqa: E402
+from backend.realtime.live_events import DEFAULT_QUEUE_EVENTS  # noqa: E402
 from backend.settings import HubSettings  # noqa: E402
 from protocol import messages  # noqa: E402
 from protocol.messages import CloseCode  # noqa: E402
@@ -268,7 +269,14 @@ def render() -> str:
         "2. Then [`vehicle`](#vehicleupdate) for each vehicle that changes, coalesced: at most "
         f"one per vehicle every {ui_interval_s:g} s (`GCS_UI_UPDATE_INTERVAL_S`), always the "
         "newest state; an update not yet sent is replaced, never queued.",
-        "3. The client may send [`ping`](#ping) at any time; the hub answers "
+        "3. Meanwhile [`events`](#eventbatch): what the vehicles and the hub report from the "
+        "moment of connecting (STATUSTEXTs with their severity, mode changes, failsafes, "
+        "links going up and down, each command's result), in batches at most every "
+        f"{ui_interval_s:g} s, identical ones folded into one with a `repeat` count. Events are "
+        "not replaced by newer ones: each client's queue holds "
+        f"{DEFAULT_QUEUE_EVENTS} and, when full, drops the least severe first, counting them "
+        "in `dropped`. Older events are in the flight log (`GET /api/v1/events`).",
+        "4. The client may send [`ping`](#ping) at any time; the hub answers "
         "[`pong`](#pong) with the same `nonce`. Nothing else is accepted from a client "
         f"({client_permissions}).",
         "",

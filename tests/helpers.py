@@ -76,6 +76,8 @@ class FleetWatcher:
             connect(ws_url, additional_headers={"Authorization": f"Bearer {token}"})
         )
         self.vehicles: dict[str, dict[str, Any]] = {}
+        self.events: list[dict[str, Any]] = []  # every live event received, in order
+        self.dropped_events = 0
 
     def close(self) -> None:
         self._stack.close()
@@ -108,6 +110,9 @@ class FleetWatcher:
                 # An update leaves out what it sent before (modes, ...): keep it.
                 vehicle = message["vehicle"]
                 self.vehicles[vehicle["id"]] = {**self.vehicles.get(vehicle["id"], {}), **vehicle}
+            elif message["type"] == "events":
+                self.events += message["events"]
+                self.dropped_events += message["dropped"]
         return self.vehicles
 
     def state(self, vehicle_id: str) -> dict[str, Any]:

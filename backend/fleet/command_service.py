@@ -129,3 +129,24 @@ async def _log(
     row = command_row(vehicle_id, principal.name, command.model_dump(), status, result, message)
     # Through the spool: a database outage delays the row, never loses it or the answer.
     await asyncio.to_thread(hub.spool.write, CommandRow.__tablename__, row)
+    # And to the operators' event feed (and the flight log, for the replay's feed).
+    await hub.store_event(
+        vehicle_id,
+        "command",
+        command_event_text(command, status, message),
+        _INFO if status == "accepted" else _WARNING,
+    )
+
+
+_WARNING = 4  # MAV_SEVERITY_WARNING
+_INFO = 6  # MAV_SEVERITY_INFO
+
+
+def command_event_text(command: Command, status: str, message: str) -> str:
+    """E.g. "set_mode AUTO: refused — mission not checked"; at most an event's 500 chars."""
+    mode = getattr(command, "mode", None)
+    what = f"{command.name} {mode}" if isinstance(mode, str) else command.name
+    text = f"{what}: {status}"
+    if message and message != status:
+        text += f" — {message}"
+    return text[:500]

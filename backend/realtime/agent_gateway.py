@@ -307,6 +307,7 @@ class AgentSession(PeerConnection):
                     message.mission_item,
                 )
                 await self.hub.bus.publish(Topic.STORAGE, hello.vehicle_id, stored)
+                await self.hub.publish_event(stored)
             case Unavailable():
                 log.warning(
                     "%s no longer has %s %d-%d: %s",

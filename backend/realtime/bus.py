@@ -23,6 +23,7 @@ from typing import Any, Protocol
 class Topic(StrEnum):
     STORAGE = "storage"  # TelemetryEnvelope and StoredEvent, in order, for the writer
     VEHICLE_STATE = "vehicle.state"  # VehicleSummary, for clients
+    VEHICLE_EVENT = "vehicle.event"  # LiveEvent, for clients (backend.realtime.live_events)
 
 
 class Subscription(Protocol):

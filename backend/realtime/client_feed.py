@@ -21,6 +21,7 @@ from backend.errors import Forbidden
 from backend.realtime.bus import LatestSubscription, Topic
 from backend.realtime.collaborators import FeedServices
 from backend.realtime.frames import FrameTooLarge, PeerConnection
+from backend.realtime.live_events import EventSubscription
 from protocol.messages import (
     CloseCode,
     ErrorReply,
@@ -116,17 +117,23 @@ class ClientFeed(PeerConnection):
         self.token_id = principal.token_id
         self.hub.client_feeds.add(self)
         updates = LatestSubscription()
+        events = EventSubscription()
         # Subscribe before the snapshot, so no change falls between the two.
         self.hub.bus.subscribe(Topic.VEHICLE_STATE, updates)
+        self.hub.bus.subscribe(Topic.VEHICLE_EVENT, events)
         try:
             fleet = [record.summary() for record in self.hub.registry.all()]
             await self.send(FleetSnapshot(vehicles=fleet))
             sent = {summary.id: _info(summary) for summary in fleet}
             async with asyncio.TaskGroup() as tasks:
                 pusher = tasks.create_task(self._push(updates, sent))
-                expiry = tasks.create_task(self._end_at_expiry(principal.expires_at, pusher))
+                event_pusher = tasks.create_task(self._push_events(events))
+                expiry = tasks.create_task(
+                    self._end_at_expiry(principal.expires_at, pusher, event_pusher)
+                )
                 await self._listen()
                 pusher.cancel()
+                event_pusher.cancel()
                 expiry.cancel()
         except* FrameTooLarge as group:
             log.warning("closing client %s: %s", self.peer, group.exceptions[0])
@@ -136,14 +143,16 @@ class ClientFeed(PeerConnection):
             pass
         finally:
             self.hub.bus.unsubscribe(Topic.VEHICLE_STATE, updates)
+            self.hub.bus.unsubscribe(Topic.VEHICLE_EVENT, events)
             self.hub.client_feeds.discard(self)
 
-    async def _end_at_expiry(self, expires_at: float | None, pusher: asyncio.Task[None]) -> None:
+    async def _end_at_expiry(self, expires_at: float | None, *pushers: asyncio.Task[None]) -> None:
         """A token's lifetime bounds the feed it opened, as a revocation does."""
         if expires_at is None:
             return
         await asyncio.sleep(max(0.0, expires_at - time.time()))
-        pusher.cancel()  # nothing more goes out on an expired token
+        for pusher in pushers:
+            pusher.cancel()  # nothing more goes out on an expired token
         log.info("closing client %s: the token of %s expired", self.peer, self.user)
         await self.close(CloseCode.UNAUTHORIZED, "token expired: log in again")
 
@@ -153,6 +162,13 @@ class ClientFeed(PeerConnection):
             for summary in await updates.drain():
                 await self.send(VehicleUpdate(vehicle=vehicle_change(summary, sent)))
             # Pacing, not synchronisation: updates arriving meanwhile coalesce per vehicle.
+            await asyncio.sleep(interval)
+
+    async def _push_events(self, events: EventSubscription) -> None:
+        interval = self.hub.settings.ui_update_interval_s
+        while True:
+            await self.send(await events.next_batch())
+            # Pacing: events arriving meanwhile go out together in the next batch.
             await asyncio.sleep(interval)
 
     async def _listen(self) -> None:

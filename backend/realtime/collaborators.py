@@ -16,6 +16,7 @@ from backend.fleet.commands import CommandDispatcher
 from backend.fleet.registry import FleetRegistry, VehicleRecord
 from backend.realtime.bus import Bus
 from backend.settings import HubSettings
+from backend.storage.records import StoredEvent
 from backend.storage.repository import Repository
 from backend.storage.sequences import Gap, StreamKey
 
@@ -96,3 +97,5 @@ class GatewayServices(Protocol):
     ) -> None: ...
 
     async def publish_state(self, record: VehicleRecord) -> None: ...
+
+    async def publish_event(self, event: StoredEvent) -> None: ...

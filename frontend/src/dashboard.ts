@@ -11,6 +11,7 @@ import { linkState } from "./format";
 import { PROTOCOL_VERSION } from "./generated/protocol";
 import type { Header } from "./header";
 import { FleetMap } from "./map";
+import { OpsPanels } from "./panels/opsPanels";
 import { ReplayPanel } from "./replayPanel";
 import { type CurrentUser, type HubConfig, type HubToClient, can } from "./types";
 
@@ -37,6 +38,7 @@ export class Dashboard {
   private audit: AuditPanel | null = null;
   private replay: ReplayPanel | null = null;
   private store: FleetStore | null = null;
+  private ops: OpsPanels | null = null;
   private expiryTimer: number | undefined;
   private stopped = false;
 
@@ -75,6 +77,7 @@ export class Dashboard {
     const select = (id: string, pan: boolean) => {
       table.select(id);
       map.select(id, pan);
+      ops.select(id);
     };
     const map = new FleetMap(document.getElementById("map")!, config, (id) => select(id, false));
     const table = new FleetTable(
@@ -84,6 +87,8 @@ export class Dashboard {
     );
     this.map = map;
     this.table = table;
+    const ops = new OpsPanels(document.querySelector<HTMLElement>(".layout")!, can(user, "command") ? runCommand : null);
+    this.ops = ops;
 
     const store = new FleetStore(({ changed, removed, all }) => {
       if (this.stopped) return;
@@ -93,6 +98,7 @@ export class Dashboard {
       }
       table.update(changed);
       map.update(changed);
+      ops.update(changed, removed);
       let online = 0;
       for (const vehicle of all.values()) if (linkState(vehicle) !== "offline") online++;
       header.setCounts(all.size, online);
@@ -107,6 +113,9 @@ export class Dashboard {
           break;
         case "vehicle":
           store.upsert(message.vehicle);
+          break;
+        case "events":
+          ops.onEvents(message);
           break;
         case "error":
           header.showNotice(`Hub: ${message.message}`);
@@ -143,6 +152,8 @@ export class Dashboard {
     this.replay = null;
     document.querySelector(".layout")?.classList.remove("flights-open");
     this.store = null;
+    this.ops?.destroy();
+    this.ops = null;
     this.table?.destroy();
     this.table = null;
     this.map?.destroy();

@@ -14,6 +14,8 @@ import { MISSING, formatAltitude, formatSpeed } from "./format";
 import type { FleetMap } from "./map";
 import { ReplayCharts } from "./replayCharts";
 import { ReplayLayer, eventTone } from "./replayMap";
+import { EventFeed } from "./events/eventFeed";
+import { EventLog } from "./events/eventLog";
 import { FlightTrack, formatClock, type ReplayState } from "./replayTrack";
 import type { Flight, FlightEvent, FlightExportFormat } from "./types";
 
@@ -74,6 +76,8 @@ export class ReplayPanel {
   private readonly eventTicks: HTMLElement;
   private readonly values: Record<"time" | "at" | "alt" | "groundspeed" | "battery" | "mode", HTMLElement>;
   private readonly exportLinks: HTMLAnchorElement[] = [];
+  /** The flight's events as the live feed shows them, up to the replay's time. */
+  private readonly eventFeed = new EventFeed({ title: "Events", vehicleFilter: false, name: "replay" });
 
   private track: FlightTrack | null = null;
   private t = 0;
@@ -173,6 +177,7 @@ export class ReplayPanel {
         value("Mode", this.values.mode),
       ),
       this.charts.element,
+      this.eventFeed.element,
       exports,
     );
     this.view.setAttribute("aria-label", "Flight replay");
@@ -270,6 +275,9 @@ export class ReplayPanel {
     if (track.isEmpty) return;
 
     this.layer.show(track, events);
+    const log = new EventLog(Number.MAX_SAFE_INTEGER);
+    log.add(events);
+    this.eventFeed.setEvents(log.all);
     this.showEventTicks(track, events);
     this.charts.show(track);
     this.render(0);
@@ -334,6 +342,7 @@ export class ReplayPanel {
     this.charts.setPosition(t);
     setText(this.values.time, `${formatClock(t)} / ${formatClock(track.duration)}`);
     setText(this.values.at, formatAuditTime(track.origin + t));
+    this.eventFeed.showUntil(track.origin + t);
     setText(this.values.alt, formatAltitude(state.altRel));
     setText(this.values.groundspeed, formatSpeed(state.groundspeed));
     setText(this.values.battery, formatBatteryAt(state));
@@ -357,6 +366,7 @@ export class ReplayPanel {
     this.layer.clear();
     this.charts.destroy();
     this.eventTicks.replaceChildren();
+    this.eventFeed.setEvents([]);
     this.scrubber.max = "0";
     this.scrubber.value = "0";
     delete this.element.dataset.flightId;

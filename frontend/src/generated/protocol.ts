@@ -17,7 +17,7 @@ export type AnyMessage = AgentToHub | HubToAgent | ClientToHub | HubToClient;
 export type AgentToHub = Hello | Telemetry | LiveState | Event | CommandResult | Unavailable | Pong;
 export type HubToAgent = Welcome | CommandRequest | Ack | Resend | ErrorReply | Ping;
 export type ClientToHub = Ping;
-export type HubToClient = FleetSnapshot | VehicleUpdate | Pong | ErrorReply;
+export type HubToClient = FleetSnapshot | VehicleUpdate | EventBatch | Pong | ErrorReply;
 
 /**
  * First frame from an agent: who it is and what it can do.
@@ -509,6 +509,47 @@ export interface VehicleChange {
    */
   last_seen: number | null;
   state: VehicleState | null;
+}
+/**
+ * The events since the last batch, oldest first: at most one batch every
+ * GCS_UI_UPDATE_INTERVAL_S. A client that reads too slowly loses the least severe events
+ * first; ``dropped`` says how many.
+ */
+export interface EventBatch {
+  type: "events";
+  /**
+   * @maxItems 64
+   */
+  events: LiveEvent[];
+  /**
+   * events left out since the last batch: the queue was full
+   */
+  dropped: number;
+}
+/**
+ * An event as the live feed carries it: the agent's (a STATUSTEXT, a mode change, a
+ * failsafe, ...) or the hub's own (a link up or down, a command's result).
+ */
+export interface LiveEvent {
+  vehicle_id: string;
+  /**
+   * Unix time, seconds.
+   */
+  time: number;
+  /**
+   * an agent's event kind, or one of the hub's: command, data_lost, ...
+   */
+  kind: string;
+  /**
+   * MAV_SEVERITY: 0 emergency .. 7 debug
+   */
+  severity: number | null;
+  text: string;
+  mission_item: number | null;
+  /**
+   * how many identical events (same vehicle, kind, severity and text) this one stands for: repeats within one batch are sent once; time is the newest
+   */
+  repeat: number;
 }
 
 export const PROTOCOL_VERSION = 1;

@@ -7,6 +7,7 @@ import logging
 import time
 from dataclasses import dataclass, field
 
+import httpx
 from sqlalchemy import Engine
 from sqlalchemy.exc import SQLAlchemyError
 
@@ -31,6 +32,7 @@ from backend.storage.retention import RetentionPolicy
 from backend.storage.sequences import Gap, StreamKey
 from backend.storage.spool import RowSpool
 from backend.storage.writer import StorageWriter
+from backend.viz3d.server import VizServer
 from protocol.messages import CloseCode
 
 log = logging.getLogger(__name__)
@@ -62,6 +64,10 @@ class Hub:
     agent_admissions: dict[str, asyncio.Lock] = field(default_factory=dict)
     # Live client feeds, so a revoked token or disabled user stops seeing the fleet.
     client_feeds: set[ClientConnection] = field(default_factory=set)
+    # The 3D view: viser on loopback, and the client that passes its page on (None when
+    # GCS_VIZ_ENABLED is false).
+    viz: VizServer | None = None
+    viz_http: httpx.AsyncClient | None = None
 
     @classmethod
     async def start(cls, settings: HubSettings) -> Hub:
@@ -112,6 +118,9 @@ class Hub:
             safety=SafetyGate(RailsRepository(engine), settings),
         )
         writer.on_sequences = hub.deliver_sequence_news
+        if settings.viz_enabled:
+            hub.viz = await asyncio.to_thread(VizServer.start)
+            hub.viz_http = httpx.AsyncClient(timeout=httpx.Timeout(10.0))
         return hub
 
     async def run(self) -> None:
@@ -122,6 +131,10 @@ class Hub:
                 tasks.create_task(self._apply_retention())
                 tasks.create_task(self._drain_spool())
         finally:
+            if self.viz_http is not None:
+                await self.viz_http.aclose()
+            if self.viz is not None:
+                await asyncio.to_thread(self.viz.stop)
             self.passwords.close()
             self.engine.dispose()
 

@@ -88,6 +88,11 @@ class FleetScene:
         self.batches = 0
         server.scene.set_up_direction("+z")
         server.scene.configure_environment_map(hdri=None)  # no CDN: the scene is lit plainly
+        # A browser's first view: the origin (the first home) from the south-west, high
+        # enough to see a fleet spread over a few hundred metres.
+        server.initial_camera.position = (-60.0, -60.0, 45.0)
+        server.initial_camera.look_at = (0.0, 0.0, 5.0)
+        server.initial_camera.up = (0.0, 0.0, 1.0)
         self._layer_folder = server.gui.add_folder("Layers")
         self._follow_choice = server.gui.add_dropdown("Follow", ["(none)"], initial_value="(none)")
         self._follow_choice.on_update(self._on_follow)

@@ -13,6 +13,7 @@ import type { Header } from "./header";
 import { FleetMap } from "./map";
 import { ReplayPanel } from "./replayPanel";
 import { type CurrentUser, type HubConfig, type HubToClient, can } from "./types";
+import { Viz3dPane } from "./viz3d/pane";
 
 // Without the hub's config there is no protocol version to compare: assume ours.
 const OFFLINE_CONFIG: HubConfig = {
@@ -37,6 +38,7 @@ export class Dashboard {
   private audit: AuditPanel | null = null;
   private replay: ReplayPanel | null = null;
   private store: FleetStore | null = null;
+  private viz3d: Viz3dPane | null = null;
   private expiryTimer: number | undefined;
   private stopped = false;
 
@@ -84,6 +86,7 @@ export class Dashboard {
     );
     this.map = map;
     this.table = table;
+    this.viz3d = new Viz3dPane(document.getElementById("map")!);
 
     const store = new FleetStore(({ changed, removed, all }) => {
       if (this.stopped) return;
@@ -137,6 +140,8 @@ export class Dashboard {
     window.clearTimeout(this.expiryTimer);
     this.socket?.stop();
     this.socket = null;
+    this.viz3d?.remove();
+    this.viz3d = null;
     this.audit?.element.remove();
     this.audit = null;
     this.replay?.destroy();

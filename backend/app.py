@@ -26,6 +26,7 @@ from backend.api import (
     safety,
     system,
     vehicles,
+    viz,
     websockets,
 )
 from backend.api.docs import install_docs
@@ -89,6 +90,7 @@ def create_app(settings: HubSettings | None = None) -> FastAPI:
     for router in routers:
         app.include_router(router, prefix=API_PREFIX)
     app.include_router(websockets.router)
+    app.include_router(viz.router)
     install_method_not_allowed(app, routers, API_PREFIX)
     install_docs(app, content_security_policy(settings.basemap_url))
     app.add_exception_handler(GcsError, _gcs_error_response)  # type: ignore[arg-type]

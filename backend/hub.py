@@ -7,6 +7,7 @@ import logging
 import time
 from dataclasses import dataclass, field
 
+import httpx
 from sqlalchemy import Engine
 from sqlalchemy.exc import SQLAlchemyError
 
@@ -32,7 +33,11 @@ from backend.storage.retention import RetentionPolicy
 from backend.storage.sequences import Gap, StreamKey
 from backend.storage.spool import RowSpool
 from backend.storage.writer import StorageWriter
-from protocol.messages import CloseCode
+from backend.viz3d.frame import SceneFrame, parse_origin
+from backend.viz3d.mirror import SceneMirror
+from backend.viz3d.scene import FleetScene
+from backend.viz3d.server import VizServer
+from protocol.messages import CloseCode, MissionItem
 
 log = logging.getLogger(__name__)
 
@@ -63,6 +68,11 @@ class Hub:
     agent_admissions: dict[str, asyncio.Lock] = field(default_factory=dict)
     # Live client feeds, so a revoked token or disabled user stops seeing the fleet.
     client_feeds: set[ClientConnection] = field(default_factory=set)
+    # The 3D view: viser on loopback, and the client that passes its page on (None when
+    # GCS_VIZ_ENABLED is false).
+    viz: VizServer | None = None
+    viz_http: httpx.AsyncClient | None = None
+    scene: FleetScene | None = None
 
     @classmethod
     async def start(cls, settings: HubSettings) -> Hub:
@@ -113,6 +123,13 @@ class Hub:
             safety=SafetyGate(RailsRepository(engine), settings),
         )
         writer.on_sequences = hub.deliver_sequence_news
+        if settings.viz_enabled:
+            hub.viz = await asyncio.to_thread(VizServer.start)
+            hub.viz_http = httpx.AsyncClient(timeout=httpx.Timeout(10.0))
+            frame = SceneFrame(parse_origin(settings.viz_origin))
+            hub.scene = await asyncio.to_thread(
+                FleetScene, hub.viz.viser, frame, settings.viz_trail_s
+            )
         return hub
 
     async def run(self) -> None:
@@ -122,7 +139,16 @@ class Hub:
                 tasks.create_task(self.writer.run())
                 tasks.create_task(self._apply_retention())
                 tasks.create_task(self._drain_spool())
+                if self.scene is not None:
+                    mirror = SceneMirror(
+                        self.scene, self.bus, self.registry, self.settings.viz_update_interval_s
+                    )
+                    tasks.create_task(mirror.run())
         finally:
+            if self.viz_http is not None:
+                await self.viz_http.aclose()
+            if self.viz is not None:
+                await asyncio.to_thread(self.viz.stop)
             self.passwords.close()
             self.engine.dispose()
 
@@ -137,6 +163,15 @@ class Hub:
 
     async def publish_state(self, record: VehicleRecord) -> None:
         await self.bus.publish(Topic.VEHICLE_STATE, record.id, record.summary())
+
+    async def mission_known(self, vehicle_id: str, items: list[MissionItem]) -> None:
+        """The mission a vehicle now has (items after home), as the hub uploaded or read
+        it: the 3D view draws its path."""
+        if self.scene is None:
+            return
+        record = self.registry.get(vehicle_id)
+        home_alt = record.state.home_alt_msl if record.state else None
+        await asyncio.to_thread(self.scene.show_mission, vehicle_id, items, home_alt)
 
     async def _apply_retention(self) -> None:
         policy = self.settings.retention_policy()

@@ -119,6 +119,17 @@ class HubSettings(BaseSettings):
     telemetry_queue_limit: int = Field(default=20_000, ge=100)
     ui_update_interval_s: float = Field(default=0.1, gt=0, description="per-client coalescing")
     max_frame_bytes: int = Field(default=MAX_FRAME_BYTES, ge=1024)
+    viz_enabled: bool = Field(default=True, description="serve the 3D view (viser) at /viz/")
+    viz_origin: str | None = Field(
+        default=None,
+        pattern=r"^\s*-?[0-9.]+\s*,\s*-?[0-9.]+\s*(,\s*-?[0-9.]+\s*)?$",
+        description="'lat,lon[,alt_msl]' of the 3D view's local east-north-up origin; "
+        "the first home position the fleet reports when unset",
+    )
+    viz_update_interval_s: float = Field(
+        default=0.1, ge=0.02, le=5.0, description="the 3D scene's batched update period"
+    )
+    viz_trail_s: float = Field(default=60.0, ge=0, le=3600, description="3D trail length")
     max_bad_frames: int = Field(default=20, ge=1, description="before a connection is closed")
     agent_liveness_timeout_s: float = Field(
         default=3.0,

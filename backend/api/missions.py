@@ -73,7 +73,9 @@ async def upload_mission(
     listed (422) before anything reaches the vehicle; a vehicle that rejects an item keeps
     its previous mission (409)."""
     command = MissionUploadCommand(items=body.items)
-    return await _run(hub, request, principal, vehicle_id, command, override_reason)
+    result = await _run(hub, request, principal, vehicle_id, command, override_reason)
+    await hub.mission_known(vehicle_id, body.items)
+    return result
 
 
 @router.get("", response_model=MissionResult, openapi_extra=requires(Permission.READ))
@@ -81,14 +83,19 @@ async def download_mission(
     vehicle_id: VehicleIdPath, request: Request, principal: CurrentPrincipal, hub: HubDep
 ) -> MissionResult:
     """The mission on the vehicle now (item 0 is home)."""
-    return await _run(hub, request, principal, vehicle_id, MissionDownloadCommand())
+    result = await _run(hub, request, principal, vehicle_id, MissionDownloadCommand())
+    if result.items is not None:
+        await hub.mission_known(vehicle_id, result.items[1:])
+    return result
 
 
 @router.delete("", response_model=MissionResult, openapi_extra=requires(Permission.COMMAND))
 async def clear_mission(
     vehicle_id: VehicleIdPath, request: Request, principal: CurrentPrincipal, hub: HubDep
 ) -> MissionResult:
-    return await _run(hub, request, principal, vehicle_id, MissionClearCommand())
+    result = await _run(hub, request, principal, vehicle_id, MissionClearCommand())
+    await hub.mission_known(vehicle_id, [])
+    return result
 
 
 @router.put("/current", response_model=MissionResult, openapi_extra=requires(Permission.COMMAND))

@@ -14,6 +14,7 @@ import { FleetMap } from "./map";
 import { OpsPanels } from "./panels/opsPanels";
 import { ReplayPanel } from "./replayPanel";
 import { type CurrentUser, type HubConfig, type HubToClient, can } from "./types";
+import { Viz3dPane } from "./viz3d/pane";
 
 // Without the hub's config there is no protocol version to compare: assume ours.
 const OFFLINE_CONFIG: HubConfig = {
@@ -39,6 +40,7 @@ export class Dashboard {
   private replay: ReplayPanel | null = null;
   private store: FleetStore | null = null;
   private ops: OpsPanels | null = null;
+  private viz3d: Viz3dPane | null = null;
   private expiryTimer: number | undefined;
   private stopped = false;
 
@@ -89,6 +91,7 @@ export class Dashboard {
     this.table = table;
     const ops = new OpsPanels(document.querySelector<HTMLElement>(".layout")!, can(user, "command") ? runCommand : null);
     this.ops = ops;
+    this.viz3d = new Viz3dPane(document.getElementById("map")!);
 
     const store = new FleetStore(({ changed, removed, all }) => {
       if (this.stopped) return;
@@ -146,6 +149,8 @@ export class Dashboard {
     window.clearTimeout(this.expiryTimer);
     this.socket?.stop();
     this.socket = null;
+    this.viz3d?.remove();
+    this.viz3d = null;
     this.audit?.element.remove();
     this.audit = null;
     this.replay?.destroy();

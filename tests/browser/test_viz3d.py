@@ -1,0 +1,92 @@
+"""The 3D view embedded in the dashboard, in headless Chromium, against the real fleet."""
+
+from __future__ import annotations
+
+import base64
+import os
+from pathlib import Path
+
+import pytest
+from playwright.sync_api import Frame, Page, expect
+
+from gcs.launcher import LocalFleet
+from tests.browser.conftest import log_in
+from tests.helpers import poll_until
+
+pytestmark = [pytest.mark.browser, pytest.mark.integration]
+
+VEHICLE = "sim_1"
+# Screenshots land here (CI keeps the folder as the test's output).
+OUTPUT = Path(os.environ.get("GCS_TEST_OUTPUT", "test-output")) / "viz3d"
+
+
+def _canvas_png(frame: Frame) -> bytes:
+    return frame.locator("canvas").first.screenshot()
+
+
+def _changed(frame: Frame, before: bytes) -> bytes | None:
+    shot = _canvas_png(frame)
+    return shot if shot != before else None
+
+
+def _colours(png: bytes, page: Page) -> int:
+    """How many distinct colours the screenshot has (a blank canvas has one or two)."""
+    return int(
+        page.evaluate(
+            """async (b64) => {
+                const img = new Image();
+                img.src = "data:image/png;base64," + b64;
+                await img.decode();
+                const c = new OffscreenCanvas(img.width, img.height);
+                const g = c.getContext("2d");
+                g.drawImage(img, 0, 0);
+                const d = g.getImageData(0, 0, img.width, img.height).data;
+                const seen = new Set();
+                for (let i = 0; i < d.length; i += 4)
+                    seen.add((d[i] << 16) | (d[i + 1] << 8) | d[i + 2]);
+                return seen.size;
+            }""",
+            base64.b64encode(png).decode(),
+        )
+    )
+
+
+def test_the_3d_view_shows_the_fleet_and_follows_it(page: Page, fleet: LocalFleet) -> None:
+    OUTPUT.mkdir(parents=True, exist_ok=True)
+    sockets: list[str] = []
+    page.on("websocket", lambda ws: sockets.append(ws.url))
+    log_in(page, fleet.plan.hub_http, "admin", fleet.plan.admin_password)
+    expect(page.locator("tr[data-vehicle-id]")).to_have_count(3, timeout=30_000)
+    row = page.locator(f'tr[data-vehicle-id="{VEHICLE}"]')
+    expect(row.locator('[data-field="armed"]')).to_have_text("disarmed · ready", timeout=30_000)
+
+    page.locator(".viz3d-toggle").click()
+    iframe = page.frame_locator(".viz3d-pane iframe")
+    # viser's client connected through the hub's relay, under /viz.
+    expect(iframe.locator("canvas").first).to_be_visible(timeout=30_000)
+    viz = page.frame(url=lambda url: "/viz/" in url)
+    assert viz is not None
+    # The scene arrived: the vehicles' nodes are in viser's scene tree.
+    expect(iframe.get_by_text(VEHICLE, exact=False).first).to_be_attached(timeout=30_000)
+    assert any(url.endswith("/viz") for url in sockets), sockets
+
+    before = _canvas_png(viz)
+    (OUTPUT / "fleet-on-the-ground.png").write_bytes(before)
+    assert _colours(before, page) > 20, "the 3D canvas is blank"
+
+    row.locator('input[data-field="takeoff-altitude"]').fill("15")
+    row.locator('button[data-action="takeoff"]').click()
+    expect(row.locator('[data-field="command-result"]')).to_contain_text("accepted", timeout=30_000)
+    page.wait_for_function(
+        """(id) => {
+            const row = document.querySelector(`tr[data-vehicle-id="${id}"]`);
+            const cell = row && row.querySelector('[data-field="alt_rel"]');
+            return parseFloat(cell ? cell.textContent : "") >= 8;
+        }""",
+        arg=VEHICLE,
+        timeout=60_000,
+    )
+    # The canvas redraws as scene batches arrive: wait for one drawn after the climb.
+    after = poll_until(lambda: _changed(viz, before), 30, "the canvas to change")
+    (OUTPUT / "vehicle-climbed.png").write_bytes(after)
+    assert _colours(after, page) > 20

@@ -11,6 +11,7 @@ import { linkState } from "./format";
 import { PROTOCOL_VERSION } from "./generated/protocol";
 import type { Header } from "./header";
 import { FleetMap } from "./map";
+import { MissionTools } from "./missions";
 import { ReplayPanel } from "./replayPanel";
 import { type CurrentUser, type HubConfig, type HubToClient, can } from "./types";
 
@@ -37,6 +38,7 @@ export class Dashboard {
   private audit: AuditPanel | null = null;
   private replay: ReplayPanel | null = null;
   private store: FleetStore | null = null;
+  private missions: MissionTools | null = null;
   private expiryTimer: number | undefined;
   private stopped = false;
 
@@ -75,6 +77,7 @@ export class Dashboard {
     const select = (id: string, pan: boolean) => {
       table.select(id);
       map.select(id, pan);
+      missions.select(id);
     };
     const map = new FleetMap(document.getElementById("map")!, config, (id) => select(id, false));
     const table = new FleetTable(
@@ -84,15 +87,19 @@ export class Dashboard {
     );
     this.map = map;
     this.table = table;
+    const missions = new MissionTools(map.leaflet, can(user, "command"));
+    this.missions = missions;
 
     const store = new FleetStore(({ changed, removed, all }) => {
       if (this.stopped) return;
       for (const id of removed) {
         table.remove(id);
         map.remove(id);
+        missions.remove(id);
       }
       table.update(changed);
       map.update(changed);
+      missions.update(changed);
       let online = 0;
       for (const vehicle of all.values()) if (linkState(vehicle) !== "offline") online++;
       header.setCounts(all.size, online);
@@ -143,6 +150,8 @@ export class Dashboard {
     this.replay = null;
     document.querySelector(".layout")?.classList.remove("flights-open");
     this.store = null;
+    this.missions?.destroy();
+    this.missions = null;
     this.table?.destroy();
     this.table = null;
     this.map?.destroy();

@@ -29,7 +29,7 @@ CHECK_S = 15  # the editor checks 0.4 s after an edit; the hub answers at once
 
 @pytest.fixture
 def wide_page(browser: Browser) -> Iterator[Page]:
-    """1920×1080: room for the mission panel beside the drawing."""
+    """1920 by 1080: room for the mission panel beside the drawing."""
     context = browser.new_context(viewport={"width": 1920, "height": 1080}, accept_downloads=True)
     opened = context.new_page()
     errors: list[str] = []

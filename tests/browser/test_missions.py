@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
@@ -123,6 +124,12 @@ def test_a_qgc_plan_opens_and_a_saved_plan_is_qgcs_format(
         )
         assert mine["params"] == pytest.approx([p or 0 for p in theirs["params"]])
 
+    # Uploaded to a group: each vehicle is checked and answers for itself.
+    page.locator('[data-field="mission-targets"]').select_option(["sim_2", MISSION_VEHICLE])
+    page.locator('[data-action="mission-upload"]').click()
+    status = page.locator('[data-field="mission-status"]')
+    expect(status).to_contain_text(re.compile(r"^sim_2: .+\nsim_3: .+$"), timeout=30_000)
+
     # A file that is not a plan is refused with the field named, and the plan stays.
     bad = DATA.parent / "not-a-plan.json"
     bad.write_text('{"fileType": "Plan", "version": 1, "mission": {"version": 2, "items": 3}}')
@@ -153,7 +160,10 @@ def test_a_drawn_mission_is_refused_on_its_leg_fixed_by_dragging_and_flown(
         log_in(page, fleet.plan.hub_http, "admin", fleet.plan.admin_password)
         expect(page.locator(".vehicle-marker")).to_have_count(3, timeout=30_000)
         _open_panel(page, MISSION_VEHICLE)
-        page.locator(".leaflet-control-zoom-out").click()
+        # Zoomed out so that the whole U fits beside the panel.
+        zoom_out = page.locator(".leaflet-control-zoom-out")
+        zoom_out.click()
+        zoom_out.click()
         pixels = PixelMap(page, api, GOTO_VEHICLE, MISSION_VEHICLE)
 
         def at(east: float, north: float) -> tuple[float, float]:

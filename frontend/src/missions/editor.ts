@@ -542,7 +542,8 @@ export class MissionEditor {
         });
         row.append(time, Object.assign(element("span", "mission-unit"), { textContent: "s" }));
       }
-      if (item.command === CMD.WAYPOINT || item.command === CMD.LOITER_TIME || item.command === CMD.TAKEOFF) {
+      const speedable = item.command === CMD.WAYPOINT || item.command === CMD.LOITER_TIME || item.command === CMD.TAKEOFF;
+      if (speedable && (editing || folded !== null)) {
         const speed = numberInput("speed", folded === null ? null : items[folded].param2, "Ground speed from here on, m/s (empty: unchanged)");
         speed.placeholder = "speed";
         speed.disabled = !editing;

@@ -40,7 +40,11 @@ function button(action: string, text: string, title = ""): HTMLButtonElement {
   return element;
 }
 
-function element<K extends keyof HTMLElementTagNameMap>(tag: K, className: string, field?: string): HTMLElementTagNameMap[K] {
+function element<K extends keyof HTMLElementTagNameMap>(
+  tag: K,
+  className: string,
+  field?: string,
+): HTMLElementTagNameMap[K] {
   const created = document.createElement(tag);
   created.className = className;
   if (field) created.dataset.field = field;
@@ -406,7 +410,10 @@ export class MissionEditor {
           if (result.outcome.status !== "accepted") {
             return `${id}: ${result.outcome.status}${result.outcome.message ? ` — ${result.outcome.message}` : ""}`;
           }
-          this.known.set(id, items.map((item) => ({ ...item })));
+          this.known.set(
+            id,
+            items.map((item) => ({ ...item })),
+          );
           return `${id}: uploaded (${items.length} items)`;
         } catch (error) {
           const violations = error instanceof ApiError ? violationsOf(error.body) : [];
@@ -492,7 +499,11 @@ export class MissionEditor {
     const current = this.draft ? null : (this.selected()?.state?.mission_current ?? null);
     this.list.replaceChildren();
     items.forEach((item, index) => {
-      if (item.command === CMD.CHANGE_SPEED && index + 1 < items.length && items[index + 1].command !== CMD.CHANGE_SPEED) {
+      if (
+        item.command === CMD.CHANGE_SPEED &&
+        index + 1 < items.length &&
+        items[index + 1].command !== CMD.CHANGE_SPEED
+      ) {
         return; // folded into the next item's row
       }
       const seq = index + 1;
@@ -500,7 +511,10 @@ export class MissionEditor {
       const row = element("li", "mission-row");
       row.dataset.seq = String(seq);
       row.dataset.command = String(item.command);
-      const refusals = [...(this.refusals.get(seq) ?? []), ...(folded === null ? [] : (this.refusals.get(folded + 1) ?? []))];
+      const refusals = [
+        ...(this.refusals.get(seq) ?? []),
+        ...(folded === null ? [] : (this.refusals.get(folded + 1) ?? [])),
+      ];
       row.classList.toggle("refused", refusals.length > 0);
       row.classList.toggle("active", current === seq);
 
@@ -542,9 +556,14 @@ export class MissionEditor {
         });
         row.append(time, Object.assign(element("span", "mission-unit"), { textContent: "s" }));
       }
-      const speedable = item.command === CMD.WAYPOINT || item.command === CMD.LOITER_TIME || item.command === CMD.TAKEOFF;
+      const speedable =
+        item.command === CMD.WAYPOINT || item.command === CMD.LOITER_TIME || item.command === CMD.TAKEOFF;
       if (speedable && (editing || folded !== null)) {
-        const speed = numberInput("speed", folded === null ? null : items[folded].param2, "Ground speed from here on, m/s (empty: unchanged)");
+        const speed = numberInput(
+          "speed",
+          folded === null ? null : items[folded].param2,
+          "Ground speed from here on, m/s (empty: unchanged)",
+        );
         speed.placeholder = "speed";
         speed.disabled = !editing;
         speed.addEventListener("change", () => {
@@ -571,7 +590,9 @@ export class MissionEditor {
     });
     if (items.length === 0) {
       const empty = element("li", "mission-empty");
-      empty.textContent = editing ? "No items yet: click the map to add a waypoint." : "No mission known for this vehicle.";
+      empty.textContent = editing
+        ? "No items yet: click the map to add a waypoint."
+        : "No mission known for this vehicle.";
       this.list.append(empty);
     }
   }

@@ -133,7 +133,8 @@ export class GoHere {
       checkGoto(id, at.lat, at.lng, alt)
         .then((answer) => {
           if (mine !== serial) return;
-          const distance = answer.distance_m === null ? "distance unknown" : `${formatDistance(answer.distance_m)} away`;
+          const distance =
+            answer.distance_m === null ? "distance unknown" : `${formatDistance(answer.distance_m)} away`;
           verdict.dataset.state = answer.ok ? "ok" : "refused";
           verdict.textContent = answer.ok
             ? `${distance} · rails: OK`
@@ -166,6 +167,9 @@ export class GoHere {
   private show(at: L.LatLng, content: HTMLElement): void {
     this.popup?.remove();
     L.DomEvent.disableClickPropagation(content);
-    this.popup = L.popup({ className: "go-here-popup", minWidth: 220 }).setLatLng(at).setContent(content).openOn(this.map);
+    this.popup = L.popup({ className: "go-here-popup", minWidth: 220 })
+      .setLatLng(at)
+      .setContent(content)
+      .openOn(this.map);
   }
 }

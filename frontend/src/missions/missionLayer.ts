@@ -81,7 +81,13 @@ export class MissionLayer {
       const flown = current !== null && seq < current;
       const active = current !== null && seq === current;
       if (previous && !(previous.equals(at) && item.command !== CMD.RTL)) {
-        this.addLeg(previous, at, index, { refused: Boolean(refused), flown, active, editable, rtl: item.command === CMD.RTL });
+        this.addLeg(previous, at, index, {
+          refused: Boolean(refused),
+          flown,
+          active,
+          editable,
+          rtl: item.command === CMD.RTL,
+        });
       }
       this.addMarker(item, seq, index, at, { refused, flown, active, editable, movable: place !== null });
       previous = at;

@@ -48,8 +48,8 @@ export function toPlan(items: readonly MissionItem[], options: PlanOptions = {})
         type: "SimpleItem",
         command: item.command,
         frame: item.frame,
-        params: [item.param1, item.param2, item.param3, item.param4, item.lat, item.lon, item.alt].map(
-          (value) => (Number.isFinite(value) ? value : null),
+        params: [item.param1, item.param2, item.param3, item.param4, item.lat, item.lon, item.alt].map((value) =>
+          Number.isFinite(value) ? value : null,
         ),
         autoContinue: item.autocontinue,
         doJumpId: index + 1,

@@ -144,8 +144,15 @@ def mission_problems(
     items: Sequence[MissionItem], vehicle_type: str = "multirotor", autopilot: str = "ardupilot"
 ) -> list[str]:
     """Every problem of every item, each naming its item (1 is the first after home)."""
+    return [problem for _, problem in mission_problems_by_item(items, vehicle_type, autopilot)]
+
+
+def mission_problems_by_item(
+    items: Sequence[MissionItem], vehicle_type: str = "multirotor", autopilot: str = "ardupilot"
+) -> list[tuple[int, str]]:
+    """``mission_problems`` with each problem's item number beside it."""
     return [
-        f"item {number} ({_command_label(item.command)}): {problem}"
+        (number, f"item {number} ({_command_label(item.command)}): {problem}")
         for number, item in enumerate(items, start=1)
         for problem in item_problems(item, len(items), vehicle_type, autopilot)
     ]

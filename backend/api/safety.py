@@ -6,15 +6,19 @@ import asyncio
 from typing import Annotated
 
 from fastapi import Path, Request, Response, status
+from pydantic import BaseModel, ConfigDict, Field
 
 from backend.api.deps import HubDep
 from backend.api.security import CurrentPrincipal, SecuredRouter, audit_entry, requires
 from backend.audit import AuditAction
 from backend.auth.policy import Permission
+from backend.fleet.safety_gate import snapshot_of
 from backend.missions.schemas import Mission, MissionCheckResponse
-from backend.safety.schemas import SafetyRailsModel
+from backend.safety.schemas import SafetyRailsModel, ViolationModel
+from backend.safety.snapshot import position
 from backend.storage.rails import SITE, vehicle_scope
-from protocol.messages import VehicleId
+from common.geodesy import haversine_m
+from protocol.messages import GotoCommand, VehicleId
 
 router = SecuredRouter(tags=["safety"])
 
@@ -114,3 +118,41 @@ async def check_mission(
     record = hub.registry.get(vehicle_id)
     check = await asyncio.to_thread(hub.safety.check_mission, record, body.items)
     return MissionCheckResponse.from_plan_check(check)
+
+
+class GotoCheck(BaseModel):
+    """A go-to to check: the `goto` command's fields."""
+
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
+
+    lat: float = Field(ge=-90, le=90)
+    lon: float = Field(ge=-180, le=180)
+    altitude: float = Field(gt=0.5, le=500, description="Metres above home")
+
+
+class GotoCheckResponse(BaseModel):
+    ok: bool = Field(description="True when the go-to breaks no rule")
+    violations: list[ViolationModel]
+    distance_m: float | None = Field(
+        description="Horizontal distance from the vehicle to the target; null when the "
+        "vehicle's position is not known"
+    )
+
+
+@router.post(
+    "/vehicles/{vehicle_id}/goto-check",
+    response_model=GotoCheckResponse,
+    openapi_extra=requires(Permission.COMMAND),
+)
+async def check_goto(vehicle_id: VehicleIdPath, body: GotoCheck, hub: HubDep) -> GotoCheckResponse:
+    """Check a go-to without sending it: the same rails the `goto` command is held to
+    (the geofence, the way there, the altitude limits, the range from home)."""
+    record = hub.registry.get(vehicle_id)
+    command = GotoCommand(lat=body.lat, lon=body.lon, altitude=body.altitude)
+    violations = await asyncio.to_thread(hub.safety.check_command, record, command)
+    here = position(snapshot_of(record))
+    return GotoCheckResponse(
+        ok=not violations,
+        violations=[ViolationModel.from_violation(v) for v in violations],
+        distance_m=None if here is None else haversine_m(here.lat, here.lon, body.lat, body.lon),
+    )

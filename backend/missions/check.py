@@ -12,7 +12,7 @@ from backend.safety.rails import SafetyRails
 from backend.safety.snapshot import VehicleSnapshot
 from backend.safety.violations import MISSION_ITEM, Violation
 from protocol.messages import MissionItem
-from protocol.mission_rules import mission_problems
+from protocol.mission_rules import mission_problems_by_item
 
 
 def check_mission(
@@ -26,8 +26,8 @@ def check_mission(
     is read only when the mission goes somewhere (a mission of settings alone needs none).
     Raises InvalidRequest when an item's altitude cannot be put above home."""
     problems = tuple(
-        Violation(MISSION_ITEM, problem)
-        for problem in mission_problems(items, vehicle_type, autopilot)
+        Violation(MISSION_ITEM, problem, items=(number,))
+        for number, problem in mission_problems_by_item(items, vehicle_type, autopilot)
     )
     waypoints = mission_waypoints(items, vehicle)
     if not waypoints:

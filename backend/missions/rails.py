@@ -58,15 +58,20 @@ def _plan_geofence(
         report.unknown("position", GEOFENCE)
     # Legs with an end outside are already reported through that end; a first leg from a
     # vehicle outside the fence is allowed so that a mission can bring it back.
-    stops: list[tuple[str, GeoPoint | None, bool]] = [
-        ("the vehicle's position", here, here is not None and fence.contains(here))
+    stops: list[tuple[str, GeoPoint | None, bool, int | None]] = [
+        ("the vehicle's position", here, here is not None and fence.contains(here), None)
     ]
-    stops += [(waypoints[i].name(i + 1), p, inside[i]) for i, p in enumerate(points)]
-    legs = [
-        f"the leg from {a_label} to {b_label}"
-        for (a_label, a, a_in), (b_label, b, b_in) in itertools.pairwise(stops)
+    stops += [
+        (waypoints[i].name(i + 1), p, inside[i], waypoints[i].item) for i, p in enumerate(points)
+    ]
+    # Each leg is shown on the item it flies to.
+    leaving = [
+        (f"the leg from {a_label} to {b_label}", b_item)
+        for (a_label, a, a_in, _), (b_label, b, b_in, b_item) in itertools.pairwise(stops)
         if a is not None and b is not None and a_in and b_in and fence.leg_leaves(a, b)
     ]
+    legs = [label for label, _ in leaving]
+    at_fault = [waypoints[i].item for _, i in outside] + [item for _, item in leaving]
     if outside:
         distance, worst = max(outside)
         message = outside_message(waypoints[worst].name(worst + 1), distance)
@@ -74,13 +79,14 @@ def _plan_geofence(
         if legs:
             verb = "leaves" if len(legs) == 1 else "leave"
             message += f"; {count(len(legs), 'leg')} between waypoints inside it also {verb} it"
-        report.add(GEOFENCE, message, None, distance)
+        report.add(GEOFENCE, message, None, distance, at_fault)
     elif legs:
         report.add(
             GEOFENCE,
             f"{legs[0]} leaves the geofence{others(len(legs), 'legs leave it')}",
             None,
             None,
+            at_fault,
         )
 
 
@@ -97,7 +103,8 @@ def _plan_distance(
     distances = [haversine_m(start.lat, start.lon, wp.lat, wp.lon) for wp in waypoints]
     far = max(range(len(distances)), key=distances.__getitem__)
     suffix = others(sum(d > limit for d in distances), "waypoints are beyond it")
-    check_distance(rails, waypoints[far].name(far + 1), distances[far], suffix, report)
+    beyond = [wp.item for wp, d in zip(waypoints, distances, strict=True) if d > limit]
+    check_distance(rails, waypoints[far].name(far + 1), distances[far], suffix, report, beyond)
 
 
 def _plan_battery(
@@ -143,7 +150,10 @@ def evaluate_plan(
     report = Report()
     check_launch_battery(rails, vehicle, report)
     check_altitudes(
-        rails, [(f"{wp.name(i)} altitude", wp.alt_rel) for i, wp in enumerate(waypoints, 1)], report
+        rails,
+        [(f"{wp.name(i)} altitude", wp.alt_rel) for i, wp in enumerate(waypoints, 1)],
+        report,
+        [wp.item for wp in waypoints],
     )
     if rails.geofence is not None:
         _plan_geofence(rails.geofence, vehicle, waypoints, report)

@@ -67,14 +67,22 @@ def _altitude_limits(rails: SafetyRails) -> list[tuple[str, float, bool, str]]:
 
 
 def check_altitudes(
-    rails: SafetyRails, targets: Sequence[tuple[str, float]], report: Report
+    rails: SafetyRails,
+    targets: Sequence[tuple[str, float]],
+    report: Report,
+    items: Sequence[int | None] = (),
 ) -> None:
     """Each altitude limit against (label, altitude) targets: one violation per limit,
-    naming the target furthest beyond it."""
+    naming the target furthest beyond it. ``items``, when given, are the targets' mission
+    items (in the same order), listed on each violation."""
+    numbers = list(items) or [None] * len(targets)
     for rule, limit, ceiling, name in _altitude_limits(rails):
-        offenders = [
-            (alt, label) for label, alt in targets if (alt > limit if ceiling else alt < limit)
+        beyond = [
+            (alt, label, number)
+            for (label, alt), number in zip(targets, numbers, strict=True)
+            if (alt > limit if ceiling else alt < limit)
         ]
+        offenders = [(alt, label) for alt, label, _ in beyond]
         if not offenders:
             continue
         pick = max if ceiling else min
@@ -82,11 +90,22 @@ def check_altitudes(
         shown, bound = pair(alt, limit, 1)
         where = "above" if ceiling else "below"
         message = f"{label} {shown} m is {where} {name.format(bound)}"
-        report.add(rule, message + others(len(offenders), f"waypoints are {where} it"), limit, alt)
+        report.add(
+            rule,
+            message + others(len(offenders), f"waypoints are {where} it"),
+            limit,
+            alt,
+            [number for _, _, number in beyond],
+        )
 
 
 def check_distance(
-    rails: SafetyRails, label: str, distance: float, suffix: str, report: Report
+    rails: SafetyRails,
+    label: str,
+    distance: float,
+    suffix: str,
+    report: Report,
+    items: Sequence[int | None] = (),
 ) -> None:
     """A place ``distance`` metres from home against the range limit."""
     limit = rails.max_distance_from_home_m
@@ -97,4 +116,5 @@ def check_distance(
             f"{label} is {shown} m from home; the limit is {bound} m{suffix}",
             limit,
             distance,
+            items,
         )

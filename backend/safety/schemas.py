@@ -130,6 +130,11 @@ class ViolationModel(_Strict):
     message: str = Field(description="What is wrong, with the numbers and units")
     limit: float | None = Field(default=None, description="The rule's limit, where it has one")
     value: float | None = Field(default=None, description="The offending value, where it has one")
+    items: list[int] = Field(
+        default_factory=list,
+        description="The mission items at fault (1 is the first after home; a leg is listed "
+        "by the item it flies to); empty for a rule about the vehicle or a command",
+    )
 
     @classmethod
     def from_violation(cls, violation: Violation) -> ViolationModel:
@@ -139,5 +144,6 @@ class ViolationModel(_Strict):
                 "message": violation.message,
                 "limit": violation.limit,
                 "value": violation.value,
+                "items": list(violation.items),
             }
         )

@@ -60,6 +60,9 @@ class Violation:
     message: str
     limit: float | None = None
     value: float | None = None
+    # The mission items at fault (1 is the first after home), so that an editor can show
+    # the refusal on them; empty for a rule about the vehicle or a command.
+    items: tuple[int, ...] = ()
 
 
 class Report:
@@ -72,8 +75,16 @@ class Report:
         self._missing: dict[str, None] = {}
         self._blocked: dict[str, None] = {}
 
-    def add(self, rule: str, message: str, limit: float | None, value: float | None) -> None:
-        self._violations.append(Violation(rule, message, limit, value))
+    def add(
+        self,
+        rule: str,
+        message: str,
+        limit: float | None,
+        value: float | None,
+        items: Sequence[int | None] = (),
+    ) -> None:
+        at_fault = tuple(dict.fromkeys(item for item in items if item is not None))
+        self._violations.append(Violation(rule, message, limit, value, at_fault))
 
     def unknown(self, item: str, rule: str) -> None:
         self._missing[item] = None

@@ -90,7 +90,7 @@ interface RequestOptions {
   own401?: boolean;
 }
 
-async function request<T>(path: string, init?: RequestInit, options: RequestOptions = {}): Promise<T> {
+export async function request<T>(path: string, init?: RequestInit, options: RequestOptions = {}): Promise<T> {
   const epoch = sessionEpoch;
   let response: Response;
   try {

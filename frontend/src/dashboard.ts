@@ -12,6 +12,7 @@ import { PROTOCOL_VERSION } from "./generated/protocol";
 import type { Header } from "./header";
 import { FleetMap } from "./map";
 import { OpsPanels } from "./panels/opsPanels";
+import { MissionTools } from "./missions";
 import { ReplayPanel } from "./replayPanel";
 import { type CurrentUser, type HubConfig, type HubToClient, can } from "./types";
 import { Viz3dPane } from "./viz3d/pane";
@@ -41,6 +42,7 @@ export class Dashboard {
   private store: FleetStore | null = null;
   private ops: OpsPanels | null = null;
   private viz3d: Viz3dPane | null = null;
+  private missions: MissionTools | null = null;
   private expiryTimer: number | undefined;
   private stopped = false;
 
@@ -80,6 +82,7 @@ export class Dashboard {
       table.select(id);
       map.select(id, pan);
       ops.select(id);
+      missions.select(id);
     };
     const map = new FleetMap(document.getElementById("map")!, config, (id) => select(id, false));
     const table = new FleetTable(
@@ -92,16 +95,20 @@ export class Dashboard {
     const ops = new OpsPanels(document.querySelector<HTMLElement>(".layout")!, can(user, "command") ? runCommand : null);
     this.ops = ops;
     this.viz3d = new Viz3dPane(document.getElementById("map")!);
+    const missions = new MissionTools(map.leaflet, can(user, "command"));
+    this.missions = missions;
 
     const store = new FleetStore(({ changed, removed, all }) => {
       if (this.stopped) return;
       for (const id of removed) {
         table.remove(id);
         map.remove(id);
+        missions.remove(id);
       }
       table.update(changed);
       map.update(changed);
       ops.update(changed, removed);
+      missions.update(changed);
       let online = 0;
       for (const vehicle of all.values()) if (linkState(vehicle) !== "offline") online++;
       header.setCounts(all.size, online);
@@ -159,6 +166,8 @@ export class Dashboard {
     this.store = null;
     this.ops?.destroy();
     this.ops = null;
+    this.missions?.destroy();
+    this.missions = null;
     this.table?.destroy();
     this.table = null;
     this.map?.destroy();

@@ -235,6 +235,7 @@ def test_a_bad_mission_item_is_refused_with_its_index(
             "message": "item 3 (NAV_LOITER_TIME): loiter time -4 s is negative",
             "limit": None,
             "value": None,
+            "items": [3],
         }
     ]
     assert api.get(f"/api/v1/vehicles/{vehicle}/mission").json()["items"] == before

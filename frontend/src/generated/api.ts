@@ -437,6 +437,27 @@ export interface paths {
         patch?: never;
         trace?: never;
     };
+    "/api/v1/vehicles/{vehicle_id}/goto-check": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        get?: never;
+        put?: never;
+        /**
+         * Check Goto
+         * @description Check a go-to without sending it: the same rails the `goto` command is held to
+         *     (the geofence, the way there, the altitude limits, the range from home).
+         */
+        post: operations["check_goto_api_v1_vehicles__vehicle_id__goto_check_post"];
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
     "/api/v1/telemetry/series": {
         parameters: {
             query?: never;
@@ -1142,6 +1163,36 @@ export interface components {
              * @description Ceiling inside the fence, metres above home; null for none
              */
             max_altitude_m?: number | null;
+        };
+        /**
+         * GotoCheck
+         * @description A go-to to check: the `goto` command's fields.
+         */
+        GotoCheck: {
+            /** Lat */
+            lat: number;
+            /** Lon */
+            lon: number;
+            /**
+             * Altitude
+             * @description Metres above home
+             */
+            altitude: number;
+        };
+        /** GotoCheckResponse */
+        GotoCheckResponse: {
+            /**
+             * Ok
+             * @description True when the go-to breaks no rule
+             */
+            ok: boolean;
+            /** Violations */
+            violations: components["schemas"]["ViolationModel"][];
+            /**
+             * Distance M
+             * @description Horizontal distance from the vehicle to the target; null when the vehicle's position is not known
+             */
+            distance_m: number | null;
         };
         /** GotoCommand */
         GotoCommand: {
@@ -1980,6 +2031,11 @@ export interface components {
              * @description The offending value, where it has one
              */
             value?: number | null;
+            /**
+             * Items
+             * @description The mission items at fault (1 is the first after home; a leg is listed by the item it flies to); empty for a rule about the vehicle or a command
+             */
+            items?: number[];
         };
     };
     responses: never;
@@ -3984,6 +4040,88 @@ export interface operations {
                 };
                 content: {
                     "application/json": components["schemas"]["MissionCheckResponse"];
+                };
+            };
+            /** @description Not authenticated */
+            401: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description Needs the 'command' permission */
+            403: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description No such vehicle, flight, log, user or token (named in the message) */
+            404: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description The request body is over the size limit */
+            413: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed) */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Unprocessable"];
+                };
+            };
+            /** @description The database is unavailable; try again after Retry-After seconds */
+            503: {
+                headers: {
+                    /** @description Seconds to wait */
+                    "Retry-After"?: number;
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+        };
+    };
+    check_goto_api_v1_vehicles__vehicle_id__goto_check_post: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path: {
+                vehicle_id: string;
+            };
+            cookie?: never;
+        };
+        requestBody: {
+            content: {
+                "application/json": components["schemas"]["GotoCheck"];
+            };
+        };
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["GotoCheckResponse"];
                 };
             };
             /** @description Not authenticated */

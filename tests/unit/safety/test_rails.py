@@ -5,6 +5,7 @@ import math
 import pytest
 
 from backend.missions import check_plan, evaluate_plan
+from backend.missions.waypoints import Waypoint
 from backend.safety import (
     RULES,
     Geofence,
@@ -265,6 +266,32 @@ def test_plan_leg_across_the_notch() -> None:
     assert violations == [
         Violation("geofence", "the leg from waypoint 1 to waypoint 2 leaves the geofence")
     ]
+
+
+def _item(east: float, north: float, alt: float, item: int) -> Waypoint:
+    p = geo(east, north)
+    return Waypoint(p.lat, p.lon, alt, item)
+
+
+def test_plan_violations_list_the_items_at_fault() -> None:
+    """An editor shows each refusal on its items: a leg by the item it flies to."""
+    rails = SafetyRails(
+        geofence=u_fence(), max_distance_from_home_m=250, min_altitude_m=10, max_altitude_m=120
+    )
+    waypoints = [
+        _item(50, 250, 30, 2),  # item 1 is a take-off, with no place of its own here
+        _item(250, 250, 30, 3),  # the leg from item 2 crosses the notch; 283 m from home
+        _item(250, 50, 130, 4),  # above the ceiling
+        _item(300, 700, 5, 6),  # outside, too far and too low
+    ]
+    by_rule = {v.rule: v for v in check_plan(rails, vehicle(battery=100), waypoints)}
+    assert by_rule["geofence"].items == (6, 3)
+    assert by_rule["max_altitude"].items == (4,)
+    assert by_rule["min_altitude"].items == (6,)
+    assert by_rule["max_distance_from_home"].items == (3, 6)  # 283 m and 660 m from home
+    # A rule about the vehicle names no item.
+    low = check_plan(SafetyRails(min_launch_battery_pct=50), vehicle(battery=20), waypoints[:1])
+    assert only(low, "min_launch_battery").items == ()
 
 
 def test_plan_first_leg_starts_at_the_vehicle() -> None:

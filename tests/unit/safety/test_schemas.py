@@ -117,6 +117,7 @@ def test_mission_response_from_a_plan_check() -> None:
             "message": "the leg from waypoint 1 to waypoint 2 leaves the geofence",
             "limit": None,
             "value": None,
+            "items": [],
         }
     ]
     assert body["estimate"]["available_pct"] == 90

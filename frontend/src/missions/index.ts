@@ -1,0 +1,41 @@
+// The dashboard's mission tools: the mission panel and editor, and "fly here".
+import type * as L from "leaflet";
+import type { VehicleSummary } from "../types";
+import { MissionEditor } from "./editor";
+import { GoHere } from "./goHere";
+import "./missions.css";
+
+export class MissionTools {
+  private readonly editor: MissionEditor;
+  private readonly goHere: GoHere | null;
+  private readonly vehicles = new Map<string, VehicleSummary>();
+  private selectedId: string | null = null;
+
+  constructor(map: L.Map, canCommand: boolean) {
+    this.editor = new MissionEditor(map, canCommand);
+    this.goHere = canCommand
+      ? new GoHere(map, () => (this.selectedId ? this.vehicles.get(this.selectedId) : undefined))
+      : null;
+  }
+
+  update(vehicles: Iterable<VehicleSummary>): void {
+    const list = [...vehicles];
+    for (const vehicle of list) this.vehicles.set(vehicle.id, vehicle);
+    this.editor.update(list);
+  }
+
+  remove(id: string): void {
+    this.vehicles.delete(id);
+    this.editor.remove(id);
+  }
+
+  select(id: string | null): void {
+    this.selectedId = id;
+    this.editor.select(id);
+  }
+
+  destroy(): void {
+    this.goHere?.destroy();
+    this.editor.destroy();
+  }
+}

@@ -15,7 +15,7 @@ from sqlalchemy import Engine
 from backend.settings import HubSettings
 from backend.storage.database import make_engine
 from gcs.launcher import LocalFleet, free_port
-from tests.helpers import access_token, api_client, running_fleet, running_hub
+from tests.helpers import access_token, api_client, poll_until, running_fleet, running_hub
 
 ADMIN_PASSWORD = "test-admin-password"
 # Fast enough that a take-off and landing take seconds, slow enough that the
@@ -56,11 +56,18 @@ def fleet(tmp_path_factory: pytest.TempPathFactory) -> Iterator[LocalFleet]:
                 # the real rate runs below the 30 % launch rail before the last tests
                 # take off. Drawing a tenth keeps the battery moving (flights still use
                 # some) without making the suite's order matter.
-                drain = api.put(
-                    f"/api/v1/vehicles/sim_{index + 1}/params/SIM_BATT_DRAIN",
-                    json={"value": FLEET_BATTERY_DRAIN},
+                vehicle = f"sim_{index + 1}"
+                poll_until(
+                    lambda vehicle=vehicle: (
+                        api.put(
+                            f"/api/v1/vehicles/{vehicle}/params/SIM_BATT_DRAIN",
+                            json={"value": FLEET_BATTERY_DRAIN},
+                        ).status_code
+                        == 200
+                    ),
+                    60,
+                    f"{vehicle} drawing its pack at {FLEET_BATTERY_DRAIN} of the rate",
                 )
-                assert drain.status_code == 200, drain.text
         yield local_fleet
 
 

@@ -87,7 +87,8 @@ def test_only_an_admin_revokes_and_only_the_holder_releases() -> None:
     with pytest.raises(Forbidden):
         leases.revoke("copter-1", BOB)
     revoked = leases.revoke("copter-1", ADA)
-    assert revoked is not None and revoked.holder == "alice"
+    assert revoked is not None
+    assert revoked.holder == "alice"
     assert leases.holder("copter-1") is None
 
 

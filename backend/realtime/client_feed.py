@@ -21,7 +21,7 @@ from backend.auth.policy import (
 from backend.control.lease import LeaseRefused
 from backend.errors import Forbidden, VehicleNotFound
 from backend.realtime.bus import LatestSubscription, Topic
-from backend.realtime.collaborators import FeedServices
+from backend.realtime.collaborators import FeedServices, GatewayServices
 from backend.realtime.frames import FrameTooLarge, PeerConnection
 from backend.realtime.live_events import EventSubscription
 from backend.realtime.manual_relay import ManualRelay
@@ -245,7 +245,7 @@ class ClientFeed(PeerConnection):
             await announce_lease(self.hub, vehicle_id, reason)
 
 
-async def announce_lease(hub: FeedServices, vehicle_id: str, reason: str) -> None:
+async def announce_lease(hub: FeedServices | GatewayServices, vehicle_id: str, reason: str) -> None:
     """Tell every dashboard who flies ``vehicle_id`` by hand now."""
     lease = hub.leases.holder(vehicle_id)
     state = LeaseState(vehicle_id=vehicle_id, holder=lease.holder if lease else None, reason=reason)

@@ -184,3 +184,46 @@ def test_sticks_fly_the_vehicle_and_silence_holds_it(flying: tuple[LocalFleet, s
             assert time.monotonic() - stopped_at < 5
         finally:
             pilot.close()
+
+
+def test_a_mode_change_the_agent_did_not_make_ends_the_lease(
+    flying: tuple[LocalFleet, str],
+) -> None:
+    """The RC pilot's mode switch outranks the browser; here the change comes from
+    another ground station's set_mode, which the agent can no more tell apart from the
+    transmitter than ArduPilot's HEARTBEAT lets it."""
+    fleet, token = flying
+    base = fleet.plan.hub_http
+    with FleetWatcher(base, token) as watcher, api_client(base, token) as api:
+        watcher.wait_until(ready(VEHICLE), 10, "the fleet")
+        pilot = Pilot(base, token)
+        stop = threading.Event()
+        streamer = threading.Thread(target=pilot.stream, args=(stop, 0), daemon=True)
+        try:
+            pilot.control("acquire")
+            poll_until(lambda: [m for m in pilot.said("lease") if m["holder"]], 5, "the lease")
+            streamer.start()
+            watcher.wait_until(
+                lambda v: v[VEHICLE]["state"]["mode"] == "LOITER", 5, "the pilot mode"
+            )
+            switched = send_command(api, VEHICLE, name="set_mode", mode="RTL")
+            assert switched["status"] == "accepted"
+            ended = poll_until(
+                lambda: [m for m in pilot.said("lease") if m["holder"] is None],
+                5,
+                "the lease to end",
+            )[-1]
+            assert "changed to RTL" in ended["reason"]
+            # Frames still streaming are now refused at the hub, never forwarded.
+            poll_until(
+                lambda: [m for m in pilot.said("error") if "lease" in m["message"]],
+                5,
+                "the refusal of the stream",
+            )
+            # The stream still running did not take the vehicle back into LOITER.
+            watcher.wait_until(lambda v: v[VEHICLE]["state"]["mode"] == "RTL", 5, "RTL")
+        finally:
+            stop.set()
+            if streamer.is_alive():
+                streamer.join(5)
+            pilot.close()

@@ -37,6 +37,17 @@ class PlanError(ValueError):
 
 
 @dataclass(frozen=True, slots=True)
+class Grid:
+    """A fleet's common lane grid: lanes at y0 + k * spacing and photos at x0 + j * trigger
+    distance, in the frame rotated by the grid angle about (cx, cy)."""
+
+    cx: float
+    cy: float
+    x0: float
+    y0: float
+
+
+@dataclass(frozen=True, slots=True)
 class Lane:
     """One lane in the local frame: photos are taken from start to end."""
 
@@ -96,12 +107,21 @@ def lower_bound_m(area: Polygon, lane_spacing_m: float, turnaround_m: float, n_r
     )
 
 
-def _segments(area: Polygon, spacing: float) -> list[list[tuple[float, float]]]:
+def _rows(miny: float, maxy: float, spacing: float, grid_y: float | None) -> list[float]:
+    """The lanes' y, each covering a strip one spacing wide: centred on the area, or on a
+    fleet's common grid so that parts' lanes line up."""
+    if grid_y is None:
+        rows = max(1, math.ceil((maxy - miny) / spacing - 1e-9))
+        y0 = (miny + maxy) / 2 - (rows - 1) * spacing / 2
+        return [y0 + i * spacing for i in range(rows)]
+    first = math.floor((miny - grid_y) / spacing + 0.5 + 1e-6)
+    last = max(first, math.ceil((maxy - grid_y) / spacing - 0.5 - 1e-6))
+    return [grid_y + k * spacing for k in range(first, last + 1)]
+
+
+def _segments(area: Polygon, spacing: float, ys: list[float]) -> list[list[tuple[float, float]]]:
     """Per row (from south to north in the rotated frame), the lanes' x extents."""
-    minx, miny, maxx, maxy = area.bounds
-    rows = max(1, math.ceil((maxy - miny) / spacing - 1e-9))
-    y0 = (miny + maxy) / 2 - (rows - 1) * spacing / 2
-    ys = [y0 + i * spacing for i in range(rows)]
+    minx, _, maxx, _ = area.bounds
     strips = [box(minx - 1, y - spacing / 2, maxx + 1, y + spacing / 2) for y in ys]
     pieces = shapely.intersection(strips, area)
     holes = [Polygon(ring) for ring in area.interiors]
@@ -171,33 +191,35 @@ def plan_lanes(
     angle_deg: float = 0.0,
     turnaround_m: float = DEFAULT_TURNAROUND_M,
     start: tuple[float, float] | None = None,
+    whole_area: bool = True,
+    grid: Grid | None = None,
 ) -> LanePlan:
     """Lanes over `area` (metres) at `angle_deg` (the lanes' heading, degrees east of north's
-    perpendicular: 0 runs them east-west)."""
+    perpendicular: 0 runs them east-west). With a `grid`, lanes and photos lie on that
+    common grid (a fleet's parts), else the lanes are centred on the area."""
     area = validate_area(area)
     spacing, trigger = calc.lane_spacing_m, calc.trigger_distance_m
-    if area.area < calc.footprint_side_m * calc.footprint_frontal_m:
+    # A fleet's part may be smaller than a photo; the area as a whole may not.
+    if whole_area and area.area < calc.footprint_side_m * calc.footprint_frontal_m:
         raise PlanError(
             f"the area ({area.area:.0f} m²) is smaller than one photo's footprint "
             f"({calc.footprint_side_m:.0f} x {calc.footprint_frontal_m:.0f} m); "
             "draw a larger area or fly lower"
         )
-    centre = area.centroid
-    rotated = affinity.rotate(area, -angle_deg, origin=centre)
+    cx, cy = (grid.cx, grid.cy) if grid else (area.centroid.x, area.centroid.y)
+    rotated = affinity.rotate(area, -angle_deg, origin=(cx, cy))
     assert isinstance(rotated, Polygon)
-    rows = _segments(rotated, spacing)
     minx, miny, _, maxy = rotated.bounds
-    n_rows = len(rows)
-    y0 = (miny + maxy) / 2 - (n_rows - 1) * spacing / 2
+    ys = _rows(miny, maxy, spacing, grid.y0 if grid else None)
+    rows = _segments(rotated, spacing, ys)
     cos_a, sin_a = math.cos(math.radians(angle_deg)), math.sin(math.radians(angle_deg))
-    cx, cy = centre.x, centre.y
 
     def back(x: float, y: float) -> tuple[float, float]:
         dx, dy = x - cx, y - cy
         return (cx + dx * cos_a - dy * sin_a, cy + dx * sin_a + dy * cos_a)
 
     holes = shapely.union_all([Polygon(ring) for ring in rotated.interiors])
-    here = start if start is not None else back(minx, y0)
+    here = start if start is not None else back(minx, ys[0])
     remaining = _cells(rows)
     lanes: list[Lane] = []
     path: list[tuple[float, float]] = []
@@ -208,7 +230,7 @@ def plan_lanes(
             for rev_rows in (False, True):
                 r, a, b = cell[-1] if rev_rows else cell[0]
                 for rev_x in (False, True):
-                    p = back(b if rev_x else a, y0 + r * spacing)
+                    p = back(b if rev_x else a, ys[r])
                     d = math.dist(here, p)
                     if best is None or d < best[0]:
                         best = (d, i, rev_rows, rev_x)
@@ -216,9 +238,16 @@ def plan_lanes(
         _, i, rev_rows, rev_x = best
         cell = remaining.pop(i)
         for k, (r, a, b) in enumerate(reversed(cell) if rev_rows else cell):
-            y = y0 + r * spacing
-            shots = max(1, math.ceil((b - a) / trigger - 1e-9))
-            a, b = _pad(a, b, y, shots * trigger - (b - a), holes)
+            y = ys[r]
+            if grid is not None and holes.is_empty:
+                # Photos on the common grid: the first within half a trigger distance
+                # past the start, the last within half one before the end.
+                a = grid.x0 + math.floor((a - grid.x0) / trigger + 0.5 + 1e-6) * trigger
+                b = max(a, grid.x0 + math.ceil((b - grid.x0) / trigger - 0.5 - 1e-6) * trigger)
+                shots = round((b - a) / trigger)
+            else:
+                shots = max(1, math.ceil((b - a) / trigger - 1e-9))
+                a, b = _pad(a, b, y, shots * trigger - (b - a), holes)
             forward = (k % 2 == 0) != rev_x
             xs, xe = (a, b) if forward else (b, a)
             step = trigger if forward else -trigger

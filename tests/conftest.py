@@ -4,6 +4,7 @@ import os
 import uuid
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -15,7 +16,7 @@ from sqlalchemy import Engine
 from backend.settings import HubSettings
 from backend.storage.database import make_engine
 from gcs.launcher import LocalFleet, free_port
-from tests.helpers import access_token, api_client, running_fleet, running_hub
+from tests.helpers import access_token, api_client, poll_until, running_fleet, running_hub
 
 ADMIN_PASSWORD = "test-admin-password"
 # Fast enough that a take-off and landing take seconds, slow enough that the
@@ -43,6 +44,12 @@ def hub(tmp_path: Path) -> Iterator[str]:
         yield base_url
 
 
+def _put_known(api: httpx.Client, vehicle: str, drain: float) -> httpx.Response | None:
+    """The parameter write's answer, or None while the hub does not know the vehicle yet."""
+    response = api.put(f"/api/v1/vehicles/{vehicle}/params/SIM_BATT_DRAIN", json={"value": drain})
+    return None if response.status_code == 404 else response
+
+
 @pytest.fixture(scope="session")
 def fleet(tmp_path_factory: pytest.TempPathFactory) -> Iterator[LocalFleet]:
     """Hub, three simulators and three agents as real processes on loopback."""
@@ -56,10 +63,14 @@ def fleet(tmp_path_factory: pytest.TempPathFactory) -> Iterator[LocalFleet]:
                 # the real rate runs below the 30 % launch rail before the last tests
                 # take off. Drawing a tenth keeps the battery moving (flights still use
                 # some) without making the suite's order matter.
-                drain = api.put(
-                    f"/api/v1/vehicles/sim_{index + 1}/params/SIM_BATT_DRAIN",
-                    json={"value": FLEET_BATTERY_DRAIN},
+                # On a loaded machine an agent may still be in its reconnect back-off
+                # when the hub answers its health check: wait until the hub knows it.
+                drain = poll_until(
+                    partial(_put_known, api, f"sim_{index + 1}", FLEET_BATTERY_DRAIN),
+                    60,
+                    f"sim_{index + 1} known to the hub",
                 )
+                assert drain is not None
                 assert drain.status_code == 200, drain.text
         yield local_fleet
 

@@ -87,6 +87,15 @@ def validate_area(area: Polygon) -> Polygon:
         raise PlanError(f"the area has {vertices} vertices; at most {MAX_VERTICES} are allowed")
     if len(area.exterior.coords) < 4:
         raise PlanError("the area needs at least 3 distinct corners")
+    outline = Polygon(area.exterior)
+    holes = [Polygon(ring) for ring in area.interiors]
+    if (
+        holes
+        and outline.is_valid
+        and all(h.is_valid for h in holes)
+        and outline.difference(shapely.union_all(holes)).area <= 1e-9 * max(outline.area, 1.0)
+    ):
+        raise PlanError("the holes cover the whole area; leave some of it to survey")
     if not area.is_valid:
         # e.g. "Self-intersection[12.5 40.1]": where it crosses, in the caller's frame.
         raise PlanError(f"the area is not a valid polygon: {explain_validity(area)}")

@@ -154,13 +154,21 @@ def test_hover_and_capture_takes_one_image_at_each_photo_point() -> None:
         (box(0, 0, 50, 50), "smaller than one photo's footprint"),
         (Polygon(), "at least 3 distinct corners"),
         (
-            Polygon([(0, 0), (500, 0), (500, 500)], [[(0, 0), (500, 0), (500, 500)]]),
-            "not a valid polygon",
+            Polygon([(0, 0), (500, 0), (500, 500)], [[(600, 0), (700, 0), (700, 100)]]),
+            "not a valid polygon: Hole lies outside shell",
         ),
     ],
 )
 def test_invalid_areas_are_refused_saying_why(area: Polygon, message: str) -> None:
     with pytest.raises(PlanError, match=message):
+        plan_lanes(area, CALC)
+
+
+def test_holes_covering_the_whole_area_are_refused() -> None:
+    area = Polygon(
+        [(0, 0), (500, 0), (500, 500), (0, 500)], [[(0, 0), (500, 0), (500, 500), (0, 500)]]
+    )
+    with pytest.raises(PlanError, match="the holes cover the whole area"):
         plan_lanes(area, CALC)
 
 

@@ -23,6 +23,7 @@ const ACTIONS: Record<AuditAction, true> = {
   "rails.clear": true,
   command: true,
   denied: true,
+  "control.lease": true,
 };
 
 /** The credential an entry was made with: an API token by name, else its kind. */

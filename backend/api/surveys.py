@@ -32,6 +32,11 @@ async def preview_survey(body: SurveyRequest, hub: HubDep) -> SurveyPreview:
     mission, its times and the safety rails' check of that mission."""
     if len(set(body.vehicle_ids)) != len(body.vehicle_ids):
         raise InvalidRequest("vehicle_ids", "each vehicle may be chosen once")
+    known = {record.id for record in hub.registry.all()}
+    if unknown := [vid for vid in body.vehicle_ids if vid not in known]:
+        # A body naming a vehicle the hub has never seen is a bad body (422), not a missing
+        # resource: the route itself exists.
+        raise InvalidRequest("vehicle_ids", f"unknown vehicles: {', '.join(unknown[:10])}")
     records = {vid: hub.registry.get(vid) for vid in body.vehicle_ids}
     fleet = []
     for vid, record in records.items():

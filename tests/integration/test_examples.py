@@ -8,18 +8,35 @@ import json
 import os
 import subprocess
 import sys
+from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
 
 from gcs.launcher import LocalFleet
-from tests.helpers import FleetWatcher, ready
+from tests.conftest import FLEET_SPEEDUP
+from tests.helpers import FleetWatcher, access_token, ready, running_fleet
 
 pytestmark = pytest.mark.integration
 
 EXAMPLES = Path(__file__).parents[2] / "examples"
 # A take-off, a flight to a point and a landing at the fleet's speed-up, with room to spare.
 EXAMPLE_TIMEOUT_S = 240
+
+
+@pytest.fixture(scope="module")
+def fleet(tmp_path_factory: pytest.TempPathFactory) -> Iterator[LocalFleet]:
+    """A demo fleet of its own, as a new user finds it: full packs, home where it started,
+    whatever the rest of the suite has flown the shared one through."""
+    with running_fleet(
+        tmp_path_factory.mktemp("examples"), vehicles=3, speedup=FLEET_SPEEDUP
+    ) as local_fleet:
+        yield local_fleet
+
+
+@pytest.fixture(scope="module")
+def fleet_admin_token(fleet: LocalFleet) -> str:
+    return access_token(fleet.plan.hub_http, "admin", fleet.plan.admin_password)
 
 
 @pytest.fixture(autouse=True)

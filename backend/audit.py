@@ -36,6 +36,7 @@ class AuditAction(StrEnum):
     RAILS_UPDATE = "rails.update"  # safety rails; target: "site" or the vehicle
     RAILS_CLEAR = "rails.clear"
     COMMAND = "command"  # anything sent to a vehicle: commands, parameters, missions
+    CONTROL_LEASE = "control.lease"  # manual control taken, given back or revoked; target: vehicle
     DENIED = "denied"  # a route refused for want of a permission; target: method and path
 
 

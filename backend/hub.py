@@ -16,6 +16,7 @@ from backend.auth.accounts import PROVISIONING, Accounts
 from backend.auth.password_work import PasswordWork
 from backend.auth.principal_cache import PrincipalCache
 from backend.auth.rate_limit import Limit, RateLimiter
+from backend.control.lease import LeaseBook
 from backend.fleet.commands import CommandDispatcher
 from backend.fleet.registry import FleetRegistry, VehicleRecord
 from backend.fleet.safety_gate import SafetyGate
@@ -68,6 +69,8 @@ class Hub:
     agent_admissions: dict[str, asyncio.Lock] = field(default_factory=dict)
     # Live client feeds, so a revoked token or disabled user stops seeing the fleet.
     client_feeds: set[ClientConnection] = field(default_factory=set)
+    # Manual-control leases: in memory only, so a restart leaves every lease revoked.
+    leases: LeaseBook = field(default_factory=LeaseBook)
     # The 3D view: viser on loopback, and the client that passes its page on (None when
     # GCS_VIZ_ENABLED is false).
     viz: VizServer | None = None

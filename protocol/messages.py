@@ -474,6 +474,7 @@ EventKind = Literal[
     "failsafe",
     "mission",
     "id_clash",  # the hub refused a second agent for this vehicle id (never sent by agents)
+    "manual",  # browser manual control started, ended or held by the deadman
     "upload",  # the agent's onboard .tlog could not be handed over (or was, after failing)
 ]
 
@@ -681,6 +682,63 @@ class Pong(Message):
     nonce: str | None = Field(default=None, max_length=64)
 
 
+# ---------------------------------------------------------------------------
+# Manual control (browser -> hub -> agent)
+# ---------------------------------------------------------------------------
+
+# MAVLink MANUAL_CONTROL's ranges: x (pitch, forward +), y (roll, right +) and r (yaw,
+# clockwise +) in [-1000, 1000]; z (throttle or climb) in [0, 1000], 500 at mid stick.
+StickAxis = Annotated[int, Field(ge=-1000, le=1000)]
+ThrottleAxis = Annotated[int, Field(ge=0, le=1000)]
+
+
+class ManualAxes(Message):
+    x: StickAxis = Field(description="pitch: forward positive, -1000..1000")
+    y: StickAxis = Field(description="roll: right positive, -1000..1000")
+    z: ThrottleAxis = Field(default=500, description="throttle or climb: 0..1000, 500 mid")
+    r: StickAxis = Field(default=0, description="yaw: clockwise positive, -1000..1000")
+    buttons: int = Field(default=0, ge=0, le=65535, description="MANUAL_CONTROL buttons")
+
+
+class ControlRequest(Message):
+    """Ask for (or give back) the manual-control lease of one vehicle. Needs the
+    'command' permission; one pilot per vehicle."""
+
+    type: Literal["control"] = "control"
+    vehicle_id: VehicleId
+    action: Literal["acquire", "release", "revoke"] = Field(
+        description="revoke: an admin ends whoever's lease"
+    )
+
+
+class ManualInput(Message):
+    """One frame of stick input, sent by the lease holder at 25 Hz or more. Frames from
+    a client without the lease, with a seq not newer than the last, or faster than
+    100 Hz are refused and never forwarded; the newest frame wins."""
+
+    type: Literal["manual"] = "manual"
+    vehicle_id: VehicleId
+    seq: int = Field(ge=0, le=MAX_SEQ)
+    axes: ManualAxes
+
+
+class LeaseState(Message):
+    """Who flies a vehicle by hand now (holder None: nobody), sent to every client."""
+
+    type: Literal["lease"] = "lease"
+    vehicle_id: VehicleId
+    holder: str | None = Field(default=None, max_length=200)
+    reason: str = Field(default="", max_length=200)
+
+
+class ManualFrame(Message):
+    """Stick input relayed to the agent; the agent holds the vehicle when these stop."""
+
+    type: Literal["manual"] = "manual"
+    seq: int = Field(ge=0, le=MAX_SEQ)
+    axes: ManualAxes
+
+
 # The hub pings an agent to learn whether it is still there (another agent wants its
 # vehicle id); the agent answers with a pong.
 AgentToHub: TypeAlias = Annotated[
@@ -688,11 +746,13 @@ AgentToHub: TypeAlias = Annotated[
     Field(discriminator="type"),
 ]
 HubToAgent: TypeAlias = Annotated[
-    Welcome | CommandRequest | Ack | Resend | ErrorReply | Ping, Field(discriminator="type")
+    Welcome | CommandRequest | Ack | Resend | ErrorReply | Ping | ManualFrame,
+    Field(discriminator="type"),
 ]
-ClientToHub: TypeAlias = Annotated[Ping, Field(discriminator="type")]
+ClientToHub: TypeAlias = Annotated[Ping | ControlRequest | ManualInput, Field(discriminator="type")]
 HubToClient: TypeAlias = Annotated[
-    FleetSnapshot | VehicleUpdate | EventBatch | Pong | ErrorReply, Field(discriminator="type")
+    FleetSnapshot | VehicleUpdate | EventBatch | Pong | ErrorReply | LeaseState,
+    Field(discriminator="type"),
 ]
 
 agent_to_hub: TypeAdapter[AgentToHub] = TypeAdapter(AgentToHub)

@@ -62,10 +62,14 @@ PARAM_DEFS: tuple[ParamDef, ...] = (
     ParamDef("LAND_ALT_LOW", ParamType.INT16, 100, 10000, "land_alt_low", _CM),
     ParamDef("LAND_SPEED", ParamType.INT16, 30, 200, "land_speed", _CM),
     ParamDef("LAND_SPEED_HIGH", ParamType.INT16, 0, 2500, "land_speed_high", _CM),
+    ParamDef("LOIT_SPEED", ParamType.REAL32, 20, 3500, "loit_speed", _CM),
     ParamDef("MOT_SPOOL_TIME", ParamType.REAL32, 0.05, 2.0, "spool_time"),
     ParamDef("MOT_THST_HOVER", ParamType.REAL32, 0.2, 0.8, "hover_throttle"),
+    ParamDef("PILOT_SPEED_DN", ParamType.INT16, 0, 500, "pilot_speed_dn", _CM),
+    ParamDef("PILOT_SPEED_UP", ParamType.INT16, 50, 500, "pilot_speed_up", _CM),
     ParamDef("PSC_POSXY_P", ParamType.REAL32, 0.5, 2.0, "psc_posxy_p"),
     ParamDef("PSC_POSZ_P", ParamType.REAL32, 1.0, 3.0, "psc_posz_p"),
+    ParamDef("RC_OVERRIDE_TIME", ParamType.REAL32, -1.0, 120.0, "rc_override_time"),
     ParamDef("RTL_ALT", ParamType.INT32, 200, 300000, "rtl_alt", _CM),
     ParamDef("RTL_CLIMB_MIN", ParamType.INT16, 0, 3000, "rtl_climb_min", _CM),
     ParamDef("RTL_CONE_SLOPE", ParamType.REAL32, 0.0, 10.0, "rtl_cone_slope"),
@@ -78,6 +82,7 @@ PARAM_DEFS: tuple[ParamDef, ...] = (
     ParamDef("SIM_WIND_SPD", ParamType.REAL32, 0.0, 30.0, "sim_wind_spd"),
     # takes effect at the next boot, as on the real vehicle: the simulator keeps the id
     # it was started with
+    ParamDef("SYSID_MYGCS", ParamType.INT16, 1, 255, "sysid_mygcs"),
     ParamDef("SYSID_THISMAV", ParamType.INT16, 1, 255),
     ParamDef("WPNAV_ACCEL", ParamType.REAL32, 50, 500, "wpnav_accel", _CM),
     ParamDef("WPNAV_ACCEL_Z", ParamType.REAL32, 50, 500, "wpnav_accel_z", _CM),

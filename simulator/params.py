@@ -53,6 +53,13 @@ class CopterParams:
     batt_fs_low_act: int = 0  # BATT_FS_LOW_ACT: 0 warn only, 1 land, 2 RTL
 
     # Simulation knobs (SITL's SIM_* parameters)
+    # The GCS whose MANUAL_CONTROL (and RC overrides) ArduPilot takes, and how long an
+    # override lasts without a fresh one before the RC sticks rule again.
+    sysid_mygcs: int = 255  # SYSID_MYGCS (MAV_GCS_SYSID from 4.7)
+    rc_override_time: float = 3.0  # RC_OVERRIDE_TIME, seconds
+    loit_speed: float = 12.5  # LOIT_SPEED (cm/s in the firmware): full stick in LOITER
+    pilot_speed_up: float = 2.5  # PILOT_SPEED_UP (cm/s in the firmware)
+    pilot_speed_dn: float = 1.5  # PILOT_SPEED_DN: 0 in the firmware means PILOT_SPEED_UP
     sim_batt_drain: float = 1.0  # SIM_BATT_DRAIN: multiplies the charge drawn (a test knob)
     sim_gps_noise: float = 0.1  # SIM_GPS_NOISE: metres, 1 sigma, on GPS_RAW_INT
     sim_wind_spd: float = 0.0  # SIM_WIND_SPD, m/s

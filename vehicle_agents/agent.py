@@ -26,6 +26,7 @@ from vehicle_agents.fcu_link import FcuLink, MavMessage
 from vehicle_agents.forwarding import MavlinkForwarder
 from vehicle_agents.hub_failsafe import HubLinkFailsafe
 from vehicle_agents.hub_link import HubLink, VehicleIdInUse
+from vehicle_agents.manual import ManualPilot
 from vehicle_agents.mission_progress import ReachedItems
 from vehicle_agents.missions import mission_number
 from vehicle_agents.outbox import Outbox, SpillFile
@@ -38,7 +39,7 @@ from vehicle_agents.tlog_uploads import TlogUploader
 
 log = logging.getLogger(__name__)
 
-CAPABILITIES = ["telemetry", "commands", "events"]
+CAPABILITIES = ["telemetry", "commands", "events", "manual"]
 
 
 async def run_agent(settings: AgentSettings) -> None:
@@ -80,6 +81,8 @@ async def _run(settings: AgentSettings) -> None:
         link.listeners.append(events.on_message)
         link.state_listeners.append(FcuLinkEvents(events.emit).on_link_change)
         executor = CommandExecutor(link)
+        pilot = ManualPilot(link, executor, events.emit)
+        tasks.create_task(pilot.run())
         hub = HubLink(
             settings.hub,
             token,
@@ -87,6 +90,7 @@ async def _run(settings: AgentSettings) -> None:
             outbox,
             executor.execute,
             live_state=lambda: current_state(link, outbox),
+            on_manual=pilot.on_frame,
         )
         tasks.create_task(publish_telemetry(link, outbox, settings.telemetry_rate_hz))
         tasks.create_task(hub.run())

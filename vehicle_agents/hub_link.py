@@ -25,6 +25,7 @@ from protocol.messages import (
     ErrorReply,
     Hello,
     LiveState,
+    ManualFrame,
     Ping,
     Pong,
     ProtocolError,
@@ -88,6 +89,7 @@ class HubLink:
         on_command: CommandHandler,
         timeouts: HubTimeouts | None = None,
         live_state: Callable[[], VehicleState] | None = None,
+        on_manual: Callable[[ManualFrame], None] | None = None,
     ) -> None:
         self.url = url
         self._token = token
@@ -96,6 +98,7 @@ class HubLink:
         self._on_command = on_command
         self.timeouts = timeouts or HubTimeouts()
         self._live_state = live_state
+        self._on_manual = on_manual
         self.connected = asyncio.Event()
         self.disconnected = asyncio.Event()
         self.disconnected.set()
@@ -240,6 +243,10 @@ class HubLink:
                 # The hub asks whether this agent is still there (another agent wants
                 # its vehicle id): answered at once, ahead of the outbox.
                 tasks.create_task(websocket.send(encode(Pong(nonce=nonce))))
+            case ManualFrame():
+                # Handled at once, never queued: the newest stick position is the one flown.
+                if self._on_manual is not None:
+                    self._on_manual(message)
             case Welcome():
                 log.warning("unexpected second welcome from hub")
 

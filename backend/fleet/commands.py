@@ -16,6 +16,7 @@ from protocol.messages import (
     Command,
     CommandOutcome,
     CommandRequest,
+    Message,
     MissionDownloadCommand,
     MissionUploadCommand,
     ParamListCommand,
@@ -24,7 +25,7 @@ from protocol.messages import (
 
 log = logging.getLogger(__name__)
 
-SendFrame = Callable[[CommandRequest], Awaitable[None]]
+SendFrame = Callable[[Message], Awaitable[None]]
 
 # The hub waits this much longer than it lets the agent try, so the agent's own
 # timeout report (which names the flight controller) arrives before the hub gives up.
@@ -56,6 +57,10 @@ class AgentChannel:
             ) from None
         finally:
             self._pending.pop(request_id, None)
+
+    async def send_frame(self, frame: Message) -> None:
+        """A frame that expects no answer (manual input)."""
+        await self._send(frame)
 
     def resolve(self, request_id: str, outcome: CommandOutcome) -> bool:
         future = self._pending.get(request_id)

@@ -16,6 +16,7 @@ from backend.errors import Forbidden
 from backend.fleet.commands import AgentChannel
 from backend.realtime.agent_admission import Clash, judge
 from backend.realtime.bus import Topic
+from backend.realtime.client_feed import announce_lease
 from backend.realtime.collaborators import GatewayServices
 from backend.realtime.frames import FrameTooLarge, PeerConnection
 from backend.storage.records import LostFrames, StoredEvent, TelemetryEnvelope
@@ -44,6 +45,10 @@ from protocol.messages import (
 log = logging.getLogger(__name__)
 
 HELLO_TIMEOUT_S = 10.0
+
+
+# An agent's "manual" event at WARNING or worse: browser control has ended on the vehicle.
+MANUAL_ENDED_SEVERITY = 4
 
 
 class AgentSession(PeerConnection):
@@ -308,6 +313,8 @@ class AgentSession(PeerConnection):
                 )
                 await self.hub.bus.publish(Topic.STORAGE, hello.vehicle_id, stored)
                 await self.hub.publish_event(stored)
+                if message.kind == "manual" and (message.severity or 7) <= MANUAL_ENDED_SEVERITY:
+                    await self._end_manual_control(hello.vehicle_id, message.text)
             case Unavailable():
                 log.warning(
                     "%s no longer has %s %d-%d: %s",
@@ -337,6 +344,13 @@ class AgentSession(PeerConnection):
                 await self.reject(
                     ErrorReply(code="unexpected_message", message="hello was already received")
                 )
+
+    async def _end_manual_control(self, vehicle_id: str, why: str) -> None:
+        """The agent ended browser control (deadman hold, the RC pilot's mode change):
+        the lease goes with it, so the stream cannot quietly take the vehicle back."""
+        if self.hub.leases.revoke(vehicle_id) is not None:
+            log.info("manual-control lease of %s ended: %s", vehicle_id, why)
+            await announce_lease(self.hub, vehicle_id, why)
 
     async def _ingest(self, hello: Hello, telemetry: Telemetry) -> None:
         hub = self.hub

@@ -10,6 +10,7 @@ import time
 from starlette.requests import HTTPConnection
 from starlette.websockets import WebSocket, WebSocketDisconnect
 
+from backend.audit import AuditAction, principal_audit_entry
 from backend.auth.credentials import presented_principal, presented_token
 from backend.auth.policy import (
     CLIENT_MESSAGE_PERMISSIONS,
@@ -17,15 +18,21 @@ from backend.auth.policy import (
     authorize,
     authorize_message,
 )
-from backend.errors import Forbidden
+from backend.control.lease import LeaseRefused
+from backend.errors import Forbidden, VehicleNotFound
 from backend.realtime.bus import LatestSubscription, Topic
-from backend.realtime.collaborators import FeedServices
+from backend.realtime.collaborators import FeedServices, GatewayServices
 from backend.realtime.frames import FrameTooLarge, PeerConnection
 from backend.realtime.live_events import EventSubscription
+from backend.realtime.manual_relay import ManualRelay
 from protocol.messages import (
     CloseCode,
+    ControlRequest,
     ErrorReply,
     FleetSnapshot,
+    LeaseState,
+    ManualFrame,
+    ManualInput,
     Ping,
     Pong,
     ProtocolError,
@@ -87,6 +94,7 @@ class ClientFeed(PeerConnection):
         self.hub = hub
         self.user = ""
         self.token_id: int | None = None
+        self._manual = ManualRelay(hub.registry)
 
     async def serve(self) -> None:
         await self.websocket.accept()
@@ -128,12 +136,14 @@ class ClientFeed(PeerConnection):
             async with asyncio.TaskGroup() as tasks:
                 pusher = tasks.create_task(self._push(updates, sent))
                 event_pusher = tasks.create_task(self._push_events(events))
+                relay = tasks.create_task(self._manual.run())
                 expiry = tasks.create_task(
                     self._end_at_expiry(principal.expires_at, pusher, event_pusher)
                 )
                 await self._listen()
                 pusher.cancel()
                 event_pusher.cancel()
+                relay.cancel()
                 expiry.cancel()
         except* FrameTooLarge as group:
             log.warning("closing client %s: %s", self.peer, group.exceptions[0])
@@ -185,3 +195,61 @@ class ClientFeed(PeerConnection):
                 continue
             if isinstance(message, Ping):
                 await self.send(Pong(nonce=message.nonce))
+            elif isinstance(message, ManualInput):
+                await self._manual_input(message)
+            elif isinstance(message, ControlRequest):
+                await self._control(message)
+
+    async def _manual_input(self, message: ManualInput) -> None:
+        """Forward the lease holder's input, newest first; refuse and count the rest."""
+        try:
+            self.hub.leases.admit(message.vehicle_id, self.user, message.seq)
+        except LeaseRefused as refusal:
+            # Never forwarded. Old or too-fast frames are a client's jitter: counted
+            # silently; input without the lease is said, since the pilot must know.
+            if "lease" in refusal.message:
+                await self.send(ErrorReply(code="forbidden", message=refusal.message))
+            return
+        self._manual.put(message.vehicle_id, ManualFrame(seq=message.seq, axes=message.axes))
+
+    async def _control(self, message: ControlRequest) -> None:
+        vehicle_id = message.vehicle_id
+        leases = self.hub.leases
+        outcome, reason = "ok", ""
+        try:
+            if self.hub.registry.get(vehicle_id).channel is None:
+                raise LeaseRefused(f"{vehicle_id} is offline")
+            if message.action == "acquire":
+                leases.acquire(vehicle_id, self.principal)
+            elif message.action == "release":
+                leases.release(vehicle_id, self.principal)
+                reason = f"released by {self.user}"
+            else:
+                leases.revoke(vehicle_id, self.principal)
+                reason = f"revoked by {self.user}"
+        except (Forbidden, VehicleNotFound) as refusal:
+            outcome = "refused"
+            reason = refusal.message
+            await self.send(ErrorReply(code="forbidden", message=reason))
+        await self.hub.record(
+            principal_audit_entry(
+                self.principal,
+                self.peer,
+                AuditAction.CONTROL_LEASE,
+                vehicle_id,
+                outcome,
+                {"action": message.action, "reason": reason},
+            )
+        )
+        if outcome == "ok":
+            await announce_lease(self.hub, vehicle_id, reason)
+
+
+async def announce_lease(hub: FeedServices | GatewayServices, vehicle_id: str, reason: str) -> None:
+    """Tell every dashboard who flies ``vehicle_id`` by hand now."""
+    lease = hub.leases.holder(vehicle_id)
+    state = LeaseState(vehicle_id=vehicle_id, holder=lease.holder if lease else None, reason=reason)
+    for feed in list(hub.client_feeds):
+        if isinstance(feed, ClientFeed):
+            with contextlib.suppress(RuntimeError, OSError, WebSocketDisconnect):
+                await feed.send(state)

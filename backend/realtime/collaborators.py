@@ -11,7 +11,9 @@ from __future__ import annotations
 import asyncio
 from typing import Protocol
 
+from backend.audit import AuditEntry
 from backend.auth.accounts import Accounts
+from backend.control.lease import LeaseBook
 from backend.fleet.commands import CommandDispatcher
 from backend.fleet.registry import FleetRegistry, VehicleRecord
 from backend.realtime.bus import Bus
@@ -64,6 +66,11 @@ class FeedServices(Protocol):
     @property
     def client_feeds(self) -> set[ClientConnection]: ...
 
+    @property
+    def leases(self) -> LeaseBook: ...
+
+    async def record(self, entry: AuditEntry) -> None: ...
+
 
 class GatewayServices(Protocol):
     """What an agent's session uses of the hub."""
@@ -91,6 +98,12 @@ class GatewayServices(Protocol):
 
     @property
     def agent_admissions(self) -> dict[str, asyncio.Lock]: ...
+
+    @property
+    def leases(self) -> LeaseBook: ...
+
+    @property
+    def client_feeds(self) -> set[ClientConnection]: ...
 
     async def store_event(
         self, vehicle_id: str, kind: str, text: str, severity: int | None = None

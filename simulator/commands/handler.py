@@ -61,6 +61,12 @@ class MessageHandler(ArmingAndModes, Navigation, Parameters, Missions, Requests)
             if self._for_us(msg.target_system):
                 self._position_target(msg)
             return self._texts()
+        if kind == "MANUAL_CONTROL":
+            # GCS_MAVLINK::handle_manual_control: only from SYSID_MYGCS, else ignored
+            sender_ok = msg.get_srcSystem() == self.copter.params.sysid_mygcs
+            if self._for_us(msg.target) and sender_ok:
+                self.copter.manual_control(int(msg.x), int(msg.y), int(msg.z), int(msg.r))
+            return []
         # HEARTBEAT, REQUEST_DATA_STREAM (accepted and ignored: streams keep their rates),
         # and anything else the simulator does not model
         return []

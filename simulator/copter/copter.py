@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from typing import Self
 
 from common.geodesy import GeoPoint
@@ -14,8 +15,12 @@ from simulator.copter.landing import ReturnAndLand
 from simulator.copter.modes import Modes
 from simulator.copter.state import BRAKE_DECEL, BRAKE_SPEED_Z
 from simulator.mavconst import CopterMode
-from simulator.physics import Setpoint
+from simulator.physics import Setpoint, wrap_2pi
 from simulator.vehicle import DT, AutoPhase
+
+# ArduCopter's THR_DZ default, 100 of 1000 either side of mid stick.
+THROTTLE_DEADZONE = 0.1
+STICK_LEAD_S = 1.0
 
 
 class Copter(Arming, Modes, Guided, Auto, ReturnAndLand, Failsafes):
@@ -43,6 +48,35 @@ class Copter(Arming, Modes, Guided, Auto, ReturnAndLand, Failsafes):
         self.battery.step(DT, amps, p.sim_batt_drain)
         self._check_battery()
         self._step_sensors()
+
+    def _loiter_sticks(self, sticks: tuple[int, int, int, int]) -> Setpoint:
+        """ModeLoiter with the sticks deflected: pitch and roll ask for a horizontal
+        velocity in the vehicle's frame up to LOIT_SPEED, throttle away from mid (outside
+        a 10 % dead zone) for a climb or descent up to PILOT_SPEED_UP/DN, yaw stick for a
+        turn at up to ATC_SLEW_YAW; the loiter target moves with them."""
+        p = self.params
+        x, y, z, r = (value / 1000.0 for value in sticks)
+        yaw = self.body.yaw
+        forward, right = x * p.loit_speed, y * p.loit_speed
+        vn = forward * math.cos(yaw) - right * math.sin(yaw)
+        ve = forward * math.sin(yaw) + right * math.cos(yaw)
+        # The target leads the vehicle by STICK_LEAD_S at the asked velocity, and the
+        # speed limits are that velocity: the position controller then flies it.
+        self._hold_ne = (self.body.north + vn * STICK_LEAD_S, self.body.east + ve * STICK_LEAD_S)
+        climb = (z - 0.5) / 0.5  # -1 .. 1
+        up, down = p.pilot_speed_up, p.pilot_speed_dn or p.pilot_speed_up
+        if abs(climb) > THROTTLE_DEADZONE:
+            rate = up if climb > 0 else down
+            self._hold_alt = max(0.0, self.body.alt + climb * rate * STICK_LEAD_S)
+        self.body.yaw = wrap_2pi(yaw + r * p.yaw_rate_max * DT)
+        return Setpoint(
+            self._hold_ne,
+            self._hold_alt,
+            speed_xy=max(p.loit_speed * math.hypot(x, y), 0.1),
+            speed_up=up,
+            speed_down=down,
+            face_travel=False,
+        )
 
     def _control(self) -> Setpoint | None:
         """This step's demand on the position controller; None for no thrust."""
@@ -92,5 +126,7 @@ class Copter(Arming, Modes, Guided, Auto, ReturnAndLand, Failsafes):
                 speed_down=self._speed_down,
             )
         # LOITER, and AUTO without a mission (only reachable by a forced arm): hold
+        if self.mode is CopterMode.LOITER and (sticks := self.overridden_sticks()) is not None:
+            return self._loiter_sticks(sticks)
         speed = self.params.wpnav_speed
         return Setpoint(self._hold_ne, self._hold_alt, speed_xy=speed, face_travel=False)

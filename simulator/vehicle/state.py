@@ -89,6 +89,9 @@ class VehicleState(ABC):
 
         self._steps = 0
         self._target_time = 0.0
+        # The newest MANUAL_CONTROL from the GCS (x, y, z, r) and when it came (sim s).
+        self._sticks: tuple[int, int, int, int] | None = None
+        self._sticks_at = 0.0
         self._texts: list[StatusText] = []
         self._low_volt_s = 0.0
         self._auto_phase = AutoPhase.IDLE
@@ -334,6 +337,20 @@ class VehicleState(ABC):
     def param_bytewise(self) -> bool:
         """Integer parameters travel bytewise (PX4), not cast to float (ArduPilot)."""
         return False
+
+    def manual_control(self, x: int, y: int, z: int, r: int) -> None:
+        """MANUAL_CONTROL from the GCS, already checked against SYSID_MYGCS: an RC
+        override of pitch (x), roll (y), throttle (z, 0..1000) and yaw (r)."""
+        self._sticks = (x, y, z, r)
+        self._sticks_at = self.time_s
+
+    def overridden_sticks(self) -> tuple[int, int, int, int] | None:
+        """The GCS's sticks while fresh: RC_OVERRIDE_TIME after the last one they lapse
+        and the transmitter's (centred, here) rule again; a negative time never lapses."""
+        timeout = self.params.rc_override_time
+        if self._sticks is None or (0 <= timeout < self.time_s - self._sticks_at):
+            return None
+        return self._sticks
 
     def position_frame_ok(self, frame: int) -> bool:
         """Whether a COMMAND_INT reposition or set-home in ``frame`` is taken at all

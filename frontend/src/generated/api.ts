@@ -848,7 +848,7 @@ export interface components {
          * @description Every action the audit log records (the OpenAPI document lists them as an enum).
          * @enum {string}
          */
-        AuditAction: "login" | "logout" | "token.create" | "token.revoke" | "user.create" | "user.update" | "agent_token.create" | "agent_token.revoke" | "rails.update" | "rails.clear" | "command" | "denied";
+        AuditAction: "login" | "logout" | "token.create" | "token.revoke" | "user.create" | "user.update" | "agent_token.create" | "agent_token.revoke" | "rails.update" | "rails.clear" | "command" | "control.lease" | "denied";
         /** AuditPage */
         AuditPage: {
             /** Entries */

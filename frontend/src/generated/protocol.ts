@@ -15,9 +15,10 @@
  */
 export type AnyMessage = AgentToHub | HubToAgent | ClientToHub | HubToClient;
 export type AgentToHub = Hello | Telemetry | LiveState | Event | CommandResult | Unavailable | Pong;
-export type HubToAgent = Welcome | CommandRequest | Ack | Resend | ErrorReply | Ping;
-export type ClientToHub = Ping;
-export type HubToClient = FleetSnapshot | VehicleUpdate | EventBatch | Pong | ErrorReply;
+export type HubToAgent = Welcome | CommandRequest | Ack | Resend | ErrorReply | Ping | ManualFrame;
+export type ClientToHub = Ping | ControlRequest | ManualInput;
+export type HubToClient =
+  FleetSnapshot | VehicleUpdate | EventBatch | Pong | ErrorReply | LeaseState;
 
 /**
  * First frame from an agent: who it is and what it can do.
@@ -188,6 +189,7 @@ export interface Event {
     | "failsafe"
     | "mission"
     | "id_clash"
+    | "manual"
     | "upload";
   /**
    * MAV_SEVERITY: 0 emergency .. 7 debug
@@ -455,6 +457,59 @@ export interface Ping {
   type: "ping";
   nonce: string | null;
 }
+/**
+ * Stick input relayed to the agent; the agent holds the vehicle when these stop.
+ */
+export interface ManualFrame {
+  type: "manual";
+  seq: number;
+  axes: ManualAxes;
+}
+export interface ManualAxes {
+  /**
+   * pitch: forward positive, -1000..1000
+   */
+  x: number;
+  /**
+   * roll: right positive, -1000..1000
+   */
+  y: number;
+  /**
+   * throttle or climb: 0..1000, 500 mid
+   */
+  z: number;
+  /**
+   * yaw: clockwise positive, -1000..1000
+   */
+  r: number;
+  /**
+   * MANUAL_CONTROL buttons
+   */
+  buttons: number;
+}
+/**
+ * Ask for (or give back) the manual-control lease of one vehicle. Needs the
+ * 'command' permission; one pilot per vehicle.
+ */
+export interface ControlRequest {
+  type: "control";
+  vehicle_id: string;
+  /**
+   * revoke: an admin ends whoever's lease
+   */
+  action: "acquire" | "release" | "revoke";
+}
+/**
+ * One frame of stick input, sent by the lease holder at 25 Hz or more. Frames from
+ * a client without the lease, with a seq not newer than the last, or faster than
+ * 100 Hz are refused and never forwarded; the newest frame wins.
+ */
+export interface ManualInput {
+  type: "manual";
+  vehicle_id: string;
+  seq: number;
+  axes: ManualAxes;
+}
 export interface FleetSnapshot {
   type: "fleet";
   /**
@@ -550,6 +605,15 @@ export interface LiveEvent {
    * how many identical events (same vehicle, kind, severity and text) this one stands for: repeats within one batch are sent once; time is the newest
    */
   repeat: number;
+}
+/**
+ * Who flies a vehicle by hand now (holder None: nobody), sent to every client.
+ */
+export interface LeaseState {
+  type: "lease";
+  vehicle_id: string;
+  holder: string | null;
+  reason: string;
 }
 
 export const PROTOCOL_VERSION = 1;

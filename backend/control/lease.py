@@ -1,0 +1,115 @@
+"""The manual-control lease: one pilot per vehicle, renewed by the input stream.
+
+Pure bookkeeping with an injected clock; the live feed applies it and audits the
+changes. The hub forwards a manual-input frame only when ``admit`` says so: the lease
+holder's own frame, newer than the last (newest wins), at most ``max_rate_hz``.
+Leases live only in memory, so a hub restart leaves none active.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+from backend.auth.policy import Permission, Principal, authorize
+from backend.errors import Forbidden
+
+
+@dataclass(frozen=True)
+class LeaseLimits:
+    """How long a lease lasts without input, and how fast input may come."""
+
+    expiry_s: float = 2.0
+    max_rate_hz: float = 100.0
+
+
+class LeaseRefused(Forbidden):
+    """The lease (or a frame under it) was refused; the message says why."""
+
+
+@dataclass
+class Lease:
+    vehicle_id: str
+    holder: str
+    token_id: int | None
+    expires_at: float  # on the book's clock
+    last_seq: int = -1
+    last_input_at: float | None = None
+
+
+@dataclass
+class RefusalCounts:
+    """Frames refused, by reason; never forwarded."""
+
+    no_lease: int = 0
+    old_seq: int = 0
+    too_fast: int = 0
+
+    def total(self) -> int:
+        return self.no_lease + self.old_seq + self.too_fast
+
+
+@dataclass
+class LeaseBook:
+    limits: LeaseLimits = field(default_factory=LeaseLimits)
+    clock: Callable[[], float] = time.monotonic
+    refused: RefusalCounts = field(default_factory=RefusalCounts)
+    _leases: dict[str, Lease] = field(default_factory=dict)
+
+    def holder(self, vehicle_id: str) -> Lease | None:
+        lease = self._leases.get(vehicle_id)
+        if lease is not None and self.clock() >= lease.expires_at:
+            del self._leases[vehicle_id]
+            return None
+        return lease
+
+    def acquire(self, vehicle_id: str, principal: Principal) -> Lease:
+        """Grant the lease to an operator; the holder asking again just renews it."""
+        authorize(principal, Permission.COMMAND, vehicle_id)
+        if principal.is_agent:
+            raise LeaseRefused("an agent cannot fly a vehicle by hand")
+        lease = self.holder(vehicle_id)
+        if lease is not None and lease.holder != principal.name:
+            raise LeaseRefused(f"{vehicle_id} is flown by hand by {lease.holder}")
+        if lease is None:
+            lease = Lease(vehicle_id, principal.name, principal.token_id, 0.0)
+            self._leases[vehicle_id] = lease
+        lease.expires_at = self.clock() + self.limits.expiry_s
+        return lease
+
+    def release(self, vehicle_id: str, principal: Principal) -> Lease:
+        lease = self.holder(vehicle_id)
+        if lease is None or lease.holder != principal.name:
+            raise LeaseRefused(f"{principal.name} does not hold the lease of {vehicle_id}")
+        del self._leases[vehicle_id]
+        return lease
+
+    def revoke(self, vehicle_id: str, principal: Principal | None = None) -> Lease | None:
+        """End a lease whoever holds it: an admin (``principal``), or the hub itself
+        (an RC mode change, the vehicle going offline) when ``principal`` is None."""
+        if principal is not None:
+            authorize(principal, Permission.ADMIN, vehicle_id)
+        lease = self.holder(vehicle_id)
+        self._leases.pop(vehicle_id, None)
+        return lease
+
+    def admit(self, vehicle_id: str, user: str, seq: int) -> Lease:
+        """Whether a manual-input frame may be forwarded; renews the lease if so."""
+        lease = self.holder(vehicle_id)
+        if lease is None or lease.holder != user:
+            self.refused.no_lease += 1
+            raise LeaseRefused(f"{user} does not hold the manual-control lease of {vehicle_id}")
+        if seq <= lease.last_seq:
+            self.refused.old_seq += 1
+            raise LeaseRefused(f"seq: {seq} is not newer than {lease.last_seq}")
+        now = self.clock()
+        if lease.last_input_at is not None and now - lease.last_input_at < (
+            1.0 / self.limits.max_rate_hz
+        ):
+            self.refused.too_fast += 1
+            raise LeaseRefused(f"input faster than {self.limits.max_rate_hz:.0f} Hz")
+        lease.last_seq = seq
+        lease.last_input_at = now
+        lease.expires_at = now + self.limits.expiry_s
+        return lease

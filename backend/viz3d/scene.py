@@ -16,6 +16,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import numpy.typing as npt
 import viser
+from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from backend.viz3d.colours import rgb, vehicle_colour
 from backend.viz3d.frame import SceneFrame, Vector, attitude_wxyz
@@ -31,7 +32,10 @@ _BODY_FACES = np.array([[0, 1, 2], [0, 2, 3], [0, 4, 1], [0, 3, 4], [1, 4, 2], [
 # does not fill with copies of one point.
 TRAIL_STEP_M = 0.25
 MAX_TRAIL_POINTS = 2_000
-NOT_MISSION_POSITIONS = frozenset({20, 21, 22})  # RTL, LAND and TAKEOFF fly from where they are
+# RTL, LAND and TAKEOFF fly from where they are.
+NOT_MISSION_POSITIONS = frozenset(
+    {mavlink2.MAV_CMD_NAV_RETURN_TO_LAUNCH, mavlink2.MAV_CMD_NAV_LAND, mavlink2.MAV_CMD_NAV_TAKEOFF}
+)
 
 
 @dataclass(frozen=True)
@@ -221,7 +225,11 @@ class FleetScene:
             for item in items:
                 if item.command in NOT_MISSION_POSITIONS or (item.lat == 0 and item.lon == 0):
                     continue
-                alt = item.alt if item.frame == 0 else (home_alt or 0.0) + item.alt
+                alt = (
+                    item.alt
+                    if item.frame == mavlink2.MAV_FRAME_GLOBAL
+                    else (home_alt or 0.0) + item.alt
+                )
                 point = self.frame.place(item.lat, item.lon, alt)
                 if point is not None:
                     waypoints.append(point)

@@ -458,6 +458,28 @@ export interface paths {
         patch?: never;
         trace?: never;
     };
+    "/api/v1/surveys/preview": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        get?: never;
+        put?: never;
+        /**
+         * Preview Survey
+         * @description Plan a survey and split it across the chosen drones, without uploading anything:
+         *     the camera's numbers, the coverage of the photos' footprints, and per drone its
+         *     mission, its times and the safety rails' check of that mission.
+         */
+        post: operations["preview_survey_api_v1_surveys_preview_post"];
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
     "/api/v1/telemetry/series": {
         parameters: {
             query?: never;
@@ -949,6 +971,29 @@ export interface components {
              */
             client_secret?: string | null;
         };
+        /** CameraModel */
+        CameraModel: {
+            /** Sensor Width Mm */
+            sensor_width_mm: number;
+            /** Sensor Height Mm */
+            sensor_height_mm: number;
+            /** Image Width Px */
+            image_width_px: number;
+            /** Image Height Px */
+            image_height_px: number;
+            /** Focal Length Mm */
+            focal_length_mm: number;
+            /**
+             * Landscape
+             * @default true
+             */
+            landscape: boolean;
+            /**
+             * Distance Trigger
+             * @default true
+             */
+            distance_trigger: boolean;
+        };
         /** ChangeSpeedCommand */
         ChangeSpeedCommand: {
             /**
@@ -1137,6 +1182,19 @@ export interface components {
             vehicle_id: string;
             /** Samples */
             samples: components["schemas"]["Sample"][];
+        };
+        /** GeoJsonPolygon */
+        GeoJsonPolygon: {
+            /**
+             * Type
+             * @constant
+             */
+            type: "Polygon";
+            /**
+             * Coordinates
+             * @description [longitude, latitude] rings: the outline first, then holes (no-fly areas)
+             */
+            coordinates: number[][][];
         };
         /** GeoPointModel */
         GeoPointModel: {
@@ -1695,6 +1753,126 @@ export interface components {
              * @description A mode name the vehicle lists.
              */
             mode: string;
+        };
+        /** SurveyPart */
+        SurveyPart: {
+            /** Vehicle Id */
+            vehicle_id: string;
+            mission: components["schemas"]["Mission"];
+            /** Lanes */
+            lanes: number;
+            /** Photo Count */
+            photo_count: number;
+            /** Path Length M */
+            path_length_m: number;
+            /** Transit S */
+            transit_s: number;
+            /** Survey S */
+            survey_s: number;
+            /** Home S */
+            home_s: number;
+            /**
+             * Total S
+             * @description Transit to the part, the part, and the way home
+             */
+            total_s: number;
+            /**
+             * Lane Paths
+             * @description Each lane's [[lat, lon], [lat, lon]] from start to end, for the map
+             */
+            lane_paths: number[][][];
+            check: components["schemas"]["MissionCheckResponse"];
+        };
+        /** SurveyPreview */
+        SurveyPreview: {
+            /**
+             * Ok
+             * @description True when every part's mission passes the safety rails
+             */
+            ok: boolean;
+            /** Altitude M */
+            altitude_m: number;
+            /** Gsd Cm */
+            gsd_cm: number;
+            /** Footprint Side M */
+            footprint_side_m: number;
+            /** Footprint Frontal M */
+            footprint_frontal_m: number;
+            /** Lane Spacing M */
+            lane_spacing_m: number;
+            /** Trigger Distance M */
+            trigger_distance_m: number;
+            /** Angle Deg */
+            angle_deg: number;
+            /** Area M2 */
+            area_m2: number;
+            /**
+             * Coverage Pct
+             * @description Area (holes excluded) seen by the photos' footprints
+             */
+            coverage_pct: number;
+            /**
+             * Coverage At Overlaps Pct
+             * @description Area seen with at least the requested side and front overlaps
+             */
+            coverage_at_overlaps_pct: number;
+            /** Photo Count */
+            photo_count: number;
+            /** Lanes */
+            lanes: number;
+            /** Parts */
+            parts: components["schemas"]["SurveyPart"][];
+        };
+        /** SurveyRequest */
+        SurveyRequest: {
+            area: components["schemas"]["GeoJsonPolygon"];
+            /**
+             * Camera
+             * @description A preset's name (e.g. sony_a6000_16mm) or the camera's figures
+             */
+            camera: string | components["schemas"]["CameraModel"];
+            /**
+             * Altitude M
+             * @description Above home; or give gsd_cm
+             */
+            altitude_m?: number | null;
+            /**
+             * Gsd Cm
+             * @description cm per pixel; or give altitude_m
+             */
+            gsd_cm?: number | null;
+            /**
+             * Side Overlap Pct
+             * @default 70
+             */
+            side_overlap_pct: number;
+            /**
+             * Front Overlap Pct
+             * @default 80
+             */
+            front_overlap_pct: number;
+            /**
+             * Angle Deg
+             * @description Lane heading; null chooses the fastest
+             */
+            angle_deg?: number | null;
+            /**
+             * Speed Ms
+             * @default 10
+             */
+            speed_ms: number;
+            /**
+             * Turnaround M
+             * @default 10
+             */
+            turnaround_m: number;
+            /**
+             * Hover And Capture
+             * @default false
+             */
+            hover_and_capture: boolean;
+            /** Vehicle Ids */
+            vehicle_ids: string[];
         };
         /**
          * TakeoffCommand
@@ -4144,6 +4322,77 @@ export interface operations {
             };
             /** @description No such vehicle, flight, log, user or token (named in the message) */
             404: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description The request body is over the size limit */
+            413: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed) */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Unprocessable"];
+                };
+            };
+            /** @description The database is unavailable; try again after Retry-After seconds */
+            503: {
+                headers: {
+                    /** @description Seconds to wait */
+                    "Retry-After"?: number;
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+        };
+    };
+    preview_survey_api_v1_surveys_preview_post: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        requestBody: {
+            content: {
+                "application/json": components["schemas"]["SurveyRequest"];
+            };
+        };
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["SurveyPreview"];
+                };
+            };
+            /** @description Not authenticated */
+            401: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description Needs the 'command' permission */
+            403: {
                 headers: {
                     [name: string]: unknown;
                 };

@@ -1,0 +1,311 @@
+"""The lane planner: boustrophedon lanes over a polygon in a local metric frame.
+
+Works on shapely 2 geometry in metres (east, north) of a tangent plane at the area's centre
+(common.geodesy.LocalFrame), so an area across a UTM zone boundary, or the antimeridian,
+needs nothing special.
+
+Lanes run along the grid angle. Each lane covers a strip one lane spacing wide; its ends
+are where the area's part of that strip begins and ends (not where the centre line meets the
+border), so a slanted edge is still covered. A lane is split where it would cross a hole.
+Lanes are grouped into cells (boustrophedon decomposition: a cell goes on while each row
+has exactly one segment overlapping the one before), each cell is flown back and forth,
+and the cells are chained nearest first, so a concave area is not crossed by long detours.
+Each lane is lengthened to a whole number of trigger distances, centred on the strip, and
+gets a turnaround (outside the area) at both ends.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import shapely
+from shapely import affinity
+from shapely.geometry import LineString, MultiPolygon, Polygon, box
+from shapely.geometry.base import BaseGeometry
+from shapely.validation import explain_validity
+
+from backend.missions.survey.camera import CameraCalc
+
+MAX_VERTICES = 10_000
+DEFAULT_TURNAROUND_M = 10.0  # QGC's default for multirotors
+
+
+class PlanError(ValueError):
+    """An area or setting no survey can be planned for; the message says what to change."""
+
+
+@dataclass(frozen=True, slots=True)
+class Grid:
+    """A fleet's common lane grid: lanes at y0 + k * spacing and photos at x0 + j * trigger
+    distance, in the frame rotated by the grid angle about (cx, cy)."""
+
+    cx: float
+    cy: float
+    x0: float
+    y0: float
+
+
+@dataclass(frozen=True, slots=True)
+class Lane:
+    """One lane in the local frame: photos are taken from start to end."""
+
+    start: tuple[float, float]
+    end: tuple[float, float]
+    photos: tuple[tuple[float, float], ...]
+
+    @property
+    def length_m(self) -> float:
+        return math.dist(self.start, self.end)
+
+
+@dataclass(frozen=True, slots=True)
+class LanePlan:
+    lanes: tuple[Lane, ...]
+    path: tuple[tuple[float, float], ...]  # turnaround-in, start, end, turnaround-out per lane
+    angle_deg: float
+    lane_spacing_m: float
+    trigger_distance_m: float
+    turnaround_m: float
+
+    @property
+    def path_length_m(self) -> float:
+        return sum(math.dist(a, b) for a, b in zip(self.path, self.path[1:], strict=False))
+
+    @property
+    def photo_count(self) -> int:
+        return sum(len(lane.photos) for lane in self.lanes)
+
+
+def validate_area(area: Polygon) -> Polygon:
+    """The area as a valid polygon, or a PlanError saying what is wrong with it."""
+    if not isinstance(area, Polygon):
+        raise PlanError("the area must be one polygon")
+    vertices = len(area.exterior.coords) + sum(len(r.coords) for r in area.interiors)
+    if vertices > MAX_VERTICES:
+        raise PlanError(f"the area has {vertices} vertices; at most {MAX_VERTICES} are allowed")
+    if len(area.exterior.coords) < 4:
+        raise PlanError("the area needs at least 3 distinct corners")
+    outline = Polygon(area.exterior)
+    holes = [Polygon(ring) for ring in area.interiors]
+    if (
+        holes
+        and outline.is_valid
+        and all(h.is_valid for h in holes)
+        and outline.difference(shapely.union_all(holes)).area <= 1e-9 * max(outline.area, 1.0)
+    ):
+        raise PlanError("the holes cover the whole area; leave some of it to survey")
+    if not area.is_valid:
+        # e.g. "Self-intersection[12.5 40.1]": where it crosses, in the caller's frame.
+        raise PlanError(f"the area is not a valid polygon: {explain_validity(area)}")
+    if area.area <= 0:
+        raise PlanError("the area is empty (its holes cover it all, or it has no extent)")
+    return area
+
+
+def lower_bound_m(area: Polygon, lane_spacing_m: float, turnaround_m: float, n_rows: int) -> float:
+    """The shortest path any lane plan at this spacing can have.
+
+    Sweeping a strip of width `lane_spacing_m` over the area needs at least area/spacing of
+    lanes; going from each row to the next needs at least one spacing; and every lane end
+    has its turnaround. Path lengths are checked against this bound.
+    """
+    return (
+        area.area / lane_spacing_m + max(n_rows - 1, 0) * lane_spacing_m + 2 * n_rows * turnaround_m
+    )
+
+
+def _rows(miny: float, maxy: float, spacing: float, grid_y: float | None) -> list[float]:
+    """The lanes' y, each covering a strip one spacing wide: centred on the area, or on a
+    fleet's common grid so that parts' lanes line up."""
+    if grid_y is None:
+        rows = max(1, math.ceil((maxy - miny) / spacing - 1e-9))
+        y0 = (miny + maxy) / 2 - (rows - 1) * spacing / 2
+        return [y0 + i * spacing for i in range(rows)]
+    first = math.floor((miny - grid_y) / spacing + 0.5 + 1e-6)
+    last = max(first, math.ceil((maxy - grid_y) / spacing - 0.5 - 1e-6))
+    return [grid_y + k * spacing for k in range(first, last + 1)]
+
+
+def _segments(area: Polygon, spacing: float, ys: list[float]) -> list[list[tuple[float, float]]]:
+    """Per row (from south to north in the rotated frame), the lanes' x extents."""
+    minx, _, maxx, _ = area.bounds
+    strips = [box(minx - 1, y - spacing / 2, maxx + 1, y + spacing / 2) for y in ys]
+    pieces = shapely.intersection(strips, area)
+    holes = [Polygon(ring) for ring in area.interiors]
+    out: list[list[tuple[float, float]]] = []
+    for y, piece in zip(ys, pieces, strict=True):
+        parts = [
+            p for p in getattr(piece, "geoms", [piece]) if isinstance(p, Polygon) and p.area > 1e-6
+        ]
+        row: list[tuple[float, float]] = []
+        for part in parts:
+            x0, _, x1, _ = part.bounds
+            extents = [(x0, x1)]
+            for hole in holes:
+                if hole.intersects(LineString([(x0, y), (x1, y)])):
+                    # No lane crosses a hole: cut the lane where the hole meets its strip.
+                    hx0, _, hx1, _ = hole.intersection(part.envelope).bounds
+                    extents = [
+                        seg
+                        for a, b in extents
+                        for seg in ((a, min(b, hx0)), (max(a, hx1), b))
+                        if seg[1] - seg[0] > 1e-6
+                    ]
+            row.extend(extents)
+        out.append(sorted(row))
+    return out
+
+
+def _cells(rows: list[list[tuple[float, float]]]) -> list[list[tuple[int, float, float]]]:
+    """Boustrophedon cells: runs of rows where one segment continues exactly one other."""
+    cells: list[list[tuple[int, float, float]]] = []
+    open_cells: dict[tuple[float, float], int] = {}
+    prev: list[tuple[float, float]] = []
+    for r, row in enumerate(rows):
+        nxt: dict[tuple[float, float], int] = {}
+        for seg in row:
+            above = [p for p in prev if p[0] < seg[1] and seg[0] < p[1]]
+            below = [s for s in row if above and s[0] < above[0][1] and above[0][0] < s[1]]
+            if len(above) == 1 and len(below) == 1 and above[0] in open_cells:
+                idx = open_cells[above[0]]
+                # A cell also ends when the next row's segment of another cell would need it.
+                others = [p for p in rows[r - 1] if p[0] < seg[1] and seg[0] < p[1]]
+                if len(others) == 1:
+                    cells[idx].append((r, *seg))
+                    nxt[seg] = idx
+                    continue
+            cells.append([(r, *seg)])
+            nxt[seg] = len(cells) - 1
+        open_cells = nxt
+        prev = row
+    return cells
+
+
+def _pad(a: float, b: float, y: float, pad: float, holes: BaseGeometry) -> tuple[float, float]:
+    """Lengthen [a, b] by `pad` to a whole number of trigger distances: on both sides, or
+    on the one side that does not run into a hole (or not at all if both do)."""
+    for left, right in ((pad / 2, pad / 2), (0.0, pad), (pad, 0.0)):
+        line = LineString([(a - left, y), (b + right, y)])
+        if holes.is_empty or line.intersection(holes).length < 1e-6:
+            return a - left, b + right
+    return a, b
+
+
+def plan_lanes(
+    area: Polygon,
+    calc: CameraCalc,
+    *,
+    angle_deg: float = 0.0,
+    turnaround_m: float = DEFAULT_TURNAROUND_M,
+    start: tuple[float, float] | None = None,
+    whole_area: bool = True,
+    grid: Grid | None = None,
+) -> LanePlan:
+    """Lanes over `area` (metres) at `angle_deg` (the lanes' heading, degrees east of north's
+    perpendicular: 0 runs them east-west). With a `grid`, lanes and photos lie on that
+    common grid (a fleet's parts), else the lanes are centred on the area."""
+    area = validate_area(area)
+    spacing, trigger = calc.lane_spacing_m, calc.trigger_distance_m
+    # A fleet's part may be smaller than a photo; the area as a whole may not.
+    if whole_area and area.area < calc.footprint_side_m * calc.footprint_frontal_m:
+        raise PlanError(
+            f"the area ({area.area:.0f} m²) is smaller than one photo's footprint "
+            f"({calc.footprint_side_m:.0f} x {calc.footprint_frontal_m:.0f} m); "
+            "draw a larger area or fly lower"
+        )
+    cx, cy = (grid.cx, grid.cy) if grid else (area.centroid.x, area.centroid.y)
+    rotated = affinity.rotate(area, -angle_deg, origin=(cx, cy))
+    assert isinstance(rotated, Polygon)
+    minx, miny, _, maxy = rotated.bounds
+    ys = _rows(miny, maxy, spacing, grid.y0 if grid else None)
+    rows = _segments(rotated, spacing, ys)
+    cos_a, sin_a = math.cos(math.radians(angle_deg)), math.sin(math.radians(angle_deg))
+
+    def back(x: float, y: float) -> tuple[float, float]:
+        dx, dy = x - cx, y - cy
+        return (cx + dx * cos_a - dy * sin_a, cy + dx * sin_a + dy * cos_a)
+
+    holes = shapely.union_all([Polygon(ring) for ring in rotated.interiors])
+    here = start if start is not None else back(minx, ys[0])
+    remaining = _cells(rows)
+    lanes: list[Lane] = []
+    path: list[tuple[float, float]] = []
+    while remaining:
+        # The next cell is the one whose nearest corner is nearest; fly it from that corner.
+        best = None
+        for i, cell in enumerate(remaining):
+            for rev_rows in (False, True):
+                r, a, b = cell[-1] if rev_rows else cell[0]
+                for rev_x in (False, True):
+                    p = back(b if rev_x else a, ys[r])
+                    d = math.dist(here, p)
+                    if best is None or d < best[0]:
+                        best = (d, i, rev_rows, rev_x)
+        assert best is not None
+        _, i, rev_rows, rev_x = best
+        cell = remaining.pop(i)
+        for k, (r, a, b) in enumerate(reversed(cell) if rev_rows else cell):
+            y = ys[r]
+            if grid is not None and holes.is_empty:
+                # Photos on the common grid: the first within half a trigger distance
+                # past the start, the last within half one before the end.
+                a = grid.x0 + math.floor((a - grid.x0) / trigger + 0.5 + 1e-6) * trigger
+                b = max(a, grid.x0 + math.ceil((b - grid.x0) / trigger - 0.5 - 1e-6) * trigger)
+                shots = round((b - a) / trigger)
+            else:
+                shots = max(1, math.ceil((b - a) / trigger - 1e-9))
+                a, b = _pad(a, b, y, shots * trigger - (b - a), holes)
+            forward = (k % 2 == 0) != rev_x
+            xs, xe = (a, b) if forward else (b, a)
+            step = trigger if forward else -trigger
+            photos = tuple(back(xs + j * step, y) for j in range(shots + 1))
+            turn = turnaround_m if forward else -turnaround_m
+            lane = Lane(back(xs, y), back(xe, y), photos)
+            lanes.append(lane)
+            path.extend([back(xs - turn, y), lane.start, lane.end, back(xe + turn, y)])
+        here = path[-1]
+    return LanePlan(
+        lanes=tuple(lanes),
+        path=tuple(path),
+        angle_deg=angle_deg,
+        lane_spacing_m=spacing,
+        trigger_distance_m=trigger,
+        turnaround_m=turnaround_m,
+    )
+
+
+def footprints(plan: LanePlan, side_m: float, frontal_m: float) -> list[Polygon]:
+    """Each photo's footprint (nadir, camera across the lanes), `side_m` x `frontal_m`."""
+    out = []
+    for lane in plan.lanes:
+        heading = math.degrees(math.atan2(lane.end[1] - lane.start[1], lane.end[0] - lane.start[0]))
+        for x, y in lane.photos:
+            rect = box(x - frontal_m / 2, y - side_m / 2, x + frontal_m / 2, y + side_m / 2)
+            out.append(affinity.rotate(rect, heading, origin=(x, y)))
+    return out
+
+
+def covered_fraction(area: Polygon, shapes: Sequence[Polygon]) -> float:
+    """The share of `area` (holes excluded) that the union of `shapes` covers."""
+    union = shapely.union_all(shapes)
+    return float(area.intersection(union).area) / float(area.area)
+
+
+def coverage(plan: LanePlan, area: Polygon, calc: CameraCalc) -> tuple[float, float]:
+    """(footprint coverage, coverage at the requested overlaps), each 0..1, from the photos.
+
+    The second uses each photo's footprint shrunk to one lane spacing by one trigger
+    distance: if those cover a point, the real footprints around it overlap by at least the
+    requested side and front overlaps.
+    """
+    real = footprints(plan, calc.footprint_side_m, calc.footprint_frontal_m)
+    adjusted = footprints(plan, calc.lane_spacing_m * 1.0001, calc.trigger_distance_m * 1.0001)
+    return covered_fraction(area, real), covered_fraction(area, adjusted)
+
+
+def as_polygon(shape: Polygon | MultiPolygon) -> Polygon:
+    if isinstance(shape, Polygon):
+        return shape
+    raise PlanError("the area must be one polygon, not several")

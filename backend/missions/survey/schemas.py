@@ -1,0 +1,97 @@
+"""REST bodies of the survey preview: what to plan, and the plan with one mission per drone.
+
+Unknown fields, NaN and infinities are rejected, as for the missions' bodies.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Literal
+
+from pydantic import BaseModel, ConfigDict, Field, model_validator
+
+from backend.missions.schemas import Mission, MissionCheckResponse
+from protocol.messages import VehicleId
+
+
+class _Strict(BaseModel):
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
+
+
+class GeoJsonPolygon(_Strict):
+    type: Literal["Polygon"]
+    coordinates: list[list[list[float]]] = Field(
+        min_length=1,
+        description="[longitude, latitude] rings: the outline first, then holes (no-fly areas)",
+    )
+
+
+class CameraModel(_Strict):
+    sensor_width_mm: float = Field(gt=0, le=100)
+    sensor_height_mm: float = Field(gt=0, le=100)
+    image_width_px: int = Field(gt=0, le=100_000)
+    image_height_px: int = Field(gt=0, le=100_000)
+    focal_length_mm: float = Field(gt=0, le=1000)
+    landscape: bool = True
+    distance_trigger: bool = True
+
+
+class SurveyRequest(_Strict):
+    area: GeoJsonPolygon
+    camera: str | CameraModel = Field(
+        description="A preset's name (e.g. sony_a6000_16mm) or the camera's figures"
+    )
+    altitude_m: float | None = Field(default=None, gt=0, description="Above home; or give gsd_cm")
+    gsd_cm: float | None = Field(default=None, gt=0, description="cm per pixel; or give altitude_m")
+    side_overlap_pct: float = Field(default=70.0, ge=0, lt=100)
+    front_overlap_pct: float = Field(default=80.0, ge=0, lt=100)
+    angle_deg: float | None = Field(
+        default=None, ge=0, lt=180, description="Lane heading; null chooses the fastest"
+    )
+    speed_ms: float = Field(default=10.0, gt=0, le=30)
+    turnaround_m: float = Field(default=10.0, ge=0, le=200)
+    hover_and_capture: bool = False
+    vehicle_ids: list[VehicleId] = Field(min_length=1, max_length=64)
+
+    @model_validator(mode="after")
+    def _one_height(self) -> SurveyRequest:
+        if (self.altitude_m is None) == (self.gsd_cm is None):
+            raise ValueError("give exactly one of altitude_m and gsd_cm")
+        return self
+
+
+class SurveyPart(_Strict):
+    vehicle_id: str
+    mission: Mission
+    lanes: int
+    photo_count: int
+    path_length_m: float
+    transit_s: float
+    survey_s: float
+    home_s: float
+    total_s: float = Field(description="Transit to the part, the part, and the way home")
+    lane_paths: list[list[list[float]]] = Field(
+        description="Each lane's [[lat, lon], [lat, lon]] from start to end, for the map"
+    )
+    check: MissionCheckResponse
+
+
+class SurveyPreview(_Strict):
+    ok: bool = Field(description="True when every part's mission passes the safety rails")
+    altitude_m: float
+    gsd_cm: float
+    footprint_side_m: float
+    footprint_frontal_m: float
+    lane_spacing_m: float
+    trigger_distance_m: float
+    angle_deg: float
+    area_m2: float
+    coverage_pct: float = Field(description="Area (holes excluded) seen by the photos' footprints")
+    coverage_at_overlaps_pct: float = Field(
+        description="Area seen with at least the requested side and front overlaps"
+    )
+    photo_count: int
+    lanes: int
+    parts: list[SurveyPart]
+
+    def summary(self) -> dict[str, Any]:
+        return self.model_dump(exclude={"parts"})

@@ -1,0 +1,118 @@
+"""A survey from a request: the camera, the lanes, the fleet split, one mission per drone,
+and the coverage check. Pure: the caller supplies where each drone is and its home, and
+checks each mission against the safety rails."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import shapely
+
+from backend.missions.survey.camera import Camera, CameraCalc, calculate, preset
+from backend.missions.survey.geo import polygon_from_geojson
+from backend.missions.survey.mission import mission_items
+from backend.missions.survey.planner import PlanError, covered_fraction, footprints
+from backend.missions.survey.report import best_angle
+from backend.missions.survey.schemas import SurveyRequest
+from backend.missions.survey.split import Drone, Part, split
+from common.geodesy import GeoPoint, LocalFrame
+from protocol.messages import MissionItem
+
+MAX_TRANSIT_M = 20_000.0  # a drone further than this from the area is not offered a part
+
+
+@dataclass(frozen=True, slots=True)
+class Fleet:
+    vehicle_id: str
+    position: GeoPoint
+    home: GeoPoint
+
+
+@dataclass(frozen=True, slots=True)
+class PlannedPart:
+    part: Part
+    items: list[MissionItem]
+    lane_paths: list[list[list[float]]]
+
+
+@dataclass(frozen=True, slots=True)
+class Survey:
+    calc: CameraCalc
+    angle_deg: float
+    area_m2: float
+    coverage: float
+    coverage_at_overlaps: float
+    parts: list[PlannedPart]
+
+
+def _camera(request: SurveyRequest) -> Camera:
+    if isinstance(request.camera, str):
+        return preset(request.camera)
+    return Camera(name="custom", **request.camera.model_dump())
+
+
+def plan_survey(request: SurveyRequest, fleet: list[Fleet]) -> Survey:
+    calc = calculate(
+        _camera(request),
+        altitude_m=request.altitude_m,
+        gsd_cm=request.gsd_cm,
+        side_overlap_pct=request.side_overlap_pct,
+        front_overlap_pct=request.front_overlap_pct,
+    )
+    area, frame = polygon_from_geojson(request.area.model_dump())
+    drones = []
+    for vehicle in fleet:
+        where = frame.to_local(vehicle.position.lat, vehicle.position.lon)
+        home = frame.to_local(vehicle.home.lat, vehicle.home.lon)
+        distance = shapely.Point(where).distance(area)
+        if distance > MAX_TRANSIT_M:
+            raise PlanError(
+                f"vehicle {vehicle.vehicle_id} is {distance / 1000:.1f} km from the area; "
+                f"choose drones within {MAX_TRANSIT_M / 1000:.0f} km"
+            )
+        drones.append(Drone(vehicle.vehicle_id, where, home, request.speed_ms))
+    angle = request.angle_deg
+    if angle is None:
+        angle = best_angle(area, calc, request.speed_ms, turnaround_m=request.turnaround_m)
+    parts = split(area, calc, drones, angle_deg=angle, turnaround_m=request.turnaround_m)
+    shots = [
+        f
+        for p in parts
+        for f in footprints(p.plan, calc.footprint_side_m, calc.footprint_frontal_m)
+    ]
+    tight = [
+        f
+        for p in parts
+        for f in footprints(p.plan, calc.lane_spacing_m * 1.0001, calc.trigger_distance_m * 1.0001)
+    ]
+    planned = [
+        PlannedPart(
+            part=p,
+            items=mission_items(
+                p.plan,
+                frame,
+                calc.altitude_m,
+                per_photo=not calc.camera.distance_trigger,
+                hover=request.hover_and_capture,
+            ),
+            lane_paths=[_latlon(frame, [lane.start, lane.end]) for lane in p.plan.lanes],
+        )
+        for p in parts
+    ]
+    return Survey(
+        calc=calc,
+        angle_deg=angle,
+        area_m2=float(area.area),
+        coverage=covered_fraction(area, shots),
+        coverage_at_overlaps=covered_fraction(area, tight),
+        parts=planned,
+    )
+
+
+def _latlon(frame: LocalFrame, points: list[tuple[float, float]]) -> list[list[float]]:
+    return [list(frame.to_geo(x, y)) for x, y in points]
+
+
+def percent(fraction: float) -> float:
+    return math.floor(fraction * 1e6) / 1e4

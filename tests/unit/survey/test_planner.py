@@ -1,0 +1,201 @@
+"""The lane planner on convex, L, U, holed, thin and zone-straddling areas: the photos'
+footprints cover the area at the requested overlaps, lanes keep out of holes, and bad areas
+are refused with a message saying what to change."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+from pymavlink.dialects.v20 import ardupilotmega as mavlink2
+from shapely import affinity
+from shapely.geometry import LineString, Polygon, box
+
+from backend.missions.survey.camera import calculate, preset
+from backend.missions.survey.geo import polygon_from_geojson
+from backend.missions.survey.mission import mission_items
+from backend.missions.survey.planner import (
+    PlanError,
+    coverage,
+    lower_bound_m,
+    plan_lanes,
+)
+from backend.missions.survey.report import best_angle, flight_time_s
+
+CALC = calculate(
+    preset("sony_a6000_16mm"), altitude_m=100, side_overlap_pct=70, front_overlap_pct=80
+)
+
+SHAPES = {
+    "convex": Polygon([(0, 0), (900, -100), (1000, 700), (200, 900)]),
+    "L": Polygon([(0, 0), (600, 0), (600, 200), (200, 200), (200, 600), (0, 600)]),
+    "U": Polygon(
+        [(0, 0), (600, 0), (600, 600), (450, 600), (450, 150), (150, 150), (150, 600), (0, 600)]
+    ),
+    "holed": Polygon(
+        [(0, 0), (600, 0), (600, 600), (0, 600)], [[(200, 200), (400, 200), (400, 400), (200, 400)]]
+    ),
+    "thin": box(0, 0, 2000, 60),
+}
+
+
+def _zone_straddling() -> Polygon:
+    # 6°E is the boundary of UTM zones 31 and 32: this area lies across it.
+    ring = [[5.99, 47.0], [6.01, 47.0], [6.012, 47.01], [5.992, 47.012], [5.99, 47.0]]
+    polygon, _ = polygon_from_geojson({"type": "Polygon", "coordinates": [ring]})
+    return polygon
+
+
+@pytest.mark.parametrize("angle", [0.0, 30.0, 90.0])
+@pytest.mark.parametrize("name", [*SHAPES, "zone-straddling"])
+def test_footprints_cover_the_whole_area(name: str, angle: float) -> None:
+    area = _zone_straddling() if name == "zone-straddling" else SHAPES[name]
+    plan = plan_lanes(area, CALC, angle_deg=angle)
+    footprint, at_overlaps = coverage(plan, area, CALC)
+    assert footprint == pytest.approx(1.0, abs=1e-9)
+    if name != "holed":
+        # Shrunk to spacing x trigger distance, the footprints still tile the area: every
+        # point is seen with the requested side and front overlaps.
+        assert at_overlaps == pytest.approx(1.0, abs=1e-9)
+
+
+@pytest.mark.parametrize("angle", [0.0, 30.0, 45.0])
+def test_no_lane_crosses_a_hole(angle: float) -> None:
+    area = SHAPES["holed"]
+    hole = Polygon(area.interiors[0])
+    plan = plan_lanes(area, CALC, angle_deg=angle)
+    for lane in plan.lanes:
+        assert not LineString([lane.start, lane.end]).intersection(hole).length > 1e-6
+
+
+def test_path_is_no_shorter_than_the_bound_and_close_to_it_on_a_rectangle() -> None:
+    area = box(0, 0, 1000, 1000)
+    plan = plan_lanes(area, CALC, angle_deg=0)
+    rows = math.ceil(1000 / CALC.lane_spacing_m)
+    bound = lower_bound_m(area, CALC.lane_spacing_m, plan.turnaround_m, rows)
+    assert bound <= plan.path_length_m <= 1.05 * bound
+
+
+@pytest.mark.parametrize("name", list(SHAPES))
+def test_the_bound_is_a_lower_bound(name: str) -> None:
+    area = SHAPES[name]
+    for angle in (0.0, 60.0):
+        plan = plan_lanes(area, CALC, angle_deg=angle)
+        rotated = affinity.rotate(area, -angle, origin=area.centroid)
+        rows = math.ceil((rotated.bounds[3] - rotated.bounds[1]) / CALC.lane_spacing_m - 1e-9)
+        assert plan.path_length_m >= lower_bound_m(
+            area, CALC.lane_spacing_m, plan.turnaround_m, rows
+        )
+
+
+def test_turnarounds_lie_outside_the_area() -> None:
+    area = box(0, 0, 500, 500)
+    plan = plan_lanes(area, CALC, angle_deg=0, turnaround_m=10)
+    for i in range(len(plan.lanes)):
+        for turn in (plan.path[4 * i], plan.path[4 * i + 3]):
+            assert area.exterior.distance(
+                LineString([turn, turn])
+            ) >= 10 - 1e-6 or not area.contains(LineString([turn, turn]))
+
+
+def test_automatic_angle_runs_lanes_along_a_long_thin_area() -> None:
+    area = affinity.rotate(box(0, 0, 2000, 120), 40, origin=(0, 0))
+    angle = best_angle(area, CALC, 10.0, turnaround_m=10)
+    assert angle == pytest.approx(40, abs=5)
+    plan = plan_lanes(area, CALC, angle_deg=angle)
+    assert flight_time_s(plan, 10.0) < flight_time_s(
+        plan_lanes(area, CALC, angle_deg=angle + 90), 10.0
+    )
+
+
+def test_mission_items_trigger_on_distance_along_each_lane() -> None:
+    polygon, frame = polygon_from_geojson(
+        {
+            "type": "Polygon",
+            "coordinates": [
+                [[8.0, 47.0], [8.005, 47.0], [8.005, 47.004], [8.0, 47.004], [8.0, 47.0]]
+            ],
+        }
+    )
+    plan = plan_lanes(polygon, CALC)
+    items = mission_items(plan, frame, CALC.altitude_m)
+    commands = [item.command for item in items]
+    assert commands[0] == mavlink2.MAV_CMD_NAV_TAKEOFF
+    assert commands[-1] == mavlink2.MAV_CMD_NAV_RETURN_TO_LAUNCH
+    triggers = [item for item in items if item.command == mavlink2.MAV_CMD_DO_SET_CAM_TRIGG_DIST]
+    assert len(triggers) == 2 * len(plan.lanes)
+    assert [t.param1 for t in triggers[:2]] == [pytest.approx(CALC.trigger_distance_m), 0.0]
+    for item in items:
+        if item.command == mavlink2.MAV_CMD_NAV_WAYPOINT:
+            assert item.frame == mavlink2.MAV_FRAME_GLOBAL_RELATIVE_ALT
+            assert item.alt == pytest.approx(CALC.altitude_m)
+            assert 46.99 < item.lat < 47.01
+            assert 7.99 < item.lon < 8.01
+
+
+def test_hover_and_capture_takes_one_image_at_each_photo_point() -> None:
+    polygon, frame = polygon_from_geojson(
+        {
+            "type": "Polygon",
+            "coordinates": [[[8.0, 47.0], [8.003, 47.0], [8.003, 47.003], [8.0, 47.0]]],
+        }
+    )
+    plan = plan_lanes(polygon, CALC)
+    items = mission_items(plan, frame, CALC.altitude_m, hover=True)
+    captures = [i for i in items if i.command == mavlink2.MAV_CMD_IMAGE_START_CAPTURE]
+    assert len(captures) == plan.photo_count
+    assert all(c.param3 == 1 for c in captures)
+
+
+@pytest.mark.parametrize(
+    ("area", "message"),
+    [
+        (Polygon([(0, 0), (500, 500), (500, 0), (0, 500)]), r"Self-intersection\[250 250\]"),
+        (box(0, 0, 50, 50), "smaller than one photo's footprint"),
+        (Polygon(), "at least 3 distinct corners"),
+        (
+            Polygon([(0, 0), (500, 0), (500, 500)], [[(600, 0), (700, 0), (700, 100)]]),
+            "not a valid polygon: Hole lies outside shell",
+        ),
+    ],
+)
+def test_invalid_areas_are_refused_saying_why(area: Polygon, message: str) -> None:
+    with pytest.raises(PlanError, match=message):
+        plan_lanes(area, CALC)
+
+
+def test_holes_covering_the_whole_area_are_refused() -> None:
+    area = Polygon(
+        [(0, 0), (500, 0), (500, 500), (0, 500)], [[(0, 0), (500, 0), (500, 500), (0, 500)]]
+    )
+    with pytest.raises(PlanError, match="the holes cover the whole area"):
+        plan_lanes(area, CALC)
+
+
+def test_too_many_vertices_are_refused() -> None:
+    ring = [
+        (1000 * math.cos(t / 2000 * math.tau), 1000 * math.sin(t / 2000 * math.tau))
+        for t in range(10_001)
+    ]
+    with pytest.raises(PlanError, match="at most 10000 are allowed"):
+        plan_lanes(Polygon(ring), CALC)
+
+
+@pytest.mark.parametrize(
+    ("geometry", "message"),
+    [
+        ({"type": "Point", "coordinates": [0, 0]}, "type Polygon"),
+        ({"type": "Polygon", "coordinates": [[[0, 0], [1, 1]]]}, "at least 4 positions"),
+        (
+            {"type": "Polygon", "coordinates": [[[0, 0], [0, 95], [1, 1], [0, 0]]]},
+            "position 1 is not a longitude/latitude",
+        ),
+        (
+            {"type": "Polygon", "coordinates": [[[0, 0], [1, 0], [1, 1], [0, 0]]]},
+            "km from its centre",
+        ),
+    ],
+)
+def test_bad_geojson_is_refused_saying_why(geometry: dict[str, object], message: str) -> None:
+    with pytest.raises(PlanError, match=message):
+        polygon_from_geojson(geometry)

@@ -18,6 +18,7 @@ from backend.auth.rate_limit import Limit, RateLimiter
 from backend.fleet.commands import CommandDispatcher
 from backend.fleet.registry import FleetRegistry, VehicleRecord
 from backend.fleet.safety_gate import SafetyGate
+from backend.mapping.tiles import TileLibrary
 from backend.realtime.bus import InProcessBus, ReliableSubscription, Topic
 from backend.realtime.collaborators import AgentConnection, ClientConnection
 from backend.settings import HubSettings
@@ -56,6 +57,8 @@ class Hub:
     safety: SafetyGate
     # Audit and command-log rows waiting out a database outage.
     spool: RowSpool
+    # The offline tile sets in the tiles folder.
+    tiles: TileLibrary
     # Live agent connections by vehicle, so revoking a token can drop its connection.
     agent_sessions: dict[str, AgentConnection] = field(default_factory=dict)
     # Held while an agent's hello is judged against the one holding its vehicle id.
@@ -101,6 +104,7 @@ class Hub:
             accounts=accounts,
             audit=audit,
             spool=spool,
+            tiles=TileLibrary(settings.tiles_folder),
             login_limiter=RateLimiter(Limit(settings.login_attempts_per_minute, 60.0)),
             login_address_limiter=RateLimiter(
                 Limit(settings.login_attempts_per_address_per_minute, 60.0)
@@ -123,6 +127,7 @@ class Hub:
                 tasks.create_task(self._drain_spool())
         finally:
             self.passwords.close()
+            self.tiles.close()
             self.engine.dispose()
 
     def deliver_sequence_news(self, acks: dict[StreamKey, int], gaps: list[Gap]) -> None:

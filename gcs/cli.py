@@ -27,7 +27,7 @@ def _configure_logging(level: str) -> None:
 
 
 # The extra each subcommand needs beyond the agent's base dependencies.
-EXTRAS = {"hub": "hub", "demo": "hub", "sim": "simulator"}
+EXTRAS = {"hub": "hub", "demo": "hub", "sim": "simulator", "tiles": "hub"}
 
 
 def _needs_extra(command: str, error: ModuleNotFoundError) -> int:
@@ -177,6 +177,12 @@ def _exposure_note(host: str) -> str:
     )
 
 
+def _tiles(args: argparse.Namespace) -> int:
+    from gcs.tiles import run
+
+    return run(args)
+
+
 def _interrupt(signum: int, frame: object) -> None:
     """A stopping signal stops the demo the way Ctrl-C does."""
     raise KeyboardInterrupt
@@ -206,6 +212,11 @@ def build_parser() -> argparse.ArgumentParser:
         "sim", help="run a simulated MAVLink copter (see `gcs sim --help`)", add_help=False
     )
 
+    from gcs.tiles import add_tiles_arguments
+
+    tiles = commands.add_parser("tiles", help="the hub's offline base maps (.mbtiles, .pmtiles)")
+    add_tiles_arguments(tiles)
+
     demo = commands.add_parser("demo", help="hub + simulated fleet + agents, one command")
     demo.add_argument("--vehicles", type=int, default=3)
     demo.add_argument(
@@ -230,6 +241,7 @@ def main(argv: list[str] | None = None) -> int:
         "agent": _agent,
         "demo": _demo,
         "sim": lambda args: _sim(args, rest),
+        "tiles": _tiles,
     }
     try:
         return handlers[args.command](args)

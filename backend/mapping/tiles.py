@@ -15,6 +15,7 @@ from __future__ import annotations
 import gzip
 import hashlib
 import logging
+import math
 import mmap
 import re
 import sqlite3
@@ -96,6 +97,13 @@ def tile_in_range(z: int, x: int, y: int) -> bool:
     return 0 <= z <= MAX_ZOOM and 0 <= x < 2**z and 0 <= y < 2**z
 
 
+def tile_corner(z: int, x: int, y: int) -> tuple[float, float]:
+    """Longitude and latitude of an XYZ tile's north-west corner (web Mercator)."""
+    n = 1 << z
+    lat = math.degrees(math.atan(math.sinh(math.pi * (1 - 2 * y / n))))
+    return x / n * 360.0 - 180.0, lat
+
+
 def _version(path: Path) -> str:
     stat = path.stat()
     return hashlib.blake2s(f"{stat.st_size}:{stat.st_mtime_ns}".encode(), digest_size=6).hexdigest()
@@ -135,10 +143,24 @@ class MBTilesSource:
             media_type=MEDIA_TYPES[kind],
             min_zoom=min_zoom,
             max_zoom=max_zoom,
-            bounds=_bounds(metadata.get("bounds")),
+            bounds=_bounds(metadata.get("bounds")) or self._extent(max_zoom),
             attribution=str(metadata.get("attribution", "")),
             version=_version(path),
         )
+
+    def _extent(self, zoom: int) -> tuple[float, float, float, float] | None:
+        """The bounds of the tiles themselves, for a file whose metadata gives none."""
+        row = self._db.execute(
+            "SELECT MIN(tile_column), MAX(tile_column), MIN(tile_row), MAX(tile_row)"
+            " FROM tiles WHERE zoom_level = ?",
+            (zoom,),
+        ).fetchone()
+        if row is None or row[0] is None:
+            return None
+        n = 1 << zoom
+        west, north = tile_corner(zoom, row[0], n - 1 - row[3])  # TMS rows count up north
+        east, south = tile_corner(zoom, row[1] + 1, n - row[2])
+        return west, south, east, north
 
     def tile(self, z: int, x: int, y: int) -> bytes | None:
         tms_row = (1 << z) - 1 - y  # MBTiles counts rows from the south (TMS)

@@ -26,6 +26,11 @@ def test_mbtiles_rows_are_flipped_to_xyz(tmp_path: Path) -> None:
         info = source.info
         assert (info.name, info.kind, info.media_type) == ("field", "mbtiles", "image/png")
         assert (info.min_zoom, info.max_zoom, info.attribution) == (0, 1, "survey 2026")
+        # No bounds in the metadata: those of the tiles at the deepest zoom (the east half).
+        assert info.bounds is not None
+        assert info.bounds[0] == 0.0
+        assert info.bounds[2] == 180.0
+        assert info.bounds[1] == pytest.approx(-85.0511, abs=1e-3)
     finally:
         source.close()
 

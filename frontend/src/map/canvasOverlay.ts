@@ -21,8 +21,13 @@ export abstract class CanvasOverlay extends L.Layer {
   private center = L.latLng(0, 0);
   private zoom = 0;
   private frame: number | null = null;
+  private drawnAt = -Infinity;
 
-  constructor(className: string, private readonly paneName: string) {
+  constructor(
+    className: string,
+    private readonly paneName: string,
+    private readonly minIntervalMs = 0,
+  ) {
     super();
     this.root = L.DomUtil.create("div", `${className} leaflet-zoom-animated canvas-overlay`);
     this.canvas = L.DomUtil.create("canvas", "canvas-overlay-canvas", this.root);
@@ -54,13 +59,23 @@ export abstract class CanvasOverlay extends L.Layer {
     };
   }
 
-  /** Redraws on the next animation frame (several requests, one draw). */
+  /**
+   * Redraws on an animation frame (several requests, one draw), at most once every
+   * `minIntervalMs`: vehicles report at 10 Hz, so drawing them at 60 Hz would show the
+   * same positions several times over.
+   */
   requestDraw(): void {
     if (this.frame !== null || !this.leafletMap) return;
-    this.frame = requestAnimationFrame(() => {
+    const run = (now: number) => {
+      if (now - this.drawnAt < this.minIntervalMs - 1) {
+        this.frame = requestAnimationFrame(run);
+        return;
+      }
       this.frame = null;
+      this.drawnAt = now;
       if (this.leafletMap) this.draw(this.leafletMap);
-    });
+    };
+    this.frame = requestAnimationFrame(run);
   }
 
   /** Where a position is on the canvas, in CSS pixels. */

@@ -1,15 +1,15 @@
-// Each vehicle's recent track, drawn fading with age: the last few minutes, one point a
-// second per vehicle. All trails of one age share one stroke (six strokes for the fleet),
-// and the canvas is redrawn at most once a second or when the view changes, so a
+// Each vehicle's recent track, drawn fading with age: the last few minutes, a point every
+// 2 s per vehicle. All trails of one age share one stroke (six strokes for the fleet),
+// and the canvas is redrawn at most every 2 s or when the view changes, so a
 // thousand trails cost little; the piece from the last point to the vehicle is drawn
 // with the vehicle (VehicleLayer), so a trail never lags behind its marker.
 import type * as L from "leaflet";
 import { CanvasOverlay } from "./canvasOverlay";
 
 export const TRAIL_SECONDS = 180;
-const POINT_EVERY_MS = 1000;
+const POINT_EVERY_MS = 2000;
 const AGE_BANDS = 6;
-const REDRAW_EVERY_MS = 1000;
+const REDRAW_EVERY_MS = 2000;
 export const TRAIL_COLOUR = "79, 179, 255"; // --accent
 export const SELECTED_TRAIL_COLOUR = "255, 255, 255";
 
@@ -101,13 +101,18 @@ export class TrailLayer extends CanvasOverlay {
     for (const [id, trail] of this.trails) {
       if (trail.length < 2) continue;
       const paths = id === this.selectedId ? selected : bands;
+      // One polyline per band of each trail: a new subpath only where the band changes.
       let previous = this.toCanvas(map, [trail[0].lat, trail[0].lon]);
+      let current = -1;
       for (let index = 1; index < trail.length; index++) {
         const point = trail[index];
         const here = this.toCanvas(map, [point.lat, point.lon]);
         if (point.at >= oldest) {
           const band = Math.min(AGE_BANDS - 1, Math.floor((this.lastDraw - point.at) / bandMs));
-          paths[band].moveTo(previous.x, previous.y);
+          if (band !== current) {
+            paths[band].moveTo(previous.x, previous.y);
+            current = band;
+          }
           paths[band].lineTo(here.x, here.y);
         }
         previous = here;

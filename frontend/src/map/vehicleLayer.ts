@@ -12,9 +12,11 @@ import { type LabelBox, placeLabels } from "./labels";
 import { TRAIL_COLOUR, SELECTED_TRAIL_COLOUR, TrailLayer } from "./trails";
 
 const SYMBOL_PX = 28;
+const DRAW_EVERY_MS = 50; // 20 Hz: twice the telemetry rate, a third of the frames
 const HIT_PX = 16;
 const LABEL_OFFSET = L.point(16, -9); // the label's top-left from the symbol's centre (style.css)
 const LABEL_HEIGHT = 20;
+const COUNT_ROOM_PX = 30;
 const LABEL_FONT = "600 12px system-ui, sans-serif";
 // The heading arrow of vehicleSymbol() (vehicleMarker.ts), centred on (0, 0).
 const ARROW: ReadonlyArray<readonly [number, number]> = [
@@ -57,6 +59,7 @@ interface Entry {
   members: string[];
   shown: boolean;
   labelWidth: number;
+  labelAt: L.Point;
 }
 
 export class VehicleLayer extends CanvasOverlay {
@@ -69,7 +72,7 @@ export class VehicleLayer extends CanvasOverlay {
     private readonly onSelect: (id: string) => void,
     private readonly trails: TrailLayer | null,
   ) {
-    super("vehicle-layer", "vehicles");
+    super("vehicle-layer", "vehicles", DRAW_EVERY_MS);
     this.labels = L.DomUtil.create("div", "vehicle-labels", this.root);
     this.measure.font = LABEL_FONT;
   }
@@ -170,6 +173,7 @@ export class VehicleLayer extends CanvasOverlay {
       members: [],
       shown: false,
       labelWidth,
+      labelAt: L.point(NaN, NaN),
     };
   }
 
@@ -240,36 +244,27 @@ export class VehicleLayer extends CanvasOverlay {
     }
   }
 
-  /** One path per state colour: a few fills for the whole fleet. */
+  /**
+   * One small pre-drawn picture per state and 5° of heading, copied into place: a copy
+   * is far cheaper than filling and stroking an outline, when the canvas is drawn in
+   * software (no GPU) as on a field laptop.
+   */
   private drawSymbols(onScreen: Array<{ entry: Entry; at: L.Point }>): void {
     const context = this.context;
-    const paths = new Map<MarkerState, Path2D>();
+    const half = SPRITE_PX / 2;
     let selected: { entry: Entry; at: L.Point } | null = null;
     for (const item of onScreen) {
       if (item.entry.id === this.selectedId) {
         selected = item; // drawn last, on top, with its own outline
         continue;
       }
-      let path = paths.get(item.entry.state);
-      if (!path) paths.set(item.entry.state, (path = new Path2D()));
-      addSymbol(path, item.entry, item.at);
-    }
-    context.lineJoin = "round";
-    context.lineWidth = 1.5;
-    context.strokeStyle = "#0b1016";
-    for (const [state, path] of paths) {
-      context.fillStyle = MARKER_FILL[state];
-      context.fill(path);
-      context.stroke(path);
+      const sprite = spriteFor(item.entry.state, item.entry.heading, false);
+      context.drawImage(sprite, Math.round(item.at.x - half), Math.round(item.at.y - half), SPRITE_PX, SPRITE_PX);
     }
     if (selected) {
-      const path = new Path2D();
-      addSymbol(path, selected.entry, selected.at);
-      context.fillStyle = MARKER_FILL[selected.entry.state];
-      context.fill(path);
-      context.lineWidth = 2.5;
-      context.strokeStyle = "#ffffff";
-      context.stroke(path);
+      const sprite = spriteFor(selected.entry.state, selected.entry.heading, true);
+      const [x, y] = [Math.round(selected.at.x - half), Math.round(selected.at.y - half)];
+      context.drawImage(sprite, x, y, SPRITE_PX, SPRITE_PX);
     }
   }
 
@@ -278,7 +273,7 @@ export class VehicleLayer extends CanvasOverlay {
       id: entry.id,
       x: at.x + LABEL_OFFSET.x,
       y: at.y + LABEL_OFFSET.y,
-      width: entry.labelWidth,
+      width: entry.labelWidth + COUNT_ROOM_PX, // room for a "+N" beside it
       height: LABEL_HEIGHT,
       priority: entry.id === this.selectedId ? 1 : 0,
     }));
@@ -295,8 +290,12 @@ export class VehicleLayer extends CanvasOverlay {
         entry.members = [];
         continue;
       }
-      const at = where.get(entry.id)!;
-      entry.element.style.transform = `translate(${at.x - SYMBOL_PX / 2}px, ${at.y - SYMBOL_PX / 2}px)`;
+      // Moved by a whole pixel, or it keeps its place: no style work for sub-pixel moves.
+      const at = where.get(entry.id)!.round();
+      if (at.x !== entry.labelAt.x || at.y !== entry.labelAt.y) {
+        entry.labelAt = at;
+        entry.element.style.transform = `translate(${at.x - SYMBOL_PX / 2}px, ${at.y - SYMBOL_PX / 2}px)`;
+      }
       if (members.length !== entry.members.length || members.some((m, i) => m !== entry.members[i])) {
         entry.count.hidden = members.length === 0;
         entry.count.textContent = `+${members.length}`;
@@ -308,13 +307,40 @@ export class VehicleLayer extends CanvasOverlay {
   }
 }
 
-function addSymbol(path: Path2D, entry: Entry, at: L.Point): void {
-  if (entry.heading === null) {
+const SPRITE_PX = 32;
+const HEADING_STEP = 5;
+const sprites = new Map<string, HTMLCanvasElement>();
+
+/** The symbol for a state and heading (rounded to 5°), drawn once and kept. */
+function spriteFor(state: MarkerState, heading: number | null, selected: boolean): HTMLCanvasElement {
+  const step = heading === null ? -1 : Math.round((((heading % 360) + 360) % 360) / HEADING_STEP) % (360 / HEADING_STEP);
+  const key = `${state}:${step}:${selected}`;
+  let sprite = sprites.get(key);
+  if (sprite) return sprite;
+  const ratio = window.devicePixelRatio || 1;
+  sprite = document.createElement("canvas");
+  sprite.width = sprite.height = Math.ceil(SPRITE_PX * ratio);
+  const context = sprite.getContext("2d")!;
+  context.scale(ratio, ratio);
+  const path = new Path2D();
+  addSymbol(path, step < 0 ? null : step * HEADING_STEP, L.point(SPRITE_PX / 2, SPRITE_PX / 2));
+  context.fillStyle = MARKER_FILL[state];
+  context.fill(path);
+  context.lineJoin = "round";
+  context.lineWidth = selected ? 2.5 : 1.5;
+  context.strokeStyle = selected ? "#ffffff" : "#0b1016";
+  context.stroke(path);
+  sprites.set(key, sprite);
+  return sprite;
+}
+
+function addSymbol(path: Path2D, heading: number | null, at: L.Point): void {
+  if (heading === null) {
     path.moveTo(at.x + 7, at.y);
     path.arc(at.x, at.y, 7, 0, Math.PI * 2);
     return;
   }
-  const radians = (entry.heading * Math.PI) / 180;
+  const radians = (heading * Math.PI) / 180;
   const cos = Math.cos(radians);
   const sin = Math.sin(radians);
   ARROW.forEach(([x, y], index) => {

@@ -166,7 +166,14 @@ def test_tile_sets_are_listed_by_name_in_the_switcher(
     switcher.hover()
     names = page.locator(".leaflet-control-layers-base label")
     expect(names).to_have_text(["field", "Grid (no tiles)"])
-    expect(page.locator(".leaflet-control-layers-overlays label")).to_have_text(["Trails"])
+    trails = page.locator(".leaflet-control-layers-overlays label")
+    expect(trails).to_have_text(["Trails"])
+    # Trails are on by default; the check box takes their canvas off the map and back.
+    expect(page.locator("#map .trail-layer")).to_have_count(1)
+    trails.locator("input").uncheck()
+    expect(page.locator("#map .trail-layer")).to_have_count(0)
+    trails.locator("input").check()
+    expect(page.locator("#map .trail-layer")).to_have_count(1)
     # The grid is a choice here (a tile set exists), so the map has nothing to say.
     names.filter(has_text="Grid").click()
     expect(page.locator("#map")).to_have_attribute("data-basemap", "Grid (no tiles)")

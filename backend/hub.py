@@ -20,6 +20,7 @@ from backend.control.lease import LeaseBook
 from backend.fleet.commands import CommandDispatcher
 from backend.fleet.registry import FleetRegistry, VehicleRecord
 from backend.fleet.safety_gate import SafetyGate
+from backend.mapping.tiles import TileLibrary
 from backend.realtime.bus import InProcessBus, ReliableSubscription, Topic
 from backend.realtime.collaborators import AgentConnection, ClientConnection
 from backend.realtime.live_events import live_event
@@ -63,6 +64,8 @@ class Hub:
     safety: SafetyGate
     # Audit and command-log rows waiting out a database outage.
     spool: RowSpool
+    # The offline tile sets in the tiles folder.
+    tiles: TileLibrary
     # Live agent connections by vehicle, so revoking a token can drop its connection.
     agent_sessions: dict[str, AgentConnection] = field(default_factory=dict)
     # Held while an agent's hello is judged against the one holding its vehicle id.
@@ -115,6 +118,7 @@ class Hub:
             accounts=accounts,
             audit=audit,
             spool=spool,
+            tiles=TileLibrary(settings.tiles_folder),
             login_limiter=RateLimiter(Limit(settings.login_attempts_per_minute, 60.0)),
             login_address_limiter=RateLimiter(
                 Limit(settings.login_attempts_per_address_per_minute, 60.0)
@@ -153,6 +157,7 @@ class Hub:
             if self.viz is not None:
                 await asyncio.to_thread(self.viz.stop)
             self.passwords.close()
+            self.tiles.close()
             self.engine.dispose()
 
     def deliver_sequence_news(self, acks: dict[StreamKey, int], gaps: list[Gap]) -> None:

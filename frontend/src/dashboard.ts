@@ -22,6 +22,9 @@ const OFFLINE_CONFIG: HubConfig = {
   basemap_url: null,
   basemap_attribution: "",
   basemap_max_zoom: 19,
+  imagery_url: null,
+  imagery_attribution: "",
+  imagery_max_zoom: 19,
   protocol: PROTOCOL_VERSION,
 };
 /** setTimeout's ceiling (about 24.8 days). */

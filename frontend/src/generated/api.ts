@@ -798,6 +798,26 @@ export interface paths {
         patch?: never;
         trace?: never;
     };
+    "/api/v1/tiles": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        /**
+         * List Tile Sets
+         * @description The offline tile sets in the hub's tiles folder (``<data dir>/tiles``).
+         */
+        get: operations["list_tile_sets_api_v1_tiles_get"];
+        put?: never;
+        post?: never;
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
 }
 export type webhooks = Record<string, never>;
 export interface components {
@@ -1015,12 +1035,30 @@ export interface components {
         };
         /** ClientConfig */
         ClientConfig: {
-            /** Basemap Url */
+            /**
+             * Basemap Url
+             * @description the online street map (XYZ); None: off
+             */
             basemap_url: string | null;
             /** Basemap Attribution */
             basemap_attribution: string;
             /** Basemap Max Zoom */
             basemap_max_zoom: number;
+            /**
+             * Imagery Url
+             * @description online imagery (XYZ); None: off
+             */
+            imagery_url?: string | null;
+            /**
+             * Imagery Attribution
+             * @default
+             */
+            imagery_attribution: string;
+            /**
+             * Imagery Max Zoom
+             * @default 19
+             */
+            imagery_max_zoom: number;
             /** Protocol */
             protocol: number;
         };
@@ -1943,6 +1981,42 @@ export interface components {
             satellites: number | null;
             /** Seq */
             seq: number;
+        };
+        /** TileSet */
+        TileSet: {
+            /**
+             * Name
+             * @description the file name without .mbtiles or .pmtiles
+             */
+            name: string;
+            /**
+             * Kind
+             * @description mbtiles or pmtiles
+             */
+            kind: string;
+            /** Media Type */
+            media_type: string;
+            /** Min Zoom */
+            min_zoom: number;
+            /** Max Zoom */
+            max_zoom: number;
+            /**
+             * Bounds
+             * @description west, south, east, north in degrees, when the file says
+             */
+            bounds: [
+                number,
+                number,
+                number,
+                number
+            ] | null;
+            /** Attribution */
+            attribution: string;
+            /**
+             * Url
+             * @description the tile URL template, with the set's version
+             */
+            url: string;
         };
         /** Tlog */
         Tlog: {
@@ -5679,6 +5753,55 @@ export interface operations {
                 };
                 content: {
                     "application/json": components["schemas"]["Unprocessable"];
+                };
+            };
+            /** @description The database is unavailable; try again after Retry-After seconds */
+            503: {
+                headers: {
+                    /** @description Seconds to wait */
+                    "Retry-After"?: number;
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+        };
+    };
+    list_tile_sets_api_v1_tiles_get: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["TileSet"][];
+                };
+            };
+            /** @description Not authenticated */
+            401: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description Needs the 'read' permission */
+            403: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
                 };
             };
             /** @description The database is unavailable; try again after Retry-After seconds */

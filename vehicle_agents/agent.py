@@ -29,6 +29,9 @@ from vehicle_agents.hub_link import HubLink, VehicleIdInUse
 from vehicle_agents.mission_progress import ReachedItems
 from vehicle_agents.missions import mission_number
 from vehicle_agents.outbox import Outbox, SpillFile
+from vehicle_agents.sensors.fcu_time import FcuClock, PoseHistory
+from vehicle_agents.sensors.relay import ScanOutbox, ScanRelay, parse_mount
+from vehicle_agents.sensors.sources import ObstacleDistanceSource, ScanSource, YdlidarSource
 from vehicle_agents.statustext import StatusTextJoiner
 from vehicle_agents.streams import StreamRequester
 from vehicle_agents.telemetry import link_snapshot
@@ -38,6 +41,7 @@ from vehicle_agents.tlog_uploads import TlogUploader
 log = logging.getLogger(__name__)
 
 CAPABILITIES = ["telemetry", "commands", "events"]
+SCAN_CAPABILITY = "scans"
 
 
 async def run_agent(settings: AgentSettings) -> None:
@@ -70,7 +74,7 @@ async def _run(settings: AgentSettings) -> None:
             vehicle_type=link.modes.vehicle_type,
             system_id=link.target_system,
             modes=link.modes.names,
-            capabilities=CAPABILITIES,
+            capabilities=CAPABILITIES + ([SCAN_CAPABILITY] if settings.lidar else []),
             agent_version=__version__,
             stream_id=uuid.uuid4().hex[:16],
         )
@@ -79,6 +83,11 @@ async def _run(settings: AgentSettings) -> None:
         link.listeners.append(events.on_message)
         link.state_listeners.append(FcuLinkEvents(events.emit).on_link_change)
         executor = CommandExecutor(link)
+        scans = None
+        if settings.lidar:
+            relay = scan_relay(settings, link)
+            scans = relay.outbox
+            tasks.create_task(relay.run())
         hub = HubLink(
             settings.hub,
             token,
@@ -86,6 +95,7 @@ async def _run(settings: AgentSettings) -> None:
             outbox,
             executor.execute,
             live_state=lambda: current_state(link, outbox),
+            scans=scans,
         )
         tasks.create_task(publish_telemetry(link, outbox, settings.telemetry_rate_hz))
         tasks.create_task(hub.run())
@@ -111,6 +121,23 @@ async def _run(settings: AgentSettings) -> None:
             )
             link.listeners.append(uploader.on_message)
             tasks.create_task(uploader.run())
+
+
+def scan_relay(settings: AgentSettings, link: FcuLink) -> ScanRelay:
+    """The LIDAR's turns, stamped with the flight controller's clock and pose."""
+    assert settings.lidar is not None
+    poses = PoseHistory(FcuClock())
+    link.listeners.append(poses.on_message)
+    source: ScanSource
+    if settings.lidar == "mavlink":
+        obstacle_distance = ObstacleDistanceSource()
+        link.listeners.append(obstacle_distance.on_message)
+        source = obstacle_distance
+    else:
+        source = YdlidarSource(settings.lidar, settings.lidar_resolution_deg, settings.lidar_baud)
+    return ScanRelay(
+        source, poses, ScanOutbox(settings.scan_budget), parse_mount(settings.lidar_mount)
+    )
 
 
 def open_outbox(settings: AgentSettings, vehicle_id: str, stream_id: str) -> Outbox:

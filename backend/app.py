@@ -24,6 +24,7 @@ from backend.api import (
     missions,
     params,
     safety,
+    scans,
     system,
     vehicles,
     websockets,
@@ -83,7 +84,7 @@ def create_app(settings: HubSettings | None = None) -> FastAPI:
         redoc_url=None,
     )
     modules: tuple[ModuleType, ...] = (system, auth, vehicles, params, missions, fleet_commands)
-    modules += (safety, *logs.ROUTE_MODULES, admin)
+    modules += (safety, scans, *logs.ROUTE_MODULES, admin)
     routers = [module.router for module in modules]
     document_errors(app, routers)
     for router in routers:

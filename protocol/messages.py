@@ -14,6 +14,10 @@ Delivery rules per message type (the realtime path honours them):
   ``unavailable`` for frames its bounded outbox had to drop.
 - ``vehicle`` updates to clients: coalesced; a newer state replaces an unsent one.
 - ``command`` / ``command_result``: request/response, correlated by ``request_id``.
+- LIDAR scans are binary frames (`protocol.scans`), the one exception to JSON: agents
+  send each scan newest first, then any backlog flagged as replayed; the hub stores them
+  all and sends a client only the newest scan of each vehicle it subscribed to
+  (``subscribe_scans``), never a queue.
 """
 
 from __future__ import annotations
@@ -590,6 +594,28 @@ class VehicleUpdate(Message):
     vehicle: VehicleSummary
 
 
+class SubscribeScans(Message):
+    """Send me this vehicle's scans (binary frames, protocol/scans.py), newest only."""
+
+    type: Literal["subscribe_scans"] = "subscribe_scans"
+    vehicle_id: VehicleId
+
+
+class UnsubscribeScans(Message):
+    type: Literal["unsubscribe_scans"] = "unsubscribe_scans"
+    vehicle_id: VehicleId
+
+
+MAX_SCAN_SUBSCRIPTIONS = 64
+
+
+class ScanSubscriptions(Message):
+    """The vehicles whose scans this feed now receives (the answer to a (un)subscribe)."""
+
+    type: Literal["scan_subscriptions"] = "scan_subscriptions"
+    vehicles: list[VehicleId] = Field(max_length=MAX_SCAN_SUBSCRIPTIONS)
+
+
 class Ping(Message):
     type: Literal["ping"] = "ping"
     nonce: str | None = Field(default=None, max_length=64)
@@ -609,9 +635,12 @@ AgentToHub: TypeAlias = Annotated[
 HubToAgent: TypeAlias = Annotated[
     Welcome | CommandRequest | Ack | Resend | ErrorReply | Ping, Field(discriminator="type")
 ]
-ClientToHub: TypeAlias = Annotated[Ping, Field(discriminator="type")]
+ClientToHub: TypeAlias = Annotated[
+    Ping | SubscribeScans | UnsubscribeScans, Field(discriminator="type")
+]
 HubToClient: TypeAlias = Annotated[
-    FleetSnapshot | VehicleUpdate | Pong | ErrorReply, Field(discriminator="type")
+    FleetSnapshot | VehicleUpdate | ScanSubscriptions | Pong | ErrorReply,
+    Field(discriminator="type"),
 ]
 
 agent_to_hub: TypeAdapter[AgentToHub] = TypeAdapter(AgentToHub)

@@ -53,8 +53,14 @@ _MOUNT = struct.Struct("<ffffff")
 HEADER_BYTES: Final = _HEAD.size + 2 * _POSE.size + _MOUNT.size
 MAX_SCAN_BYTES: Final = HEADER_BYTES + 2 * MAX_BEAMS
 
-_POSE_FIELDS = (("lat", "f64"), ("lon", "f64"), ("alt_msl", "f32"), ("roll", "f32"),
-                ("pitch", "f32"), ("yaw", "f32"))  # fmt: skip
+_POSE_FIELDS = (
+    ("lat", "f64"),
+    ("lon", "f64"),
+    ("alt_msl", "f32"),
+    ("roll", "f32"),
+    ("pitch", "f32"),
+    ("yaw", "f32"),
+)
 SCAN_HEADER_FIELDS: Final = [
     ("magic", "4s"),
     ("version", "u8"),
@@ -189,8 +195,20 @@ def decode_scan(data: bytes) -> ScanFrame:
         raise ScanFrameError(
             f"frame: {len(data)} bytes is shorter than the {HEADER_BYTES}-byte header"
         )
-    (magic, version, flags, beams, seq, sensor_us, utc, duration, angle_min, increment, scale,
-     range_max) = _HEAD.unpack_from(data, 0)  # fmt: skip
+    (
+        magic,
+        version,
+        flags,
+        beams,
+        seq,
+        sensor_us,
+        utc,
+        duration,
+        angle_min,
+        increment,
+        scale,
+        range_max,
+    ) = _HEAD.unpack_from(data, 0)
     if magic != SCAN_MAGIC:
         raise ScanFrameError("magic: not a scan frame (expected b'GSCN')")
     if version != SCAN_VERSION:
@@ -241,8 +259,14 @@ def _finite(name: str, value: float) -> None:
 def _check(frame: ScanFrame) -> None:
     if not 1 <= len(frame.ranges) <= MAX_BEAMS:
         raise ScanFrameError(f"beams: must be 1..{MAX_BEAMS}, got {len(frame.ranges)}")
-    for name in ("utc_time", "duration_s", "angle_min", "angle_increment", "range_scale",
-                 "range_max_m"):  # fmt: skip
+    for name in (
+        "utc_time",
+        "duration_s",
+        "angle_min",
+        "angle_increment",
+        "range_scale",
+        "range_max_m",
+    ):
         _finite(name, getattr(frame, name))
     if not 0.0 < frame.duration_s <= 1.0:
         raise ScanFrameError(f"duration_s: must be > 0 and <= 1 s, got {frame.duration_s}")
@@ -255,11 +279,32 @@ def _check(frame: ScanFrame) -> None:
     ):
         raise ScanFrameError("angle_increment: beams must cover at most one turn, and not 0")
     for when, pose in (("pose_start", frame.pose_start), ("pose_end", frame.pose_end)):
-        for name, value in zip(("lat", "lon", "alt_msl", "roll", "pitch", "yaw"),
-                               _pose_tuple(pose), strict=True):  # fmt: skip
+        for name, value in zip(
+            ("lat", "lon", "alt_msl", "roll", "pitch", "yaw"), _pose_tuple(pose), strict=True
+        ):
             _finite(f"{when}.{name}", value)
         if not (-90.0 <= pose.lat <= 90.0 and -180.0 <= pose.lon <= 180.0):
             raise ScanFrameError(f"{when}: latitude/longitude out of range")
     m = frame.mount
     for name in ("forward", "right", "down", "roll", "pitch", "yaw"):
         _finite(f"mount.{name}", getattr(m, name))
+
+
+CLIENT_SCAN_MAGIC: Final = b"GSCV"
+
+
+def client_scan_frame(vehicle_id: str, data: bytes) -> bytes:
+    """A scan as the hub sends it to a subscriber: ``"GSCV" | id length u8 | vehicle id
+    (UTF-8) | the agent's scan frame``."""
+    name = vehicle_id.encode()
+    if len(name) > 255:
+        raise ScanFrameError("vehicle_id: at most 255 bytes")
+    return CLIENT_SCAN_MAGIC + bytes([len(name)]) + name + data
+
+
+def split_client_scan_frame(data: bytes) -> tuple[str, ScanFrame]:
+    """The vehicle id and the scan of a subscriber's binary frame."""
+    if data[:4] != CLIENT_SCAN_MAGIC or len(data) < 5:
+        raise ScanFrameError("magic: not a subscriber's scan frame (expected b'GSCV')")
+    size = data[4]
+    return data[5 : 5 + size].decode(), decode_scan(data[5 + size :])

@@ -102,8 +102,11 @@ class Lidar:
         def lerp(a: float, b: float) -> Array:
             return np.asarray(a + (b - a) * share, dtype=np.float64)
 
-        east, north, up = (lerp(previous.east, pose.east), lerp(previous.north, pose.north),
-                           lerp(previous.up, pose.up))  # fmt: skip
+        east, north, up = (
+            lerp(previous.east, pose.east),
+            lerp(previous.north, pose.north),
+            lerp(previous.up, pose.up),
+        )
         roll, pitch = lerp(previous.roll, pose.roll), lerp(previous.pitch, pose.pitch)
         yaw = previous.yaw + _wrap_pi(np.asarray(pose.yaw - previous.yaw)) * share
         index = numbers % spec.beams

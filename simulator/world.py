@@ -234,8 +234,13 @@ def obstacle_from_dict(item: dict[str, Any]) -> Obstacle:
     z_max = z_min + float(item.get("height", 6.0))
     if kind == "box":
         size = _pair(item.get("size"), "box size")
-        return box(_pair(item.get("center"), "box center"), size, float(item.get("yaw_deg", 0.0)),
-                   z_min, z_max)  # fmt: skip
+        return box(
+            _pair(item.get("center"), "box center"),
+            size,
+            float(item.get("yaw_deg", 0.0)),
+            z_min,
+            z_max,
+        )
     if kind == "cylinder":
         center = _pair(item.get("center"), "cylinder center")
         return Cylinder(center, float(item.get("radius", 0.0)), z_min, z_max)

@@ -138,7 +138,11 @@ def _lacking(principal: Principal, needed: Permission) -> str:
 
 # What each WebSocket message type needs, by the ``type`` field. A message type missing
 # here is refused, and the test suite checks every type in protocol.messages is listed.
-CLIENT_MESSAGE_PERMISSIONS: dict[str, Permission] = {"ping": Permission.READ}
+CLIENT_MESSAGE_PERMISSIONS: dict[str, Permission] = {
+    "ping": Permission.READ,
+    "subscribe_scans": Permission.READ,
+    "unsubscribe_scans": Permission.READ,
+}
 AGENT_MESSAGE_PERMISSIONS: dict[str, Permission] = {
     "hello": Permission.AGENT,
     "telemetry": Permission.AGENT,

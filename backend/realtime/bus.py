@@ -23,6 +23,7 @@ from typing import Any, Protocol
 class Topic(StrEnum):
     STORAGE = "storage"  # TelemetryEnvelope and StoredEvent, in order, for the writer
     VEHICLE_STATE = "vehicle.state"  # VehicleSummary, for clients
+    SCANS = "scans"  # ScanDelivery (backend/scans), newest per vehicle, for subscribers
 
 
 class Subscription(Protocol):

@@ -21,13 +21,18 @@ from backend.errors import Forbidden
 from backend.realtime.bus import LatestSubscription, Topic
 from backend.realtime.collaborators import FeedServices
 from backend.realtime.frames import FrameTooLarge, PeerConnection
+from backend.realtime.scan_feed import ScanSubscription
 from protocol.messages import (
+    MAX_SCAN_SUBSCRIPTIONS,
     CloseCode,
     ErrorReply,
     FleetSnapshot,
     Ping,
     Pong,
     ProtocolError,
+    ScanSubscriptions,
+    SubscribeScans,
+    UnsubscribeScans,
     VehicleUpdate,
     client_to_hub,
     decode,
@@ -58,6 +63,7 @@ class ClientFeed(PeerConnection):
         self.hub = hub
         self.user = ""
         self.token_id: int | None = None
+        self.scans = ScanSubscription()
 
     async def serve(self) -> None:
         await self.websocket.accept()
@@ -96,9 +102,11 @@ class ClientFeed(PeerConnection):
             )
             async with asyncio.TaskGroup() as tasks:
                 pusher = tasks.create_task(self._push(updates))
+                scan_pusher = tasks.create_task(self._push_scans())
                 expiry = tasks.create_task(self._end_at_expiry(principal.expires_at, pusher))
                 await self._listen()
                 pusher.cancel()
+                scan_pusher.cancel()
                 expiry.cancel()
         except* FrameTooLarge as group:
             log.warning("closing client %s: %s", self.peer, group.exceptions[0])
@@ -108,6 +116,8 @@ class ClientFeed(PeerConnection):
             pass
         finally:
             self.hub.bus.unsubscribe(Topic.VEHICLE_STATE, updates)
+            if self.scans.vehicles:
+                self.hub.bus.unsubscribe(Topic.SCANS, self.scans)
             self.hub.client_feeds.discard(self)
 
     async def _end_at_expiry(self, expires_at: float | None, pusher: asyncio.Task[None]) -> None:
@@ -127,6 +137,36 @@ class ClientFeed(PeerConnection):
             # Pacing, not synchronisation: updates arriving meanwhile coalesce per vehicle.
             await asyncio.sleep(interval)
 
+    async def _push_scans(self) -> None:
+        """The newest scan of each subscribed vehicle. A client that stops reading stalls
+        this send; meanwhile newer scans replace the unsent one, so the hub holds at most
+        one scan per subscribed vehicle for it, never a queue."""
+        while True:
+            for delivery in await self.scans.drain():
+                await self.send_bytes(delivery.data)
+
+    async def _scan_subscription(self, message: SubscribeScans | UnsubscribeScans) -> None:
+        had_any = bool(self.scans.vehicles)
+        if isinstance(message, SubscribeScans):
+            if len(self.scans.vehicles) >= MAX_SCAN_SUBSCRIPTIONS:
+                await self.reject(
+                    ErrorReply(
+                        code="invalid_message",
+                        message=f"vehicle_id: at most {MAX_SCAN_SUBSCRIPTIONS} scan "
+                        "subscriptions per feed",
+                    )
+                )
+                return
+            self.scans.vehicles.add(message.vehicle_id)
+        else:
+            self.scans.vehicles.discard(message.vehicle_id)
+        # On the bus only while it wants something: nobody pays for scans they did not ask for.
+        if self.scans.vehicles and not had_any:
+            self.hub.bus.subscribe(Topic.SCANS, self.scans)
+        elif had_any and not self.scans.vehicles:
+            self.hub.bus.unsubscribe(Topic.SCANS, self.scans)
+        await self.send(ScanSubscriptions(vehicles=sorted(self.scans.vehicles)))
+
     async def _listen(self) -> None:
         while (frame := await self.receive()) is not None:
             try:
@@ -141,3 +181,5 @@ class ClientFeed(PeerConnection):
                 continue
             if isinstance(message, Ping):
                 await self.send(Pong(nonce=message.nonce))
+            elif isinstance(message, SubscribeScans | UnsubscribeScans):
+                await self._scan_subscription(message)

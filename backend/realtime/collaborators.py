@@ -36,6 +36,14 @@ class AgentConnection(Protocol):
     def request_resend(self, gap: Gap) -> None: ...
 
 
+class ScanIngest(Protocol):
+    """Where an agent's binary scan frames go (backend.scans.service.ScanService)."""
+
+    async def ingest(self, vehicle_id: str, stream_id: str, data: bytes) -> object:
+        """Raises ValueError (with ``reason`` and ``message``) for a refused scan."""
+        ...
+
+
 class ClientConnection(Protocol):
     """A dashboard's or integration's live feed, as the hub keeps it (to revoke)."""
 
@@ -90,6 +98,9 @@ class GatewayServices(Protocol):
 
     @property
     def agent_admissions(self) -> dict[str, asyncio.Lock]: ...
+
+    @property
+    def scans(self) -> ScanIngest: ...
 
     async def store_event(
         self, vehicle_id: str, kind: str, text: str, severity: int | None = None

@@ -34,8 +34,13 @@ def _turns(
 
 
 def test_ray_cast_meets_each_kind_of_obstacle_at_its_surface() -> None:
-    world = World([box((5.0, 0.0), (2.0, 2.0)), Cylinder((0.0, 3.0), 0.5),
-                   wall((-4.0, -5.0), (4.0, -5.0), thickness=0.2)])  # fmt: skip
+    world = World(
+        [
+            box((5.0, 0.0), (2.0, 2.0)),
+            Cylinder((0.0, 3.0), 0.5),
+            wall((-4.0, -5.0), (4.0, -5.0), thickness=0.2),
+        ]
+    )
     origins = np.tile([0.0, 0.0, 2.0], (3, 1))
     directions = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, -1.0, 0.0]])
     assert world.cast(origins, directions, 12.0) == pytest.approx([4.0, 2.5, 4.9])
@@ -76,17 +81,29 @@ def test_a_moving_drone_gets_a_skewed_scan() -> None:
 
 def test_scene_files_load_and_bad_ones_name_the_obstacle(tmp_path: Path) -> None:
     scene = tmp_path / "yard.json"
-    scene.write_text(json.dumps({"obstacles": [
-        {"kind": "box", "center": [10, 5], "size": [4, 2], "yaw_deg": 30, "height": 6},
-        {"kind": "cylinder", "center": [-8, 3], "radius": 0.5},
-        {"kind": "wall", "start": [-15, -10], "end": [15, -10]},
-        {"kind": "polygon", "points": [[0, 12], [6, 14], [3, 18]], "z_min": 1, "height": 4},
-    ]}))  # fmt: skip
+    scene.write_text(
+        json.dumps(
+            {
+                "obstacles": [
+                    {"kind": "box", "center": [10, 5], "size": [4, 2], "yaw_deg": 30, "height": 6},
+                    {"kind": "cylinder", "center": [-8, 3], "radius": 0.5},
+                    {"kind": "wall", "start": [-15, -10], "end": [15, -10]},
+                    {
+                        "kind": "polygon",
+                        "points": [[0, 12], [6, 14], [3, 18]],
+                        "z_min": 1,
+                        "height": 4,
+                    },
+                ]
+            }
+        )
+    )
     world = load_scene(scene)
     assert len(world.obstacles) == 4
     assert world.distance_to_surface(np.array([[-8.0, 3.5]]))[0] == pytest.approx(0.0)
-    scene.write_text(json.dumps({"obstacles": [{"kind": "cylinder", "center": [0, 0]},
-                                               {"kind": "cone"}]}))  # fmt: skip
+    scene.write_text(
+        json.dumps({"obstacles": [{"kind": "cylinder", "center": [0, 0]}, {"kind": "cone"}]})
+    )
     with pytest.raises(ValueError, match="obstacle 0: a cylinder's radius must be > 0"):
         load_scene(scene)
 

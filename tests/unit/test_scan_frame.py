@@ -87,5 +87,6 @@ def test_the_encoder_refuses_what_the_decoder_would() -> None:
     with pytest.raises(ScanFrameError, match="duration_s"):
         encode_scan(bad)
     with pytest.raises(ScanFrameError, match="beams"):
-        encode_scan(ScanFrame(**{**{f: getattr(frame, f) for f in frame.__slots__},
-                                 "ranges": array("H")}))  # fmt: skip
+        encode_scan(
+            ScanFrame(**{**{f: getattr(frame, f) for f in frame.__slots__}, "ranges": array("H")})
+        )

@@ -108,17 +108,27 @@ class PoseHistory:
             return
         self.clock.add(self._monotonic(), boot_s)
         if kind == "GLOBAL_POSITION_INT":
-            self._push(self._pos_t, self._pos, boot_s,
-                       (message.lat / 1e7, message.lon / 1e7, message.alt / 1000.0))  # fmt: skip
+            self._push(
+                self._pos_t,
+                self._pos,
+                boot_s,
+                (message.lat / 1e7, message.lon / 1e7, message.alt / 1000.0),
+            )
         elif kind == "ATTITUDE":
-            self._push(self._att_t, self._att, boot_s,
-                       (float(message.roll), float(message.pitch), float(message.yaw)))  # fmt: skip
+            self._push(
+                self._att_t,
+                self._att,
+                boot_s,
+                (float(message.roll), float(message.pitch), float(message.yaw)),
+            )
 
     @staticmethod
     def _push(
-        times: deque[float], values: deque[tuple[float, float, float]], t: float,
+        times: deque[float],
+        values: deque[tuple[float, float, float]],
+        t: float,
         value: tuple[float, float, float],
-    ) -> None:  # fmt: skip
+    ) -> None:
         if times and t < times[-1] - 1.0:  # a reboot: older reports belong to another clock
             times.clear()
             values.clear()
@@ -154,6 +164,9 @@ def _interpolate(
     share = (t - t0) / (t1 - t0)
     a, b = values[i - 1], values[i]
     if angles:
-        return (_lerp_angle(a[0], b[0], share), _lerp_angle(a[1], b[1], share),
-                _lerp_angle(a[2], b[2], share))  # fmt: skip
+        return (
+            _lerp_angle(a[0], b[0], share),
+            _lerp_angle(a[1], b[1], share),
+            _lerp_angle(a[2], b[2], share),
+        )
     return (_lerp(a[0], b[0], share), _lerp(a[1], b[1], share), _lerp(a[2], b[2], share))

@@ -16,8 +16,8 @@
 export type AnyMessage = AgentToHub | HubToAgent | ClientToHub | HubToClient;
 export type AgentToHub = Hello | Telemetry | LiveState | Event | CommandResult | Unavailable | Pong;
 export type HubToAgent = Welcome | CommandRequest | Ack | Resend | ErrorReply | Ping;
-export type ClientToHub = Ping;
-export type HubToClient = FleetSnapshot | VehicleUpdate | Pong | ErrorReply;
+export type ClientToHub = Ping | SubscribeScans | UnsubscribeScans;
+export type HubToClient = FleetSnapshot | VehicleUpdate | ScanSubscriptions | Pong | ErrorReply;
 
 /**
  * First frame from an agent: who it is and what it can do.
@@ -455,6 +455,17 @@ export interface Ping {
   type: "ping";
   nonce: string | null;
 }
+/**
+ * Send me this vehicle's scans (binary frames, protocol/scans.py), newest only.
+ */
+export interface SubscribeScans {
+  type: "subscribe_scans";
+  vehicle_id: string;
+}
+export interface UnsubscribeScans {
+  type: "unsubscribe_scans";
+  vehicle_id: string;
+}
 export interface FleetSnapshot {
   type: "fleet";
   /**
@@ -480,6 +491,16 @@ export interface VehicleSummary {
 export interface VehicleUpdate {
   type: "vehicle";
   vehicle: VehicleSummary;
+}
+/**
+ * The vehicles whose scans this feed now receives (the answer to a (un)subscribe).
+ */
+export interface ScanSubscriptions {
+  type: "scan_subscriptions";
+  /**
+   * @maxItems 64
+   */
+  vehicles: string[];
 }
 
 export const PROTOCOL_VERSION = 1;

@@ -17,3 +17,8 @@ class ScanSubscription(LatestSubscription):
         if key in self.vehicles:
             super().offer(key, message)
         return True  # another vehicle's scan: not wanted, never waited for
+
+    @property
+    def pending(self) -> int:
+        """Scans waiting for this feed: at most one per subscribed vehicle."""
+        return len(self._pending)

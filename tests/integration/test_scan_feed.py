@@ -199,5 +199,5 @@ def test_subscribers_get_scans_others_none_and_a_stalled_reader_holds_one(
             assert len(received) > 100
             assert not binary_frames(bystander, 0.5)
             # The stalled feed: its socket is full, and the hub holds one newest scan for it.
-            assert stalled_feed.scans.replaced > 100
+            assert stalled_feed.scans.replaced > 0  # coalesced, not queued
             assert pending <= 1

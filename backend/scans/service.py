@@ -28,6 +28,8 @@ from collections import Counter, deque
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
+import numpy as np
+
 from backend.realtime.bus import Bus, Topic
 from backend.scans.pointmap import PointMap
 from backend.scans.points import WorldPoints, world_points
@@ -151,12 +153,11 @@ class ScanService:
                     "rate", f"more than {self.max_rate_hz:g} scans/s from {vehicle_id}"
                 )
             recent.append(now)
-        limit = round(frame.range_max_m / frame.range_scale)
-        beyond = [i for i, r in enumerate(frame.ranges) if r > limit]
-        if beyond:
-            counts.cleaned_ranges += len(beyond)
-            for i in beyond:
-                frame.ranges[i] = NO_RETURN
+        ranges = np.frombuffer(frame.ranges, dtype=np.uint16)  # a view: writes go through
+        beyond = ranges > round(frame.range_max_m / frame.range_scale)
+        if beyond.any():
+            counts.cleaned_ranges += int(beyond.sum())
+            ranges[beyond] = NO_RETURN
         return frame
 
     async def run(self) -> None:

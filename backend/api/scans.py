@@ -17,6 +17,7 @@ from backend.auth.policy import Permission
 from backend.errors import NotFound
 from backend.scans.export import ply_bytes
 from backend.scans.points import WorldPoints, world_points
+from common.geodesy import LocalFrame
 from protocol.scans import decode_scan
 
 router = SecuredRouter(tags=["scans"])
@@ -54,7 +55,7 @@ class ScanPage(BaseModel):
     start: float
     end: float
     limit: int
-    site: SiteOrigin
+    site: SiteOrigin | None = Field(description="the origin of the points' east/north/up")
     scans: list[ScanPoints]
     truncated: bool
 
@@ -88,18 +89,14 @@ class ObstacleBody(BaseModel):
     voxels: int
 
 
-def _site(hub: HubDep) -> SiteOrigin:
-    site = hub.scans.site
-    if site is None:
-        raise NotFound("no scans yet: the site has no origin")
+def _origin(site: LocalFrame) -> SiteOrigin:
     o = site.origin
     return SiteOrigin(lat=o.lat, lon=o.lon, alt_msl=o.alt)
 
 
 def _body(hub: HubDep, vehicle_id: str, data: bytes) -> ScanPoints:
     frame = decode_scan(data)
-    site = hub.scans.site
-    assert site is not None
+    site = hub.scans.site_for(frame)
     points: WorldPoints = world_points(frame, site)
     return ScanPoints(
         vehicle_id=vehicle_id,
@@ -126,11 +123,9 @@ async def latest_scan(vehicle_id: VehicleIdPath, hub: HubDep) -> ScanPoints:
     latest = hub.scans.latest.get(vehicle_id)
     if latest is None and row is None:
         raise NotFound(f"no scan from {vehicle_id!r} yet")
-    _site(hub)
     if latest is not None and (row is None or latest.frame.utc_time >= row.time):
         frame = latest.frame
-        site = hub.scans.site
-        assert site is not None
+        site = hub.scans.site_for(frame)
         return ScanPoints(
             vehicle_id=vehicle_id,
             seq=frame.seq,
@@ -163,14 +158,15 @@ async def scans_between(
     rows = await asyncio.to_thread(
         hub.scans.repository.between, vehicle_id, start_at, end_at, limit + 1
     )
-    site = _site(hub) if rows else SiteOrigin(lat=0.0, lon=0.0, alt_msl=0.0)
+    scans = [_body(hub, vehicle_id, row.frame) for row in rows[:limit]]
+    site = hub.scans.site
     return ScanPage(
         vehicle_id=vehicle_id,
         start=start_at,
         end=end_at,
         limit=limit,
-        site=site,
-        scans=[_body(hub, vehicle_id, row.frame) for row in rows[:limit]],
+        site=None if site is None else _origin(site),
+        scans=scans,
         truncated=len(rows) > limit,
     )
 
@@ -209,7 +205,7 @@ async def point_map(
     """The site's voxel point map (the most recently seen voxels, up to ``limit``)."""
     scans = hub.scans
     points = scans.point_map.points(limit)
-    site = None if scans.site is None else _site(hub)
+    site = None if scans.site is None else _origin(scans.site)
     if format == "ply":
         origin = "unset" if site is None else f"{site.lat},{site.lon},{site.alt_msl}"
         return Response(

@@ -115,11 +115,8 @@ class ScanService:
         except ScanRejected as refusal:
             counts.rejected[refusal.reason] += 1
             raise
-        if self.site is None:
-            pose = frame.pose_start
-            self.site = LocalFrame(pose.lat, pose.lon, pose.alt_msl)
-            log.info("site origin set from %s's first scan: %s", vehicle_id, self.site.origin)
-        points = world_points(frame, self.site)
+        site = self.site_for(frame)
+        points = world_points(frame, site)
         self.point_map.add(points.enu, frame.utc_time)
         stored = StoredScan(vehicle_id, stream_id, frame.seq, frame.utc_time, frame.beams, data)
         await self._queue.put(stored)  # reliable: waits when the store is behind
@@ -131,6 +128,15 @@ class ScanService:
             delivery = ScanDelivery(vehicle_id, client_scan_frame(vehicle_id, data))
             await self.bus.publish(Topic.SCANS, vehicle_id, delivery)
         return frame
+
+    def site_for(self, frame: ScanFrame) -> LocalFrame:
+        """The site's frame; without a configured origin, the first scan's position
+        (live, or the first one read back from the store after a restart)."""
+        if self.site is None:
+            pose = frame.pose_start
+            self.site = LocalFrame(pose.lat, pose.lon, pose.alt_msl)
+            log.info("site origin set from a scan: %s", self.site.origin)
+        return self.site
 
     def _check(self, vehicle_id: str, data: bytes, counts: ScanDiagnostics) -> ScanFrame:
         try:

@@ -23,6 +23,7 @@ from collections.abc import Callable
 from typing import Any
 
 from protocol.scans import ScanPose
+from vehicle_agents.sensors.envelope import lower_envelope_slope
 
 CLOCK_WINDOW = 400  # samples: 10-20 s of the streams that carry time_boot_ms
 REFIT_EVERY = 20
@@ -56,13 +57,11 @@ class FcuClock:
         self._since_fit = 0
         samples = self._samples
         if len(samples) >= 20 and samples[-1][0] - samples[0][0] >= 2.0:
-            n = len(samples)
-            mean_a = sum(a for a, _ in samples) / n
-            mean_b = sum(b for _, b in samples) / n
-            var = sum((a - mean_a) ** 2 for a, _ in samples)
-            cov = sum((a - mean_a) * (b - mean_b) for a, b in samples)
-            if var > 0.0 and 0.01 < cov / var < 200.0:
-                self._rate = cov / var
+            # arrival as a function of the board's time: delays push it up, never down
+            by_board = [(boot, arrived) for arrived, boot in samples]
+            per_board_s = lower_envelope_slope(by_board, 1.0 / self._rate)
+            if 0.005 < per_board_s < 100.0:
+                self._rate = 1.0 / per_board_s
         self._offset = max(b - self._rate * a for a, b in samples)
 
     @property

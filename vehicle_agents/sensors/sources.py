@@ -25,6 +25,7 @@ from collections.abc import AsyncIterator, Callable
 from dataclasses import dataclass, field
 from typing import Any, Protocol
 
+from vehicle_agents.sensors.envelope import lower_envelope_slope
 from vehicle_agents.sensors.ydlidar import Packet, YdlidarParser
 
 log = logging.getLogger(__name__)
@@ -57,7 +58,7 @@ class ScanSource(Protocol):
     def turns(self) -> AsyncIterator[Turn]: ...
 
 
-CLOCK_WINDOW = 400  # packets: about 2 s of a T-mini Pro at 10 Hz
+CLOCK_WINDOW = 800  # packets: a few seconds of a T-mini Pro at 10 Hz
 REFIT_EVERY = 50
 
 
@@ -93,15 +94,9 @@ class SensorClock:
 
     def _fit(self) -> None:
         self._since_fit = 0
-        samples = self._samples
-        n = len(samples)
-        if n >= 20 and samples[-1][0] - samples[0][0] > 0:
-            mean_g = sum(g for g, _ in samples) / n
-            mean_t = sum(t for _, t in samples) / n
-            var = sum((g - mean_g) ** 2 for g, _ in samples)
-            cov = sum((g - mean_g) * (t - mean_t) for g, t in samples)
-            if var > 0.0 and cov > 0.0:
-                self.spacing_s = cov / var
+        samples = list(self._samples)
+        if len(samples) >= 20 and samples[-1][0] > samples[0][0]:
+            self.spacing_s = lower_envelope_slope(samples, self.spacing_s)
         self._origin = min(t - g * self.spacing_s for g, t in samples)
 
     def time_of(self, beam: int) -> float:

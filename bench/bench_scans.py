@@ -116,7 +116,7 @@ def hub_cost(frames: list[bytes]) -> tuple[float, float]:
     import asyncio
 
     service = ScanService(
-        ScanRepository(make_engine("sqlite://")),
+        ScanRepository(make_engine("sqlite:///:memory:")),
         InProcessBus(),
         site=SITE,
         max_rate_hz=1e9,

@@ -1765,7 +1765,8 @@ export interface components {
             end: number;
             /** Limit */
             limit: number;
-            site: components["schemas"]["SiteOrigin"];
+            /** @description the origin of the points' east/north/up */
+            site: components["schemas"]["SiteOrigin"] | null;
             /** Scans */
             scans: components["schemas"]["ScanPoints"][];
             /** Truncated */

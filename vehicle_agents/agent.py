@@ -30,7 +30,7 @@ from vehicle_agents.mission_progress import ReachedItems
 from vehicle_agents.missions import mission_number
 from vehicle_agents.outbox import Outbox, SpillFile
 from vehicle_agents.sensors.fcu_time import FcuClock, PoseHistory
-from vehicle_agents.sensors.relay import ScanOutbox, ScanRelay, parse_mount
+from vehicle_agents.sensors.relay import DiskBacklog, ScanOutbox, ScanRelay, parse_mount
 from vehicle_agents.sensors.sources import ObstacleDistanceSource, ScanSource, YdlidarSource
 from vehicle_agents.statustext import StatusTextJoiner
 from vehicle_agents.streams import StreamRequester
@@ -85,7 +85,7 @@ async def _run(settings: AgentSettings) -> None:
         executor = CommandExecutor(link)
         scans = None
         if settings.lidar:
-            relay = scan_relay(settings, link)
+            relay = scan_relay(settings, link, vehicle_id)
             scans = relay.outbox
             tasks.create_task(relay.run())
         hub = HubLink(
@@ -123,7 +123,7 @@ async def _run(settings: AgentSettings) -> None:
             tasks.create_task(uploader.run())
 
 
-def scan_relay(settings: AgentSettings, link: FcuLink) -> ScanRelay:
+def scan_relay(settings: AgentSettings, link: FcuLink, vehicle_id: str) -> ScanRelay:
     """The LIDAR's turns, stamped with the flight controller's clock and pose."""
     assert settings.lidar is not None
     poses = PoseHistory(FcuClock())
@@ -135,9 +135,15 @@ def scan_relay(settings: AgentSettings, link: FcuLink) -> ScanRelay:
         source = obstacle_distance
     else:
         source = YdlidarSource(settings.lidar, settings.lidar_resolution_deg, settings.lidar_baud)
-    return ScanRelay(
-        source, poses, ScanOutbox(settings.scan_budget), parse_mount(settings.lidar_mount)
-    )
+    backlog = None
+    if settings.outbox_dir is not None:
+        path = settings.outbox_dir / f"{vehicle_id}.scans.sqlite"
+        try:
+            backlog = DiskBacklog(path)
+        except (OSError, sqlite3.Error) as error:
+            log.error("scan backlog file %s unusable (%s); keeping it in memory", path, error)
+    outbox = ScanOutbox(settings.scan_budget, backlog)
+    return ScanRelay(source, poses, outbox, parse_mount(settings.lidar_mount))
 
 
 def open_outbox(settings: AgentSettings, vehicle_id: str, stream_id: str) -> Outbox:

@@ -100,8 +100,8 @@ class AgentSettings(BaseSettings):
         default=6000,
         ge=1,
         description="scans kept while the hub is unreachable (6,000 = 10 min at 10 Hz, "
-        "about 10 MB), replayed oldest first after the newest; when full, the oldest are "
-        "dropped and counted",
+        "about 10 MB; on disk in outbox_dir when it is set), replayed oldest first after "
+        "the newest; when full, the oldest are dropped and counted",
     )
     stream_rates_hz: dict[str, float] = Field(
         default_factory=dict,

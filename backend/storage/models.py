@@ -84,8 +84,9 @@ class ScanRow(Base):
 
     __tablename__ = "scans"
     __table_args__ = (
-        # (vehicle, agent run, seq): a scan sent twice (after a reconnect) is stored once.
-        UniqueConstraint("vehicle_id", "stream_id", "seq", name="uq_scan"),
+        # (vehicle, seq, time): a scan sent twice (after a reconnect) is stored once. Not the
+        # agent run's stream: a backlog kept on disk is replayed by the next run.
+        UniqueConstraint("vehicle_id", "seq", "time", name="uq_scan"),
         Index("ix_scans_vehicle_time", "vehicle_id", "time"),
         Index("ix_scans_time", "time"),  # retention
     )

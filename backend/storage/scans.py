@@ -27,11 +27,11 @@ class ScanRepository:
         self.engine = engine
 
     def insert(self, batch: Sequence[StoredScan]) -> None:
-        """Store a batch; a scan stored before (same vehicle, run and seq) is skipped."""
+        """Store a batch; a scan stored before (same vehicle, seq and time) is skipped."""
         if not batch:
             return
         statement = dialect_insert(self.engine, ScanRow).on_conflict_do_nothing(
-            index_elements=["vehicle_id", "stream_id", "seq"]
+            index_elements=["vehicle_id", "seq", "time"]
         )
         with self.engine.begin() as connection:
             connection.execute(statement, [asdict(scan) for scan in batch])

@@ -6,6 +6,7 @@ from __future__ import annotations
 import asyncio
 import math
 import random
+from pathlib import Path
 from types import SimpleNamespace
 
 import pytest
@@ -16,7 +17,7 @@ from simulator.world import default_scene
 from simulator.ydlidar_wire import encode_beams
 from tests.unit.test_scan_frame import _frame
 from vehicle_agents.sensors.fcu_time import FcuClock, PoseHistory
-from vehicle_agents.sensors.relay import ScanOutbox
+from vehicle_agents.sensors.relay import DiskBacklog, ScanOutbox
 from vehicle_agents.sensors.sources import TurnAssembler
 from vehicle_agents.sensors.ydlidar import YdlidarParser
 
@@ -92,5 +93,24 @@ def test_the_newest_scan_goes_first_then_the_backlog_oldest_first_as_replayed() 
         assert [(s.seq, s.replayed) for s in sent] == [(3, False), (1, True), (2, True)]
         outbox.unsent(frames[3])  # the link dropped as it went: it waits again
         assert decode_scan(await outbox.next_frame()).flags & FLAG_REPLAYED
+
+    asyncio.run(run())
+
+
+def test_a_disk_backlog_survives_the_agent_and_keeps_its_order(tmp_path: Path) -> None:
+    async def run() -> None:
+        frames = [encode_scan(_frame()) for _ in range(5)]
+        frames = [f[:8] + bytes([i]) + f[9:] for i, f in enumerate(frames)]
+        first = ScanOutbox(budget=3, backlog=DiskBacklog(tmp_path / "v1.scans.sqlite"))
+        for frame in frames:
+            first.put(frame)  # an outage: nothing sent
+        assert first.dropped == 1
+        # The agent restarts: the backlog on disk is still there, oldest first, replayed.
+        again = ScanOutbox(budget=3, backlog=DiskBacklog(tmp_path / "v1.scans.sqlite"))
+        sent = [decode_scan(await again.next_frame()) for _ in range(3)]
+        assert [(s.seq, s.replayed) for s in sent] == [(1, True), (2, True), (3, True)]
+        again.unsent(frames[3])
+        assert decode_scan(await again.next_frame()).seq == 3
+        assert len(again) == 0
 
     asyncio.run(run())

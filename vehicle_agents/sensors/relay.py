@@ -13,10 +13,13 @@ from __future__ import annotations
 import asyncio
 import logging
 import math
+import sqlite3
 import time
 from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass
+from pathlib import Path
+from typing import Protocol
 
 from common.retry import Backoff, Retries
 from protocol.scans import FLAG_REPLAYED, Mount, ScanFrame, encode_scan, with_flags
@@ -29,14 +32,63 @@ POSE_WAIT_S = 0.5  # how long a turn waits for the flight controller's pose to c
 POSE_POLL_S = 0.01
 
 
-class ScanOutbox:
-    """The newest scan, and a bounded backlog of older unsent ones."""
+class Backlog(Protocol):
+    """Scans waiting for the hub, oldest first."""
 
-    def __init__(self, budget: int) -> None:
+    def __len__(self) -> int: ...
+
+    def append(self, frame: bytes) -> None: ...
+
+    def appendleft(self, frame: bytes) -> None: ...
+
+    def popleft(self) -> bytes: ...
+
+
+class DiskBacklog:
+    """The backlog in a SQLite file: an outage's scans survive an agent restart too, and
+    cost a drone's flash, not its memory. Written only while scans wait (an outage, a
+    slow link); on a healthy link each scan is sent before the next one comes."""
+
+    def __init__(self, path: Path) -> None:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        self._db = sqlite3.connect(path, isolation_level=None)
+        self._db.execute("PRAGMA journal_mode=WAL")
+        self._db.execute("PRAGMA synchronous=NORMAL")
+        self._db.execute("CREATE TABLE IF NOT EXISTS scans (id INTEGER PRIMARY KEY, frame BLOB)")
+        self._count = int(self._db.execute("SELECT count(*) FROM scans").fetchone()[0])
+
+    def __len__(self) -> int:
+        return self._count
+
+    def append(self, frame: bytes) -> None:
+        self._db.execute("INSERT INTO scans (frame) VALUES (?)", (frame,))
+        self._count += 1
+
+    def appendleft(self, frame: bytes) -> None:
+        first = self._db.execute("SELECT coalesce(min(id), 1) FROM scans").fetchone()[0]
+        self._db.execute("INSERT INTO scans (id, frame) VALUES (?, ?)", (first - 1, frame))
+        self._count += 1
+
+    def popleft(self) -> bytes:
+        row = self._db.execute("SELECT id, frame FROM scans ORDER BY id LIMIT 1").fetchone()
+        if row is None:
+            raise IndexError("empty backlog")
+        self._db.execute("DELETE FROM scans WHERE id = ?", (row[0],))
+        self._count -= 1
+        return bytes(row[1])
+
+
+class ScanOutbox:
+    """The newest scan, and a bounded backlog of older unsent ones (in memory, or on
+    disk with `DiskBacklog`)."""
+
+    def __init__(self, budget: int, backlog: Backlog | None = None) -> None:
         self.budget = budget
         self._latest: bytes | None = None
-        self._backlog: deque[bytes] = deque()
+        self._backlog: Backlog = backlog if backlog is not None else deque()
         self._ready = asyncio.Event()
+        if len(self._backlog):
+            self._ready.set()  # an earlier run's scans, kept on disk
         self.dropped = 0
         self.sent = 0
 
@@ -45,7 +97,7 @@ class ScanOutbox:
 
     def put(self, frame: bytes) -> None:
         if self._latest is not None:
-            if len(self._backlog) >= self.budget:
+            while len(self._backlog) >= self.budget:
                 self._backlog.popleft()
                 self.dropped += 1
             self._backlog.append(self._latest)
@@ -58,7 +110,7 @@ class ScanOutbox:
             if self._latest is not None:
                 frame, self._latest = self._latest, None
                 return frame
-            if self._backlog:
+            if len(self._backlog):
                 return with_flags(self._backlog.popleft(), FLAG_REPLAYED)
             self._ready.clear()
             await self._ready.wait()

@@ -31,7 +31,7 @@ def upgrade() -> None:
         sa.Column("time", sa.Double(), nullable=False),
         sa.Column("beams", sa.Integer(), nullable=False),
         sa.Column("frame", sa.LargeBinary(), nullable=False),
-        sa.UniqueConstraint("vehicle_id", "stream_id", "seq", name="uq_scan"),
+        sa.UniqueConstraint("vehicle_id", "seq", "time", name="uq_scan"),
     )
     op.create_index("ix_scans_vehicle_time", "scans", ["vehicle_id", "time"])
     op.create_index("ix_scans_time", "scans", ["time"])

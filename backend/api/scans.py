@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import asyncio
+import math
 from typing import Annotated, Literal
 
 from fastapi import Query
@@ -10,12 +11,14 @@ from fastapi.responses import Response
 from pydantic import BaseModel, Field
 
 from backend.api.deps import HubDep
+from backend.api.logs.common import FlightIdPath, flight_end
 from backend.api.security import SecuredRouter, requires
 from backend.api.time_ranges import Moment, time_query, time_range
 from backend.api.vehicles import VehicleIdPath
 from backend.auth.policy import Permission
 from backend.errors import NotFound
 from backend.scans.export import ply_bytes
+from backend.scans.pointmap import PointMap
 from backend.scans.points import WorldPoints, world_points
 from common.geodesy import LocalFrame
 from protocol.scans import decode_scan
@@ -231,3 +234,47 @@ async def obstacles(hub: HubDep) -> list[ObstacleBody]:
     """Clusters in the point map (above the ground), with their extents in site ENU."""
     found = await asyncio.to_thread(hub.scans.point_map.obstacles)
     return [ObstacleBody.model_validate(o, from_attributes=True) for o in found]
+
+
+FLIGHT_SCAN_PAGE = 500
+
+
+def _flight_points(hub: HubDep, flight_id: int) -> tuple[str, PointMap, LocalFrame | None]:
+    """A flight's scans as one point map at the site map's voxel size: bounded by the
+    surfaces the flight saw, however long it was."""
+    flight = hub.logbook.flight(flight_id)
+    end = flight_end(flight)
+    points = PointMap(hub.scans.point_map.voxel_m, hub.scans.point_map.max_voxels)
+    start, site = flight.start_time, hub.scans.site
+    while True:
+        rows = hub.scans.repository.between(flight.vehicle_id, start, end, FLIGHT_SCAN_PAGE)
+        for row in rows:
+            frame = decode_scan(row.frame)
+            site = hub.scans.site_for(frame)
+            points.add(world_points(frame, site).enu, row.time)
+        if len(rows) < FLIGHT_SCAN_PAGE:
+            return f"{flight.vehicle_id}_flight{flight.id}", points, site
+        start = math.nextafter(rows[-1].time, math.inf)
+
+
+@router.get(
+    "/flights/{flight_id}/points.ply",
+    openapi_extra=requires(Permission.READ),
+    response_class=Response,
+    responses={
+        200: {"content": {"application/octet-stream": {}}},
+        404: {"description": "No such flight"},
+    },
+)
+async def flight_points(flight_id: FlightIdPath, hub: HubDep) -> Response:
+    """The world points of a flight's scans (site east/north/up metres, voxel-downsampled
+    like the point map) as a PLY file, for CloudCompare, PDAL or MeshLab."""
+    name, points, site = await asyncio.to_thread(_flight_points, hub, flight_id)
+    origin = (
+        "unset" if site is None else ",".join(str(v) for v in _origin(site).model_dump().values())
+    )
+    return Response(
+        ply_bytes(points.points(), f"gcs flight points: ENU metres, site origin {origin}"),
+        media_type="application/octet-stream",
+        headers={"Content-Disposition": f'attachment; filename="{name}.ply"'},
+    )

@@ -4,6 +4,7 @@ the link alive, subscribers served, others not, and a stalled reader held to one
 from __future__ import annotations
 
 import contextlib
+import io
 import json
 import math
 import threading
@@ -14,7 +15,9 @@ from pathlib import Path
 from typing import Any
 
 import httpx
+import numpy as np
 import pytest
+from plyfile import PlyData  # type: ignore[import-untyped]
 from websockets.exceptions import ConnectionClosed
 from websockets.sync.client import ClientConnection, connect
 
@@ -201,3 +204,39 @@ def test_subscribers_get_scans_others_none_and_a_stalled_reader_holds_one(
             # The stalled feed: its socket is full, and the hub holds one newest scan for it.
             assert stalled_feed.scans.replaced > 0  # coalesced, not queued
             assert pending <= 1
+
+
+def test_a_flights_world_points_export_as_ply(
+    hub: str, enrol: Callable[[str], str], admin_token: str
+) -> None:
+    with agent(hub, enrol("v1"), "v1") as socket, api_client(hub, admin_token) as api:
+        now = time.time()
+
+        def telemetry(seq: int, armed: bool) -> str:
+            state = VehicleState(armed=armed, alt_rel=2.0)
+            return encode(Telemetry(seq=seq, time=now + seq, state=state))
+
+        socket.send(telemetry(0, False))
+        socket.send(telemetry(1, True))  # the flight starts
+        for seq in range(5):
+            socket.send(scan(seq, at=now + 1.5 + seq * 0.1))
+        socket.send(telemetry(2, True))
+        socket.send(telemetry(3, False))  # and ends
+
+        def flight() -> list[dict[str, Any]]:
+            listed = api.get("/api/v1/flights", params={"vehicle_id": "v1"}).json()["flights"]
+            return [f for f in listed if f["end_time"] is not None]
+
+        flight_id = poll_until(flight, 10, "the flight stored")[0]["id"]
+        poll_until(
+            lambda: api.get("/api/v1/vehicles/v1/scans/diagnostics").json()["stored"] == 5,
+            10,
+            "the scans stored",
+        )
+        answer = api.get(f"/api/v1/flights/{flight_id}/points.ply")
+    assert answer.status_code == 200, answer.text
+    ply = PlyData.read(io.BytesIO(answer.content))
+    vertices = ply["vertex"]
+    radius = np.hypot(vertices["x"], vertices["y"])
+    assert len(radius) > 200  # 720 beams on a 5 m circle, downsampled to 10 cm voxels
+    assert np.all(np.abs(radius - 5.0) < 0.1)

@@ -90,6 +90,9 @@ class ObstacleBody(BaseModel):
     up_min: float
     up_max: float
     voxels: int
+    outline: list[tuple[float, float]] = Field(
+        description="the extent's corners as latitude, longitude (degrees), for a map"
+    )
 
 
 def _origin(site: LocalFrame) -> SiteOrigin:
@@ -233,7 +236,20 @@ async def point_map(
 async def obstacles(hub: HubDep) -> list[ObstacleBody]:
     """Clusters in the point map (above the ground), with their extents in site ENU."""
     found = await asyncio.to_thread(hub.scans.point_map.obstacles)
-    return [ObstacleBody.model_validate(o, from_attributes=True) for o in found]
+    site = hub.scans.site
+    if site is None:
+        return []
+    bodies = []
+    for o in found:
+        corners = [
+            (o.east_min, o.north_min),
+            (o.east_max, o.north_min),
+            (o.east_max, o.north_max),
+            (o.east_min, o.north_max),
+        ]
+        outline = [site.to_geo(east, north) for east, north in corners]
+        bodies.append(ObstacleBody(**vars(o), outline=outline))
+    return bodies
 
 
 FLIGHT_SCAN_PAGE = 500

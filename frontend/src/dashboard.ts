@@ -13,6 +13,7 @@ import type { Header } from "./header";
 import { FleetMap } from "./map";
 import { ReplayPanel } from "./replayPanel";
 import { type CurrentUser, type HubConfig, type HubToClient, can } from "./types";
+import { ScanLayer } from "./scans/scanLayer";
 
 // Without the hub's config there is no protocol version to compare: assume ours.
 const OFFLINE_CONFIG: HubConfig = {
@@ -34,6 +35,7 @@ export class Dashboard {
   private socket: FleetSocket | null = null;
   private map: FleetMap | null = null;
   private table: FleetTable | null = null;
+  private scans: ScanLayer | null = null;
   private audit: AuditPanel | null = null;
   private replay: ReplayPanel | null = null;
   private store: FleetStore | null = null;
@@ -75,6 +77,7 @@ export class Dashboard {
     const select = (id: string, pan: boolean) => {
       table.select(id);
       map.select(id, pan);
+      scans.follow(id);
     };
     const map = new FleetMap(document.getElementById("map")!, config, (id) => select(id, false));
     const table = new FleetTable(
@@ -84,6 +87,8 @@ export class Dashboard {
     );
     this.map = map;
     this.table = table;
+    const scans = new ScanLayer(map.leaflet, (message) => this.socket?.send(message));
+    this.scans = scans;
 
     const store = new FleetStore(({ changed, removed, all }) => {
       if (this.stopped) return;
@@ -118,8 +123,10 @@ export class Dashboard {
 
     this.socket = new FleetSocket({
       onMessage,
+      onBinary: (data) => scans.onFrame(data),
       onState: (state, retry) => {
         if (!this.stopped) header.setConnection(state, retry);
+        if (state === "connected") scans.resubscribe();
       },
       onUnauthorized: (reason) => hooks.onUnauthorized(reason),
       onForbidden: (reason) => header.showNotice(`The hub refused the live feed: ${reason}`, true),
@@ -145,6 +152,8 @@ export class Dashboard {
     this.store = null;
     this.table?.destroy();
     this.table = null;
+    this.scans?.destroy();
+    this.scans = null;
     this.map?.destroy();
     this.map = null;
     this.header.setConnection("stopped");

@@ -1572,6 +1572,14 @@ export interface components {
             up_max: number;
             /** Voxels */
             voxels: number;
+            /**
+             * Outline
+             * @description the extent's corners as latitude, longitude (degrees), for a map
+             */
+            outline: [
+                number,
+                number
+            ][];
         };
         /** ParamGetCommand */
         ParamGetCommand: {

@@ -24,6 +24,7 @@ from backend.api import (
     missions,
     params,
     safety,
+    scans,
     surveys,
     system,
     tiles,
@@ -86,7 +87,7 @@ def create_app(settings: HubSettings | None = None) -> FastAPI:
         redoc_url=None,
     )
     modules: tuple[ModuleType, ...] = (system, auth, vehicles, params, missions, fleet_commands)
-    modules += (safety, surveys, *logs.ROUTE_MODULES, admin, tiles)
+    modules += (safety, surveys, scans, *logs.ROUTE_MODULES, admin, tiles)
     routers = [module.router for module in modules]
     document_errors(app, routers)
     for router in routers:

@@ -13,6 +13,7 @@ from pydantic_settings import BaseSettings, SettingsConfigDict
 from backend.auth.password_policy import password_problem
 from backend.storage.retention import AUDIT_MIN_RETENTION_DAYS, RetentionPolicy
 from common.addresses import is_loopback
+from common.geodesy import LocalFrame
 from protocol.messages import MAX_FRAME_BYTES
 
 REPO_ROOT = Path(__file__).resolve().parent.parent
@@ -135,6 +136,33 @@ class HubSettings(BaseSettings):
     )
     viz_trail_s: float = Field(default=60.0, ge=0, le=3600, description="3D trail length")
     max_bad_frames: int = Field(default=20, ge=1, description="before a connection is closed")
+    site_origin: str | None = Field(
+        default=None,
+        pattern=r"^-?\d+(\.\d+)?,-?\d+(\.\d+)?,-?\d+(\.\d+)?$",
+        description="LAT,LON,ALT_MSL of the site's east-north-up frame (scans' world points, "
+        "the point map); unset: the first scan's position",
+    )
+    scan_voxel_m: float = Field(
+        default=0.1, ge=0.01, le=5.0, description="the point map's voxel size"
+    )
+    scan_map_max_voxels: int = Field(
+        default=500_000,
+        ge=1000,
+        description="the point map's bound (about 100 bytes each): the least recently seen "
+        "voxels go first",
+    )
+    scan_max_rate_hz: float = Field(
+        default=20.0, gt=0, le=100, description="live scans per second per vehicle, at most"
+    )
+    scan_queue_limit: int = Field(default=2000, ge=10, description="scans waiting to be stored")
+
+    def site_frame(self) -> LocalFrame | None:
+        """The site's east-north-up frame, if an origin is configured."""
+        if self.site_origin is None:
+            return None
+        lat, lon, alt = (float(part) for part in self.site_origin.split(","))
+        return LocalFrame(lat, lon, alt)
+
     agent_liveness_timeout_s: float = Field(
         default=3.0,
         gt=0,

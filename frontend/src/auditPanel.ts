@@ -22,6 +22,7 @@ const ACTIONS: Record<AuditAction, true> = {
   "rails.update": true,
   "rails.clear": true,
   command: true,
+  "control.lease": true,
   denied: true,
 };
 

@@ -15,6 +15,7 @@ import { OpsPanels } from "./panels/opsPanels";
 import { MissionTools } from "./missions";
 import { ReplayPanel } from "./replayPanel";
 import { type CurrentUser, type HubConfig, type HubToClient, can } from "./types";
+import { ScanLayer } from "./scans/scanLayer";
 import { Viz3dPane } from "./viz3d/pane";
 
 // Without the hub's config there is no protocol version to compare: assume ours.
@@ -40,6 +41,7 @@ export class Dashboard {
   private socket: FleetSocket | null = null;
   private map: FleetMap | null = null;
   private table: FleetTable | null = null;
+  private scans: ScanLayer | null = null;
   private audit: AuditPanel | null = null;
   private replay: ReplayPanel | null = null;
   private store: FleetStore | null = null;
@@ -86,6 +88,7 @@ export class Dashboard {
       map.select(id, pan);
       ops.select(id);
       missions.select(id);
+      scans.follow(id);
     };
     const map = new FleetMap(document.getElementById("map")!, config, (id) => select(id, false));
     const table = new FleetTable(
@@ -100,6 +103,8 @@ export class Dashboard {
     this.viz3d = new Viz3dPane(document.getElementById("map")!);
     const missions = new MissionTools(map.leaflet, can(user, "command"));
     this.missions = missions;
+    const scans = new ScanLayer(map.leaflet, (message) => this.socket?.send(message));
+    this.scans = scans;
 
     const store = new FleetStore(({ changed, removed, all }) => {
       if (this.stopped) return;
@@ -140,8 +145,10 @@ export class Dashboard {
 
     this.socket = new FleetSocket({
       onMessage,
+      onBinary: (data) => scans.onFrame(data),
       onState: (state, retry) => {
         if (!this.stopped) header.setConnection(state, retry);
+        if (state === "connected") scans.resubscribe();
       },
       onUnauthorized: (reason) => hooks.onUnauthorized(reason),
       onForbidden: (reason) => header.showNotice(`The hub refused the live feed: ${reason}`, true),
@@ -173,6 +180,8 @@ export class Dashboard {
     this.missions = null;
     this.table?.destroy();
     this.table = null;
+    this.scans?.destroy();
+    this.scans = null;
     this.map?.destroy();
     this.map = null;
     this.header.setConnection("stopped");

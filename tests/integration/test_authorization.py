@@ -138,9 +138,26 @@ def test_client_feed_needs_a_login_and_serves_every_role(hub: str, users: dict[s
         headers = {"Authorization": f"Bearer {access_token(hub, name, PASSWORD)}"}
         with connect(url, additional_headers=headers) as feed:
             assert json.loads(feed.recv(timeout=5))["type"] == "fleet"
-            for message_type in CLIENT_MESSAGE_PERMISSIONS:
-                feed.send(json.dumps({"type": message_type}))
+            # Every message a reader may send, each well formed, is served for every role;
+            # the COMMAND ones (control, manual) are tested in test_manual_control.py.
+            for message_type, permission in CLIENT_MESSAGE_PERMISSIONS.items():
+                if permission is not Permission.READ:
+                    continue
+                feed.send(json.dumps(_READ_SAMPLES[message_type]))
                 assert json.loads(feed.recv(timeout=5))["type"] != "error"
+
+
+# A valid message of each type that needs only READ.
+_READ_SAMPLES: dict[str, dict[str, Any]] = {
+    "ping": {"type": "ping", "nonce": "n1"},
+    "subscribe_scans": {"type": "subscribe_scans", "vehicle_id": "V1"},
+    "unsubscribe_scans": {"type": "unsubscribe_scans", "vehicle_id": "V1"},
+}
+
+
+def test_every_read_message_has_a_sample() -> None:
+    reads = {t for t, p in CLIENT_MESSAGE_PERMISSIONS.items() if p is Permission.READ}
+    assert reads == set(_READ_SAMPLES)
 
 
 def test_user_tokens_cannot_connect_as_agents(hub: str, users: dict[str, str]) -> None:

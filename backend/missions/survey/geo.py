@@ -59,8 +59,3 @@ def polygon_from_geojson(geometry: Any) -> tuple[Polygon, LocalFrame]:
         )
     polygon = Polygon(local, [[frame.to_local(lat, lon) for lon, lat in h] for h in holes])
     return polygon, frame
-
-
-def to_geo(frame: LocalFrame, point: tuple[float, float]) -> tuple[float, float]:
-    """(lat, lon) of a local point."""
-    return frame.to_geo(point[0], point[1])

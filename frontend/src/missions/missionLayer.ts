@@ -125,7 +125,9 @@ export class MissionLayer {
         L.DomEvent.stop(event);
         this.hooks.insert(index, event.latlng);
       });
-      leg.bindTooltip("Click to insert a waypoint", { sticky: true });
+      leg.bindTooltip(Object.assign(document.createElement("span"), { textContent: "Click to insert a waypoint" }), {
+        sticky: true,
+      });
     }
     this.group.addLayer(leg);
   }

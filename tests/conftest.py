@@ -3,7 +3,7 @@ from __future__ import annotations
 import os
 import uuid
 from collections.abc import Callable, Iterator
-from contextlib import contextmanager
+from contextlib import ExitStack, contextmanager
 from pathlib import Path
 from typing import Any
 
@@ -43,12 +43,32 @@ def hub(tmp_path: Path) -> Iterator[str]:
         yield base_url
 
 
+@contextmanager
+def _environment(**values: str) -> Iterator[None]:
+    """Set environment variables for the processes started inside; restored after."""
+    saved = {name: os.environ.get(name) for name in values}
+    os.environ.update(values)
+    try:
+        yield
+    finally:
+        for name, value in saved.items():
+            if value is None:
+                os.environ.pop(name, None)
+            else:
+                os.environ[name] = value
+
+
 @pytest.fixture(scope="session")
 def fleet(tmp_path_factory: pytest.TempPathFactory) -> Iterator[LocalFleet]:
     """Hub, three simulators and three agents as real processes on loopback."""
-    with running_fleet(
-        tmp_path_factory.mktemp("fleet"), vehicles=3, speedup=FLEET_SPEEDUP
-    ) as local_fleet:
+    # Every test shares the admin's budget of requests that reach a vehicle on this hub;
+    # at the default 20 a second, back-to-back tests would meet each other's 429s (the
+    # limit's own tests run on hubs of their own).
+    with ExitStack() as stack:
+        with _environment(GCS_COMMANDS_PER_SECOND="1000"):  # for the processes it starts
+            local_fleet = stack.enter_context(
+                running_fleet(tmp_path_factory.mktemp("fleet"), vehicles=3, speedup=FLEET_SPEEDUP)
+            )
         token = access_token(local_fleet.plan.hub_http, "admin", local_fleet.plan.admin_password)
         with api_client(local_fleet.plan.hub_http, token) as api:
             for index in range(local_fleet.plan.vehicles):

@@ -17,7 +17,7 @@ def mavutil() -> Any:
     it loads "all" and loads it again for MAVLink 2 on the first frame (about 6 MB more on
     a small board), and its messages would come from another module than the dialect the
     agent decodes with. So nothing in the agent imports it at module level; the link and
-    the mode tables ask for it here. An operator's own MAVLINK_DIALECT still wins.
+    the mode tables ask for it here, and it always speaks MAVLink 2 in that dialect.
     """
     os.environ.setdefault("MAVLINK20", "1")
     os.environ.setdefault("MAVLINK_DIALECT", DIALECT)
@@ -29,4 +29,9 @@ def mavutil() -> Any:
         sys.modules.setdefault(UNUSED_ON_IMPORT, None)  # type: ignore[arg-type]
     from pymavlink import mavutil as module
 
+    if module.current_dialect != DIALECT or not module.mavlink20():
+        # Imported earlier by someone else in this process (a test, an embedding tool), on
+        # another dialect or MAVLink 1: the agent's messages must be the ones it decodes.
+        os.environ["MAVLINK20"] = "1"
+        module.set_dialect(DIALECT)
     return module

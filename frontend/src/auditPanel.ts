@@ -24,6 +24,7 @@ const ACTIONS: Record<AuditAction, true> = {
   command: true,
   "control.lease": true,
   denied: true,
+  "control.lease": true,
 };
 
 /** The credential an entry was made with: an API token by name, else its kind. */

@@ -13,7 +13,7 @@ from typing import Any
 import httpx
 import jsonschema_rs
 import pytest
-from playwright.sync_api import Browser, Page, expect
+from playwright.sync_api import Browser, FloatRect, Page, expect
 
 from common.geodesy import LocalFrame, haversine_m
 from gcs.launcher import LocalFleet
@@ -141,6 +141,54 @@ def test_a_qgc_plan_opens_and_a_saved_plan_is_qgcs_format(
     expect(rows).to_have_count(5)
 
 
+def _box(page: Page, selector: str) -> FloatRect:
+    box = page.locator(selector).first.bounding_box()
+    assert box is not None, f"{selector} is not on the page"
+    return box
+
+
+def _pan_clear_of_panel(page: Page, vehicle: str) -> None:
+    """Drag the map so that the vehicle sits midway between the map's left edge and
+    the mission panel, low in the map: the panel floats over the map's top right and
+    grows downwards as items are added, and the map is only a column of the dashboard,
+    so the drawing (some 240 px wide, 160 px above and 80 px below the vehicle at this
+    zoom) must lie wholly to the left of the panel."""
+    marker_at = f'.vehicle-marker[data-vehicle-id="{vehicle}"]'
+    # Leaflet ignores a drag begun while it animates a zoom or pan: wait for it to end.
+    last = [_box(page, marker_at)]
+
+    def settled() -> bool:
+        now = _box(page, marker_at)
+        same = now == last[0]
+        last[0] = now
+        return same
+
+    poll_until(settled, 10, "the map to settle", every_s=0.3)
+    area, panel, marker = _box(page, "#map"), _box(page, ".mission-panel"), last[0]
+    here = (marker["x"] + marker["width"] / 2, marker["y"] + marker["height"] / 2)
+    there = ((area["x"] + panel["x"]) / 2, area["y"] + area["height"] * 0.65)
+    # Grab the map well below the vehicles, where there is nothing but map.
+    start = (area["x"] + area["width"] / 2, area["y"] + area["height"] * 0.85)
+    page.mouse.move(*start)
+    page.mouse.down()
+    page.mouse.move(start[0] + there[0] - here[0], start[1] + there[1] - here[1], steps=15)
+    page.mouse.up()
+
+
+def _assert_on_open_map(page: Page, x: float, y: float) -> None:
+    """A point to click or drag on the map: on the map, not under a panel or control."""
+    hit = page.evaluate(
+        """([x, y]) => {
+            const element = document.elementFromPoint(x, y);
+            if (element === null) return "nothing";
+            if (element.closest(".mission-panel, .leaflet-control")) return "a panel";
+            return element.closest("#map") ? "map" : element.tagName;
+        }""",
+        [x, y],
+    )
+    assert hit == "map", f"({x:.0f}, {y:.0f}) is on {hit}, not the open map"
+
+
 def _u_fence(frame: LocalFrame) -> list[dict[str, float]]:
     """A U open to the north around the vehicle: a notch 20 m wide from 20 m north."""
     corners = [(-60, -40), (60, -40), (60, 80), (10, 80), (10, 20), (-10, 20), (-10, 80), (-60, 80)]
@@ -164,10 +212,13 @@ def test_a_drawn_mission_is_refused_on_its_leg_fixed_by_dragging_and_flown(
         zoom_out = page.locator(".leaflet-control-zoom-out")
         zoom_out.click()
         zoom_out.click()
+        _pan_clear_of_panel(page, MISSION_VEHICLE)
         pixels = PixelMap(page, api, GOTO_VEHICLE, MISSION_VEHICLE)
 
         def at(east: float, north: float) -> tuple[float, float]:
-            return pixels.pixel(*frame.to_geo(east, north))
+            x, y = pixels.pixel(*frame.to_geo(east, north))
+            _assert_on_open_map(page, x, y)
+            return x, y
 
         # Draw: a take-off (added by Edit), a waypoint in each arm of the U, then RTL.
         page.locator('[data-action="mission-edit"]').click()

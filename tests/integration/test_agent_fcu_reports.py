@@ -140,8 +140,15 @@ def test_chunked_statustexts_become_one_event_each() -> None:
                 fcu.push(text(first, 7, 0), text(")", 7, 1))
                 fcu.push(text("Takeoff detected"))  # id 0: complete in itself
                 # chunks out of order, another text's chunks in between
-                fcu.push(text("b" * 50, 9, 1), text("tail", 8, 1), text("a" * 50, 9, 0))
-                fcu.push(text("head of 8 " + "h" * 40, 8, 0), text("end", 9, 2))
+                # One push: the sets are complete within the agent's 1 s wait, however
+                # busy the machine.
+                fcu.push(
+                    text("b" * 50, 9, 1),
+                    text("tail", 8, 1),
+                    text("a" * 50, 9, 0),
+                    text("head of 8 " + "h" * 40, 8, 0),
+                    text("end", 9, 2),
+                )
                 fcu.push(text(exact[:50], 10, 0), text(exact[50:], 10, 1))
                 events = await agent.events(5)
                 await agent.no_more_events()

@@ -125,9 +125,9 @@ export class MissionLayer {
         L.DomEvent.stop(event);
         this.hooks.insert(index, event.latlng);
       });
-      leg.bindTooltip(Object.assign(document.createElement("span"), { textContent: "Click to insert a waypoint" }), {
-        sticky: true,
-      });
+      const hint = document.createElement("span");
+      hint.textContent = "Click to insert a waypoint";
+      leg.bindTooltip(hint, { sticky: true });
     }
     this.group.addLayer(leg);
   }

@@ -24,8 +24,10 @@ from backend.api import (
     missions,
     params,
     safety,
+    scans,
     surveys,
     system,
+    tiles,
     vehicles,
     viz,
     websockets,
@@ -85,15 +87,16 @@ def create_app(settings: HubSettings | None = None) -> FastAPI:
         redoc_url=None,
     )
     modules: tuple[ModuleType, ...] = (system, auth, vehicles, params, missions, fleet_commands)
-    modules += (safety, surveys, *logs.ROUTE_MODULES, admin)
+    modules += (safety, surveys, scans, *logs.ROUTE_MODULES, admin, tiles)
     routers = [module.router for module in modules]
     document_errors(app, routers)
     for router in routers:
         app.include_router(router, prefix=API_PREFIX)
     app.include_router(websockets.router)
     app.include_router(viz.router)
+    app.include_router(tiles.tile_router)  # /tiles/<name>/{z}/{x}/{y}, beside the API
     install_method_not_allowed(app, routers, API_PREFIX)
-    install_docs(app, content_security_policy(settings.basemap_url))
+    install_docs(app, content_security_policy(*settings.online_tile_urls))
     app.add_exception_handler(GcsError, _gcs_error_response)  # type: ignore[arg-type]
     app.add_exception_handler(OperationalError, _database_unavailable)  # type: ignore[arg-type]
     if settings.cors_origins:
@@ -107,7 +110,7 @@ def create_app(settings: HubSettings | None = None) -> FastAPI:
     app.add_middleware(
         SecurityMiddleware,
         max_body_bytes=settings.max_body_bytes,
-        csp=content_security_policy(settings.basemap_url),
+        csp=content_security_policy(*settings.online_tile_urls),
         hsts=settings.environment == "production",
         large_bodies={r"^/api/v1/vehicles/[^/]+/tlogs$": settings.max_tlog_bytes},
     )

@@ -20,9 +20,11 @@ from backend.control.lease import LeaseBook
 from backend.fleet.commands import CommandDispatcher
 from backend.fleet.registry import FleetRegistry, VehicleRecord
 from backend.fleet.safety_gate import SafetyGate
+from backend.mapping.tiles import TileLibrary
 from backend.realtime.bus import InProcessBus, ReliableSubscription, Topic
 from backend.realtime.collaborators import AgentConnection, ClientConnection
 from backend.realtime.live_events import live_event
+from backend.scans.service import ScanService
 from backend.settings import HubSettings
 from backend.storage.database import make_engine, migrate
 from backend.storage.logbook import Logbook
@@ -31,6 +33,7 @@ from backend.storage.rails import RailsRepository
 from backend.storage.records import StoredEvent
 from backend.storage.repository import Repository
 from backend.storage.retention import RetentionPolicy
+from backend.storage.scans import ScanRepository
 from backend.storage.sequences import Gap, StreamKey
 from backend.storage.spool import RowSpool
 from backend.storage.writer import StorageWriter
@@ -61,8 +64,11 @@ class Hub:
     command_limiter: RateLimiter
     passwords: PasswordWork
     safety: SafetyGate
+    scans: ScanService
     # Audit and command-log rows waiting out a database outage.
     spool: RowSpool
+    # The offline tile sets in the tiles folder.
+    tiles: TileLibrary
     # Live agent connections by vehicle, so revoking a token can drop its connection.
     agent_sessions: dict[str, AgentConnection] = field(default_factory=dict)
     # Held while an agent's hello is judged against the one holding its vehicle id.
@@ -115,6 +121,7 @@ class Hub:
             accounts=accounts,
             audit=audit,
             spool=spool,
+            tiles=TileLibrary(settings.tiles_folder),
             login_limiter=RateLimiter(Limit(settings.login_attempts_per_minute, 60.0)),
             login_address_limiter=RateLimiter(
                 Limit(settings.login_attempts_per_address_per_minute, 60.0)
@@ -124,6 +131,15 @@ class Hub:
                 settings.password_hash_threads, settings.password_hash_max_pending
             ),
             safety=SafetyGate(RailsRepository(engine), settings),
+            scans=ScanService(
+                ScanRepository(engine),
+                bus,
+                site=settings.site_frame(),
+                voxel_m=settings.scan_voxel_m,
+                max_voxels=settings.scan_map_max_voxels,
+                max_rate_hz=settings.scan_max_rate_hz,
+                queue_limit=settings.scan_queue_limit,
+            ),
         )
         writer.on_sequences = hub.deliver_sequence_news
         if settings.viz_enabled:
@@ -140,6 +156,7 @@ class Hub:
         try:
             async with asyncio.TaskGroup() as tasks:
                 tasks.create_task(self.writer.run())
+                tasks.create_task(self.scans.run())
                 tasks.create_task(self._apply_retention())
                 tasks.create_task(self._drain_spool())
                 if self.scene is not None:
@@ -153,6 +170,7 @@ class Hub:
             if self.viz is not None:
                 await asyncio.to_thread(self.viz.stop)
             self.passwords.close()
+            self.tiles.close()
             self.engine.dispose()
 
     def deliver_sequence_news(self, acks: dict[StreamKey, int], gaps: list[Gap]) -> None:

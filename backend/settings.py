@@ -13,9 +13,14 @@ from pydantic_settings import BaseSettings, SettingsConfigDict
 from backend.auth.password_policy import password_problem
 from backend.storage.retention import AUDIT_MIN_RETENTION_DAYS, RetentionPolicy
 from common.addresses import is_loopback
+from common.geodesy import LocalFrame
 from protocol.messages import MAX_FRAME_BYTES
 
 REPO_ROOT = Path(__file__).resolve().parent.parent
+OSM_TILE_URL = "https://tile.openstreetmap.org/{z}/{x}/{y}.png"
+OSM_ATTRIBUTION = (
+    '&copy; <a href="https://www.openstreetmap.org/copyright">OpenStreetMap</a> contributors'
+)
 
 # Secrets that ship in examples and tutorials; refused outside development.
 WEAK_SECRETS = frozenset(
@@ -131,6 +136,33 @@ class HubSettings(BaseSettings):
     )
     viz_trail_s: float = Field(default=60.0, ge=0, le=3600, description="3D trail length")
     max_bad_frames: int = Field(default=20, ge=1, description="before a connection is closed")
+    site_origin: str | None = Field(
+        default=None,
+        pattern=r"^-?\d+(\.\d+)?,-?\d+(\.\d+)?,-?\d+(\.\d+)?$",
+        description="LAT,LON,ALT_MSL of the site's east-north-up frame (scans' world points, "
+        "the point map); unset: the first scan's position",
+    )
+    scan_voxel_m: float = Field(
+        default=0.1, ge=0.01, le=5.0, description="the point map's voxel size"
+    )
+    scan_map_max_voxels: int = Field(
+        default=500_000,
+        ge=1000,
+        description="the point map's bound (about 100 bytes each): the least recently seen "
+        "voxels go first",
+    )
+    scan_max_rate_hz: float = Field(
+        default=20.0, gt=0, le=100, description="live scans per second per vehicle, at most"
+    )
+    scan_queue_limit: int = Field(default=2000, ge=10, description="scans waiting to be stored")
+
+    def site_frame(self) -> LocalFrame | None:
+        """The site's east-north-up frame, if an origin is configured."""
+        if self.site_origin is None:
+            return None
+        lat, lon, alt = (float(part) for part in self.site_origin.split(","))
+        return LocalFrame(lat, lon, alt)
+
     agent_liveness_timeout_s: float = Field(
         default=3.0,
         gt=0,
@@ -150,11 +182,21 @@ class HubSettings(BaseSettings):
     )
     retention_interval_s: float = Field(default=3600, gt=0)
 
+    # The online base maps: XYZ URL templates ({z}/{x}/{y}, optionally {s} for a, b, c).
+    # An empty URL turns one off; the CSP lets the browser reach exactly these hosts.
     basemap_url: str | None = Field(
-        default=None, description="XYZ tile URL template; a plain grid when unset (offline)"
+        default=OSM_TILE_URL, description="the street map; empty turns it off"
     )
-    basemap_attribution: str = ""
+    basemap_attribution: str = Field(
+        default="", description="shown with the street map; OpenStreetMap's for its tiles"
+    )
     basemap_max_zoom: int = Field(default=19, ge=1, le=24)
+    imagery_url: str | None = Field(default=None, description="aerial imagery; off when unset")
+    imagery_attribution: str = ""
+    imagery_max_zoom: int = Field(default=19, ge=1, le=24)
+    tiles_dir: Path | None = Field(
+        default=None, description="offline tile sets (.mbtiles, .pmtiles); <data dir>/tiles"
+    )
     frontend_dir: Path | None = Field(
         default=None,
         description="the built dashboard (its index.html); unset: frontend/dist of the "
@@ -172,6 +214,20 @@ class HubSettings(BaseSettings):
             if path and field_name not in values:
                 values[field_name] = Path(path).read_text().strip()
         return values
+
+    @model_validator(mode="after")
+    def _online_base_maps(self) -> HubSettings:
+        for name in ("basemap_url", "imagery_url"):
+            url = getattr(self, name)
+            if not url:
+                setattr(self, name, None)  # empty: this base map is off
+                continue
+            problem = tile_url_problem(url)
+            if problem:
+                raise ValueError(f"GCS_{name.upper()} {problem}")
+        if self.basemap_url == OSM_TILE_URL and not self.basemap_attribution:
+            self.basemap_attribution = OSM_ATTRIBUTION  # its licence asks for it
+        return self
 
     @model_validator(mode="after")
     def _no_default_secrets_in_production(self) -> HubSettings:
@@ -226,6 +282,14 @@ class HubSettings(BaseSettings):
         )
 
     @property
+    def tiles_folder(self) -> Path:
+        return self.tiles_dir or self.data_dir / "tiles"
+
+    @property
+    def online_tile_urls(self) -> list[str]:
+        return [url for url in (self.basemap_url, self.imagery_url) if url]
+
+    @property
     def on_loopback(self) -> bool:
         """Listening on this machine only, where nothing else on the network reaches."""
         return is_loopback(self.host)
@@ -240,3 +304,14 @@ class HubSettings(BaseSettings):
         if self.database_url:
             return self.database_url
         return f"sqlite:///{(self.data_dir / 'gcs.sqlite3').resolve()}"
+
+
+def tile_url_problem(url: str) -> str:
+    """Why an XYZ URL template cannot be used, or "" when it can."""
+    parts = urlsplit(url)
+    if parts.scheme not in ("https", "http") or not parts.netloc:
+        return f"must be an http(s) URL, not {url!r}"
+    missing = [key for key in ("{z}", "{x}", "{y}") if key not in url]
+    if missing:
+        return f"must hold {', '.join(missing)} (an XYZ template such as {OSM_TILE_URL})"
+    return ""

@@ -28,7 +28,7 @@ def _configure_logging(level: str) -> None:
 
 
 # The extra each subcommand needs beyond the agent's base dependencies.
-EXTRAS = {"hub": "hub", "demo": "hub", "sim": "simulator"}
+EXTRAS = {"hub": "hub", "demo": "hub", "sim": "simulator", "tiles": "hub"}
 
 
 def _needs_extra(command: str, error: ModuleNotFoundError) -> int:
@@ -188,6 +188,12 @@ def _exposure_note(host: str) -> str:
     )
 
 
+def _tiles(args: argparse.Namespace) -> int:
+    from gcs.tiles import run
+
+    return run(args)
+
+
 def _interrupt(signum: int, frame: object) -> None:
     """A stopping signal stops the demo the way Ctrl-C does."""
     raise KeyboardInterrupt
@@ -217,6 +223,11 @@ def build_parser() -> argparse.ArgumentParser:
         "sim", help="run a simulated MAVLink copter (see `gcs sim --help`)", add_help=False
     )
 
+    from gcs.tiles import add_tiles_arguments
+
+    tiles = commands.add_parser("tiles", help="the hub's offline base maps (.mbtiles, .pmtiles)")
+    add_tiles_arguments(tiles)
+
     demo = commands.add_parser("demo", help="hub + simulated fleet + agents, one command")
     demo.add_argument("--vehicles", type=int, default=3)
     demo.add_argument(
@@ -241,6 +252,7 @@ def main(argv: list[str] | None = None) -> int:
         "agent": _agent,
         "demo": _demo,
         "sim": lambda args: _sim(args, rest),
+        "tiles": _tiles,
     }
     try:
         return handlers[args.command](args)

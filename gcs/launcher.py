@@ -58,6 +58,8 @@ class FleetPlan:
     # ("ardupilot", "px4"); vehicles beyond a tuple's end are ArduPilot quads.
     frames: tuple[str, ...] = ()
     autopilots: tuple[str, ...] = ()
+    # Each simulator fits a 2-D LIDAR (its bytes on a TCP port) and each agent relays it.
+    lidars: bool = False
 
     @property
     def local_host(self) -> str:
@@ -154,6 +156,7 @@ class LocalFleet:
         self.log_dir = plan.data_dir / "logs"
         self.processes: list[ManagedProcess] = []
         self.sim_ports: dict[int, int] = {}  # by vehicle index, to restart an agent
+        self.lidar_ports: dict[int, int] = {}
 
     def vehicle_id(self, index: int) -> str:
         return self.plan.vehicle_id(index)
@@ -212,6 +215,10 @@ class LocalFleet:
         sim_port = free_port()
         self.sim_ports[index] = sim_port
         lat, lon, alt = self.plan.vehicle_home(index)
+        lidar: list[str] = []
+        if self.plan.lidars:
+            self.lidar_ports[index] = free_port()
+            lidar = ["--lidar", f"tcp:127.0.0.1:{self.lidar_ports[index]}"]
         self.spawn(
             f"sim_{index + 1}",
             [
@@ -225,6 +232,7 @@ class LocalFleet:
                 "--speedup",
                 str(self.plan.speedup),
                 *self.plan.vehicle_sim_args(index),
+                *lidar,
             ],
         )
         self.start_agent(index, sim_port)
@@ -249,6 +257,11 @@ class LocalFleet:
                 # ...and keeps what the hub has not stored on disk, through hub outages.
                 "--outbox-dir",
                 str(self.plan.data_dir / "onboard" / self.vehicle_id(index)),
+                *(
+                    ["--lidar", f"tcp://127.0.0.1:{self.lidar_ports[index]}"]
+                    if index in self.lidar_ports
+                    else []
+                ),
             ],
             {"GCS_AGENT_TOKEN": self.plan.agent_token(index)},
         )

@@ -16,6 +16,10 @@ Delivery rules per message type (the realtime path honours them):
   does not change while an agent stays connected (its modes, autopilot and vehicle type)
   goes out once per client connection, and again only when it changes.
 - ``command`` / ``command_result``: request/response, correlated by ``request_id``.
+- LIDAR scans are binary frames (`protocol.scans`), the one exception to JSON: agents
+  send each scan newest first, then any backlog flagged as replayed; the hub stores them
+  all and sends a client only the newest scan of each vehicle it subscribed to
+  (``subscribe_scans``), never a queue.
 """
 
 from __future__ import annotations
@@ -672,6 +676,28 @@ class EventBatch(Message):
     )
 
 
+class SubscribeScans(Message):
+    """Send me this vehicle's scans (binary frames, protocol/scans.py), newest only."""
+
+    type: Literal["subscribe_scans"] = "subscribe_scans"
+    vehicle_id: VehicleId
+
+
+class UnsubscribeScans(Message):
+    type: Literal["unsubscribe_scans"] = "unsubscribe_scans"
+    vehicle_id: VehicleId
+
+
+MAX_SCAN_SUBSCRIPTIONS = 64
+
+
+class ScanSubscriptions(Message):
+    """The vehicles whose scans this feed now receives (the answer to a (un)subscribe)."""
+
+    type: Literal["scan_subscriptions"] = "scan_subscriptions"
+    vehicles: list[VehicleId] = Field(max_length=MAX_SCAN_SUBSCRIPTIONS)
+
+
 class Ping(Message):
     type: Literal["ping"] = "ping"
     nonce: str | None = Field(default=None, max_length=64)
@@ -749,9 +775,12 @@ HubToAgent: TypeAlias = Annotated[
     Welcome | CommandRequest | Ack | Resend | ErrorReply | Ping | ManualFrame,
     Field(discriminator="type"),
 ]
-ClientToHub: TypeAlias = Annotated[Ping | ControlRequest | ManualInput, Field(discriminator="type")]
+ClientToHub: TypeAlias = Annotated[
+    Ping | ControlRequest | ManualInput | SubscribeScans | UnsubscribeScans,
+    Field(discriminator="type"),
+]
 HubToClient: TypeAlias = Annotated[
-    FleetSnapshot | VehicleUpdate | EventBatch | Pong | ErrorReply | LeaseState,
+    FleetSnapshot | VehicleUpdate | EventBatch | ScanSubscriptions | Pong | ErrorReply | LeaseState,
     Field(discriminator="type"),
 ]
 

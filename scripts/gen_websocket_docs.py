@@ -279,6 +279,13 @@ def render() -> str:
         "4. The client may send [`ping`](#ping) at any time; the hub answers "
         "[`pong`](#pong) with the same `nonce`. Nothing else is accepted from a client "
         f"({client_permissions}).",
+        "4. LIDAR scans: after [`subscribe_scans`](#subscribescans) for a vehicle (answered "
+        "with [`scan_subscriptions`](#scansubscriptions)), the hub sends that vehicle's scans "
+        "as **binary** frames: `GSCV`, the vehicle id's length (one byte) and the id, then "
+        "the agent's scan frame, laid out in `protocol/scans.py` (uint16 millimetre ranges, "
+        "the poses at the turn's start and end; 1,580 bytes for 720 beams). Only the newest "
+        "scan of each subscribed vehicle is kept for a feed: a client that reads slowly "
+        "gets fewer scans, never a queue. A feed that subscribed to nothing gets none.",
         "",
         "Commands are not sent on the feed: they go through the REST API "
         "(`POST /api/v1/vehicles/{id}/commands`, `POST /api/v1/fleet/commands`), which "

@@ -7,6 +7,7 @@ import logging
 import sys
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Literal
 
 from common.geodesy import GeoPoint
@@ -66,6 +67,10 @@ class SimulatorConfig:
     message_interval: MessageIntervalSupport = "supported"
     frame: Frame = "quad"
     autopilot: Autopilot = "ardupilot"
+    # A 2-D LIDAR whose serial bytes are served on this TCP address; None: no LIDAR.
+    lidar: ListenAddress | None = None
+    lidar_rate_hz: float = 10.0
+    scene: Path | None = None  # obstacles (simulator/world.py); None: the default yard
 
     def __post_init__(self) -> None:
         if not 1 <= self.system_id <= 255:
@@ -74,6 +79,10 @@ class SimulatorConfig:
             raise ValueError(f"speed-up must be > 0 and <= {MAX_SPEEDUP:g}, got {self.speedup}")
         if self.frame == "rover" and self.autopilot != "ardupilot":
             raise ValueError("the rover is simulated as ArduRover only (--autopilot ardupilot)")
+        if self.lidar is not None and self.lidar.scheme != "tcp":
+            raise ValueError("the LIDAR's bytes are served over TCP only (--lidar tcp:HOST:PORT)")
+        if not 5.0 <= self.lidar_rate_hz <= 12.0:
+            raise ValueError(f"LIDAR rate must be 5..12 Hz, got {self.lidar_rate_hz}")
         if self.gps2_fix is not None and not 0 <= self.gps2_fix <= 8:
             raise ValueError(f"GPS2 fix type must be a GPS_FIX_TYPE, 0..8, got {self.gps2_fix}")
 
@@ -191,6 +200,28 @@ def build_parser() -> argparse.ArgumentParser:
         default=defaults.autopilot,
         help="the autopilot the quad plays on the wire: its modes and answers (default ardupilot)",
     )
+    parser.add_argument(
+        "--lidar",
+        type=_listen,
+        default=None,
+        metavar="tcp:HOST:PORT",
+        help="fit a 2-D LIDAR (a YDLIDAR T-mini Pro) and serve its serial bytes on this TCP "
+        "address (default: no LIDAR)",
+    )
+    parser.add_argument(
+        "--lidar-rate",
+        type=float,
+        default=defaults.lidar_rate_hz,
+        metavar="HZ",
+        help="the LIDAR's turns per second, 5..12 (default 10: 0.5 degree beams)",
+    )
+    parser.add_argument(
+        "--scene",
+        type=Path,
+        default=None,
+        metavar="FILE",
+        help="a JSON scene of obstacles for the LIDAR (default: a small yard around home)",
+    )
     return parser
 
 
@@ -223,6 +254,9 @@ def parse_args(argv: Sequence[str] | None = None) -> SimulatorConfig:
             message_interval=args.message_interval,
             frame=args.frame,
             autopilot=args.autopilot,
+            lidar=args.lidar,
+            lidar_rate_hz=args.lidar_rate,
+            scene=args.scene,
         )
     except ValueError as error:  # a combination the options cannot express
         parser.error(str(error))

@@ -14,7 +14,7 @@ import logging
 import time
 from abc import ABC, abstractmethod
 from collections.abc import Callable
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
@@ -31,6 +31,9 @@ from simulator.telemetry import (
 )
 from simulator.vehicle import ItemReached, Vehicle
 from simulator.vehicles import REBOOT_SILENCE_S, build_vehicle
+
+if TYPE_CHECKING:
+    from simulator.lidar_stream import LidarStream
 
 log = logging.getLogger(__name__)
 
@@ -157,6 +160,8 @@ class SimulatorServer:
         self._ticker: asyncio.Task[None] | None = None
         self._signature = self._state_signature()
         self._silent_until = 0.0  # a rebooting flight controller neither hears nor sends
+        self.lidar: LidarStream | None = None
+        self.lidar_address: ListenAddress | None = None
 
     # -- lifecycle -------------------------------------------------------------
 
@@ -176,6 +181,17 @@ class SimulatorServer:
             self._udp_transport = transport
             port = int(transport.get_extra_info("sockname")[1])
         self.address = ListenAddress(listen.scheme, listen.host, port)
+        if self.config.lidar is not None:
+            # numpy is imported only by a simulator that has a LIDAR to ray-cast for
+            from simulator.lidar_stream import LidarStream
+
+            self.lidar = LidarStream(
+                self.config.lidar,
+                self.config.scene,
+                self.config.lidar_rate_hz,
+                seed=self.config.system_id,
+            )
+            self.lidar_address = await self.lidar.start()
         self._ticker = asyncio.create_task(self._tick_forever(), name="simulator-tick")
         log.info(
             "simulator sysid=%d listening on %s speedup=%g",
@@ -194,6 +210,8 @@ class SimulatorServer:
             self._ticker = None
         if self._tcp_server is not None:
             self._tcp_server.close()
+        if self.lidar is not None:
+            await self.lidar.stop()
         for link in list(self.links):
             link.close()
         if self._client_tasks:
@@ -227,6 +245,8 @@ class SimulatorServer:
         """Catch the physics up with the clock and send whatever streams are due."""
         now = self._wall()
         self.copter.advance_to(self.clock.now())
+        if self.lidar is not None:  # the sensor has its own power: it turns through a reboot
+            self.lidar.advance(self.copter)
         if now < self._silent_until:
             return
         self._publish_changes(now)

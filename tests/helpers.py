@@ -44,10 +44,11 @@ class _NotifyingServer(uvicorn.Server):
 
 
 @contextmanager
-def running_hub(settings: HubSettings) -> Iterator[str]:
-    """The hub app served by uvicorn in a thread; yields its http:// base URL."""
+def running_hub(settings: HubSettings, app: Any = None) -> Iterator[str]:
+    """The hub app (``app``, else one made from ``settings``) served by uvicorn in a
+    thread; yields its http:// base URL."""
     config = uvicorn.Config(
-        create_app(settings),
+        app if app is not None else create_app(settings),
         host="127.0.0.1",
         port=settings.port,
         log_level="warning",

@@ -30,6 +30,9 @@ from vehicle_agents.manual import ManualPilot
 from vehicle_agents.mission_progress import ReachedItems
 from vehicle_agents.missions import mission_number
 from vehicle_agents.outbox import Outbox, SpillFile
+from vehicle_agents.sensors.fcu_time import FcuClock, PoseHistory
+from vehicle_agents.sensors.relay import DiskBacklog, ScanOutbox, ScanRelay, parse_mount
+from vehicle_agents.sensors.sources import ObstacleDistanceSource, ScanSource, YdlidarSource
 from vehicle_agents.statustext import StatusTextJoiner
 from vehicle_agents.streams import StreamRequester
 from vehicle_agents.telemetry import link_snapshot
@@ -40,6 +43,7 @@ from vehicle_agents.tlog_uploads import TlogUploader
 log = logging.getLogger(__name__)
 
 CAPABILITIES = ["telemetry", "commands", "events", "manual"]
+SCAN_CAPABILITY = "scans"
 
 
 async def run_agent(settings: AgentSettings) -> None:
@@ -72,7 +76,7 @@ async def _run(settings: AgentSettings) -> None:
             vehicle_type=link.modes.vehicle_type,
             system_id=link.target_system,
             modes=link.modes.names,
-            capabilities=CAPABILITIES,
+            capabilities=CAPABILITIES + ([SCAN_CAPABILITY] if settings.lidar else []),
             agent_version=__version__,
             stream_id=uuid.uuid4().hex[:16],
         )
@@ -83,6 +87,11 @@ async def _run(settings: AgentSettings) -> None:
         executor = CommandExecutor(link)
         pilot = ManualPilot(link, executor, events.emit)
         tasks.create_task(pilot.run())
+        scans = None
+        if settings.lidar:
+            relay = scan_relay(settings, link, vehicle_id)
+            scans = relay.outbox
+            tasks.create_task(relay.run())
         hub = HubLink(
             settings.hub,
             token,
@@ -91,6 +100,7 @@ async def _run(settings: AgentSettings) -> None:
             executor.execute,
             live_state=lambda: current_state(link, outbox),
             on_manual=pilot.on_frame,
+            scans=scans,
         )
         tasks.create_task(publish_telemetry(link, outbox, settings.telemetry_rate_hz))
         tasks.create_task(hub.run())
@@ -120,6 +130,29 @@ async def _run(settings: AgentSettings) -> None:
             )
             link.listeners.append(uploader.on_message)
             tasks.create_task(uploader.run())
+
+
+def scan_relay(settings: AgentSettings, link: FcuLink, vehicle_id: str) -> ScanRelay:
+    """The LIDAR's turns, stamped with the flight controller's clock and pose."""
+    assert settings.lidar is not None
+    poses = PoseHistory(FcuClock())
+    link.listeners.append(poses.on_message)
+    source: ScanSource
+    if settings.lidar == "mavlink":
+        obstacle_distance = ObstacleDistanceSource()
+        link.listeners.append(obstacle_distance.on_message)
+        source = obstacle_distance
+    else:
+        source = YdlidarSource(settings.lidar, settings.lidar_resolution_deg, settings.lidar_baud)
+    backlog = None
+    if settings.outbox_dir is not None:
+        path = settings.outbox_dir / f"{vehicle_id}.scans.sqlite"
+        try:
+            backlog = DiskBacklog(path)
+        except (OSError, sqlite3.Error) as error:
+            log.error("scan backlog file %s unusable (%s); keeping it in memory", path, error)
+    outbox = ScanOutbox(settings.scan_budget, backlog)
+    return ScanRelay(source, poses, outbox, parse_mount(settings.lidar_mount))
 
 
 def open_outbox(settings: AgentSettings, vehicle_id: str, stream_id: str) -> Outbox:

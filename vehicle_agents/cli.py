@@ -51,6 +51,11 @@ _FLAG_KINDS: dict[str, dict[str, Any]] = {
     "hub_failsafe_timeout_s": {"type": float, "metavar": "SECONDS"},
     "mavlink_forward": {"action": "append", "metavar": "ENDPOINT"},
     "stream_rates_hz": {"action": "append", "metavar": "MESSAGE=HZ"},
+    "lidar": {"metavar": "DEVICE|tcp://HOST:PORT|mavlink"},
+    "lidar_baud": {"type": int, "metavar": "BAUD"},
+    "lidar_resolution_deg": {"type": float, "metavar": "DEG"},
+    "lidar_mount": {"metavar": "F,R,D,ROLL,PITCH,YAW"},
+    "scan_budget": {"type": int, "metavar": "SCANS"},
 }
 # Flags of earlier releases, still accepted (hidden) so existing units and scripts run.
 _OLD_FLAGS = {

@@ -93,6 +93,28 @@ class AgentSettings(BaseSettings):
         description="MAVLink endpoints for third-party GCSs, e.g. udpout:10.0.0.5:14550 or "
         "udpin:0.0.0.0:14551",
     )
+    lidar: str | None = Field(
+        default=None,
+        description="a 2-D LIDAR to relay: a YDLIDAR's serial device (/dev/ttyUSB0), the "
+        "simulator's tcp://HOST:PORT, or 'mavlink' for OBSTACLE_DISTANCE from the flight "
+        "controller",
+    )
+    lidar_baud: int = Field(default=230400, gt=0, description="the LIDAR's serial baud rate")
+    lidar_resolution_deg: float = Field(
+        default=0.5, ge=0.1, le=10.0, description="the angle between beams of a relayed scan"
+    )
+    lidar_mount: str = Field(
+        default="0,0,0,0,0,0",
+        description="where the LIDAR sits: forward,right,down (m),roll,pitch,yaw (deg) from "
+        "the vehicle's centre and axes",
+    )
+    scan_budget: int = Field(
+        default=6000,
+        ge=1,
+        description="scans kept while the hub is unreachable (6,000 = 10 min at 10 Hz, "
+        "about 10 MB; on disk in outbox_dir when it is set), replayed oldest first after "
+        "the newest; when full, the oldest are dropped and counted",
+    )
     stream_rates_hz: dict[str, float] = Field(
         default_factory=dict,
         description="extra or changed MAVLink message rates to request, e.g. "
@@ -112,6 +134,14 @@ class AgentSettings(BaseSettings):
 
         stream_plan(rates)  # names MAVLink knows, rates >= 0: refused here, before flight
         return rates
+
+    @field_validator("lidar_mount")
+    @classmethod
+    def _mount(cls, text: str) -> str:
+        from vehicle_agents.sensors.relay import parse_mount
+
+        parse_mount(text)
+        return text
 
     @field_validator("hub")
     @classmethod

@@ -38,6 +38,7 @@ from protocol.messages import (
     hub_to_agent,
 )
 from vehicle_agents.outbox import Outbox
+from vehicle_agents.sensors.relay import ScanOutbox
 
 log = logging.getLogger(__name__)
 
@@ -90,6 +91,7 @@ class HubLink:
         timeouts: HubTimeouts | None = None,
         live_state: Callable[[], VehicleState] | None = None,
         on_manual: Callable[[ManualFrame], None] | None = None,
+        scans: ScanOutbox | None = None,
     ) -> None:
         self.url = url
         self._token = token
@@ -99,6 +101,7 @@ class HubLink:
         self.timeouts = timeouts or HubTimeouts()
         self._live_state = live_state
         self._on_manual = on_manual
+        self._scans = scans
         self.connected = asyncio.Event()
         self.disconnected = asyncio.Event()
         self.disconnected.set()
@@ -174,6 +177,8 @@ class HubLink:
             try:
                 async with asyncio.TaskGroup() as tasks:
                     tasks.create_task(self._send_outbox(websocket))
+                    if self._scans is not None:
+                        tasks.create_task(self._send_scans(websocket, self._scans))
                     if self._live_state is not None:
                         tasks.create_task(self._send_live_while_behind(websocket))
                     try:
@@ -201,6 +206,18 @@ class HubLink:
     async def _send_outbox(self, websocket: ClientConnection) -> None:
         while True:
             await websocket.send(await self._outbox.next_frame())
+
+    async def _send_scans(self, websocket: ClientConnection, scans: ScanOutbox) -> None:
+        """Binary scan frames, newest first: their own queue, so they never wait behind
+        telemetry nor push it out."""
+        while True:
+            frame = await scans.next_frame()
+            try:
+                await websocket.send(frame)
+            except ConnectionClosed:
+                scans.unsent(frame)
+                raise
+            scans.sent += 1
 
     def _handle_frame(
         self, frame: str | bytes, websocket: ClientConnection, tasks: asyncio.TaskGroup

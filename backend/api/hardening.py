@@ -4,6 +4,7 @@ check is the live feed's own, in backend/realtime/client_feed.py)."""
 from __future__ import annotations
 
 import re
+from collections.abc import Iterable
 from urllib.parse import urlsplit
 
 from starlette.datastructures import Headers
@@ -19,13 +20,21 @@ SECURITY_HEADERS = {
 }
 
 
-def content_security_policy(basemap_url: str | None) -> str:
-    """Only our own bundle runs; map tiles may come from the configured base map host."""
-    tiles = "'self' data: blob:"
-    if basemap_url:
-        parts = urlsplit(basemap_url.replace("{s}", "a"))
-        host = parts.netloc.replace("a.", "*.", 1) if "{s}" in basemap_url else parts.netloc
-        tiles += f" {parts.scheme}://{host}"
+def tile_sources(tile_urls: Iterable[str]) -> list[str]:
+    """The origins that serve these XYZ templates; ``{s}`` is Leaflet's a, b and c."""
+    origins: list[str] = []
+    for url in tile_urls:
+        for subdomain in ("a", "b", "c") if "{s}" in url else ("",):
+            parts = urlsplit(url.replace("{s}", subdomain))
+            origin = f"{parts.scheme}://{parts.netloc}"
+            if origin not in origins:
+                origins.append(origin)
+    return origins
+
+
+def content_security_policy(*tile_urls: str) -> str:
+    """Only our own bundle runs; map tiles come from the hub or the configured base maps."""
+    tiles = " ".join(["'self' data: blob:", *tile_sources(tile_urls)])
     return (
         "default-src 'self'; "
         f"img-src {tiles}; "

@@ -21,9 +21,12 @@ class Health(BaseModel):
 
 
 class ClientConfig(BaseModel):
-    basemap_url: str | None
+    basemap_url: str | None = Field(description="the online street map (XYZ); None: off")
     basemap_attribution: str
     basemap_max_zoom: int
+    imagery_url: str | None = Field(default=None, description="online imagery (XYZ); None: off")
+    imagery_attribution: str = ""
+    imagery_max_zoom: int = 19
     protocol: int
 
 

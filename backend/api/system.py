@@ -35,5 +35,8 @@ async def client_config(hub: HubDep) -> ClientConfig:
         basemap_url=settings.basemap_url,
         basemap_attribution=settings.basemap_attribution,
         basemap_max_zoom=settings.basemap_max_zoom,
+        imagery_url=settings.imagery_url,
+        imagery_attribution=settings.imagery_attribution,
+        imagery_max_zoom=settings.imagery_max_zoom,
         protocol=PROTOCOL_VERSION,
     )

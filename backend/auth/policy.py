@@ -142,6 +142,8 @@ CLIENT_MESSAGE_PERMISSIONS: dict[str, Permission] = {
     "ping": Permission.READ,
     "control": Permission.COMMAND,
     "manual": Permission.COMMAND,
+    "subscribe_scans": Permission.READ,
+    "unsubscribe_scans": Permission.READ,
 }
 AGENT_MESSAGE_PERMISSIONS: dict[str, Permission] = {
     "hello": Permission.AGENT,

@@ -45,6 +45,7 @@ from protocol.messages import (
 log = logging.getLogger(__name__)
 
 HELLO_TIMEOUT_S = 10.0
+SCAN_ERROR_INTERVAL_S = 1.0  # refused scans are answered at most this often
 
 
 # An agent's "manual" event at WARNING or worse: browser control has ended on the vehicle.
@@ -65,6 +66,7 @@ class AgentSession(PeerConnection):
         self._acks: dict[str, dict[str, int]] = {}
         self._resends: list[Resend] = []
         self._news = asyncio.Event()
+        self._scan_error_at = -SCAN_ERROR_INTERVAL_S
 
     def acknowledge(self, key: StreamKey, seq: int) -> None:
         if seq >= 0:
@@ -289,6 +291,9 @@ class AgentSession(PeerConnection):
             log.info("agent %s disconnected", vehicle_id)
 
     async def _handle_frame(self, hello: Hello, channel: AgentChannel, frame: str | bytes) -> None:
+        if isinstance(frame, bytes):
+            await self._ingest_scan(hello, frame)
+            return
         try:
             message = decode(agent_to_hub, frame)
         except ProtocolError as error:
@@ -351,6 +356,20 @@ class AgentSession(PeerConnection):
         if self.hub.leases.revoke(vehicle_id) is not None:
             log.info("manual-control lease of %s ended: %s", vehicle_id, why)
             await announce_lease(self.hub, vehicle_id, why)
+
+    async def _ingest_scan(self, hello: Hello, data: bytes) -> None:
+        """A binary frame is a LIDAR scan. A refused one is counted in the vehicle's scan
+        diagnostics and answered (at most once a second), never the end of the link: a
+        sensor's bad turn must not cost the vehicle its telemetry."""
+        try:
+            await self.hub.scans.ingest(hello.vehicle_id, hello.stream_id, data)
+        except ValueError as refusal:
+            message = getattr(refusal, "message", str(refusal))
+            now = time.monotonic()
+            if now - self._scan_error_at >= SCAN_ERROR_INTERVAL_S:
+                self._scan_error_at = now
+                log.info("scan from %s refused: %s", hello.vehicle_id, message)
+                await self.send(ErrorReply(code="invalid_message", message=f"scan: {message}"))
 
     async def _ingest(self, hello: Hello, telemetry: Telemetry) -> None:
         hub = self.hub

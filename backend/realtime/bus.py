@@ -24,6 +24,7 @@ class Topic(StrEnum):
     STORAGE = "storage"  # TelemetryEnvelope and StoredEvent, in order, for the writer
     VEHICLE_STATE = "vehicle.state"  # VehicleSummary, for clients
     VEHICLE_EVENT = "vehicle.event"  # LiveEvent, for clients (backend.realtime.live_events)
+    SCANS = "scans"  # ScanDelivery (backend/scans), newest per vehicle, for subscribers
 
 
 class Subscription(Protocol):

@@ -25,7 +25,9 @@ from backend.realtime.collaborators import FeedServices, GatewayServices
 from backend.realtime.frames import FrameTooLarge, PeerConnection
 from backend.realtime.live_events import EventSubscription
 from backend.realtime.manual_relay import ManualRelay
+from backend.realtime.scan_feed import ScanSubscription
 from protocol.messages import (
+    MAX_SCAN_SUBSCRIPTIONS,
     CloseCode,
     ControlRequest,
     ErrorReply,
@@ -36,6 +38,9 @@ from protocol.messages import (
     Ping,
     Pong,
     ProtocolError,
+    ScanSubscriptions,
+    SubscribeScans,
+    UnsubscribeScans,
     VehicleChange,
     VehicleSummary,
     VehicleUpdate,
@@ -95,6 +100,7 @@ class ClientFeed(PeerConnection):
         self.user = ""
         self.token_id: int | None = None
         self._manual = ManualRelay(hub.registry)
+        self.scans = ScanSubscription()
 
     async def serve(self) -> None:
         await self.websocket.accept()
@@ -136,13 +142,15 @@ class ClientFeed(PeerConnection):
             async with asyncio.TaskGroup() as tasks:
                 pusher = tasks.create_task(self._push(updates, sent))
                 event_pusher = tasks.create_task(self._push_events(events))
+                scan_pusher = tasks.create_task(self._push_scans())
                 relay = tasks.create_task(self._manual.run())
                 expiry = tasks.create_task(
-                    self._end_at_expiry(principal.expires_at, pusher, event_pusher)
+                    self._end_at_expiry(principal.expires_at, pusher, event_pusher, scan_pusher)
                 )
                 await self._listen()
                 pusher.cancel()
                 event_pusher.cancel()
+                scan_pusher.cancel()
                 relay.cancel()
                 expiry.cancel()
         except* FrameTooLarge as group:
@@ -154,6 +162,8 @@ class ClientFeed(PeerConnection):
         finally:
             self.hub.bus.unsubscribe(Topic.VEHICLE_STATE, updates)
             self.hub.bus.unsubscribe(Topic.VEHICLE_EVENT, events)
+            if self.scans.vehicles:
+                self.hub.bus.unsubscribe(Topic.SCANS, self.scans)
             self.hub.client_feeds.discard(self)
 
     async def _end_at_expiry(self, expires_at: float | None, *pushers: asyncio.Task[None]) -> None:
@@ -181,6 +191,36 @@ class ClientFeed(PeerConnection):
             # Pacing: events arriving meanwhile go out together in the next batch.
             await asyncio.sleep(interval)
 
+    async def _push_scans(self) -> None:
+        """The newest scan of each subscribed vehicle. A client that stops reading stalls
+        this send; meanwhile newer scans replace the unsent one, so the hub holds at most
+        one scan per subscribed vehicle for it, never a queue."""
+        while True:
+            for delivery in await self.scans.drain():
+                await self.send_bytes(delivery.data)
+
+    async def _scan_subscription(self, message: SubscribeScans | UnsubscribeScans) -> None:
+        had_any = bool(self.scans.vehicles)
+        if isinstance(message, SubscribeScans):
+            if len(self.scans.vehicles) >= MAX_SCAN_SUBSCRIPTIONS:
+                await self.reject(
+                    ErrorReply(
+                        code="invalid_message",
+                        message=f"vehicle_id: at most {MAX_SCAN_SUBSCRIPTIONS} scan "
+                        "subscriptions per feed",
+                    )
+                )
+                return
+            self.scans.vehicles.add(message.vehicle_id)
+        else:
+            self.scans.vehicles.discard(message.vehicle_id)
+        # On the bus only while it wants something: nobody pays for scans they did not ask for.
+        if self.scans.vehicles and not had_any:
+            self.hub.bus.subscribe(Topic.SCANS, self.scans)
+        elif had_any and not self.scans.vehicles:
+            self.hub.bus.unsubscribe(Topic.SCANS, self.scans)
+        await self.send(ScanSubscriptions(vehicles=sorted(self.scans.vehicles)))
+
     async def _listen(self) -> None:
         while (frame := await self.receive()) is not None:
             try:
@@ -199,6 +239,8 @@ class ClientFeed(PeerConnection):
                 await self._manual_input(message)
             elif isinstance(message, ControlRequest):
                 await self._control(message)
+            elif isinstance(message, SubscribeScans | UnsubscribeScans):
+                await self._scan_subscription(message)
 
     async def _manual_input(self, message: ManualInput) -> None:
         """Forward the lease holder's input, newest first; refuse and count the rest."""

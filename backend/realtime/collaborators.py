@@ -39,6 +39,14 @@ class AgentConnection(Protocol):
     def request_resend(self, gap: Gap) -> None: ...
 
 
+class ScanIngest(Protocol):
+    """Where an agent's binary scan frames go (backend.scans.service.ScanService)."""
+
+    async def ingest(self, vehicle_id: str, stream_id: str, data: bytes) -> object:
+        """Raises ValueError (with ``reason`` and ``message``) for a refused scan."""
+        ...
+
+
 class ClientConnection(Protocol):
     """A dashboard's or integration's live feed, as the hub keeps it (to revoke)."""
 
@@ -104,6 +112,9 @@ class GatewayServices(Protocol):
 
     @property
     def client_feeds(self) -> set[ClientConnection]: ...
+
+    @property
+    def scans(self) -> ScanIngest: ...
 
     async def store_event(
         self, vehicle_id: str, kind: str, text: str, severity: int | None = None

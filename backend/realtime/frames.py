@@ -45,6 +45,10 @@ class PeerConnection:
         async with self._send_lock:
             await self.websocket.send_text(encode(message))
 
+    async def send_bytes(self, data: bytes) -> None:
+        async with self._send_lock:
+            await self.websocket.send_bytes(data)
+
     async def close(self, code: int, reason: str) -> None:
         async with self._send_lock:
             await self.websocket.close(code, close_reason(reason))

@@ -23,6 +23,7 @@ from backend.storage.models import (
     CommandRow,
     EventRow,
     FlightRow,
+    ScanRow,
     TelemetryRow,
     TlogRow,
 )
@@ -265,6 +266,8 @@ class Logbook:
         removed: dict[str, int] = {}
         targets: tuple[tuple[str, Any, Any, float | None], ...] = (
             ("telemetry", TelemetryRow, TelemetryRow.time, policy.telemetry_days),
+            # Scans are the flight's sensor data: they go when its telemetry goes.
+            ("scans", ScanRow, ScanRow.time, policy.telemetry_days),
             ("events", EventRow, EventRow.time, policy.events_days),
             ("commands", CommandRow, CommandRow.time, policy.commands_days),
             ("flights", FlightRow, FlightRow.end_time, policy.flights_days),

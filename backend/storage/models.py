@@ -9,6 +9,7 @@ from sqlalchemy import (
     ForeignKey,
     Index,
     Integer,
+    LargeBinary,
     SmallInteger,
     String,
     UniqueConstraint,
@@ -75,6 +76,28 @@ TELEMETRY_STATE_COLUMNS: tuple[str, ...] = tuple(
     for column in TelemetryRow.__table__.columns
     if column.name not in TELEMETRY_KEY_COLUMNS
 )
+
+
+class ScanRow(Base):
+    """One LIDAR turn, as the agent sent it (protocol/scans.py's binary frame): kept whole,
+    so a replay or an export turns it into points exactly as the live path did."""
+
+    __tablename__ = "scans"
+    __table_args__ = (
+        # (vehicle, seq, time): a scan sent twice (after a reconnect) is stored once. Not the
+        # agent run's stream: a backlog kept on disk is replayed by the next run.
+        UniqueConstraint("vehicle_id", "seq", "time", name="uq_scan"),
+        Index("ix_scans_vehicle_time", "vehicle_id", "time"),
+        Index("ix_scans_time", "time"),  # retention
+    )
+
+    id: Mapped[int] = mapped_column(RowId, primary_key=True, autoincrement=True)
+    vehicle_id: Mapped[str] = mapped_column(String(64), ForeignKey("vehicles.id"))
+    stream_id: Mapped[str] = mapped_column(String(64))
+    seq: Mapped[int] = mapped_column(BigInteger)
+    time: Mapped[float] = mapped_column(Double, doc="UTC of the first beam, Unix seconds")
+    beams: Mapped[int] = mapped_column(Integer)
+    frame: Mapped[bytes] = mapped_column(LargeBinary)
 
 
 class UserRow(Base):

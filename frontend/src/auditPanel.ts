@@ -22,8 +22,8 @@ const ACTIONS: Record<AuditAction, true> = {
   "rails.update": true,
   "rails.clear": true,
   command: true,
-  denied: true,
   "control.lease": true,
+  denied: true,
 };
 
 /** The credential an entry was made with: an API token by name, else its kind. */

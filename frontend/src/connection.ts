@@ -3,7 +3,7 @@
 // sends the session cookie with the handshake; a hub that refuses the session
 // closes with 4401, and then the socket stops instead of retrying forever.
 import { apiUrl } from "./api";
-import type { HubToClient, Ping } from "./types";
+import type { ClientToHub, HubToClient, Ping } from "./types";
 
 export type ConnectionState = "connecting" | "connected" | "reconnecting" | "stopped";
 
@@ -14,6 +14,8 @@ export const CLOSE_FORBIDDEN = 4403;
 
 export interface FleetSocketHandlers {
   onMessage(message: HubToClient): void;
+  /** A binary frame: a LIDAR scan the dashboard subscribed to (protocol/scans.py). */
+  onBinary?(data: ArrayBuffer): void;
   /** `retryInMs` is set while waiting before the next attempt. */
   onState(state: ConnectionState, retryInMs?: number): void;
   /** The hub closed with 4401; the socket has stopped. */
@@ -65,6 +67,7 @@ export class FleetSocket {
   private connect(state: ConnectionState): void {
     this.handlers.onState(state);
     const socket = new WebSocket(socketUrl());
+    socket.binaryType = "arraybuffer";
     this.socket = socket;
     let opened = false;
     socket.onopen = () => {
@@ -76,6 +79,10 @@ export class FleetSocket {
     socket.onmessage = (event: MessageEvent) => {
       this.lastFrameAt = Date.now();
       this.backoffMs = MIN_BACKOFF_MS; // the hub is really talking to us
+      if (event.data instanceof ArrayBuffer) {
+        this.handlers.onBinary?.(event.data);
+        return;
+      }
       const message = parse(event.data);
       if (message) this.handlers.onMessage(message);
     };
@@ -97,6 +104,14 @@ export class FleetSocket {
       if (!opened) this.handlers.onAttemptFailed?.();
     };
     // onerror is always followed by onclose, which does the work.
+  }
+
+  /** Sends a message if the link is open; false if it is not (the caller retries on reconnect). */
+  send(message: ClientToHub): boolean {
+    const socket = this.socket;
+    if (!socket || socket.readyState !== WebSocket.OPEN) return false;
+    socket.send(JSON.stringify(message));
+    return true;
   }
 
   private keepAlive(): void {

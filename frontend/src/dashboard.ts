@@ -15,6 +15,7 @@ import { OpsPanels } from "./panels/opsPanels";
 import { MissionTools } from "./missions";
 import { ReplayPanel } from "./replayPanel";
 import { type CurrentUser, type HubConfig, type HubToClient, can } from "./types";
+import { ScanLayer } from "./scans/scanLayer";
 import { Viz3dPane } from "./viz3d/pane";
 
 // Without the hub's config there is no protocol version to compare: assume ours.
@@ -22,6 +23,9 @@ const OFFLINE_CONFIG: HubConfig = {
   basemap_url: null,
   basemap_attribution: "",
   basemap_max_zoom: 19,
+  imagery_url: null,
+  imagery_attribution: "",
+  imagery_max_zoom: 19,
   protocol: PROTOCOL_VERSION,
 };
 /** setTimeout's ceiling (about 24.8 days). */
@@ -37,6 +41,7 @@ export class Dashboard {
   private socket: FleetSocket | null = null;
   private map: FleetMap | null = null;
   private table: FleetTable | null = null;
+  private scans: ScanLayer | null = null;
   private audit: AuditPanel | null = null;
   private replay: ReplayPanel | null = null;
   private store: FleetStore | null = null;
@@ -83,6 +88,7 @@ export class Dashboard {
       map.select(id, pan);
       ops.select(id);
       missions.select(id);
+      scans.follow(id);
     };
     const map = new FleetMap(document.getElementById("map")!, config, (id) => select(id, false));
     const table = new FleetTable(
@@ -97,6 +103,8 @@ export class Dashboard {
     this.viz3d = new Viz3dPane(document.getElementById("map")!);
     const missions = new MissionTools(map.leaflet, can(user, "command"));
     this.missions = missions;
+    const scans = new ScanLayer(map.leaflet, (message) => this.socket?.send(message));
+    this.scans = scans;
 
     const store = new FleetStore(({ changed, removed, all }) => {
       if (this.stopped) return;
@@ -137,8 +145,10 @@ export class Dashboard {
 
     this.socket = new FleetSocket({
       onMessage,
+      onBinary: (data) => scans.onFrame(data),
       onState: (state, retry) => {
         if (!this.stopped) header.setConnection(state, retry);
+        if (state === "connected") scans.resubscribe();
       },
       onUnauthorized: (reason) => hooks.onUnauthorized(reason),
       onForbidden: (reason) => header.showNotice(`The hub refused the live feed: ${reason}`, true),
@@ -170,6 +180,8 @@ export class Dashboard {
     this.missions = null;
     this.table?.destroy();
     this.table = null;
+    this.scans?.destroy();
+    this.scans = null;
     this.map?.destroy();
     this.map = null;
     this.header.setConnection("stopped");

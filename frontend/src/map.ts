@@ -1,24 +1,21 @@
-// The Leaflet map: an optional offline-safe basemap and one marker per vehicle.
+// The Leaflet map: the base maps (map/baseLayers.ts), the trails and the vehicles, all
+// of them on canvases (map/trails.ts, map/vehicleLayer.ts).
 import * as L from "leaflet";
 import "leaflet/dist/leaflet.css";
+import { BaseMaps } from "./map/baseLayers";
+import "./map/map.css";
+import { TrailLayer } from "./map/trails";
+import { VehicleLayer } from "./map/vehicleLayer";
 import type { HubConfig, VehicleSummary } from "./types";
-import { VehicleMarker } from "./vehicleMarker";
 
 const GRID_PX = [320, 64]; // major and minor lines, in the order of style.css
 const FIT_MAX_ZOOM = 19; // close enough to tell apart vehicles a few metres apart
 
-function positionOf(vehicle: VehicleSummary): L.LatLng | null {
-  const lat = vehicle.state?.lat;
-  const lon = vehicle.state?.lon;
-  if (lat === null || lat === undefined || lon === null || lon === undefined) return null;
-  // 0°N 0°E is an autopilot's "no position yet", never a place to draw a vehicle.
-  if (lat === 0 && lon === 0) return null;
-  return L.latLng(lat, lon);
-}
-
 export class FleetMap {
   private readonly map: L.Map;
-  private readonly markers = new Map<string, VehicleMarker>();
+  private readonly vehicles: VehicleLayer;
+  private readonly trails: TrailLayer;
+  private readonly baseMaps: BaseMaps;
   private selectedId: string | null = null;
   private hasFitted = false;
   /** The live view to return to when the replay ends. */
@@ -27,42 +24,36 @@ export class FleetMap {
   constructor(
     private readonly container: HTMLElement,
     config: HubConfig,
-    private readonly onSelect: (id: string) => void,
+    onSelect: (id: string) => void,
   ) {
-    const maxZoom = config.basemap_url ? config.basemap_max_zoom : 22;
-    this.map = L.map(container, { maxZoom, worldCopyJump: true }).setView([20, 0], 2);
+    this.map = L.map(container, { maxZoom: 22, worldCopyJump: true }).setView([20, 0], 2);
     L.control.scale({ imperial: false }).addTo(this.map);
     this.addFitControl();
+    // Trails under the mission overlays (400), vehicles over their markers (600).
+    this.map.createPane("trails").style.zIndex = "390";
+    this.map.createPane("vehicles").style.zIndex = "620";
+    this.trails = new TrailLayer();
+    this.trails.addTo(this.map);
+    this.vehicles = new VehicleLayer(onSelect, this.trails);
+    this.vehicles.addTo(this.map);
 
-    if (config.basemap_url) {
-      L.tileLayer(config.basemap_url, {
-        attribution: config.basemap_attribution,
-        maxZoom: config.basemap_max_zoom,
-      }).addTo(this.map);
-    } else {
-      // No tiles, so nothing is fetched: a CSS grid that moves with the map instead.
-      container.classList.add("no-basemap");
-      this.map.on("move zoom viewreset resize", () => this.moveGrid());
-      this.moveGrid();
-    }
+    // Without tiles nothing is fetched: a CSS grid that moves with the map instead.
+    this.map.on("move zoom viewreset resize", () => this.moveGrid());
+    this.baseMaps = new BaseMaps(this.map, config, {
+      setGrid: (shown) => {
+        container.classList.toggle("no-basemap", shown);
+        if (shown) this.moveGrid();
+      },
+      overlays: { Trails: this.trails },
+    });
+    void this.baseMaps.start();
   }
 
   /** Adds, moves or restyles the vehicles' markers. */
   update(vehicles: Iterable<VehicleSummary>): void {
-    for (const vehicle of vehicles) {
-      let marker = this.markers.get(vehicle.id);
-      // A vehicle that loses its fix keeps its marker at the last known position.
-      const position = positionOf(vehicle) ?? marker?.marker.getLatLng();
-      if (!position) continue;
-      if (!marker) {
-        marker = new VehicleMarker(vehicle.id, position, this.onSelect);
-        this.markers.set(vehicle.id, marker);
-        marker.marker.addTo(this.map);
-        marker.setSelected(vehicle.id === this.selectedId);
-      }
-      marker.update(vehicle, position);
-    }
-    if (!this.hasFitted && !this.liveView && this.markers.size > 0) {
+    const added = this.vehicles.update(vehicles);
+    if (added && this.selectedId) this.vehicles.select(this.selectedId);
+    if (!this.hasFitted && !this.liveView && this.vehicles.count > 0) {
       this.hasFitted = true;
       this.fitFleet();
     }
@@ -84,7 +75,7 @@ export class FleetMap {
     } else if (this.liveView) {
       const { center, zoom } = this.liveView;
       this.liveView = null;
-      if (this.hasFitted || this.markers.size === 0) this.map.setView(center, zoom, { animate: false });
+      if (this.hasFitted || this.vehicles.count === 0) this.map.setView(center, zoom, { animate: false });
       else {
         this.hasFitted = true;
         this.fitFleet();
@@ -93,29 +84,27 @@ export class FleetMap {
   }
 
   remove(id: string): void {
-    this.markers.get(id)?.marker.remove();
-    this.markers.delete(id);
+    this.vehicles.forget(id);
   }
 
   select(id: string | null, pan: boolean): void {
-    if (this.selectedId) this.markers.get(this.selectedId)?.setSelected(false);
     this.selectedId = id;
-    const marker = id ? this.markers.get(id) : undefined;
-    if (!marker) return;
-    marker.setSelected(true);
-    if (pan) this.map.panTo(marker.marker.getLatLng());
+    const position = this.vehicles.select(id);
+    if (position && pan) this.map.panTo(position);
   }
 
-  /** Removes the map and its markers, leaving the container empty for a later session. */
+  /** Removes the map and its layers, leaving the container empty for a later session. */
   destroy(): void {
+    this.baseMaps.destroy();
+    this.vehicles.clear();
     this.map.remove();
-    this.markers.clear();
     this.container.classList.remove("no-basemap", "replaying");
     this.container.style.backgroundPosition = "";
+    delete this.container.dataset.basemap;
   }
 
   fitFleet(): void {
-    const points = [...this.markers.values()].map((m) => m.marker.getLatLng());
+    const points = this.vehicles.positions();
     if (points.length === 0) return;
     const zoom = Math.min(FIT_MAX_ZOOM, this.map.getMaxZoom());
     if (points.length === 1) this.map.setView(points[0], zoom);

@@ -5,6 +5,7 @@ import type { components, paths } from "./generated/api";
 import type { Event } from "./generated/protocol";
 
 export type {
+  ClientToHub,
   CommandOutcome,
   ErrorReply,
   FleetSnapshot,

@@ -26,5 +26,8 @@ def test_health_and_config(hub: str, admin_api: httpx.Client) -> None:
     config = admin_api.get("/api/v1/config").json()
     assert health["status"] == "ok"
     assert health["vehicles"] == 0
-    assert config["basemap_url"] is None  # offline grid by default
+    # OpenStreetMap's standard tiles by default, with the attribution its licence asks for
+    assert config["basemap_url"] == "https://tile.openstreetmap.org/{z}/{x}/{y}.png"
+    assert "OpenStreetMap" in config["basemap_attribution"]
+    assert config["imagery_url"] is None  # imagery is off until a URL is set
     assert config["protocol"] == 1

@@ -150,6 +150,8 @@ def test_client_feed_needs_a_login_and_serves_every_role(hub: str, users: dict[s
 # A valid message of each type that needs only READ.
 _READ_SAMPLES: dict[str, dict[str, Any]] = {
     "ping": {"type": "ping", "nonce": "n1"},
+    "subscribe_scans": {"type": "subscribe_scans", "vehicle_id": "V1"},
+    "unsubscribe_scans": {"type": "unsubscribe_scans", "vehicle_id": "V1"},
 }
 
 

@@ -480,6 +480,127 @@ export interface paths {
         patch?: never;
         trace?: never;
     };
+    "/api/v1/vehicles/{vehicle_id}/scans/latest": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        /**
+         * Latest Scan
+         * @description The vehicle's newest scan as world points (live, else the newest stored).
+         */
+        get: operations["latest_scan_api_v1_vehicles__vehicle_id__scans_latest_get"];
+        put?: never;
+        post?: never;
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
+    "/api/v1/vehicles/{vehicle_id}/scans": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        /**
+         * Scans Between
+         * @description Stored scans in a time range, oldest first, as world points.
+         */
+        get: operations["scans_between_api_v1_vehicles__vehicle_id__scans_get"];
+        put?: never;
+        post?: never;
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
+    "/api/v1/vehicles/{vehicle_id}/scans/diagnostics": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        /**
+         * Scan Diagnostics
+         * @description What the hub made of this vehicle's scans: received, stored, refused by reason.
+         */
+        get: operations["scan_diagnostics_api_v1_vehicles__vehicle_id__scans_diagnostics_get"];
+        put?: never;
+        post?: never;
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
+    "/api/v1/scans/map": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        /**
+         * Point Map
+         * @description The site's voxel point map (the most recently seen voxels, up to ``limit``).
+         */
+        get: operations["point_map_api_v1_scans_map_get"];
+        put?: never;
+        post?: never;
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
+    "/api/v1/scans/obstacles": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        /**
+         * Obstacles
+         * @description Clusters in the point map (above the ground), with their extents in site ENU.
+         */
+        get: operations["obstacles_api_v1_scans_obstacles_get"];
+        put?: never;
+        post?: never;
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
+    "/api/v1/flights/{flight_id}/points.ply": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        /**
+         * Flight Points
+         * @description The world points of a flight's scans (site east/north/up metres, voxel-downsampled
+         *     like the point map) as a PLY file, for CloudCompare, PDAL or MeshLab.
+         */
+        get: operations["flight_points_api_v1_flights__flight_id__points_ply_get"];
+        put?: never;
+        post?: never;
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
     "/api/v1/telemetry/series": {
         parameters: {
             query?: never;
@@ -798,6 +919,26 @@ export interface paths {
         patch?: never;
         trace?: never;
     };
+    "/api/v1/tiles": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        /**
+         * List Tile Sets
+         * @description The offline tile sets in the hub's tiles folder (``<data dir>/tiles``).
+         */
+        get: operations["list_tile_sets_api_v1_tiles_get"];
+        put?: never;
+        post?: never;
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
 }
 export type webhooks = Record<string, never>;
 export interface components {
@@ -1015,12 +1156,30 @@ export interface components {
         };
         /** ClientConfig */
         ClientConfig: {
-            /** Basemap Url */
+            /**
+             * Basemap Url
+             * @description the online street map (XYZ); None: off
+             */
             basemap_url: string | null;
             /** Basemap Attribution */
             basemap_attribution: string;
             /** Basemap Max Zoom */
             basemap_max_zoom: number;
+            /**
+             * Imagery Url
+             * @description online imagery (XYZ); None: off
+             */
+            imagery_url?: string | null;
+            /**
+             * Imagery Attribution
+             * @default
+             */
+            imagery_attribution: string;
+            /**
+             * Imagery Max Zoom
+             * @default 19
+             */
+            imagery_max_zoom: number;
             /** Protocol */
             protocol: number;
         };
@@ -1542,6 +1701,33 @@ export interface components {
             /** Items */
             items: components["schemas"]["MissionItem"][];
         };
+        /** ObstacleBody */
+        ObstacleBody: {
+            /** Id */
+            id: number;
+            /** East Min */
+            east_min: number;
+            /** East Max */
+            east_max: number;
+            /** North Min */
+            north_min: number;
+            /** North Max */
+            north_max: number;
+            /** Up Min */
+            up_min: number;
+            /** Up Max */
+            up_max: number;
+            /** Voxels */
+            voxels: number;
+            /**
+             * Outline
+             * @description the extent's corners as latitude, longitude (degrees), for a map
+             */
+            outline: [
+                number,
+                number
+            ][];
+        };
         /** ParamGetCommand */
         ParamGetCommand: {
             /**
@@ -1606,6 +1792,25 @@ export interface components {
          * @enum {string}
          */
         Permission: "read" | "command" | "audit" | "admin" | "agent";
+        /** PointMapBody */
+        PointMapBody: {
+            site: components["schemas"]["SiteOrigin"] | null;
+            /** Voxel M */
+            voxel_m: number;
+            /** Voxels */
+            voxels: number;
+            /** Evicted */
+            evicted: number;
+            /**
+             * Points
+             * @description voxel centres, east/north/up
+             */
+            points: [
+                number,
+                number,
+                number
+            ][];
+        };
         /**
          * RebootCommand
          * @description Reboot the flight controller (autopilots refuse this while armed).
@@ -1701,6 +1906,87 @@ export interface components {
             /** Satellites */
             satellites: number | null;
         };
+        /** ScanDiagnosticsBody */
+        ScanDiagnosticsBody: {
+            /** Vehicle Id */
+            vehicle_id: string;
+            /** Received */
+            received: number;
+            /** Live */
+            live: number;
+            /** Replayed */
+            replayed: number;
+            /** Stored */
+            stored: number;
+            /**
+             * Cleaned Ranges
+             * @description ranges beyond the sensor's maximum, dropped
+             */
+            cleaned_ranges: number;
+            /**
+             * Rejected
+             * @description refused scans by reason
+             */
+            rejected: {
+                [key: string]: number;
+            };
+        };
+        /** ScanPage */
+        ScanPage: {
+            /** Vehicle Id */
+            vehicle_id: string;
+            /** Start */
+            start: number;
+            /** End */
+            end: number;
+            /** Limit */
+            limit: number;
+            /** @description the origin of the points' east/north/up */
+            site: components["schemas"]["SiteOrigin"] | null;
+            /** Scans */
+            scans: components["schemas"]["ScanPoints"][];
+            /** Truncated */
+            truncated: boolean;
+        };
+        /**
+         * ScanPoints
+         * @description One scan's returns in the world.
+         */
+        ScanPoints: {
+            /** Vehicle Id */
+            vehicle_id: string;
+            /** Seq */
+            seq: number;
+            /**
+             * Time
+             * @description UTC of the first beam, Unix seconds
+             */
+            time: number;
+            /** Duration S */
+            duration_s: number;
+            /** Beams */
+            beams: number;
+            /** Replayed */
+            replayed: boolean;
+            /**
+             * Enu
+             * @description east, north, up metres from the site origin, one per return
+             */
+            enu: [
+                number,
+                number,
+                number
+            ][];
+            /**
+             * Geodetic
+             * @description latitude, longitude (degrees), altitude (m) of the same points
+             */
+            geodetic: [
+                number,
+                number,
+                number
+            ][];
+        };
         /** Series */
         Series: {
             /** Start */
@@ -1753,6 +2039,15 @@ export interface components {
              * @description A mode name the vehicle lists.
              */
             mode: string;
+        };
+        /** SiteOrigin */
+        SiteOrigin: {
+            /** Lat */
+            lat: number;
+            /** Lon */
+            lon: number;
+            /** Alt Msl */
+            alt_msl: number;
         };
         /** SurveyPart */
         SurveyPart: {
@@ -1943,6 +2238,42 @@ export interface components {
             satellites: number | null;
             /** Seq */
             seq: number;
+        };
+        /** TileSet */
+        TileSet: {
+            /**
+             * Name
+             * @description the file name without .mbtiles or .pmtiles
+             */
+            name: string;
+            /**
+             * Kind
+             * @description mbtiles or pmtiles
+             */
+            kind: string;
+            /** Media Type */
+            media_type: string;
+            /** Min Zoom */
+            min_zoom: number;
+            /** Max Zoom */
+            max_zoom: number;
+            /**
+             * Bounds
+             * @description west, south, east, north in degrees, when the file says
+             */
+            bounds: [
+                number,
+                number,
+                number,
+                number
+            ] | null;
+            /** Attribution */
+            attribution: string;
+            /**
+             * Url
+             * @description the tile URL template, with the set's version
+             */
+            url: string;
         };
         /** Tlog */
         Tlog: {
@@ -4431,6 +4762,403 @@ export interface operations {
             };
         };
     };
+    latest_scan_api_v1_vehicles__vehicle_id__scans_latest_get: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path: {
+                /** @description The vehicle's identity */
+                vehicle_id: string;
+            };
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ScanPoints"];
+                };
+            };
+            /** @description Not authenticated */
+            401: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description Needs the 'read' permission */
+            403: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description Unknown vehicle, or no scan from it yet */
+            404: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed) */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Unprocessable"];
+                };
+            };
+            /** @description The database is unavailable; try again after Retry-After seconds */
+            503: {
+                headers: {
+                    /** @description Seconds to wait */
+                    "Retry-After"?: number;
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+        };
+    };
+    scans_between_api_v1_vehicles__vehicle_id__scans_get: {
+        parameters: {
+            query?: {
+                /** @description Unix seconds (0 to 100000000000, fractions kept exactly) or an ISO 8601 date-time (no time zone means UTC, precise to the microsecond) in the same range. Both bounds are inclusive. Default: end - 1 min. */
+                start?: number | string | null;
+                /** @description Unix seconds (0 to 100000000000, fractions kept exactly) or an ISO 8601 date-time (no time zone means UTC, precise to the microsecond) in the same range. Both bounds are inclusive. Default: now. */
+                end?: number | string | null;
+                limit?: number;
+            };
+            header?: never;
+            path: {
+                /** @description The vehicle's identity */
+                vehicle_id: string;
+            };
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ScanPage"];
+                };
+            };
+            /** @description Not authenticated */
+            401: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description Needs the 'read' permission */
+            403: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description No such vehicle, flight, log, user or token (named in the message) */
+            404: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed) */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Unprocessable"];
+                };
+            };
+            /** @description The database is unavailable; try again after Retry-After seconds */
+            503: {
+                headers: {
+                    /** @description Seconds to wait */
+                    "Retry-After"?: number;
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+        };
+    };
+    scan_diagnostics_api_v1_vehicles__vehicle_id__scans_diagnostics_get: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path: {
+                /** @description The vehicle's identity */
+                vehicle_id: string;
+            };
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ScanDiagnosticsBody"];
+                };
+            };
+            /** @description Not authenticated */
+            401: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description Needs the 'read' permission */
+            403: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description No such vehicle, flight, log, user or token (named in the message) */
+            404: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed) */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Unprocessable"];
+                };
+            };
+            /** @description The database is unavailable; try again after Retry-After seconds */
+            503: {
+                headers: {
+                    /** @description Seconds to wait */
+                    "Retry-After"?: number;
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+        };
+    };
+    point_map_api_v1_scans_map_get: {
+        parameters: {
+            query?: {
+                /** @description json, or a PLY file */
+                format?: "json" | "ply";
+                limit?: number;
+            };
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["PointMapBody"];
+                    "application/octet-stream": unknown;
+                };
+            };
+            /** @description Not authenticated */
+            401: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description Needs the 'read' permission */
+            403: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed) */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Unprocessable"];
+                };
+            };
+            /** @description The database is unavailable; try again after Retry-After seconds */
+            503: {
+                headers: {
+                    /** @description Seconds to wait */
+                    "Retry-After"?: number;
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+        };
+    };
+    obstacles_api_v1_scans_obstacles_get: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ObstacleBody"][];
+                };
+            };
+            /** @description Not authenticated */
+            401: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description Needs the 'read' permission */
+            403: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description The database is unavailable; try again after Retry-After seconds */
+            503: {
+                headers: {
+                    /** @description Seconds to wait */
+                    "Retry-After"?: number;
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+        };
+    };
+    flight_points_api_v1_flights__flight_id__points_ply_get: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path: {
+                flight_id: number;
+            };
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/octet-stream": unknown;
+                };
+            };
+            /** @description Not authenticated */
+            401: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description Needs the 'read' permission */
+            403: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description No such flight */
+            404: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed) */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Unprocessable"];
+                };
+            };
+            /** @description The database is unavailable; try again after Retry-After seconds */
+            503: {
+                headers: {
+                    /** @description Seconds to wait */
+                    "Retry-After"?: number;
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+        };
+    };
     telemetry_series_api_v1_telemetry_series_get: {
         parameters: {
             query?: {
@@ -5679,6 +6407,55 @@ export interface operations {
                 };
                 content: {
                     "application/json": components["schemas"]["Unprocessable"];
+                };
+            };
+            /** @description The database is unavailable; try again after Retry-After seconds */
+            503: {
+                headers: {
+                    /** @description Seconds to wait */
+                    "Retry-After"?: number;
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+        };
+    };
+    list_tile_sets_api_v1_tiles_get: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["TileSet"][];
+                };
+            };
+            /** @description Not authenticated */
+            401: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description Needs the 'read' permission */
+            403: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
                 };
             };
             /** @description The database is unavailable; try again after Retry-After seconds */

@@ -16,9 +16,9 @@
 export type AnyMessage = AgentToHub | HubToAgent | ClientToHub | HubToClient;
 export type AgentToHub = Hello | Telemetry | LiveState | Event | CommandResult | Unavailable | Pong;
 export type HubToAgent = Welcome | CommandRequest | Ack | Resend | ErrorReply | Ping | ManualFrame;
-export type ClientToHub = Ping | ControlRequest | ManualInput;
+export type ClientToHub = Ping | ControlRequest | ManualInput | SubscribeScans | UnsubscribeScans;
 export type HubToClient =
-  FleetSnapshot | VehicleUpdate | EventBatch | Pong | ErrorReply | LeaseState;
+  FleetSnapshot | VehicleUpdate | EventBatch | ScanSubscriptions | Pong | ErrorReply | LeaseState;
 
 /**
  * First frame from an agent: who it is and what it can do.
@@ -510,6 +510,17 @@ export interface ManualInput {
   seq: number;
   axes: ManualAxes;
 }
+/**
+ * Send me this vehicle's scans (binary frames, protocol/scans.py), newest only.
+ */
+export interface SubscribeScans {
+  type: "subscribe_scans";
+  vehicle_id: string;
+}
+export interface UnsubscribeScans {
+  type: "unsubscribe_scans";
+  vehicle_id: string;
+}
 export interface FleetSnapshot {
   type: "fleet";
   /**
@@ -605,6 +616,16 @@ export interface LiveEvent {
    * how many identical events (same vehicle, kind, severity and text) this one stands for: repeats within one batch are sent once; time is the newest
    */
   repeat: number;
+}
+/**
+ * The vehicles whose scans this feed now receives (the answer to a (un)subscribe).
+ */
+export interface ScanSubscriptions {
+  type: "scan_subscriptions";
+  /**
+   * @maxItems 64
+   */
+  vehicles: string[];
 }
 /**
  * Who flies a vehicle by hand now (holder None: nobody), sent to every client.

@@ -1,0 +1,296 @@
+"""LIDAR scans: the latest, by time range, the site's point map and its obstacles."""
+
+from __future__ import annotations
+
+import asyncio
+import math
+from typing import Annotated, Literal
+
+from fastapi import Query
+from fastapi.responses import Response
+from pydantic import BaseModel, Field
+
+from backend.api.deps import HubDep
+from backend.api.logs.common import FlightIdPath, flight_end
+from backend.api.security import SecuredRouter, requires
+from backend.api.time_ranges import Moment, time_query, time_range
+from backend.api.vehicles import VehicleIdPath
+from backend.auth.policy import Permission
+from backend.errors import NotFound
+from backend.scans.export import ply_bytes
+from backend.scans.pointmap import PointMap
+from backend.scans.points import WorldPoints, world_points
+from common.geodesy import LocalFrame
+from protocol.scans import decode_scan
+
+router = SecuredRouter(tags=["scans"])
+
+MAX_SCANS_PAGE = 100
+DEFAULT_SCAN_HISTORY_S = 60.0
+MAX_MAP_POINTS = 500_000
+
+
+class SiteOrigin(BaseModel):
+    lat: float
+    lon: float
+    alt_msl: float
+
+
+class ScanPoints(BaseModel):
+    """One scan's returns in the world."""
+
+    vehicle_id: str
+    seq: int
+    time: float = Field(description="UTC of the first beam, Unix seconds")
+    duration_s: float
+    beams: int
+    replayed: bool
+    enu: list[tuple[float, float, float]] = Field(
+        description="east, north, up metres from the site origin, one per return"
+    )
+    geodetic: list[tuple[float, float, float]] = Field(
+        description="latitude, longitude (degrees), altitude (m) of the same points"
+    )
+
+
+class ScanPage(BaseModel):
+    vehicle_id: str
+    start: float
+    end: float
+    limit: int
+    site: SiteOrigin | None = Field(description="the origin of the points' east/north/up")
+    scans: list[ScanPoints]
+    truncated: bool
+
+
+class ScanDiagnosticsBody(BaseModel):
+    vehicle_id: str
+    received: int
+    live: int
+    replayed: int
+    stored: int
+    cleaned_ranges: int = Field(description="ranges beyond the sensor's maximum, dropped")
+    rejected: dict[str, int] = Field(description="refused scans by reason")
+
+
+class PointMapBody(BaseModel):
+    site: SiteOrigin | None
+    voxel_m: float
+    voxels: int
+    evicted: int
+    points: list[tuple[float, float, float]] = Field(description="voxel centres, east/north/up")
+
+
+class ObstacleBody(BaseModel):
+    id: int
+    east_min: float
+    east_max: float
+    north_min: float
+    north_max: float
+    up_min: float
+    up_max: float
+    voxels: int
+    outline: list[tuple[float, float]] = Field(
+        description="the extent's corners as latitude, longitude (degrees), for a map"
+    )
+
+
+def _origin(site: LocalFrame) -> SiteOrigin:
+    o = site.origin
+    return SiteOrigin(lat=o.lat, lon=o.lon, alt_msl=o.alt)
+
+
+def _body(hub: HubDep, vehicle_id: str, data: bytes) -> ScanPoints:
+    frame = decode_scan(data)
+    site = hub.scans.site_for(frame)
+    points: WorldPoints = world_points(frame, site)
+    return ScanPoints(
+        vehicle_id=vehicle_id,
+        seq=frame.seq,
+        time=frame.utc_time,
+        duration_s=frame.duration_s,
+        beams=frame.beams,
+        replayed=frame.replayed,
+        enu=[tuple(p) for p in points.enu.round(3).tolist()],
+        geodetic=[tuple(p) for p in points.geodetic(site).round(8).tolist()],
+    )
+
+
+@router.get(
+    "/vehicles/{vehicle_id}/scans/latest",
+    response_model=ScanPoints,
+    openapi_extra=requires(Permission.READ),
+    responses={404: {"description": "Unknown vehicle, or no scan from it yet"}},
+)
+async def latest_scan(vehicle_id: VehicleIdPath, hub: HubDep) -> ScanPoints:
+    """The vehicle's newest scan as world points (live, else the newest stored)."""
+    hub.registry.get(vehicle_id)
+    row = await asyncio.to_thread(hub.scans.repository.latest, vehicle_id)
+    latest = hub.scans.latest.get(vehicle_id)
+    if latest is None and row is None:
+        raise NotFound(f"no scan from {vehicle_id!r} yet")
+    if latest is not None and (row is None or latest.frame.utc_time >= row.time):
+        frame = latest.frame
+        site = hub.scans.site_for(frame)
+        return ScanPoints(
+            vehicle_id=vehicle_id,
+            seq=frame.seq,
+            time=frame.utc_time,
+            duration_s=frame.duration_s,
+            beams=frame.beams,
+            replayed=frame.replayed,
+            enu=[tuple(p) for p in latest.points.enu.round(3).tolist()],
+            geodetic=[tuple(p) for p in latest.points.geodetic(site).round(8).tolist()],
+        )
+    assert row is not None
+    return _body(hub, vehicle_id, row.frame)
+
+
+@router.get(
+    "/vehicles/{vehicle_id}/scans",
+    response_model=ScanPage,
+    openapi_extra=requires(Permission.READ),
+)
+async def scans_between(
+    vehicle_id: VehicleIdPath,
+    hub: HubDep,
+    start: Annotated[Moment | None, time_query("end - 1 min")] = None,
+    end: Annotated[Moment | None, time_query("now")] = None,
+    limit: Annotated[int, Query(ge=1, le=MAX_SCANS_PAGE)] = 20,
+) -> ScanPage:
+    """Stored scans in a time range, oldest first, as world points."""
+    hub.registry.get(vehicle_id)
+    start_at, end_at = time_range(start, end, DEFAULT_SCAN_HISTORY_S)
+    rows = await asyncio.to_thread(
+        hub.scans.repository.between, vehicle_id, start_at, end_at, limit + 1
+    )
+    scans = [_body(hub, vehicle_id, row.frame) for row in rows[:limit]]
+    site = hub.scans.site
+    return ScanPage(
+        vehicle_id=vehicle_id,
+        start=start_at,
+        end=end_at,
+        limit=limit,
+        site=None if site is None else _origin(site),
+        scans=scans,
+        truncated=len(rows) > limit,
+    )
+
+
+@router.get(
+    "/vehicles/{vehicle_id}/scans/diagnostics",
+    response_model=ScanDiagnosticsBody,
+    openapi_extra=requires(Permission.READ),
+)
+async def scan_diagnostics(vehicle_id: VehicleIdPath, hub: HubDep) -> ScanDiagnosticsBody:
+    """What the hub made of this vehicle's scans: received, stored, refused by reason."""
+    hub.registry.get(vehicle_id)
+    counts = hub.scans.diagnostics_of(vehicle_id)
+    return ScanDiagnosticsBody(
+        vehicle_id=vehicle_id,
+        received=counts.received,
+        live=counts.live,
+        replayed=counts.replayed,
+        stored=counts.stored,
+        cleaned_ranges=counts.cleaned_ranges,
+        rejected=dict(counts.rejected),
+    )
+
+
+@router.get(
+    "/scans/map",
+    response_model=PointMapBody,
+    openapi_extra=requires(Permission.READ),
+    responses={200: {"content": {"application/octet-stream": {}}}},
+)
+async def point_map(
+    hub: HubDep,
+    format: Annotated[Literal["json", "ply"], Query(description="json, or a PLY file")] = "json",
+    limit: Annotated[int, Query(ge=1, le=MAX_MAP_POINTS)] = 100_000,
+) -> PointMapBody | Response:
+    """The site's voxel point map (the most recently seen voxels, up to ``limit``)."""
+    scans = hub.scans
+    points = scans.point_map.points(limit)
+    site = None if scans.site is None else _origin(scans.site)
+    if format == "ply":
+        origin = "unset" if site is None else f"{site.lat},{site.lon},{site.alt_msl}"
+        return Response(
+            ply_bytes(points, f"gcs point map: ENU metres, site origin {origin}"),
+            media_type="application/octet-stream",
+            headers={"Content-Disposition": 'attachment; filename="pointmap.ply"'},
+        )
+    return PointMapBody(
+        site=site,
+        voxel_m=scans.point_map.voxel_m,
+        voxels=len(scans.point_map),
+        evicted=scans.point_map.evicted,
+        points=[tuple(p) for p in points.round(3).tolist()],
+    )
+
+
+@router.get(
+    "/scans/obstacles",
+    response_model=list[ObstacleBody],
+    openapi_extra=requires(Permission.READ),
+)
+async def obstacles(hub: HubDep) -> list[ObstacleBody]:
+    """Clusters in the point map (above the ground), with their extents in site ENU."""
+    found = await asyncio.to_thread(hub.scans.point_map.obstacles)
+    site = hub.scans.site
+    if site is None:
+        return []
+    bodies = []
+    for o in found:
+        corners = [
+            (o.east_min, o.north_min),
+            (o.east_max, o.north_min),
+            (o.east_max, o.north_max),
+            (o.east_min, o.north_max),
+        ]
+        outline = [site.to_geo(east, north) for east, north in corners]
+        bodies.append(ObstacleBody(**vars(o), outline=outline))
+    return bodies
+
+
+FLIGHT_SCAN_PAGE = 500
+
+
+def _flight_points(hub: HubDep, flight_id: int) -> tuple[str, PointMap, LocalFrame | None]:
+    """A flight's scans as one point map at the site map's voxel size: bounded by the
+    surfaces the flight saw, however long it was."""
+    flight = hub.logbook.flight(flight_id)
+    end = flight_end(flight)
+    points = PointMap(hub.scans.point_map.voxel_m, hub.scans.point_map.max_voxels)
+    start, site = flight.start_time, hub.scans.site
+    while True:
+        rows = hub.scans.repository.between(flight.vehicle_id, start, end, FLIGHT_SCAN_PAGE)
+        for row in rows:
+            frame = decode_scan(row.frame)
+            site = hub.scans.site_for(frame)
+            points.add(world_points(frame, site).enu, row.time)
+        if len(rows) < FLIGHT_SCAN_PAGE:
+            return f"{flight.vehicle_id}_flight{flight.id}", points, site
+        start = math.nextafter(rows[-1].time, math.inf)
+
+
+@router.get(
+    "/flights/{flight_id}/points.ply",
+    openapi_extra=requires(Permission.READ),
+    response_class=Response,
+    responses={
+        200: {"content": {"application/octet-stream": {}}},
+        404: {"description": "No such flight"},
+    },
+)
+async def flight_points(flight_id: FlightIdPath, hub: HubDep) -> Response:
+    """The world points of a flight's scans (site east/north/up metres, voxel-downsampled
+    like the point map) as a PLY file, for CloudCompare, PDAL or MeshLab."""
+    name, points, site = await asyncio.to_thread(_flight_points, hub, flight_id)
+    origin = (
+        "unset" if site is None else ",".join(str(v) for v in _origin(site).model_dump().values())
+    )
+    return Response(
+        ply_bytes(points.points(), f"gcs flight points: ENU metres, site origin {origin}"),
+        media_type="application/octet-stream",
+        headers={"Content-Disposition": f'attachment; filename="{name}.ply"'},
+    )

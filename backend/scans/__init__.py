@@ -1,0 +1,1 @@
+"""LIDAR scans on the hub: checked, stored, turned into world points, mapped, fanned out."""

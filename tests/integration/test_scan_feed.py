@@ -1,0 +1,245 @@
+"""Scans through an in-process hub over real WebSockets: bad scans refused and counted with
+the link alive, subscribers served, others not, and a stalled reader held to one scan."""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import json
+import math
+import threading
+import time
+from array import array
+from collections.abc import Callable, Iterator
+from pathlib import Path
+from typing import Any
+
+import httpx
+import numpy as np
+import pytest
+from plyfile import PlyData  # type: ignore[import-untyped]
+from websockets.exceptions import ConnectionClosed
+from websockets.sync.client import ClientConnection, connect
+
+from backend.app import create_app
+from protocol.messages import AGENT_WS_PATH, CLIENT_WS_PATH, Telemetry, VehicleState, encode
+from protocol.scans import (
+    MAX_BEAMS,
+    ScanFrame,
+    ScanPose,
+    encode_scan,
+    split_client_scan_frame,
+)
+from tests.conftest import ADMIN_PASSWORD, hub_settings
+from tests.helpers import access_token, agent_hello, api_client, poll_until, running_hub
+
+pytestmark = pytest.mark.integration
+
+HOME = ScanPose(-35.363262, 149.165237, 587.0)
+
+
+def scan(seq: int, *, beams: int = 720, at: float | None = None, metres: float = 5.0) -> bytes:
+    """A scan of ``metres`` all round; quantised as it is, not as an agent would clean it."""
+    ranges = array("H", [round(metres * 1000)] * beams)
+    return encode_scan(
+        ScanFrame(
+            seq=seq,
+            sensor_time_us=seq * 100_000,
+            utc_time=time.time() if at is None else at,
+            duration_s=0.1,
+            angle_min=0.0,
+            angle_increment=-2 * math.pi / beams,
+            range_max_m=12.0,
+            pose_start=HOME,
+            pose_end=HOME,
+            ranges=ranges,
+        )
+    )
+
+
+@contextlib.contextmanager
+def agent(base: str, token: str, vehicle_id: str) -> Iterator[ClientConnection]:
+    url = base.replace("http://", "ws://") + AGENT_WS_PATH
+    with connect(url, additional_headers={"Authorization": f"Bearer {token}"}) as socket:
+        socket.send(encode(agent_hello(vehicle_id, stream_id="s1")))
+        assert json.loads(socket.recv(timeout=5))["type"] == "welcome"
+        yield socket
+
+
+@contextlib.contextmanager
+def feed(base: str, token: str, **options: Any) -> Iterator[ClientConnection]:
+    url = base.replace("http://", "ws://") + CLIENT_WS_PATH
+    with contextlib.ExitStack() as stack:
+        socket = stack.enter_context(
+            connect(url, additional_headers={"Authorization": f"Bearer {token}"}, **options)
+        )
+        assert json.loads(socket.recv(timeout=5))["type"] == "fleet"
+        yield socket
+        with contextlib.suppress(ConnectionClosed, TimeoutError):
+            stack.close()
+
+
+def subscribe(socket: ClientConnection, vehicle_id: str) -> None:
+    socket.send(json.dumps({"type": "subscribe_scans", "vehicle_id": vehicle_id}))
+    while True:  # vehicle updates may come first
+        answer = json.loads(socket.recv(timeout=5))
+        if answer["type"] == "scan_subscriptions":
+            assert vehicle_id in answer["vehicles"]
+            return
+
+
+def binary_frames(socket: ClientConnection, within_s: float) -> list[bytes]:
+    frames, deadline = [], time.monotonic() + within_s
+    while (remaining := deadline - time.monotonic()) > 0:
+        try:
+            frame = socket.recv(timeout=remaining)
+        except TimeoutError:
+            break
+        if isinstance(frame, bytes):
+            frames.append(frame)
+    return frames
+
+
+def errors_to(socket: ClientConnection, within_s: float) -> list[str]:
+    texts, deadline = [], time.monotonic() + within_s
+    while (remaining := deadline - time.monotonic()) > 0:
+        try:
+            message = json.loads(socket.recv(timeout=remaining))
+        except TimeoutError:
+            break
+        if message["type"] == "error":
+            texts.append(message["message"])
+    return texts
+
+
+def test_bad_scans_are_refused_or_cleaned_counted_and_the_link_survives(
+    hub: str, enrol: Callable[[str], str], admin_token: str
+) -> None:
+    with agent(hub, enrol("v1"), "v1") as socket, api_client(hub, admin_token) as api:
+        good = scan(0)
+        socket.send(good[:-2])  # a beam count the header disagrees with
+        assert "beams: the header says 720 beams" in errors_to(socket, 2)[0]
+        cases = [
+            good[:24] + b"\0\0\0\0\0\0\xf8\x7f" + good[32:],  # utc_time NaN
+            scan(1, at=time.time() + 3600),  # an hour ahead
+            scan(2, at=time.time() - 30 * 86400),  # a month old
+            scan(3, beams=MAX_BEAMS) + b"\0" * 4000,  # over the size limit
+        ]
+        for frame in cases:
+            socket.send(frame)
+        socket.send(scan(4, metres=40.0))  # beyond the sensor's 12 m: cleaned, not stored
+        for seq in range(5, 40):  # a burst: more than 20 scans/s
+            socket.send(scan(seq))
+        socket.send(encode(Telemetry(seq=0, time=time.time(), state=VehicleState(alt_rel=3.0))))
+
+        def counted() -> dict[str, Any] | None:
+            body: dict[str, Any] = api.get("/api/v1/vehicles/v1/scans/diagnostics").json()
+            return body if body["received"] == 41 and body["stored"] >= 1 else None
+
+        diagnostics = poll_until(counted, 10, "every scan counted")
+        assert diagnostics is not None
+        assert diagnostics["rejected"]["bad_frame"] == 3
+        assert diagnostics["rejected"]["time_future"] == 1
+        assert diagnostics["rejected"]["time_past"] == 1
+        assert diagnostics["rejected"]["rate"] >= 15
+        assert diagnostics["cleaned_ranges"] == 720
+        # The link survived all of it: the telemetry behind the bad scans is live.
+        poll_until(
+            lambda: (api.get("/api/v1/vehicles/v1").json()["state"] or {}).get("alt_rel") == 3.0,
+            5,
+            "the telemetry sent after the bad scans",
+        )
+        latest = api.get("/api/v1/vehicles/v1/scans/latest").json()
+        assert latest["geodetic"]
+        assert all(math.isfinite(v) for point in latest["enu"] for v in point)
+
+
+def test_subscribers_get_scans_others_none_and_a_stalled_reader_holds_one(
+    tmp_path: Path,
+) -> None:
+    settings = hub_settings(tmp_path, scan_max_rate_hz=100.0)
+    app = create_app(settings)
+    with running_hub(settings, app) as base:
+        token = access_token(base, "admin", ADMIN_PASSWORD)
+        with httpx.Client(base_url=base, headers={"Authorization": f"Bearer {token}"}) as api:
+            tokens = {
+                v: api.post(f"/api/v1/vehicles/{v}/agent-tokens").json()["token"]
+                for v in ("v1", "v2")
+            }
+        with (
+            feed(base, token) as reader,
+            feed(base, token) as bystander,
+            # max_queue=1: the client library stops reading its socket once a frame waits.
+            feed(base, token, max_queue=1) as stalled,
+            agent(base, tokens["v1"], "v1") as v1,
+            agent(base, tokens["v2"], "v2") as v2,
+        ):
+            subscribe(reader, "v1")
+            feeds = app.state.hub.client_feeds
+            reader_feed = next(f for f in feeds if f.scans.vehicles)
+            subscribe(stalled, "v1")
+            # Not the set's first subscribed feed: its order is arbitrary.
+            stalled_feed = next(f for f in feeds if f.scans.vehicles and f is not reader_feed)
+            # 16 KB scans at 100 Hz for 6 s: ~10 MB, more than loopback's socket buffers.
+            stop = threading.Event()
+
+            def send(socket: ClientConnection) -> None:
+                seq = 0
+                while not stop.is_set():
+                    socket.send(scan(seq, beams=MAX_BEAMS))
+                    seq += 1
+                    time.sleep(0.01)  # pacing the sender at the rate limit
+
+            senders = [threading.Thread(target=send, args=(s,)) for s in (v1, v2)]
+            for sender in senders:
+                sender.start()
+            try:
+                received = binary_frames(reader, 6.0)
+                pending = stalled_feed.scans.pending
+            finally:
+                stop.set()
+                for sender in senders:
+                    sender.join(10)
+            vehicles = {split_client_scan_frame(frame)[0] for frame in received}
+            assert vehicles == {"v1"}  # v2's scans go to nobody: nobody asked
+            assert len(received) > 100
+            assert not binary_frames(bystander, 0.5)
+            # The stalled feed: its socket is full, and the hub holds one newest scan for it.
+            assert stalled_feed.scans.replaced > 0  # coalesced, not queued
+            assert pending <= 1
+
+
+def test_a_flights_world_points_export_as_ply(
+    hub: str, enrol: Callable[[str], str], admin_token: str
+) -> None:
+    with agent(hub, enrol("v1"), "v1") as socket, api_client(hub, admin_token) as api:
+        now = time.time()
+
+        def telemetry(seq: int, armed: bool) -> str:
+            state = VehicleState(armed=armed, alt_rel=2.0)
+            return encode(Telemetry(seq=seq, time=now + seq, state=state))
+
+        socket.send(telemetry(0, False))
+        socket.send(telemetry(1, True))  # the flight starts
+        for seq in range(5):
+            socket.send(scan(seq, at=now + 1.5 + seq * 0.1))
+        socket.send(telemetry(2, True))
+        socket.send(telemetry(3, False))  # and ends
+
+        def flight() -> list[dict[str, Any]]:
+            listed = api.get("/api/v1/flights", params={"vehicle_id": "v1"}).json()["flights"]
+            return [f for f in listed if f["end_time"] is not None]
+
+        flight_id = poll_until(flight, 10, "the flight stored")[0]["id"]
+        poll_until(
+            lambda: api.get("/api/v1/vehicles/v1/scans/diagnostics").json()["stored"] == 5,
+            10,
+            "the scans stored",
+        )
+        answer = api.get(f"/api/v1/flights/{flight_id}/points.ply")
+    assert answer.status_code == 200, answer.text
+    ply = PlyData.read(io.BytesIO(answer.content))
+    vertices = ply["vertex"]
+    radius = np.hypot(vertices["x"], vertices["y"])
+    assert len(radius) > 200  # 720 beams on a 5 m circle, downsampled to 10 cm voxels
+    assert np.all(np.abs(radius - 5.0) < 0.1)

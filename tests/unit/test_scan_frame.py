@@ -1,0 +1,92 @@
+"""The binary scan frame (protocol/scans.py): size, round trip, and what it refuses."""
+
+from __future__ import annotations
+
+import math
+from array import array
+
+import pytest
+
+from protocol.scans import (
+    FLAG_REPLAYED,
+    HEADER_BYTES,
+    MAX_SCAN_BYTES,
+    Mount,
+    ScanFrame,
+    ScanFrameError,
+    ScanPose,
+    decode_scan,
+    encode_scan,
+    quantise,
+    with_flags,
+)
+
+
+def _frame(beams: int = 720) -> ScanFrame:
+    ranges, _ = quantise([1.0 + i * 0.01 for i in range(beams)], 0.001, 12.0)
+    return ScanFrame(
+        seq=41,
+        sensor_time_us=123_456_789,
+        utc_time=1_760_000_000.25,
+        duration_s=0.1,
+        angle_min=0.0,
+        angle_increment=-math.radians(0.5),
+        range_max_m=12.0,
+        pose_start=ScanPose(-35.363262, 149.165237, 589.0, 0.01, -0.02, 1.5),
+        pose_end=ScanPose(-35.3632621, 149.1652371, 589.1, 0.01, -0.02, 1.6),
+        ranges=ranges,
+        mount=Mount(0.05, 0.0, -0.1, 0.0, 0.0, math.pi),
+    )
+
+
+def test_a_720_beam_scan_fits_in_2_kb_and_round_trips() -> None:
+    frame = _frame()
+    data = encode_scan(frame)
+    assert len(data) == HEADER_BYTES + 1440
+    assert len(data) <= 2048
+    back = decode_scan(data)
+    assert back.ranges == frame.ranges
+    assert back.seq == 41
+    assert back.sensor_time_us == 123_456_789
+    assert back.utc_time == frame.utc_time
+    assert back.pose_start.lat == frame.pose_start.lat  # f64: millimetres survive
+    assert back.pose_end.yaw == pytest.approx(1.6, abs=1e-6)
+    assert back.mount.yaw == pytest.approx(math.pi, abs=1e-6)
+    assert not back.replayed
+    assert decode_scan(with_flags(data, FLAG_REPLAYED)).replayed
+
+
+def test_quantising_cleans_what_is_no_range() -> None:
+    ranges, cleaned = quantise([math.nan, math.inf, -1.0, 0.0, 12.5, 0.0004, 11.9994], 0.001, 12.0)
+    assert list(ranges) == [0, 0, 0, 0, 0, 1, 11999]
+    assert cleaned == 4  # NaN, infinity, negative, beyond the maximum (0 is "no return")
+
+
+@pytest.mark.parametrize(
+    ("mangle", "rule"),
+    [
+        (lambda d: d[:-2], "beams: the header says 720 beams, the frame holds 719"),
+        (lambda d: d + b"\0\0", "beams: the header says 720 beams"),
+        (lambda d: b"XSCN" + d[4:], "magic"),
+        (lambda d: d[:4] + b"\x09" + d[5:], "version: 9"),
+        (lambda d: d[:10], "shorter than"),
+        (lambda d: d + bytes(MAX_SCAN_BYTES), "over the limit"),
+        # utc_time (offset 24) as NaN
+        (lambda d: d[:24] + b"\0\0\0\0\0\0\xf8\x7f" + d[32:], "utc_time: must be a finite"),
+    ],
+)
+def test_bad_frames_are_refused_naming_the_field(mangle: object, rule: str) -> None:
+    data = encode_scan(_frame())
+    with pytest.raises(ScanFrameError, match=rule):
+        decode_scan(mangle(data))  # type: ignore[operator]
+
+
+def test_the_encoder_refuses_what_the_decoder_would() -> None:
+    frame = _frame()
+    bad = ScanFrame(**{**{f: getattr(frame, f) for f in frame.__slots__}, "duration_s": 0.0})
+    with pytest.raises(ScanFrameError, match="duration_s"):
+        encode_scan(bad)
+    with pytest.raises(ScanFrameError, match="beams"):
+        encode_scan(
+            ScanFrame(**{**{f: getattr(frame, f) for f in frame.__slots__}, "ranges": array("H")})
+        )

@@ -1,0 +1,282 @@
+"""Scan sources behind one interface: each yields whole turns, stamped on the agent's clock.
+
+- `YdlidarSource`: a YDLIDAR on a serial port (``/dev/ttyUSB0``, 230400 baud for a
+  T-mini Pro), or the simulator's LIDAR socket (``tcp://HOST:PORT``), whose bytes are the
+  same; parsed by `vehicle_agents.sensors.ydlidar`.
+- `ObstacleDistanceSource`: MAVLink OBSTACLE_DISTANCE from the flight controller, for a
+  rangefinder wired to the autopilot (ArduPilot's proximity library sends 72 sectors;
+  SITL can simulate one).
+- ROS 2 ``sensor_msgs/LaserScan``: where rclpy is installed, a node can hand its scans to
+  `ScanQueue.put` (a `Turn` maps one-to-one onto a LaserScan). rclpy is not a dependency
+  of the agent and is imported by nothing here.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import logging
+import math
+import threading
+import time
+from array import array
+from collections import deque
+from collections.abc import AsyncIterator, Callable
+from dataclasses import dataclass, field
+from typing import Any, Protocol
+
+from vehicle_agents.sensors.envelope import lower_envelope_slope
+from vehicle_agents.sensors.ydlidar import Packet, YdlidarParser
+
+log = logging.getLogger(__name__)
+
+READ_SIZE = 4096
+DEFAULT_PERIOD_S = 0.1
+
+
+@dataclass(frozen=True, slots=True)
+class Turn:
+    """One full turn of the head. Beam ``i`` points at ``angle_min + i * angle_increment``
+    (radians, counter-clockwise from the sensor's forward axis) and was measured at
+    ``start + i * duration_s / beams``. ``start`` is agent monotonic seconds, unless
+    ``fcu_start_s`` gives the flight controller's own time for it (MAVLink sources)."""
+
+    start: float
+    duration_s: float
+    angle_min: float
+    angle_increment: float
+    ranges: array[int]  # millimetres, 0 for no return
+    range_max_m: float
+    fcu_start_s: float | None = None
+
+
+class ScanSource(Protocol):
+    """Where turns come from; `stats` counts what each source threw away."""
+
+    stats: dict[str, int]
+
+    def turns(self) -> AsyncIterator[Turn]: ...
+
+
+CLOCK_WINDOW = 800  # packets: a few seconds of a T-mini Pro at 10 Hz
+REFIT_EVERY = 50
+
+
+class SensorClock:
+    """When each beam was measured, on the agent's clock.
+
+    The head samples at a steady rate, so beam number ``g`` (counted over all turns) was
+    measured at ``origin + g * spacing``. Each packet, stamped on arrival, is a sample of
+    that line, late by its trip (the UART, the OS, the event loop) but never early: the
+    spacing is fitted through the samples of the last few seconds, and the line is lowered
+    to the least delayed of them. One delayed read then moves nothing, and the start of a
+    turn comes out to within the best trip time of the window, not of that one turn.
+    """
+
+    def __init__(self, spacing_s: float) -> None:
+        self._samples: deque[tuple[int, float]] = deque(maxlen=CLOCK_WINDOW)
+        self.reset(spacing_s)
+
+    def reset(self, spacing_s: float) -> None:
+        """Start again from the sensor's stated rate (before any turn was timed)."""
+        self.spacing_s = spacing_s
+        self._samples.clear()
+        self._origin: float | None = None
+        self._since_fit = 0
+
+    def add(self, beam: int, arrived: float) -> None:
+        self._samples.append((beam, arrived))
+        self._since_fit += 1
+        if self._origin is None or self._since_fit >= REFIT_EVERY:
+            self._fit()
+        else:
+            self._origin = min(self._origin, arrived - beam * self.spacing_s)
+
+    def _fit(self) -> None:
+        self._since_fit = 0
+        samples = list(self._samples)
+        if len(samples) >= 20 and samples[-1][0] > samples[0][0]:
+            self.spacing_s = lower_envelope_slope(samples, self.spacing_s)
+        self._origin = min(t - g * self.spacing_s for g, t in samples)
+
+    def time_of(self, beam: int) -> float:
+        assert self._origin is not None
+        return self._origin + beam * self.spacing_s
+
+
+@dataclass
+class TurnAssembler:
+    """YDLIDAR packets into turns on a fixed grid of ``resolution_deg`` beams, each turn
+    timed by a `SensorClock` (the sensor's own frequency only until it has samples)."""
+
+    resolution_deg: float = 0.5
+    range_max_m: float = 12.0
+    _ranges: array[int] | None = None
+    _turn: int = -1
+    _beams: int = field(init=False)
+    _clock: SensorClock = field(init=False)
+
+    def __post_init__(self) -> None:
+        self._beams = round(360.0 / self.resolution_deg)
+        self._clock = SensorClock(DEFAULT_PERIOD_S / self._beams)
+
+    def add(self, packet: Packet, arrived: float) -> Turn | None:
+        done = None
+        beams = self._beams
+        if packet.zero:
+            if self._ranges is not None:
+                done = self._finish()
+            elif packet.scan_hz:
+                self._clock.reset(1.0 / (packet.scan_hz * beams))
+            self._ranges = array("H", bytes(2 * beams))
+            self._turn += 1
+        ranges = self._ranges
+        if ranges is None:  # the middle of a turn whose start was not seen
+            return None
+        step = self.resolution_deg
+        top = round(self.range_max_m * 1000.0)
+        for angle, distance in zip(packet.angles_deg, packet.distances_mm, strict=True):
+            if 0 < distance <= top:
+                ranges[round(angle / step) % beams] = distance
+        last = packet.angles_deg[-1] / 360.0 * beams
+        self._clock.add(round(self._turn * beams + last), arrived)
+        return done
+
+    def _finish(self) -> Turn:
+        assert self._ranges is not None
+        start = self._clock.time_of(self._turn * self._beams)
+        end = self._clock.time_of((self._turn + 1) * self._beams)
+        return Turn(
+            start=start,
+            duration_s=end - start,
+            angle_min=0.0,
+            angle_increment=-math.radians(self.resolution_deg),  # the head turns clockwise
+            ranges=self._ranges,
+            range_max_m=self.range_max_m,
+        )
+
+
+class YdlidarSource:
+    """A YDLIDAR on ``tcp://HOST:PORT`` (the simulator) or a serial device path."""
+
+    def __init__(
+        self,
+        url: str,
+        resolution_deg: float = 0.5,
+        baud: int = 230400,
+        monotonic: Callable[[], float] = time.monotonic,
+    ) -> None:
+        self.url = url
+        self.baud = baud
+        self.parser = YdlidarParser()
+        self.assembler = TurnAssembler(resolution_deg)
+        self._monotonic = monotonic
+        self.stats: dict[str, int] = {}
+
+    def _update_stats(self) -> None:
+        s = self.parser.stats
+        self.stats = {
+            "packets": s.packets,
+            "bad_checksums": s.bad_checksums,
+            "skipped_bytes": s.skipped_bytes,
+        }
+
+    async def turns(self) -> AsyncIterator[Turn]:
+        async for chunk, arrived in self._chunks():
+            for packet in self.parser.feed(chunk):
+                turn = self.assembler.add(packet, arrived)
+                if turn is not None:
+                    self._update_stats()
+                    yield turn
+
+    async def _chunks(self) -> AsyncIterator[tuple[bytes, float]]:
+        if self.url.startswith("tcp://"):
+            host, _, port = self.url.removeprefix("tcp://").rpartition(":")
+            reader, writer = await asyncio.open_connection(host, int(port))
+            try:
+                while data := await reader.read(READ_SIZE):
+                    yield data, self._monotonic()
+            finally:
+                writer.close()
+                with contextlib.suppress(ConnectionError, OSError):
+                    await writer.wait_closed()
+            raise ConnectionError(f"LIDAR {self.url} closed the connection")
+        async for item in self._serial_chunks():
+            yield item
+
+    async def _serial_chunks(self) -> AsyncIterator[tuple[bytes, float]]:
+        """A serial port, read by a thread (pyserial blocks) into the event loop."""
+        import serial  # type: ignore[import-untyped]  # pyserial: in the agent's base set
+
+        port = serial.Serial(self.url, self.baud, timeout=0.05)
+        queue: asyncio.Queue[tuple[bytes, float]] = asyncio.Queue(maxsize=256)
+        loop = asyncio.get_running_loop()
+        stop = threading.Event()
+
+        def put(item: tuple[bytes, float]) -> None:
+            if queue.full():  # the loop fell behind: drop bytes, as a UART would
+                return
+            queue.put_nowait(item)
+
+        def read() -> None:
+            while not stop.is_set():
+                data = port.read(READ_SIZE)
+                if data:
+                    loop.call_soon_threadsafe(put, (bytes(data), self._monotonic()))
+
+        reader = threading.Thread(target=read, name="lidar-serial", daemon=True)
+        reader.start()
+        try:
+            while True:
+                yield await queue.get()
+        finally:
+            stop.set()
+            await asyncio.to_thread(reader.join, 1.0)
+            port.close()
+
+
+class ObstacleDistanceSource:
+    """OBSTACLE_DISTANCE from the flight controller (an FcuLink listener feeds it).
+
+    Distances are centimetres per sector, ``max_distance + 1`` (or UINT16_MAX) for no
+    obstacle, 0 for unknown; sectors run clockwise from ``angle_offset`` in the frame the
+    message names (MAV_FRAME_BODY_FRD, ArduPilot's): so the increment is negative here.
+    """
+
+    UNKNOWN_CM = 0
+    NO_OBSTACLE = 65535
+
+    def __init__(self, queue_size: int = 4) -> None:
+        self._queue: asyncio.Queue[Turn] = asyncio.Queue(maxsize=queue_size)
+        self.stats: dict[str, int] = {"messages": 0, "dropped": 0}
+
+    def on_message(self, message: Any) -> None:
+        if message.get_type() != "OBSTACLE_DISTANCE":
+            return
+        self.stats["messages"] += 1
+        increment = float(message.increment_f) or float(message.increment)
+        if increment <= 0.0:
+            return
+        count = min(72, math.floor(360.0 / increment + 1e-6))
+        max_cm = int(message.max_distance)
+        ranges = array("H", bytes(2 * count))
+        for i, cm in enumerate(message.distances[:count]):
+            if self.UNKNOWN_CM < cm <= max_cm and cm != self.NO_OBSTACLE:
+                ranges[i] = cm * 10
+        turn = Turn(
+            start=0.0,
+            duration_s=max(1e-3, 1.0 / 10.0),  # a sector sweep is not timed: one message
+            angle_min=-math.radians(float(message.angle_offset)),
+            angle_increment=-math.radians(increment),
+            ranges=ranges,
+            range_max_m=max_cm / 100.0,
+            fcu_start_s=int(message.time_usec) / 1e6,
+        )
+        if self._queue.full():  # newest wins
+            self._queue.get_nowait()
+            self.stats["dropped"] += 1
+        self._queue.put_nowait(turn)
+
+    async def turns(self) -> AsyncIterator[Turn]:
+        while True:
+            yield await self._queue.get()

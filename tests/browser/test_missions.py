@@ -131,12 +131,12 @@ def test_a_qgc_plan_opens_and_a_saved_plan_is_qgcs_format(
     expect(status).to_contain_text(re.compile(r"^sim_2: .+\nsim_3: .+$"), timeout=30_000)
 
     # A file that is not a plan is refused with the field named, and the plan stays.
-    bad = DATA.parent / "not-a-plan.json"
-    bad.write_text('{"fileType": "Plan", "version": 1, "mission": {"version": 2, "items": 3}}')
-    try:
-        page.locator('[data-field="mission-file"]').set_input_files(bad)
-    finally:
-        bad.unlink()
+    # Handed over as bytes: a file on disk removed right after set_input_files could be
+    # gone before the page reads it (NotFoundError under load).
+    bad = b'{"fileType": "Plan", "version": 1, "mission": {"version": 2, "items": 3}}'
+    page.locator('[data-field="mission-file"]').set_input_files(
+        {"name": "not-a-plan.json", "mimeType": "application/json", "buffer": bad}
+    )
     expect(page.locator('[data-field="mission-status"]')).to_contain_text("mission.items")
     expect(rows).to_have_count(5)
 

@@ -263,6 +263,19 @@ def poll_until(
     return value
 
 
+async def poll_until_async(
+    condition: Callable[[], T], timeout_s: float, what: str, *, every_s: float = 0.05
+) -> T:
+    """`poll_until` inside an event loop: sleeps without blocking the loop, so the tasks
+    under test run between looks."""
+    deadline = time.monotonic() + timeout_s
+    while not (value := condition()):
+        if time.monotonic() > deadline:
+            raise AssertionError(f"timed out after {timeout_s:g} s waiting for {what}")
+        await asyncio.sleep(every_s)  # polling: there is no event to wait on
+    return value
+
+
 def agent_hello(
     vehicle_id: str = "v1",
     *,

@@ -9,9 +9,20 @@ from __future__ import annotations
 import json
 import time
 from collections.abc import Iterator, Sequence
-from typing import Any
+from typing import Any, TypeVar
 
-from sqlalchemy import Connection, Engine, and_, delete, func, insert, or_, select, update
+from sqlalchemy import (
+    Connection,
+    Engine,
+    Select,
+    and_,
+    delete,
+    func,
+    insert,
+    or_,
+    select,
+    update,
+)
 from sqlalchemy.orm import Session
 
 from backend.errors import NotFound
@@ -32,6 +43,27 @@ from common.geodesy import haversine_m
 
 # The columns a chart, a replay or an export needs.
 SERIES_COLUMNS = ("time", *TELEMETRY_STATE_COLUMNS)
+
+
+_Logged = TypeVar("_Logged", EventRow, CommandRow)
+
+
+def _page(
+    query: Select[_Logged],
+    row: type[_Logged],
+    start: float | None,
+    end: float | None,
+    before_id: int | None,
+) -> Select[_Logged]:
+    """Rows in a time range (either end open) and, when paging, older than ``before_id``:
+    the same window for the events and the commands."""
+    if start is not None:
+        query = query.where(row.time >= start)
+    if end is not None:
+        query = query.where(row.time <= end)
+    if before_id is not None:
+        query = query.where(row.id < before_id)
+    return query
 
 
 def _series_query(vehicle_id: str, start: float, end: float) -> Any:
@@ -180,15 +212,10 @@ class Logbook:
         limit: int,
     ) -> Sequence[EventRow]:
         query = select(EventRow).order_by(EventRow.time.desc(), EventRow.id.desc()).limit(limit)
+        query = _page(query, EventRow, start, end, before_id)
         for column, value in ((EventRow.vehicle_id, vehicle_id), (EventRow.kind, kind)):
             if value is not None:
                 query = query.where(column == value)
-        if start is not None:
-            query = query.where(EventRow.time >= start)
-        if end is not None:
-            query = query.where(EventRow.time <= end)
-        if before_id is not None:
-            query = query.where(EventRow.id < before_id)
         with Session(self.engine) as session:
             return session.scalars(query).all()
 
@@ -217,15 +244,10 @@ class Logbook:
         limit: int,
     ) -> Sequence[CommandRow]:
         query = select(CommandRow).order_by(CommandRow.id.desc()).limit(limit)
+        query = _page(query, CommandRow, start, end, before_id)
         for column, value in ((CommandRow.vehicle_id, vehicle_id), (CommandRow.actor, actor)):
             if value is not None:
                 query = query.where(column == value)
-        if start is not None:
-            query = query.where(CommandRow.time >= start)
-        if end is not None:
-            query = query.where(CommandRow.time <= end)
-        if before_id is not None:
-            query = query.where(CommandRow.id < before_id)
         with Session(self.engine) as session:
             return session.scalars(query).all()
 

@@ -46,6 +46,7 @@ SERIES_COLUMNS = ("time", *TELEMETRY_STATE_COLUMNS)
 
 
 _Logged = TypeVar("_Logged", EventRow, CommandRow)
+_Kept = TypeVar("_Kept", FlightRow, TlogRow)
 
 
 def _page(
@@ -157,11 +158,15 @@ class Logbook:
             return session.scalars(query).all()
 
     def flight(self, flight_id: int) -> FlightRow:
+        return self._one(FlightRow, flight_id, "flight")
+
+    def _one(self, row: type[_Kept], key: int, what: str) -> _Kept:
+        """The row with this id, or NotFound naming it."""
         with Session(self.engine) as session:
-            row = session.get(FlightRow, flight_id)
-        if row is None:
-            raise NotFound(f"no flight {flight_id}")
-        return row
+            found = session.get(row, key)
+        if found is None:
+            raise NotFound(f"no {what} {key}")
+        return found
 
     # -- telemetry series --------------------------------------------------
 
@@ -275,11 +280,7 @@ class Logbook:
             ).all()
 
     def tlog(self, tlog_id: int) -> TlogRow:
-        with Session(self.engine) as session:
-            row = session.get(TlogRow, tlog_id)
-        if row is None:
-            raise NotFound(f"no tlog {tlog_id}")
-        return row
+        return self._one(TlogRow, tlog_id, "tlog")
 
     # -- retention ---------------------------------------------------------
 

@@ -37,7 +37,8 @@ def _offline_and_watched(page: Page, hub: str) -> tuple[list[str], list[str]]:
 
 def _under_the_hubs_csp(response: Response | None) -> None:
     """The page came with the hub's policy: scripts from the hub only, none inline."""
-    assert response is not None and response.ok
+    assert response is not None
+    assert response.ok
     policy = response.headers.get("content-security-policy", "")
     directives = {d.split()[0]: d.split()[1:] for d in policy.split(";") if d.strip()}
     assert directives.get("script-src") == ["'self'"], policy

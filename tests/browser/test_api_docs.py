@@ -52,6 +52,10 @@ def test_swagger_ui_renders_offline_under_the_csp(page: Page, hub: str) -> None:
         ".opblock-summary-path", has_text="/api/v1/vehicles/{vehicle_id}/commands"
     ).first.wait_for(timeout=15_000)
     assert page.locator(".opblock").count() >= 40
+    # The sockets, which OpenAPI cannot describe, are named at the top, with their page.
+    info = page.locator(".information-container")
+    assert "/api/v1/ws" in info.inner_text()
+    assert "docs/websockets.md" in info.inner_text()
     assert elsewhere == []
     assert refused == []
 

@@ -8,7 +8,15 @@ import re
 from pathlib import Path
 from types import ModuleType
 
-from protocol.messages import CloseCode, client_to_hub, hub_to_agent, hub_to_client
+from backend.openapi_document import openapi_document
+from protocol.messages import (
+    AGENT_WS_PATH,
+    CLIENT_WS_PATH,
+    CloseCode,
+    client_to_hub,
+    hub_to_agent,
+    hub_to_client,
+)
 
 ROOT = Path(__file__).resolve().parents[2]
 SCRIPT = ROOT / "scripts" / "gen_websocket_docs.py"
@@ -58,3 +66,13 @@ def test_the_live_feeds_conversation_names_every_message_a_client_may_send() -> 
     assert steps == [str(n) for n in range(1, len(steps) + 1)], steps
     for tag in client_to_hub.json_schema()["discriminator"]["mapping"]:
         assert f"[`{tag}`](#" in conversation, tag
+
+
+def test_the_openapi_document_sends_a_reader_to_the_socket_page() -> None:
+    """OpenAPI cannot describe a WebSocket: its description (the top of /docs) names both
+    sockets, how to authenticate on them, and the page that has the rest."""
+    description = openapi_document()["info"]["description"]
+    assert f"`{CLIENT_WS_PATH}`" in description
+    assert f"`{AGENT_WS_PATH}`" in description
+    assert "Authorization: Bearer <token>" in description
+    assert "docs/websockets.md" in description

@@ -155,6 +155,44 @@ def test_command_a_group(fleet: LocalFleet) -> None:
     assert f"landed and disarmed: {', '.join(vehicles)}" in out
 
 
+def test_read_the_audit_log(fleet: LocalFleet, fleet_admin_token: str) -> None:
+    """Each entry names the credential used, a filter narrows the log, and the example
+    follows next_before_id from page to page without repeating or skipping an entry."""
+    with api_client(fleet.plan.hub_http, fleet_admin_token) as api:
+        # Eight entries at least (token.create each), for pages to follow.
+        made = [
+            api.post("/api/v1/auth/api-tokens", json={"name": name, "scopes": ["read"]})
+            for name in ("wall", *(f"kiosk-{n}" for n in range(7)))
+        ]
+        assert all(answer.status_code == 201 for answer in made), made[0].text
+        read_only = made[0].json()["token"]
+    refused = failed(run_example("04_command_a_group.py", fleet, GCS_TOKEN=read_only))
+    assert " answered 403:" in refused
+
+    out = succeeded(run_example("06_read_the_audit_log.py", fleet, "--action", "denied"))
+    newest = out.splitlines()[0].split()
+    assert newest[2:8] == ["admin", "via", "wall", "denied", "POST", "/api/v1/fleet/commands"]
+
+    out = succeeded(run_example("06_read_the_audit_log.py", fleet, "--last", "7", "--page", "3"))
+    lines = out.splitlines()
+    assert lines[-1] == "7 entries"
+    ids = [int(line.split()[0]) for line in lines[:-1]]
+    everything = api_get_audit(fleet, fleet_admin_token, limit=7)
+    assert ids == [entry["id"] for entry in everything]  # newest first, none twice
+
+    refused = failed(run_example("06_read_the_audit_log.py", fleet, "--action", "takeoff"))
+    assert refused.startswith("error: GET /api/v1/audit answered 422:"), refused
+    assert "command" in refused  # the valid actions are named
+
+
+def api_get_audit(fleet: LocalFleet, token: str, limit: int) -> list[dict[str, Any]]:
+    with api_client(fleet.plan.hub_http, token) as api:
+        page = api.get("/api/v1/audit", params={"limit": limit})
+    assert page.status_code == 200, page.text
+    entries: list[dict[str, Any]] = page.json()["entries"]
+    return entries
+
+
 README = EXAMPLES.parent / "README.md"
 
 

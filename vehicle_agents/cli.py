@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 import asyncio
 import logging
+import os
 import signal
 import sys
 from collections.abc import Coroutine
@@ -136,6 +137,10 @@ def run(args: argparse.Namespace, prog: str = "gcs-agent") -> int:
         return print_id(settings, prog)
     from vehicle_agents.agent import run_agent
     from vehicle_agents.hub_link import VehicleIdInUse
+
+    # What the agent writes (the outbox's telemetry, onboard .tlogs) is for its own user
+    # only, on a companion computer that others may log in to.
+    os.umask(0o077)
 
     try:
         return run_until_signalled(run_agent(settings), give_up=(VehicleIdInUse,))

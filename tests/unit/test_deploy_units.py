@@ -38,3 +38,11 @@ def test_the_readme_gives_the_hub_service_steps() -> None:
         "systemctl enable --now gcs-hub",
     ):
         assert step in steps, step
+
+
+def test_the_agent_units_state_is_private() -> None:
+    """systemd makes a StateDirectory 0755 unless told: the outbox and .tlogs in it are
+    the vehicle's flight data."""
+    unit = _settings(ROOT / "deploy" / "gcs-agent.service")
+    assert unit["StateDirectoryMode"] == ["0700"]
+    assert unit["UMask"] == ["0077"]

@@ -19,6 +19,7 @@ from typing import Any
 
 from pydantic import ValidationError
 
+from common.log_escaping import escape_control_characters_in_logs
 from vehicle_agents.config import (
     ENV_PREFIX,
     AgentSettings,
@@ -225,4 +226,5 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     logging.basicConfig(level=args.log_level.upper(), format=LOG_FORMAT)
+    escape_control_characters_in_logs()
     return run(args)

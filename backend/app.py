@@ -45,8 +45,8 @@ from backend.errors import (
     Unauthenticated,
 )
 from backend.hub import Hub
-from backend.log_escaping import escape_control_characters_in_logs
 from backend.settings import REPO_ROOT, HubSettings
+from common.log_escaping import escape_control_characters_in_logs
 from protocol.messages import AGENT_WS_PATH, CLIENT_WS_PATH
 
 log = logging.getLogger(__name__)

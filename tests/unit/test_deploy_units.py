@@ -49,3 +49,11 @@ def test_the_agent_unit_does_not_restart_an_agent_refused_its_vehicle_id() -> No
     assert unit["Restart"] == ["always"]
     (prevented,) = unit["RestartPreventExitStatus"]
     assert str(EXIT_VEHICLE_ID_IN_USE) in prevented.split()
+
+
+def test_the_agent_units_state_is_private() -> None:
+    """systemd makes a StateDirectory 0755 unless told: the outbox and .tlogs in it are
+    the vehicle's flight data."""
+    unit = _settings(ROOT / "deploy" / "gcs-agent.service")
+    assert unit["StateDirectoryMode"] == ["0700"]
+    assert unit["UMask"] == ["0077"]

@@ -194,12 +194,17 @@ def running_fleet(data_dir: Path, **plan: Any) -> Iterator[LocalFleet]:
 
 @contextmanager
 def agent_process(
-    hub: str, token: str, vehicle_id: str, fcu_port: int, log_dir: Path | None = None
+    hub: str,
+    token: str,
+    vehicle_id: str,
+    fcu_port: int,
+    log_dir: Path | None = None,
+    extra_args: Sequence[str] = (),
 ) -> Iterator[subprocess.Popen[bytes]]:
     """`gcs agent` as a process between a flight controller on loopback TCP at
     ``fcu_port`` and the hub
-    at ``hub`` (its http:// URL); its output goes to ``log_dir/<vehicle_id>.log`` if
-    given, else where the test's goes."""
+    at ``hub`` (its http:// URL), with ``extra_args`` added to its command line; its
+    output goes to ``log_dir/<vehicle_id>.log`` if given, else where the test's goes."""
     with ExitStack() as stack:
         log = (
             None
@@ -218,6 +223,7 @@ def agent_process(
                 hub.replace("http://", "ws://"),
                 "--vehicle-id",
                 vehicle_id,
+                *extra_args,
             ],
             env={**os.environ, "GCS_AGENT_TOKEN": token},
             stdout=log,

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import json
 import time
-from collections.abc import Iterator, Sequence
+from collections.abc import Iterable, Iterator, Sequence
 from typing import Any, TypeVar
 
 from sqlalchemy import (
@@ -23,7 +23,7 @@ from sqlalchemy import (
     select,
     update,
 )
-from sqlalchemy.orm import Session
+from sqlalchemy.orm import InstrumentedAttribute, Session
 
 from backend.errors import NotFound
 from backend.storage.database import dialect_insert, transaction
@@ -55,9 +55,14 @@ def _page(
     start: float | None,
     end: float | None,
     before_id: int | None,
+    equal: Iterable[tuple[InstrumentedAttribute[str], str | None]] = (),
 ) -> Select[_Logged]:
-    """Rows in a time range (either end open) and, when paging, older than ``before_id``:
-    the same window for the events and the commands."""
+    """Rows in a time range (either end open), older than ``before_id`` when paging, and
+    with each column of ``equal`` that is given a value at that value: the same window
+    for the events and the commands."""
+    for column, value in equal:
+        if value is not None:
+            query = query.where(column == value)
     if start is not None:
         query = query.where(row.time >= start)
     if end is not None:
@@ -217,10 +222,8 @@ class Logbook:
         limit: int,
     ) -> Sequence[EventRow]:
         query = select(EventRow).order_by(EventRow.time.desc(), EventRow.id.desc()).limit(limit)
-        query = _page(query, EventRow, start, end, before_id)
-        for column, value in ((EventRow.vehicle_id, vehicle_id), (EventRow.kind, kind)):
-            if value is not None:
-                query = query.where(column == value)
+        equal = ((EventRow.vehicle_id, vehicle_id), (EventRow.kind, kind))
+        query = _page(query, EventRow, start, end, before_id, equal)
         with Session(self.engine) as session:
             return session.scalars(query).all()
 
@@ -249,10 +252,8 @@ class Logbook:
         limit: int,
     ) -> Sequence[CommandRow]:
         query = select(CommandRow).order_by(CommandRow.id.desc()).limit(limit)
-        query = _page(query, CommandRow, start, end, before_id)
-        for column, value in ((CommandRow.vehicle_id, vehicle_id), (CommandRow.actor, actor)):
-            if value is not None:
-                query = query.where(column == value)
+        equal = ((CommandRow.vehicle_id, vehicle_id), (CommandRow.actor, actor))
+        query = _page(query, CommandRow, start, end, before_id, equal)
         with Session(self.engine) as session:
             return session.scalars(query).all()
 

@@ -197,5 +197,5 @@ def test_retention_removes_only_old_rows(engine: Engine) -> None:
         + [_sample(100 + i, now - 3600 + i, False, 0.0) for i in range(5)],
     )
     removed = Logbook(engine).apply_retention(RetentionPolicy(telemetry_days=7), now)
-    assert removed == {"telemetry": 23}
+    assert removed == {"telemetry": 23, "scans": 0}  # scans go with telemetry
     assert Repository(engine).count_telemetry("v1") == 5

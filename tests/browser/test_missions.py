@@ -335,7 +335,11 @@ def test_a_drawn_mission_is_refused_on_its_leg_fixed_by_dragging_and_flown(
         expect(page.locator(".vehicle-marker")).to_have_count(3, timeout=30_000)
         expect(page.locator("#map")).to_have_attribute("data-basemap", "farmland")
         _open_panel(page, size, MISSION_VEHICLE)
+        # A fresh plan: the vehicle's mission (an earlier run's) is where editing starts.
         page.locator('[data-action="mission-edit"]').click()
+        page.locator('[data-action="mission-clear"]').click()
+        page.locator('[data-action="mission-add-22"]').click()
+        expect(page.locator(".mission-row")).to_have_count(1)
         pixels = _frame_the_fence(page, frame)
 
         def at(east: float, north: float) -> tuple[float, float]:
@@ -343,7 +347,7 @@ def test_a_drawn_mission_is_refused_on_its_leg_fixed_by_dragging_and_flown(
             _assert_on_open_map(page, x, y)
             return x, y
 
-        # Draw: a take-off (added by Edit), a waypoint in each arm of the U, then RTL.
+        # Draw: after the take-off, a waypoint in each arm of the U, then RTL.
         page.mouse.click(*at(-40, 60))
         page.mouse.click(*at(40, 60))
         _expand_panel(page)
@@ -428,6 +432,13 @@ def test_a_drawn_mission_is_refused_on_its_leg_fixed_by_dragging_and_flown(
         if size == "desktop" and os.environ.get("GCS_UPDATE_SCREENSHOTS"):
             # The base map, the trail behind the flying vehicle, its mission with the
             # active item, and the event feed: the README's picture.
+            # One zoom step in, about the mission (the wheel zooms about the pointer).
+            page.mouse.move(*pixels.pixel(*frame.to_geo(0, 20)))
+            page.mouse.wheel(0, -60)
+            PixelMap(page)  # settled
+            page.wait_for_function(
+                "() => !document.querySelector('#map img.leaflet-tile:not(.leaflet-tile-loaded)')"
+            )
             README_IMAGE.parent.mkdir(parents=True, exist_ok=True)
             page.screenshot(path=README_IMAGE)
         poll_until(
@@ -501,5 +512,22 @@ def test_fly_here_moves_the_vehicle(
         90,
         f"{GOTO_VEHICLE} at the clicked point",
     )
+    # The selected vehicle's panel follows it: up at 10 m, 40 m from where it armed
+    # (its home), in flight, its attitude drawn.
+    _toggle_drawer(page, size, "ops", True)
+    panel = page.locator('[data-panel="selected-vehicle"]')
+    expect(panel.locator('[data-field="selected-alt"]')).to_have_text(
+        re.compile(r"^(9|10|11)\.\d m$")
+    )
+    expect(panel.locator('[data-field="selected-home"]')).to_have_text(
+        re.compile(r"^(3[6-9]|4[0-4]) m$")
+    )
+    expect(panel.locator('[data-field="selected-flight-time"]')).to_have_text(
+        re.compile(r"^(\d+:)?\d+:\d\d$")
+    )
+    expect(panel.locator('[data-field="attitude"]')).to_have_attribute(
+        "aria-label", re.compile(r"^Roll -?\d+°, pitch -?\d+°, heading \d{3}°$")
+    )
+    _shot(page, "fly-here-arrived", size)
     assert api.post(commands, json={"name": "land"}).status_code == 200
     poll_until(lambda: not _states(api)[GOTO_VEHICLE]["armed"], 120, f"{GOTO_VEHICLE} landed")

@@ -389,9 +389,13 @@ def test_a_drawn_mission_is_refused_on_its_leg_fixed_by_dragging_and_flown(
         page.mouse.move(*at(-45, 5), steps=12)
         page.mouse.up()
         _expand_panel(page)
-        expect(page.locator('[data-field="mission-verdict"]')).to_contain_text(
-            "Rails: OK", timeout=CHECK_S * 1000
-        )
+        _shot(page, "mission-dragged", size)
+        try:
+            expect(page.locator('[data-field="mission-verdict"]')).to_contain_text(
+                "Rails: OK", timeout=CHECK_S * 1000
+            )
+        except AssertionError as error:  # say which rule still refuses it
+            raise AssertionError(page.locator(".mission-body").inner_text()) from error
         expect(page.locator(".mission-row.refused")).to_have_count(0)
         moved = rows.nth(2)
         lat, lon = (
@@ -432,8 +436,9 @@ def test_a_drawn_mission_is_refused_on_its_leg_fixed_by_dragging_and_flown(
         if size == "desktop" and os.environ.get("GCS_UPDATE_SCREENSHOTS"):
             # The base map, the trail behind the flying vehicle, its mission with the
             # active item, and the event feed: the README's picture.
-            # One zoom step in, about the mission (the wheel zooms about the pointer).
-            page.mouse.move(*pixels.pixel(*frame.to_geo(0, 20)))
+            # One zoom step in, about the middle of the flown path (the wheel zooms
+            # about the pointer).
+            page.mouse.move(*pixels.pixel(*frame.to_geo(-22, 30)))
             page.mouse.wheel(0, -60)
             PixelMap(page)  # settled
             page.wait_for_function(

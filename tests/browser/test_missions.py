@@ -320,6 +320,29 @@ def _frame_the_fence(page: Page, frame: LocalFrame) -> PixelMap:
     return PixelMap(page)
 
 
+def _close_up(page: Page, middle: tuple[float, float]) -> None:
+    """One zoom step in about ``middle`` (the wheel zooms about the pointer), then drag
+    the map to put it in the middle of the drawing area."""
+    pixels = PixelMap(page)
+    page.mouse.move(*pixels.pixel(*middle))
+    page.mouse.wheel(0, -60)
+    pixels = PixelMap(page)
+    here, space = pixels.pixel(*middle), _drawing_area(page)
+    start = pixels.a
+    page.mouse.move(*start)
+    page.mouse.down()
+    page.mouse.move(
+        start[0] + space["x"] + space["width"] / 2 - here[0],
+        start[1] + space["y"] + space["height"] / 2 - here[1],
+        steps=15,
+    )
+    page.mouse.up()
+    PixelMap(page)  # settled
+    page.wait_for_function(
+        "() => !document.querySelector('#map img.leaflet-tile:not(.leaflet-tile-loaded)')"
+    )
+
+
 def test_a_drawn_mission_is_refused_on_its_leg_fixed_by_dragging_and_flown(
     sized_page: tuple[Page, str], mission_fleet: LocalFleet, api: httpx.Client
 ) -> None:
@@ -411,6 +434,10 @@ def test_a_drawn_mission_is_refused_on_its_leg_fixed_by_dragging_and_flown(
         on_board = api.get(f"/api/v1/vehicles/{MISSION_VEHICLE}/mission").json()["items"][1:]
         assert [item["command"] for item in on_board] == [22, 16, 16, 20]
 
+        readme = size == "desktop" and bool(os.environ.get("GCS_UPDATE_SCREENSHOTS"))
+        if readme:
+            _close_up(page, frame.to_geo(-22, 30))  # the README's picture: the path, larger
+
         commands = f"/api/v1/vehicles/{MISSION_VEHICLE}/commands"
         assert api.post(commands, json={"name": "set_mode", "mode": "GUIDED"}).status_code == 200
         armed = api.post(commands, json={"name": "arm"}).json()
@@ -428,24 +455,16 @@ def test_a_drawn_mission_is_refused_on_its_leg_fixed_by_dragging_and_flown(
         expect(page.locator('.mission-leg.flown[data-seq="2"]')).to_have_count(1)
         expect(page.locator('.mission-row.active[data-seq="3"]')).to_have_count(1)
         _shot(page, "mission-flown", size)
+        if readme:
+            # The base map, the trail behind the flying vehicle, its mission with the
+            # active item and the flown legs, and the event feed.
+            README_IMAGE.parent.mkdir(parents=True, exist_ok=True)
+            page.screenshot(path=README_IMAGE)
         # On to the return: the RTL item, drawn at home, is the active one.
         expect(page.locator('.mission-item.active[data-kind="rtl"][data-seq="4"]')).to_have_count(
             1, timeout=90_000
         )
         expect(page.locator('.mission-item.flown[data-seq="3"]')).to_have_count(1)
-        if size == "desktop" and os.environ.get("GCS_UPDATE_SCREENSHOTS"):
-            # The base map, the trail behind the flying vehicle, its mission with the
-            # active item, and the event feed: the README's picture.
-            # One zoom step in, about the middle of the flown path (the wheel zooms
-            # about the pointer).
-            page.mouse.move(*pixels.pixel(*frame.to_geo(-22, 30)))
-            page.mouse.wheel(0, -60)
-            PixelMap(page)  # settled
-            page.wait_for_function(
-                "() => !document.querySelector('#map img.leaflet-tile:not(.leaflet-tile-loaded)')"
-            )
-            README_IMAGE.parent.mkdir(parents=True, exist_ok=True)
-            page.screenshot(path=README_IMAGE)
         poll_until(
             lambda: not _states(api)[MISSION_VEHICLE]["armed"], 120, "the mission to end landed"
         )

@@ -363,6 +363,11 @@ def test_a_drawn_mission_is_refused_on_its_leg_fixed_by_dragging_and_flown(
         page.locator('[data-action="mission-clear"]').click()
         page.locator('[data-action="mission-add-22"]').click()
         expect(page.locator(".mission-row")).to_have_count(1)
+        if _small(size):  # touch targets of at least 44 px
+            for target in page.locator(".mission-panel button:visible").all():
+                box = target.bounding_box()
+                assert box is not None
+                assert min(box["height"], box["width"]) >= 44, (target.inner_text(), box)
         pixels = _frame_the_fence(page, frame)
 
         def at(east: float, north: float) -> tuple[float, float]:
@@ -401,6 +406,8 @@ def test_a_drawn_mission_is_refused_on_its_leg_fixed_by_dragging_and_flown(
 
         # Fixed by dragging item 3 into the west arm.
         _fold_panel_if_in_the_way(page)
+        if _small(size):
+            _shot(page, "mission-refused-map", size)  # the red leg, the panel folded
         grab = pixels.pixel(*frame.to_geo(40, 60))
         on_item = page.evaluate(
             "([x, y]) => document.elementFromPoint(x, y)?.closest('.mission-item')?.dataset.seq",

@@ -43,12 +43,18 @@ class MissionRunner(Camera, GcsCommands):
     def set_mission(self, items: list[MissionItem]) -> None:
         """Replace the stored mission (a completed upload; item 0 is home)."""
         self.mission = list(items) if len(items) > 1 else []
-        if self.in_auto and self._auto_phase is not AutoPhase.IDLE:
+        if self._mission_running():
             # carry on with the command in flight; the new mission follows it
             self._auto_next = min(self._auto_next, len(self.mission))
             self.mission_current = min(self.mission_current, max(0, len(self.mission) - 1))
         else:
+            # Not running, or run to its end (landed, or holding after its last item):
+            # the new mission starts from its first item, as ArduPilot's does (its
+            # disarm resets the mission, AP_Arming_Copter::disarm; and a completed one
+            # starts over when AUTO is entered, AP_Mission::resume).
             self.mission_current = 0
+            if not self.armed and self._auto_phase is AutoPhase.DONE:
+                self._auto_phase = AutoPhase.IDLE  # reset on disarm: not started
 
     def clear_mission(self) -> bool:
         """MISSION_CLEAR_ALL; refused while the mission is running (AP_Mission::clear)."""

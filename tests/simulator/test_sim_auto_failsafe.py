@@ -99,6 +99,26 @@ def test_auto_needs_a_takeoff_on_the_ground_and_resumes_in_the_air() -> None:
     assert [e.seq for e in flying.drain_events() if isinstance(e, ItemReached)] == [1, 2]
 
 
+def test_a_mission_uploaded_after_one_was_flown_starts_from_its_take_off() -> None:
+    copter = Copter(DEFAULT_HOME)
+    copter.set_mission(mission(copter))
+    copter.set_mode(CopterMode.GUIDED)
+    copter.arm()
+    assert copter.set_mode(CopterMode.AUTO) is MavResult.ACCEPTED
+    run_until(copter, lambda c: not c.armed, 200)
+    assert copter.mode is CopterMode.AUTO  # landed and disarmed, still in AUTO
+
+    # The next flight's plan, uploaded as a GCS does after a flight.
+    copter.set_mission(mission(copter))
+    assert copter.mission_state() is MissionState.NOT_STARTED
+    copter.set_mode(CopterMode.GUIDED)
+    copter.arm()
+    assert copter.set_mode(CopterMode.AUTO) is MavResult.ACCEPTED, texts(copter)[-2:]
+    copter.drain_events()
+    run_until(copter, lambda c: not c.armed, 200)
+    assert [e.seq for e in copter.drain_events() if isinstance(e, ItemReached)] == [1, 4, 5, 8]
+
+
 def test_wpnav_speed_changes_guided_cruise_speed() -> None:
     copter = airborne(10.0)
     assert copter.set_param("WPNAV_SPEED", 800.0) is SetOutcome.STORED

@@ -480,7 +480,17 @@ EventKind = Literal[
     "id_clash",  # the hub refused a second agent for this vehicle id (never sent by agents)
     "manual",  # browser manual control started, ended or held by the deadman
     "upload",  # the agent's onboard .tlog could not be handed over (or was, after failing)
+    "camera",  # the camera fired (CAMERA_FEEDBACK); the event's photo says where
 ]
+
+
+class Photo(Message):
+    """Where and when a photo was taken, as the autopilot reports it (CAMERA_FEEDBACK)."""
+
+    index: int = Field(ge=0, le=2**32 - 1, description="the camera's image number (img_idx)")
+    lat: float = Field(ge=-90, le=90)
+    lon: float = Field(ge=-180, le=180)
+    alt_rel: float = Field(ge=-1000, le=10000, description="metres above home")
 
 
 class Event(Message):
@@ -504,6 +514,7 @@ class Event(Message):
         le=65535,
         description="the mission item a 'mission' event is about (numbered as the hub does)",
     )
+    photo: Photo | None = Field(default=None, description="for a 'camera' event: the photo")
 
 
 SequencedKind = Literal["telemetry", "event"]
@@ -656,6 +667,7 @@ class LiveEvent(Message):
     )
     text: str = Field(max_length=500)
     mission_item: int | None = Field(default=None, ge=0, le=65535)
+    photo: Photo | None = Field(default=None, description="for a 'camera' event: the photo")
     repeat: int = Field(
         default=1,
         ge=1,

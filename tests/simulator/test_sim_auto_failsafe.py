@@ -61,9 +61,11 @@ def test_auto_flies_the_mission_from_the_ground() -> None:
     assert reached == [1, 4, 5, 8]
     assert max_speed == pytest.approx(3.0, abs=0.05)  # DO_CHANGE_SPEED ran during the flight
     photos = [e for e in events if isinstance(e, PhotoTaken)]
-    # every 10 m along the first leg; the "do" commands after the loiter run as it starts
-    # (ArduPilot's order), so the trigger stops there and DIGICAM takes one more
-    assert 4 <= len(photos) <= 6
+    # Every 10 m along both legs: the "do" commands after the loiter run once it is over
+    # (AP_Mission's order), so the trigger stops there and DIGICAM takes one more there.
+    assert 6 <= len(photos) <= 8
+    on_second_leg = [p for p in photos if copter.ne_of(p.lat, p.lon)[1] > 15.0]
+    assert len(on_second_leg) >= 2
     assert [p.index for p in photos] == list(range(1, len(photos) + 1))
     said = texts(copter)
     assert "Reached command #4" in said

@@ -10,8 +10,8 @@ border), so a slanted edge is still covered. A lane is split where it would cros
 Lanes are grouped into cells (boustrophedon decomposition: a cell goes on while each row
 has exactly one segment overlapping the one before), each cell is flown back and forth,
 and the cells are chained nearest first, so a concave area is not crossed by long detours.
-Each lane is lengthened to a whole number of trigger distances, centred on the strip, and
-gets a turnaround (outside the area) at both ends.
+Photos are taken at each lane's entry, every trigger distance, and at its exit, as QGC's
+survey has ArduPilot take them; each lane gets a turnaround (outside the area) at both ends.
 """
 
 from __future__ import annotations
@@ -23,7 +23,6 @@ from dataclasses import dataclass
 import shapely
 from shapely import affinity
 from shapely.geometry import LineString, MultiPolygon, Polygon, box
-from shapely.geometry.base import BaseGeometry
 from shapely.validation import explain_validity
 
 from backend.missions.survey.camera import CameraCalc
@@ -183,16 +182,6 @@ def _cells(rows: list[list[tuple[float, float]]]) -> list[list[tuple[int, float,
     return cells
 
 
-def _pad(a: float, b: float, y: float, pad: float, holes: BaseGeometry) -> tuple[float, float]:
-    """Lengthen [a, b] by `pad` to a whole number of trigger distances: on both sides, or
-    on the one side that does not run into a hole (or not at all if both do)."""
-    for left, right in ((pad / 2, pad / 2), (0.0, pad), (pad, 0.0)):
-        line = LineString([(a - left, y), (b + right, y)])
-        if holes.is_empty or line.intersection(holes).length < 1e-6:
-            return a - left, b + right
-    return a, b
-
-
 def plan_lanes(
     area: Polygon,
     calc: CameraCalc,
@@ -255,12 +244,15 @@ def plan_lanes(
                 b = max(a, grid.x0 + math.ceil((b - grid.x0) / trigger - 0.5 - 1e-6) * trigger)
                 shots = round((b - a) / trigger)
             else:
+                # As QGC and ArduPilot fly it: a photo at the entry (DO_SET_CAM_TRIGG_DIST
+                # with "trigger once"), one per trigger distance, and one at the exit (the
+                # stop command triggers once too). The lane is not lengthened.
                 shots = max(1, math.ceil((b - a) / trigger - 1e-9))
-                a, b = _pad(a, b, y, shots * trigger - (b - a), holes)
             forward = (k % 2 == 0) != rev_x
             xs, xe = (a, b) if forward else (b, a)
             step = trigger if forward else -trigger
-            photos = tuple(back(xs + j * step, y) for j in range(shots + 1))
+            along = [xs + j * step for j in range(shots)]
+            photos = tuple(back(x, y) for x in [*along, xe])
             turn = turnaround_m if forward else -turnaround_m
             lane = Lane(back(xs, y), back(xe, y), photos)
             lanes.append(lane)

@@ -190,7 +190,8 @@ export interface Event {
     | "mission"
     | "id_clash"
     | "manual"
-    | "upload";
+    | "upload"
+    | "camera";
   /**
    * MAV_SEVERITY: 0 emergency .. 7 debug
    */
@@ -200,6 +201,25 @@ export interface Event {
    * the mission item a 'mission' event is about (numbered as the hub does)
    */
   mission_item: number | null;
+  /**
+   * for a 'camera' event: the photo
+   */
+  photo: Photo | null;
+}
+/**
+ * Where and when a photo was taken, as the autopilot reports it (CAMERA_FEEDBACK).
+ */
+export interface Photo {
+  /**
+   * the camera's image number (img_idx)
+   */
+  index: number;
+  lat: number;
+  lon: number;
+  /**
+   * metres above home
+   */
+  alt_rel: number;
 }
 export interface CommandResult {
   type: "command_result";
@@ -612,6 +632,10 @@ export interface LiveEvent {
   severity: number | null;
   text: string;
   mission_item: number | null;
+  /**
+   * for a 'camera' event: the photo
+   */
+  photo: Photo | null;
   /**
    * how many identical events (same vehicle, kind, severity and text) this one stands for: repeats within one batch are sent once; time is the newest
    */

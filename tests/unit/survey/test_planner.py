@@ -125,6 +125,13 @@ def test_mission_items_trigger_on_distance_along_each_lane() -> None:
     triggers = [item for item in items if item.command == mavlink2.MAV_CMD_DO_SET_CAM_TRIGG_DIST]
     assert len(triggers) == 2 * len(plan.lanes)
     assert [t.param1 for t in triggers[:2]] == [pytest.approx(CALC.trigger_distance_m), 0.0]
+    # QGC's "trigger once" on both: a photo at each lane's entry and at its exit
+    assert all(t.param3 == 1 for t in triggers)
+    # ArduPilot runs a "do" command once the waypoint before it is reached: the camera
+    # starts at the lane's entry and stops at its exit, each following its waypoint.
+    for i, item in enumerate(items):
+        if item.command == mavlink2.MAV_CMD_DO_SET_CAM_TRIGG_DIST:
+            assert items[i - 1].command == mavlink2.MAV_CMD_NAV_WAYPOINT
     for item in items:
         if item.command == mavlink2.MAV_CMD_NAV_WAYPOINT:
             assert item.frame == mavlink2.MAV_FRAME_GLOBAL_RELATIVE_ALT
@@ -142,9 +149,15 @@ def test_hover_and_capture_takes_one_image_at_each_photo_point() -> None:
     )
     plan = plan_lanes(polygon, CALC)
     items = mission_items(plan, frame, CALC.altitude_m, hover=True)
-    captures = [i for i in items if i.command == mavlink2.MAV_CMD_IMAGE_START_CAPTURE]
+    captures = [i for i in items if i.command == mavlink2.MAV_CMD_DO_DIGICAM_CONTROL]
     assert len(captures) == plan.photo_count
-    assert all(c.param3 == 1 for c in captures)
+    # param5 "shoot" is 1: MISSION_ITEM_INT's x, unscaled, which our items hold as lat * 1e7
+    assert all(round(c.lat * 1e7) == 1 for c in captures)
+    # each capture follows the waypoint it is taken at, which holds for the camera to settle
+    for i, capture in enumerate(items):
+        if capture.command == mavlink2.MAV_CMD_DO_DIGICAM_CONTROL:
+            assert items[i - 1].command == mavlink2.MAV_CMD_NAV_WAYPOINT
+            assert items[i - 1].param1 > 0
 
 
 @pytest.mark.parametrize(

@@ -777,6 +777,33 @@ class ManualFrame(Message):
     axes: ManualAxes
 
 
+class SurveyDroneProgress(Message):
+    vehicle_id: VehicleId
+    state: Name = Field(description="assigned, flying, done or dropped")
+    lanes_done: int = Field(ge=0)
+    lanes_total: int = Field(ge=0)
+    photos: int = Field(ge=0)
+    reason: str | None = Field(default=None, max_length=500, description="why it dropped out")
+
+
+class SurveyUpdate(Message):
+    """An area survey's progress, at most one a second per survey (newest wins): lanes
+    flown, photos triggered (CAMERA_FEEDBACK) and the share of the area their footprints
+    cover, overall and per drone, and whether a hand-over awaits the operator."""
+
+    type: Literal["survey"] = "survey"
+    survey_id: Name
+    state: Name = Field(description="planned, flying, handover_offered, done, aborted, failed")
+    lanes_done: int = Field(ge=0)
+    lanes_total: int = Field(ge=0)
+    photos: int = Field(ge=0)
+    covered_pct: float = Field(ge=0, le=100)
+    drones: list[SurveyDroneProgress] = Field(max_length=64)
+    handover_lanes: int | None = Field(
+        default=None, ge=0, description="lanes a hand-over offers to move; null if none offered"
+    )
+
+
 # The hub pings an agent to learn whether it is still there (another agent wants its
 # vehicle id); the agent answers with a pong.
 AgentToHub: TypeAlias = Annotated[
@@ -792,7 +819,14 @@ ClientToHub: TypeAlias = Annotated[
     Field(discriminator="type"),
 ]
 HubToClient: TypeAlias = Annotated[
-    FleetSnapshot | VehicleUpdate | EventBatch | ScanSubscriptions | Pong | ErrorReply | LeaseState,
+    FleetSnapshot
+    | VehicleUpdate
+    | EventBatch
+    | ScanSubscriptions
+    | Pong
+    | ErrorReply
+    | LeaseState
+    | SurveyUpdate,
     Field(discriminator="type"),
 ]
 

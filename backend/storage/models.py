@@ -12,6 +12,7 @@ from sqlalchemy import (
     LargeBinary,
     SmallInteger,
     String,
+    Text,
     UniqueConstraint,
 )
 from sqlalchemy.orm import DeclarativeBase, Mapped, mapped_column
@@ -276,3 +277,19 @@ class TlogRow(Base):
     path: Mapped[str] = mapped_column(String(512))
     size: Mapped[int] = mapped_column(BigInteger)
     uploaded_at: Mapped[float] = mapped_column(Double)
+
+
+class SurveyRow(Base):
+    """One area survey: its plan, its drones' missions and progress, as validated JSON
+    (backend.missions.survey.run.SurveyRun), so a restarted hub carries on with it."""
+
+    __tablename__ = "surveys"
+    __table_args__ = (Index("ix_surveys_state", "state"),)
+
+    id: Mapped[str] = mapped_column(String(32), primary_key=True)
+    created: Mapped[float] = mapped_column(Double)
+    updated: Mapped[float] = mapped_column(Double)
+    state: Mapped[str] = mapped_column(String(24))
+    created_by: Mapped[str] = mapped_column(String(64))
+    # Text, not a bounded String: a large survey's photos run to megabytes.
+    run_json: Mapped[str] = mapped_column(Text)

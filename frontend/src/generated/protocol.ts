@@ -18,7 +18,14 @@ export type AgentToHub = Hello | Telemetry | LiveState | Event | CommandResult |
 export type HubToAgent = Welcome | CommandRequest | Ack | Resend | ErrorReply | Ping | ManualFrame;
 export type ClientToHub = Ping | ControlRequest | ManualInput | SubscribeScans | UnsubscribeScans;
 export type HubToClient =
-  FleetSnapshot | VehicleUpdate | EventBatch | ScanSubscriptions | Pong | ErrorReply | LeaseState;
+  | FleetSnapshot
+  | VehicleUpdate
+  | EventBatch
+  | ScanSubscriptions
+  | Pong
+  | ErrorReply
+  | LeaseState
+  | SurveyUpdate;
 
 /**
  * First frame from an agent: who it is and what it can do.
@@ -659,6 +666,45 @@ export interface LeaseState {
   vehicle_id: string;
   holder: string | null;
   reason: string;
+}
+/**
+ * An area survey's progress, at most one a second per survey (newest wins): lanes
+ * flown, photos triggered (CAMERA_FEEDBACK) and the share of the area their footprints
+ * cover, overall and per drone, and whether a hand-over awaits the operator.
+ */
+export interface SurveyUpdate {
+  type: "survey";
+  survey_id: string;
+  /**
+   * planned, flying, handover_offered, done, aborted, failed
+   */
+  state: string;
+  lanes_done: number;
+  lanes_total: number;
+  photos: number;
+  covered_pct: number;
+  /**
+   * @maxItems 64
+   */
+  drones: SurveyDroneProgress[];
+  /**
+   * lanes a hand-over offers to move; null if none offered
+   */
+  handover_lanes: number | null;
+}
+export interface SurveyDroneProgress {
+  vehicle_id: string;
+  /**
+   * assigned, flying, done or dropped
+   */
+  state: string;
+  lanes_done: number;
+  lanes_total: number;
+  photos: number;
+  /**
+   * why it dropped out
+   */
+  reason: string | null;
 }
 
 export const PROTOCOL_VERSION = 1;

@@ -219,6 +219,12 @@ class EventRow(Base):
     # The mission item a "mission" event is about (hub numbering), so a flight log can be
     # queried by item rather than by parsing the text.
     mission_item: Mapped[int | None] = mapped_column(Integer)
+    # Where a "camera" event's photo was taken (CAMERA_FEEDBACK), so a survey's photos can
+    # be read back after a hub restart.
+    photo_index: Mapped[int | None] = mapped_column(BigInteger)
+    photo_lat: Mapped[float | None] = mapped_column(Double)
+    photo_lon: Mapped[float | None] = mapped_column(Double)
+    photo_alt_rel: Mapped[float | None] = mapped_column(Double)
 
 
 class SequenceGapRow(Base):

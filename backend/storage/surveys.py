@@ -9,7 +9,7 @@ from dataclasses import dataclass
 from sqlalchemy import Engine, select
 from sqlalchemy.orm import Session
 
-from backend.storage.models import SurveyRow
+from backend.storage.models import EventRow, SurveyRow
 
 
 @dataclass(frozen=True)
@@ -56,6 +56,9 @@ class SurveyRepository:
             )
             return [_stored(row) for row in rows]
 
+    def photos(self, vehicle_ids: list[str], since: float) -> list[StoredPhoto]:
+        return stored_photos(self.engine, vehicle_ids, since)
+
     def recent(self, limit: int) -> list[StoredSurvey]:
         with Session(self.engine) as session:
             rows = session.scalars(
@@ -66,3 +69,41 @@ class SurveyRepository:
 
 def _stored(row: SurveyRow) -> StoredSurvey:
     return StoredSurvey(row.id, row.created, row.state, row.created_by, row.run_json)
+
+
+@dataclass(frozen=True)
+class StoredPhoto:
+    vehicle_id: str
+    index: int
+    lat: float
+    lon: float
+    alt_rel: float
+    time: float
+
+
+def stored_photos(engine: Engine, vehicle_ids: list[str], since: float) -> list[StoredPhoto]:
+    """The photos the vehicles reported since a time, from the flight log, oldest first."""
+    query = (
+        select(
+            EventRow.vehicle_id,
+            EventRow.photo_index,
+            EventRow.photo_lat,
+            EventRow.photo_lon,
+            EventRow.photo_alt_rel,
+            EventRow.time,
+        )
+        .where(
+            EventRow.vehicle_id.in_(vehicle_ids),
+            EventRow.kind == "camera",
+            EventRow.time >= since,
+            EventRow.photo_lat.is_not(None),
+        )
+        .order_by(EventRow.time)
+    )
+    with engine.connect() as connection:
+        return [
+            StoredPhoto(
+                vid, int(index or 0), float(lat or 0.0), float(lon or 0.0), float(alt or 0.0), at
+            )
+            for vid, index, lat, lon, alt, at in connection.execute(query)
+        ]

@@ -63,6 +63,7 @@ from protocol.messages import (
     LiveEvent,
     MissionSetCurrentCommand,
     MissionUploadCommand,
+    Photo,
     ReturnToLaunchCommand,
     SetModeCommand,
     SurveyDroneProgress,
@@ -110,7 +111,22 @@ class SurveyService:
                 continue
             self._runs[run.id] = run
             self._owners[run.id] = stored.created_by
-            log.info("survey %s resumed (%s)", run.id, run.state)
+            if run.started is not None:
+                # Photos the flight log stored after this survey's last save (the hub
+                # acknowledged them, so the agents will not send them again).
+                vehicles = [d.vehicle_id for d in run.drones]
+                found = await asyncio.to_thread(self._repository.photos, vehicles, run.started)
+                added = sum(
+                    run.photo(
+                        p.vehicle_id,
+                        Photo(index=p.index, lat=p.lat, lon=p.lon, alt_rel=p.alt_rel),
+                        p.time,
+                    )
+                    for p in found
+                )
+                log.info("survey %s resumed (%s), %d photos from the log", run.id, run.state, added)
+            else:
+                log.info("survey %s resumed (%s)", run.id, run.state)
 
     async def run(self) -> None:
         events = ReliableSubscription(EVENT_QUEUE)
@@ -199,6 +215,7 @@ class SurveyService:
             raise Conflict(f"survey {survey_id} not started: {run.note}")
         async with self._lock:
             run.state = SurveyState.FLYING
+            run.started = time.time()
             await self._save(run)
         started = await asyncio.gather(*(self._launch(principal, run, d) for d in run.drones))
         async with self._lock:
@@ -317,12 +334,14 @@ class SurveyService:
 
     # -- following the fleet -------------------------------------------------------------
 
-    def _flying_runs(self, vehicle_id: str) -> list[tuple[SurveyRun, DroneRun]]:
+    def _flying_runs(
+        self, vehicle_id: str, states: frozenset[DroneState] = frozenset({DroneState.FLYING})
+    ) -> list[tuple[SurveyRun, DroneRun]]:
         out = []
         for run in self._runs.values():
             if run.state in (SurveyState.FLYING, SurveyState.HANDOVER_OFFERED):
                 drone = run.drone(vehicle_id)
-                if drone is not None and drone.state is DroneState.FLYING:
+                if drone is not None and drone.state in states:
                     out.append((run, drone))
         return out
 
@@ -332,14 +351,17 @@ class SurveyService:
             if not isinstance(event, LiveEvent) or event.kind not in ("mission", "camera"):
                 continue
             async with self._lock:
-                for run, _ in self._flying_runs(event.vehicle_id):
-                    changed = False
-                    if event.kind == "camera" and event.photo is not None:
-                        changed = run.photo(event.vehicle_id, event.photo)
-                    elif event.kind == "mission" and event.mission_item is not None:
-                        changed = run.reached(event.vehicle_id, event.mission_item)
-                    if changed:
-                        self._dirty.add(run.id)
+                if event.kind == "camera" and event.photo is not None:
+                    # Any survey the drone flew when it took the photo, even one it has
+                    # finished or dropped out of: an agent back from an outage replays its
+                    # photos, perhaps after the hub has seen it land.
+                    for run in self._runs.values():
+                        if run.photo(event.vehicle_id, event.photo, event.time):
+                            self._dirty.add(run.id)
+                elif event.kind == "mission" and event.mission_item is not None:
+                    for run, _ in self._flying_runs(event.vehicle_id):
+                        if run.reached(event.vehicle_id, event.mission_item):
+                            self._dirty.add(run.id)
 
     async def _follow_states(self, states: LatestSubscription) -> None:
         while True:
@@ -369,6 +391,7 @@ class SurveyService:
                     self._drop(run, drone, "landed before its lanes were flown")
                 else:
                     drone.state = DroneState.DONE
+                    drone.finished = time.time()
                 self._dirty.add(run.id)
             elif remaining and state.mode.upper() in LEAVING_MODES:
                 self._drop(run, drone, f"left its mission: {state.mode}")
@@ -406,6 +429,7 @@ class SurveyService:
         log.warning("survey %s: %s drops out: %s", run.id, drone.vehicle_id, reason)
         drone.state = DroneState.DROPPED
         drone.reason = reason
+        drone.finished = time.time()
         self._dirty.add(run.id)
         self._offer(run, reason=f"{drone.vehicle_id} {reason}")
 

@@ -186,6 +186,49 @@ def test_three_drones_fly_the_survey_and_their_photos_cover_the_area(
     assert any(e["text"].startswith("photo ") for e in events["events"])
 
 
+def test_a_survey_carries_on_across_a_hub_restart(
+    api: httpx.Client, fleet: LocalFleet, token: str
+) -> None:
+    with FleetWatcher(fleet.plan.hub_http, token) as watcher:
+        watcher.wait_until(_on_ground_and_ready, 60, "three drones ready on the ground")
+    survey_id = _create_and_start(api, fleet)
+    poll_until(
+        lambda: _progress(api, survey_id)["lanes_done"] >= 2, 90, "two lanes flown", every_s=0.05
+    )
+    fleet.kill("hub")
+    fleet.start_hub(
+        {"GCS_SURVEY_LINK_TIMEOUT_S": str(LINK_TIMEOUT_S), "GCS_COMMANDS_PER_SECOND": "1000"}
+    )
+    # Generous: the new hub opens the store while three simulators run at ten times speed
+    # on a shared machine.
+    fleet.wait_until_ready(timeout_s=120)
+    with api_client(fleet.plan.hub_http, token) as again:
+        resumed = _progress(again, survey_id)
+        assert resumed["state"] == "flying"
+        assert [d["state"] for d in resumed["drones"]] == ["flying"] * 3
+        # Progress stored up to the last save, and the rest from the autopilots' own
+        # MISSION_CURRENT once the agents are back.
+        poll_until(lambda: _progress(again, survey_id)["lanes_done"] >= 2, 30, "progress")
+        done = poll_until(
+            lambda: (p := _progress(again, survey_id))["state"] in ("done", "failed") and p,
+            150,
+            "the survey to end after the restart",
+        )
+        assert done["state"] == "done", done
+        assert done["lanes_done"] == done["lanes_total"]
+        # The photos taken while the hub was down come in with the agents' replay, perhaps
+        # after the drones were seen landed.
+        poll_until(
+            lambda: (
+                _photo_coverage(fleet, again.get(f"/api/v1/surveys/{survey_id}").json()["survey"])
+                > 1 - 1e-6
+            ),
+            30,
+            "the replayed photos to cover the area",
+        )
+        assert _progress(again, survey_id)["covered_pct"] == 100.0
+
+
 def test_a_lost_drone_s_lanes_are_handed_over_and_the_area_still_covered(
     api: httpx.Client, watcher: FleetWatcher, fleet: LocalFleet
 ) -> None:

@@ -51,6 +51,8 @@ class DroneState(StrEnum):
 ACTIVE_STATES = frozenset({SurveyState.PLANNED, SurveyState.FLYING, SurveyState.HANDOVER_OFFERED})
 # Modes in which a drone has left its mission: a failsafe or a pilot took it home or down.
 # (The mission's own RTL item runs in AUTO, so a drone finishing its lanes stays in AUTO.)
+# An agent's clock against the hub's: photos are timed by the agent, the survey by the hub.
+CLOCK_SLACK_S = 10.0
 LEAVING_MODES = frozenset({"RTL", "SMART_RTL", "LAND", "AUTO.RTL", "AUTO.LAND"})
 
 
@@ -78,6 +80,7 @@ class DroneRun(_Model):
     current: int | None = None
     airborne: bool = False
     reason: str | None = None  # why it dropped out
+    finished: float | None = None  # Unix time it was seen done or dropped out
 
     def unflown(self) -> list[LaneRecord]:
         return [lane for lane in self.lanes if not lane.done]
@@ -96,6 +99,7 @@ class HandoverOffer(_Model):
 class SurveyRun(_Model):
     id: str
     created: float
+    started: float | None = None  # Unix time the missions were started
     state: SurveyState = SurveyState.PLANNED
     request: SurveyRequest
     altitude_m: float
@@ -138,11 +142,19 @@ class SurveyRun(_Model):
                 changed = True
         return changed
 
-    def photo(self, vehicle_id: str, photo: Photo) -> bool:
+    def photo(self, vehicle_id: str, photo: Photo, taken: float | None = None) -> bool:
+        """A photo the drone took (at Unix time `taken`, if known). Photos reach the hub
+        late after an outage (the agent replays them), perhaps after the drone was seen
+        landed: any taken between the start and the drone's end count."""
         drone = self.drone(vehicle_id)
-        if drone is None or drone.state is DroneState.ASSIGNED:
+        if drone is None or self.started is None:
             return False
-        if photo.index in drone.photo_indexes[-64:]:
+        if taken is not None and (
+            taken < self.started - CLOCK_SLACK_S
+            or (drone.finished is not None and taken > drone.finished + CLOCK_SLACK_S)
+        ):
+            return False
+        if photo.index in drone.photo_indexes[-256:]:
             return False  # at-least-once delivery: the same photo again
         drone.photos.append((photo.lat, photo.lon))
         drone.photo_indexes.append(photo.index)

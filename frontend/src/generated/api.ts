@@ -1476,6 +1476,8 @@ export interface components {
             airborne: boolean;
             /** Reason */
             reason?: string | null;
+            /** Finished */
+            finished?: number | null;
         };
         /**
          * DroneState
@@ -2474,6 +2476,8 @@ export interface components {
             id: string;
             /** Created */
             created: number;
+            /** Started */
+            started?: number | null;
             /** @default planned */
             state: components["schemas"]["SurveyState"];
             request: components["schemas"]["SurveyRequest"];

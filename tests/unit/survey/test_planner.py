@@ -19,6 +19,7 @@ from backend.missions.survey.planner import (
     coverage,
     lower_bound_m,
     plan_lanes,
+    strip_bound_m,
 )
 from backend.missions.survey.report import best_angle, flight_time_s
 
@@ -74,6 +75,47 @@ def test_path_is_no_shorter_than_the_bound_and_close_to_it_on_a_rectangle() -> N
     rows = math.ceil(1000 / CALC.lane_spacing_m)
     bound = lower_bound_m(area, CALC.lane_spacing_m, plan.turnaround_m, rows)
     assert bound <= plan.path_length_m <= 1.05 * bound
+
+
+@pytest.mark.parametrize(
+    ("name", "angle"),
+    [
+        ("convex", 0.0),
+        ("convex", 30.0),
+        ("convex", 90.0),
+        ("U", 90.0),
+        ("thin", 0.0),
+        ("zone-straddling", 0.0),
+        ("zone-straddling", 45.0),
+        ("zone-straddling", 90.0),
+    ],
+)
+def test_path_is_within_five_percent_of_the_strip_bound(name: str, angle: float) -> None:
+    # The strip bound (planner.strip_bound_m) counts what any plan at this spacing and
+    # angle must fly. The slanted quadrilateral at 45-60° (1.052-1.056 x), concave areas
+    # at angles across their arms and the thin strip flown across (up to 1.19 x) stay
+    # further above it: the bar is met where the lanes run along the area's edges.
+    area = _zone_straddling() if name == "zone-straddling" else SHAPES[name]
+    plan = plan_lanes(area, CALC, angle_deg=angle)
+    bound = strip_bound_m(area, CALC, angle, plan.turnaround_m)
+    assert bound <= plan.path_length_m <= 1.05 * bound
+
+
+@pytest.mark.parametrize("angle", [0.0, 30.0, 45.0, 60.0, 90.0, 135.0])
+@pytest.mark.parametrize("name", [*SHAPES, "zone-straddling"])
+def test_the_strip_bound_is_a_lower_bound(name: str, angle: float) -> None:
+    area = _zone_straddling() if name == "zone-straddling" else SHAPES[name]
+    plan = plan_lanes(area, CALC, angle_deg=angle)
+    assert plan.path_length_m >= strip_bound_m(area, CALC, angle, plan.turnaround_m)
+
+
+def test_a_concave_area_is_flown_without_a_detour_at_its_inner_corner() -> None:
+    # The L's rows shrink from 600 m to 200 m: flown from the arm's far corner, the lane
+    # after the step starts where the one before it ended; flown the other way it would
+    # cross 400 m back.
+    plan = plan_lanes(SHAPES["L"], CALC, angle_deg=0)
+    legs = [math.dist(a, b) for a, b in zip(plan.path[3::4], plan.path[4::4], strict=False)]
+    assert max(legs) < CALC.lane_spacing_m * 1.5
 
 
 @pytest.mark.parametrize("name", list(SHAPES))

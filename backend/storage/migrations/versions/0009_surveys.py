@@ -1,4 +1,5 @@
-"""Area surveys: one row per survey, its plan and progress kept as JSON
+"""Area surveys: one row per survey, its plan and progress kept as JSON; where a camera
+event's photo was taken
 
 Revision ID: 0009_surveys
 Revises: 0008_scans
@@ -27,8 +28,16 @@ def upgrade() -> None:
         sa.Column("run_json", sa.Text(), nullable=False),
     )
     op.create_index("ix_surveys_state", "surveys", ["state"])
+    with op.batch_alter_table("events") as events:
+        events.add_column(sa.Column("photo_index", sa.BigInteger(), nullable=True))
+        events.add_column(sa.Column("photo_lat", sa.Double(), nullable=True))
+        events.add_column(sa.Column("photo_lon", sa.Double(), nullable=True))
+        events.add_column(sa.Column("photo_alt_rel", sa.Double(), nullable=True))
 
 
 def downgrade() -> None:
+    with op.batch_alter_table("events") as events:
+        for column in ("photo_alt_rel", "photo_lon", "photo_lat", "photo_index"):
+            events.drop_column(column)
     op.drop_index("ix_surveys_state", table_name="surveys")
     op.drop_table("surveys")

@@ -506,7 +506,13 @@ class SurveyService:
         else:
             mode = "AUTO.MISSION"  # PX4 takes off by itself on the mission's take-off item
         why = await self._send(principal, drone.vehicle_id, SetModeCommand(mode=mode))
-        return None if why is None else f"{mode}: {why}"
+        if why is None:
+            return None
+        if mode == "AUTO":
+            # It took off but will not fly the mission: it must not be left hovering.
+            back = await self._send(principal, drone.vehicle_id, ReturnToLaunchCommand())
+            why += "; sent home" if back is None else f"; RTL also refused: {back}"
+        return f"{mode}: {why}"
 
     async def _save(self, run: SurveyRun) -> None:
         stored = StoredSurvey(

@@ -177,3 +177,21 @@ def test_wind_leans_the_hover_and_shows_as_airspeed() -> None:
     assert copter.body.groundspeed < 0.01  # the position controller holds station
     assert copter.body.pitch < -math.radians(3.0)  # nose down, into the wind (facing north)
     assert math.hypot(*copter.body.airspeed_ne(copter.params)) == pytest.approx(8.0, abs=0.05)
+
+
+def test_a_mission_flown_to_the_end_starts_again_from_its_take_off_next_time() -> None:
+    # AP_Arming_Copter::disarm resets the mission: a survey uploaded while the vehicle sits
+    # disarmed in AUTO after its last one takes off again rather than "Missing Takeoff Cmd".
+    copter = Copter(DEFAULT_HOME)
+    copter.set_mission(mission(copter))
+    copter.set_mode(CopterMode.GUIDED)
+    copter.arm()
+    assert copter.set_mode(CopterMode.AUTO) is MavResult.ACCEPTED
+    run_until(copter, lambda c: not c.armed, 200)
+    assert copter.mode is CopterMode.AUTO
+    copter.set_mission(mission(copter))
+    assert copter.mission_current == 0
+    copter.set_mode(CopterMode.GUIDED)
+    copter.arm()
+    assert copter.set_mode(CopterMode.AUTO) is MavResult.ACCEPTED
+    run_until(copter, lambda c: c.relative_alt > 5, 60)

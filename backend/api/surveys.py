@@ -9,9 +9,10 @@ returns one mission per drone, each with the same mission check an upload runs.
 from __future__ import annotations
 
 import asyncio
-from typing import Annotated
+from typing import Annotated, Any, Literal
 
-from fastapi import Path
+from fastapi import Path, Query
+from fastapi.responses import JSONResponse, PlainTextResponse, Response
 from pydantic import BaseModel, Field
 
 from backend.api.deps import HubDep
@@ -21,6 +22,16 @@ from backend.errors import InvalidRequest
 from backend.fleet.safety_gate import snapshot_of
 from backend.missions.schemas import Mission, MissionCheckResponse
 from backend.missions.survey.camera import CameraError
+from backend.missions.survey.interop import (
+    MAX_FILE_BYTES,
+    InteropError,
+    mission_path_geojson,
+    read_geojson_polygon,
+    read_kml_polygon,
+    read_qgc_survey,
+    to_qgc_plan,
+    to_wpl,
+)
 from backend.missions.survey.planner import PlanError
 from backend.missions.survey.run import HandoverOffer, SurveyRun
 from backend.missions.survey.schemas import SurveyPart, SurveyPreview, SurveyRequest
@@ -222,3 +233,70 @@ async def abort_survey(
 ) -> SurveyDetail:
     """End the survey: every drone still flying it returns to launch."""
     return _detail(hub, await hub.surveys.abort(survey_id, principal))
+
+
+class SurveyFile(BaseModel):
+    format: Literal["plan", "kml", "geojson"] = Field(
+        description="plan: a QGroundControl .plan with a Survey item (its polygon, camera, "
+        "altitude or GSD, overlaps, angle, turnaround); kml: the first Polygon of a KML file "
+        "(Google Earth); geojson: a Polygon, Feature or FeatureCollection"
+    )
+    content: str = Field(max_length=MAX_FILE_BYTES, description="the file's text")
+
+
+@router.post(
+    "/surveys/import",
+    response_model=dict[str, Any],
+    openapi_extra=requires(Permission.READ),
+)
+async def import_survey_area(body: SurveyFile) -> dict[str, Any]:
+    """A survey request's fields from another tool's file (no side effects): at least the
+    `area`, and from a QGC Survey also its camera and settings. Add `vehicle_ids` (and
+    anything to change) and send it to `POST /surveys` or the preview."""
+    try:
+        if body.format == "plan":
+            return read_qgc_survey(body.content)
+        if body.format == "kml":
+            return {"area": read_kml_polygon(body.content)}
+        return {"area": read_geojson_polygon(body.content)}
+    except InteropError as error:
+        raise InvalidRequest("content", str(error)) from error
+
+
+@router.get(
+    "/surveys/{survey_id}/vehicles/{vehicle_id}/mission",
+    openapi_extra=requires(Permission.READ),
+    responses={200: {"content": {"application/json": {}, "text/plain": {}}}},
+)
+async def export_survey_mission(
+    survey_id: SurveyIdPath,
+    vehicle_id: Annotated[VehicleId, Path()],
+    hub: HubDep,
+    format: Annotated[Literal["plan", "wpl", "geojson"], Query()] = "plan",
+) -> Response:
+    """One drone's survey mission as a file other tools open: a QGroundControl `.plan`,
+    a `QGC WPL 110` waypoint file (Mission Planner, MAVProxy), or its path as GeoJSON."""
+    run = await hub.surveys.find(survey_id)
+    drone = run.drone(vehicle_id)
+    if drone is None:
+        raise InvalidRequest("vehicle_id", f"vehicle {vehicle_id} is not in survey {survey_id}")
+    record = {r.id: r for r in hub.registry.all()}.get(vehicle_id)
+    state = record.state if record is not None else None
+    home = (
+        (state.home_lat or 0.0, state.home_lon or 0.0, state.home_alt_msl or 0.0)
+        if state is not None
+        else (0.0, 0.0, 0.0)
+    )
+    name = f"survey-{survey_id}-{vehicle_id}"
+    if format == "wpl":
+        return PlainTextResponse(
+            to_wpl(drone.items, home),
+            headers={"Content-Disposition": f'attachment; filename="{name}.waypoints"'},
+        )
+    document = (
+        to_qgc_plan(drone.items, home) if format == "plan" else mission_path_geojson(drone.items)
+    )
+    suffix = "plan" if format == "plan" else "geojson"
+    return JSONResponse(
+        document, headers={"Content-Disposition": f'attachment; filename="{name}.{suffix}"'}
+    )

@@ -96,6 +96,7 @@ class SurveyService:
         self._owners: dict[str, str] = {}
         self._dirty: set[str] = set()
         self._gone_since: dict[str, float] = {}
+        self._landed_since: dict[tuple[str, str], float] = {}
         self._lock = asyncio.Lock()  # one change to the surveys at a time
 
     # -- life cycle ----------------------------------------------------------------------
@@ -386,12 +387,19 @@ class SurveyService:
                 drone.airborne = drone.airborne or (state.alt_rel or 0) > 1.0
             remaining = drone.unflown()
             if drone.airborne and not state.armed:
-                # Landed: done if every lane is flown, else it stopped short.
-                if remaining:
-                    self._drop(run, drone, "landed before its lanes were flown")
-                else:
+                # Landed: done if every lane is flown, else it stopped short. A drone that
+                # landed while the hub was away has its "reached" events still coming (the
+                # agent replays them): it is given the link timeout before it is judged.
+                key = (run.id, vid)
+                landed = self._landed_since.setdefault(key, self._clock())
+                if not remaining:
                     drone.state = DroneState.DONE
                     drone.finished = time.time()
+                elif self._clock() - landed >= self._settings.survey_link_timeout_s:
+                    self._drop(run, drone, "landed before its lanes were flown")
+                else:
+                    continue
+                self._landed_since.pop(key, None)
                 self._dirty.add(run.id)
             elif remaining and state.mode.upper() in LEAVING_MODES:
                 self._drop(run, drone, f"left its mission: {state.mode}")

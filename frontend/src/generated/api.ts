@@ -649,6 +649,49 @@ export interface paths {
         patch?: never;
         trace?: never;
     };
+    "/api/v1/surveys/import": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        get?: never;
+        put?: never;
+        /**
+         * Import Survey Area
+         * @description A survey request's fields from another tool's file (no side effects): at least the
+         *     `area`, and from a QGC Survey also its camera and settings. Add `vehicle_ids` (and
+         *     anything to change) and send it to `POST /surveys` or the preview.
+         */
+        post: operations["import_survey_area_api_v1_surveys_import_post"];
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
+    "/api/v1/surveys/{survey_id}/vehicles/{vehicle_id}/mission": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        /**
+         * Export Survey Mission
+         * @description One drone's survey mission as a file other tools open: a QGroundControl `.plan`,
+         *     a `QGC WPL 110` waypoint file (Mission Planner, MAVProxy), or its path as GeoJSON.
+         */
+        get: operations["export_survey_mission_api_v1_surveys__survey_id__vehicles__vehicle_id__mission_get"];
+        put?: never;
+        post?: never;
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
     "/api/v1/vehicles/{vehicle_id}/scans/latest": {
         parameters: {
             query?: never;
@@ -2344,6 +2387,20 @@ export interface components {
              * @description why it dropped out
              */
             reason?: string | null;
+        };
+        /** SurveyFile */
+        SurveyFile: {
+            /**
+             * Format
+             * @description plan: a QGroundControl .plan with a Survey item (its polygon, camera, altitude or GSD, overlaps, angle, turnaround); kml: the first Polygon of a KML file (Google Earth); geojson: a Polygon, Feature or FeatureCollection
+             * @enum {string}
+             */
+            format: "plan" | "kml" | "geojson";
+            /**
+             * Content
+             * @description the file's text
+             */
+            content: string;
         };
         /** SurveyList */
         SurveyList: {
@@ -5706,6 +5763,152 @@ export interface operations {
                 };
             };
             /** @description Needs the 'command' permission */
+            403: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description No such vehicle, flight, log, user or token (named in the message) */
+            404: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed) */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Unprocessable"];
+                };
+            };
+            /** @description The database is unavailable; try again after Retry-After seconds */
+            503: {
+                headers: {
+                    /** @description Seconds to wait */
+                    "Retry-After"?: number;
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+        };
+    };
+    import_survey_area_api_v1_surveys_import_post: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        requestBody: {
+            content: {
+                "application/json": components["schemas"]["SurveyFile"];
+            };
+        };
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": {
+                        [key: string]: unknown;
+                    };
+                };
+            };
+            /** @description Not authenticated */
+            401: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description Needs the 'read' permission */
+            403: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description The request body is over the size limit */
+            413: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed) */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Unprocessable"];
+                };
+            };
+            /** @description The database is unavailable; try again after Retry-After seconds */
+            503: {
+                headers: {
+                    /** @description Seconds to wait */
+                    "Retry-After"?: number;
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+        };
+    };
+    export_survey_mission_api_v1_surveys__survey_id__vehicles__vehicle_id__mission_get: {
+        parameters: {
+            query?: {
+                format?: "plan" | "wpl" | "geojson";
+            };
+            header?: never;
+            path: {
+                survey_id: string;
+                vehicle_id: string;
+            };
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": unknown;
+                    "text/plain": unknown;
+                };
+            };
+            /** @description Not authenticated */
+            401: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description Needs the 'read' permission */
             403: {
                 headers: {
                     [name: string]: unknown;

@@ -188,6 +188,15 @@ def test_three_drones_fly_the_survey_and_their_photos_cover_the_area(
 
     survey = api.get(f"/api/v1/surveys/{survey_id}").json()["survey"]
     assert _photo_coverage(fleet, survey) == pytest.approx(1.0, abs=1e-6)
+    # The live feed carried the progress too.
+    watcher.wait_until(
+        lambda _: watcher.surveys.get(survey_id, {}).get("state") == "done",
+        30,
+        "the survey's progress on the live feed",
+    )
+    live = watcher.surveys[survey_id]
+    assert live["lanes_done"] == live["lanes_total"] == done["lanes_total"]
+    assert live["photos"] >= done["photos"] > 0
     for drone in survey["drones"]:
         commands = [item["command"] for item in drone["items"]]
         assert commands[0] == mavlink2.MAV_CMD_NAV_TAKEOFF

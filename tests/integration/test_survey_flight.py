@@ -300,3 +300,39 @@ def test_a_lost_drone_s_lanes_are_handed_over_and_the_area_still_covered(
     survey = api.get(f"/api/v1/surveys/{survey_id}").json()["survey"]
     assert _photo_coverage(fleet, survey) == pytest.approx(1.0, abs=1e-6)
     assert done["covered_pct"] == 100.0
+
+
+def test_a_drone_sent_home_mid_survey_drops_out_and_an_abort_sends_all_home(
+    api: httpx.Client, watcher: FleetWatcher, fleet: LocalFleet
+) -> None:
+    # Runs last: sim_2's agent is gone after the hand-over test; sim_1 and sim_3 fly.
+    watcher.wait_until(
+        lambda v: all(ready(vid)(v) and not v[vid]["state"]["armed"] for vid in ("sim_1", "sim_3")),
+        90,
+        "sim_1 and sim_3 ready on the ground",
+    )
+    created = api.post(
+        "/api/v1/surveys", json={**_request(fleet), "vehicle_ids": ["sim_1", "sim_3"]}
+    )
+    assert created.status_code == 201, created.text
+    survey_id = created.json()["survey"]["id"]
+    assert api.post(f"/api/v1/surveys/{survey_id}/start").status_code == 200
+    poll_until(lambda: _progress(api, survey_id)["photos"] >= 4, 60, "photos", every_s=0.05)
+    # As a failsafe or the RC pilot would: the drone leaves its mission for RTL.
+    rtl = api.post("/api/v1/vehicles/sim_3/commands", json={"name": "rtl"})
+    assert rtl.json()["outcome"]["status"] == "accepted", rtl.text
+    offered = poll_until(
+        lambda: (p := _progress(api, survey_id))["state"] == "handover_offered" and p,
+        30,
+        "the hand-over offer",
+    )
+    assert offered["drones"][1]["state"] == "dropped"
+    assert "left its mission: RTL" in offered["drones"][1]["reason"]
+    assert api.get(f"/api/v1/surveys/{survey_id}/handover").json()["lost"] == ["sim_3"]
+    aborted = api.post(f"/api/v1/surveys/{survey_id}/abort")
+    assert aborted.status_code == 200, aborted.text
+    assert aborted.json()["progress"]["state"] == "aborted"
+    watcher.wait_until(
+        lambda v: v["sim_1"]["state"]["mode"] == "RTL", 30, "sim_1 sent home by the abort"
+    )
+    assert api.post(f"/api/v1/surveys/{survey_id}/abort").status_code == 409

@@ -78,6 +78,7 @@ class FleetWatcher:
         )
         self.vehicles: dict[str, dict[str, Any]] = {}
         self.events: list[dict[str, Any]] = []  # every live event received, in order
+        self.surveys: dict[str, dict[str, Any]] = {}  # the newest progress of each survey
         self.dropped_events = 0
 
     def close(self) -> None:
@@ -114,6 +115,8 @@ class FleetWatcher:
             elif message["type"] == "events":
                 self.events += message["events"]
                 self.dropped_events += message["dropped"]
+            elif message["type"] == "survey":
+                self.surveys[message["survey_id"]] = message
         return self.vehicles
 
     def state(self, vehicle_id: str) -> dict[str, Any]:

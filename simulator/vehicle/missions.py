@@ -113,8 +113,12 @@ class MissionRunner(Camera, GcsCommands):
         self._auto_run_from(self.mission_current if self.mission_current >= 1 else 1)
 
     def _auto_run_from(self, seq: int) -> None:
-        """Run "do" commands up to the next nav command, start that, and then the "do"
-        commands after it, which ArduPilot runs while the nav command is in progress."""
+        """Run the "do" commands up to the next nav command, then start that.
+
+        AP_Mission::advance_current_nav_cmd: the "do" commands after nav command N run
+        once N completes (on the way to the next one), not while N is flown. A survey's
+        DO_SET_CAM_TRIGG_DIST after a lane's entry waypoint starts the camera there, and
+        the one after its exit waypoint stops it there (QGC's survey relies on this)."""
         mission = self.mission
         while seq < len(mission) and not mission[seq].is_nav:
             self._do_command(mission[seq])
@@ -124,11 +128,7 @@ class MissionRunner(Camera, GcsCommands):
             return
         self.mission_current = seq
         self._start_nav(mission[seq])
-        following = seq + 1
-        while following < len(mission) and not mission[following].is_nav:
-            self._do_command(mission[following])
-            following += 1
-        self._auto_next = following
+        self._auto_next = seq + 1
 
     def _nav_done(self) -> None:
         item = self._auto_item

@@ -8,9 +8,13 @@ vehicle's diagnostics; the agent's connection survives either way):
    return" and counted, so no point is ever placed at infinity.
 2. Time: more than `FUTURE_LIMIT_S` ahead of the hub's clock, or older than
    `PAST_LIMIT_S` (the agent keeps ten minutes), is refused.
-3. Rate: live scans beyond ``scan_max_rate_hz`` per vehicle are refused. Replayed scans
-   (after an outage) are paced by storage instead: the store's queue is bounded and
-   waits, so backpressure reaches the agent.
+3. Rate: live scans beyond ``scan_max_rate_hz`` per vehicle are refused, counted on the
+   scans' own times, not on their arrival: a hub that stalls (its store applying
+   backpressure while an outage's backlog replays) reads a second's worth of a 10 Hz
+   sensor's scans in a burst, and those are not too many. An agent that spaces fake
+   times to pass reaches the future limit within seconds. Replayed scans (after an
+   outage) are paced by storage instead: the store's queue is bounded and waits, so
+   backpressure reaches the agent.
 4. The vehicle: a scan arrives on an agent's own connection, whose token was checked
    against its vehicle id at the hello; a frame has no vehicle id of its own, so one
    agent cannot send scans for another.
@@ -152,13 +156,18 @@ class ScanService:
             raise ScanRejected("time_past", f"utc_time: {now - frame.utc_time:.0f} s in the past")
         if not frame.replayed:
             recent = self._recent.setdefault(vehicle_id, deque())
-            while recent and recent[0] <= now - 1.0:
-                recent.popleft()
+            at = frame.utc_time
+            while recent and (recent[0] <= at - 1.0 or recent[-1] > at):
+                # out of the window, or after this scan: the agent's clock stepped back
+                if recent[0] <= at - 1.0:
+                    recent.popleft()
+                else:
+                    recent.pop()
             if len(recent) >= self.max_rate_hz:
                 raise ScanRejected(
                     "rate", f"more than {self.max_rate_hz:g} scans/s from {vehicle_id}"
                 )
-            recent.append(now)
+            recent.append(at)
         ranges = np.frombuffer(frame.ranges, dtype=np.uint16)  # a view: writes go through
         beyond = ranges > round(frame.range_max_m / frame.range_scale)
         if beyond.any():

@@ -32,7 +32,7 @@ from vehicle_agents.missions import mission_number
 from vehicle_agents.outbox import Outbox, SpillFile
 from vehicle_agents.sensors.fcu_time import FcuClock, PoseHistory
 from vehicle_agents.sensors.relay import DiskBacklog, ScanOutbox, ScanRelay, parse_mount
-from vehicle_agents.sensors.sources import ObstacleDistanceSource, ScanSource, YdlidarSource
+from vehicle_agents.sensors.sources import MavlinkRangeSource, ScanSource, YdlidarSource
 from vehicle_agents.statustext import StatusTextJoiner
 from vehicle_agents.streams import StreamRequester
 from vehicle_agents.telemetry import link_snapshot
@@ -139,9 +139,9 @@ def scan_relay(settings: AgentSettings, link: FcuLink, vehicle_id: str) -> ScanR
     link.listeners.append(poses.on_message)
     source: ScanSource
     if settings.lidar == "mavlink":
-        obstacle_distance = ObstacleDistanceSource()
-        link.listeners.append(obstacle_distance.on_message)
-        source = obstacle_distance
+        ranges = MavlinkRangeSource()
+        link.listeners.append(ranges.on_message)
+        source = ranges
     else:
         source = YdlidarSource(settings.lidar, settings.lidar_resolution_deg, settings.lidar_baud)
     backlog = None

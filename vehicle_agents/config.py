@@ -96,8 +96,8 @@ class AgentSettings(BaseSettings):
     lidar: str | None = Field(
         default=None,
         description="a 2-D LIDAR to relay: a YDLIDAR's serial device (/dev/ttyUSB0), the "
-        "simulator's tcp://HOST:PORT, or 'mavlink' for OBSTACLE_DISTANCE from the flight "
-        "controller",
+        "simulator's tcp://HOST:PORT, or 'mavlink' for the flight controller's "
+        "OBSTACLE_DISTANCE (PX4) or DISTANCE_SENSOR (ArduPilot's proximity sectors)",
     )
     lidar_baud: int = Field(default=230400, gt=0, description="the LIDAR's serial baud rate")
     lidar_resolution_deg: float = Field(

@@ -72,6 +72,10 @@ class FcuClock:
         assert self._offset is not None
         return self._rate * monotonic_s + self._offset
 
+    def to_monotonic(self, fcu_s: float) -> float:
+        assert self._offset is not None
+        return (fcu_s - self._offset) / self._rate
+
     @property
     def rate(self) -> float:
         return self._rate

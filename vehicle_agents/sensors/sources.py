@@ -27,7 +27,13 @@ from dataclasses import dataclass, field
 from typing import Any, Protocol
 
 from vehicle_agents.sensors.envelope import lower_envelope_slope
-from vehicle_agents.sensors.ydlidar import Packet, YdlidarParser
+from vehicle_agents.sensors.ydlidar import (
+    GET_HEALTH,
+    START_SCAN,
+    STOP_SCAN,
+    Packet,
+    YdlidarParser,
+)
 
 log = logging.getLogger(__name__)
 
@@ -163,8 +169,14 @@ class TurnAssembler:
         )
 
 
+# What YDLidar-SDK's driver sends to start a sensor: stop whatever it was doing, ask its
+# health, start the scan. A T-mini Pro idles until it gets the start command.
+STARTUP = STOP_SCAN + GET_HEALTH + START_SCAN
+
+
 class YdlidarSource:
-    """A YDLIDAR on ``tcp://HOST:PORT`` (the simulator) or a serial device path."""
+    """A YDLIDAR on ``tcp://HOST:PORT`` (the simulator) or a serial device path. The same
+    commands start it on either, and the sensor's health answer is logged if not good."""
 
     def __init__(
         self,
@@ -189,8 +201,19 @@ class YdlidarSource:
         }
 
     async def turns(self) -> AsyncIterator[Turn]:
+        reported = None
         async for chunk, arrived in self._chunks():
-            for packet in self.parser.feed(chunk):
+            packets = self.parser.feed(chunk)
+            if self.parser.health != reported:
+                reported = self.parser.health
+                if reported is not None and reported.status != 0:
+                    log.warning(
+                        "LIDAR %s reports status %d, error code %#06x",
+                        self.url,
+                        reported.status,
+                        reported.error_code,
+                    )
+            for packet in packets:
                 turn = self.assembler.add(packet, arrived)
                 if turn is not None:
                     self._update_stats()
@@ -201,9 +224,13 @@ class YdlidarSource:
             host, _, port = self.url.removeprefix("tcp://").rpartition(":")
             reader, writer = await asyncio.open_connection(host, int(port))
             try:
+                writer.write(STARTUP)
+                await writer.drain()
                 while data := await reader.read(READ_SIZE):
                     yield data, self._monotonic()
             finally:
+                with contextlib.suppress(ConnectionError, OSError):
+                    writer.write(STOP_SCAN)
                 writer.close()
                 with contextlib.suppress(ConnectionError, OSError):
                     await writer.wait_closed()
@@ -216,6 +243,9 @@ class YdlidarSource:
         import serial  # type: ignore[import-untyped]  # pyserial: in the agent's base set
 
         port = serial.Serial(self.url, self.baud, timeout=0.05)
+        port.write(STOP_SCAN)
+        port.reset_input_buffer()  # the packets of a scan left running
+        port.write(GET_HEALTH + START_SCAN)
         queue: asyncio.Queue[tuple[bytes, float]] = asyncio.Queue(maxsize=256)
         loop = asyncio.get_running_loop()
         stop = threading.Event()
@@ -239,6 +269,8 @@ class YdlidarSource:
         finally:
             stop.set()
             await asyncio.to_thread(reader.join, 1.0)
+            with contextlib.suppress(OSError, serial.SerialException):
+                port.write(STOP_SCAN)  # the head stops spinning
             port.close()
 
 

@@ -32,6 +32,8 @@ from vehicle_agents.missions import mission_number
 from vehicle_agents.outbox import Outbox, SpillFile
 from vehicle_agents.sensors.fcu_time import FcuClock, PoseHistory
 from vehicle_agents.sensors.relay import DiskBacklog, ScanOutbox, ScanRelay, parse_mount
+from vehicle_agents.sensors.ros2 import SCHEME as ROS2_SCHEME
+from vehicle_agents.sensors.ros2 import LaserScanSource
 from vehicle_agents.sensors.sources import MavlinkRangeSource, ScanSource, YdlidarSource
 from vehicle_agents.statustext import StatusTextJoiner
 from vehicle_agents.streams import StreamRequester
@@ -142,6 +144,8 @@ def scan_relay(settings: AgentSettings, link: FcuLink, vehicle_id: str) -> ScanR
         ranges = MavlinkRangeSource()
         link.listeners.append(ranges.on_message)
         source = ranges
+    elif settings.lidar.startswith(ROS2_SCHEME):
+        source = LaserScanSource(settings.lidar)
     else:
         source = YdlidarSource(settings.lidar, settings.lidar_resolution_deg, settings.lidar_baud)
     backlog = None

@@ -7,9 +7,9 @@
   controller, for a rangefinder wired to the autopilot (ArduPilot's proximity library
   reports 8 sectors as DISTANCE_SENSOR, PX4 72 as OBSTACLE_DISTANCE; SITL can simulate
   either).
-- ROS 2 ``sensor_msgs/LaserScan``: where rclpy is installed, a node can hand its scans to
-  `ScanQueue.put` (a `Turn` maps one-to-one onto a LaserScan). rclpy is not a dependency
-  of the agent and is imported by nothing here.
+- `vehicle_agents.sensors.ros2.LaserScanSource`: a ROS 2 ``sensor_msgs/LaserScan``
+  topic, where rclpy is installed (a `Turn` maps one-to-one onto a LaserScan). rclpy is
+  not a dependency of the agent and is imported only when that source starts.
 """
 
 from __future__ import annotations

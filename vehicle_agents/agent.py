@@ -30,7 +30,7 @@ from vehicle_agents.manual import ManualPilot
 from vehicle_agents.mission_progress import ReachedItems
 from vehicle_agents.missions import mission_number
 from vehicle_agents.outbox import Outbox, SpillFile
-from vehicle_agents.sensors.fcu_time import FcuClock, PoseHistory
+from vehicle_agents.sensors.fcu_time import FcuClock, PoseHistory, ask_timesync
 from vehicle_agents.sensors.relay import DiskBacklog, ScanOutbox, ScanRelay, parse_mount
 from vehicle_agents.sensors.ros2 import SCHEME as ROS2_SCHEME
 from vehicle_agents.sensors.ros2 import LaserScanSource
@@ -94,6 +94,7 @@ async def _run(settings: AgentSettings) -> None:
             relay = scan_relay(settings, link, vehicle_id)
             scans = relay.outbox
             tasks.create_task(relay.run())
+            tasks.create_task(ask_timesync(link.send))
         hub = HubLink(
             settings.hub,
             token,

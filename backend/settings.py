@@ -155,6 +155,12 @@ class HubSettings(BaseSettings):
         default=20.0, gt=0, le=100, description="live scans per second per vehicle, at most"
     )
     scan_queue_limit: int = Field(default=2000, ge=10, description="scans waiting to be stored")
+    scan_obstacle_interval_s: float = Field(
+        default=5.0,
+        gt=0,
+        description="how often obstacles are extracted from the point map; one found or "
+        "gone is an event (kind 'obstacle')",
+    )
 
     def site_frame(self) -> LocalFrame | None:
         """The site's east-north-up frame, if an origin is configured."""

@@ -14,6 +14,7 @@ import { MISSING, formatAltitude, formatSpeed } from "./format";
 import type { FleetMap } from "./map";
 import { ReplayCharts } from "./replayCharts";
 import { ReplayLayer, eventTone } from "./replayMap";
+import { ReplayScans } from "./replayScans";
 import { EventFeed } from "./events/eventFeed";
 import { EventLog } from "./events/eventLog";
 import { FlightTrack, formatClock, type ReplayState } from "./replayTrack";
@@ -65,6 +66,7 @@ export class ReplayPanel {
   private readonly list: FlightList;
   private readonly layer: ReplayLayer;
   private readonly charts: ReplayCharts;
+  private readonly scans: ReplayScans;
 
   private readonly view: HTMLElement;
   private readonly title: HTMLElement;
@@ -95,6 +97,7 @@ export class ReplayPanel {
     this.list = new FlightList((flight) => void this.load(flight));
     this.layer = new ReplayLayer(map.leaflet, (t) => this.seek(t));
     this.charts = new ReplayCharts((t) => this.seek(t));
+    this.scans = new ReplayScans(map.leaflet);
 
     this.title = element("h3", { className: "replay-title" });
     this.status = field("p", "replay-status", { className: "panel-status" });
@@ -275,6 +278,7 @@ export class ReplayPanel {
     if (track.isEmpty) return;
 
     this.layer.show(track, events);
+    this.scans.show(flight.vehicle_id);
     const log = new EventLog(Number.MAX_SAFE_INTEGER);
     log.add(events);
     this.eventFeed.setEvents(log.all);
@@ -339,6 +343,7 @@ export class ReplayPanel {
     this.element.dataset.replayT = t.toFixed(2);
     const state = track.stateAt(t);
     this.layer.moveTo(state.position, this.playing && this.follow.checked);
+    this.scans.moveTo(track.origin + t);
     this.charts.setPosition(t);
     setText(this.values.time, `${formatClock(t)} / ${formatClock(track.duration)}`);
     setText(this.values.at, formatAuditTime(track.origin + t));
@@ -364,6 +369,7 @@ export class ReplayPanel {
     this.track = null;
     this.t = 0;
     this.layer.clear();
+    this.scans.clear();
     this.charts.destroy();
     this.eventTicks.replaceChildren();
     this.eventFeed.setEvents([]);

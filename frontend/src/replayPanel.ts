@@ -6,7 +6,7 @@
 // value, the charts' x axis and the time display all use it. Playback advances it
 // by (real time elapsed × speed) each animation frame, and the marker's position
 // and heading are interpolated between the samples around it.
-import { fetchEvents, fetchFlightTelemetry, flightExportUrl } from "./api";
+import { apiUrl, fetchEvents, fetchFlightTelemetry, flightExportUrl } from "./api";
 import { formatAuditTime } from "./auditPanel";
 import { actionButton, element, field, setText } from "./dom";
 import { FlightList } from "./flightList";
@@ -28,10 +28,24 @@ export const REPLAY_SPEEDS = [1, 2, 5, 10, 30] as const;
 /** A frame later than this (a background tab) does not jump the replay ahead. */
 const MAX_FRAME_S = 0.25;
 
-const EXPORTS: { format: FlightExportFormat; label: string; title: string }[] = [
-  { format: "csv", label: "CSV", title: "Samples as CSV" },
-  { format: "geojson", label: "GeoJSON", title: "Track as GeoJSON" },
-  { format: "tlog", label: "tlog", title: "MAVLink telemetry log" },
+interface FlightExport {
+  format: FlightExportFormat | "ply";
+  label: string;
+  title: string;
+  url: (id: number) => string;
+}
+
+const EXPORTS: FlightExport[] = [
+  { format: "csv", label: "CSV", title: "Samples as CSV", url: (id) => flightExportUrl(id, "csv") },
+  { format: "geojson", label: "GeoJSON", title: "Track as GeoJSON", url: (id) => flightExportUrl(id, "geojson") },
+  { format: "tlog", label: "tlog", title: "MAVLink telemetry log", url: (id) => flightExportUrl(id, "tlog") },
+  // The LIDAR's world points of the flight, for CloudCompare or PDAL (none without scans).
+  {
+    format: "ply",
+    label: "Points",
+    title: "LIDAR world points as PLY",
+    url: (id) => apiUrl(`flights/${id}/points.ply`).toString(),
+  },
 ];
 
 type ReplayViewState = "empty" | "loading" | "ready" | "error";
@@ -239,9 +253,9 @@ export class ReplayPanel {
     this.list.select(flight.id);
     this.element.dataset.flightId = String(flight.id);
     this.title.textContent = `${flight.vehicle_id} · ${formatAuditTime(flight.start_time)}`;
-    for (const [index, { format }] of EXPORTS.entries()) {
+    for (const [index, { format, url }] of EXPORTS.entries()) {
       const link = this.exportLinks[index];
-      link.href = flightExportUrl(flight.id, format);
+      link.href = url(flight.id);
       link.download = `flight-${flight.id}-${flight.vehicle_id}.${format}`;
     }
     this.setViewState("loading", "Loading the flight…");

@@ -73,5 +73,11 @@ def test_the_selected_vehicles_scan_and_the_obstacles_are_drawn(
         "() => Number(document.querySelector('#map').dataset.replayScanPoints || 0) > 300",
         timeout=15_000,
     )
+    # The flight's world points are among its exports, for CloudCompare or PDAL.
+    points = panel.locator('a[data-action="export-ply"]').get_attribute("href") or ""
+    assert points.endswith(f"/api/v1/flights/{flight['id']}/points.ply"), points
+    ply = page.request.get(points)
+    assert ply.status == 200, ply.text()[:500]
+    assert ply.body().startswith(b"ply\n")
     page.locator('button[data-action="show-flights"]').click()  # back to the fleet
     page.wait_for_function("() => !('replayScanPoints' in document.querySelector('#map').dataset)")

@@ -43,6 +43,7 @@ from pydantic import (
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from protocol.mavlink_wire import WIRE_RANGES, wire_problem
+from protocol.scans import scan_frame_schema
 
 PROTOCOL_VERSION = 1
 # Telemetry frames are a few hundred bytes; 64 KiB leaves room for later scan data
@@ -886,6 +887,8 @@ def json_schema() -> dict[str, Any]:
         "hub_to_agent": hub_to_agent.json_schema(),
         "client_to_hub": client_to_hub.json_schema(),
         "hub_to_client": hub_to_client.json_schema(),
+        # LIDAR scans: binary WebSocket frames, not JSON (protocol/scans.py)
+        "scan_frame": scan_frame_schema(),
     }
 
 

@@ -31,9 +31,11 @@ from vehicle_agents.manual import ManualPilot
 from vehicle_agents.mission_progress import ReachedItems
 from vehicle_agents.missions import mission_number
 from vehicle_agents.outbox import Outbox, SpillFile
-from vehicle_agents.sensors.fcu_time import FcuClock, PoseHistory
+from vehicle_agents.sensors.fcu_time import FcuClock, PoseHistory, ask_timesync
 from vehicle_agents.sensors.relay import DiskBacklog, ScanOutbox, ScanRelay, parse_mount
-from vehicle_agents.sensors.sources import ObstacleDistanceSource, ScanSource, YdlidarSource
+from vehicle_agents.sensors.ros2 import SCHEME as ROS2_SCHEME
+from vehicle_agents.sensors.ros2 import LaserScanSource
+from vehicle_agents.sensors.sources import MavlinkRangeSource, ScanSource, YdlidarSource
 from vehicle_agents.statustext import StatusTextJoiner
 from vehicle_agents.streams import StreamRequester
 from vehicle_agents.telemetry import link_snapshot
@@ -96,6 +98,7 @@ async def _run(settings: AgentSettings) -> None:
             relay = scan_relay(settings, link, vehicle_id)
             scans = relay.outbox
             tasks.create_task(relay.run())
+            tasks.create_task(ask_timesync(link.send))
         hub = HubLink(
             settings.hub,
             token,
@@ -143,9 +146,11 @@ def scan_relay(settings: AgentSettings, link: FcuLink, vehicle_id: str) -> ScanR
     link.listeners.append(poses.on_message)
     source: ScanSource
     if settings.lidar == "mavlink":
-        obstacle_distance = ObstacleDistanceSource()
-        link.listeners.append(obstacle_distance.on_message)
-        source = obstacle_distance
+        ranges = MavlinkRangeSource()
+        link.listeners.append(ranges.on_message)
+        source = ranges
+    elif settings.lidar.startswith(ROS2_SCHEME):
+        source = LaserScanSource(settings.lidar)
     else:
         source = YdlidarSource(settings.lidar, settings.lidar_resolution_deg, settings.lidar_baud)
     backlog = None

@@ -781,7 +781,8 @@ export interface paths {
         };
         /**
          * Obstacles
-         * @description Clusters in the point map (above the ground), with their extents in site ENU.
+         * @description Clusters in the point map (above the ground), with their extents in site ENU; an
+         *     obstacle keeps its id while it is seen (found and gone are events, kind "obstacle").
          */
         get: operations["obstacles_api_v1_scans_obstacles_get"];
         put?: never;

@@ -26,6 +26,8 @@ from collections.abc import AsyncIterator, Callable
 from dataclasses import dataclass, field
 from typing import Any, Protocol
 
+from pymavlink.dialects.v20 import ardupilotmega as mavlink2
+
 from vehicle_agents.sensors.envelope import lower_envelope_slope
 from vehicle_agents.sensors.ydlidar import (
     GET_HEALTH,
@@ -296,8 +298,8 @@ class MavlinkRangeSource:
 
     NO_READING = 65535
     SECTORS = 8  # MAV_SENSOR_ROTATION_NONE .. MAV_SENSOR_ROTATION_YAW_315
-    FRAME_BODY_FRD = 12
-    NORTH_FRAMES = frozenset({0, 1})  # MAV_FRAME_GLOBAL, MAV_FRAME_LOCAL_NED
+    FRAME_BODY_FRD = mavlink2.MAV_FRAME_BODY_FRD
+    NORTH_FRAMES = frozenset({mavlink2.MAV_FRAME_GLOBAL, mavlink2.MAV_FRAME_LOCAL_NED})
 
     def __init__(self, queue_size: int = 4) -> None:
         self._queue: asyncio.Queue[Turn] = asyncio.Queue(maxsize=queue_size)

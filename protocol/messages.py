@@ -293,6 +293,22 @@ class MissionSetCurrentCommand(Message):
     seq: int = Field(ge=1, le=MAX_MISSION_ITEMS, description="1 is the first item after home")
 
 
+class ManualStartCommand(Message):
+    """Open browser control on the vehicle (the hub sends it when it grants a lease): the
+    agent checks that the autopilot will take MANUAL_CONTROL from it (ArduPilot
+    MAV_GCS_SYSID/SYSID_MYGCS and RC_OVERRIDE_TIME, PX4 COM_RC_IN_MODE) and switches to
+    the pilot mode, which pauses a mission in progress. Refused with the reason
+    otherwise. Not for the REST endpoint: a lease comes from the control message."""
+
+    name: Literal["manual_start"] = "manual_start"
+
+
+class ManualStopCommand(Message):
+    """Close browser control (the lease was released): the vehicle holds."""
+
+    name: Literal["manual_stop"] = "manual_stop"
+
+
 Command = Annotated[
     ArmCommand
     | DisarmCommand
@@ -311,7 +327,9 @@ Command = Annotated[
     | MissionUploadCommand
     | MissionDownloadCommand
     | MissionClearCommand
-    | MissionSetCurrentCommand,
+    | MissionSetCurrentCommand
+    | ManualStartCommand
+    | ManualStopCommand,
     Field(discriminator="name"),
 ]
 
@@ -737,6 +755,14 @@ class ControlRequest(Message):
     )
 
 
+# Where a frame's values come from. The agent holds the vehicle when a "gamepad" or
+# "program" stream repeats the same off-centre values for its frozen time (a frozen
+# device, or a client streaming its last reading); an on-screen stick or a key held
+# still is a pilot holding a steady input, and the page's own liveness (hidden, blurred,
+# pointer lost) stops those streams.
+InputSource = Literal["gamepad", "touch", "keyboard", "program"]
+
+
 class ManualInput(Message):
     """One frame of stick input, sent by the lease holder at 25 Hz or more. Frames from
     a client without the lease, with a seq not newer than the last, or faster than
@@ -746,6 +772,7 @@ class ManualInput(Message):
     vehicle_id: VehicleId
     seq: int = Field(ge=0, le=MAX_SEQ)
     axes: ManualAxes
+    source: InputSource = "program"
 
 
 class LeaseState(Message):
@@ -755,6 +782,12 @@ class LeaseState(Message):
     vehicle_id: VehicleId
     holder: str | None = Field(default=None, max_length=200)
     reason: str = Field(default="", max_length=200)
+    resume_mode: str | None = Field(
+        default=None,
+        max_length=MAX_NAME_CHARS,
+        description="a mission was in progress when the lease began and is paused: "
+        "set this mode to resume it (ArduPilot AUTO, PX4 AUTO.MISSION)",
+    )
 
 
 class ManualFrame(Message):
@@ -763,6 +796,7 @@ class ManualFrame(Message):
     type: Literal["manual"] = "manual"
     seq: int = Field(ge=0, le=MAX_SEQ)
     axes: ManualAxes
+    source: InputSource = "program"
 
 
 # The hub pings an agent to learn whether it is still there (another agent wants its

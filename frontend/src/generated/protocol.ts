@@ -293,7 +293,9 @@ export interface CommandRequest {
     | MissionUploadCommand
     | MissionDownloadCommand
     | MissionClearCommand
-    | MissionSetCurrentCommand;
+    | MissionSetCurrentCommand
+    | ManualStartCommand
+    | ManualStopCommand;
   /**
    * How long the agent may try before giving up.
    */
@@ -426,6 +428,22 @@ export interface MissionSetCurrentCommand {
   seq: number;
 }
 /**
+ * Open browser control on the vehicle (the hub sends it when it grants a lease): the
+ * agent checks that the autopilot will take MANUAL_CONTROL from it (ArduPilot
+ * MAV_GCS_SYSID/SYSID_MYGCS and RC_OVERRIDE_TIME, PX4 COM_RC_IN_MODE) and switches to
+ * the pilot mode, which pauses a mission in progress. Refused with the reason
+ * otherwise. Not for the REST endpoint: a lease comes from the control message.
+ */
+export interface ManualStartCommand {
+  name: "manual_start";
+}
+/**
+ * Close browser control (the lease was released): the vehicle holds.
+ */
+export interface ManualStopCommand {
+  name: "manual_stop";
+}
+/**
  * Everything up to these sequence numbers of the stream is stored; the agent may
  * forget it. Sent after the database commit, never on receipt.
  */
@@ -464,6 +482,7 @@ export interface ManualFrame {
   type: "manual";
   seq: number;
   axes: ManualAxes;
+  source: "gamepad" | "touch" | "keyboard" | "program";
 }
 export interface ManualAxes {
   /**
@@ -509,6 +528,7 @@ export interface ManualInput {
   vehicle_id: string;
   seq: number;
   axes: ManualAxes;
+  source: "gamepad" | "touch" | "keyboard" | "program";
 }
 /**
  * Send me this vehicle's scans (binary frames, protocol/scans.py), newest only.
@@ -635,6 +655,10 @@ export interface LeaseState {
   vehicle_id: string;
   holder: string | null;
   reason: string;
+  /**
+   * a mission was in progress when the lease began and is paused: set this mode to resume it (ArduPilot AUTO, PX4 AUTO.MISSION)
+   */
+  resume_mode: string | null;
 }
 
 export const PROTOCOL_VERSION = 1;

@@ -508,7 +508,11 @@ export interface ManualAxes {
 }
 /**
  * Ask for (or give back) the manual-control lease of one vehicle. Needs the
- * 'command' permission; one pilot per vehicle.
+ * 'command' permission; one pilot per vehicle. An acquire is granted (a `lease` naming
+ * the holder, to every client) only once the vehicle's agent has checked that the
+ * autopilot takes MANUAL_CONTROL from it and switched to its pilot mode; otherwise
+ * an `error` gives the reason (e.g. SYSID_MYGCS or COM_RC_IN_MODE). Release and
+ * revoke put the vehicle in its hold mode.
  */
 export interface ControlRequest {
   type: "control";
@@ -648,7 +652,11 @@ export interface ScanSubscriptions {
   vehicles: string[];
 }
 /**
- * Who flies a vehicle by hand now (holder None: nobody), sent to every client.
+ * Who flies a vehicle by hand now (holder None: nobody), sent to every client when
+ * it changes, and for every vehicle with a lease history when a client connects. A
+ * lease ends when released, revoked by an admin, expired (no input for 2 s), on the
+ * vehicle (the agent's deadman, frozen input, its hold button, a mode change from the
+ * RC transmitter or another GCS), or with a hub restart; `reason` says which.
  */
 export interface LeaseState {
   type: "lease";

@@ -777,6 +777,13 @@ class ManualInput(Message):
     seq: int = Field(ge=0, le=MAX_SEQ)
     axes: ManualAxes
     source: InputSource = "program"
+    sent_ms: float | None = Field(
+        default=None,
+        ge=0,
+        le=1e15,
+        description="the client's own clock when it read the input (ms); the agent "
+        "echoes it (manual_echo) so the pilot sees the input-to-vehicle round trip",
+    )
 
 
 class LeaseState(Message):
@@ -805,12 +812,32 @@ class ManualFrame(Message):
     seq: int = Field(ge=0, le=MAX_SEQ)
     axes: ManualAxes
     source: InputSource = "program"
+    sent_ms: float | None = Field(default=None, ge=0, le=1e15)
+
+
+class ManualApplied(Message):
+    """The agent sent this frame to the flight controller as MANUAL_CONTROL (about twice
+    a second while a stream lasts): the hub passes it to the lease holder."""
+
+    type: Literal["manual_applied"] = "manual_applied"
+    seq: int = Field(ge=0, le=MAX_SEQ)
+    sent_ms: float | None = Field(default=None, ge=0, le=1e15)
+
+
+class ManualEcho(Message):
+    """To the lease holder: its frame ``seq`` went out to the flight controller. Its
+    ``sent_ms`` against the client's clock now is the input-to-vehicle round trip."""
+
+    type: Literal["manual_echo"] = "manual_echo"
+    vehicle_id: VehicleId
+    seq: int = Field(ge=0, le=MAX_SEQ)
+    sent_ms: float | None = Field(default=None, ge=0, le=1e15)
 
 
 # The hub pings an agent to learn whether it is still there (another agent wants its
 # vehicle id); the agent answers with a pong.
 AgentToHub: TypeAlias = Annotated[
-    Hello | Telemetry | LiveState | Event | CommandResult | Unavailable | Pong,
+    Hello | Telemetry | LiveState | Event | CommandResult | Unavailable | Pong | ManualApplied,
     Field(discriminator="type"),
 ]
 HubToAgent: TypeAlias = Annotated[
@@ -822,7 +849,14 @@ ClientToHub: TypeAlias = Annotated[
     Field(discriminator="type"),
 ]
 HubToClient: TypeAlias = Annotated[
-    FleetSnapshot | VehicleUpdate | EventBatch | ScanSubscriptions | Pong | ErrorReply | LeaseState,
+    FleetSnapshot
+    | VehicleUpdate
+    | EventBatch
+    | ScanSubscriptions
+    | Pong
+    | ErrorReply
+    | LeaseState
+    | ManualEcho,
     Field(discriminator="type"),
 ]
 

@@ -25,6 +25,7 @@ from protocol.messages import (
     ErrorReply,
     Hello,
     LiveState,
+    ManualApplied,
     ManualFrame,
     Ping,
     Pong,
@@ -90,7 +91,7 @@ class HubLink:
         on_command: CommandHandler,
         timeouts: HubTimeouts | None = None,
         live_state: Callable[[], VehicleState] | None = None,
-        on_manual: Callable[[ManualFrame], None] | None = None,
+        on_manual: Callable[[ManualFrame], ManualApplied | None] | None = None,
         scans: ScanOutbox | None = None,
     ) -> None:
         self.url = url
@@ -263,7 +264,9 @@ class HubLink:
             case ManualFrame():
                 # Handled at once, never queued: the newest stick position is the one flown.
                 if self._on_manual is not None:
-                    self._on_manual(message)
+                    applied = self._on_manual(message)
+                    if applied is not None:
+                        tasks.create_task(websocket.send(encode(applied)))
             case Welcome():
                 log.warning("unexpected second welcome from hub")
 

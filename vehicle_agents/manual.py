@@ -56,6 +56,7 @@ from protocol.messages import (
     EventKind,
     HoldCommand,
     LandCommand,
+    ManualApplied,
     ManualFrame,
     SetModeCommand,
 )
@@ -89,6 +90,7 @@ class ManualTimeouts:
     first_frame_s: float = 3.0  # from the lease's start to the first frame
     frozen_s: float = 3.0  # a gamepad's same off-centre values this long: hold
     check_s: float = 0.05  # how often the deadman looks
+    echo_s: float = 0.5  # how often a flown frame is echoed to the pilot (its delay)
 
 
 def _off_centre(frame: ManualFrame) -> bool:
@@ -122,6 +124,7 @@ class ManualPilot:
         self._pressed: list[int] = []  # button bits pressed, acted on by check()
         self._pilot_mode: str | None = None
         self._seen_pilot_mode = False  # the switch to the pilot mode has shown
+        self._echoed_at = -1e9
         self.sent = 0
         self.ignored = 0  # frames that came with no browser control open
         link.listeners.append(self._on_message)
@@ -225,12 +228,13 @@ class ManualPilot:
 
     # -- the stream -----------------------------------------------------------------
 
-    def on_frame(self, frame: ManualFrame) -> None:
+    def on_frame(self, frame: ManualFrame) -> ManualApplied | None:
+        """Fly one frame; now and then, what to tell the hub about it (its echo)."""
         if not self.active or self._link.target_system is None:
             self.ignored += 1  # nothing takes control without a lease
-            return
+            return None
         if frame.seq <= self._last_seq:
-            return  # older than what was flown: never stream a stale value
+            return None  # older than what was flown: never stream a stale value
         now = self._clock()
         axes = frame.axes
         values = (axes.x, axes.y, axes.z, axes.r, axes.buttons)
@@ -250,6 +254,10 @@ class ManualPilot:
             )
         )
         self.sent += 1
+        if now - self._echoed_at < self.timeouts.echo_s:
+            return None
+        self._echoed_at = now
+        return ManualApplied(seq=frame.seq, sent_ms=frame.sent_ms)
 
     def _on_message(self, message: MavMessage) -> None:
         if not self.active or message.get_type() != "HEARTBEAT":

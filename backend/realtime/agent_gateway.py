@@ -30,6 +30,7 @@ from protocol.messages import (
     Event,
     Hello,
     LiveState,
+    ManualApplied,
     Ping,
     Pong,
     ProtocolError,
@@ -345,6 +346,8 @@ class AgentSession(PeerConnection):
                     )
             case Pong():
                 pass  # its arrival answered answers_within()
+            case ManualApplied(seq=seq, sent_ms=sent_ms):
+                await manual_control.echo(self.hub, hello.vehicle_id, seq, sent_ms)
             case Hello():
                 await self.reject(
                     ErrorReply(code="unexpected_message", message="hello was already received")

@@ -258,7 +258,12 @@ class ClientFeed(PeerConnection):
             return
         self._manual.put(
             message.vehicle_id,
-            ManualFrame(seq=message.seq, axes=message.axes, source=message.source),
+            ManualFrame(
+                seq=message.seq,
+                axes=message.axes,
+                source=message.source,
+                sent_ms=message.sent_ms,
+            ),
         )
 
     async def _control(self, message: ControlRequest) -> None:

@@ -32,7 +32,7 @@ from backend.fleet.commands import CommandDispatcher
 from backend.fleet.registry import FleetRegistry
 from backend.realtime.collaborators import ClientConnection, LeaseListener
 from backend.storage.models import AuditRow
-from protocol.messages import LeaseState, ManualStartCommand, ManualStopCommand
+from protocol.messages import LeaseState, ManualEcho, ManualStartCommand, ManualStopCommand
 
 log = logging.getLogger(__name__)
 
@@ -73,6 +73,19 @@ def lease_state(lease: Lease, reason: str = "") -> LeaseState:
         reason=reason,
         resume_mode=lease.resume_mode,
     )
+
+
+async def echo(hub: LeaseServices, vehicle_id: str, seq: int, sent_ms: float | None) -> None:
+    """The agent flew the holder's frame ``seq``: tell the holder's feeds (the pilot view's
+    input-to-vehicle delay), nobody else."""
+    lease = hub.leases.holder(vehicle_id)
+    if lease is None:
+        return
+    message = ManualEcho(vehicle_id=vehicle_id, seq=seq, sent_ms=sent_ms)
+    for feed in list(hub.client_feeds):
+        if feed.user == lease.holder and isinstance(feed, LeaseListener):
+            with contextlib.suppress(RuntimeError, OSError, WebSocketDisconnect):
+                await feed.send(message)
 
 
 async def acquire(hub: LeaseServices, vehicle_id: str, principal: Principal) -> Lease:

@@ -157,6 +157,9 @@ export class Dashboard {
         case "lease":
           pilot.onLease(message);
           break;
+        case "manual_echo":
+          pilot.onEcho(message);
+          break;
       }
     };
 

@@ -4,6 +4,7 @@ move on the page; hide the page and watch it hold."""
 
 from __future__ import annotations
 
+import re
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -82,6 +83,8 @@ def test_dragging_the_stick_flies_the_vehicle_on_the_page(page: Page, hovering: 
     finally:
         page.mouse.up()
     assert latitude(page) > start  # north, the way the stick pointed (heading 0)
+    # The agent's echo of a flown frame: the input-to-vehicle round trip, measured.
+    expect(page.locator('[data-field="pilot-delay"]')).to_have_text(re.compile(r"^\d+ ms$"))
     axes = page.locator('[data-field="pilot-axes"]').text_content() or ""
     assert axes.startswith("x ")
     page.locator('[data-panel="pilot"] button[data-action="release-control"]').click()

@@ -83,6 +83,7 @@ class Pilot:
             "seq": self.seq,
             "axes": axes,
             "source": self.source,
+            "sent_ms": time.monotonic() * 1000,
         }
         self.socket.send(json.dumps(frame))
 
@@ -246,6 +247,11 @@ def test_sticks_fly_the_vehicle_and_silence_holds_it(flying: tuple[LocalFleet, s
                     f"{VEHICLE} to fly on the sticks",
                 )[VEHICLE]["state"]
                 assert after["mode"] == "LOITER"  # the agent switched to the pilot mode
+                # The agent echoes flown frames to the holder: the input-to-vehicle delay.
+                echo = poll_until(lambda: pilot.said("manual_echo"), 5, "an echo")[-1]
+                assert echo["vehicle_id"] == VEHICLE
+                delay_ms = time.monotonic() * 1000 - echo["sent_ms"]
+                assert 0 < delay_ms < 2000, delay_ms
             finally:
                 stop.set()
                 streamer.join(5)

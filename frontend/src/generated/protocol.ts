@@ -14,11 +14,19 @@
  * Any frame of protocol version 1, in either direction.
  */
 export type AnyMessage = AgentToHub | HubToAgent | ClientToHub | HubToClient;
-export type AgentToHub = Hello | Telemetry | LiveState | Event | CommandResult | Unavailable | Pong;
+export type AgentToHub =
+  Hello | Telemetry | LiveState | Event | CommandResult | Unavailable | Pong | ManualApplied;
 export type HubToAgent = Welcome | CommandRequest | Ack | Resend | ErrorReply | Ping | ManualFrame;
 export type ClientToHub = Ping | ControlRequest | ManualInput | SubscribeScans | UnsubscribeScans;
 export type HubToClient =
-  FleetSnapshot | VehicleUpdate | EventBatch | ScanSubscriptions | Pong | ErrorReply | LeaseState;
+  | FleetSnapshot
+  | VehicleUpdate
+  | EventBatch
+  | ScanSubscriptions
+  | Pong
+  | ErrorReply
+  | LeaseState
+  | ManualEcho;
 
 /**
  * First frame from an agent: who it is and what it can do.
@@ -267,6 +275,15 @@ export interface Pong {
   type: "pong";
   nonce: string | null;
 }
+/**
+ * The agent sent this frame to the flight controller as MANUAL_CONTROL (about twice
+ * a second while a stream lasts): the hub passes it to the lease holder.
+ */
+export interface ManualApplied {
+  type: "manual_applied";
+  seq: number;
+  sent_ms: number | null;
+}
 export interface Welcome {
   type: "welcome";
   protocol: number;
@@ -483,6 +500,7 @@ export interface ManualFrame {
   seq: number;
   axes: ManualAxes;
   source: "gamepad" | "touch" | "keyboard" | "program";
+  sent_ms: number | null;
 }
 export interface ManualAxes {
   /**
@@ -533,6 +551,10 @@ export interface ManualInput {
   seq: number;
   axes: ManualAxes;
   source: "gamepad" | "touch" | "keyboard" | "program";
+  /**
+   * the client's own clock when it read the input (ms); the agent echoes it (manual_echo) so the pilot sees the input-to-vehicle round trip
+   */
+  sent_ms: number | null;
 }
 /**
  * Send me this vehicle's scans (binary frames, protocol/scans.py), newest only.
@@ -667,6 +689,16 @@ export interface LeaseState {
    * a mission was in progress when the lease began and is paused: set this mode to resume it (ArduPilot AUTO, PX4 AUTO.MISSION)
    */
   resume_mode: string | null;
+}
+/**
+ * To the lease holder: its frame ``seq`` went out to the flight controller. Its
+ * ``sent_ms`` against the client's clock now is the input-to-vehicle round trip.
+ */
+export interface ManualEcho {
+  type: "manual_echo";
+  vehicle_id: string;
+  seq: number;
+  sent_ms: number | null;
 }
 
 export const PROTOCOL_VERSION = 1;

@@ -8,7 +8,7 @@ import type { Runner } from "../panels/selectedVehicle";
 import { AttitudeIndicator } from "../panels/attitude";
 import { actionButton, element, field, setText } from "../dom";
 import { MISSING, formatAltitude, formatBattery, formatSpeed } from "../format";
-import type { LeaseState, ManualInput } from "../generated/protocol";
+import type { LeaseState, ManualEcho, ManualInput } from "../generated/protocol";
 import type { ClientToHub, CurrentUser, VehicleSummary } from "../types";
 import {
   BUTTON_HOLD,
@@ -51,7 +51,7 @@ export class PilotPanel {
   private readonly listeners = new AbortController();
   private readonly attitude = new AttitudeIndicator();
   private readonly ui: Record<
-    "title" | "holder" | "status" | "delay" | "alt" | "speed" | "battery" | "position" | "mode" | "axes",
+    "title" | "holder" | "status" | "delay" | "rtt" | "alt" | "speed" | "battery" | "position" | "mode" | "axes",
     HTMLElement
   >;
   private readonly take: HTMLButtonElement;
@@ -77,6 +77,7 @@ export class PilotPanel {
       holder: field("p", "lease-holder", { className: "pilot-holder", textContent: "Select a vehicle" }),
       status: field("output", "pilot-status", { className: "pilot-status", textContent: "not flying" }),
       delay: value("pilot-delay"),
+      rtt: value("pilot-hub-rtt"),
       alt: value("pilot-alt"),
       speed: value("pilot-speed"),
       battery: value("pilot-battery"),
@@ -139,7 +140,8 @@ export class PilotPanel {
           stat("Speed", this.ui.speed),
           stat("Battery", this.ui.battery),
           stat("Position", this.ui.position),
-          stat("Hub round trip", this.ui.delay),
+          stat("Input → vehicle (round trip)", this.ui.delay),
+          stat("Hub round trip", this.ui.rtt),
         ),
       ),
       this.ui.axes,
@@ -190,7 +192,13 @@ export class PilotPanel {
     const sentAt = this.pingSentAt.get(nonce);
     if (sentAt === undefined) return;
     this.pingSentAt.delete(nonce);
-    setText(this.ui.delay, `${Math.round(performance.now() - sentAt)} ms`);
+    setText(this.ui.rtt, `${Math.round(performance.now() - sentAt)} ms`);
+  }
+
+  /** The agent flew our frame: its send time against now is input to vehicle and back. */
+  onEcho(echo: ManualEcho): void {
+    if (echo.vehicle_id !== this.vehicleId || typeof echo.sent_ms !== "number" || !this.sending) return;
+    setText(this.ui.delay, `${Math.round(performance.now() - echo.sent_ms)} ms`);
   }
 
   destroy(): void {
@@ -277,6 +285,7 @@ export class PilotPanel {
       seq: ++this.seq,
       axes: toManualAxes(shaped, reading.buttons),
       source: this.source.name,
+      sent_ms: now, // this page's monotonic clock; echoed back by the agent
     };
     if (!this.send(message)) {
       this.stop("link to the hub lost");

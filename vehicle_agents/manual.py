@@ -5,8 +5,9 @@ first checks that the autopilot will take MANUAL_CONTROL from it, and refuses wi
 reason instead of streaming frames the autopilot would drop:
 
 - ArduPilot takes MANUAL_CONTROL (an RC override) only from its GCS's system id,
-  ``MAV_GCS_SYSID`` (4.7 on; ``SYSID_MYGCS`` before, default 255), and times overrides
-  out after ``RC_OVERRIDE_TIME`` seconds (0 turns them off; -1 never times out).
+  ``MAV_GCS_SYSID`` (4.7 on, up to ``MAV_GCS_SYSID_HI`` when that is greater;
+  ``SYSID_MYGCS`` before, default 255), and times overrides out after
+  ``RC_OVERRIDE_TIME`` seconds (0 turns them off; -1 never times out).
 - PX4 takes it only when ``COM_RC_IN_MODE`` allows MAVLink input: 1 (MAVLink only),
   2 (RC and MAVLink with fallback) or 3 (RC or MAVLink, keep first); 0 is RC only and
   4 disables manual input. PX4 checks only the target system, not the sender's id.
@@ -197,14 +198,19 @@ class ManualPilot:
         if modes is None or self._link.target_system is None:
             return "the flight controller is not identified yet"
         if modes.autopilot == "ardupilot":
-            gcs_id = await self._param("MAV_GCS_SYSID") or await self._param("SYSID_MYGCS")
+            low = await self._param("MAV_GCS_SYSID")
+            high = await self._param("MAV_GCS_SYSID_HI") if low is not None else None
+            gcs_id = low or await self._param("SYSID_MYGCS")
             if gcs_id is None:
                 return "could not read MAV_GCS_SYSID or SYSID_MYGCS"
             name, value = gcs_id
-            if round(value) != self._source_system:
+            # 4.7 accepts the range MAV_GCS_SYSID..MAV_GCS_SYSID_HI when HI is greater.
+            top = high[1] if high is not None and high[1] > value else value
+            if not round(value) <= self._source_system <= round(top):
+                accepted = f"{value:g}" if top == value else f"{value:g}..{top:g}"
                 return (
                     f"ArduPilot takes MANUAL_CONTROL only from its GCS ({name} = "
-                    f"{value:g}); set {name} to {self._source_system}, the agent's id"
+                    f"{accepted}); set {name} to {self._source_system}, the agent's id"
                 )
             override = await self._param("RC_OVERRIDE_TIME")
             if override is not None and override[1] == 0:

@@ -38,10 +38,11 @@ def hovering(tmp_path_factory: pytest.TempPathFactory) -> Iterator[LocalFleet]:
         yield fleet
 
 
-def take_control(page: Page, fleet: LocalFleet) -> None:
+def take_control(page: Page, fleet: LocalFleet, source: str = "touch") -> None:
     log_in(page, fleet.plan.hub_http, "admin", fleet.plan.admin_password)
     page.locator(f'tr[data-vehicle-id="{VEHICLE}"]').click()
     pilot = page.locator('[data-panel="pilot"]')
+    pilot.locator('select[data-field="pilot-source"]').select_option(source)
     expect(pilot.locator('[data-field="lease-holder"]')).to_contain_text(
         "Nobody flies it by hand", timeout=30_000
     )
@@ -51,7 +52,7 @@ def take_control(page: Page, fleet: LocalFleet) -> None:
     expect(pilot.locator('[data-field="lease-holder"]')).to_have_text(
         "Flown by hand by admin", timeout=30_000
     )
-    expect(pilot.locator('[data-field="pilot-status"]')).to_contain_text("flying with On-screen")
+    expect(pilot.locator('[data-field="pilot-status"]')).to_contain_text("flying with")
     expect(pilot.locator('[data-field="pilot-mode"]')).to_have_text("LOITER", timeout=10_000)
 
 
@@ -111,6 +112,64 @@ def test_hiding_the_page_stops_the_stream_and_the_vehicle_holds(
     pilot = page.locator('[data-panel="pilot"]')
     expect(pilot.locator('[data-field="pilot-status"]')).to_contain_text("stopped: page hidden")
     # The agent's deadman: no input for 0.5 s holds the vehicle and ends the lease.
+    expect(pilot.locator('[data-field="pilot-mode"]')).to_have_text("BRAKE", timeout=5_000)
+    expect(pilot.locator('[data-field="lease-holder"]')).to_contain_text(
+        "manual input stopped for", timeout=5_000
+    )
+
+
+def sent_axes(page: Page) -> dict[str, int]:
+    """The last frame the page sent, as the pilot view prints it ("x 463  y 0 ...")."""
+    text = page.locator('[data-field="pilot-axes"]').text_content() or ""
+    words = text.split()
+    return {words[i]: int(words[i + 1]) for i in range(0, len(words) - 1, 2)}
+
+
+def test_the_keyboard_steps_and_the_shaping_smooths(page: Page, hovering: LocalFleet) -> None:
+    take_control(page, hovering, "keyboard")
+    # Three presses of W (the second and third as a held key's repeats): three steps of
+    # 0.25, capped at the 0.6 sensitivity; then the dead zone and expo shape it.
+    for _ in range(3):
+        page.keyboard.down("w")
+    page.wait_for_function(
+        "() => /^x (4\\d\\d) /.test(document.querySelector('[data-field=pilot-axes]').textContent)",
+        timeout=5_000,
+    )
+    assert sent_axes(page)["x"] == 463  # (0.6 - 0.05) / 0.95, expo 0.3: 0.463
+    page.keyboard.up("w")
+    # Let go: back to centre through the slew limit (4 per second), never a jump.
+    page.wait_for_function(
+        "() => /^x 0 /.test(document.querySelector('[data-field=pilot-axes]').textContent)",
+        timeout=5_000,
+    )
+    page.locator('[data-panel="pilot"] button[data-action="release-control"]').click()
+    expect(page.locator('[data-field="lease-holder"]')).to_contain_text("released", timeout=10_000)
+
+
+def test_a_frozen_gamepad_stops_the_stream_and_the_vehicle_holds(
+    page: Page, hovering: LocalFleet
+) -> None:
+    # A gamepad the page reads through the Gamepad API, whose values the test sets.
+    page.add_init_script(
+        """(() => {
+            const buttons = Array.from({length: 16}, () => ({pressed: false, value: 0}));
+            window.fakePad = {id: 'test pad', index: 0, connected: true, mapping: 'standard',
+                              timestamp: 1, axes: [0, 0, 0, 0], buttons};
+            navigator.getGamepads = () => [window.fakePad];
+        })();"""
+    )
+    take_control(page, hovering, "gamepad")
+    # Right stick pushed forward (the standard mapping's axis 3, up is negative)...
+    page.evaluate("() => { fakePad.axes = [0, 0, 0, -0.8]; fakePad.timestamp = 2; }")
+    page.wait_for_function(
+        "() => /^x [1-9]\\d+ /.test(document.querySelector('[data-field=pilot-axes]').textContent)",
+        timeout=5_000,
+    )
+    # ...and then the pad freezes there: the page keeps reading the same values.
+    pilot = page.locator('[data-panel="pilot"]')
+    expect(pilot.locator('[data-field="pilot-status"]')).to_contain_text(
+        "stopped: gamepad frozen", timeout=5_000
+    )
     expect(pilot.locator('[data-field="pilot-mode"]')).to_have_text("BRAKE", timeout=5_000)
     expect(pilot.locator('[data-field="lease-holder"]')).to_contain_text(
         "manual input stopped for", timeout=5_000

@@ -2,7 +2,7 @@
 
 Pure bookkeeping with an injected clock; the live feed applies it and audits the
 changes. The hub forwards a manual-input frame only when ``admit`` says so: the lease
-holder's own frame, newer than the last (newest wins), at most ``max_rate_hz``.
+holder's own frame, newer than the last (newest wins); the relay caps the rate.
 Leases live only in memory, so a hub restart leaves none active; the audit log tells
 the restarted hub which were open, and it reports those as revoked
 (backend/realtime/manual_control.py).
@@ -137,12 +137,10 @@ class LeaseBook:
         if seq <= lease.last_seq:
             self.refused.old_seq += 1
             raise LeaseRefused(f"seq: {seq} is not newer than {lease.last_seq}")
+        # Input faster than max_rate_hz is admitted here and collapses to its newest
+        # frame in the relay (backend/realtime/manual_relay.py), which counts the rest
+        # in refused.too_fast: a refusal here would keep a burst's oldest frame instead.
         now = self.clock()
-        if lease.last_input_at is not None and now - lease.last_input_at < (
-            1.0 / self.limits.max_rate_hz
-        ):
-            self.refused.too_fast += 1
-            raise LeaseRefused(f"input faster than {self.limits.max_rate_hz:.0f} Hz")
         lease.last_seq = seq
         lease.last_input_at = now
         lease.expires_at = now + self.limits.expiry_s

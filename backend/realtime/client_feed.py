@@ -99,7 +99,9 @@ class ClientFeed(PeerConnection):
         self.hub = hub
         self.user = ""
         self.token_id: int | None = None
-        self._manual = ManualRelay(hub.registry)
+        self._manual = ManualRelay(
+            hub.registry, hub.leases.limits.max_rate_hz, on_collapse=self._count_collapse
+        )
         self.scans = ScanSubscription()
 
     async def serve(self) -> None:
@@ -265,6 +267,9 @@ class ClientFeed(PeerConnection):
                 sent_ms=message.sent_ms,
             ),
         )
+
+    def _count_collapse(self) -> None:
+        self.hub.leases.refused.too_fast += 1
 
     async def _control(self, message: ControlRequest) -> None:
         vehicle_id = message.vehicle_id

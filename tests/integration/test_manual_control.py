@@ -225,6 +225,37 @@ def test_input_without_the_lease_is_refused(flying: tuple[LocalFleet, str]) -> N
         pilot.close()
 
 
+def test_bad_frames_are_refused_counted_and_never_flown(flying: tuple[LocalFleet, str]) -> None:
+    """Axes outside MANUAL_CONTROL's ranges and NaN are refused by the wire's schema
+    (each one answered, and counted towards the feed's bad-frame limit), before any
+    lease check: they cannot be forwarded, for there is no frame to forward."""
+    fleet, token = flying
+    pilot = Pilot(fleet.plan.hub_http, token)
+    try:
+        assert pilot.take()["holder"] == "admin"
+        bad = [{"x": 1001, "y": 0}, {"x": float("nan"), "y": 0}, {"x": 0, "y": 0, "z": -1}]
+        for axes in bad:
+            pilot.seq += 1
+            frame = {"type": "manual", "vehicle_id": VEHICLE, "seq": pilot.seq, "axes": axes}
+            pilot.socket.send(json.dumps(frame))
+        refusals = poll_until(
+            lambda: (
+                [m for m in pilot.said("error") if m["code"] == "invalid_message"]
+                if len(pilot.said("error")) >= len(bad)
+                else []
+            ),
+            5,
+            "the refusals",
+        )
+        assert len(refusals) == len(bad), refusals
+        assert any("axes.x" in m["message"] for m in refusals), refusals
+        assert any("axes.z" in m["message"] for m in refusals), refusals
+        # None renewed the lease: with no good frame, it expires.
+        poll_until(lambda: pilot.leases(None, "expired"), 10, "the lease to expire")
+    finally:
+        pilot.close()
+
+
 def test_sticks_fly_the_vehicle_and_silence_holds_it(flying: tuple[LocalFleet, str]) -> None:
     fleet, token = flying
     base = fleet.plan.hub_http

@@ -249,6 +249,15 @@ def fly_process(
     return asyncio.run(fly_all(base, token, vehicles, seconds, rate_hz))
 
 
+def cpu_seconds(pid: int) -> float:
+    """User and system CPU time of one process, from /proc."""
+    try:
+        fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    except OSError:
+        return 0.0
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+
 def percentile(values: list[float], q: float) -> float:
     ordered = sorted(values)
     return ordered[min(len(ordered) - 1, max(0, round(q / 100 * (len(ordered) - 1))))]
@@ -277,6 +286,8 @@ def run(count: int, seconds: float, rate_hz: float) -> dict[str, Any]:
             with httpx.Client(base_url=base, headers=headers, timeout=60) as api:
                 hovering(api, vehicles)
             load = os.getloadavg()[0]
+            cpu_before = {m.name: cpu_seconds(m.process.pid) for m in fleet.processes}
+            wall_before = time.monotonic()
             # The pilots in a process of their own, so the taps' thread (which passes
             # every simulator's telemetry on) never holds their interpreter lock.
             # Up to 5 pilots per process, as 20 dashboards would not share one thread.
@@ -287,6 +298,11 @@ def run(count: int, seconds: float, rate_hz: float) -> dict[str, Any]:
                     fly_process, [(base, token, group, seconds, rate_hz) for group in groups]
                 )
             streams = [stream for part in parts for stream in part]
+            wall = time.monotonic() - wall_before
+            used = {
+                m.name: cpu_seconds(m.process.pid) - cpu_before.get(m.name, 0.0)
+                for m in fleet.processes
+            }
     delays, rates, lost, ended = [], [], 0, []
     for stream in streams:
         tap = taps.taps[stream.vehicle_id]
@@ -311,6 +327,11 @@ def run(count: int, seconds: float, rate_hz: float) -> dict[str, Any]:
         "lost": lost,
         "ended": ended,
         "load": load,
+        # Share of one core while the pilots flew (their lease set-up included).
+        "hub_cpu": 100 * used.get("hub", 0.0) / wall,
+        "agent_cpu": 100
+        * statistics.mean(v for k, v in used.items() if k.startswith("agent"))
+        / wall,
     }
 
 
@@ -350,6 +371,10 @@ def main() -> None:
         )
         verdict = "met" if ok else "NOT met"
         print(" ".join(f"{c:>9}" for c in cells) + f"  {verdict} (p99 <= 30 ms at >= 25 Hz)")
+        print(
+            f"          CPU while flying: hub {r['hub_cpu']:.0f} % of a core, "
+            f"each agent {r['agent_cpu']:.0f} %"
+        )
         for line in r["ended"]:
             print(f"          lease ended early: {line}")
 

@@ -776,7 +776,11 @@ class ManualInput(Message):
     vehicle_id: VehicleId
     seq: int = Field(ge=0, le=MAX_SEQ)
     axes: ManualAxes
-    source: InputSource = "program"
+    source: InputSource = Field(
+        default="program",
+        description="gamepad and program streams that repeat the same off-centre values "
+        "for 3 s count as frozen and hold the vehicle; touch and keyboard do not",
+    )
     sent_ms: float | None = Field(
         default=None,
         ge=0,

@@ -57,6 +57,7 @@ class Pilot:
         self._reader = threading.Thread(target=self._read, daemon=True)
         self._reader.start()
         self.seq = 0
+        self.buttons = 0  # MANUAL_CONTROL's button bits in every frame streamed
         self.last_sent_at = 0.0
 
     def _read(self) -> None:
@@ -76,7 +77,7 @@ class Pilot:
 
     def stick(self, x: int, y: int = 0, z: int = 500, r: int = 0) -> None:
         self.seq += 1
-        axes = {"x": x, "y": y, "z": z, "r": r}
+        axes = {"x": x, "y": y, "z": z, "r": r, "buttons": self.buttons}
         frame = {
             "type": "manual",
             "vehicle_id": self.vehicle,
@@ -495,6 +496,62 @@ def test_a_mission_pauses_under_the_lease_and_resumes_after(
             if streamer.is_alive():
                 streamer.join(5)
             pilot.close()
+
+
+def press(pilot: Pilot, bit: int) -> None:
+    """Hold a button for a few frames of the stream, as a thumb does."""
+    pilot.buttons = bit
+    sent = pilot.seq
+    poll_until(lambda: pilot.seq >= sent + 5, 5, "five frames with the button", every_s=0.05)
+    pilot.buttons = 0
+
+
+def test_the_select_and_hold_buttons(flying: tuple[LocalFleet, str]) -> None:
+    """The seed's select button: ignored high up; on the ground it arms, and disarms
+    again. The hold button holds the vehicle and gives control back."""
+    fleet, token = flying
+    base = fleet.plan.hub_http
+    with FleetWatcher(base, token) as watcher:
+        watcher.wait_until(ready(VEHICLE), 10, "the fleet")
+        watcher.wait_until(ready(PX4_VEHICLE), 10, "the PX4 copter")
+        high = Pilot(base, token)
+        ground = Pilot(base, token, vehicle=PX4_VEHICLE)
+        stop = threading.Event()
+        streams = [
+            threading.Thread(target=pilot.stream, args=(stop, 0), daemon=True)
+            for pilot in (high, ground)
+        ]
+        try:
+            assert high.take()["holder"] == "admin"
+            assert ground.take()["holder"] == "admin"
+            for stream in streams:
+                stream.start()
+            # At 10 m the select button does nothing but say so.
+            press(high, 1)
+            watcher.wait_until(
+                lambda v: any("select ignored at" in e["text"] for e in watcher.events),
+                5,
+                "select ignored high up",
+            )
+            assert watcher.state(VEHICLE)["mode"] == "LOITER"
+            # On the ground, disarmed: select arms; pressed again, it disarms.
+            assert watcher.state(PX4_VEHICLE)["armed"] is False
+            press(ground, 1)
+            watcher.wait_until(lambda v: v[PX4_VEHICLE]["state"]["armed"], 10, "armed")
+            press(ground, 1)
+            watcher.wait_until(lambda v: not v[PX4_VEHICLE]["state"]["armed"], 10, "disarmed again")
+            # The hold button: BRAKE, and the lease goes back.
+            press(high, 2)
+            watcher.wait_until(lambda v: v[VEHICLE]["state"]["mode"] == "BRAKE", 5, "BRAKE")
+            poll_until(lambda: high.leases(None, "hold button pressed"), 5, "the lease ended")
+        finally:
+            stop.set()
+            for stream in streams:
+                if stream.is_alive():
+                    stream.join(5)
+            ground.control("release")
+            high.close()
+            ground.close()
 
 
 def test_a_lease_survives_a_hub_restart_only_as_revoked(flying: tuple[LocalFleet, str]) -> None:

@@ -550,6 +550,9 @@ export interface ManualInput {
   vehicle_id: string;
   seq: number;
   axes: ManualAxes;
+  /**
+   * gamepad and program streams that repeat the same off-centre values for 3 s count as frozen and hold the vehicle; touch and keyboard do not
+   */
   source: "gamepad" | "touch" | "keyboard" | "program";
   /**
    * the client's own clock when it read the input (ms); the agent echoes it (manual_echo) so the pilot sees the input-to-vehicle round trip

@@ -166,6 +166,10 @@ def test_the_agent_refuses_a_lease_the_autopilot_would_ignore(
         pilot = Pilot(base, token)
         px4 = Pilot(base, token, vehicle=PX4_VEHICLE)
         try:
+            # Browser control opens only with a lease, never by a bare REST command.
+            bare = api.post(f"/api/v1/vehicles/{VEHICLE}/commands", json={"name": "manual_start"})
+            assert bare.status_code == 422, bare.text
+            assert "comes with the manual-control lease" in bare.text
             set_param(api, VEHICLE, "SYSID_MYGCS", 255)  # ArduPilot's default
             refused = pilot.take()
             assert refused["type"] == "error", refused

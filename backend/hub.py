@@ -21,6 +21,7 @@ from backend.fleet.commands import CommandDispatcher
 from backend.fleet.registry import FleetRegistry, VehicleRecord
 from backend.fleet.safety_gate import SafetyGate
 from backend.mapping.tiles import TileLibrary
+from backend.realtime import manual_control
 from backend.realtime.bus import InProcessBus, ReliableSubscription, Topic
 from backend.realtime.collaborators import AgentConnection, ClientConnection
 from backend.realtime.live_events import live_event
@@ -151,6 +152,7 @@ class Hub:
         writer.on_sequences = hub.deliver_sequence_news
         hub.surveys = SurveyService(hub, bus, SurveyRepository(engine), settings)
         await hub.surveys.load()
+        await manual_control.revoke_left_open(hub, engine)
         if settings.viz_enabled:
             hub.viz = await asyncio.to_thread(VizServer.start)
             hub.viz_http = httpx.AsyncClient(timeout=httpx.Timeout(10.0))
@@ -170,6 +172,7 @@ class Hub:
                 tasks.create_task(self._apply_retention())
                 tasks.create_task(self._drain_spool())
                 tasks.create_task(self.surveys.run())
+                tasks.create_task(manual_control.watch_expiry(self))
                 if self.scene is not None:
                     mirror = SceneMirror(
                         self.scene, self.bus, self.registry, self.settings.viz_update_interval_s

@@ -7,13 +7,17 @@ import logging
 import sqlite3
 import time
 import uuid
-from collections.abc import Callable
+from collections.abc import Awaitable, Callable
 
 from protocol.messages import (
     PROTOCOL_VERSION,
+    Command,
+    CommandOutcome,
     Event,
     EventKind,
     Hello,
+    ManualStartCommand,
+    ManualStopCommand,
     Photo,
     Telemetry,
     VehicleState,
@@ -91,7 +95,7 @@ async def _run(settings: AgentSettings) -> None:
         link.listeners.append(events.on_message)
         link.state_listeners.append(FcuLinkEvents(events.emit).on_link_change)
         executor = CommandExecutor(link)
-        pilot = ManualPilot(link, executor, events.emit)
+        pilot = ManualPilot(link, executor, events.emit, source_system=settings.source_system)
         tasks.create_task(pilot.run())
         scans = None
         if settings.lidar:
@@ -104,7 +108,7 @@ async def _run(settings: AgentSettings) -> None:
             token,
             hello,
             outbox,
-            executor.execute,
+            manual_commands(pilot, executor.execute),
             live_state=lambda: current_state(link, outbox),
             on_manual=pilot.on_frame,
             scans=scans,
@@ -137,6 +141,21 @@ async def _run(settings: AgentSettings) -> None:
             )
             link.listeners.append(uploader.on_message)
             tasks.create_task(uploader.run())
+
+
+def manual_commands(
+    pilot: ManualPilot, execute: Callable[[Command], Awaitable[CommandOutcome]]
+) -> Callable[[Command], Awaitable[CommandOutcome]]:
+    """The lease's start and end go to the manual pilot, every other command to the FCU."""
+
+    async def run(command: Command) -> CommandOutcome:
+        if isinstance(command, ManualStartCommand):
+            return await pilot.start()
+        if isinstance(command, ManualStopCommand):
+            return await pilot.stop()
+        return await execute(command)
+
+    return run
 
 
 def scan_relay(settings: AgentSettings, link: FcuLink, vehicle_id: str) -> ScanRelay:

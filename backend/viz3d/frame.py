@@ -12,8 +12,9 @@ from collections import Counter
 
 import numpy as np
 import numpy.typing as npt
+from pymap3d.enu import enu2geodetic, geodetic2enu
 
-from common.geodesy import GeoPoint, LocalFrame
+from common.geodesy import WGS84, GeoPoint, LocalFrame
 from protocol.messages import VehicleState
 
 # Farther than this from the origin is not a fleet we can draw truthfully (the tangent
@@ -124,3 +125,17 @@ def attitude_wxyz(
             cr * cp * sy - sr * sp * cy,
         ]
     )
+
+
+def reframe(points: npt.NDArray[np.floating], source: LocalFrame, target: LocalFrame) -> Vector:
+    """(n, 3) east-north-up points of one local frame, in another (through WGS-84): the
+    scans' site frame may have another origin than the scene's."""
+    points = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+    if source.origin == target.origin or not len(points):
+        return points
+    s, t = source.origin, target.origin
+    lat, lon, alt = enu2geodetic(
+        points[:, 0], points[:, 1], points[:, 2], s.lat, s.lon, s.alt, WGS84
+    )
+    east, north, up = geodetic2enu(lat, lon, alt, t.lat, t.lon, t.alt, WGS84)
+    return np.column_stack([east, north, up])

@@ -10,7 +10,8 @@ from __future__ import annotations
 
 import threading
 from collections import deque
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Iterator, Sequence
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -18,9 +19,13 @@ import numpy.typing as npt
 import viser
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
+from backend.scans.pointmap import MapObstacle
+from backend.scans.points import world_points
 from backend.viz3d.colours import rgb, vehicle_colour
-from backend.viz3d.frame import SceneFrame, Vector, attitude_wxyz
+from backend.viz3d.frame import SceneFrame, Vector, attitude_wxyz, reframe
+from common.geodesy import LocalFrame
 from protocol.messages import MissionItem, VehicleSummary
+from protocol.scans import ScanFrame
 
 # A flat arrowhead, 2 m long, pointing along the body's forward (x) axis.
 _BODY_VERTICES = np.array(
@@ -51,11 +56,15 @@ VEHICLES = Layer("vehicles", "Vehicles")
 TRAILS = Layer("trails", "Trails")
 HOMES = Layer("homes", "Homes")
 MISSIONS = Layer("missions", "Missions")
-# Layers whose data comes with later features. Each appears in the panel when its first
-# data is drawn through `show_points` (scans, the point map) or a method of its own
-# (survey lanes, the mosaic plane, formation slots), never before.
+# Layers of the sensors' data: each appears in the panel when its first data is drawn
+# (a vehicle's latest scan, the accumulated point map, the obstacles found in it), never
+# before. Survey lanes, the mosaic plane and formation slots will join them the same way
+# when their features exist.
 SCANS = Layer("scans", "LIDAR scans")
 POINT_MAP = Layer("point_map", "Point map")
+OBSTACLES = Layer("obstacles", "Obstacles")
+POINT_MAP_COLOUR = (150, 150, 150)
+OBSTACLE_COLOUR = (255, 80, 0)
 
 
 @dataclass
@@ -84,11 +93,12 @@ class FleetScene:
         # One group node per layer, made first, so the panel's checkbox hides the group.
         self._groups = {
             layer.key: server.scene.add_frame(f"/{layer.key}", show_axes=False)
-            for layer in (GRID, VEHICLES, TRAILS, HOMES, MISSIONS, SCANS, POINT_MAP)
+            for layer in (GRID, VEHICLES, TRAILS, HOMES, MISSIONS, SCANS, POINT_MAP, OBSTACLES)
         }
         self._mission_paths: dict[str, viser.LineSegmentsHandle] = {}
         self._next_waypoints: dict[str, viser.IcosphereHandle] = {}
         self._follow: dict[int, str] = {}  # viser client id -> vehicle id
+        self._obstacles: list[viser.BoxHandle] = []
         self.batches = 0
         server.scene.set_up_direction("+z")
         server.scene.configure_environment_map(hdri=None)  # no CDN: the scene is lit plainly
@@ -116,6 +126,12 @@ class FleetScene:
             self._follow_cameras()
             self._show_skipped()
             self.batches += 1
+
+    @contextmanager
+    def batch(self) -> Iterator[None]:
+        """Calls made inside reach the browser as one atomic update."""
+        with self._lock, self.server.atomic():
+            yield
 
     def vehicle_position(self, vehicle_id: str) -> Vector | None:
         vehicle = self._vehicles.get(vehicle_id)
@@ -280,11 +296,8 @@ class FleetScene:
         colour: tuple[int, int, int],
         point_size: float = 0.15,
     ) -> None:
-        """Points already in the local frame (metres east, north, up), replacing the
-        layer's previous points under ``key``: the hook for a vehicle's latest LIDAR scan
-        (layer SCANS, key the vehicle) and the accumulated map (POINT_MAP). Scans reach
-        the hub as ranges from a pose; turning them into these points is the scans
-        feature's job, and its arrival adds the call."""
+        """Points already in the scene's frame (metres east, north, up), replacing the
+        layer's previous points under ``key``."""
         points = np.asarray(points_enu, dtype=np.float32).reshape(-1, 3)
         points = points[np.isfinite(points).all(axis=1)]
         with self._lock, self.server.atomic():
@@ -292,6 +305,47 @@ class FleetScene:
                 f"/{layer.key}/{key}", points, colors=colour, point_size=point_size
             )
             self._show_layer(layer)
+
+    def show_scan(self, vehicle_id: str, frame: ScanFrame) -> bool:
+        """A vehicle's latest scan, each beam placed from the scene's own origin (the
+        scans feature's ``world_points``, pose interpolated per beam), in the vehicle's
+        colour. False, and nothing drawn, while the scene has no origin yet."""
+        if self.frame.local is None:
+            return False
+        points = world_points(frame, self.frame.local).enu
+        self.show_points(SCANS, vehicle_id, points, rgb(vehicle_colour(vehicle_id)))
+        return True
+
+    def show_point_map(
+        self, points: npt.NDArray[np.floating], obstacles: Sequence[MapObstacle], site: LocalFrame
+    ) -> bool:
+        """The site's accumulated point map and the obstacles found in it, both in the
+        site's frame (``site``), moved into the scene's. False while it has no origin."""
+        if self.frame.local is None:
+            return False
+        local = self.frame.local
+        with self._lock, self.server.atomic():
+            if len(points):
+                self.show_points(POINT_MAP, "all", reframe(points, site, local), POINT_MAP_COLOUR)
+            for handle in self._obstacles:
+                handle.remove()
+            self._obstacles = []
+            for obstacle in obstacles:
+                low = (obstacle.east_min, obstacle.north_min, obstacle.up_min)
+                high = (obstacle.east_max, obstacle.north_max, obstacle.up_max)
+                corners = reframe(np.array([low, high]), site, local)
+                self._obstacles.append(
+                    self.server.scene.add_box(
+                        f"/{OBSTACLES.key}/{obstacle.id}",
+                        color=OBSTACLE_COLOUR,
+                        dimensions=tuple(np.abs(corners[1] - corners[0]).tolist()),
+                        wireframe=True,
+                        position=corners.mean(axis=0),
+                    )
+                )
+            if obstacles:
+                self._show_layer(OBSTACLES)
+        return True
 
     # -- the panel ---------------------------------------------------------------
 

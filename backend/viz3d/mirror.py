@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import asyncio
 import logging
+import time
 
 from backend.fleet.registry import FleetRegistry
 from backend.realtime.bus import Bus, LatestSubscription, Topic
@@ -27,6 +28,7 @@ log = logging.getLogger(__name__)
 # scene's heaviest message, and it changes little from one second to the next.
 POINT_MAP_INTERVAL_S = 2.0
 POINT_MAP_MAX_POINTS = 100_000
+POINT_MAP_SHARE = 10.0
 
 
 class SceneMirror:
@@ -96,9 +98,14 @@ class SceneMirror:
         drawn = -1
         while True:
             point_map = scans.point_map
+            took = 0.0
             if point_map.version != drawn and scans.site is not None:
                 drawn = point_map.version
                 # Copied here, on the loop that adds to it; searched and drawn in a thread.
                 points = point_map.points(limit=POINT_MAP_MAX_POINTS)
+                started = time.monotonic()
                 await asyncio.to_thread(self._show_point_map, points, point_map.voxel_m, scans.site)
-            await asyncio.sleep(POINT_MAP_INTERVAL_S)
+                took = time.monotonic() - started
+            # The obstacle search is pure Python (seconds over a large map): waiting ten
+            # times as long as it took keeps it to a tenth of a core, GIL included.
+            await asyncio.sleep(max(POINT_MAP_INTERVAL_S, POINT_MAP_SHARE * took))

@@ -37,6 +37,10 @@ _BODY_FACES = np.array([[0, 1, 2], [0, 2, 3], [0, 4, 1], [0, 3, 4], [1, 4, 2], [
 # does not fill with copies of one point.
 TRAIL_STEP_M = 0.25
 MAX_TRAIL_POINTS = 2_000
+# A trail is sent whole (viser cannot append to a line), so it is redrawn at most this
+# often per vehicle: 50 trails rebuilt at every 10 Hz batch were most of a batch's cost
+# (bench/bench_viz.py). The model itself moves at every batch; its trail follows it.
+TRAIL_REDRAW_S = 0.5
 # RTL, LAND and TAKEOFF fly from where they are.
 NOT_MISSION_POSITIONS = frozenset(
     {mavlink2.MAV_CMD_NAV_RETURN_TO_LAUNCH, mavlink2.MAV_CMD_NAV_LAND, mavlink2.MAV_CMD_NAV_TAKEOFF}
@@ -65,6 +69,7 @@ POINT_MAP = Layer("point_map", "Point map")
 OBSTACLES = Layer("obstacles", "Obstacles")
 POINT_MAP_COLOUR = (150, 150, 150)
 OBSTACLE_COLOUR = (255, 80, 0)
+MAX_OBSTACLES = 200
 
 
 @dataclass
@@ -74,6 +79,7 @@ class _Vehicle:
     colour: tuple[int, int, int]
     trail: deque[tuple[float, Vector]] = field(default_factory=deque)
     trail_handle: viser.LineSegmentsHandle | None = None
+    trail_drawn_at: float = float("-inf")
     home: viser.IcosphereHandle | None = None
     position: Vector | None = None
 
@@ -196,13 +202,16 @@ class FleetScene:
     ) -> None:
         now = when if when is not None else (vehicle.trail[-1][0] if vehicle.trail else 0.0)
         trail = vehicle.trail
-        if trail and float(np.linalg.norm(trail[-1][1] - position)) < TRAIL_STEP_M:
+        if not trail or float(np.linalg.norm(trail[-1][1] - position)) >= TRAIL_STEP_M:
+            trail.append((now, position))
+            while trail and (trail[0][0] < now - self.trail_s or len(trail) > MAX_TRAIL_POINTS):
+                trail.popleft()
+        # Drawn when it has a point not drawn yet (one kept back by the pacing is drawn
+        # later, even if the vehicle has stopped), at most every TRAIL_REDRAW_S.
+        undrawn = bool(trail) and trail[-1][0] > vehicle.trail_drawn_at
+        if len(trail) < 2 or not undrawn or now - vehicle.trail_drawn_at < TRAIL_REDRAW_S:
             return
-        trail.append((now, position))
-        while trail and (trail[0][0] < now - self.trail_s or len(trail) > MAX_TRAIL_POINTS):
-            trail.popleft()
-        if len(trail) < 2:
-            return
+        vehicle.trail_drawn_at = now
         points = np.array([point for _, point in trail], dtype=np.float32)
         segments = np.stack([points[:-1], points[1:]], axis=1)
         if vehicle.trail_handle is None:
@@ -330,7 +339,8 @@ class FleetScene:
             for handle in self._obstacles:
                 handle.remove()
             self._obstacles = []
-            for obstacle in obstacles:
+            # The largest first, and a bounded number: one box is one scene message.
+            for obstacle in sorted(obstacles, key=lambda o: -o.voxels)[:MAX_OBSTACLES]:
                 low = (obstacle.east_min, obstacle.north_min, obstacle.up_min)
                 high = (obstacle.east_max, obstacle.north_max, obstacle.up_max)
                 corners = reframe(np.array([low, high]), site, local)

@@ -171,6 +171,8 @@ async def _load(
             await bus.publish(Topic.VEHICLE_STATE, summary.id, summary)
             if lidar:
                 await scans.ingest(summary.id, "bench", _scan(site, index, t, tick, ranges))
+            # Each vehicle is its own socket in the hub: let the others (the mirror) run.
+            await asyncio.sleep(0)
         tick += 1
         # Paced to the clock, not by sleeps of a fixed length: a slow tick is caught up.
         await asyncio.sleep(max(0.0, started + tick / rate_hz - time.monotonic()))

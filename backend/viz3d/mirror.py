@@ -20,7 +20,6 @@ from backend.scans.pointmap import Array, find_obstacles
 from backend.scans.service import ScanDelivery, ScanService
 from backend.viz3d.scene import FleetScene
 from common.geodesy import LocalFrame
-from protocol.scans import ScanFrameError, split_client_scan_frame
 
 log = logging.getLogger(__name__)
 
@@ -50,7 +49,7 @@ class SceneMirror:
         async with asyncio.TaskGroup() as tasks:
             tasks.create_task(self._vehicles())
             if self.scans is not None:
-                tasks.create_task(self._scans())
+                tasks.create_task(self._scans(self.scans))
                 tasks.create_task(self._point_map(self.scans))
 
     async def _vehicles(self) -> None:
@@ -70,26 +69,27 @@ class SceneMirror:
         finally:
             self.bus.unsubscribe(Topic.VEHICLE_STATE, updates)
 
-    async def _scans(self) -> None:
+    async def _scans(self, scans: ScanService) -> None:
         updates = LatestSubscription()
         self.bus.subscribe(Topic.SCANS, updates)
         try:
             while True:
                 deliveries: list[ScanDelivery] = await updates.drain()
-                await asyncio.to_thread(self._show_scans, deliveries)
+                await asyncio.to_thread(self._show_scans, scans, deliveries)
                 await asyncio.sleep(self.interval_s)
         finally:
             self.bus.unsubscribe(Topic.SCANS, updates)
 
-    def _show_scans(self, deliveries: list[ScanDelivery]) -> None:
+    def _show_scans(self, scans: ScanService, deliveries: list[ScanDelivery]) -> None:
+        site = scans.site
+        if site is None:
+            return
         with self.scene.batch():
             for delivery in deliveries:
-                try:
-                    _, frame = split_client_scan_frame(delivery.data)
-                except ScanFrameError as error:  # the service checked it: a bug if seen
-                    log.warning("3D view: scan from %s not drawn: %s", delivery.vehicle_id, error)
-                    continue
-                self.scene.show_scan(delivery.vehicle_id, frame)
+                # The service's newest scan of the vehicle, its points already placed
+                # (at least as new as the delivery that woke us).
+                if (latest := scans.latest.get(delivery.vehicle_id)) is not None:
+                    self.scene.show_scan(delivery.vehicle_id, latest.points.enu, site)
 
     def _show_point_map(self, points: Array, voxel_m: float, site: LocalFrame) -> None:
         self.scene.show_point_map(points, find_obstacles(points, voxel_m), site)

@@ -20,12 +20,10 @@ import viser
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from backend.scans.pointmap import MapObstacle
-from backend.scans.points import world_points
 from backend.viz3d.colours import rgb, vehicle_colour
 from backend.viz3d.frame import SceneFrame, Vector, attitude_wxyz, reframe
 from common.geodesy import LocalFrame
 from protocol.messages import MissionItem, VehicleSummary
-from protocol.scans import ScanFrame
 
 # A flat arrowhead, 2 m long, pointing along the body's forward (x) axis.
 _BODY_VERTICES = np.array(
@@ -315,14 +313,17 @@ class FleetScene:
             )
             self._show_layer(layer)
 
-    def show_scan(self, vehicle_id: str, frame: ScanFrame) -> bool:
-        """A vehicle's latest scan, each beam placed from the scene's own origin (the
-        scans feature's ``world_points``, pose interpolated per beam), in the vehicle's
-        colour. False, and nothing drawn, while the scene has no origin yet."""
+    def show_scan(
+        self, vehicle_id: str, points: npt.NDArray[np.floating], site: LocalFrame
+    ) -> bool:
+        """A vehicle's latest scan: its world points as the scans feature placed them
+        (``backend.scans.points``, each beam from the pose of its instant) in the site's
+        frame, moved into the scene's, in the vehicle's colour. False, and nothing drawn,
+        while the scene has no origin yet."""
         if self.frame.local is None:
             return False
-        points = world_points(frame, self.frame.local).enu
-        self.show_points(SCANS, vehicle_id, points, rgb(vehicle_colour(vehicle_id)))
+        local = reframe(points, site, self.frame.local)
+        self.show_points(SCANS, vehicle_id, local, rgb(vehicle_colour(vehicle_id)))
         return True
 
     def show_point_map(

@@ -12,7 +12,7 @@ import viser
 from websockets.sync.client import connect
 
 from backend.viz3d.colours import rgb, vehicle_colour
-from backend.viz3d.frame import SceneFrame, attitude_wxyz
+from backend.viz3d.frame import SceneFrame, attitude_wxyz, reframe
 from backend.viz3d.scene import SCANS, FleetScene
 from backend.viz3d.server import VizServer
 from common.geodesy import LocalFrame
@@ -203,3 +203,14 @@ def test_a_trail_is_redrawn_at_a_bounded_rate_and_catches_up_when_the_vehicle_st
     np.testing.assert_allclose(
         drawn[-1][1], _node(viz.viser, "/vehicles/alpha").position, atol=1e-2
     )
+
+
+def test_reframing_between_two_origins_matches_the_geodesy_round_trip() -> None:
+    site = LocalFrame(*HOME)
+    other = LocalFrame(47.41, 8.53, 500.0)  # 1.6 km away, 12 m higher
+    points = np.random.default_rng(0).uniform(-3000, 3000, (50, 3))
+    expected = []
+    for east, north, up in points:
+        where = site.from_enu(east, north, up)
+        expected.append(other.to_enu(where.lat, where.lon, where.alt))
+    np.testing.assert_allclose(reframe(points, site, other), expected, atol=1e-6)

@@ -174,6 +174,9 @@ async def _load(
             # Each vehicle is its own socket in the hub: let the others (the mirror) run.
             await asyncio.sleep(0)
         tick += 1
+        if rate_hz == 0:  # a still fleet: drawn once, then nothing changes
+            await stop.wait()
+            return
         # Paced to the clock, not by sleeps of a fixed length: a slow tick is caught up.
         await asyncio.sleep(max(0.0, started + tick / rate_hz - time.monotonic()))
 
@@ -279,8 +282,10 @@ def main() -> int:
     parser.add_argument("--rate-hz", type=float, default=10.0)
     parser.add_argument("--seconds", type=float, default=10.0)
     args = parser.parse_args()
-    # First an empty scene: what viser's client costs to draw on this machine at all.
+    # First an empty scene, then the fleet standing still: what viser's client costs to
+    # draw on this machine at all, and to draw the fleet without any update arriving.
     run_case(0, args.rate_hz, args.seconds, lidar=False)
+    run_case(args.vehicles, 0.0, args.seconds, lidar=False)
     for lidar in (False, True):
         run_case(args.vehicles, args.rate_hz, args.seconds, lidar)
     return 0

@@ -8,7 +8,7 @@ service (its checks, its point map) and the scene mirror, which batches what cha
 one atomic viser update per period (GCS_VIZ_UPDATE_INTERVAL_S, 0.1 s). A load generator
 publishes every vehicle's state at --rate-hz, each moving on its own circle, 40 m apart;
 with LIDAR each vehicle also sends a full 720-beam turn at the same rate (every beam a
-return at 6-10 m, the worst case for points: 36,000 points a second a vehicle).
+return at 6-10 m, the worst case for points: 7,200 a second a vehicle, 360,000 in all).
 
 Measured over --seconds, after the scene has settled:
 - scene messages: what viser sends one browser, counted by a second client on the same

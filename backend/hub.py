@@ -175,7 +175,11 @@ class Hub:
                 tasks.create_task(manual_control.watch_expiry(self))
                 if self.scene is not None:
                     mirror = SceneMirror(
-                        self.scene, self.bus, self.registry, self.settings.viz_update_interval_s
+                        self.scene,
+                        self.bus,
+                        self.registry,
+                        self.settings.viz_update_interval_s,
+                        scans=self.scans,
                     )
                     tasks.create_task(mirror.run())
         finally:

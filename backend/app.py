@@ -45,12 +45,32 @@ from backend.errors import (
     Unauthenticated,
 )
 from backend.hub import Hub
-from backend.log_escaping import escape_control_characters_in_logs
 from backend.settings import REPO_ROOT, HubSettings
+from common.log_escaping import escape_control_characters_in_logs
+from protocol.messages import AGENT_WS_PATH, CLIENT_WS_PATH
 
 log = logging.getLogger(__name__)
 
 API_PREFIX = "/api/v1"
+# The API document's description: where a new client starts, and what /docs cannot show
+# (OpenAPI has no WebSockets). Markdown, as Swagger UI and ReDoc render it.
+API_DESCRIPTION = f"""Live fleet state, commands and telemetry history for drone fleets.
+
+**Authenticating.** `POST {API_PREFIX}/auth/token` takes a form (`username`, `password`)
+and answers a bearer token; send it as `Authorization: Bearer <token>` on every request.
+`POST {API_PREFIX}/auth/api-tokens` makes a long-lived one limited to scopes (the OAuth2
+scheme lists them; each operation names the one it needs).
+
+**WebSockets**, which this document cannot describe:
+
+- `{CLIENT_WS_PATH}`, the live feed for dashboards and integrations: the same bearer
+  header on the upgrade request; the fleet, then each vehicle as it changes, and events.
+- `{AGENT_WS_PATH}`, the link of the vehicle agents (an agent token).
+
+Every message, field and close code of both is in the repository's `docs/websockets.md`,
+written from the wire protocol (`protocol/messages.py`; `python -m protocol.messages`
+prints its JSON Schema).
+"""
 
 _DASHBOARD_MISSING = """<!doctype html><title>Fleet GCS</title>
 <h1>The dashboard is not built</h1>
@@ -81,7 +101,7 @@ def create_app(settings: HubSettings | None = None) -> FastAPI:
     app = FastAPI(
         title="Fleet GCS hub",
         version="0.1.0",
-        description="Live fleet state, commands and telemetry history for drone fleets.",
+        description=API_DESCRIPTION,
         lifespan=lifespan,
         docs_url=None,  # install_docs serves /docs and /redoc without a CDN
         redoc_url=None,

@@ -36,7 +36,9 @@ from backend.storage.retention import RetentionPolicy
 from backend.storage.scans import ScanRepository
 from backend.storage.sequences import Gap, StreamKey
 from backend.storage.spool import RowSpool
+from backend.storage.surveys import SurveyRepository
 from backend.storage.writer import StorageWriter
+from backend.surveys.service import SurveyService
 from backend.viz3d.frame import SceneFrame, parse_origin
 from backend.viz3d.mirror import SceneMirror
 from backend.viz3d.scene import FleetScene
@@ -82,6 +84,8 @@ class Hub:
     viz: VizServer | None = None
     viz_http: httpx.AsyncClient | None = None
     scene: FleetScene | None = None
+    # Area surveys: created in start(), as they send commands through the hub itself.
+    surveys: SurveyService = field(init=False)
 
     @classmethod
     async def start(cls, settings: HubSettings) -> Hub:
@@ -142,6 +146,8 @@ class Hub:
             ),
         )
         writer.on_sequences = hub.deliver_sequence_news
+        hub.surveys = SurveyService(hub, bus, SurveyRepository(engine), settings)
+        await hub.surveys.load()
         if settings.viz_enabled:
             hub.viz = await asyncio.to_thread(VizServer.start)
             hub.viz_http = httpx.AsyncClient(timeout=httpx.Timeout(10.0))
@@ -159,6 +165,7 @@ class Hub:
                 tasks.create_task(self.scans.run())
                 tasks.create_task(self._apply_retention())
                 tasks.create_task(self._drain_spool())
+                tasks.create_task(self.surveys.run())
                 if self.scene is not None:
                     mirror = SceneMirror(
                         self.scene, self.bus, self.registry, self.settings.viz_update_interval_s

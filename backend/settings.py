@@ -155,6 +155,22 @@ class HubSettings(BaseSettings):
         default=20.0, gt=0, le=100, description="live scans per second per vehicle, at most"
     )
     scan_queue_limit: int = Field(default=2000, ge=10, description="scans waiting to be stored")
+    survey_link_timeout_s: float = Field(
+        default=10.0,
+        gt=0,
+        le=3600,
+        description="a surveying drone whose agent has been gone this long is out of the "
+        "survey: its unflown lanes are offered to the others",
+    )
+    survey_battery_floor_pct: float = Field(
+        default=20.0,
+        ge=0,
+        le=100,
+        description="a surveying drone whose battery falls below this is out of the survey",
+    )
+    survey_update_interval_s: float = Field(
+        default=1.0, gt=0, le=60, description="a survey's progress goes out at most this often"
+    )
 
     def site_frame(self) -> LocalFrame | None:
         """The site's east-north-up frame, if an origin is configured."""

@@ -5,8 +5,10 @@ fleet split's time for 2 to 16 drones over 1 km² with the slowest drone's time 
     .venv/bin/python bench/bench_survey.py
 
 "plan" is one lane plan at a given angle; "auto angle" searches the angle every 5°;
-"coverage" is the footprint coverage check. Each figure is the best of 3 runs. Prints a
-Markdown table; asserts nothing.
+"coverage" is the footprint coverage check. "strip bound" is planner.strip_bound_m (what
+any plan at that spacing and angle must fly; the bar is 1.05), "area bound" the looser
+area / spacing one. Each time is the best of 3 runs. Prints a Markdown table; asserts
+nothing.
 """
 
 from __future__ import annotations
@@ -23,7 +25,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 from shapely.geometry import Polygon
 
 from backend.missions.survey.camera import calculate, preset
-from backend.missions.survey.planner import coverage, lower_bound_m, plan_lanes
+from backend.missions.survey.planner import coverage, lower_bound_m, plan_lanes, strip_bound_m
 from backend.missions.survey.report import best_angle
 from backend.missions.survey.split import Drone, split
 
@@ -47,8 +49,11 @@ def _area(km2: float) -> Polygon:
 
 def main() -> None:
     print(f"camera {CALC.camera.name}, GSD {CALC.gsd_cm} cm, spacing {CALC.lane_spacing_m:.1f} m")
-    print("| area km² | lanes | photos | plan s | auto angle s | coverage s | path / bound |")
-    print("|---|---|---|---|---|---|---|")
+    print(
+        "| area km² | lanes | photos | plan s | auto angle s | coverage s | covered % "
+        "| path / strip bound | path / area bound |"
+    )
+    print("|---|---|---|---|---|---|---|---|---|")
     for km2 in (0.1, 1.0, 10.0):
         area = _area(km2)
         plan = plan_lanes(area, CALC, angle_deg=0)
@@ -56,12 +61,14 @@ def main() -> None:
         ratio = plan.path_length_m / lower_bound_m(
             area, CALC.lane_spacing_m, plan.turnaround_m, rows
         )
+        strip = plan.path_length_m / strip_bound_m(area, CALC, 0.0, plan.turnaround_m)
+        covered, _ = coverage(plan, area, CALC)
         t_plan = _best_s(partial(plan_lanes, area, CALC, angle_deg=0))
         t_angle = _best_s(partial(best_angle, area, CALC, 10.0, turnaround_m=10.0))
         t_cover = _best_s(partial(coverage, plan, area, CALC))
         print(
             f"| {km2:g} | {len(plan.lanes)} | {plan.photo_count} | {t_plan:.3f} | "
-            f"{t_angle:.3f} | {t_cover:.3f} | {ratio:.3f} |"
+            f"{t_angle:.3f} | {t_cover:.3f} | {100 * covered:.2f} | {strip:.3f} | {ratio:.3f} |"
         )
 
     print()

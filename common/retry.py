@@ -64,17 +64,34 @@ class Retries:
         return self.backoff.delay(self.failures)
 
     async def sleep(self, delay: float) -> None:
+        _raise_if_stopping()
         await self._sleep(delay)
 
     async def wait(self) -> float:
         """Count one more failure and wait before the next attempt; the wait it took."""
         delay = self.next_delay()
-        await self._sleep(delay)
+        await self.sleep(delay)
         return delay
 
     def reset(self) -> None:
         """The attempt succeeded: the next failure waits as little as the first."""
         self.failures = 0
+
+
+def _raise_if_stopping() -> None:
+    """Refuse to start another attempt in a task that has been asked to stop.
+
+    On Python 3.11 a ``TaskGroup`` whose child fails while the task around it is being
+    cancelled raises only the child's error: the link's reader reports the closed socket
+    at the moment SIGTERM cancels the agent, the loop's ``except*`` takes the error, and
+    the cancellation is gone. The loop would then retry for ever and the process ignore
+    every further SIGTERM. Every retry loop comes through here before it waits, so this
+    is the one place to see the request that was swallowed (``Task.cancelling()`` still
+    counts it) and to honour it.
+    """
+    task = asyncio.current_task()
+    if task is not None and task.cancelling():
+        raise asyncio.CancelledError
 
 
 def _after(failures: int) -> RetryCallState:

@@ -16,6 +16,8 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from common.log_escaping import escape_control_characters_in_logs
+
 if TYPE_CHECKING:
     from backend.settings import HubSettings
     from gcs.launcher import LocalFleet
@@ -25,6 +27,8 @@ LOG_FORMAT = "%(asctime)s %(levelname)-7s %(name)s: %(message)s"  # as vehicle_a
 
 def _configure_logging(level: str) -> None:
     logging.basicConfig(level=level.upper(), format=LOG_FORMAT)
+    # A peer's text (a user name, a STATUSTEXT, the hub's error reply) never forges a line.
+    escape_control_characters_in_logs()
 
 
 # The extra each subcommand needs beyond the agent's base dependencies.

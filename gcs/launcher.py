@@ -294,7 +294,8 @@ class LocalFleet:
             try:
                 with urllib.request.urlopen(f"{self.plan.hub_http}/api/v1/health", timeout=2):
                     return
-            except (urllib.error.URLError, ConnectionError):
+            except (urllib.error.URLError, ConnectionError, TimeoutError):
+                # TimeoutError: a hub still starting on a busy machine answers late.
                 if time.monotonic() > deadline:
                     raise TimeoutError(f"hub not ready after {timeout_s:.0f} s") from None
                 time.sleep(0.1)  # nothing to wait on but the port opening

@@ -493,7 +493,17 @@ EventKind = Literal[
     "id_clash",  # the hub refused a second agent for this vehicle id (never sent by agents)
     "manual",  # browser manual control started, ended or held by the deadman
     "upload",  # the agent's onboard .tlog could not be handed over (or was, after failing)
+    "camera",  # the camera fired (CAMERA_FEEDBACK); the event's photo says where
 ]
+
+
+class Photo(Message):
+    """Where and when a photo was taken, as the autopilot reports it (CAMERA_FEEDBACK)."""
+
+    index: int = Field(ge=0, le=2**32 - 1, description="the camera's image number (img_idx)")
+    lat: float = Field(ge=-90, le=90)
+    lon: float = Field(ge=-180, le=180)
+    alt_rel: float = Field(ge=-1000, le=10000, description="metres above home")
 
 
 class Event(Message):
@@ -517,6 +527,7 @@ class Event(Message):
         le=65535,
         description="the mission item a 'mission' event is about (numbered as the hub does)",
     )
+    photo: Photo | None = Field(default=None, description="for a 'camera' event: the photo")
 
 
 SequencedKind = Literal["telemetry", "event"]
@@ -669,6 +680,7 @@ class LiveEvent(Message):
     )
     text: str = Field(max_length=500)
     mission_item: int | None = Field(default=None, ge=0, le=65535)
+    photo: Photo | None = Field(default=None, description="for a 'camera' event: the photo")
     repeat: int = Field(
         default=1,
         ge=1,
@@ -778,6 +790,33 @@ class ManualFrame(Message):
     axes: ManualAxes
 
 
+class SurveyDroneProgress(Message):
+    vehicle_id: VehicleId
+    state: Name = Field(description="assigned, flying, done or dropped")
+    lanes_done: int = Field(ge=0)
+    lanes_total: int = Field(ge=0)
+    photos: int = Field(ge=0)
+    reason: str | None = Field(default=None, max_length=500, description="why it dropped out")
+
+
+class SurveyUpdate(Message):
+    """An area survey's progress, at most one a second per survey (newest wins): lanes
+    flown, photos triggered (CAMERA_FEEDBACK) and the share of the area their footprints
+    cover, overall and per drone, and whether a hand-over awaits the operator."""
+
+    type: Literal["survey"] = "survey"
+    survey_id: Name
+    state: Name = Field(description="planned, flying, handover_offered, done, aborted, failed")
+    lanes_done: int = Field(ge=0)
+    lanes_total: int = Field(ge=0)
+    photos: int = Field(ge=0)
+    covered_pct: float = Field(ge=0, le=100)
+    drones: list[SurveyDroneProgress] = Field(max_length=64)
+    handover_lanes: int | None = Field(
+        default=None, ge=0, description="lanes a hand-over offers to move; null if none offered"
+    )
+
+
 # The hub pings an agent to learn whether it is still there (another agent wants its
 # vehicle id); the agent answers with a pong.
 AgentToHub: TypeAlias = Annotated[
@@ -793,7 +832,14 @@ ClientToHub: TypeAlias = Annotated[
     Field(discriminator="type"),
 ]
 HubToClient: TypeAlias = Annotated[
-    FleetSnapshot | VehicleUpdate | EventBatch | ScanSubscriptions | Pong | ErrorReply | LeaseState,
+    FleetSnapshot
+    | VehicleUpdate
+    | EventBatch
+    | ScanSubscriptions
+    | Pong
+    | ErrorReply
+    | LeaseState
+    | SurveyUpdate,
     Field(discriminator="type"),
 ]
 

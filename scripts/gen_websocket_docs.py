@@ -172,7 +172,9 @@ def field_table(schema: Schema) -> list[str]:
             presence = f"`{json.dumps(prop['default'])}`"
         else:
             presence = "optional"
-        description = " ".join(prop.get("description", "").split()).rstrip(".")
+        description = " ".join(prop.get("description", "").split())
+        if not description.endswith("..."):  # "multirotor, rover, ..." keeps its dots
+            description = description.removesuffix(".")
         meaning = "; ".join(part for part in (description, ", ".join(limits_of(prop))) if part)
         lines.append(f"| `{name}` | {cell(type_of(prop))} | {presence} | {cell(meaning)} |")
     return lines
@@ -183,10 +185,19 @@ def description_of(schema: Schema) -> list[str]:
     return [" ".join(text.split()), ""] if text else []
 
 
-def message_section(name: str, schema: Schema, direction: str) -> list[str]:
+def message_section(
+    name: str, schema: Schema, direction: str, anchored: set[str] | None = None
+) -> list[str]:
+    """A message's heading and fields; its anchor once per page (``anchored`` holds those
+    already written: ping and pong go both ways, and links lead to the first)."""
     tag = schema["properties"]["type"]["const"]
+    target = anchor(name)
+    if anchored is not None:
+        if target in anchored:
+            target = ""
+        anchored.add(target)
     return [
-        f'<a id="{anchor(name)}"></a>',
+        *([f'<a id="{target}"></a>'] if target else []),
         f"#### `{tag}` ({direction})",
         "",
         *description_of(schema),
@@ -216,6 +227,7 @@ def render() -> str:
         f"`{kind}` needs `{permission}`" for kind, permission in CLIENT_MESSAGE_PERMISSIONS.items()
     )
     agent_kinds = ", ".join(f"`{kind}`" for kind in AGENT_MESSAGE_PERMISSIONS)
+    anchored: set[str] = set()
 
     out = [
         "# The WebSockets: the live feed and the agent link",
@@ -229,6 +241,10 @@ def render() -> str:
         "fleet, then each vehicle as it changes.",
         f"- `{messages.AGENT_WS_PATH}`, the **agent link**, for the vehicle agents only: "
         "telemetry and events up, commands down.",
+        "",
+        # A literal: backend.api.viz would import viser, and its socket is not ours.
+        "(The 3D view's page under `/viz/` has a socket too; it carries viser's own wire "
+        "format to that page and is not an API.)",
         "",
         "On both, every frame is one JSON object as text, and its `type` names the message. "
         f"A frame is at most {messages.MAX_FRAME_BYTES:,} bytes (the hub closes with "
@@ -277,15 +293,23 @@ def render() -> str:
         f"{DEFAULT_QUEUE_EVENTS} and, when full, drops the least severe first, counting them "
         "in `dropped`. Older events are in the flight log (`GET /api/v1/events`).",
         "4. The client may send [`ping`](#ping) at any time; the hub answers "
-        "[`pong`](#pong) with the same `nonce`. Nothing else is accepted from a client "
-        f"({client_permissions}).",
-        "4. LIDAR scans: after [`subscribe_scans`](#subscribescans) for a vehicle (answered "
-        "with [`scan_subscriptions`](#scansubscriptions)), the hub sends that vehicle's scans "
+        "[`pong`](#pong) with the same `nonce`.",
+        "5. Flying by hand: [`control`](#controlrequest) asks for a vehicle's manual-control "
+        "lease (or gives it back); every feed then gets [`lease`](#leasestate), naming who "
+        "holds it, and a refusal is an [`error`](#errorreply) (`forbidden`) with the reason. "
+        "The holder streams [`manual`](#manualinput) frames; one without the lease is "
+        "answered with `forbidden` too.",
+        "6. LIDAR scans: after [`subscribe_scans`](#subscribescans) for a vehicle (answered "
+        "with [`scan_subscriptions`](#scansubscriptions)) and until "
+        "[`unsubscribe_scans`](#unsubscribescans), the hub sends that vehicle's scans "
         "as **binary** frames: `GSCV`, the vehicle id's length (one byte) and the id, then "
         "the agent's scan frame, laid out in `protocol/scans.py` (uint16 millimetre ranges, "
         "the poses at the turn's start and end; 1,580 bytes for 720 beams). Only the newest "
         "scan of each subscribed vehicle is kept for a feed: a client that reads slowly "
         "gets fewer scans, never a queue. A feed that subscribed to nothing gets none.",
+        "",
+        f"A client may send these messages only, each needing a permission ({client_permissions}); "
+        "anything else is answered with an [`error`](#errorreply).",
         "",
         "Commands are not sent on the feed: they go through the REST API "
         "(`POST /api/v1/vehicles/{id}/commands`, `POST /api/v1/fleet/commands`), which "
@@ -295,10 +319,10 @@ def render() -> str:
         "",
     ]
     for name in client_to_hub:
-        out += message_section(name, definitions[name], "client → hub")
+        out += message_section(name, definitions[name], "client → hub", anchored)
     for name in hub_to_client:
         if name != "ErrorReply":
-            out += message_section(name, definitions[name], "hub → client")
+            out += message_section(name, definitions[name], "hub → client", anchored)
     out += [
         "## The agent link",
         "",
@@ -333,10 +357,10 @@ def render() -> str:
         "",
     ]
     for name in agent_to_hub:
-        out += message_section(name, definitions[name], "agent → hub")
+        out += message_section(name, definitions[name], "agent → hub", anchored)
     for name in hub_to_agent:
         if name != "ErrorReply":
-            out += message_section(name, definitions[name], "hub → agent")
+            out += message_section(name, definitions[name], "hub → agent", anchored)
     out += [
         "## Errors on either socket",
         "",

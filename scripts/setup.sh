@@ -33,8 +33,9 @@ if [ $need_node -eq 1 ] || [ $python_ok -eq 0 ]; then
     apt_install python3 python3-venv nodejs npm
 fi
 if [ $dev -eq 1 ]; then
-    # The browser tests drive Debian's Chromium; the compose test validates the file.
-    apt_install chromium docker-compose
+    # The browser tests drive Debian's Chromium; the compose test validates the file;
+    # the README's client steps, which the suite runs, use curl.
+    apt_install chromium docker-compose curl
 fi
 
 if [ ! -x .venv/bin/python ]; then

@@ -24,6 +24,7 @@ DO_COMMANDS = frozenset(
     {MavCmd.DO_CHANGE_SPEED, MavCmd.DO_SET_CAM_TRIGG_DIST, MavCmd.DO_DIGICAM_CONTROL}
 )
 SUPPORTED_COMMANDS = NAV_COMMANDS | DO_COMMANDS
+LOCATION_COMMANDS = NAV_COMMANDS - {MavCmd.NAV_RETURN_TO_LAUNCH}
 
 # Frames a mission item may use: altitudes relative to home (terrain is flat here), or
 # above mean sea level; "do" commands carry no position and may say MISSION.
@@ -74,7 +75,9 @@ def check_item(item: MissionItem) -> str | None:
         return "unsupported"
     if item.frame not in SUPPORTED_FRAMES:
         return "frame"
-    if item.command in NAV_COMMANDS and item.frame == MavFrame.MISSION:
+    if item.command in LOCATION_COMMANDS and item.frame == MavFrame.MISSION:
+        # AP_Mission checks the frame only of commands that store a location
+        # (stored_in_location): an RTL in MAV_FRAME_MISSION, as QGC writes it, is fine.
         return "frame"
     return None
 

@@ -78,6 +78,7 @@ class FleetWatcher:
         )
         self.vehicles: dict[str, dict[str, Any]] = {}
         self.events: list[dict[str, Any]] = []  # every live event received, in order
+        self.surveys: dict[str, dict[str, Any]] = {}  # the newest progress of each survey
         self.dropped_events = 0
 
     def close(self) -> None:
@@ -114,6 +115,8 @@ class FleetWatcher:
             elif message["type"] == "events":
                 self.events += message["events"]
                 self.dropped_events += message["dropped"]
+            elif message["type"] == "survey":
+                self.surveys[message["survey_id"]] = message
         return self.vehicles
 
     def state(self, vehicle_id: str) -> dict[str, Any]:
@@ -194,12 +197,17 @@ def running_fleet(data_dir: Path, **plan: Any) -> Iterator[LocalFleet]:
 
 @contextmanager
 def agent_process(
-    hub: str, token: str, vehicle_id: str, fcu_port: int, log_dir: Path | None = None
+    hub: str,
+    token: str,
+    vehicle_id: str,
+    fcu_port: int,
+    log_dir: Path | None = None,
+    extra_args: Sequence[str] = (),
 ) -> Iterator[subprocess.Popen[bytes]]:
     """`gcs agent` as a process between a flight controller on loopback TCP at
     ``fcu_port`` and the hub
-    at ``hub`` (its http:// URL); its output goes to ``log_dir/<vehicle_id>.log`` if
-    given, else where the test's goes."""
+    at ``hub`` (its http:// URL), with ``extra_args`` added to its command line; its
+    output goes to ``log_dir/<vehicle_id>.log`` if given, else where the test's goes."""
     with ExitStack() as stack:
         log = (
             None
@@ -218,6 +226,7 @@ def agent_process(
                 hub.replace("http://", "ws://"),
                 "--vehicle-id",
                 vehicle_id,
+                *extra_args,
             ],
             env={**os.environ, "GCS_AGENT_TOKEN": token},
             stdout=log,
@@ -260,6 +269,19 @@ def poll_until(
         if time.monotonic() > deadline:
             raise AssertionError(f"timed out after {timeout_s:.0f} s waiting for {what}")
         time.sleep(every_s)  # polling: there is no event to wait on
+    return value
+
+
+async def poll_until_async(
+    condition: Callable[[], T], timeout_s: float, what: str, *, every_s: float = 0.05
+) -> T:
+    """`poll_until` inside an event loop: sleeps without blocking the loop, so the tasks
+    under test run between looks."""
+    deadline = time.monotonic() + timeout_s
+    while not (value := condition()):
+        if time.monotonic() > deadline:
+            raise AssertionError(f"timed out after {timeout_s:g} s waiting for {what}")
+        await asyncio.sleep(every_s)  # polling: there is no event to wait on
     return value
 
 

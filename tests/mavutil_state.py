@@ -9,7 +9,9 @@ a no-op and puts everything back after the test.
 from __future__ import annotations
 
 import importlib
+from pathlib import Path
 from types import ModuleType
+from typing import Any
 
 import pytest
 
@@ -22,3 +24,15 @@ def mavutil_in_mavlink2(monkeypatch: pytest.MonkeyPatch) -> ModuleType:
     monkeypatch.setattr(mavutil, "mavlink", dialect)
     module: ModuleType = mavutil
     return module
+
+
+def read_tlog(mavutil: ModuleType, path: Path) -> list[Any]:
+    """Every message of a .tlog, in order, as pymavlink (and so other GCS tools) reads it."""
+    connection = mavutil.mavlink_connection(str(path))
+    messages = []
+    try:
+        while (message := connection.recv_match()) is not None:
+            messages.append(message)
+    finally:
+        connection.close()
+    return messages

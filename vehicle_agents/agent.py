@@ -14,6 +14,7 @@ from protocol.messages import (
     Event,
     EventKind,
     Hello,
+    Photo,
     Telemetry,
     VehicleState,
     encode,
@@ -41,6 +42,9 @@ from vehicle_agents.tlog_pruning import MIB, TlogRetention
 from vehicle_agents.tlog_uploads import TlogUploader
 
 log = logging.getLogger(__name__)
+
+# CAMERA_FEEDBACK.flags: a photo (CAMERA_FEEDBACK_FLAGS; not a video or a bad capture).
+CAMERA_FEEDBACK_PHOTO = 0
 
 CAPABILITIES = ["telemetry", "commands", "events", "manual"]
 SCAN_CAPABILITY = "scans"
@@ -218,6 +222,22 @@ class EventSource:
         elif kind == "MISSION_ITEM_REACHED" and self._reached.reached(int(message.seq)):
             number = mission_number(int(message.seq), self._autopilot)
             self.emit("mission", f"reached mission item {number}", None, mission_item=number)
+        elif kind == "CAMERA_FEEDBACK" and int(message.flags) == CAMERA_FEEDBACK_PHOTO:
+            # ArduPilot sends one per shutter release (AP_Camera), to every GCS link: the
+            # photo's place for the survey's progress and the flight log.
+            photo = Photo(
+                index=int(message.img_idx),
+                lat=message.lat / 1e7,
+                lon=message.lng / 1e7,
+                alt_rel=float(message.alt_rel),
+            )
+            self.emit(
+                "camera",
+                f"photo {photo.index} at {photo.lat:.7f}, {photo.lon:.7f}, "
+                f"{photo.alt_rel:.1f} m above home",
+                None,
+                photo=photo,
+            )
 
     def emit(
         self,
@@ -226,6 +246,7 @@ class EventSource:
         severity: int | None,
         *,
         mission_item: int | None = None,
+        photo: Photo | None = None,
     ) -> None:
         event = Event(
             seq=self._seq,
@@ -234,6 +255,7 @@ class EventSource:
             severity=severity,
             text=text,
             mission_item=mission_item,
+            photo=photo,
         )
         self._outbox.put("event", self._seq, encode(event))
         self._seq += 1

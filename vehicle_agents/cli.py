@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 import asyncio
 import logging
+import os
 import signal
 import sys
 from collections.abc import Coroutine
@@ -18,6 +19,7 @@ from typing import Any
 
 from pydantic import ValidationError
 
+from common.log_escaping import escape_control_characters_in_logs
 from vehicle_agents.config import (
     ENV_PREFIX,
     AgentSettings,
@@ -137,6 +139,10 @@ def run(args: argparse.Namespace, prog: str = "gcs-agent") -> int:
     from vehicle_agents.agent import run_agent
     from vehicle_agents.hub_link import VehicleIdInUse
 
+    # What the agent writes (the outbox's telemetry, onboard .tlogs) is for its own user
+    # only, on a companion computer that others may log in to.
+    os.umask(0o077)
+
     try:
         return run_until_signalled(run_agent(settings), give_up=(VehicleIdInUse,))
     except VehicleIdInUse as refused:
@@ -220,4 +226,5 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     logging.basicConfig(level=args.log_level.upper(), format=LOG_FORMAT)
+    escape_control_characters_in_logs()
     return run(args)

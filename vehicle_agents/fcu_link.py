@@ -29,6 +29,10 @@ from vehicle_agents.modes import ModeTable, mode_table_for
 
 log = logging.getLogger(__name__)
 
+# Messages whose target_system names the sender, not an addressee: ArduPilot fills
+# CAMERA_FEEDBACK's with its own system id (AP_Camera::send_feedback), for every GCS.
+_SENDER_IN_TARGET = frozenset({"CAMERA_FEEDBACK"})
+
 MavMessage = Any  # pymavlink messages are dynamically generated classes
 MessagePredicate = Callable[[MavMessage], bool]
 
@@ -265,7 +269,10 @@ class FcuLink:
             self._identify(message)
         if message.get_srcSystem() != self.target_system:
             return
-        if getattr(message, "target_system", 0) not in (0, self.source_system):
+        if kind not in _SENDER_IN_TARGET and getattr(message, "target_system", 0) not in (
+            0,
+            self.source_system,
+        ):
             # An answer to a GCS attached through forwarding: not the agent's to take,
             # or a third party's COMMAND_ACK could complete the agent's own command.
             return

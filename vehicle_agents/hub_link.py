@@ -263,7 +263,14 @@ class HubLink:
             case ManualFrame():
                 # Handled at once, never queued: the newest stick position is the one flown.
                 if self._on_manual is not None:
-                    self._on_manual(message)
+                    try:
+                        self._on_manual(message)
+                    except Exception:
+                        # A frame that cannot be flown (the flight controller's link went
+                        # down under it) is lost, like any late stick input; raised here
+                        # it would end the hub session, and the link would flap at the
+                        # pilot's 25 Hz while the flight controller is away.
+                        log.exception("stick input %d not flown", message.seq)
             case Welcome():
                 log.warning("unexpected second welcome from hub")
 

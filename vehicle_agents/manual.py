@@ -81,7 +81,9 @@ class ManualPilot:
             self._overridden = False
         if self.active and frame.seq <= self._last_seq:
             return  # older than what was flown: never stream a stale value
-        if self._link.target_system is None:
+        if self._link.target_system is None or not self._link.connected:
+            # No flight controller to fly: the frame is dropped, and the deadman holds the
+            # vehicle if the link comes back after the stream stopped.
             return
         if not self.active:
             self.active = True

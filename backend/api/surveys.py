@@ -1,4 +1,6 @@
-"""Area survey: a plan preview with no side effects (issue 17).
+"""Area surveys (issue 17): a plan preview with no side effects; create (plan, split and
+check every part); start (upload every mission, then start them together); progress; the
+hand-over offer and its acceptance; taking one drone out; abort.
 
 The preview plans the lanes from the camera, splits the area across the chosen drones and
 returns one mission per drone, each with the same mission check an upload runs.
@@ -7,18 +9,35 @@ returns one mission per drone, each with the same mission check an upload runs.
 from __future__ import annotations
 
 import asyncio
+from typing import Annotated, Any, Literal
+
+from fastapi import Path, Query
+from fastapi.responses import JSONResponse, PlainTextResponse, Response
+from pydantic import BaseModel, Field
 
 from backend.api.deps import HubDep
-from backend.api.security import SecuredRouter, requires
+from backend.api.security import CurrentPrincipal, SecuredRouter, requires
 from backend.auth.policy import Permission
 from backend.errors import InvalidRequest
 from backend.fleet.safety_gate import snapshot_of
 from backend.missions.schemas import Mission, MissionCheckResponse
 from backend.missions.survey.camera import CameraError
+from backend.missions.survey.interop import (
+    MAX_FILE_BYTES,
+    InteropError,
+    mission_path_geojson,
+    read_geojson_polygon,
+    read_kml_polygon,
+    read_qgc_survey,
+    to_qgc_plan,
+    to_wpl,
+)
 from backend.missions.survey.planner import PlanError
+from backend.missions.survey.run import HandoverOffer, SurveyRun
 from backend.missions.survey.schemas import SurveyPart, SurveyPreview, SurveyRequest
 from backend.missions.survey.service import Fleet, percent, plan_survey
 from backend.safety.snapshot import home, position
+from protocol.messages import SurveyUpdate, VehicleId
 
 router = SecuredRouter(tags=["surveys"])
 
@@ -89,4 +108,195 @@ async def preview_survey(body: SurveyRequest, hub: HubDep) -> SurveyPreview:
         photo_count=sum(part.photo_count for part in parts),
         lanes=sum(part.lanes for part in parts),
         parts=parts,
+    )
+
+
+SurveyIdPath = Annotated[str, Path(min_length=1, max_length=32, pattern=r"^[0-9a-f]+$")]
+
+
+class SurveyDetail(BaseModel):
+    progress: SurveyUpdate
+    survey: SurveyRun = Field(
+        description="The plan, each drone's mission and lanes (flown or not), its photos "
+        "([lat, lon] from CAMERA_FEEDBACK) and any hand-over on offer"
+    )
+
+
+class SurveyList(BaseModel):
+    surveys: list[SurveyUpdate]
+
+
+def _detail(hub: HubDep, run: SurveyRun) -> SurveyDetail:
+    return SurveyDetail(progress=hub.surveys.update_of(run), survey=run)
+
+
+@router.post(
+    "/surveys",
+    response_model=SurveyDetail,
+    status_code=201,
+    openapi_extra=requires(Permission.COMMAND),
+)
+async def create_survey(
+    body: SurveyRequest, principal: CurrentPrincipal, hub: HubDep
+) -> SurveyDetail:
+    """Plan and split a survey and check every drone's mission against the safety rails;
+    nothing is uploaded until it is started. Each chosen drone must be connected, ready,
+    on the ground and in no other survey (422 naming it otherwise); a part that breaks a
+    rail refuses the whole survey (422, each violation naming its vehicle)."""
+    return _detail(hub, await hub.surveys.create(body, principal))
+
+
+@router.get("/surveys", response_model=SurveyList, openapi_extra=requires(Permission.READ))
+async def list_surveys(hub: HubDep) -> SurveyList:
+    """The surveys this hub is following (planned, flying, or awaiting a hand-over)."""
+    return SurveyList(surveys=[hub.surveys.update_of(run) for run in hub.surveys.active()])
+
+
+@router.get(
+    "/surveys/{survey_id}", response_model=SurveyDetail, openapi_extra=requires(Permission.READ)
+)
+async def get_survey(survey_id: SurveyIdPath, hub: HubDep) -> SurveyDetail:
+    return _detail(hub, await hub.surveys.find(survey_id))
+
+
+@router.get(
+    "/surveys/{survey_id}/progress",
+    response_model=SurveyUpdate,
+    openapi_extra=requires(Permission.READ),
+)
+async def survey_progress(survey_id: SurveyIdPath, hub: HubDep) -> SurveyUpdate:
+    """Lanes flown, photos taken and the area their footprints cover, overall and per
+    drone; the live feed carries the same as `survey` messages."""
+    return hub.surveys.update_of(await hub.surveys.find(survey_id))
+
+
+@router.post(
+    "/surveys/{survey_id}/start",
+    response_model=SurveyDetail,
+    openapi_extra=requires(Permission.COMMAND),
+)
+async def start_survey(
+    survey_id: SurveyIdPath, principal: CurrentPrincipal, hub: HubDep
+) -> SurveyDetail:
+    """Upload every drone's mission (each checked again on the way), then start them
+    together: a guided take-off, then AUTO. An upload refused anywhere starts nothing
+    (409); a drone that fails to take off drops out and its lanes are offered."""
+    return _detail(hub, await hub.surveys.start(survey_id, principal))
+
+
+@router.get(
+    "/surveys/{survey_id}/handover",
+    response_model=HandoverOffer | None,
+    openapi_extra=requires(Permission.READ),
+)
+async def handover_offer(survey_id: SurveyIdPath, hub: HubDep) -> HandoverOffer | None:
+    """The hand-over on offer, if any: which drone dropped out and why, and per drone still
+    flying its new mission (from where it is) and the time it needs to finish."""
+    return (await hub.surveys.find(survey_id)).offer
+
+
+@router.post(
+    "/surveys/{survey_id}/handover/accept",
+    response_model=SurveyDetail,
+    openapi_extra=requires(Permission.COMMAND),
+)
+async def accept_handover(
+    survey_id: SurveyIdPath, principal: CurrentPrincipal, hub: HubDep
+) -> SurveyDetail:
+    """Upload the offered missions; each drone flies on from where it is."""
+    return _detail(hub, await hub.surveys.accept(survey_id, principal))
+
+
+@router.post(
+    "/surveys/{survey_id}/vehicles/{vehicle_id}/abort",
+    response_model=SurveyDetail,
+    openapi_extra=requires(Permission.COMMAND),
+)
+async def abort_vehicle(
+    survey_id: SurveyIdPath,
+    vehicle_id: Annotated[VehicleId, Path()],
+    principal: CurrentPrincipal,
+    hub: HubDep,
+) -> SurveyDetail:
+    """Take one drone out of the survey: it returns to launch, and its unflown lanes are
+    offered to the others."""
+    return _detail(hub, await hub.surveys.drop_vehicle(survey_id, vehicle_id, principal))
+
+
+@router.post(
+    "/surveys/{survey_id}/abort",
+    response_model=SurveyDetail,
+    openapi_extra=requires(Permission.COMMAND),
+)
+async def abort_survey(
+    survey_id: SurveyIdPath, principal: CurrentPrincipal, hub: HubDep
+) -> SurveyDetail:
+    """End the survey: every drone still flying it returns to launch."""
+    return _detail(hub, await hub.surveys.abort(survey_id, principal))
+
+
+class SurveyFile(BaseModel):
+    format: Literal["plan", "kml", "geojson"] = Field(
+        description="plan: a QGroundControl .plan with a Survey item (its polygon, camera, "
+        "altitude or GSD, overlaps, angle, turnaround); kml: the first Polygon of a KML file "
+        "(Google Earth); geojson: a Polygon, Feature or FeatureCollection"
+    )
+    content: str = Field(max_length=MAX_FILE_BYTES, description="the file's text")
+
+
+@router.post(
+    "/surveys/import",
+    response_model=dict[str, Any],
+    openapi_extra=requires(Permission.READ),
+)
+async def import_survey_area(body: SurveyFile) -> dict[str, Any]:
+    """A survey request's fields from another tool's file (no side effects): at least the
+    `area`, and from a QGC Survey also its camera and settings. Add `vehicle_ids` (and
+    anything to change) and send it to `POST /surveys` or the preview."""
+    try:
+        if body.format == "plan":
+            return read_qgc_survey(body.content)
+        if body.format == "kml":
+            return {"area": read_kml_polygon(body.content)}
+        return {"area": read_geojson_polygon(body.content)}
+    except InteropError as error:
+        raise InvalidRequest("content", str(error)) from error
+
+
+@router.get(
+    "/surveys/{survey_id}/vehicles/{vehicle_id}/mission",
+    openapi_extra=requires(Permission.READ),
+    responses={200: {"content": {"application/json": {}, "text/plain": {}}}},
+)
+async def export_survey_mission(
+    survey_id: SurveyIdPath,
+    vehicle_id: Annotated[VehicleId, Path()],
+    hub: HubDep,
+    format: Annotated[Literal["plan", "wpl", "geojson"], Query()] = "plan",
+) -> Response:
+    """One drone's survey mission as a file other tools open: a QGroundControl `.plan`,
+    a `QGC WPL 110` waypoint file (Mission Planner, MAVProxy), or its path as GeoJSON."""
+    run = await hub.surveys.find(survey_id)
+    drone = run.drone(vehicle_id)
+    if drone is None:
+        raise InvalidRequest("vehicle_id", f"vehicle {vehicle_id} is not in survey {survey_id}")
+    record = {r.id: r for r in hub.registry.all()}.get(vehicle_id)
+    state = record.state if record is not None else None
+    home = (
+        (state.home_lat or 0.0, state.home_lon or 0.0, state.home_alt_msl or 0.0)
+        if state is not None
+        else (0.0, 0.0, 0.0)
+    )
+    name = f"survey-{survey_id}-{vehicle_id}"
+    if format == "wpl":
+        return PlainTextResponse(
+            to_wpl(drone.items, home),
+            headers={"Content-Disposition": f'attachment; filename="{name}.waypoints"'},
+        )
+    document = (
+        to_qgc_plan(drone.items, home) if format == "plan" else mission_path_geojson(drone.items)
+    )
+    suffix = "plan" if format == "plan" else "geojson"
+    return JSONResponse(
+        document, headers={"Content-Disposition": f'attachment; filename="{name}.{suffix}"'}
     )

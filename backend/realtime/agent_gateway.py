@@ -315,6 +315,7 @@ class AgentSession(PeerConnection):
                     message.severity,
                     message.text,
                     message.mission_item,
+                    message.photo,
                 )
                 await self.hub.bus.publish(Topic.STORAGE, hello.vehicle_id, stored)
                 await self.hub.publish_event(stored)

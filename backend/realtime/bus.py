@@ -25,6 +25,7 @@ class Topic(StrEnum):
     VEHICLE_STATE = "vehicle.state"  # VehicleSummary, for clients
     VEHICLE_EVENT = "vehicle.event"  # LiveEvent, for clients (backend.realtime.live_events)
     SCANS = "scans"  # ScanDelivery (backend/scans), newest per vehicle, for subscribers
+    SURVEYS = "surveys"  # SurveyUpdate, newest per survey, for clients
 
 
 class Subscription(Protocol):

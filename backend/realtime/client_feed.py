@@ -132,9 +132,11 @@ class ClientFeed(PeerConnection):
         self.hub.client_feeds.add(self)
         updates = LatestSubscription()
         events = EventSubscription()
+        surveys = LatestSubscription()
         # Subscribe before the snapshot, so no change falls between the two.
         self.hub.bus.subscribe(Topic.VEHICLE_STATE, updates)
         self.hub.bus.subscribe(Topic.VEHICLE_EVENT, events)
+        self.hub.bus.subscribe(Topic.SURVEYS, surveys)
         try:
             fleet = [record.summary() for record in self.hub.registry.all()]
             await self.send(FleetSnapshot(vehicles=fleet))
@@ -143,12 +145,16 @@ class ClientFeed(PeerConnection):
                 pusher = tasks.create_task(self._push(updates, sent))
                 event_pusher = tasks.create_task(self._push_events(events))
                 scan_pusher = tasks.create_task(self._push_scans())
+                survey_pusher = tasks.create_task(self._push_surveys(surveys))
                 relay = tasks.create_task(self._manual.run())
                 expiry = tasks.create_task(
-                    self._end_at_expiry(principal.expires_at, pusher, event_pusher, scan_pusher)
+                    self._end_at_expiry(
+                        principal.expires_at, pusher, event_pusher, scan_pusher, survey_pusher
+                    )
                 )
                 await self._listen()
                 pusher.cancel()
+                survey_pusher.cancel()
                 event_pusher.cancel()
                 scan_pusher.cancel()
                 relay.cancel()
@@ -162,6 +168,7 @@ class ClientFeed(PeerConnection):
         finally:
             self.hub.bus.unsubscribe(Topic.VEHICLE_STATE, updates)
             self.hub.bus.unsubscribe(Topic.VEHICLE_EVENT, events)
+            self.hub.bus.unsubscribe(Topic.SURVEYS, surveys)
             if self.scans.vehicles:
                 self.hub.bus.unsubscribe(Topic.SCANS, self.scans)
             self.hub.client_feeds.discard(self)
@@ -190,6 +197,12 @@ class ClientFeed(PeerConnection):
             await self.send(await events.next_batch())
             # Pacing: events arriving meanwhile go out together in the next batch.
             await asyncio.sleep(interval)
+
+    async def _push_surveys(self, surveys: LatestSubscription) -> None:
+        """Survey progress, newest per survey: the survey service paces it already."""
+        while True:
+            for update in await surveys.drain():
+                await self.send(update)
 
     async def _push_scans(self) -> None:
         """The newest scan of each subscribed vehicle. A client that stops reading stalls

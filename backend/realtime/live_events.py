@@ -33,6 +33,7 @@ def live_event(event: StoredEvent) -> LiveEvent:
         severity=event.severity,
         text=event.text,
         mission_item=event.mission_item,
+        photo=event.photo,
     )
 
 

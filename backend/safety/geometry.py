@@ -16,7 +16,7 @@ import math
 from collections.abc import Sequence
 from typing import Final
 
-from common.geodesy import LocalFrame, haversine_m
+from common.geodesy import LocalFrame, centre_of, haversine_m
 
 XY = tuple[float, float]
 LatLon = tuple[float, float]
@@ -219,17 +219,6 @@ def signed_area(ring: Sequence[XY]) -> float:
 # --- Polygon validation ---------------------------------------------------------------------
 
 
-def _centre(vertices: Sequence[LatLon]) -> LatLon:
-    # Average of unit vectors, not of degrees: averaging longitudes 179 and -179 gives 0.
-    sx = sy = sz = 0.0
-    for lat, lon in vertices:
-        phi, lam = math.radians(lat), math.radians(lon)
-        sx += math.cos(phi) * math.cos(lam)
-        sy += math.cos(phi) * math.sin(lam)
-        sz += math.sin(phi)
-    return math.degrees(math.atan2(sz, math.hypot(sx, sy))), math.degrees(math.atan2(sy, sx))
-
-
 def _check_coordinates(vertices: Sequence[LatLon]) -> None:
     for i, (lat, lon) in enumerate(vertices, start=1):
         if not (math.isfinite(lat) and math.isfinite(lon)):
@@ -321,7 +310,7 @@ class FencePolygon:
             if points[i] == points[(i + 1) % len(points)]:
                 j = (i + 1) % len(points)
                 raise InvalidGeofence(f"vertices {i + 1} and {j + 1} are the same point")
-        centre = _centre(points)
+        centre = centre_of(points)
         distances = [haversine_m(*centre, lat, lon) for lat, lon in points]
         farthest = max(range(len(points)), key=distances.__getitem__)
         if distances[farthest] > MAX_POLYGON_RADIUS_M:

@@ -8,11 +8,22 @@ from __future__ import annotations
 
 import json
 import time
-from collections.abc import Iterator, Sequence
-from typing import Any
+from collections.abc import Iterable, Iterator, Sequence
+from typing import Any, TypeVar
 
-from sqlalchemy import Connection, Engine, and_, delete, func, insert, or_, select, update
-from sqlalchemy.orm import Session
+from sqlalchemy import (
+    Connection,
+    Engine,
+    Select,
+    and_,
+    delete,
+    func,
+    insert,
+    or_,
+    select,
+    update,
+)
+from sqlalchemy.orm import InstrumentedAttribute, Session
 
 from backend.errors import NotFound
 from backend.storage.database import dialect_insert, transaction
@@ -32,6 +43,33 @@ from common.geodesy import haversine_m
 
 # The columns a chart, a replay or an export needs.
 SERIES_COLUMNS = ("time", *TELEMETRY_STATE_COLUMNS)
+
+
+_Logged = TypeVar("_Logged", EventRow, CommandRow)
+_Kept = TypeVar("_Kept", FlightRow, TlogRow)
+
+
+def _page(
+    query: Select[_Logged],
+    row: type[_Logged],
+    start: float | None,
+    end: float | None,
+    before_id: int | None,
+    equal: Iterable[tuple[InstrumentedAttribute[str], str | None]] = (),
+) -> Select[_Logged]:
+    """Rows in a time range (either end open), older than ``before_id`` when paging, and
+    with each column of ``equal`` that is given a value at that value: the same window
+    for the events and the commands."""
+    for column, value in equal:
+        if value is not None:
+            query = query.where(column == value)
+    if start is not None:
+        query = query.where(row.time >= start)
+    if end is not None:
+        query = query.where(row.time <= end)
+    if before_id is not None:
+        query = query.where(row.id < before_id)
+    return query
 
 
 def _series_query(vehicle_id: str, start: float, end: float) -> Any:
@@ -125,11 +163,15 @@ class Logbook:
             return session.scalars(query).all()
 
     def flight(self, flight_id: int) -> FlightRow:
+        return self._one(FlightRow, flight_id, "flight")
+
+    def _one(self, row: type[_Kept], key: int, what: str) -> _Kept:
+        """The row with this id, or NotFound naming it."""
         with Session(self.engine) as session:
-            row = session.get(FlightRow, flight_id)
-        if row is None:
-            raise NotFound(f"no flight {flight_id}")
-        return row
+            found = session.get(row, key)
+        if found is None:
+            raise NotFound(f"no {what} {key}")
+        return found
 
     # -- telemetry series --------------------------------------------------
 
@@ -180,15 +222,8 @@ class Logbook:
         limit: int,
     ) -> Sequence[EventRow]:
         query = select(EventRow).order_by(EventRow.time.desc(), EventRow.id.desc()).limit(limit)
-        for column, value in ((EventRow.vehicle_id, vehicle_id), (EventRow.kind, kind)):
-            if value is not None:
-                query = query.where(column == value)
-        if start is not None:
-            query = query.where(EventRow.time >= start)
-        if end is not None:
-            query = query.where(EventRow.time <= end)
-        if before_id is not None:
-            query = query.where(EventRow.id < before_id)
+        equal = ((EventRow.vehicle_id, vehicle_id), (EventRow.kind, kind))
+        query = _page(query, EventRow, start, end, before_id, equal)
         with Session(self.engine) as session:
             return session.scalars(query).all()
 
@@ -217,15 +252,8 @@ class Logbook:
         limit: int,
     ) -> Sequence[CommandRow]:
         query = select(CommandRow).order_by(CommandRow.id.desc()).limit(limit)
-        for column, value in ((CommandRow.vehicle_id, vehicle_id), (CommandRow.actor, actor)):
-            if value is not None:
-                query = query.where(column == value)
-        if start is not None:
-            query = query.where(CommandRow.time >= start)
-        if end is not None:
-            query = query.where(CommandRow.time <= end)
-        if before_id is not None:
-            query = query.where(CommandRow.id < before_id)
+        equal = ((CommandRow.vehicle_id, vehicle_id), (CommandRow.actor, actor))
+        query = _page(query, CommandRow, start, end, before_id, equal)
         with Session(self.engine) as session:
             return session.scalars(query).all()
 
@@ -253,11 +281,7 @@ class Logbook:
             ).all()
 
     def tlog(self, tlog_id: int) -> TlogRow:
-        with Session(self.engine) as session:
-            row = session.get(TlogRow, tlog_id)
-        if row is None:
-            raise NotFound(f"no tlog {tlog_id}")
-        return row
+        return self._one(TlogRow, tlog_id, "tlog")
 
     # -- retention ---------------------------------------------------------
 

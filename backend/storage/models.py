@@ -12,6 +12,7 @@ from sqlalchemy import (
     LargeBinary,
     SmallInteger,
     String,
+    Text,
     UniqueConstraint,
 )
 from sqlalchemy.orm import DeclarativeBase, Mapped, mapped_column
@@ -218,6 +219,12 @@ class EventRow(Base):
     # The mission item a "mission" event is about (hub numbering), so a flight log can be
     # queried by item rather than by parsing the text.
     mission_item: Mapped[int | None] = mapped_column(Integer)
+    # Where a "camera" event's photo was taken (CAMERA_FEEDBACK), so a survey's photos can
+    # be read back after a hub restart.
+    photo_index: Mapped[int | None] = mapped_column(BigInteger)
+    photo_lat: Mapped[float | None] = mapped_column(Double)
+    photo_lon: Mapped[float | None] = mapped_column(Double)
+    photo_alt_rel: Mapped[float | None] = mapped_column(Double)
 
 
 class SequenceGapRow(Base):
@@ -276,3 +283,19 @@ class TlogRow(Base):
     path: Mapped[str] = mapped_column(String(512))
     size: Mapped[int] = mapped_column(BigInteger)
     uploaded_at: Mapped[float] = mapped_column(Double)
+
+
+class SurveyRow(Base):
+    """One area survey: its plan, its drones' missions and progress, as validated JSON
+    (backend.missions.survey.run.SurveyRun), so a restarted hub carries on with it."""
+
+    __tablename__ = "surveys"
+    __table_args__ = (Index("ix_surveys_state", "state"),)
+
+    id: Mapped[str] = mapped_column(String(32), primary_key=True)
+    created: Mapped[float] = mapped_column(Double)
+    updated: Mapped[float] = mapped_column(Double)
+    state: Mapped[str] = mapped_column(String(24))
+    created_by: Mapped[str] = mapped_column(String(64))
+    # Text, not a bounded String: a large survey's photos run to megabytes.
+    run_json: Mapped[str] = mapped_column(Text)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from protocol.messages import SequencedKind, Telemetry
+from protocol.messages import Photo, SequencedKind, Telemetry
 
 
 @dataclass(frozen=True)
@@ -26,6 +26,9 @@ class StoredEvent:
     severity: int | None
     text: str
     mission_item: int | None = None
+    # A camera event's photo: on the live feed and to the survey's progress; the stored
+    # row keeps it in the text.
+    photo: Photo | None = None
 
 
 @dataclass(frozen=True)

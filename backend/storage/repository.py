@@ -87,7 +87,7 @@ class Repository:
             .returning(EventRow.id)
         )
         with transaction(self.engine, connection) as active:
-            return len(active.execute(statement, [asdict(e) for e in events]).all())
+            return len(active.execute(statement, [event_values(e) for e in events]).all())
 
     def highest_seq(self, vehicle_id: str, stream_id: str, kind: str) -> int | None:
         """The highest sequence number stored for an agent stream, of telemetry or events."""
@@ -195,3 +195,15 @@ def _telemetry_row(envelope: TelemetryEnvelope) -> dict[str, Any]:
         time=envelope.telemetry.time,
     )
     return row
+
+
+def event_values(event: StoredEvent) -> dict[str, object]:
+    """An event as its row's columns: a photo in its own four."""
+    values: dict[str, object] = asdict(event)
+    del values["photo"]
+    photo = event.photo
+    values["photo_index"] = None if photo is None else photo.index
+    values["photo_lat"] = None if photo is None else photo.lat
+    values["photo_lon"] = None if photo is None else photo.lon
+    values["photo_alt_rel"] = None if photo is None else photo.alt_rel
+    return values

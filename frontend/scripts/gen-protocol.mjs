@@ -10,14 +10,12 @@
 //
 // The output depends only on the input and the locked json-schema-to-typescript version.
 
-import { execFileSync } from "node:child_process";
-import { existsSync, readFileSync, writeFileSync, mkdirSync } from "node:fs";
-import { dirname, resolve } from "node:path";
-import { fileURLToPath } from "node:url";
 import { compile } from "json-schema-to-typescript";
+import { parseArgs, readInput, writeOutput } from "./generator-cli.mjs";
 
-const here = dirname(fileURLToPath(import.meta.url));
-const repoRoot = resolve(here, "..", "..");
+const USAGE =
+  "usage: gen-protocol.mjs [schema.json | --from-python] [--out FILE]\n" +
+  "Reads the schema bundle from stdin when no input is given.\n";
 
 // The bundle's sections, and the name each one's message union gets in TypeScript.
 const SECTIONS = {
@@ -38,38 +36,6 @@ const BANNER = `/* eslint-disable */
  * Properties whose schema gives a default are emitted as required: pydantic
  * serializes every field, so every frame on the wire carries them.
  */`;
-
-function parseArgs(argv) {
-  const args = { fromPython: false, out: null, input: null };
-  for (let i = 0; i < argv.length; i++) {
-    const arg = argv[i];
-    if (arg === "--from-python") args.fromPython = true;
-    else if (arg === "--out") args.out = argv[++i];
-    else if (arg === "-h" || arg === "--help") {
-      process.stdout.write(
-        "usage: gen-protocol.mjs [schema.json | --from-python] [--out FILE]\n" +
-          "Reads the schema bundle from stdin when no input is given.\n",
-      );
-      process.exit(0);
-    } else if (arg.startsWith("-")) throw new Error(`unknown option ${arg}`);
-    else args.input = arg;
-  }
-  if (args.out === undefined) throw new Error("--out needs a file path");
-  return args;
-}
-
-function readSchemaText(args) {
-  if (args.fromPython) {
-    const venvPython = resolve(repoRoot, ".venv", "bin", "python");
-    const python = existsSync(venvPython) ? venvPython : "python3";
-    return execFileSync(python, ["-m", "protocol.messages"], {
-      cwd: repoRoot,
-      encoding: "utf8",
-      stdio: ["ignore", "pipe", "inherit"],
-    });
-  }
-  return readFileSync(args.input ?? 0, "utf8"); // fd 0 = stdin
-}
 
 const canonical = (value) =>
   JSON.stringify(value, (_key, v) =>
@@ -139,8 +105,8 @@ function bundle(raw) {
 }
 
 async function main() {
-  const args = parseArgs(process.argv.slice(2));
-  const raw = JSON.parse(readSchemaText(args));
+  const args = parseArgs(process.argv.slice(2), USAGE);
+  const raw = JSON.parse(await readInput(args, "protocol.messages"));
   const ts = await compile(bundle(raw), "AnyMessage", {
     bannerComment: BANNER,
     additionalProperties: false,
@@ -150,13 +116,7 @@ async function main() {
     format: true,
     style: { singleQuote: false, semi: true, printWidth: 100, trailingComma: "all" },
   });
-  const output = `${ts.trimEnd()}\n\nexport const PROTOCOL_VERSION = ${raw.protocol};\n`;
-  if (args.out) {
-    mkdirSync(dirname(resolve(args.out)), { recursive: true });
-    writeFileSync(args.out, output);
-  } else {
-    process.stdout.write(output);
-  }
+  writeOutput(args, `${ts.trimEnd()}\n\nexport const PROTOCOL_VERSION = ${raw.protocol};\n`);
 }
 
 main().catch((error) => {

@@ -1,4 +1,4 @@
-// The live WebSocket to the hub: reconnects with exponential backoff and pings
+// The live WebSocket to the hub: reconnects with exponential backoff (full jitter) and pings
 // so that a silently dead link (common on field radios) is noticed. The browser
 // sends the session cookie with the handshake; a hub that refuses the session
 // closes with 4401, and then the socket stops instead of retrying forever.
@@ -126,7 +126,10 @@ export class FleetSocket {
   }
 
   private scheduleReconnect(): void {
-    const delay = this.backoffMs;
+    // Full jitter, the policy of common/retry.py: a wait drawn uniformly from [0, cap],
+    // the cap doubling from MIN_BACKOFF_MS to MAX_BACKOFF_MS. Every dashboard that lost
+    // one hub (a restart) would otherwise knock again at the same instants, every round.
+    const delay = Math.round(Math.random() * this.backoffMs);
     this.backoffMs = Math.min(this.backoffMs * 2, MAX_BACKOFF_MS);
     this.handlers.onState("reconnecting", delay);
     this.retryTimer = window.setTimeout(() => this.connect("reconnecting"), delay);

@@ -3,6 +3,7 @@
 import * as L from "leaflet";
 import "leaflet/dist/leaflet.css";
 import { BaseMaps } from "./map/baseLayers";
+import { CursorPosition } from "./map/cursorPosition";
 import "./map/map.css";
 import { TrailLayer } from "./map/trails";
 import { VehicleLayer } from "./map/vehicleLayer";
@@ -28,6 +29,7 @@ export class FleetMap {
   ) {
     this.map = L.map(container, { maxZoom: 22, worldCopyJump: true }).setView([20, 0], 2);
     L.control.scale({ imperial: false }).addTo(this.map);
+    new CursorPosition().addTo(this.map);
     this.addFitControl();
     // Trails under the mission overlays (400), vehicles over their markers (600).
     this.map.createPane("trails").style.zIndex = "390";

@@ -58,6 +58,9 @@ class Arming(CopterState):
         self.land_complete = True
         self._takeoff_alt = None
         self._taking_off = False
+        # AP_Arming_Copter::disarm resets the mission (mode_auto.mission.reset()): the next
+        # flight, and a mission uploaded meanwhile, start again from the first command.
+        self.mission_current = 0
         self._say(Severity.INFO, "Disarming motors")
 
     def _detect_landing(self, setpoint: Setpoint | None) -> None:

@@ -43,12 +43,18 @@ class MissionRunner(Camera, GcsCommands):
     def set_mission(self, items: list[MissionItem]) -> None:
         """Replace the stored mission (a completed upload; item 0 is home)."""
         self.mission = list(items) if len(items) > 1 else []
-        if self.in_auto and self._auto_phase is not AutoPhase.IDLE:
+        if self._mission_running():
             # carry on with the command in flight; the new mission follows it
             self._auto_next = min(self._auto_next, len(self.mission))
             self.mission_current = min(self.mission_current, max(0, len(self.mission) - 1))
         else:
+            # Not running, or run to its end (landed, or holding after its last item):
+            # the new mission starts from its first item, as ArduPilot's does (its
+            # disarm resets the mission, AP_Arming_Copter::disarm; and a completed one
+            # starts over when AUTO is entered, AP_Mission::resume).
             self.mission_current = 0
+            if not self.armed and self._auto_phase is AutoPhase.DONE:
+                self._auto_phase = AutoPhase.IDLE  # reset on disarm: not started
 
     def clear_mission(self) -> bool:
         """MISSION_CLEAR_ALL; refused while the mission is running (AP_Mission::clear)."""
@@ -107,8 +113,12 @@ class MissionRunner(Camera, GcsCommands):
         self._auto_run_from(self.mission_current if self.mission_current >= 1 else 1)
 
     def _auto_run_from(self, seq: int) -> None:
-        """Run "do" commands up to the next nav command, start that, and then the "do"
-        commands after it, which ArduPilot runs while the nav command is in progress."""
+        """Run the "do" commands up to the next nav command, then start that.
+
+        AP_Mission::advance_current_nav_cmd: the "do" commands after nav command N run
+        once N completes (on the way to the next one), not while N is flown. A survey's
+        DO_SET_CAM_TRIGG_DIST after a lane's entry waypoint starts the camera there, and
+        the one after its exit waypoint stops it there (QGC's survey relies on this)."""
         mission = self.mission
         while seq < len(mission) and not mission[seq].is_nav:
             self._do_command(mission[seq])
@@ -118,11 +128,7 @@ class MissionRunner(Camera, GcsCommands):
             return
         self.mission_current = seq
         self._start_nav(mission[seq])
-        following = seq + 1
-        while following < len(mission) and not mission[following].is_nav:
-            self._do_command(mission[following])
-            following += 1
-        self._auto_next = following
+        self._auto_next = seq + 1
 
     def _nav_done(self) -> None:
         item = self._auto_item

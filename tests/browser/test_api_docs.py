@@ -6,7 +6,7 @@ from __future__ import annotations
 from urllib.parse import urlsplit
 
 import pytest
-from playwright.sync_api import Page, Route
+from playwright.sync_api import Page, Response, Route
 
 pytestmark = pytest.mark.browser
 
@@ -35,20 +35,34 @@ def _offline_and_watched(page: Page, hub: str) -> tuple[list[str], list[str]]:
     return elsewhere, refused
 
 
+def _under_the_hubs_csp(response: Response | None) -> None:
+    """The page came with the hub's policy: scripts from the hub only, none inline."""
+    assert response is not None
+    assert response.ok
+    policy = response.headers.get("content-security-policy", "")
+    directives = {d.split()[0]: d.split()[1:] for d in policy.split(";") if d.strip()}
+    assert directives.get("script-src") == ["'self'"], policy
+    assert directives.get("default-src") == ["'self'"], policy
+
+
 def test_swagger_ui_renders_offline_under_the_csp(page: Page, hub: str) -> None:
     elsewhere, refused = _offline_and_watched(page, hub)
-    page.goto(f"{hub}/docs")
+    _under_the_hubs_csp(page.goto(f"{hub}/docs"))
     page.locator(
         ".opblock-summary-path", has_text="/api/v1/vehicles/{vehicle_id}/commands"
     ).first.wait_for(timeout=15_000)
     assert page.locator(".opblock").count() >= 40
+    # The sockets, which OpenAPI cannot describe, are named at the top, with their page.
+    info = page.locator(".information-container")
+    assert "/api/v1/ws" in info.inner_text()
+    assert "docs/websockets.md" in info.inner_text()
     assert elsewhere == []
     assert refused == []
 
 
 def test_redoc_renders_offline_under_the_csp(page: Page, hub: str) -> None:
     elsewhere, refused = _offline_and_watched(page, hub)
-    page.goto(f"{hub}/redoc")
+    _under_the_hubs_csp(page.goto(f"{hub}/redoc"))
     # ReDoc's sidebar always asks its vendor's CDN for a logo (and hides it when refused).
     vendor_logo = "https://cdn.redoc.ly/redoc/logo-mini.svg"
     page.get_by_text("Send a command and return the flight controller's answer.").first.wait_for(

@@ -1,8 +1,9 @@
 """The map's base layers and vehicles in headless Chromium, at three screen sizes.
 
 A hub with no online base map and one offline MBTiles file made here: the file is the
-base map (its tiles come from /tiles/... with a 200 and the PNG written), and vehicles
-whose labels would overlap show one label with a count instead.
+base map (its tiles come from /tiles/... with a 200 and the PNG written; a screenshot at
+each size goes to test-output/base-maps/), and vehicles whose labels would overlap show
+one label with a count instead.
 """
 
 from __future__ import annotations
@@ -27,6 +28,7 @@ TILE_RADIUS = 8  # tiles each way around home, per zoom
 # Two colours in a checkerboard, so each tile is told apart from its neighbours.
 EVEN, ODD = png_tile((214, 140, 60)), png_tile((120, 170, 90))
 FLEET_TIMEOUT_MS = 60_000
+OUTPUT = Path(__file__).resolve().parents[2] / "test-output" / "base-maps"
 
 
 def _tile_of(lat: float, lon: float, zoom: int) -> tuple[int, int]:
@@ -71,9 +73,7 @@ def sized_page(browser: Browser, request: pytest.FixtureRequest) -> Iterator[Pag
 
 
 @pytest.mark.parametrize("sized_page", list(SIZES), indirect=True)
-def test_an_offline_mbtiles_file_is_the_base_map(
-    sized_page: Page, tiled_fleet: LocalFleet, tmp_path_factory: pytest.TempPathFactory
-) -> None:
+def test_an_offline_mbtiles_file_is_the_base_map(sized_page: Page, tiled_fleet: LocalFleet) -> None:
     page = sized_page
     with page.expect_response(
         lambda r: "/tiles/field/" in r.url and r.status == 200, timeout=30_000
@@ -109,10 +109,9 @@ def test_an_offline_mbtiles_file_is_the_base_map(
     expect(page.locator('[data-field="basemap-notice"]')).to_be_hidden()
     expect(page.locator(".leaflet-control-attribution")).to_contain_text("Test field")
 
-    shots = tmp_path_factory.getbasetemp() / "screenshots"
-    shots.mkdir(exist_ok=True)
+    OUTPUT.mkdir(parents=True, exist_ok=True)
     width, height = page.viewport_size["width"], page.viewport_size["height"]  # type: ignore[index]
-    path = shots / f"offline-base-map-{width}x{height}.png"
+    path = OUTPUT / f"offline-base-map-{width}x{height}.png"
     page.screenshot(path=str(path))
     assert path.stat().st_size > 10_000
 

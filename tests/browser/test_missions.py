@@ -1,10 +1,13 @@
 """The mission editor, QGroundControl .plan files and "fly here", in headless Chromium
-against the real fleet (hub, simulators, agents)."""
+against a real fleet (hub, simulators, agents) whose base map is an offline MBTiles file
+made here. The drawn mission and "fly here" run at a desktop, a tablet and a phone size,
+each saving its screenshots under test-output/missions/; with GCS_UPDATE_SCREENSHOTS=1
+the desktop run of the flown mission also remakes the README's picture."""
 
 from __future__ import annotations
 
 import json
-import math
+import os
 import re
 from collections.abc import Iterator
 from pathlib import Path
@@ -16,22 +19,61 @@ import pytest
 from playwright.sync_api import Browser, FloatRect, Page, expect
 
 from common.geodesy import LocalFrame, haversine_m
-from gcs.launcher import LocalFleet
+from gcs.launcher import DEFAULT_HOME, FleetPlan, LocalFleet, free_port
 from tests.browser.conftest import log_in
-from tests.helpers import api_client, poll_until
+from tests.conftest import FLEET_SPEEDUP
+from tests.helpers import access_token, api_client, poll_until
+from tests.map_tiles import farmland_tiles, write_mbtiles
 
 pytestmark = [pytest.mark.browser, pytest.mark.integration]
 
 DATA = Path(__file__).parent.parent / "data" / "qgc"
+ROOT = Path(__file__).resolve().parents[2]
+OUTPUT = ROOT / "test-output" / "missions"
+README_IMAGE = ROOT / "docs" / "img" / "dashboard-map.png"
+SIZES = {"desktop": (1920, 1080), "tablet": (1024, 768), "phone": (390, 844)}
 MISSION_VEHICLE = "sim_3"
 GOTO_VEHICLE = "sim_1"
 CHECK_S = 15  # the editor checks 0.4 s after an edit; the hub answers at once
+U_WIDTH_M, U_HEIGHT_M = 120, 120  # the fence drawn around the mission vehicle
 
 
-@pytest.fixture
-def wide_page(browser: Browser) -> Iterator[Page]:
-    """1920 by 1080: room for the mission panel beside the drawing."""
-    context = browser.new_context(viewport={"width": 1920, "height": 1080}, accept_downloads=True)
+@pytest.fixture(scope="module")
+def mission_fleet(tmp_path_factory: pytest.TempPathFactory) -> Iterator[LocalFleet]:
+    """A fleet of its own, with nothing online and a farmland tile set as its base map:
+    the README's picture is made here."""
+    data_dir = tmp_path_factory.mktemp("mission-fleet")
+    (data_dir / "tiles").mkdir(mode=0o700)
+    tiles = farmland_tiles(DEFAULT_HOME[:2], range(14, 20), radius_m=450)
+    write_mbtiles(data_dir / "tiles" / "farmland.mbtiles", tiles, attribution="Made-up farmland")
+    plan = FleetPlan(port=free_port(), data_dir=data_dir, vehicles=3, speedup=FLEET_SPEEDUP)
+    with LocalFleet(plan) as fleet:
+        fleet.start(hub_env={"GCS_BASEMAP_URL": ""})
+        fleet.wait_until_ready()
+        yield fleet
+
+
+@pytest.fixture(scope="module")
+def api(mission_fleet: LocalFleet) -> Iterator[httpx.Client]:
+    plan = mission_fleet.plan
+    with api_client(plan.hub_http, access_token(plan.hub_http, "admin", plan.admin_password)) as c:
+        poll_until(
+            lambda: sum(bool(s.get("lat")) for s in _states(c).values()) == plan.vehicles,
+            60,
+            "every vehicle with a position",
+        )
+        yield c
+
+
+def _context_page(browser: Browser, size: str) -> Iterator[Page]:
+    width, height = SIZES[size]
+    # The tablet and the phone have touch screens (a long press opens "fly here") and a
+    # mouse as well, which draws the mission as it would on a desktop.
+    context = browser.new_context(
+        viewport={"width": width, "height": height},
+        accept_downloads=True,
+        has_touch=size != "desktop",
+    )
     opened = context.new_page()
     errors: list[str] = []
     opened.on("pageerror", lambda error: errors.append(str(error)))
@@ -41,65 +83,151 @@ def wide_page(browser: Browser) -> Iterator[Page]:
 
 
 @pytest.fixture
-def api(fleet: LocalFleet, fleet_admin_token: str) -> Iterator[httpx.Client]:
-    with api_client(fleet.plan.hub_http, fleet_admin_token) as client:
-        yield client
+def wide_page(browser: Browser) -> Iterator[Page]:
+    """1920 by 1080: room for the mission panel beside the drawing."""
+    yield from _context_page(browser, "desktop")
+
+
+@pytest.fixture(params=list(SIZES))
+def sized_page(browser: Browser, request: pytest.FixtureRequest) -> Iterator[tuple[Page, str]]:
+    yield from ((page, request.param) for page in _context_page(browser, request.param))
+
+
+def _shot(page: Page, name: str, size: str) -> None:
+    OUTPUT.mkdir(parents=True, exist_ok=True)
+    page.screenshot(path=OUTPUT / f"{name}-{size}.png")
 
 
 def _states(api: httpx.Client) -> dict[str, dict[str, Any]]:
     return {v["id"]: v["state"] or {} for v in api.get("/api/v1/vehicles").json()}
 
 
-class PixelMap:
-    """Map pixels from lat/lon, measured from two vehicles' markers (Web Mercator is
-    locally linear: a degree of latitude is sec(lat) times a degree of longitude)."""
-
-    def __init__(self, page: Page, api: httpx.Client, a: str, b: str) -> None:
-        def centres() -> dict[str, tuple[float, float]]:
-            found = {}
-            for vid in (a, b):
-                box = page.locator(f'.vehicle-marker[data-vehicle-id="{vid}"]').bounding_box()
-                assert box is not None
-                found[vid] = (box["x"] + box["width"] / 2, box["y"] + box["height"] / 2)
-            return found
-
-        # Wait for the map to stop moving (a pan or zoom animates).
-        last: list[dict[str, tuple[float, float]]] = [centres()]
-
-        def settled() -> bool:
-            now = centres()
-            same = now == last[0]
-            last[0] = now
-            return same
-
-        poll_until(settled, 10, "the map to settle", every_s=0.3)
-        states = _states(api)
-        (xa, ya), (xb, _) = last[0][a], last[0][b]
-        self.lat0, self.lon0 = states[a]["lat"], states[a]["lon"]
-        self.x0, self.y0 = xa, ya
-        self.per_lon = (xb - xa) / (states[b]["lon"] - self.lon0)
-        self.per_lat = -self.per_lon / math.cos(math.radians(self.lat0))
-
-    def pixel(self, lat: float, lon: float) -> tuple[float, float]:
-        return (
-            self.x0 + (lon - self.lon0) * self.per_lon,
-            self.y0 + (lat - self.lat0) * self.per_lat,
-        )
+def _box(page: Page, selector: str) -> FloatRect:
+    box = page.locator(selector).first.bounding_box()
+    assert box is not None, f"{selector} is not on the page"
+    return box
 
 
-def _open_panel(page: Page, vehicle: str) -> None:
-    page.locator(f'tr[data-vehicle-id="{vehicle}"]').first.click()
-    page.locator('[data-action="mission-toggle"]').click()
+def _small(size: str) -> bool:
+    return size != "desktop"
+
+
+def _toggle_drawer(page: Page, size: str, drawer: str, open_: bool) -> None:
+    """On a tablet or a phone the fleet list and the panels are drawers over the map."""
+    if not _small(size):
+        return
+    button = page.locator(f'button[data-action="drawer-{drawer}"]')
+    if (button.get_attribute("aria-expanded") == "true") != open_:
+        button.click()
+    expect(button).to_have_attribute("aria-expanded", str(open_).lower())
+
+
+def _select(page: Page, size: str, vehicle: str) -> None:
+    _toggle_drawer(page, size, "fleet", True)
+    page.locator(f'tr[data-vehicle-id="{vehicle}"] td[data-field="mode"]').click()
+    _toggle_drawer(page, size, "fleet", False)
     expect(page.locator('[data-field="mission-vehicle"]')).to_contain_text(vehicle)
 
 
+OPEN_MAP_JS = """([x, y]) => {
+    const element = document.elementFromPoint(x, y);
+    if (element === null) return "nothing";
+    if (element.closest(".mission-panel, .leaflet-control, .drawer-toggles, .leaflet-popup"))
+        return "a panel";
+    if (element.closest(".vehicle-marker, .mission-item")) return "a marker";
+    return element.closest("#map") ? "map" : element.tagName;
+}"""
+
+
+def _on_open_map(page: Page, x: float, y: float) -> bool:
+    return bool(page.evaluate(OPEN_MAP_JS, [x, y]) == "map")
+
+
+def _assert_on_open_map(page: Page, x: float, y: float) -> None:
+    """A point to click or drag on the map: on the map, not under a panel or control."""
+    hit = page.evaluate(OPEN_MAP_JS, [x, y])
+    assert hit == "map", f"({x:.0f}, {y:.0f}) is on {hit}, not the open map"
+
+
+def _latlon_at(page: Page, x: float, y: float) -> tuple[float, float]:
+    """What the map's pointer readout says at (x, y): moved off and back, so that it
+    reads the map as it is now, not as it was under a pointer that stood still."""
+    page.mouse.move(x + 2, y)
+    page.mouse.move(x, y)
+    readout = page.locator('[data-field="cursor-position"]')
+    expect(readout).to_be_visible()
+    lat, lon = (float(part) for part in readout.inner_text().split(","))
+    return lat, lon
+
+
+class PixelMap:
+    """Page pixels from lat/lon and back, read off the map's own pointer readout at two
+    open points (Web Mercator is linear enough over the few hundred metres drawn here).
+    Waits for the map to stop moving: a pan or zoom animates."""
+
+    def __init__(self, page: Page) -> None:
+        area = _box(page, "#map")
+        grid = [
+            (area["x"] + area["width"] * fx / 10, area["y"] + area["height"] * fy / 10)
+            for fx in range(1, 10)
+            for fy in range(2, 10)
+        ]
+        open_points = [p for p in grid if _on_open_map(page, *p)]
+        assert len(open_points) >= 2, "no open map to read positions from"
+        self.a, self.b = max(
+            ((p, q) for p in open_points for q in open_points),
+            key=lambda pq: min(abs(pq[0][0] - pq[1][0]), abs(pq[0][1] - pq[1][1])),
+        )
+        readings: list[tuple[tuple[float, float], ...]] = [()]
+
+        def settled() -> bool:
+            now = (_latlon_at(page, *self.a), _latlon_at(page, *self.b))
+            same = now == readings[0]
+            readings[0] = now
+            return same
+
+        poll_until(settled, 15, "the map to settle", every_s=0.3)
+        (lat_a, lon_a), (lat_b, lon_b) = readings[0]
+        self.lat0, self.lon0 = lat_a, lon_a
+        self.per_lon = (self.b[0] - self.a[0]) / (lon_b - lon_a)
+        self.per_lat = (self.b[1] - self.a[1]) / (lat_b - lat_a)
+
+    def pixel(self, lat: float, lon: float) -> tuple[float, float]:
+        return (
+            self.a[0] + (lon - self.lon0) * self.per_lon,
+            self.a[1] + (lat - self.lat0) * self.per_lat,
+        )
+
+    def metres_per_px(self) -> float:
+        return 111_320.0 / abs(self.per_lat)
+
+
+def _open_panel(page: Page, size: str, vehicle: str) -> None:
+    _select(page, size, vehicle)
+    _expand_panel(page)
+
+
+def _expand_panel(page: Page) -> None:
+    toggle = page.locator('[data-action="mission-toggle"]')
+    if toggle.get_attribute("aria-expanded") != "true":
+        toggle.click()
+    expect(page.locator(".mission-body")).to_be_visible()
+
+
+def _collapse_panel(page: Page) -> None:
+    toggle = page.locator('[data-action="mission-toggle"]')
+    if toggle.get_attribute("aria-expanded") == "true":
+        toggle.click()
+    expect(page.locator(".mission-body")).to_be_hidden()
+
+
 def test_a_qgc_plan_opens_and_a_saved_plan_is_qgcs_format(
-    wide_page: Page, fleet: LocalFleet
+    wide_page: Page, mission_fleet: LocalFleet
 ) -> None:
     page = wide_page
-    log_in(page, fleet.plan.hub_http, "admin", fleet.plan.admin_password)
+    log_in(page, mission_fleet.plan.hub_http, "admin", mission_fleet.plan.admin_password)
     expect(page.locator(".vehicle-marker")).to_have_count(3, timeout=30_000)
-    _open_panel(page, MISSION_VEHICLE)
+    _open_panel(page, "desktop", MISSION_VEHICLE)
 
     source = json.loads((DATA / "simple_square.plan").read_text())
     page.locator('[data-field="mission-file"]').set_input_files(DATA / "simple_square.plan")
@@ -131,62 +259,14 @@ def test_a_qgc_plan_opens_and_a_saved_plan_is_qgcs_format(
     expect(status).to_contain_text(re.compile(r"^sim_2: .+\nsim_3: .+$"), timeout=30_000)
 
     # A file that is not a plan is refused with the field named, and the plan stays.
-    bad = DATA.parent / "not-a-plan.json"
-    bad.write_text('{"fileType": "Plan", "version": 1, "mission": {"version": 2, "items": 3}}')
-    try:
-        page.locator('[data-field="mission-file"]').set_input_files(bad)
-    finally:
-        bad.unlink()
+    # Handed over as bytes: a file on disk removed right after set_input_files could be
+    # gone before the page reads it (NotFoundError under load).
+    bad = b'{"fileType": "Plan", "version": 1, "mission": {"version": 2, "items": 3}}'
+    page.locator('[data-field="mission-file"]').set_input_files(
+        {"name": "not-a-plan.json", "mimeType": "application/json", "buffer": bad}
+    )
     expect(page.locator('[data-field="mission-status"]')).to_contain_text("mission.items")
     expect(rows).to_have_count(5)
-
-
-def _box(page: Page, selector: str) -> FloatRect:
-    box = page.locator(selector).first.bounding_box()
-    assert box is not None, f"{selector} is not on the page"
-    return box
-
-
-def _pan_clear_of_panel(page: Page, vehicle: str) -> None:
-    """Drag the map so that the vehicle sits midway between the map's left edge and
-    the mission panel, low in the map: the panel floats over the map's top right and
-    grows downwards as items are added, and the map is only a column of the dashboard,
-    so the drawing (some 240 px wide, 160 px above and 80 px below the vehicle at this
-    zoom) must lie wholly to the left of the panel."""
-    marker_at = f'.vehicle-marker[data-vehicle-id="{vehicle}"]'
-    # Leaflet ignores a drag begun while it animates a zoom or pan: wait for it to end.
-    last = [_box(page, marker_at)]
-
-    def settled() -> bool:
-        now = _box(page, marker_at)
-        same = now == last[0]
-        last[0] = now
-        return same
-
-    poll_until(settled, 10, "the map to settle", every_s=0.3)
-    area, panel, marker = _box(page, "#map"), _box(page, ".mission-panel"), last[0]
-    here = (marker["x"] + marker["width"] / 2, marker["y"] + marker["height"] / 2)
-    there = ((area["x"] + panel["x"]) / 2, area["y"] + area["height"] * 0.65)
-    # Grab the map well below the vehicles, where there is nothing but map.
-    start = (area["x"] + area["width"] / 2, area["y"] + area["height"] * 0.85)
-    page.mouse.move(*start)
-    page.mouse.down()
-    page.mouse.move(start[0] + there[0] - here[0], start[1] + there[1] - here[1], steps=15)
-    page.mouse.up()
-
-
-def _assert_on_open_map(page: Page, x: float, y: float) -> None:
-    """A point to click or drag on the map: on the map, not under a panel or control."""
-    hit = page.evaluate(
-        """([x, y]) => {
-            const element = document.elementFromPoint(x, y);
-            if (element === null) return "nothing";
-            if (element.closest(".mission-panel, .leaflet-control")) return "a panel";
-            return element.closest("#map") ? "map" : element.tagName;
-        }""",
-        [x, y],
-    )
-    assert hit == "map", f"({x:.0f}, {y:.0f}) is on {hit}, not the open map"
 
 
 def _u_fence(frame: LocalFrame) -> list[dict[str, float]]:
@@ -195,35 +275,110 @@ def _u_fence(frame: LocalFrame) -> list[dict[str, float]]:
     return [dict(zip(("lat", "lon"), frame.to_geo(e, n), strict=True)) for e, n in corners]
 
 
+def _drawing_area(page: Page) -> FloatRect:
+    """Where the drawing goes: the map beside the mission panel when the panel leaves
+    room for it (a desktop, a tablet), else the whole map with the panel folded away (a
+    phone), below the controls along the map's top."""
+    area, panel = _box(page, "#map"), _box(page, ".mission-panel")
+    top = area["y"] + 70  # the zoom buttons, the drawer toggles, the layer switcher
+    bottom = area["y"] + area["height"] - 40  # the scale, the attribution
+    if panel["x"] - area["x"] >= 400:
+        return {"x": area["x"], "y": top, "width": panel["x"] - area["x"], "height": bottom - top}
+    return {"x": area["x"], "y": top, "width": area["width"], "height": bottom - top}
+
+
+def _fold_panel_if_in_the_way(page: Page) -> None:
+    area, panel = _box(page, "#map"), _box(page, ".mission-panel")
+    if panel["x"] - area["x"] < 400:
+        _collapse_panel(page)
+
+
+def _frame_the_fence(page: Page, frame: LocalFrame) -> PixelMap:
+    """Zoom out until the fence fits the drawing area, then drag the map so that the
+    fence sits in the middle of it."""
+    _fold_panel_if_in_the_way(page)
+    pixels = PixelMap(page)
+    space = _drawing_area(page)
+    zoom_out = page.locator(".leaflet-control-zoom-out")
+    for _ in range(6):
+        fits = (
+            U_WIDTH_M / pixels.metres_per_px() < space["width"] * 0.8
+            and U_HEIGHT_M / pixels.metres_per_px() < space["height"] * 0.8
+        )
+        if fits:
+            break
+        zoom_out.click()
+        pixels = PixelMap(page)
+    centre = pixels.pixel(*frame.to_geo(0, 20))  # the middle of the U
+    wanted = (space["x"] + space["width"] / 2, space["y"] + space["height"] / 2)
+    # Grab the map at an open point, away from the vehicles and the controls.
+    start = pixels.a
+    page.mouse.move(*start)
+    page.mouse.down()
+    page.mouse.move(start[0] + wanted[0] - centre[0], start[1] + wanted[1] - centre[1], steps=15)
+    page.mouse.up()
+    return PixelMap(page)
+
+
+def _close_up(page: Page, middle: tuple[float, float]) -> None:
+    """One zoom step in about ``middle`` (the wheel zooms about the pointer), then drag
+    the map to put it in the middle of the drawing area."""
+    pixels = PixelMap(page)
+    page.mouse.move(*pixels.pixel(*middle))
+    page.mouse.wheel(0, -60)
+    pixels = PixelMap(page)
+    here, space = pixels.pixel(*middle), _drawing_area(page)
+    start = pixels.a
+    page.mouse.move(*start)
+    page.mouse.down()
+    page.mouse.move(
+        start[0] + space["x"] + space["width"] / 2 - here[0],
+        start[1] + space["y"] + space["height"] / 2 - here[1],
+        steps=15,
+    )
+    page.mouse.up()
+    PixelMap(page)  # settled
+    page.wait_for_function(
+        "() => !document.querySelector('#map img.leaflet-tile:not(.leaflet-tile-loaded)')"
+    )
+
+
 def test_a_drawn_mission_is_refused_on_its_leg_fixed_by_dragging_and_flown(
-    wide_page: Page, fleet: LocalFleet, api: httpx.Client, tmp_path: Path
+    sized_page: tuple[Page, str], mission_fleet: LocalFleet, api: httpx.Client
 ) -> None:
-    page = wide_page
+    page, size = sized_page
+    poll_until(lambda: not _states(api)[MISSION_VEHICLE]["armed"], 120, "the vehicle landed")
     here = _states(api)[MISSION_VEHICLE]
     frame = LocalFrame(here["lat"], here["lon"], 0.0)
     site_rails = api.get("/api/v1/safety/rails").json()
     fenced = {**site_rails, "geofence": {"polygon": _u_fence(frame)}}
     assert api.put("/api/v1/safety/rails", json=fenced).status_code == 200
     try:
-        log_in(page, fleet.plan.hub_http, "admin", fleet.plan.admin_password)
+        log_in(page, mission_fleet.plan.hub_http, "admin", mission_fleet.plan.admin_password)
         expect(page.locator(".vehicle-marker")).to_have_count(3, timeout=30_000)
-        _open_panel(page, MISSION_VEHICLE)
-        # Zoomed out so that the whole U fits beside the panel.
-        zoom_out = page.locator(".leaflet-control-zoom-out")
-        zoom_out.click()
-        zoom_out.click()
-        _pan_clear_of_panel(page, MISSION_VEHICLE)
-        pixels = PixelMap(page, api, GOTO_VEHICLE, MISSION_VEHICLE)
+        expect(page.locator("#map")).to_have_attribute("data-basemap", "farmland")
+        _open_panel(page, size, MISSION_VEHICLE)
+        # A fresh plan: the vehicle's mission (an earlier run's) is where editing starts.
+        page.locator('[data-action="mission-edit"]').click()
+        page.locator('[data-action="mission-clear"]').click()
+        page.locator('[data-action="mission-add-22"]').click()
+        expect(page.locator(".mission-row")).to_have_count(1)
+        if _small(size):  # touch targets of at least 44 px
+            for target in page.locator(".mission-panel button:visible").all():
+                box = target.bounding_box()
+                assert box is not None
+                assert min(box["height"], box["width"]) >= 44, (target.inner_text(), box)
+        pixels = _frame_the_fence(page, frame)
 
         def at(east: float, north: float) -> tuple[float, float]:
             x, y = pixels.pixel(*frame.to_geo(east, north))
             _assert_on_open_map(page, x, y)
             return x, y
 
-        # Draw: a take-off (added by Edit), a waypoint in each arm of the U, then RTL.
-        page.locator('[data-action="mission-edit"]').click()
+        # Draw: after the take-off, a waypoint in each arm of the U, then RTL.
         page.mouse.click(*at(-40, 60))
         page.mouse.click(*at(40, 60))
+        _expand_panel(page)
         page.locator('[data-action="mission-add-20"]').click()
         rows = page.locator(".mission-row")
         expect(rows).to_have_count(4)
@@ -237,7 +392,7 @@ def test_a_drawn_mission_is_refused_on_its_leg_fixed_by_dragging_and_flown(
         expect(page.locator('.mission-violation[data-rule="geofence"]')).to_have_count(1)
         expect(page.locator('.mission-item.refused[data-seq="3"]')).to_have_count(1)
         expect(page.locator('.mission-leg.refused[data-seq="3"]')).to_have_count(1)
-        page.screenshot(path=str(tmp_path / "mission-refused.png"))
+        _shot(page, "mission-refused", size)
 
         # The go-to check speaks for the same fence: into the notch is refused.
         notch = frame.to_geo(0, 50)
@@ -250,13 +405,27 @@ def test_a_drawn_mission_is_refused_on_its_leg_fixed_by_dragging_and_flown(
         assert checked["distance_m"] == pytest.approx(50, abs=2)
 
         # Fixed by dragging item 3 into the west arm.
-        page.mouse.move(*at(40, 60))
+        _fold_panel_if_in_the_way(page)
+        if _small(size):
+            _shot(page, "mission-refused-map", size)  # the red leg, the panel folded
+        grab = pixels.pixel(*frame.to_geo(40, 60))
+        on_item = page.evaluate(
+            "([x, y]) => document.elementFromPoint(x, y)?.closest('.mission-item')?.dataset.seq",
+            list(grab),
+        )
+        assert on_item == "3", f"item 3 is not under the pointer at {grab}"
+        page.mouse.move(*grab)
         page.mouse.down()
         page.mouse.move(*at(-45, 5), steps=12)
         page.mouse.up()
-        expect(page.locator('[data-field="mission-verdict"]')).to_contain_text(
-            "Rails: OK", timeout=CHECK_S * 1000
-        )
+        _expand_panel(page)
+        _shot(page, "mission-dragged", size)
+        try:
+            expect(page.locator('[data-field="mission-verdict"]')).to_contain_text(
+                "Rails: OK", timeout=CHECK_S * 1000
+            )
+        except AssertionError as error:  # say which rule still refuses it
+            raise AssertionError(page.locator(".mission-body").inner_text()) from error
         expect(page.locator(".mission-row.refused")).to_have_count(0)
         moved = rows.nth(2)
         lat, lon = (
@@ -272,12 +441,17 @@ def test_a_drawn_mission_is_refused_on_its_leg_fixed_by_dragging_and_flown(
         on_board = api.get(f"/api/v1/vehicles/{MISSION_VEHICLE}/mission").json()["items"][1:]
         assert [item["command"] for item in on_board] == [22, 16, 16, 20]
 
+        readme = size == "desktop" and bool(os.environ.get("GCS_UPDATE_SCREENSHOTS"))
+        if readme:
+            _close_up(page, frame.to_geo(-22, 30))  # the README's picture: the path, larger
+
         commands = f"/api/v1/vehicles/{MISSION_VEHICLE}/commands"
         assert api.post(commands, json={"name": "set_mode", "mode": "GUIDED"}).status_code == 200
         armed = api.post(commands, json={"name": "arm"}).json()
         assert armed["outcome"]["status"] == "accepted", armed
         auto = api.post(commands, json={"name": "set_mode", "mode": "AUTO"}).json()
         assert auto["outcome"]["status"] == "accepted", auto
+        _fold_panel_if_in_the_way(page)  # on a phone: the map, to watch the flight
 
         # The active item moves along the path on the map, the flown legs dimmed behind it.
         for seq in (2, 3):
@@ -287,7 +461,17 @@ def test_a_drawn_mission_is_refused_on_its_leg_fixed_by_dragging_and_flown(
         expect(page.locator('.mission-item.flown[data-seq="1"]')).to_have_count(1)
         expect(page.locator('.mission-leg.flown[data-seq="2"]')).to_have_count(1)
         expect(page.locator('.mission-row.active[data-seq="3"]')).to_have_count(1)
-        page.screenshot(path=str(tmp_path / "mission-flown.png"))
+        _shot(page, "mission-flown", size)
+        if readme:
+            # The base map, the trail behind the flying vehicle, its mission with the
+            # active item and the flown legs, and the event feed.
+            README_IMAGE.parent.mkdir(parents=True, exist_ok=True)
+            page.screenshot(path=README_IMAGE)
+        # On to the return: the RTL item, drawn at home, is the active one.
+        expect(page.locator('.mission-item.active[data-kind="rtl"][data-seq="4"]')).to_have_count(
+            1, timeout=90_000
+        )
+        expect(page.locator('.mission-item.flown[data-seq="3"]')).to_have_count(1)
         poll_until(
             lambda: not _states(api)[MISSION_VEHICLE]["armed"], 120, "the mission to end landed"
         )
@@ -295,8 +479,23 @@ def test_a_drawn_mission_is_refused_on_its_leg_fixed_by_dragging_and_flown(
         assert api.put("/api/v1/safety/rails", json=site_rails).status_code == 200
 
 
-def test_fly_here_moves_the_vehicle(wide_page: Page, fleet: LocalFleet, api: httpx.Client) -> None:
-    page = wide_page
+def _long_press(page: Page, x: float, y: float, until: str) -> None:
+    """A finger held on the screen (CDP touch events, as a touch screen sends them)
+    until ``until`` shows, then lifted: no fixed wait for the long-press timer."""
+    cdp = page.context.new_cdp_session(page)
+    point = [{"x": x, "y": y}]
+    cdp.send("Input.dispatchTouchEvent", {"type": "touchStart", "touchPoints": point})
+    try:
+        expect(page.locator(until)).to_be_visible(timeout=10_000)
+    finally:
+        cdp.send("Input.dispatchTouchEvent", {"type": "touchEnd", "touchPoints": []})
+        cdp.detach()
+
+
+def test_fly_here_moves_the_vehicle(
+    sized_page: tuple[Page, str], mission_fleet: LocalFleet, api: httpx.Client
+) -> None:
+    page, size = sized_page
     commands = f"/api/v1/vehicles/{GOTO_VEHICLE}/commands"
     poll_until(lambda: _states(api)[GOTO_VEHICLE].get("ready_to_fly"), 60, "ready to fly")
     assert api.post(commands, json={"name": "set_mode", "mode": "GUIDED"}).status_code == 200
@@ -305,20 +504,33 @@ def test_fly_here_moves_the_vehicle(wide_page: Page, fleet: LocalFleet, api: htt
     assert takeoff["outcome"]["status"] == "accepted", takeoff
     poll_until(lambda: (_states(api)[GOTO_VEHICLE].get("alt_rel") or 0) > 6, 60, "the climb")
 
-    log_in(page, fleet.plan.hub_http, "admin", fleet.plan.admin_password)
+    log_in(page, mission_fleet.plan.hub_http, "admin", mission_fleet.plan.admin_password)
     expect(page.locator(".vehicle-marker")).to_have_count(3, timeout=30_000)
-    page.locator(f'tr[data-vehicle-id="{GOTO_VEHICLE}"]').first.click()
-    pixels = PixelMap(page, api, GOTO_VEHICLE, MISSION_VEHICLE)
-    start = _states(api)[GOTO_VEHICLE]
-    target = LocalFrame(start["lat"], start["lon"], 0.0).to_geo(0, 40)
+    _select(page, size, GOTO_VEHICLE)  # the map pans to it
+    states = _states(api)
+    start = states[GOTO_VEHICLE]
+    # Towards the others: each run flies back over the ground the last one left.
+    north = 40 if start["lat"] <= states[MISSION_VEHICLE]["lat"] else -40
+    target = LocalFrame(start["lat"], start["lon"], 0.0).to_geo(0, north)
+    pixels = PixelMap(page)
+    x, y = pixels.pixel(*target)
+    _assert_on_open_map(page, x, y)
 
-    page.mouse.click(*pixels.pixel(*target), button="right")
     verdict = page.locator('[data-field="go-here-verdict"]')
+    if _small(size):
+        _long_press(page, x, y, until='[data-field="go-here-verdict"]')
+    else:
+        page.mouse.click(x, y, button="right")
     expect(verdict).to_contain_text("rails: OK", timeout=CHECK_S * 1000)
     distance = float(verdict.inner_text().split(" m away")[0])
     assert distance == pytest.approx(40, abs=4)
     confirm = page.locator('[data-action="go-here-confirm"]')
     expect(confirm).to_have_text("Fly here at 10 m")
+    if _small(size):
+        box = confirm.bounding_box()
+        assert box is not None
+        assert box["height"] >= 44, box  # a touch target
+    _shot(page, "fly-here", size)
     confirm.click()
     expect(page.locator('[data-field="go-here-result"]')).to_contain_text("accepted")
     poll_until(
@@ -331,4 +543,22 @@ def test_fly_here_moves_the_vehicle(wide_page: Page, fleet: LocalFleet, api: htt
         90,
         f"{GOTO_VEHICLE} at the clicked point",
     )
-    api.post(commands, json={"name": "land"})
+    # The selected vehicle's panel follows it: up at 10 m, 40 m from where it armed
+    # (its home), in flight, its attitude drawn.
+    _toggle_drawer(page, size, "ops", True)
+    panel = page.locator('[data-panel="selected-vehicle"]')
+    expect(panel.locator('[data-field="selected-alt"]')).to_have_text(
+        re.compile(r"^(9|10|11)\.\d m$")
+    )
+    expect(panel.locator('[data-field="selected-home"]')).to_have_text(
+        re.compile(r"^(3[6-9]|4[0-4]) m$")
+    )
+    expect(panel.locator('[data-field="selected-flight-time"]')).to_have_text(
+        re.compile(r"^(\d+:)?\d+:\d\d$")
+    )
+    expect(panel.locator('[data-field="attitude"]')).to_have_attribute(
+        "aria-label", re.compile(r"^Roll -?\d+°, pitch -?\d+°, heading \d{3}°$")
+    )
+    _shot(page, "fly-here-arrived", size)
+    assert api.post(commands, json={"name": "land"}).status_code == 200
+    poll_until(lambda: not _states(api)[GOTO_VEHICLE]["armed"], 120, f"{GOTO_VEHICLE} landed")

@@ -5,7 +5,6 @@ saved under test-output/panels/."""
 
 from __future__ import annotations
 
-import os
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -23,8 +22,6 @@ pytestmark = [pytest.mark.browser, pytest.mark.integration]
 SIZES = {"desktop": (1920, 1080), "tablet": (1024, 768), "phone": (390, 844)}
 OUTPUT = Path(__file__).resolve().parents[2] / "test-output" / "panels"
 WARN_COLOUR = "rgb(245, 185, 66)"  # --warn in style.css
-# The demo's README picture is remade with GCS_UPDATE_SCREENSHOTS=1.
-README_IMAGE = Path(__file__).resolve().parents[2] / "docs" / "img" / "dashboard-events.png"
 
 
 @pytest.fixture(scope="module")
@@ -157,9 +154,6 @@ def test_a_pre_arm_failure_shows_in_the_feed_and_on_the_row(
     failure = feed.locator(f'li[data-category="prearm"][data-vehicle-id="{vehicle}"]').first
     expect(failure).to_contain_text("Arm: RTL mode not armable", timeout=30_000)
     expect(failure).to_have_attribute("data-severity", "2")
-    if size == "desktop" and os.environ.get("GCS_UPDATE_SCREENSHOTS"):
-        README_IMAGE.parent.mkdir(parents=True, exist_ok=True)
-        page.screenshot(path=README_IMAGE)
     # The feed filters by severity: "error and worse" still shows a critical text.
     feed.locator('[data-field="event-severity-filter"]').select_option("3")
     expect(failure).to_be_visible()

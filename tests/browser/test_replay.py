@@ -184,6 +184,12 @@ def test_a_stored_flight_replays_on_the_map(
     expect(play).to_have_text("Play")  # stopped at the end
     assert page.evaluate(MARKER_POSITION) != start_position
     expect(panel.locator('[data-field="replay-time"]')).not_to_have_text(re.compile(r"^00:00:00 /"))
+    # The live feed's view plays back with it: at the end, the whole flight's events,
+    # the landing's disarm among them.
+    feed = panel.locator('[data-feed="replay"]')
+    expect(feed.locator('li[data-kind="disarmed"]')).to_have_count(1)
+    expect(feed.locator('li[data-kind="armed"]')).to_have_count(1)
+    at_end = feed.locator("li").count()
 
     # Scrubbing back to the start puts the marker back where it took off.
     # (Playwright cannot fill a range input: set it as a drag would, with an input event.)
@@ -195,6 +201,9 @@ def test_a_stored_flight_replays_on_the_map(
     )
     expect(panel.locator('[data-field="replay-time"]')).to_have_text(re.compile(r"^00:00:00 /"))
     assert page.evaluate(MARKER_POSITION) == start_position
+    # Back at the start, what had not happened yet is gone from the feed: the disarm.
+    expect(feed.locator('li[data-kind="disarmed"]')).to_have_count(0)
+    assert feed.locator("li").count() < at_end
 
     # Leaving the replay restores the live view.
     page.locator('button[data-action="close-flights"]').click()

@@ -270,3 +270,37 @@ def test_the_hub_stores_no_position_and_one_reached_event_with_its_item(
         assert {(s["lat"], s["lon"], s["alt_msl"]) for s in samples} == {(None, None, None)}
         summary = api.get(f"/api/v1/vehicles/{vehicle}").json()
         assert (summary["state"]["lat"], summary["state"]["lon"]) == (None, None)
+
+
+# -- issue 17: each photo the camera takes is an event with its place --------------------
+
+
+def feedback(index: int, target_system: int, flags: int) -> MavMessage:
+    # As AP_Camera::send_feedback fills it: target_system is the vehicle's own id.
+    return mavlink2.MAVLink_camera_feedback_message(
+        0, target_system, 0, index, LAT, LON, 620.5, 30.25, 0, 0, 90, 0, flags, index
+    )
+
+
+def test_camera_feedback_becomes_a_camera_event_with_the_photo() -> None:
+    async def run() -> None:
+        with ScriptedFlightController(autopilot=ARDUPILOT) as fcu:
+            async with agent_on(fcu) as agent:
+                fcu.push(
+                    feedback(1, fcu.system_id, mavlink2.CAMERA_FEEDBACK_PHOTO),
+                    feedback(2, fcu.system_id, mavlink2.CAMERA_FEEDBACK_VIDEO),
+                    feedback(3, fcu.system_id, mavlink2.CAMERA_FEEDBACK_PHOTO),
+                )
+                events = await agent.events(2)
+                await agent.no_more_events()
+        assert [e["kind"] for e in events] == ["camera", "camera"]
+        assert events[0]["photo"] == {
+            "index": 1,
+            "lat": LAT / 1e7,
+            "lon": LON / 1e7,
+            "alt_rel": 30.25,
+        }
+        assert events[1]["photo"]["index"] == 3
+        assert events[0]["text"].startswith("photo 1 at -35.3632620, 149.1652370")
+
+    asyncio.run(run())

@@ -11,6 +11,7 @@ skip the protocol's validation, as a bug in the agent would.
 from __future__ import annotations
 
 import contextlib
+import itertools
 import json
 import queue
 import threading
@@ -30,7 +31,7 @@ from protocol.messages import (
     Welcome,
     encode,
 )
-from tests.helpers import agent_process
+from tests.helpers import agent_process, poll_until
 from tests.integration.test_agent_commands import with_executor
 from tests.mavlink_peer import Answer, ScriptedFlightController
 from vehicle_agents.commands import CommandExecutor
@@ -88,6 +89,12 @@ def _command(request_id: str, command: object, timeout_s: object = 5.0) -> str:
     return json.dumps({**frame, "timeout_s": timeout_s})
 
 
+def _manual(seq: int, **axes: object) -> str:
+    return json.dumps(
+        {"type": "manual", "seq": seq, "axes": {"x": 0, "y": 0, "z": 500, "r": 0, **axes}}
+    )
+
+
 NAN, INF = float("nan"), float("inf")
 WAYPOINT = {"command": 16, "lat": -35.36, "lon": 149.16, "alt": 20}
 MALFORMED: dict[str, object] = {
@@ -138,12 +145,54 @@ def test_malformed_commands_are_answered_as_failed_and_the_agent_goes_on(
         # no request id to answer: read past, as any unusable frame
         for frame in ["[" * 30_000, "{", '{"type": "command"}', json.dumps({"type": 5})]:
             connection.send(frame)
+        # stick input no MANUAL_CONTROL field can hold (int16 axes, uint16 buttons)
+        for axis in ("x", "y", "z", "r", "buttons"):
+            for bad in (1e300, NAN, 70000):
+                connection.send(_manual(1, **{axis: bad}))
 
         good = _command("good", {"name": "change_speed", "speed": 3.0})
         assert hub.answer_to(connection, good)["status"] == "accepted"
         assert agent.poll() is None, "the agent is still running"
         assert hub.connections.empty(), "and it never had to reconnect"
-        assert not [m for m in fcu.received if m.get_type() in ("PARAM_SET", "MISSION_COUNT")]
+        sent = {m.get_type() for m in fcu.received}
+        assert not sent & {"PARAM_SET", "MISSION_COUNT", "MANUAL_CONTROL"}, sent
+
+
+def test_stick_input_while_the_flight_controller_is_away_keeps_the_hub_link(
+    tmp_path: Path,
+) -> None:
+    """A pilot's 25 Hz stream goes on while the flight controller's link is down (a USB
+    cable out, the autopilot rebooting): the frames cannot be flown, and are dropped; the
+    hub link, and the agent's answers on it, go on."""
+    fcu = ScriptedFlightController()  # listening from here; answering once entered
+    with (
+        ScriptedHub() as hub,
+        agent_process(hub.url, "t" * 32, VEHICLE, fcu.port, tmp_path) as agent,
+    ):
+        with fcu:
+            connection = hub.connections.get(timeout=30)
+            seq = itertools.count(1)
+
+            def flown() -> bool:
+                # the agent is flying by hand when the flight controller goes (frames
+                # before its first heartbeat have no vehicle to go to)
+                connection.send(_manual(next(seq), x=300))
+                return "MANUAL_CONTROL" in fcu.kinds()
+
+            poll_until(flown, ANSWER_S, "stick input flown", every_s=0.04)
+        down = "flight controller link is down"
+
+        def gone() -> bool:
+            hold = _command(f"hold-{next(seq)}", {"name": "hold"})
+            return bool(hub.answer_to(connection, hold)["message"] == down)
+
+        poll_until(gone, 2 * ANSWER_S, "the agent sees its flight controller go", every_s=0.1)
+        for _ in range(25):  # a second of a pilot's stream
+            connection.send(_manual(next(seq), x=300))
+        outcome = hub.answer_to(connection, _command("after", {"name": "hold"}))
+        assert outcome == {**outcome, "status": "failed", "message": down}
+        assert agent.poll() is None, "the agent is still running"
+        assert hub.connections.empty(), "and it never had to reconnect"
 
 
 def test_the_executor_answers_a_value_that_slipped_past_validation_as_failed() -> None:

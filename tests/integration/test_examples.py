@@ -6,16 +6,26 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import subprocess
 import sys
+import textwrap
 from collections.abc import Iterator
 from pathlib import Path
+from typing import Any
 
 import pytest
 
 from gcs.launcher import LocalFleet
 from tests.conftest import FLEET_SPEEDUP
-from tests.helpers import FleetWatcher, access_token, ready, running_fleet
+from tests.helpers import (
+    FleetWatcher,
+    access_token,
+    api_client,
+    poll_until,
+    ready,
+    running_fleet,
+)
 
 pytestmark = pytest.mark.integration
 
@@ -143,3 +153,138 @@ def test_command_a_group(fleet: LocalFleet) -> None:
     vehicles = [fleet.vehicle_id(i) for i in range(fleet.plan.vehicles)]
     assert f"airborne: {', '.join(vehicles)}" in out
     assert f"landed and disarmed: {', '.join(vehicles)}" in out
+
+
+def test_read_the_audit_log(fleet: LocalFleet, fleet_admin_token: str) -> None:
+    """Each entry names the credential used, a filter narrows the log, and the example
+    follows next_before_id from page to page without repeating or skipping an entry."""
+    with api_client(fleet.plan.hub_http, fleet_admin_token) as api:
+        # Eight entries at least (token.create each), for pages to follow.
+        made = [
+            api.post("/api/v1/auth/api-tokens", json={"name": name, "scopes": ["read"]})
+            for name in ("wall", *(f"kiosk-{n}" for n in range(7)))
+        ]
+        assert all(answer.status_code == 201 for answer in made), made[0].text
+        read_only = made[0].json()["token"]
+    refused = failed(run_example("04_command_a_group.py", fleet, GCS_TOKEN=read_only))
+    assert " answered 403:" in refused
+
+    out = succeeded(run_example("06_read_the_audit_log.py", fleet, "--action", "denied"))
+    newest = out.splitlines()[0].split()
+    assert newest[2:8] == ["admin", "via", "wall", "denied", "POST", "/api/v1/fleet/commands"]
+
+    out = succeeded(run_example("06_read_the_audit_log.py", fleet, "--last", "7", "--page", "3"))
+    lines = out.splitlines()
+    assert lines[-1] == "7 entries"
+    ids = [int(line.split()[0]) for line in lines[:-1]]
+    everything = api_get_audit(fleet, fleet_admin_token, limit=7)
+    assert ids == [entry["id"] for entry in everything]  # newest first, none twice
+
+    refused = failed(run_example("06_read_the_audit_log.py", fleet, "--action", "takeoff"))
+    assert refused.startswith("error: GET /api/v1/audit answered 422:"), refused
+    assert "command" in refused  # the valid actions are named
+
+
+def api_get_audit(fleet: LocalFleet, token: str, limit: int) -> list[dict[str, Any]]:
+    with api_client(fleet.plan.hub_http, token) as api:
+        page = api.get("/api/v1/audit", params={"limit": limit})
+    assert page.status_code == 200, page.text
+    entries: list[dict[str, Any]] = page.json()["entries"]
+    return entries
+
+
+README = EXAMPLES.parent / "README.md"
+
+
+def readme_client_steps() -> list[str]:
+    """The shell blocks of the README's "From nothing to a working client", in order."""
+    text = README.read_text()
+    section = text.split("From nothing to a working client", 1)[1]
+    section = section.split("The scripts in [examples/](examples/)", 1)[0]
+    return [textwrap.dedent(block) for block in re.findall(r"```sh\n(.*?)```", section, re.S)]
+
+
+def json_values(text: str) -> list[Any]:
+    """The JSON answers curl printed back to back (it adds no newline)."""
+    decoder, values, at = json.JSONDecoder(), [], 0
+    while (at := len(text) - len(text[at:].lstrip())) < len(text):
+        value, at = decoder.raw_decode(text, at)
+        values.append(value)
+    return values
+
+
+def test_the_readmes_client_steps_work_in_order(fleet: LocalFleet, tmp_path: Path) -> None:
+    """A new user's path: each step's shell block, run in one shell as they come, with the
+    HUB and PASSWORD step 0 says to export, in a folder of the user's own."""
+    steps = readme_client_steps()
+    assert len(steps) == 6, "one block for each of steps 1 to 6"
+    vehicle = "sim_1"
+    assert vehicle == fleet.vehicle_id(0)  # the id the README's steps use
+    watcher_token = access_token(fleet.plan.hub_http, "admin", fleet.plan.admin_password)
+    with FleetWatcher(fleet.plan.hub_http, watcher_token) as watcher:
+        watcher.wait_until(
+            lambda _: bool(watcher.state(vehicle).get("ready_to_fly")), 120, f"{vehicle} ready"
+        )
+    # Step 3 runs the example as `.venv/bin/python examples/...` from a checkout.
+    (tmp_path / ".venv").symlink_to(Path(sys.executable).parents[1])
+    (tmp_path / "examples").symlink_to(EXAMPLES)
+    separator = "=== step done ==="
+
+    def shell(steps: list[str]) -> str:
+        """The steps in one shell, as a user types them; what they printed."""
+        script = "set -euo pipefail\n" + f"\necho\necho '{separator}'\n".join(steps)
+        environment = {k: v for k, v in os.environ.items() if not k.startswith("GCS_")}
+        environment |= {"HUB": fleet.plan.hub_http, "PASSWORD": fleet.plan.admin_password}
+        run = subprocess.run(
+            ["bash", "-c", script],
+            env=environment,
+            cwd=tmp_path,
+            capture_output=True,
+            text=True,
+            timeout=EXAMPLE_TIMEOUT_S,
+            check=False,
+        )
+        assert run.returncode == 0, f"{run.stdout}\n{run.stderr}"
+        return run.stdout
+
+    def finished_flights() -> list[int]:
+        with api_client(fleet.plan.hub_http, watcher_token) as api:
+            page = api.get("/api/v1/flights", params={"vehicle_id": vehicle}).json()
+        return [flight["id"] for flight in page["flights"] if flight["end_time"]]
+
+    flown_before = finished_flights()
+    # Steps 1 to 4, then the user waits for the flight that step 5 exports to end.
+    # The shell's TOKEN is kept for steps 5 and 6 as the user's shell would keep it.
+    log_in, first_call, feed, command, _ = shell([*steps[:4], 'printf %s "$TOKEN" > token']).split(
+        separator
+    )
+    [flown] = poll_until(
+        lambda: [f for f in finished_flights() if f not in flown_before],
+        120,
+        f"{vehicle}'s flight to end",
+    )
+    export, audit = shell(["TOKEN=$(cat token)\n" + steps[4], steps[5]]).split(separator)
+
+    [api_token] = json_values(log_in)
+    assert api_token["name"] == "my-script"
+    assert sorted(api_token["scopes"]) == ["command", "read"]
+    assert api_token["token"]
+    me, vehicles = json_values(first_call)
+    assert me["username"] == "admin"
+    assert vehicle in {v["id"] for v in vehicles}
+    assert "pong: hello" in feed.splitlines()
+    assert feed.strip().splitlines()[0].startswith("fleet: ")
+    takeoff, landing = json_values(command)
+    assert takeoff["outcome"]["status"] == "accepted", takeoff
+    [landed] = landing["results"]
+    assert (landed["vehicle_id"], landed["outcome"]["status"]) == (vehicle, "accepted")
+    assert export.strip() == ""
+    features = json.loads((tmp_path / "flight.geojson").read_text())["features"]
+    [track] = [f for f in features if f["geometry"]["type"] == "LineString"]
+    # The flight just flown: step 5 takes the newest that has ended.
+    assert track["properties"]["flight_id"] == flown
+    # Landed as soon as it took off, as step 4 does: a short track, but a track.
+    assert len(track["geometry"]["coordinates"]) >= 2
+    [page] = json_values(audit)
+    assert 1 <= len(page["entries"]) <= 5
+    assert "next_before_id" in page

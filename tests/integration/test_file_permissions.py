@@ -1,5 +1,6 @@
-"""The hub's data folder, its SQLite database (with WAL) and the launcher's logs are
-private to the user who runs them (13.15): folders 0700, files 0600."""
+"""The hub's data folder, its SQLite database (with WAL) and the launcher's logs, and the
+agent's outbox and onboard .tlogs, are private to the user who runs them (13.15): folders
+0700, files 0600."""
 
 from __future__ import annotations
 
@@ -13,7 +14,8 @@ import httpx
 import pytest
 
 from gcs.launcher import FleetPlan, LocalFleet, free_port
-from tests.helpers import access_token, poll_until
+from tests.helpers import access_token, agent_process, poll_until
+from tests.mavlink_peer import ScriptedFlightController
 
 pytestmark = pytest.mark.integration
 
@@ -72,3 +74,39 @@ def test_an_existing_world_readable_database_is_made_private(tmp_path: Path) -> 
     os.chmod(database, 0o644)
     make_engine(f"sqlite:///{database}").dispose()
     assert oct(_mode(database)) == oct(0o600)
+
+
+def test_the_agents_outbox_and_onboard_tlogs_are_private(tmp_path: Path) -> None:
+    """On the vehicle too: the outbox (an outage's telemetry, in SQLite with its WAL) and
+    the onboard .tlogs are the agent's user's only, whatever the umask it started with."""
+    state = tmp_path / "state"
+    outbox, tlogs = state / "outbox", state / "tlogs"
+    with (
+        permissive_umask(),
+        ScriptedFlightController(armed=True) as fcu,  # armed: the .tlog is being written
+        agent_process(
+            f"http://127.0.0.1:{free_port()}",  # no hub: the outbox keeps it all
+            "t" * 32,
+            "private_1",
+            fcu.port,
+            tmp_path,
+            extra_args=["--outbox-dir", str(outbox), "--tlog-dir", str(tlogs)],
+        ),
+    ):
+        database = outbox / "private_1.outbox.sqlite"
+        written = poll_until(
+            lambda: Path(f"{database}-wal").exists() and list(tlogs.glob("*.tlog")),
+            30,
+            "the outbox's WAL and a .tlog",
+        )
+        private = {
+            outbox: 0o700,
+            tlogs: 0o700,
+            database: 0o600,
+            Path(f"{database}-wal"): 0o600,
+            written[0]: 0o600,
+        }
+        found = {path: _mode(path) for path in private}
+    assert {str(p): oct(m) for p, m in found.items()} == {
+        str(p): oct(m) for p, m in private.items()
+    }

@@ -1,12 +1,17 @@
-"""A user name with a newline cannot forge a line in the hub's log."""
+"""A user name with a newline cannot forge a line in the hub's log, nor a peer's text one in
+the agent's."""
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import httpx
 
 from gcs.launcher import FleetPlan, LocalFleet, free_port
+from tests.helpers import agent_process
+from tests.integration.test_agent_survives_bad_commands import ScriptedHub, _command
+from tests.mavlink_peer import ScriptedFlightController
 
 FORGED = "2031-01-01 00:00:00,000 INFO    backend.audit: audit: admin"
 
@@ -28,3 +33,25 @@ def test_a_user_name_cannot_forge_a_log_line(tmp_path: Path) -> None:
     lines = log.splitlines()
     assert not [line for line in lines if line.startswith("2031")], log[-2000:]
     assert any("login x\\n" + FORGED in line for line in lines), log[-2000:]
+
+
+AGENT_FORGED = "2031-01-01 00:00:00,000 ERROR   vehicle_agents.agent: flight controller lost"
+
+
+def test_what_the_hub_says_cannot_forge_a_line_in_the_agents_log(tmp_path: Path) -> None:
+    """The agent logs texts that come from its peers (the hub's error replies, a command's
+    reasons from the flight controller's STATUSTEXTs): escaped there too."""
+    with (
+        ScriptedFlightController() as fcu,
+        ScriptedHub() as hub,
+        agent_process(hub.url, "t" * 32, "logs_1", fcu.port, tmp_path),
+    ):
+        connection = hub.connections.get(timeout=30)
+        reply = {"type": "error", "code": "bad_frame", "message": "x\n" + AGENT_FORGED}
+        connection.send(json.dumps(reply))
+        # answered after the reply was read (and so logged): the log is written by then
+        assert hub.answer_to(connection, _command("after", 12))["status"] == "failed"
+    log = (tmp_path / "logs_1.log").read_text()
+    lines = log.splitlines()
+    assert not [line for line in lines if line.startswith("2031")], log[-2000:]
+    assert any("x\\n" + AGENT_FORGED in line for line in lines), log[-2000:]

@@ -14,7 +14,7 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from gcs.launcher import LocalFleet
 from tests.helpers import FleetWatcher, api_client, ready, state_of
-from tests.simulator.test_sim_server import mavlink_client
+from tests.simulator.test_sim_server import mavlink_client, wait_for
 
 pytestmark = pytest.mark.integration
 
@@ -140,12 +140,8 @@ def test_a_current_item_beyond_the_mission_is_refused_at_once(
 
 
 def _next(gcs: Any, system_id: int, types: list[str]) -> Any:
-    deadline = time.monotonic() + 10
-    while (remaining := deadline - time.monotonic()) > 0:
-        message = gcs.recv_match(type=types, blocking=True, timeout=remaining)
-        if message is not None and message.get_srcSystem() == system_id:
-            return message
-    raise AssertionError(f"no {types} from system {system_id} within 10 s")
+    what = f"{types} from system {system_id}"
+    return wait_for(gcs, types, lambda _: True, 10, what, system_id=system_id)
 
 
 def _load_as_another_gcs(port: int, system_id: int, items: list[Any]) -> None:

@@ -10,6 +10,7 @@ from collections.abc import Awaitable, Callable
 from typing import TypeVar
 
 import pytest
+from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from protocol.messages import MissionItem
 from simulator import ListenAddress, SimulatorConfig
@@ -20,8 +21,13 @@ from vehicle_agents.missions import MissionClient
 
 pytestmark = pytest.mark.integration
 
-TAKEOFF, WAYPOINT, RTL, CHANGE_SPEED = 22, 16, 20, 178
-GLOBAL, RELATIVE, RELATIVE_INT = 0, 3, 6
+TAKEOFF = mavlink2.MAV_CMD_NAV_TAKEOFF
+WAYPOINT = mavlink2.MAV_CMD_NAV_WAYPOINT
+RTL = mavlink2.MAV_CMD_NAV_RETURN_TO_LAUNCH
+CHANGE_SPEED = mavlink2.MAV_CMD_DO_CHANGE_SPEED
+GLOBAL = mavlink2.MAV_FRAME_GLOBAL
+RELATIVE = mavlink2.MAV_FRAME_GLOBAL_RELATIVE_ALT
+RELATIVE_INT = mavlink2.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT
 HOME_LAT, HOME_LON = -35.363262, 149.165237
 T = TypeVar("T")
 

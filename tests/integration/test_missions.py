@@ -6,6 +6,7 @@ from __future__ import annotations
 from typing import Any
 
 import pytest
+from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from gcs.launcher import LocalFleet
 from tests.helpers import FleetWatcher, api_client
@@ -13,7 +14,10 @@ from tests.helpers import FleetWatcher, api_client
 pytestmark = pytest.mark.integration
 
 VEHICLE = "sim_1"
-TAKEOFF, WAYPOINT, RTL, DO_SET_SERVO = 22, 16, 20, 183
+TAKEOFF = mavlink2.MAV_CMD_NAV_TAKEOFF
+WAYPOINT = mavlink2.MAV_CMD_NAV_WAYPOINT
+RTL = mavlink2.MAV_CMD_NAV_RETURN_TO_LAUNCH
+DO_SET_SERVO = mavlink2.MAV_CMD_DO_SET_SERVO
 
 
 def _mission(lat: float, lon: float, alt: float) -> list[dict[str, Any]]:

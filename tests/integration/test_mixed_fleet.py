@@ -8,6 +8,7 @@ from typing import Any
 
 import httpx
 import pytest
+from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from gcs.launcher import LocalFleet
 from tests.helpers import (
@@ -25,7 +26,8 @@ pytestmark = pytest.mark.integration
 
 ROVER, PX4 = "sim_1", "sim_2"
 NORTH = 1 / 111_320
-WAYPOINT, RTL = 16, 20
+WAYPOINT = mavlink2.MAV_CMD_NAV_WAYPOINT
+RTL = mavlink2.MAV_CMD_NAV_RETURN_TO_LAUNCH
 
 
 @pytest.fixture(scope="module")

@@ -15,6 +15,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from gcs.launcher import LocalFleet
 from tests.helpers import (
@@ -31,7 +32,10 @@ pytestmark = pytest.mark.integration
 
 VEHICLE = "sim_1"
 OUTAGE_S = 30.0
-TAKEOFF, WAYPOINT, LOITER_TIME, RTL = 22, 16, 19, 20
+TAKEOFF = mavlink2.MAV_CMD_NAV_TAKEOFF
+WAYPOINT = mavlink2.MAV_CMD_NAV_WAYPOINT
+LOITER_TIME = mavlink2.MAV_CMD_NAV_LOITER_TIME
+RTL = mavlink2.MAV_CMD_NAV_RETURN_TO_LAUNCH
 
 
 @pytest.fixture

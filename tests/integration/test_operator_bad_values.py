@@ -1,10 +1,12 @@
 """An operator's out-of-range number never reaches, let alone ends, a vehicle's agent.
 
-Against real processes (hub, simulator, agent), an operator sends 1e300 and NaN in every
-field of every route that ends up in a MAVLink field: commands to one vehicle and to a
-group, parameters, mission upload and set-current. Each 1e300 is a 422 that names the
-field; afterwards the agent is still running, still connected, and still carries out a
-good command (and the vehicle's parameter is unchanged).
+Against real processes (hub, simulator, agent), an operator sends 1e300, -1e300, NaN and
+Infinity in every number of every route that ends up in a MAVLink field: each command
+with a number, to one vehicle and to a group (take-off, go-to, speed, set home, parameter
+set, mission upload, set current), the parameter route, the mission routes, and stick
+input on the dashboard's socket. Each one is refused naming the field (a 422 on REST, an
+error reply on the socket); afterwards the agent is still running, still connected, and
+still carries a good command there and back (and the vehicle's parameter is unchanged).
 """
 
 from __future__ import annotations
@@ -12,67 +14,100 @@ from __future__ import annotations
 import json
 import math
 import secrets
-from collections.abc import Callable
-from pathlib import Path
-from typing import Any
+from collections.abc import Callable, Iterator
+from typing import Any, get_args
 
 import httpx
 import pytest
+from pydantic import BaseModel
+from websockets.sync.client import ClientConnection, connect
 
 from gcs.launcher import LocalFleet
+from protocol.messages import CLIENT_WS_PATH, Command, ManualAxes, MissionItem
 from tests.conftest import FLEET_SPEEDUP
 from tests.helpers import FleetWatcher, access_token, api_client, connected, running_fleet
 
 pytestmark = pytest.mark.integration
 
 VEHICLE = "sim_1"
-NAN = math.nan
+# What a careless or hostile client can put on the wire: json.dumps spells NaN and
+# Infinity as JavaScript does (httpx's json= refuses to), and a number in a string is
+# read as that number by a lax parser.
+BAD: list[float | str] = [1e300, -1e300, math.nan, math.inf, "1e300", "NaN"]
+BAD_IDS = ["1e300", "-1e300", "NaN", "Infinity", "string 1e300", "string NaN"]
 WAYPOINT = {"command": 16, "lat": -35.3632, "lon": 149.1652, "alt": 20.0}
+# Every number a mission item carries into MISSION_ITEM_INT
+ITEM_FIELDS = ("param1", "param2", "param3", "param4", "lat", "lon", "alt", "command", "frame")
+STICK = {"x": 0, "y": 0, "z": 500, "r": 0, "buttons": 0}
 
 
-def _commands(bad: float) -> dict[str, dict[str, Any]]:
-    """Each command with ``bad`` in one of its numbers, by the field a 422 must name."""
+def _commands(bad: float | str) -> list[tuple[str, dict[str, Any]]]:
+    """Each command with ``bad`` in one of its numbers, with the field a 422 must name:
+    every number of every command the protocol has (the others carry none)."""
+    home = {"name": "set_home", "use_current": False, "lat": -35.36, "lon": 149.16}
+    goto = {"name": "goto", "lat": -35.36, "lon": 149.16, "altitude": 10}
+    commands: list[tuple[str, dict[str, Any]]] = [
+        ("altitude", {"name": "takeoff", "altitude": bad}),
+        ("lat", {**goto, "lat": bad}),
+        ("lon", {**goto, "lon": bad}),
+        ("altitude", {**goto, "altitude": bad}),
+        ("speed", {"name": "change_speed", "speed": bad}),
+        ("lat", {**home, "alt_msl": 500.0, "lat": bad}),
+        ("lon", {**home, "alt_msl": 500.0, "lon": bad}),
+        ("alt_msl", {**home, "alt_msl": bad}),
+        ("value", {"name": "param_set", "param": "WPNAV_SPEED", "value": bad}),
+        ("seq", {"name": "mission_set_current", "seq": bad}),
+    ]
+    for field in ITEM_FIELDS:
+        items = [WAYPOINT, {**WAYPOINT, field: bad}]
+        commands.append((field, {"name": "mission_upload", "items": items}))
+    return commands
+
+
+def _numbers(model: type[BaseModel]) -> set[str]:
+    """The fields of ``model`` that hold a number (a bool is not one)."""
     return {
-        "altitude": {"name": "takeoff", "altitude": bad},
-        "lat": {"name": "goto", "lat": bad, "lon": 149.16, "altitude": 10},
-        "lon": {"name": "goto", "lat": -35.36, "lon": bad, "altitude": 10},
-        "speed": {"name": "change_speed", "speed": bad},
-        "alt_msl": {
-            "name": "set_home",
-            "use_current": False,
-            "lat": -35.36,
-            "lon": 149.16,
-            "alt_msl": bad,
-        },
-        "value": {"name": "param_set", "param": "WPNAV_SPEED", "value": bad},
-        "param1": {"name": "mission_upload", "items": [{**WAYPOINT, "param1": bad}]},
-        "param4": {"name": "mission_upload", "items": [{**WAYPOINT, "param4": bad}]},
-        "alt": {"name": "mission_upload", "items": [{**WAYPOINT, "alt": bad}]},
-        "seq": {"name": "mission_set_current", "seq": bad},
+        name
+        for name, field in model.model_fields.items()
+        if {int, float} & set(get_args(field.annotation) or [field.annotation])
     }
+
+
+def test_the_cases_cover_every_number_of_every_command() -> None:
+    """A number added to a command (or a command added) must join the cases below."""
+    covered: set[tuple[str, str]] = set()
+    for field, command in _commands(1e300):
+        covered.add((command["name"], field))
+    expected = {
+        (model.model_fields["name"].default, field)
+        for model in get_args(get_args(Command)[0])
+        for field in _numbers(model)
+    }
+    expected |= {("mission_upload", field) for field in _numbers(MissionItem)}
+    assert covered == expected
+    assert set(ITEM_FIELDS) == _numbers(MissionItem)
+    assert set(STICK) == _numbers(ManualAxes)
 
 
 Request = Callable[[httpx.Client], httpx.Response]
 
 
 def _send(method: str, url: str, body: object) -> Request:
-    # json.dumps writes NaN as JavaScript does (httpx's json= refuses to): what a
-    # careless or hostile client can put on the wire
     content = json.dumps(body)
     headers = {"content-type": "application/json"}
     return lambda api: api.request(method, url, content=content, headers=headers)
 
 
-def _requests(bad: float) -> list[tuple[str, Request]]:
-    """(the field a 422 must name, the request) for every route that reaches MAVLink."""
+def _requests(bad: float | str) -> list[tuple[str, Request]]:
+    """(the field a 422 must name, the request) for every REST route that reaches MAVLink."""
     base = f"/api/v1/vehicles/{VEHICLE}"
     requests: list[tuple[str, Request]] = []
-    for field, command in _commands(bad).items():
+    for field, command in _commands(bad):
         requests.append((field, _send("POST", f"{base}/commands", command)))
         group = {"vehicle_ids": [VEHICLE], "command": command}
         requests.append((field, _send("POST", "/api/v1/fleet/commands", group)))
     requests.append(("value", _send("PUT", f"{base}/params/WPNAV_SPEED", {"value": bad})))
-    for field in ("param1", "param2", "param3", "param4", "alt", "lat", "lon", "command"):
+    for field in ITEM_FIELDS:
         body = {"items": [WAYPOINT, {**WAYPOINT, field: bad}]}
         requests.append((field, _send("POST", f"{base}/mission", body)))
     requests.append(("seq", _send("PUT", f"{base}/mission/current", {"seq": bad})))
@@ -80,67 +115,102 @@ def _requests(bad: float) -> list[tuple[str, Request]]:
 
 
 @pytest.fixture(scope="module")
-def one_vehicle(tmp_path_factory: pytest.TempPathFactory) -> Any:
+def one_vehicle(tmp_path_factory: pytest.TempPathFactory) -> Iterator[LocalFleet]:
     with running_fleet(
         tmp_path_factory.mktemp("bounds"), vehicles=1, speedup=FLEET_SPEEDUP
     ) as fleet:
         yield fleet
 
 
-def _operator(fleet: LocalFleet) -> httpx.Client:
-    base = fleet.plan.hub_http
-    admin = access_token(base, "admin", fleet.plan.admin_password)
+@pytest.fixture(scope="module")
+def operator(one_vehicle: LocalFleet) -> str:
+    """An operator's bearer token: the role that may command, below the admin."""
+    base = one_vehicle.plan.hub_http
+    admin = access_token(base, "admin", one_vehicle.plan.admin_password)
     password = secrets.token_urlsafe(18)
     with api_client(base, admin) as api:
         created = api.post(
             "/api/v1/users", json={"username": "op", "password": password, "role": "operator"}
         )
         assert created.status_code == 201, created.text
-    return api_client(base, access_token(base, "op", password))
+    return access_token(base, "op", password)
+
+
+def _wpnav_speed(api: httpx.Client) -> float:
+    read = api.get(f"/api/v1/vehicles/{VEHICLE}/params/WPNAV_SPEED")
+    assert read.status_code == 200, read.text
+    value: float = read.json()["values"]["WPNAV_SPEED"]
+    return value
 
 
 def _still_answering(fleet: LocalFleet, api: httpx.Client, wpnav_speed: float) -> None:
     fleet.check_alive()  # raises if the agent (or anything else) exited
     with FleetWatcher(fleet.plan.hub_http, api.headers["Authorization"][7:]) as watcher:
         watcher.wait_until(connected(VEHICLE), 30, f"{VEHICLE} connected")
-    read = api.get(f"/api/v1/vehicles/{VEHICLE}/params/WPNAV_SPEED")
-    assert read.status_code == 200, read.text
-    assert read.json()["values"]["WPNAV_SPEED"] == wpnav_speed, "nothing reached the vehicle"
+    assert _wpnav_speed(api) == wpnav_speed, "nothing reached the vehicle"
     # a write the vehicle echoes: the agent still carries a command there and back
     good = api.put(f"/api/v1/vehicles/{VEHICLE}/params/WPNAV_SPEED", json={"value": wpnav_speed})
     assert good.status_code == 200, good.text
 
 
-def test_1e300_is_a_422_naming_the_field_on_every_route(
-    one_vehicle: LocalFleet, tmp_path: Path
+@pytest.mark.parametrize("bad", BAD, ids=BAD_IDS)
+def test_every_rest_route_refuses_the_number_naming_the_field(
+    one_vehicle: LocalFleet, operator: str, bad: float | str
 ) -> None:
-    with _operator(one_vehicle) as api:
-        with FleetWatcher(one_vehicle.plan.hub_http, api.headers["Authorization"][7:]) as w:
-            w.wait_until(connected(VEHICLE), 30, f"{VEHICLE} connected")
-        before = api.get(f"/api/v1/vehicles/{VEHICLE}/params/WPNAV_SPEED")
-        assert before.status_code == 200, before.text
-        wpnav_speed = before.json()["values"]["WPNAV_SPEED"]
-        for bad in (1e300, -1e300):
-            for field, request in _requests(bad):
-                response = request(api)
-                assert response.status_code == 422, (field, response.text)
-                named = [error["loc"][-1] for error in response.json()["detail"]]
-                assert field in named, (field, response.text)
-            one_vehicle.check_alive()
+    with api_client(one_vehicle.plan.hub_http, operator) as api:
+        with FleetWatcher(one_vehicle.plan.hub_http, operator) as watcher:
+            watcher.wait_until(connected(VEHICLE), 30, f"{VEHICLE} connected")
+        wpnav_speed = _wpnav_speed(api)
+        for field, request in _requests(bad):
+            response = request(api)
+            assert response.status_code == 422, (field, response.text)
+            named = [error["loc"][-1] for error in response.json()["detail"]]
+            assert field in named, (field, response.text)
         _still_answering(one_vehicle, api, wpnav_speed)
 
 
-def test_nan_never_reaches_the_agent_on_any_route(one_vehicle: LocalFleet) -> None:
+def _said(socket: ClientConnection, kind: str) -> dict[str, Any]:
+    """The next message of this kind (fleet states and events in between are read past)."""
+    while True:
+        message: dict[str, Any] = json.loads(socket.recv(timeout=10))
+        if message["type"] == kind:
+            return message
+
+
+def test_stick_input_refuses_the_number_naming_the_axis(
+    one_vehicle: LocalFleet, operator: str
+) -> None:
+    """Stick input is the one path to MAVLink (MANUAL_CONTROL, int16 and uint16 fields)
+    that is not REST: the lease holder's socket gets an error naming the axis, and the
+    socket, the lease and the agent go on."""
     base = one_vehicle.plan.hub_http
-    admin = access_token(base, "admin", one_vehicle.plan.admin_password)
-    with api_client(base, admin) as api:
-        wpnav_speed = api.get(f"/api/v1/vehicles/{VEHICLE}/params/WPNAV_SPEED").json()
-        for field, request in _requests(NAN):
-            try:
-                status = request(api).status_code
-            except httpx.TransportError:
-                # Until the hub can serialise a 422 that quotes a NaN (issue 13.9) it
-                # breaks off the response; either way nothing was sent on.
-                status = 500
-            assert status in (422, 500), field
-        _still_answering(one_vehicle, api, wpnav_speed["values"]["WPNAV_SPEED"])
+    url = base.replace("http://", "ws://") + CLIENT_WS_PATH
+    with (
+        api_client(base, operator) as api,
+        connect(url, additional_headers={"Authorization": f"Bearer {operator}"}) as pilot,
+    ):
+        with FleetWatcher(base, operator) as watcher:
+            watcher.wait_until(connected(VEHICLE), 30, f"{VEHICLE} connected")
+        wpnav_speed = _wpnav_speed(api)
+        pilot.send(json.dumps({"type": "control", "vehicle_id": VEHICLE, "action": "acquire"}))
+        assert _said(pilot, "lease")["holder"] == "op"
+        seq = 0
+        # fewer than the 20 bad frames after which the hub closes a socket
+        for bad in (1e300, math.nan, -math.inf):
+            for axis in STICK:
+                seq += 1
+                frame = {
+                    "type": "manual",
+                    "vehicle_id": VEHICLE,
+                    "seq": seq,
+                    "axes": {**STICK, axis: bad},
+                }
+                pilot.send(json.dumps(frame))
+                error = _said(pilot, "error")
+                assert error["code"] == "invalid_message", (bad, axis, error)
+                assert f"manual.axes.{axis}:" in error["message"], (bad, axis, error)
+        pilot.send(json.dumps({"type": "ping", "nonce": "still here"}))
+        assert _said(pilot, "pong")["nonce"] == "still here"
+        pilot.send(json.dumps({"type": "control", "vehicle_id": VEHICLE, "action": "release"}))
+        assert _said(pilot, "lease")["holder"] is None
+        _still_answering(one_vehicle, api, wpnav_speed)

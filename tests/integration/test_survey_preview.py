@@ -5,12 +5,14 @@ gets a 422 saying what to change, and nothing is uploaded."""
 from __future__ import annotations
 
 from collections.abc import Iterator
+from pathlib import Path
 from typing import Any
 
 import httpx
 import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
+from backend.missions.survey.interop import read_qgc_plan_items, read_wpl
 from gcs.launcher import LocalFleet
 from tests.helpers import FleetWatcher, api_client, ready
 
@@ -106,3 +108,35 @@ def test_a_self_intersecting_area_is_refused_saying_where(
     response = api.post("/api/v1/surveys/preview", json=body)
     assert response.status_code == 422, response.text
     assert "Self-intersection" in response.text
+
+
+def test_files_import_and_a_planned_survey_exports_each_drone_s_mission(
+    api: httpx.Client, watcher: FleetWatcher
+) -> None:
+    plan_text = (Path(__file__).resolve().parents[1] / "data" / "qgc" / "survey.plan").read_text()
+    imported = api.post("/api/v1/surveys/import", json={"format": "plan", "content": plan_text})
+    assert imported.status_code == 200, imported.text
+    assert imported.json()["altitude_m"] == 80
+    assert imported.json()["area"]["type"] == "Polygon"
+    bad = api.post("/api/v1/surveys/import", json={"format": "kml", "content": "<kml/>"})
+    assert bad.status_code == 422
+    assert "holds no Polygon" in bad.text
+
+    for vehicle in VEHICLES:
+        watcher.wait_until(ready(vehicle), 60, f"{vehicle} ready")
+    created = api.post("/api/v1/surveys", json=_request(watcher.state("sim_1")))
+    assert created.status_code == 201, created.text
+    survey = created.json()["survey"]
+    try:
+        drone = survey["drones"][0]
+        url = f"/api/v1/surveys/{survey['id']}/vehicles/{drone['vehicle_id']}/mission"
+        exported = api.get(url, params={"format": "plan"})
+        assert exported.status_code == 200, exported.text
+        items = read_qgc_plan_items(exported.text)
+        assert [i.command for i in items] == [i["command"] for i in drone["items"]]
+        wpl = api.get(url, params={"format": "wpl"})
+        assert wpl.text.startswith("QGC WPL 110")
+        assert len(read_wpl(wpl.text)[1]) == len(drone["items"])
+    finally:
+        # A planned survey holds its drones: free them for the rest of the suite.
+        assert api.post(f"/api/v1/surveys/{survey['id']}/abort").status_code == 200

@@ -6,13 +6,12 @@ from __future__ import annotations
 import asyncio
 import os
 import time
-from collections.abc import Callable
 from pathlib import Path
 
 import pytest
 
 from tests.conftest import ADMIN_PASSWORD, hub_settings
-from tests.helpers import access_token, api_client, running_hub
+from tests.helpers import access_token, api_client, poll_until_async, running_hub
 from tests.integration.test_agent_tokens import OPERATOR_TOKEN, _heartbeat, _recorded_flight
 from tests.integration.test_hub_bad_input import scripted_agent
 from vehicle_agents.tlog_pruning import DAY_S, UPLOADED_DIR, TlogRetention
@@ -27,14 +26,6 @@ def _aged(path: Path, size: int, age_days: float) -> Path:
     mtime = time.time() - age_days * DAY_S
     os.utime(path, (mtime, mtime))
     return path
-
-
-async def _until(condition: Callable[[], bool], timeout_s: float, what: str) -> None:
-    """Files announce nothing: look again until ``condition`` holds."""
-    deadline = time.monotonic() + timeout_s
-    while not condition():
-        assert time.monotonic() < deadline, f"timed out after {timeout_s} s waiting for {what}"
-        await asyncio.sleep(0.05)  # polling: there is no event to wait on
 
 
 def test_after_an_upload_the_agent_prunes_uploaded_tlogs_only(tmp_path: Path) -> None:
@@ -59,7 +50,9 @@ def test_after_an_upload_the_agent_prunes_uploaded_tlogs_only(tmp_path: Path) ->
             running = tasks.create_task(uploader.run())
             uploader.on_message(_heartbeat(armed=True))
             uploaded = onboard / UPLOADED_DIR / flight.name
-            await _until(lambda: uploaded.exists() and not earlier.exists(), 20, "the pruning")
+            await poll_until_async(
+                lambda: uploaded.exists() and not earlier.exists(), 20, "the pruning"
+            )
             running.cancel()
 
     settings = hub_settings(tmp_path, agent_tokens=f"alpha={OPERATOR_TOKEN}")

@@ -1,4 +1,5 @@
-"""A live socket lasts no longer than the token that opened it."""
+"""A live socket (the dashboard's feed, the 3D view's relay) lasts no longer than the token
+that opened it."""
 
 from __future__ import annotations
 
@@ -8,22 +9,27 @@ from pathlib import Path
 
 import pytest
 from websockets.exceptions import ConnectionClosed
-from websockets.sync.client import connect
+from websockets.sync.client import ClientConnection, connect
 
 from protocol.messages import CLIENT_WS_PATH, CloseCode
 from tests.conftest import ADMIN_PASSWORD, hub_settings
-from tests.helpers import access_token, api_client, running_hub
+from tests.helpers import access_token, running_hub
 from tests.integration.test_hub_bad_input import _telemetry, scripted_agent
+from tests.viz_wire import SUBPROTOCOL
 
 TOKEN_TTL_S = 3.0
 
 
 def test_a_dashboard_socket_closes_with_4401_when_its_token_expires(tmp_path: Path) -> None:
-    with running_hub(hub_settings(tmp_path, access_token_ttl_s=TOKEN_TTL_S)) as base:
+    # The agent's token is provisioned, so that no request spends the short token's life
+    # (on a loaded machine, enrolling through the API could outlive it).
+    agent_token = "t" * 32
+    settings = hub_settings(
+        tmp_path, access_token_ttl_s=TOKEN_TTL_S, agent_tokens=f"v1={agent_token}"
+    )
+    with running_hub(settings) as base:
         token = access_token(base, "admin", ADMIN_PASSWORD)
         opened = time.time()
-        with api_client(base, token) as api:
-            agent_token = api.post("/api/v1/vehicles/v1/agent-tokens").json()["token"]
         url = base.replace("http://", "ws://") + CLIENT_WS_PATH
         headers = {"Authorization": f"Bearer {token}"}
         with (
@@ -49,4 +55,31 @@ def test_a_dashboard_socket_closes_with_4401_when_its_token_expires(tmp_path: Pa
     assert closed.value.rcvd.code == CloseCode.UNAUTHORIZED
     assert "expired" in closed.value.rcvd.reason
     assert sent > 1  # updates did flow until then
+    assert ended - opened >= TOKEN_TTL_S - 0.5  # not before the token's lifetime
+
+
+def test_the_3d_views_socket_closes_with_4401_when_its_token_expires(tmp_path: Path) -> None:
+    """The other socket a user's token opens: the relay to the 3D scene under /viz/."""
+    with running_hub(hub_settings(tmp_path, access_token_ttl_s=TOKEN_TTL_S)) as base:
+        token = access_token(base, "admin", ADMIN_PASSWORD)
+        opened = time.time()
+        url = base.replace("http://", "ws://") + "/viz"
+        headers = {"Authorization": f"Bearer {token}"}
+        frames = 0
+
+        def watch(view: ClientConnection) -> None:
+            """The scene's frames, until the relay ends."""
+            nonlocal frames
+            while True:
+                view.recv(timeout=TOKEN_TTL_S + 5)
+                frames += 1
+
+        view = connect(url, subprotocols=[SUBPROTOCOL], additional_headers=headers)  # type: ignore[list-item]
+        with view, pytest.raises(ConnectionClosed) as closed:
+            watch(view)
+        ended = time.time()
+    assert closed.value.rcvd is not None
+    assert closed.value.rcvd.code == CloseCode.UNAUTHORIZED
+    assert "expired" in closed.value.rcvd.reason
+    assert frames >= 1  # the scene did reach the viewer until then
     assert ended - opened >= TOKEN_TTL_S - 0.5  # not before the token's lifetime

@@ -110,6 +110,15 @@ def test_a_second_agent_with_the_same_id_is_refused_and_stops(
         assert "refused vehicle id 'twin'" in log
         assert "clash" in log
         assert "--vehicle-id" in log
+        # The operator sees it as it happens, on the dashboards' live feed.
+        watcher.wait_until(
+            lambda _: any(
+                e["vehicle_id"] == "twin" and e["kind"] == "id_clash" and e["severity"] == 3
+                for e in watcher.events
+            ),
+            10,
+            "the clash on the live feed",
+        )
         with api_client(hub, admin_token) as api:
             poll_until(lambda: _events(api, "twin", "id_clash"), 10, "the clash event")
             [clash] = _events(api, "twin", "id_clash")

@@ -61,9 +61,11 @@ def test_auto_flies_the_mission_from_the_ground() -> None:
     assert reached == [1, 4, 5, 8]
     assert max_speed == pytest.approx(3.0, abs=0.05)  # DO_CHANGE_SPEED ran during the flight
     photos = [e for e in events if isinstance(e, PhotoTaken)]
-    # every 10 m along the first leg; the "do" commands after the loiter run as it starts
-    # (ArduPilot's order), so the trigger stops there and DIGICAM takes one more
-    assert 4 <= len(photos) <= 6
+    # Every 10 m along both legs: the "do" commands after the loiter run once it is over
+    # (AP_Mission's order), so the trigger stops there and DIGICAM takes one more there.
+    assert 6 <= len(photos) <= 8
+    on_second_leg = [p for p in photos if copter.ne_of(p.lat, p.lon)[1] > 15.0]
+    assert len(on_second_leg) >= 2
     assert [p.index for p in photos] == list(range(1, len(photos) + 1))
     said = texts(copter)
     assert "Reached command #4" in said
@@ -97,6 +99,26 @@ def test_auto_needs_a_takeoff_on_the_ground_and_resumes_in_the_air() -> None:
     run_until(flying, lambda c: not c.armed, 120)
     assert flying.body.north == pytest.approx(20.0, abs=2.5)
     assert [e.seq for e in flying.drain_events() if isinstance(e, ItemReached)] == [1, 2]
+
+
+def test_a_mission_uploaded_after_one_was_flown_starts_from_its_take_off() -> None:
+    copter = Copter(DEFAULT_HOME)
+    copter.set_mission(mission(copter))
+    copter.set_mode(CopterMode.GUIDED)
+    copter.arm()
+    assert copter.set_mode(CopterMode.AUTO) is MavResult.ACCEPTED
+    run_until(copter, lambda c: not c.armed, 200)
+    assert copter.mode is CopterMode.AUTO  # landed and disarmed, still in AUTO
+
+    # The next flight's plan, uploaded as a GCS does after a flight.
+    copter.set_mission(mission(copter))
+    assert copter.mission_state() is MissionState.NOT_STARTED
+    copter.set_mode(CopterMode.GUIDED)
+    copter.arm()
+    assert copter.set_mode(CopterMode.AUTO) is MavResult.ACCEPTED, texts(copter)[-2:]
+    copter.drain_events()
+    run_until(copter, lambda c: not c.armed, 200)
+    assert [e.seq for e in copter.drain_events() if isinstance(e, ItemReached)] == [1, 4, 5, 8]
 
 
 def test_wpnav_speed_changes_guided_cruise_speed() -> None:
@@ -175,3 +197,21 @@ def test_wind_leans_the_hover_and_shows_as_airspeed() -> None:
     assert copter.body.groundspeed < 0.01  # the position controller holds station
     assert copter.body.pitch < -math.radians(3.0)  # nose down, into the wind (facing north)
     assert math.hypot(*copter.body.airspeed_ne(copter.params)) == pytest.approx(8.0, abs=0.05)
+
+
+def test_a_mission_flown_to_the_end_starts_again_from_its_take_off_next_time() -> None:
+    # AP_Arming_Copter::disarm resets the mission: a survey uploaded while the vehicle sits
+    # disarmed in AUTO after its last one takes off again rather than "Missing Takeoff Cmd".
+    copter = Copter(DEFAULT_HOME)
+    copter.set_mission(mission(copter))
+    copter.set_mode(CopterMode.GUIDED)
+    copter.arm()
+    assert copter.set_mode(CopterMode.AUTO) is MavResult.ACCEPTED
+    run_until(copter, lambda c: not c.armed, 200)
+    assert copter.mode is CopterMode.AUTO
+    copter.set_mission(mission(copter))
+    assert copter.mission_current == 0
+    copter.set_mode(CopterMode.GUIDED)
+    copter.arm()
+    assert copter.set_mode(CopterMode.AUTO) is MavResult.ACCEPTED
+    run_until(copter, lambda c: c.relative_alt > 5, 60)

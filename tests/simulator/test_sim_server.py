@@ -38,12 +38,15 @@ def wait_for(
     predicate: Callable[[Any], bool],
     timeout_s: float,
     what: str,
+    *,
+    system_id: int = SYSID,
 ) -> Any:
-    """The first message of ``types`` from the simulator that satisfies ``predicate``."""
+    """The first message of ``types`` from ``system_id`` (the simulator's, unless told)
+    that satisfies ``predicate``: the one MAVLink wait of the tests."""
     deadline = time.monotonic() + timeout_s
     while (remaining := deadline - time.monotonic()) > 0:
         message = connection.recv_match(type=types, blocking=True, timeout=remaining)
-        if message is not None and message.get_srcSystem() == SYSID and predicate(message):
+        if message is not None and message.get_srcSystem() == system_id and predicate(message):
             return message
     raise AssertionError(f"timed out after {timeout_s} s waiting for {what}")
 

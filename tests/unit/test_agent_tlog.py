@@ -11,7 +11,7 @@ from typing import Any
 import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
-from tests.mavutil_state import mavutil_in_mavlink2
+from tests.mavutil_state import mavutil_in_mavlink2, read_tlog
 from vehicle_agents.tlog import TlogRecorder, TlogUploadError, upload_tlog
 
 T0 = 1_700_000_000.0  # 2023-11-14T22:13:20Z
@@ -57,17 +57,6 @@ def mavutil(monkeypatch: pytest.MonkeyPatch) -> ModuleType:
     return mavutil_in_mavlink2(monkeypatch)
 
 
-def _read_back(mavutil: ModuleType, path: Path) -> list[Any]:
-    connection = mavutil.mavlink_connection(str(path))
-    messages = []
-    try:
-        while (message := connection.recv_match()) is not None:
-            messages.append(message)
-    finally:
-        connection.close()
-    return messages
-
-
 def test_one_flight_is_one_file_of_what_was_received(tmp_path: Path, mavutil: ModuleType) -> None:
     wire = Wire()
     recorder = TlogRecorder(tmp_path, "alpha-1")
@@ -94,7 +83,7 @@ def test_one_flight_is_one_file_of_what_was_received(tmp_path: Path, mavutil: Mo
 
     assert recorder.recording is None
     assert list(recorder.finished) == [tmp_path / "alpha-1_20231114T221321.tlog"]
-    read = _read_back(mavutil, recorder.finished[0])
+    read = read_tlog(mavutil, recorder.finished[0])
     assert [m.get_type() for m in read] == [m.get_type() for m, _, _ in flight]
     assert [m._timestamp for m in read] == pytest.approx([at for _, at, _ in flight], abs=1e-6)
     assert [m.get_msgbuf() for m in read] == [m.get_msgbuf() for m, _, _ in flight]
@@ -152,7 +141,7 @@ def test_writing_stops_past_max_bytes_and_says_so_once(
 
     (path,) = recorder.finished
     assert path.stat().st_size == limit
-    assert [m.get_type() for m in _read_back(mavutil, path)] == ["HEARTBEAT"] + [
+    assert [m.get_type() for m in read_tlog(mavutil, path)] == ["HEARTBEAT"] + [
         "GLOBAL_POSITION_INT"
     ] * 3
     assert len([r for r in caplog.records if "stopped" in r.getMessage()]) == 1

@@ -3,12 +3,21 @@
 from __future__ import annotations
 
 import pytest
+from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from protocol.messages import MissionItem
 from protocol.mission_rules import mission_problems
 
-TAKEOFF, WAYPOINT, LOITER_TIME, LOITER_TURNS, LAND, RTL = 22, 16, 19, 18, 21, 20
-CHANGE_SPEED, JUMP, DELAY, CAM_TRIGG_DIST = 178, 177, 112, 206
+TAKEOFF = mavlink2.MAV_CMD_NAV_TAKEOFF
+WAYPOINT = mavlink2.MAV_CMD_NAV_WAYPOINT
+LOITER_TIME = mavlink2.MAV_CMD_NAV_LOITER_TIME
+LOITER_TURNS = mavlink2.MAV_CMD_NAV_LOITER_TURNS
+LAND = mavlink2.MAV_CMD_NAV_LAND
+RTL = mavlink2.MAV_CMD_NAV_RETURN_TO_LAUNCH
+CHANGE_SPEED = mavlink2.MAV_CMD_DO_CHANGE_SPEED
+JUMP = mavlink2.MAV_CMD_DO_JUMP
+DELAY = mavlink2.MAV_CMD_CONDITION_DELAY
+CAM_TRIGG_DIST = mavlink2.MAV_CMD_DO_SET_CAM_TRIGG_DIST
 HERE = {"lat": -35.36, "lon": 149.16}
 
 

@@ -5,6 +5,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from vehicle_agents.cli import EXIT_VEHICLE_ID_IN_USE
+
 ROOT = Path(__file__).parents[2]
 
 
@@ -38,3 +40,20 @@ def test_the_readme_gives_the_hub_service_steps() -> None:
         "systemctl enable --now gcs-hub",
     ):
         assert step in steps, step
+
+
+def test_the_agent_unit_does_not_restart_an_agent_refused_its_vehicle_id() -> None:
+    """An id clash (close 4409) ends the agent with EXIT_VEHICLE_ID_IN_USE: restarting it
+    would only knock again, so the unit must leave it stopped for a person to fix."""
+    unit = _settings(ROOT / "deploy" / "gcs-agent.service")
+    assert unit["Restart"] == ["always"]
+    (prevented,) = unit["RestartPreventExitStatus"]
+    assert str(EXIT_VEHICLE_ID_IN_USE) in prevented.split()
+
+
+def test_the_agent_units_state_is_private() -> None:
+    """systemd makes a StateDirectory 0755 unless told: the outbox and .tlogs in it are
+    the vehicle's flight data."""
+    unit = _settings(ROOT / "deploy" / "gcs-agent.service")
+    assert unit["StateDirectoryMode"] == ["0700"]
+    assert unit["UMask"] == ["0077"]

@@ -15,6 +15,7 @@ import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from gcs.launcher import free_port
+from tests.helpers import poll_until_async
 from vehicle_agents.fcu_link import MavMessage
 from vehicle_agents.forwarding import (
     NO_TARGET,
@@ -196,11 +197,7 @@ def make_gcs() -> Iterator[Callable[[], Gcs]]:
 
 
 async def until(condition: Callable[[], bool], what: str) -> None:
-    deadline = time.monotonic() + WAIT_S
-    while not condition():
-        if time.monotonic() > deadline:
-            raise AssertionError(f"timed out waiting for {what}")
-        await asyncio.sleep(0.001)
+    await poll_until_async(condition, WAIT_S, what, every_s=0.001)
 
 
 @contextlib.asynccontextmanager

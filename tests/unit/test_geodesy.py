@@ -12,7 +12,7 @@ from pyproj import Geod, Transformer
 
 import backend.safety
 import simulator
-from common.geodesy import EARTH_MEAN_RADIUS_M, GeoPoint, LocalFrame, haversine_m
+from common.geodesy import EARTH_MEAN_RADIUS_M, GeoPoint, LocalFrame, centre_of, haversine_m
 from gcs.launcher import VEHICLE_SPACING_M, FleetPlan
 from simulator import DEFAULT_HOME, Copter
 
@@ -127,6 +127,7 @@ def test_positions_go_in_as_lat_lon_and_offsets_come_out_as_east_north() -> None
 _HAND_WRITTEN = re.compile(
     r"class (LocalFrame|GeoPoint)\b|def (haversine\w*|to_local|to_geo|to_global)\("
     r"|METRES_PER_DEGREE|LOCATION_SCALING_FACTOR|6_?378_?137|298\.257"
+    r"|\b111_?3\d\d\b|radians\(lat\b"  # metres per degree; trigonometry on a latitude
 )
 
 
@@ -139,3 +140,10 @@ def test_no_other_module_does_its_own_geodesy() -> None:
         for match in _HAND_WRITTEN.finditer(path.read_text(encoding="utf-8"))
     ]
     assert found == []
+
+
+def test_the_centre_of_points_across_the_antimeridian_is_on_it() -> None:
+    lat, lon = centre_of([(10.0, 179.0), (10.0, -179.0), (12.0, 180.0)])
+    assert abs(lon) == pytest.approx(180.0)
+    assert 10.0 < lat < 12.0
+    assert centre_of([(47.0, 8.0), (47.0, 8.0)]) == pytest.approx((47.0, 8.0))

@@ -1,13 +1,17 @@
 """Imports point one way: the import-linter contracts in pyproject.toml hold, and an import
-that points up breaks one of them (so it fails this test, not a review)."""
+that points up breaks one of them (so it fails this test, not a review). docs/architecture.md
+draws the same layers and names every package."""
 
 from __future__ import annotations
 
 import os
+import re
 import shutil
 import subprocess
 import sys
+import tomllib
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -80,3 +84,50 @@ def test_an_upward_import_breaks_a_contract(tree: Path, module: str, imported: s
     assert result.returncode == 1, result.stdout + result.stderr
     assert "BROKEN" in result.stdout
     assert imported.split(".")[0] in result.stdout
+
+
+# -- docs/architecture.md draws the same layers ---------------------------------------------
+
+ARCHITECTURE = ROOT / "docs" / "architecture.md"
+# A layer's line in the page's hub drawing: its modules and packages, then what they do.
+_LAYER_LINE = re.compile(r"^ ((?:[a-z_0-9]+(?:/|\.py)(?: │ |  ))*[a-z_0-9]+(?:/|\.py))(?:\s|$)")
+
+
+def _contract(contract_id: str) -> dict[str, Any]:
+    config = tomllib.loads(CONFIG.read_text())["tool"]["importlinter"]["contracts"]
+    (contract,) = [c for c in config if c["id"] == contract_id]
+    return dict(contract)
+
+
+def _members(layer: str) -> frozenset[str]:
+    """``"safety | auth"`` -> {"safety", "auth"} (``:`` joins siblings that may import each
+    other, ``|`` independent ones)."""
+    return frozenset(name.strip() for name in re.split(r"[|:]", layer))
+
+
+def _drawn_hub_layers() -> list[frozenset[str]]:
+    text = ARCHITECTURE.read_text()
+    start = text.index("Inside the hub, top to bottom")
+    block = text[text.index("```", start) + 3 : text.index("```", text.index("```", start) + 3)]
+    layers = []
+    for line in block.splitlines():
+        if match := _LAYER_LINE.match(line):
+            names = re.split(r" │ |  ", match.group(1))
+            layers.append(frozenset(name.removesuffix("/").removesuffix(".py") for name in names))
+    return layers
+
+
+def test_the_architecture_page_draws_the_hubs_layers_as_the_contract_has_them() -> None:
+    contract = [_members(layer) for layer in _contract("hub")["layers"]]
+    assert _drawn_hub_layers() == contract
+
+
+def test_the_architecture_page_names_every_package() -> None:
+    text = ARCHITECTURE.read_text()
+    tabled = set(re.findall(r"^\| `([a-z_0-9/.]+)` \|", text, flags=re.MULTILINE))
+    wanted = {f"{package}/" for package in PACKAGES if package != "backend"}  # by its parts
+    for layer in _contract("hub")["layers"]:
+        for name in _members(layer):
+            module = ROOT / "backend" / f"{name}.py"
+            wanted.add(f"backend/{name}.py" if module.exists() else f"backend/{name}/")
+    assert wanted - tabled == set()

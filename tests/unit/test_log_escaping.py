@@ -9,7 +9,7 @@ from collections.abc import Iterator
 import pytest
 from uvicorn.logging import AccessFormatter
 
-from backend.log_escaping import EscapeControlCharacters, escape_control_characters_in_logs
+from common.log_escaping import EscapeControlCharacters, escape_control_characters_in_logs
 
 
 @pytest.fixture

@@ -39,6 +39,49 @@ def test_the_agent_loads_one_dialect() -> None:
     assert done.stdout.strip() == f"{dialect} ['{dialect}']"
 
 
+# The agent's RSS bar (DESIGN.md: 60 MB at 200 messages/s); its imports alone took 47 MiB
+# when measured (README, "What an onboard install holds"), so this leaves room to run.
+IMPORTED_RSS_BUDGET_MIB = 52
+NEVER_IMPORTED = {
+    "backend",
+    "simulator",
+    "gcs",
+    "bench",  # the hub, the simulator, the launcher
+    "fastapi",
+    "starlette",
+    "uvicorn",
+    "sqlalchemy",
+    "httpx",
+    "viser",  # the hub's
+    "numpy",
+    "lxml",  # pymavlink's optional numpy, its generator's lxml: 10+ MiB each
+}
+
+
+def test_the_agents_start_up_imports_nothing_of_the_hub_and_fit_its_budget() -> None:
+    """What gcs-agent loads before it connects, in a fresh interpreter of the dev venv,
+    which has the hub's packages too: none of them, and a bounded RSS."""
+    script = (
+        "import sys\n"
+        "import vehicle_agents.cli, vehicle_agents.agent\n"
+        "status = open('/proc/self/status').read().splitlines()\n"
+        "rss_kb = next(int(line.split()[1]) for line in status if line.startswith('VmRSS'))\n"
+        "print(rss_kb / 1024, ' '.join(sorted({name.split('.')[0] for name in sys.modules})))\n"
+    )
+    env = {k: v for k, v in os.environ.items() if k not in ("MAVLINK_DIALECT", "MAVLINK20")}
+    done = subprocess.run(
+        [sys.executable, "-c", script],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        check=True,
+        env=env,
+    )
+    rss_mib, loaded = done.stdout.split(" ", 1)
+    assert NEVER_IMPORTED & set(loaded.split()) == set()
+    assert float(rss_mib) < IMPORTED_RSS_BUDGET_MIB
+
+
 def _fake_pymavlink(root: Path) -> Path:
     for version in ("v10", "v20"):
         folder = root / "dialects" / version

@@ -90,3 +90,42 @@ def test_a_policy_must_grow_from_a_positive_start() -> None:
         Backoff(initial_s=0.0, max_s=1.0)
     with pytest.raises(ValueError, match="initial_s"):
         Backoff(initial_s=2.0, max_s=1.0)
+
+
+def test_a_loop_cancelled_as_its_link_fails_stops_instead_of_retrying() -> None:
+    asyncio.run(_cancel_a_loop_as_its_link_fails())
+
+
+async def _cancel_a_loop_as_its_link_fails() -> None:
+    """SIGTERM cancels the agent at the moment the flight controller closes its socket:
+    the link's TaskGroup raises only the reader's OSError (Python 3.11 drops the
+    cancellation then), the loop catches it, and its next wait must still end the loop."""
+    reader_started = asyncio.Event()
+    attempts: list[int] = []
+
+    async def reader() -> None:
+        if attempts != [1]:
+            raise OSError("connection refused")  # the flight controller is gone
+        reader_started.set()
+        try:
+            await asyncio.Event().wait()
+        except asyncio.CancelledError:
+            raise OSError("flight controller closed the connection") from None
+
+    async def keep_link_up() -> None:
+        retries = Retries(Backoff(initial_s=0.001, max_s=0.001))
+        for _ in range(50):  # bounded, so the test ends even when the bug is back
+            attempts.append(1)
+            try:
+                async with asyncio.TaskGroup() as tasks:
+                    tasks.create_task(reader())
+            except* OSError:
+                pass
+            await retries.wait()
+
+    link = asyncio.create_task(keep_link_up())
+    await reader_started.wait()
+    link.cancel()
+    await asyncio.wait({link}, timeout=5)
+    assert link.cancelled(), f"the loop retried {len(attempts)} times after its cancellation"
+    assert len(attempts) == 1

@@ -1,15 +1,21 @@
 """A lane plan as MAVLink mission items, the way QGC's Survey writes them
-(TransectStyleComplexItem): per lane a waypoint at the turnaround, one at the lane's start
-followed by DO_SET_CAM_TRIGG_DIST (distance, no shutter time, trigger once at once), one at
-the lane's end followed by DO_SET_CAM_TRIGG_DIST 0 (stop), and one at the far turnaround.
+(TransectStyleComplexItem::_buildAndAppendMissionItems): per lane a waypoint at the
+turnaround, one at the lane's entry followed by DO_SET_CAM_TRIGG_DIST (distance, no shutter
+time, trigger once at once), one at the lane's exit followed by DO_SET_CAM_TRIGG_DIST 0
+(stop, and trigger once: QGC's "trigger at entry and exit for full coverage"), and one at
+the far turnaround. ArduPilot runs the "do" commands after a waypoint once it is reached
+(AP_Mission::advance_current_nav_cmd), so the camera runs from entry to exit.
 
 For "hover and capture", or a camera that cannot trigger on distance, the lane gets a
-waypoint at each photo (held for a moment when hovering) followed by IMAGE_START_CAPTURE
-for one image, as QGC does. The mission starts with a take-off and ends with RTL.
-Altitudes are relative to home (MAV_FRAME_GLOBAL_RELATIVE_ALT).
+waypoint at each photo (held for a moment when hovering) followed by DO_DIGICAM_CONTROL
+"shoot once", which every ArduPilot since 3.x runs in a mission. The mission starts with a
+take-off and DO_CHANGE_SPEED to the survey's speed, and ends with RTL. Altitudes are
+relative to home (MAV_FRAME_GLOBAL_RELATIVE_ALT).
 """
 
 from __future__ import annotations
+
+from dataclasses import dataclass
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
@@ -18,6 +24,18 @@ from common.geodesy import LocalFrame
 from protocol.messages import MissionItem
 
 HOVER_HOLD_S = 1.0  # time to settle before each photo when hovering
+# MISSION_ITEM_INT carries a "do" command's param5 in x unscaled; our MissionItem holds x as
+# lat * 1e7, so param5 = 1 is a latitude of 1e-7.
+_PARAM5_ONE = 1e-7
+
+
+@dataclass(frozen=True, slots=True)
+class SurveyMission:
+    """The items, and for each lane the item numbers (1 is the first after home) of its
+    entry and exit waypoints: a lane is flown once its exit is reached."""
+
+    items: list[MissionItem]
+    lanes: list[tuple[int, int]]
 
 
 def _wp(
@@ -35,24 +53,92 @@ def _wp(
 
 
 def _trigger_distance(distance_m: float) -> MissionItem:
+    # param3 = 1 on both: a photo at the lane's entry and one at its exit, as QGC writes it.
     return MissionItem(
         command=mavlink2.MAV_CMD_DO_SET_CAM_TRIGG_DIST,
         frame=mavlink2.MAV_FRAME_MISSION,
         param1=distance_m,
         param2=0,
-        param3=1 if distance_m > 0 else 0,
+        param3=1,
     )
 
 
 def _single_photo() -> MissionItem:
-    # param1 camera id (0 all), param2 interval 0, param3 one image, param4 sequence 0.
+    # param1 session 0, param2 zoom 0, param3 zoom step 0, param4 focus 0, param5 shoot 1.
     return MissionItem(
-        command=mavlink2.MAV_CMD_IMAGE_START_CAPTURE,
+        command=mavlink2.MAV_CMD_DO_DIGICAM_CONTROL,
         frame=mavlink2.MAV_FRAME_MISSION,
-        param1=0,
-        param2=0,
-        param3=1,
+        lat=_PARAM5_ONE,
     )
+
+
+def _change_speed(speed_ms: float) -> MissionItem:
+    # param1 1 = ground speed, param2 the speed, param3 -1 = throttle unchanged.
+    return MissionItem(
+        command=mavlink2.MAV_CMD_DO_CHANGE_SPEED,
+        frame=mavlink2.MAV_FRAME_MISSION,
+        param1=1,
+        param2=speed_ms,
+        param3=-1,
+    )
+
+
+def survey_mission(
+    plan: LanePlan,
+    frame: LocalFrame,
+    altitude_m: float,
+    *,
+    speed_ms: float | None = None,
+    per_photo: bool = False,
+    hover: bool = False,
+    takeoff: bool = True,
+    rtl: bool = True,
+    start: tuple[float, float] | None = None,
+    lead_in: bool = True,
+) -> SurveyMission:
+    """``start``: a first waypoint where the vehicle is (a mission resumed in the air).
+    ``lead_in=False``: the first lane has no turnaround before it (it starts where the
+    vehicle is, part way along a lane)."""
+    items: list[MissionItem] = []
+    lanes: list[tuple[int, int]] = []
+    if takeoff:
+        items.append(
+            MissionItem(
+                command=mavlink2.MAV_CMD_NAV_TAKEOFF,
+                frame=mavlink2.MAV_FRAME_GLOBAL_RELATIVE_ALT,
+                alt=altitude_m,
+            )
+        )
+    if start is not None:
+        items.append(_wp(frame, start, altitude_m))
+    if speed_ms is not None:
+        # After the first nav command: it runs once that is done (take-off or resume point).
+        items.append(_change_speed(speed_ms))
+    for i, lane in enumerate(plan.lanes):
+        turn_in, turn_out = plan.path[4 * i], plan.path[4 * i + 3]
+        if lead_in or i > 0:
+            items.append(_wp(frame, turn_in, altitude_m))
+        entry = len(items) + 1
+        if per_photo or hover:
+            for photo in lane.photos:
+                items.append(_wp(frame, photo, altitude_m, HOVER_HOLD_S if hover else 0.0))
+                items.append(_single_photo())
+            exit_ = len(items) - 1
+        else:
+            items.append(_wp(frame, lane.start, altitude_m))
+            items.append(_trigger_distance(plan.trigger_distance_m))
+            items.append(_wp(frame, lane.end, altitude_m))
+            exit_ = len(items)
+            items.append(_trigger_distance(0.0))
+        lanes.append((entry, exit_))
+        items.append(_wp(frame, turn_out, altitude_m))
+    if rtl:
+        items.append(
+            MissionItem(
+                command=mavlink2.MAV_CMD_NAV_RETURN_TO_LAUNCH, frame=mavlink2.MAV_FRAME_MISSION
+            )
+        )
+    return SurveyMission(items, lanes)
 
 
 def mission_items(
@@ -64,33 +150,15 @@ def mission_items(
     hover: bool = False,
     takeoff: bool = True,
     rtl: bool = True,
+    speed_ms: float | None = None,
 ) -> list[MissionItem]:
-    items: list[MissionItem] = []
-    if takeoff:
-        items.append(
-            MissionItem(
-                command=mavlink2.MAV_CMD_NAV_TAKEOFF,
-                frame=mavlink2.MAV_FRAME_GLOBAL_RELATIVE_ALT,
-                alt=altitude_m,
-            )
-        )
-    for i, lane in enumerate(plan.lanes):
-        turn_in, turn_out = plan.path[4 * i], plan.path[4 * i + 3]
-        items.append(_wp(frame, turn_in, altitude_m))
-        if per_photo or hover:
-            for photo in lane.photos:
-                items.append(_wp(frame, photo, altitude_m, HOVER_HOLD_S if hover else 0.0))
-                items.append(_single_photo())
-        else:
-            items.append(_wp(frame, lane.start, altitude_m))
-            items.append(_trigger_distance(plan.trigger_distance_m))
-            items.append(_wp(frame, lane.end, altitude_m))
-            items.append(_trigger_distance(0.0))
-        items.append(_wp(frame, turn_out, altitude_m))
-    if rtl:
-        items.append(
-            MissionItem(
-                command=mavlink2.MAV_CMD_NAV_RETURN_TO_LAUNCH, frame=mavlink2.MAV_FRAME_MISSION
-            )
-        )
-    return items
+    return survey_mission(
+        plan,
+        frame,
+        altitude_m,
+        speed_ms=speed_ms,
+        per_photo=per_photo,
+        hover=hover,
+        takeoff=takeoff,
+        rtl=rtl,
+    ).items

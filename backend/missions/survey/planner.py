@@ -10,8 +10,8 @@ border), so a slanted edge is still covered. A lane is split where it would cros
 Lanes are grouped into cells (boustrophedon decomposition: a cell goes on while each row
 has exactly one segment overlapping the one before), each cell is flown back and forth,
 and the cells are chained nearest first, so a concave area is not crossed by long detours.
-Each lane is lengthened to a whole number of trigger distances, centred on the strip, and
-gets a turnaround (outside the area) at both ends.
+Photos are taken at each lane's entry, every trigger distance, and at its exit, as QGC's
+survey has ArduPilot take them; each lane gets a turnaround (outside the area) at both ends.
 """
 
 from __future__ import annotations
@@ -20,16 +20,19 @@ import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
+import numpy as np
 import shapely
 from shapely import affinity
 from shapely.geometry import LineString, MultiPolygon, Polygon, box
-from shapely.geometry.base import BaseGeometry
 from shapely.validation import explain_validity
 
 from backend.missions.survey.camera import CameraCalc
 
 MAX_VERTICES = 10_000
 DEFAULT_TURNAROUND_M = 10.0  # QGC's default for multirotors
+
+
+Point = tuple[float, float]
 
 
 class PlanError(ValueError):
@@ -116,6 +119,53 @@ def lower_bound_m(area: Polygon, lane_spacing_m: float, turnaround_m: float, n_r
     )
 
 
+def strip_bound_m(area: Polygon, calc: CameraCalc, angle_deg: float, turnaround_m: float) -> float:
+    """The shortest path a lane plan with the planner's rows at this spacing and angle can
+    have, and the bound path lengths are held to (at most 1.05 times it).
+
+    Each row's strip (one lane spacing wide) is covered at the requested overlaps only by
+    photos on its own lane, so the lane must reach within half a trigger distance of each
+    end of every piece of the area in the strip: at least the piece's length less one
+    trigger distance. Going from piece to piece takes at least one spacing (or the gap
+    between two pieces of a row, if less), and every lane has its two turnarounds. Unlike
+    area / spacing (lower_bound_m), this counts what no plan at this angle can avoid: a
+    slanted edge makes the end rows as long as the area is wide.
+    """
+    area = validate_area(area)
+    spacing, trigger = calc.lane_spacing_m, calc.trigger_distance_m
+    centre = area.centroid
+    rotated = affinity.rotate(area, -angle_deg, origin=(centre.x, centre.y))
+    assert isinstance(rotated, Polygon)
+    _, miny, _, maxy = rotated.bounds
+    ys = _rows(miny, maxy, spacing, None)
+    rows = _segments(rotated, spacing, ys)
+    pieces = [(a, b, y) for row, y in zip(rows, ys, strict=True) for a, b in row]
+    return (
+        sum(max(0.0, (b - a) - trigger) for a, b, _ in pieces)
+        + _entries_m(pieces, turnaround_m)
+        + 2 * len(pieces) * turnaround_m
+    )
+
+
+def _entries_m(pieces: list[tuple[float, float, float]], turnaround_m: float) -> float:
+    """The least transit between pieces: every piece but the first is entered from where
+    another one was left. A lane is left and entered at a turnaround point, on its row and
+    at most one turnaround beyond an end of its piece, so each entry costs at least the
+    rows' separation across, and the ends' separation along less two turnarounds."""
+    if len(pieces) < 2:
+        return 0.0
+    ends = np.array([[(a, y), (b, y)] for a, b, y in pieces])  # piece, end, (x, y)
+    flat = ends.reshape(-1, 2)
+    nearest = []
+    for i in range(len(pieces)):
+        delta = np.abs(flat[None, :, :] - ends[i][:, None, :])  # my end, other end, xy
+        along = np.maximum(delta[..., 0] - 2 * turnaround_m, 0.0)
+        d = np.hypot(along, delta[..., 1])
+        d[:, 2 * i : 2 * i + 2] = np.inf  # not from itself
+        nearest.append(float(d.min()))
+    return sum(nearest) - max(nearest)
+
+
 def _rows(miny: float, maxy: float, spacing: float, grid_y: float | None) -> list[float]:
     """The lanes' y, each covering a strip one spacing wide: centred on the area, or on a
     fleet's common grid so that parts' lanes line up."""
@@ -183,14 +233,57 @@ def _cells(rows: list[list[tuple[float, float]]]) -> list[list[tuple[int, float,
     return cells
 
 
-def _pad(a: float, b: float, y: float, pad: float, holes: BaseGeometry) -> tuple[float, float]:
-    """Lengthen [a, b] by `pad` to a whole number of trigger distances: on both sides, or
-    on the one side that does not run into a hole (or not at all if both do)."""
-    for left, right in ((pad / 2, pad / 2), (0.0, pad), (pad, 0.0)):
-        line = LineString([(a - left, y), (b + right, y)])
-        if holes.is_empty or line.intersection(holes).length < 1e-6:
-            return a - left, b + right
-    return a, b
+Cell = list[tuple[int, float, float]]
+Visit = tuple[int, bool, bool]  # cell, flown from its last row, first lane westward
+_MULTI_START_CELLS = 30  # above this, one greedy chain from the nearest cell
+
+
+def _ends(cell: Cell, ys: list[float], rev_rows: bool, rev_x: bool) -> tuple[Point, Point, float]:
+    """Where flying `cell` this way starts and ends (rotated frame), and its transit from
+    each lane's end to the next one's start: a cell whose rows shrink costs a detour at the
+    step flown one way, none flown the other."""
+    rows = list(reversed(cell)) if rev_rows else cell
+    transit = 0.0
+    prev_end: float | None = None
+    for k, (_, a, b) in enumerate(rows):
+        forward = (k % 2 == 0) != rev_x
+        start, end = (a, b) if forward else (b, a)
+        if prev_end is not None:
+            transit += abs(start - prev_end)
+        prev_end = end
+    r0, a0, b0 = rows[0]
+    r1, a1, b1 = rows[-1]
+    last_forward = ((len(rows) - 1) % 2 == 0) != rev_x
+    return (b0 if rev_x else a0, ys[r0]), (b1 if last_forward else a1, ys[r1]), transit
+
+
+def _order(cells: list[Cell], ys: list[float], origin: Point | None) -> list[Visit]:
+    """The order and direction to fly the cells in: from each possible first cell and
+    corner, the nearest next cell each time; the chain with the least transit wins."""
+    ways = [(i, rr, rx) for i in range(len(cells)) for rr in (False, True) for rx in (False, True)]
+    ends = {w: _ends(cells[w[0]], ys, w[1], w[2]) for w in ways}
+
+    def chain(first: Visit) -> tuple[float, list[Visit]]:
+        cost = math.dist(origin, ends[first][0]) if origin is not None else 0.0
+        cost += ends[first][2]
+        order, done, here = [first], {first[0]}, ends[first][1]
+        while len(done) < len(cells):
+            step, way = min(
+                (math.dist(here, ends[w][0]) + ends[w][2], w) for w in ways if w[0] not in done
+            )
+            cost += step
+            order.append(way)
+            done.add(way[0])
+            here = ends[way][1]
+        return cost, order
+
+    if origin is not None and len(cells) > _MULTI_START_CELLS:
+        firsts = [min(ways, key=lambda w: math.dist(origin, ends[w][0]))]
+    elif len(cells) > _MULTI_START_CELLS:
+        firsts = [ways[0]]
+    else:
+        firsts = ways
+    return min((chain(first) for first in firsts), key=lambda c: c[0])[1]
 
 
 def plan_lanes(
@@ -218,7 +311,7 @@ def plan_lanes(
     cx, cy = (grid.cx, grid.cy) if grid else (area.centroid.x, area.centroid.y)
     rotated = affinity.rotate(area, -angle_deg, origin=(cx, cy))
     assert isinstance(rotated, Polygon)
-    minx, miny, _, maxy = rotated.bounds
+    _, miny, _, maxy = rotated.bounds
     ys = _rows(miny, maxy, spacing, grid.y0 if grid else None)
     rows = _segments(rotated, spacing, ys)
     cos_a, sin_a = math.cos(math.radians(angle_deg)), math.sin(math.radians(angle_deg))
@@ -228,24 +321,16 @@ def plan_lanes(
         return (cx + dx * cos_a - dy * sin_a, cy + dx * sin_a + dy * cos_a)
 
     holes = shapely.union_all([Polygon(ring) for ring in rotated.interiors])
-    here = start if start is not None else back(minx, ys[0])
-    remaining = _cells(rows)
+    cells = _cells(rows)
+    origin = None
+    if start is not None:
+        # where the vehicle is, in the rotated frame
+        dx, dy = start[0] - cx, start[1] - cy
+        origin = (cx + dx * cos_a + dy * sin_a, cy - dx * sin_a + dy * cos_a)
     lanes: list[Lane] = []
     path: list[tuple[float, float]] = []
-    while remaining:
-        # The next cell is the one whose nearest corner is nearest; fly it from that corner.
-        best = None
-        for i, cell in enumerate(remaining):
-            for rev_rows in (False, True):
-                r, a, b = cell[-1] if rev_rows else cell[0]
-                for rev_x in (False, True):
-                    p = back(b if rev_x else a, ys[r])
-                    d = math.dist(here, p)
-                    if best is None or d < best[0]:
-                        best = (d, i, rev_rows, rev_x)
-        assert best is not None
-        _, i, rev_rows, rev_x = best
-        cell = remaining.pop(i)
+    for i, rev_rows, rev_x in _order(cells, ys, origin):
+        cell = cells[i]
         for k, (r, a, b) in enumerate(reversed(cell) if rev_rows else cell):
             y = ys[r]
             if grid is not None and holes.is_empty:
@@ -255,17 +340,19 @@ def plan_lanes(
                 b = max(a, grid.x0 + math.ceil((b - grid.x0) / trigger - 0.5 - 1e-6) * trigger)
                 shots = round((b - a) / trigger)
             else:
+                # As QGC and ArduPilot fly it: a photo at the entry (DO_SET_CAM_TRIGG_DIST
+                # with "trigger once"), one per trigger distance, and one at the exit (the
+                # stop command triggers once too). The lane is not lengthened.
                 shots = max(1, math.ceil((b - a) / trigger - 1e-9))
-                a, b = _pad(a, b, y, shots * trigger - (b - a), holes)
             forward = (k % 2 == 0) != rev_x
             xs, xe = (a, b) if forward else (b, a)
             step = trigger if forward else -trigger
-            photos = tuple(back(xs + j * step, y) for j in range(shots + 1))
+            along = [xs + j * step for j in range(shots)]
+            photos = tuple(back(x, y) for x in [*along, xe])
             turn = turnaround_m if forward else -turnaround_m
             lane = Lane(back(xs, y), back(xe, y), photos)
             lanes.append(lane)
             path.extend([back(xs - turn, y), lane.start, lane.end, back(xe + turn, y)])
-        here = path[-1]
     return LanePlan(
         lanes=tuple(lanes),
         path=tuple(path),

@@ -11,7 +11,7 @@ import shapely
 
 from backend.missions.survey.camera import Camera, CameraCalc, calculate, preset
 from backend.missions.survey.geo import polygon_from_geojson
-from backend.missions.survey.mission import mission_items
+from backend.missions.survey.mission import survey_mission
 from backend.missions.survey.planner import PlanError, covered_fraction, footprints
 from backend.missions.survey.report import best_angle
 from backend.missions.survey.schemas import SurveyRequest
@@ -34,11 +34,14 @@ class PlannedPart:
     part: Part
     items: list[MissionItem]
     lane_paths: list[list[list[float]]]
+    # Per lane, the item numbers of its entry and exit waypoints (progress, hand-over).
+    lane_items: list[tuple[int, int]]
 
 
 @dataclass(frozen=True, slots=True)
 class Survey:
     calc: CameraCalc
+    frame: LocalFrame
     angle_deg: float
     area_m2: float
     coverage: float
@@ -86,22 +89,27 @@ def plan_survey(request: SurveyRequest, fleet: list[Fleet]) -> Survey:
         for p in parts
         for f in footprints(p.plan, calc.lane_spacing_m * 1.0001, calc.trigger_distance_m * 1.0001)
     ]
-    planned = [
-        PlannedPart(
-            part=p,
-            items=mission_items(
-                p.plan,
-                frame,
-                calc.altitude_m,
-                per_photo=not calc.camera.distance_trigger,
-                hover=request.hover_and_capture,
-            ),
-            lane_paths=[_latlon(frame, [lane.start, lane.end]) for lane in p.plan.lanes],
+    planned = []
+    for p in parts:
+        mission = survey_mission(
+            p.plan,
+            frame,
+            calc.altitude_m,
+            speed_ms=request.speed_ms,
+            per_photo=not calc.camera.distance_trigger,
+            hover=request.hover_and_capture,
         )
-        for p in parts
-    ]
+        planned.append(
+            PlannedPart(
+                part=p,
+                items=mission.items,
+                lane_paths=[_latlon(frame, [lane.start, lane.end]) for lane in p.plan.lanes],
+                lane_items=mission.lanes,
+            )
+        )
     return Survey(
         calc=calc,
+        frame=frame,
         angle_deg=angle,
         area_m2=float(area.area),
         coverage=covered_fraction(area, shots),

@@ -14,14 +14,12 @@
 // workspace gets its own TypeScript 5, and both stay locked in frontend/package-lock.json.
 // The output depends only on the input and the locked openapi-typescript version.
 
-import { execFileSync } from "node:child_process";
-import { existsSync, mkdirSync, readFileSync, writeFileSync } from "node:fs";
-import { dirname, resolve } from "node:path";
-import { fileURLToPath } from "node:url";
 import openapiTS, { astToString } from "openapi-typescript";
+import { parseArgs, readInput, writeOutput } from "../generator-cli.mjs";
 
-const here = dirname(fileURLToPath(import.meta.url));
-const repoRoot = resolve(here, "..", "..", "..");
+const USAGE =
+  "usage: gen-api.mjs [openapi.json | --from-python] [--out FILE]\n" +
+  "Reads the OpenAPI document from stdin when no input is given.\n";
 
 const BANNER = `/* eslint-disable */
 /**
@@ -34,60 +32,14 @@ const BANNER = `/* eslint-disable */
  */
 `;
 
-function parseArgs(argv) {
-  const args = { fromPython: false, out: null, input: null };
-  for (let i = 0; i < argv.length; i++) {
-    const arg = argv[i];
-    if (arg === "--from-python") args.fromPython = true;
-    else if (arg === "--out") args.out = argv[++i];
-    else if (arg === "-h" || arg === "--help") {
-      process.stdout.write(
-        "usage: gen-api.mjs [openapi.json | --from-python] [--out FILE]\n" +
-          "Reads the OpenAPI document from stdin when no input is given.\n",
-      );
-      process.exit(0);
-    } else if (arg.startsWith("-")) throw new Error(`unknown option ${arg}`);
-    else args.input = arg;
-  }
-  if (args.out === undefined) throw new Error("--out needs a file path");
-  return args;
-}
-
-/** All of stdin; read as a stream, since a synchronous read of a pipe can fail with EAGAIN. */
-async function readStdin() {
-  const chunks = [];
-  for await (const chunk of process.stdin) chunks.push(chunk);
-  return Buffer.concat(chunks).toString("utf8");
-}
-
-async function readDocumentText(args) {
-  if (args.fromPython) {
-    const venvPython = resolve(repoRoot, ".venv", "bin", "python");
-    const python = existsSync(venvPython) ? venvPython : "python3";
-    return execFileSync(python, ["-m", "backend.openapi_document"], {
-      cwd: repoRoot,
-      encoding: "utf8",
-      maxBuffer: 64 * 1024 * 1024,
-      stdio: ["ignore", "pipe", "inherit"],
-    });
-  }
-  return args.input ? readFileSync(args.input, "utf8") : readStdin();
-}
-
 async function main() {
-  const args = parseArgs(process.argv.slice(2));
-  const document = JSON.parse(await readDocumentText(args));
+  const args = parseArgs(process.argv.slice(2), USAGE);
+  const document = JSON.parse(await readInput(args, "backend.openapi_document"));
   if (typeof document.openapi !== "string" || !document.paths) {
     throw new Error("input is not an OpenAPI document (no 'openapi' version or 'paths')");
   }
   const ast = await openapiTS(document, { silent: true });
-  const output = `${BANNER}\n${astToString(ast).trimEnd()}\n`;
-  if (args.out) {
-    mkdirSync(dirname(resolve(args.out)), { recursive: true });
-    writeFileSync(args.out, output);
-  } else {
-    process.stdout.write(output);
-  }
+  writeOutput(args, `${BANNER}\n${astToString(ast).trimEnd()}\n`);
 }
 
 main().catch((error) => {

@@ -480,6 +480,218 @@ export interface paths {
         patch?: never;
         trace?: never;
     };
+    "/api/v1/surveys": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        /**
+         * List Surveys
+         * @description The surveys this hub is following (planned, flying, or awaiting a hand-over).
+         */
+        get: operations["list_surveys_api_v1_surveys_get"];
+        put?: never;
+        /**
+         * Create Survey
+         * @description Plan and split a survey and check every drone's mission against the safety rails;
+         *     nothing is uploaded until it is started. Each chosen drone must be connected, ready,
+         *     on the ground and in no other survey (422 naming it otherwise); a part that breaks a
+         *     rail refuses the whole survey (422, each violation naming its vehicle).
+         */
+        post: operations["create_survey_api_v1_surveys_post"];
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
+    "/api/v1/surveys/{survey_id}": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        /** Get Survey */
+        get: operations["get_survey_api_v1_surveys__survey_id__get"];
+        put?: never;
+        post?: never;
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
+    "/api/v1/surveys/{survey_id}/progress": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        /**
+         * Survey Progress
+         * @description Lanes flown, photos taken and the area their footprints cover, overall and per
+         *     drone; the live feed carries the same as `survey` messages.
+         */
+        get: operations["survey_progress_api_v1_surveys__survey_id__progress_get"];
+        put?: never;
+        post?: never;
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
+    "/api/v1/surveys/{survey_id}/start": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        get?: never;
+        put?: never;
+        /**
+         * Start Survey
+         * @description Upload every drone's mission (each checked again on the way), then start them
+         *     together: a guided take-off, then AUTO. An upload refused anywhere starts nothing
+         *     (409); a drone that fails to take off drops out and its lanes are offered.
+         */
+        post: operations["start_survey_api_v1_surveys__survey_id__start_post"];
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
+    "/api/v1/surveys/{survey_id}/handover": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        /**
+         * Handover Offer
+         * @description The hand-over on offer, if any: which drone dropped out and why, and per drone still
+         *     flying its new mission (from where it is) and the time it needs to finish.
+         */
+        get: operations["handover_offer_api_v1_surveys__survey_id__handover_get"];
+        put?: never;
+        post?: never;
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
+    "/api/v1/surveys/{survey_id}/handover/accept": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        get?: never;
+        put?: never;
+        /**
+         * Accept Handover
+         * @description Upload the offered missions; each drone flies on from where it is.
+         */
+        post: operations["accept_handover_api_v1_surveys__survey_id__handover_accept_post"];
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
+    "/api/v1/surveys/{survey_id}/vehicles/{vehicle_id}/abort": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        get?: never;
+        put?: never;
+        /**
+         * Abort Vehicle
+         * @description Take one drone out of the survey: it returns to launch, and its unflown lanes are
+         *     offered to the others.
+         */
+        post: operations["abort_vehicle_api_v1_surveys__survey_id__vehicles__vehicle_id__abort_post"];
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
+    "/api/v1/surveys/{survey_id}/abort": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        get?: never;
+        put?: never;
+        /**
+         * Abort Survey
+         * @description End the survey: every drone still flying it returns to launch.
+         */
+        post: operations["abort_survey_api_v1_surveys__survey_id__abort_post"];
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
+    "/api/v1/surveys/import": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        get?: never;
+        put?: never;
+        /**
+         * Import Survey Area
+         * @description A survey request's fields from another tool's file (no side effects): at least the
+         *     `area`, and from a QGC Survey also its camera and settings. Add `vehicle_ids` (and
+         *     anything to change) and send it to `POST /surveys` or the preview.
+         */
+        post: operations["import_survey_area_api_v1_surveys_import_post"];
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
+    "/api/v1/surveys/{survey_id}/vehicles/{vehicle_id}/mission": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        /**
+         * Export Survey Mission
+         * @description One drone's survey mission as a file other tools open: a QGroundControl `.plan`,
+         *     a `QGC WPL 110` waypoint file (Mission Planner, MAVProxy), or its path as GeoJSON.
+         */
+        get: operations["export_survey_mission_api_v1_surveys__survey_id__vehicles__vehicle_id__mission_get"];
+        put?: never;
+        post?: never;
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
     "/api/v1/vehicles/{vehicle_id}/scans/latest": {
         parameters: {
             query?: never;
@@ -1273,6 +1485,48 @@ export interface components {
              */
             force: boolean;
         };
+        /** DroneRun */
+        DroneRun: {
+            /** Vehicle Id */
+            vehicle_id: string;
+            /** @default assigned */
+            state: components["schemas"]["DroneState"];
+            /** Items */
+            items: components["schemas"]["MissionItem"][];
+            /** Lanes */
+            lanes: components["schemas"]["LaneRecord"][];
+            /**
+             * Lanes Done Before
+             * @default 0
+             */
+            lanes_done_before: number;
+            /**
+             * Photos
+             * @description [lat, lon]
+             */
+            photos?: [
+                number,
+                number
+            ][];
+            /** Photo Indexes */
+            photo_indexes?: number[];
+            /** Current */
+            current?: number | null;
+            /**
+             * Airborne
+             * @default false
+             */
+            airborne: boolean;
+            /** Reason */
+            reason?: string | null;
+            /** Finished */
+            finished?: number | null;
+        };
+        /**
+         * DroneState
+         * @enum {string}
+         */
+        DroneState: "assigned" | "flying" | "done" | "dropped";
         /**
          * ErrorMessage
          * @description Every error but a 422: one sentence that names what went wrong.
@@ -1445,6 +1699,30 @@ export interface components {
             /** Results */
             results: components["schemas"]["VehicleCommandResult"][];
         };
+        /** HandoverOffer */
+        HandoverOffer: {
+            /** Lost */
+            lost: string[];
+            /** Reason */
+            reason: string;
+            /** Missions */
+            missions: {
+                [key: string]: components["schemas"]["MissionItem"][];
+            };
+            /** Lanes */
+            lanes: {
+                [key: string]: components["schemas"]["LaneRecord"][];
+            };
+            /** Lanes Moved */
+            lanes_moved: number;
+            /**
+             * Total S
+             * @description each drone's estimated time to finish
+             */
+            total_s: {
+                [key: string]: number;
+            };
+        };
         /** Health */
         Health: {
             /**
@@ -1541,6 +1819,40 @@ export interface components {
              * @enum {string}
              */
             name: "land";
+        };
+        /** LaneRecord */
+        LaneRecord: {
+            /**
+             * Start
+             * @description [lat, lon] where photos start
+             */
+            start: [
+                number,
+                number
+            ];
+            /**
+             * End
+             * @description [lat, lon] where they end
+             */
+            end: [
+                number,
+                number
+            ];
+            /**
+             * Entry
+             * @description the item number of the lane's entry waypoint
+             */
+            entry: number;
+            /**
+             * Exit
+             * @description the item number of its exit waypoint
+             */
+            exit: number;
+            /**
+             * Done
+             * @default false
+             */
+            done: boolean;
         };
         /** LoginRequest */
         LoginRequest: {
@@ -2049,6 +2361,52 @@ export interface components {
             /** Alt Msl */
             alt_msl: number;
         };
+        /** SurveyDetail */
+        SurveyDetail: {
+            progress: components["schemas"]["SurveyUpdate"];
+            /** @description The plan, each drone's mission and lanes (flown or not), its photos ([lat, lon] from CAMERA_FEEDBACK) and any hand-over on offer */
+            survey: components["schemas"]["SurveyRun"];
+        };
+        /** SurveyDroneProgress */
+        SurveyDroneProgress: {
+            /** Vehicle Id */
+            vehicle_id: string;
+            /**
+             * State
+             * @description assigned, flying, done or dropped
+             */
+            state: string;
+            /** Lanes Done */
+            lanes_done: number;
+            /** Lanes Total */
+            lanes_total: number;
+            /** Photos */
+            photos: number;
+            /**
+             * Reason
+             * @description why it dropped out
+             */
+            reason?: string | null;
+        };
+        /** SurveyFile */
+        SurveyFile: {
+            /**
+             * Format
+             * @description plan: a QGroundControl .plan with a Survey item (its polygon, camera, altitude or GSD, overlaps, angle, turnaround); kml: the first Polygon of a KML file (Google Earth); geojson: a Polygon, Feature or FeatureCollection
+             * @enum {string}
+             */
+            format: "plan" | "kml" | "geojson";
+            /**
+             * Content
+             * @description the file's text
+             */
+            content: string;
+        };
+        /** SurveyList */
+        SurveyList: {
+            /** Surveys */
+            surveys: components["schemas"]["SurveyUpdate"][];
+        };
         /** SurveyPart */
         SurveyPart: {
             /** Vehicle Id */
@@ -2168,6 +2526,84 @@ export interface components {
             hover_and_capture: boolean;
             /** Vehicle Ids */
             vehicle_ids: string[];
+        };
+        /** SurveyRun */
+        SurveyRun: {
+            /** Id */
+            id: string;
+            /** Created */
+            created: number;
+            /** Started */
+            started?: number | null;
+            /** @default planned */
+            state: components["schemas"]["SurveyState"];
+            request: components["schemas"]["SurveyRequest"];
+            /** Altitude M */
+            altitude_m: number;
+            /** Footprint Side M */
+            footprint_side_m: number;
+            /** Footprint Frontal M */
+            footprint_frontal_m: number;
+            /** Lane Spacing M */
+            lane_spacing_m: number;
+            /** Trigger Distance M */
+            trigger_distance_m: number;
+            /** Angle Deg */
+            angle_deg: number;
+            /** Drones */
+            drones: components["schemas"]["DroneRun"][];
+            offer?: components["schemas"]["HandoverOffer"] | null;
+            /**
+             * Handovers
+             * @default 0
+             */
+            handovers: number;
+            /**
+             * Note
+             * @default
+             */
+            note: string;
+        };
+        /**
+         * SurveyState
+         * @enum {string}
+         */
+        SurveyState: "planned" | "flying" | "handover_offered" | "done" | "aborted" | "failed";
+        /**
+         * SurveyUpdate
+         * @description An area survey's progress, at most one a second per survey (newest wins): lanes
+         *     flown, photos triggered (CAMERA_FEEDBACK) and the share of the area their footprints
+         *     cover, overall and per drone, and whether a hand-over awaits the operator.
+         */
+        SurveyUpdate: {
+            /**
+             * Type
+             * @default survey
+             * @constant
+             */
+            type: "survey";
+            /** Survey Id */
+            survey_id: string;
+            /**
+             * State
+             * @description planned, flying, handover_offered, done, aborted, failed
+             */
+            state: string;
+            /** Lanes Done */
+            lanes_done: number;
+            /** Lanes Total */
+            lanes_total: number;
+            /** Photos */
+            photos: number;
+            /** Covered Pct */
+            covered_pct: number;
+            /** Drones */
+            drones: components["schemas"]["SurveyDroneProgress"][];
+            /**
+             * Handover Lanes
+             * @description lanes a hand-over offers to move; null if none offered
+             */
+            handover_lanes?: number | null;
         };
         /**
          * TakeoffCommand
@@ -4733,6 +5169,756 @@ export interface operations {
             };
             /** @description The request body is over the size limit */
             413: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed) */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Unprocessable"];
+                };
+            };
+            /** @description The database is unavailable; try again after Retry-After seconds */
+            503: {
+                headers: {
+                    /** @description Seconds to wait */
+                    "Retry-After"?: number;
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+        };
+    };
+    list_surveys_api_v1_surveys_get: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["SurveyList"];
+                };
+            };
+            /** @description Not authenticated */
+            401: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description Needs the 'read' permission */
+            403: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description The database is unavailable; try again after Retry-After seconds */
+            503: {
+                headers: {
+                    /** @description Seconds to wait */
+                    "Retry-After"?: number;
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+        };
+    };
+    create_survey_api_v1_surveys_post: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        requestBody: {
+            content: {
+                "application/json": components["schemas"]["SurveyRequest"];
+            };
+        };
+        responses: {
+            /** @description Successful Response */
+            201: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["SurveyDetail"];
+                };
+            };
+            /** @description Not authenticated */
+            401: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description Needs the 'command' permission */
+            403: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description The request body is over the size limit */
+            413: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed) */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Unprocessable"];
+                };
+            };
+            /** @description The database is unavailable; try again after Retry-After seconds */
+            503: {
+                headers: {
+                    /** @description Seconds to wait */
+                    "Retry-After"?: number;
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+        };
+    };
+    get_survey_api_v1_surveys__survey_id__get: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path: {
+                survey_id: string;
+            };
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["SurveyDetail"];
+                };
+            };
+            /** @description Not authenticated */
+            401: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description Needs the 'read' permission */
+            403: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description No such vehicle, flight, log, user or token (named in the message) */
+            404: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed) */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Unprocessable"];
+                };
+            };
+            /** @description The database is unavailable; try again after Retry-After seconds */
+            503: {
+                headers: {
+                    /** @description Seconds to wait */
+                    "Retry-After"?: number;
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+        };
+    };
+    survey_progress_api_v1_surveys__survey_id__progress_get: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path: {
+                survey_id: string;
+            };
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["SurveyUpdate"];
+                };
+            };
+            /** @description Not authenticated */
+            401: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description Needs the 'read' permission */
+            403: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description No such vehicle, flight, log, user or token (named in the message) */
+            404: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed) */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Unprocessable"];
+                };
+            };
+            /** @description The database is unavailable; try again after Retry-After seconds */
+            503: {
+                headers: {
+                    /** @description Seconds to wait */
+                    "Retry-After"?: number;
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+        };
+    };
+    start_survey_api_v1_surveys__survey_id__start_post: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path: {
+                survey_id: string;
+            };
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["SurveyDetail"];
+                };
+            };
+            /** @description Not authenticated */
+            401: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description Needs the 'command' permission */
+            403: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description No such vehicle, flight, log, user or token (named in the message) */
+            404: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed) */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Unprocessable"];
+                };
+            };
+            /** @description The database is unavailable; try again after Retry-After seconds */
+            503: {
+                headers: {
+                    /** @description Seconds to wait */
+                    "Retry-After"?: number;
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+        };
+    };
+    handover_offer_api_v1_surveys__survey_id__handover_get: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path: {
+                survey_id: string;
+            };
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["HandoverOffer"] | null;
+                };
+            };
+            /** @description Not authenticated */
+            401: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description Needs the 'read' permission */
+            403: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description No such vehicle, flight, log, user or token (named in the message) */
+            404: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed) */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Unprocessable"];
+                };
+            };
+            /** @description The database is unavailable; try again after Retry-After seconds */
+            503: {
+                headers: {
+                    /** @description Seconds to wait */
+                    "Retry-After"?: number;
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+        };
+    };
+    accept_handover_api_v1_surveys__survey_id__handover_accept_post: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path: {
+                survey_id: string;
+            };
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["SurveyDetail"];
+                };
+            };
+            /** @description Not authenticated */
+            401: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description Needs the 'command' permission */
+            403: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description No such vehicle, flight, log, user or token (named in the message) */
+            404: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed) */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Unprocessable"];
+                };
+            };
+            /** @description The database is unavailable; try again after Retry-After seconds */
+            503: {
+                headers: {
+                    /** @description Seconds to wait */
+                    "Retry-After"?: number;
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+        };
+    };
+    abort_vehicle_api_v1_surveys__survey_id__vehicles__vehicle_id__abort_post: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path: {
+                survey_id: string;
+                vehicle_id: string;
+            };
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["SurveyDetail"];
+                };
+            };
+            /** @description Not authenticated */
+            401: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description Needs the 'command' permission */
+            403: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description No such vehicle, flight, log, user or token (named in the message) */
+            404: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed) */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Unprocessable"];
+                };
+            };
+            /** @description The database is unavailable; try again after Retry-After seconds */
+            503: {
+                headers: {
+                    /** @description Seconds to wait */
+                    "Retry-After"?: number;
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+        };
+    };
+    abort_survey_api_v1_surveys__survey_id__abort_post: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path: {
+                survey_id: string;
+            };
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["SurveyDetail"];
+                };
+            };
+            /** @description Not authenticated */
+            401: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description Needs the 'command' permission */
+            403: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description No such vehicle, flight, log, user or token (named in the message) */
+            404: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed) */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Unprocessable"];
+                };
+            };
+            /** @description The database is unavailable; try again after Retry-After seconds */
+            503: {
+                headers: {
+                    /** @description Seconds to wait */
+                    "Retry-After"?: number;
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+        };
+    };
+    import_survey_area_api_v1_surveys_import_post: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        requestBody: {
+            content: {
+                "application/json": components["schemas"]["SurveyFile"];
+            };
+        };
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": {
+                        [key: string]: unknown;
+                    };
+                };
+            };
+            /** @description Not authenticated */
+            401: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description Needs the 'read' permission */
+            403: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description The request body is over the size limit */
+            413: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed) */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Unprocessable"];
+                };
+            };
+            /** @description The database is unavailable; try again after Retry-After seconds */
+            503: {
+                headers: {
+                    /** @description Seconds to wait */
+                    "Retry-After"?: number;
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+        };
+    };
+    export_survey_mission_api_v1_surveys__survey_id__vehicles__vehicle_id__mission_get: {
+        parameters: {
+            query?: {
+                format?: "plan" | "wpl" | "geojson";
+            };
+            header?: never;
+            path: {
+                survey_id: string;
+                vehicle_id: string;
+            };
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": unknown;
+                    "text/plain": unknown;
+                };
+            };
+            /** @description Not authenticated */
+            401: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description Needs the 'read' permission */
+            403: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description No such vehicle, flight, log, user or token (named in the message) */
+            404: {
                 headers: {
                     [name: string]: unknown;
                 };

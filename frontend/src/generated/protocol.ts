@@ -18,7 +18,14 @@ export type AgentToHub = Hello | Telemetry | LiveState | Event | CommandResult |
 export type HubToAgent = Welcome | CommandRequest | Ack | Resend | ErrorReply | Ping | ManualFrame;
 export type ClientToHub = Ping | ControlRequest | ManualInput | SubscribeScans | UnsubscribeScans;
 export type HubToClient =
-  FleetSnapshot | VehicleUpdate | EventBatch | ScanSubscriptions | Pong | ErrorReply | LeaseState;
+  | FleetSnapshot
+  | VehicleUpdate
+  | EventBatch
+  | ScanSubscriptions
+  | Pong
+  | ErrorReply
+  | LeaseState
+  | SurveyUpdate;
 
 /**
  * First frame from an agent: who it is and what it can do.
@@ -190,7 +197,8 @@ export interface Event {
     | "mission"
     | "id_clash"
     | "manual"
-    | "upload";
+    | "upload"
+    | "camera";
   /**
    * MAV_SEVERITY: 0 emergency .. 7 debug
    */
@@ -200,6 +208,25 @@ export interface Event {
    * the mission item a 'mission' event is about (numbered as the hub does)
    */
   mission_item: number | null;
+  /**
+   * for a 'camera' event: the photo
+   */
+  photo: Photo | null;
+}
+/**
+ * Where and when a photo was taken, as the autopilot reports it (CAMERA_FEEDBACK).
+ */
+export interface Photo {
+  /**
+   * the camera's image number (img_idx)
+   */
+  index: number;
+  lat: number;
+  lon: number;
+  /**
+   * metres above home
+   */
+  alt_rel: number;
 }
 export interface CommandResult {
   type: "command_result";
@@ -613,6 +640,10 @@ export interface LiveEvent {
   text: string;
   mission_item: number | null;
   /**
+   * for a 'camera' event: the photo
+   */
+  photo: Photo | null;
+  /**
    * how many identical events (same vehicle, kind, severity and text) this one stands for: repeats within one batch are sent once; time is the newest
    */
   repeat: number;
@@ -635,6 +666,45 @@ export interface LeaseState {
   vehicle_id: string;
   holder: string | null;
   reason: string;
+}
+/**
+ * An area survey's progress, at most one a second per survey (newest wins): lanes
+ * flown, photos triggered (CAMERA_FEEDBACK) and the share of the area their footprints
+ * cover, overall and per drone, and whether a hand-over awaits the operator.
+ */
+export interface SurveyUpdate {
+  type: "survey";
+  survey_id: string;
+  /**
+   * planned, flying, handover_offered, done, aborted, failed
+   */
+  state: string;
+  lanes_done: number;
+  lanes_total: number;
+  photos: number;
+  covered_pct: number;
+  /**
+   * @maxItems 64
+   */
+  drones: SurveyDroneProgress[];
+  /**
+   * lanes a hand-over offers to move; null if none offered
+   */
+  handover_lanes: number | null;
+}
+export interface SurveyDroneProgress {
+  vehicle_id: string;
+  /**
+   * assigned, flying, done or dropped
+   */
+  state: string;
+  lanes_done: number;
+  lanes_total: number;
+  photos: number;
+  /**
+   * why it dropped out
+   */
+  reason: string | null;
 }
 
 export const PROTOCOL_VERSION = 1;

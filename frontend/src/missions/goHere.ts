@@ -19,6 +19,8 @@ export class GoHere {
   private popup: L.Popup | null = null;
   private pressTimer: number | undefined;
   private pressStart: { x: number; y: number } | null = null;
+  /** A long press opened the popup; the finger is still down. */
+  private pressOpened = false;
 
   constructor(
     private readonly map: L.Map,
@@ -30,6 +32,8 @@ export class GoHere {
     container.addEventListener("pointermove", this.onPointerMove);
     container.addEventListener("pointerup", this.cancelPress);
     container.addEventListener("pointercancel", this.cancelPress);
+    // Not passive: preventDefault is what keeps the lift from becoming a tap.
+    container.addEventListener("touchend", this.onTouchEnd, { passive: false });
   }
 
   destroy(): void {
@@ -39,12 +43,18 @@ export class GoHere {
     container.removeEventListener("pointermove", this.onPointerMove);
     container.removeEventListener("pointerup", this.cancelPress);
     container.removeEventListener("pointercancel", this.cancelPress);
+    container.removeEventListener("touchend", this.onTouchEnd);
     this.cancelPress();
     this.popup?.remove();
   }
 
   private readonly onContextMenu = (event: L.LeafletMouseEvent): void => {
     L.DomEvent.preventDefault(event.originalEvent);
+    if (this.pressStart) {
+      // A browser that makes a long press a "contextmenu" (Chrome on Android): one popup.
+      this.cancelPress();
+      this.pressOpened = true;
+    }
     this.open(event.latlng);
   };
 
@@ -52,10 +62,12 @@ export class GoHere {
   private readonly onPointerDown = (event: PointerEvent): void => {
     if (event.pointerType !== "touch") return;
     this.cancelPress();
+    this.pressOpened = false;
     this.pressStart = { x: event.clientX, y: event.clientY };
     this.pressTimer = window.setTimeout(() => {
       const start = this.pressStart;
       this.pressStart = null;
+      this.pressOpened = start !== null;
       if (start) this.open(this.map.mouseEventToLatLng({ clientX: start.x, clientY: start.y } as MouseEvent));
     }, LONG_PRESS_MS);
   };
@@ -63,6 +75,15 @@ export class GoHere {
   private readonly onPointerMove = (event: PointerEvent): void => {
     const start = this.pressStart;
     if (start && Math.hypot(event.clientX - start.x, event.clientY - start.y) > 10) this.cancelPress();
+  };
+
+  // A browser that fires no "contextmenu" on a long press (Chromium without a context
+  // menu, among others) turns the lift into a tap, and a tap on the map closes its popup:
+  // the one the press just opened.
+  private readonly onTouchEnd = (event: TouchEvent): void => {
+    if (!this.pressOpened) return;
+    this.pressOpened = false;
+    event.preventDefault();
   };
 
   private readonly cancelPress = (): void => {

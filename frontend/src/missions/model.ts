@@ -1,7 +1,9 @@
 // The one mission model in the browser: the hub's REST `MissionItem` (generated from
-// protocol/messages.py through the OpenAPI document), plus the few MAV_CMD numbers and
-// helpers the map and the editor need. No second mission type.
+// protocol/messages.py through the OpenAPI document), plus the few MAV_CMD and MAV_FRAME
+// values (pymavlink's, through generated/mavlink.ts) and helpers the map and the editor
+// need. No second mission type, and no number typed by hand.
 import type { components } from "../generated/api";
+import * as mav from "../generated/mavlink";
 
 type Schemas = components["schemas"];
 export type MissionItem = Schemas["MissionItem"];
@@ -11,23 +13,27 @@ export type MissionResult = Schemas["MissionResult"];
 export type GotoCheck = Schemas["GotoCheckResponse"];
 export type Violation = Schemas["ViolationModel"];
 
-/** MAV_CMD numbers (common.xml). */
+/** The MAV_CMD values the editor and the map use, by short names. */
 export const CMD = {
-  WAYPOINT: 16,
-  LOITER_TIME: 19,
-  RTL: 20,
-  LAND: 21,
-  TAKEOFF: 22,
-  CHANGE_SPEED: 178,
+  WAYPOINT: mav.MAV_CMD_NAV_WAYPOINT,
+  LOITER_TIME: mav.MAV_CMD_NAV_LOITER_TIME,
+  RTL: mav.MAV_CMD_NAV_RETURN_TO_LAUNCH,
+  LAND: mav.MAV_CMD_NAV_LAND,
+  TAKEOFF: mav.MAV_CMD_NAV_TAKEOFF,
+  CHANGE_SPEED: mav.MAV_CMD_DO_CHANGE_SPEED,
 } as const;
 
-/** MAV_FRAME numbers: the altitude's reference. */
-export const FRAME = { GLOBAL: 0, GLOBAL_RELATIVE_ALT: 3, GLOBAL_TERRAIN_ALT: 10 } as const;
+/** MAV_FRAME values: the altitude's reference. */
+export const FRAME = {
+  GLOBAL: mav.MAV_FRAME_GLOBAL,
+  GLOBAL_RELATIVE_ALT: mav.MAV_FRAME_GLOBAL_RELATIVE_ALT,
+  GLOBAL_TERRAIN_ALT: mav.MAV_FRAME_GLOBAL_TERRAIN_ALT,
+} as const;
 
 const FRAME_NAMES: Record<number, string> = {
-  0: "above sea level",
-  3: "above home",
-  10: "above terrain",
+  [FRAME.GLOBAL]: "above sea level",
+  [FRAME.GLOBAL_RELATIVE_ALT]: "above home",
+  [FRAME.GLOBAL_TERRAIN_ALT]: "above terrain",
 };
 
 export function frameName(frame: number): string {
@@ -35,14 +41,14 @@ export function frameName(frame: number): string {
 }
 
 const COMMAND_NAMES: Record<number, string> = {
-  16: "Waypoint",
-  17: "Loiter",
-  18: "Loiter turns",
-  19: "Loiter time",
-  20: "Return to launch",
-  21: "Land",
-  22: "Take-off",
-  178: "Change speed",
+  [mav.MAV_CMD_NAV_WAYPOINT]: "Waypoint",
+  [mav.MAV_CMD_NAV_LOITER_UNLIM]: "Loiter",
+  [mav.MAV_CMD_NAV_LOITER_TURNS]: "Loiter turns",
+  [mav.MAV_CMD_NAV_LOITER_TIME]: "Loiter time",
+  [mav.MAV_CMD_NAV_RETURN_TO_LAUNCH]: "Return to launch",
+  [mav.MAV_CMD_NAV_LAND]: "Land",
+  [mav.MAV_CMD_NAV_TAKEOFF]: "Take-off",
+  [mav.MAV_CMD_DO_CHANGE_SPEED]: "Change speed",
 };
 
 export function commandName(command: number): string {
@@ -53,7 +59,18 @@ export function commandName(command: number): string {
 export const EDITABLE_COMMANDS = [CMD.TAKEOFF, CMD.WAYPOINT, CMD.LOITER_TIME, CMD.LAND, CMD.RTL] as const;
 
 /** Commands that take the vehicle to their item's latitude and longitude. */
-const GOES_TO = new Set<number>([16, 17, 18, 19, 21, 82, 31, 84, 85, 94]);
+const GOES_TO = new Set<number>([
+  mav.MAV_CMD_NAV_WAYPOINT,
+  mav.MAV_CMD_NAV_LOITER_UNLIM,
+  mav.MAV_CMD_NAV_LOITER_TURNS,
+  mav.MAV_CMD_NAV_LOITER_TIME,
+  mav.MAV_CMD_NAV_LAND,
+  mav.MAV_CMD_NAV_SPLINE_WAYPOINT,
+  mav.MAV_CMD_NAV_LOITER_TO_ALT,
+  mav.MAV_CMD_NAV_VTOL_TAKEOFF,
+  mav.MAV_CMD_NAV_VTOL_LAND,
+  mav.MAV_CMD_NAV_PAYLOAD_PLACE,
+]);
 
 /** Where an item is on the map: null for an item that acts where the vehicle is. */
 export function placeOf(item: MissionItem): [number, number] | null {
@@ -79,7 +96,8 @@ export function makeItem(command: number, lat = 0, lon = 0, alt = 0): MissionIte
 
 /** A DO_CHANGE_SPEED item: ground speed (param1 1) in m/s, throttle unchanged (-1). */
 export function speedItem(speed: number): MissionItem {
-  return { ...makeItem(CMD.CHANGE_SPEED), frame: 2, param1: 1, param2: speed, param3: -1 };
+  const frame = mav.MAV_FRAME_MISSION; // a DO_ command has no place
+  return { ...makeItem(CMD.CHANGE_SPEED), frame, param1: 1, param2: speed, param3: -1 };
 }
 
 /** A MissionItem with every field the REST body has, from a partial one (a download omits none). */

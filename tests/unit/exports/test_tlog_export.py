@@ -4,12 +4,11 @@ import subprocess
 import sys
 from pathlib import Path
 from types import ModuleType
-from typing import Any
 
 import pytest
 
 from backend.exports import ExportSample, sample_position, tlog_chunks
-from tests.mavutil_state import mavutil_in_mavlink2
+from tests.mavutil_state import mavutil_in_mavlink2, read_tlog
 from tests.unit.exports.flight_data import T0, events, flight, samples
 
 
@@ -25,17 +24,6 @@ def _write(path: Path, chunks: list[bytes]) -> Path:
     return path
 
 
-def _read_all(mavutil: ModuleType, path: Path) -> list[Any]:
-    connection = mavutil.mavlink_connection(str(path))
-    messages = []
-    try:
-        while (message := connection.recv_match()) is not None:
-            messages.append(message)
-    finally:
-        connection.close()
-    return messages
-
-
 def _by_time(flight_samples: list[ExportSample]) -> dict[int, ExportSample]:
     return {round(s.time * 1e6): s for s in flight_samples}
 
@@ -45,7 +33,7 @@ def test_positions_read_back_with_their_times(tmp_path: Path, mavutil: ModuleTyp
     positioned = [s for s in flight_samples if sample_position(s) is not None]
     path = _write(tmp_path / "f.tlog", list(tlog_chunks(flight(), flight_samples, events())))
 
-    messages = _read_all(mavutil, path)
+    messages = read_tlog(mavutil, path)
 
     assert not [m for m in messages if m.get_type() == "BAD_DATA"]
     positions = [m for m in messages if m.get_type() == "GLOBAL_POSITION_INT"]
@@ -74,7 +62,7 @@ def test_heartbeats_decode_to_the_mode_names(tmp_path: Path, mavutil: ModuleType
     flight_samples = samples(57)  # modes change at 1.9 s and 3.8 s, disarmed at 5.2 s
     path = _write(tmp_path / "f.tlog", list(tlog_chunks(flight(), flight_samples, [])))
 
-    heartbeats = [m for m in _read_all(mavutil, path) if m.get_type() == "HEARTBEAT"]
+    heartbeats = [m for m in read_tlog(mavutil, path) if m.get_type() == "HEARTBEAT"]
 
     samples_at = _by_time(flight_samples)
     for heartbeat in heartbeats:
@@ -108,7 +96,7 @@ def test_modes_of_other_autopilots_and_vehicles(
     chunks = tlog_chunks(flight(autopilot, vehicle_type), flight_samples, [])
     path = _write(tmp_path / "f.tlog", list(chunks))
 
-    heartbeats = [m for m in _read_all(mavutil, path) if m.get_type() == "HEARTBEAT"]
+    heartbeats = [m for m in read_tlog(mavutil, path) if m.get_type() == "HEARTBEAT"]
 
     assert {mavutil.mode_string_v10(h) for h in heartbeats} == set(modes)
 
@@ -116,7 +104,7 @@ def test_modes_of_other_autopilots_and_vehicles(
 def test_events_are_statustexts_merged_in_time_order(tmp_path: Path, mavutil: ModuleType) -> None:
     path = _write(tmp_path / "f.tlog", list(tlog_chunks(flight(), samples(), events())))
 
-    texts = [m for m in _read_all(mavutil, path) if m.get_type() == "STATUSTEXT"]
+    texts = [m for m in read_tlog(mavutil, path) if m.get_type() == "STATUSTEXT"]
 
     assert [(t.text, t.severity) for t in texts] == [
         ("PreArm: before take-off", 4),

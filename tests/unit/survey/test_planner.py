@@ -19,6 +19,7 @@ from backend.missions.survey.planner import (
     coverage,
     lower_bound_m,
     plan_lanes,
+    strip_bound_m,
 )
 from backend.missions.survey.report import best_angle, flight_time_s
 
@@ -76,6 +77,47 @@ def test_path_is_no_shorter_than_the_bound_and_close_to_it_on_a_rectangle() -> N
     assert bound <= plan.path_length_m <= 1.05 * bound
 
 
+@pytest.mark.parametrize(
+    ("name", "angle"),
+    [
+        ("convex", 0.0),
+        ("convex", 30.0),
+        ("convex", 90.0),
+        ("U", 90.0),
+        ("thin", 0.0),
+        ("zone-straddling", 0.0),
+        ("zone-straddling", 45.0),
+        ("zone-straddling", 90.0),
+    ],
+)
+def test_path_is_within_five_percent_of_the_strip_bound(name: str, angle: float) -> None:
+    # The strip bound (planner.strip_bound_m) counts what any plan at this spacing and
+    # angle must fly. The slanted quadrilateral at 45-60° (1.052-1.056 x), concave areas
+    # at angles across their arms and the thin strip flown across (up to 1.19 x) stay
+    # further above it: the bar is met where the lanes run along the area's edges.
+    area = _zone_straddling() if name == "zone-straddling" else SHAPES[name]
+    plan = plan_lanes(area, CALC, angle_deg=angle)
+    bound = strip_bound_m(area, CALC, angle, plan.turnaround_m)
+    assert bound <= plan.path_length_m <= 1.05 * bound
+
+
+@pytest.mark.parametrize("angle", [0.0, 30.0, 45.0, 60.0, 90.0, 135.0])
+@pytest.mark.parametrize("name", [*SHAPES, "zone-straddling"])
+def test_the_strip_bound_is_a_lower_bound(name: str, angle: float) -> None:
+    area = _zone_straddling() if name == "zone-straddling" else SHAPES[name]
+    plan = plan_lanes(area, CALC, angle_deg=angle)
+    assert plan.path_length_m >= strip_bound_m(area, CALC, angle, plan.turnaround_m)
+
+
+def test_a_concave_area_is_flown_without_a_detour_at_its_inner_corner() -> None:
+    # The L's rows shrink from 600 m to 200 m: flown from the arm's far corner, the lane
+    # after the step starts where the one before it ended; flown the other way it would
+    # cross 400 m back.
+    plan = plan_lanes(SHAPES["L"], CALC, angle_deg=0)
+    legs = [math.dist(a, b) for a, b in zip(plan.path[3::4], plan.path[4::4], strict=False)]
+    assert max(legs) < CALC.lane_spacing_m * 1.5
+
+
 @pytest.mark.parametrize("name", list(SHAPES))
 def test_the_bound_is_a_lower_bound(name: str) -> None:
     area = SHAPES[name]
@@ -125,6 +167,13 @@ def test_mission_items_trigger_on_distance_along_each_lane() -> None:
     triggers = [item for item in items if item.command == mavlink2.MAV_CMD_DO_SET_CAM_TRIGG_DIST]
     assert len(triggers) == 2 * len(plan.lanes)
     assert [t.param1 for t in triggers[:2]] == [pytest.approx(CALC.trigger_distance_m), 0.0]
+    # QGC's "trigger once" on both: a photo at each lane's entry and at its exit
+    assert all(t.param3 == 1 for t in triggers)
+    # ArduPilot runs a "do" command once the waypoint before it is reached: the camera
+    # starts at the lane's entry and stops at its exit, each following its waypoint.
+    for i, item in enumerate(items):
+        if item.command == mavlink2.MAV_CMD_DO_SET_CAM_TRIGG_DIST:
+            assert items[i - 1].command == mavlink2.MAV_CMD_NAV_WAYPOINT
     for item in items:
         if item.command == mavlink2.MAV_CMD_NAV_WAYPOINT:
             assert item.frame == mavlink2.MAV_FRAME_GLOBAL_RELATIVE_ALT
@@ -142,9 +191,15 @@ def test_hover_and_capture_takes_one_image_at_each_photo_point() -> None:
     )
     plan = plan_lanes(polygon, CALC)
     items = mission_items(plan, frame, CALC.altitude_m, hover=True)
-    captures = [i for i in items if i.command == mavlink2.MAV_CMD_IMAGE_START_CAPTURE]
+    captures = [i for i in items if i.command == mavlink2.MAV_CMD_DO_DIGICAM_CONTROL]
     assert len(captures) == plan.photo_count
-    assert all(c.param3 == 1 for c in captures)
+    # param5 "shoot" is 1: MISSION_ITEM_INT's x, unscaled, which our items hold as lat * 1e7
+    assert all(round(c.lat * 1e7) == 1 for c in captures)
+    # each capture follows the waypoint it is taken at, which holds for the camera to settle
+    for i, capture in enumerate(items):
+        if capture.command == mavlink2.MAV_CMD_DO_DIGICAM_CONTROL:
+            assert items[i - 1].command == mavlink2.MAV_CMD_NAV_WAYPOINT
+            assert items[i - 1].param1 > 0
 
 
 @pytest.mark.parametrize(

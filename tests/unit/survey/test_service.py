@@ -48,7 +48,7 @@ def test_each_drone_gets_a_mission_and_the_photos_cover_the_area() -> None:
 def test_a_per_photo_camera_gets_one_capture_per_photo() -> None:
     survey = plan_survey(_request(camera="micasense_rededge_mx", gsd_cm=5.0), _fleet())
     for planned in survey.parts:
-        captures = [i for i in planned.items if i.command == mavlink2.MAV_CMD_IMAGE_START_CAPTURE]
+        captures = [i for i in planned.items if i.command == mavlink2.MAV_CMD_DO_DIGICAM_CONTROL]
         assert len(captures) == planned.part.plan.photo_count
 
 

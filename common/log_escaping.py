@@ -1,5 +1,8 @@
 """Control characters in logged values are escaped, so a value cannot forge a log line.
 
+Shared by the hub and the agent (whose logs hold its peers' texts: the hub's error
+replies, the flight controller's STATUSTEXT reasons); standard library only.
+
 A user name such as ``"x\\n2026-01-01 00:00:00,000 INFO backend.audit: audit: admin ..."``
 went into the hub's log verbatim through the audit logger and wrote a line that looked
 like the hub's own. A filter on every handler escapes each value (the arguments, and the

@@ -1,0 +1,347 @@
+"""Other tools' files: QGroundControl `.plan` (simple items, and the polygon and camera of a
+Survey complex item), `QGC WPL 110` waypoint files, GeoJSON polygons and paths, and KML
+polygons (areas drawn in Google Earth).
+
+Pure: text or parsed JSON in, our types out, and back. Every reader raises InteropError with
+a message saying what is wrong and where.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import xml.etree.ElementTree as ElementTree
+from collections.abc import Sequence
+from typing import Any
+
+from pymavlink.dialects.v20 import ardupilotmega as mavlink2
+
+from protocol.messages import MissionItem
+
+MAX_FILE_BYTES = 5_000_000
+# Commands whose params 5-7 are a position; for the others they are plain numbers, which
+# MISSION_ITEM_INT carries unscaled in x and y (our MissionItem holds x as lat * 1e7).
+_POSITIONLESS_FRAME = mavlink2.MAV_FRAME_MISSION
+_KML = "{http://www.opengis.net/kml/2.2}"
+
+
+class InteropError(ValueError):
+    """A file that cannot be read; the message says what to change."""
+
+
+def _number(value: Any, where: str) -> float:
+    if value is None:
+        return math.nan  # QGC writes NaN as null
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        raise InteropError(f"{where} must be a number, not {value!r}")
+    return float(value)
+
+
+def _params_to_item(
+    command: int, frame: int, params: Sequence[float], autocontinue: bool
+) -> MissionItem:
+    p = [0.0 if math.isnan(v) else v for v in params]
+    if frame == _POSITIONLESS_FRAME:
+        lat, lon = p[4] / 1e7, p[5] / 1e7  # unscaled param5/param6 as MISSION_ITEM_INT x/y
+    else:
+        lat, lon = p[4], p[5]
+    return MissionItem(
+        command=command,
+        frame=frame,
+        param1=p[0],
+        param2=p[1],
+        param3=p[2],
+        param4=p[3],
+        lat=lat,
+        lon=lon,
+        alt=p[6],
+        autocontinue=autocontinue,
+    )
+
+
+def _item_params(item: MissionItem) -> list[float]:
+    if item.frame == _POSITIONLESS_FRAME:
+        five, six = float(round(item.lat * 1e7)), float(round(item.lon * 1e7))
+    else:
+        five, six = item.lat, item.lon
+    return [item.param1, item.param2, item.param3, item.param4, five, six, item.alt]
+
+
+# -- QGroundControl .plan ------------------------------------------------------------------
+
+
+def to_qgc_plan(
+    items: Sequence[MissionItem],
+    home: tuple[float, float, float],
+    *,
+    cruise_speed_ms: float = 15.0,
+    hover_speed_ms: float = 5.0,
+) -> dict[str, Any]:
+    """A plan file QGC opens: `fileType` Plan, version 1, mission version 2 with
+    ArduPilot (firmwareType 3) multirotor (vehicleType 2) and simple items."""
+    simple = []
+    for number, item in enumerate(items, start=1):
+        entry: dict[str, Any] = {
+            "type": "SimpleItem",
+            "autoContinue": item.autocontinue,
+            "command": item.command,
+            "doJumpId": number,
+            "frame": item.frame,
+            "params": _item_params(item),
+        }
+        if item.frame != _POSITIONLESS_FRAME:
+            entry["Altitude"] = item.alt
+            entry["AltitudeMode"] = 1 if item.frame == mavlink2.MAV_FRAME_GLOBAL_RELATIVE_ALT else 2
+            entry["AMSLAltAboveTerrain"] = None
+        simple.append(entry)
+    return {
+        "fileType": "Plan",
+        "version": 1,
+        "groundStation": "fleet-gcs",
+        "mission": {
+            "version": 2,
+            "firmwareType": mavlink2.MAV_AUTOPILOT_ARDUPILOTMEGA,
+            "vehicleType": mavlink2.MAV_TYPE_QUADROTOR,
+            "cruiseSpeed": cruise_speed_ms,
+            "hoverSpeed": hover_speed_ms,
+            "globalPlanAltitudeMode": 1,
+            "plannedHomePosition": list(home),
+            "items": simple,
+        },
+        "geoFence": {"circles": [], "polygons": [], "version": 2},
+        "rallyPoints": {"points": [], "version": 2},
+    }
+
+
+def _plan_document(text: str | bytes) -> dict[str, Any]:
+    if len(text) > MAX_FILE_BYTES:
+        raise InteropError(f"the file is larger than {MAX_FILE_BYTES // 1_000_000} MB")
+    try:
+        document = json.loads(text)
+    except ValueError as error:
+        raise InteropError(f"not a .plan file: invalid JSON ({error})") from None
+    if not isinstance(document, dict) or document.get("fileType") != "Plan":
+        raise InteropError('not a .plan file: its "fileType" must be "Plan"')
+    mission = document.get("mission")
+    if not isinstance(mission, dict) or not isinstance(mission.get("items"), list):
+        raise InteropError('the plan has no "mission" with "items"')
+    return document
+
+
+def read_qgc_plan_items(text: str | bytes) -> list[MissionItem]:
+    """A plan's simple items (a complex item is refused, named: flying part of a survey
+    would be worse than none; import its polygon with read_qgc_survey instead)."""
+    document = _plan_document(text)
+    items = []
+    for i, raw in enumerate(document["mission"]["items"]):
+        where = f"mission item {i + 1}"
+        if not isinstance(raw, dict):
+            raise InteropError(f"{where} must be an object")
+        if raw.get("type") != "SimpleItem":
+            kind = raw.get("complexItemType", raw.get("type"))
+            raise InteropError(f"{where} is a {kind} complex item; open it as a survey area")
+        params = raw.get("params")
+        if not isinstance(params, list) or len(params) != 7:
+            raise InteropError(f"{where} needs 7 params")
+        numbers = [_number(p, f"{where} param {k + 1}") for k, p in enumerate(params)]
+        try:
+            items.append(
+                _params_to_item(
+                    int(raw["command"]),
+                    int(raw["frame"]),
+                    numbers,
+                    bool(raw.get("autoContinue", True)),
+                )
+            )
+        except (KeyError, TypeError, ValueError) as error:
+            raise InteropError(f"{where} is not a mission item: {error}") from None
+    return items
+
+
+def read_qgc_survey(text: str | bytes) -> dict[str, Any]:
+    """The first Survey complex item of a plan as our survey request's fields: the area
+    (GeoJSON), the camera's figures, altitude or GSD, overlaps, angle, turnaround and
+    hover-and-capture (QGC's CameraCalc and TransectStyleComplexItem keys)."""
+    document = _plan_document(text)
+    for i, raw in enumerate(document["mission"]["items"]):
+        if isinstance(raw, dict) and raw.get("complexItemType") == "survey":
+            return _survey_fields(raw, f"mission item {i + 1}")
+    raise InteropError("the plan has no Survey complex item")
+
+
+def _survey_fields(raw: dict[str, Any], where: str) -> dict[str, Any]:
+    polygon = raw.get("polygon")
+    if not isinstance(polygon, list) or len(polygon) < 3:
+        raise InteropError(f'{where}: the survey\'s "polygon" needs at least 3 [lat, lon]')
+    ring = []
+    for k, point in enumerate(polygon):
+        if not isinstance(point, list) or len(point) < 2:
+            raise InteropError(f"{where}: polygon point {k + 1} must be [lat, lon]")
+        ring.append([_number(point[1], "longitude"), _number(point[0], "latitude")])
+    ring.append(ring[0])
+    transect = raw.get("TransectStyleComplexItem", {})
+    calc = transect.get("CameraCalc", {}) if isinstance(transect, dict) else {}
+    if not isinstance(calc, dict):
+        raise InteropError(f'{where}: "CameraCalc" must be an object')
+    fields: dict[str, Any] = {"area": {"type": "Polygon", "coordinates": [ring]}}
+    if "SensorWidth" in calc:
+        fields["camera"] = {
+            "sensor_width_mm": _number(calc.get("SensorWidth"), "SensorWidth"),
+            "sensor_height_mm": _number(calc.get("SensorHeight"), "SensorHeight"),
+            "image_width_px": int(_number(calc.get("ImageWidth"), "ImageWidth")),
+            "image_height_px": int(_number(calc.get("ImageHeight"), "ImageHeight")),
+            "focal_length_mm": _number(calc.get("FocalLength"), "FocalLength"),
+            "landscape": bool(calc.get("Landscape", True)),
+        }
+    if calc.get("ValueSetIsDistance", True) and "DistanceToSurface" in calc:
+        fields["altitude_m"] = _number(calc["DistanceToSurface"], "DistanceToSurface")
+    elif "ImageDensity" in calc:
+        fields["gsd_cm"] = _number(calc["ImageDensity"], "ImageDensity")
+    for ours, theirs in (
+        ("side_overlap_pct", "SideOverlap"),
+        ("front_overlap_pct", "FrontalOverlap"),
+    ):
+        if theirs in calc:
+            fields[ours] = _number(calc[theirs], theirs)
+    if "angle" in raw:
+        # QGC's grid angle is the lanes' compass heading (0 = north-south lanes); ours is
+        # degrees from east (0 = east-west lanes), counter-clockwise.
+        fields["angle_deg"] = (90.0 - _number(raw["angle"], "angle")) % 180.0
+    if isinstance(transect, dict):
+        if "TurnAroundDistance" in transect:
+            fields["turnaround_m"] = _number(transect["TurnAroundDistance"], "TurnAroundDistance")
+        if "HoverAndCapture" in transect:
+            fields["hover_and_capture"] = bool(transect["HoverAndCapture"])
+    return fields
+
+
+# -- QGC WPL 110 ---------------------------------------------------------------------------
+
+WPL_HEADER = "QGC WPL 110"
+
+
+def to_wpl(items: Sequence[MissionItem], home: tuple[float, float, float]) -> str:
+    """Line 0 is home (absolute altitude), then one line per item, tab-separated: index,
+    current, frame, command, param1-4, x/lat, y/lon, z/alt, autocontinue."""
+    lines = [WPL_HEADER]
+    lat, lon, alt = home
+    lines.append(f"0\t1\t0\t16\t0\t0\t0\t0\t{lat:.8f}\t{lon:.8f}\t{alt:.6f}\t1")
+    for number, item in enumerate(items, start=1):
+        p = _item_params(item)
+        fields = [number, 0, item.frame, item.command, *p, int(item.autocontinue)]
+        lines.append("\t".join(_wpl_number(v) for v in fields))
+    return "\n".join(lines) + "\n"
+
+
+def _wpl_number(value: float | int) -> str:
+    if isinstance(value, int):
+        return str(value)
+    return f"{value:.8f}".rstrip("0").rstrip(".") or "0"
+
+
+def read_wpl(text: str) -> tuple[tuple[float, float, float] | None, list[MissionItem]]:
+    """(home, items after home) from a `QGC WPL 110` file."""
+    if len(text) > MAX_FILE_BYTES:
+        raise InteropError(f"the file is larger than {MAX_FILE_BYTES // 1_000_000} MB")
+    lines = [line for line in text.splitlines() if line.strip()]
+    if not lines or not lines[0].startswith("QGC WPL 110"):
+        raise InteropError('not a waypoint file: the first line must be "QGC WPL 110"')
+    home = None
+    items = []
+    for n, line in enumerate(lines[1:], start=2):
+        parts = line.split("\t") if "\t" in line else line.split()
+        if len(parts) != 12:
+            raise InteropError(f"line {n} has {len(parts)} fields; a waypoint line has 12")
+        try:
+            index, _current, frame, command = (int(v) for v in parts[:4])
+            numbers = [float(v) for v in parts[4:11]]
+            autocontinue = bool(int(float(parts[11])))
+        except ValueError:
+            raise InteropError(f"line {n}: a field is not a number") from None
+        if index == 0:
+            home = (numbers[4], numbers[5], numbers[6])
+            continue
+        items.append(_params_to_item(command, frame, numbers, autocontinue))
+    return home, items
+
+
+# -- GeoJSON and KML -----------------------------------------------------------------------
+
+
+def mission_path_geojson(items: Sequence[MissionItem]) -> dict[str, Any]:
+    """The mission's positions as a GeoJSON LineString ([lon, lat, alt])."""
+    coordinates = [
+        [item.lon, item.lat, item.alt]
+        for item in items
+        if item.frame != _POSITIONLESS_FRAME and (item.lat or item.lon)
+    ]
+    return {
+        "type": "Feature",
+        "properties": {},
+        "geometry": {"type": "LineString", "coordinates": coordinates},
+    }
+
+
+def read_geojson_polygon(text: str | bytes) -> dict[str, Any]:
+    """A Polygon from a GeoJSON geometry, Feature or FeatureCollection (its first)."""
+    try:
+        document = json.loads(text)
+    except ValueError as error:
+        raise InteropError(f"not GeoJSON: {error}") from None
+    while isinstance(document, dict):
+        kind = document.get("type")
+        if kind == "Polygon":
+            return {"type": "Polygon", "coordinates": document.get("coordinates")}
+        if kind == "Feature":
+            document = document.get("geometry")
+        elif kind == "FeatureCollection" and document.get("features"):
+            document = document["features"][0]
+        else:
+            break
+    raise InteropError("the GeoJSON holds no Polygon")
+
+
+def read_kml_polygon(data: str | bytes) -> dict[str, Any]:
+    """The first Polygon of a KML file (Google Earth), holes included, as GeoJSON."""
+    raw = data.encode() if isinstance(data, str) else data
+    if len(raw) > MAX_FILE_BYTES:
+        raise InteropError(f"the file is larger than {MAX_FILE_BYTES // 1_000_000} MB")
+    # The standard library's parser fetches no external entities or DTDs, and its expat
+    # refuses entity expansion bombs (expat >= 2.4): a KML file stays data.
+    try:
+        root = ElementTree.fromstring(raw)
+    except ElementTree.ParseError as error:
+        raise InteropError(f"not a KML file: {error}") from None
+    polygon = _first(root, "Polygon")
+    if polygon is None:
+        raise InteropError("the KML file holds no Polygon")
+
+    def ring(boundary: ElementTree.Element, what: str) -> list[list[float]]:
+        node = _first(boundary, "coordinates")
+        text = "" if node is None else (node.text or "")
+        if not text.strip():
+            raise InteropError(f"the KML polygon's {what} has no coordinates")
+        points = []
+        for k, triple in enumerate(text.split()):
+            try:
+                values = [float(v) for v in triple.split(",")]
+            except ValueError:
+                raise InteropError(f"the {what}'s point {k + 1} is not lon,lat[,alt]") from None
+            points.append(values[:2])
+        if points[0] != points[-1]:
+            points.append(points[0])
+        return points
+
+    outer = _first(polygon, "outerBoundaryIs")
+    if outer is None:
+        raise InteropError("the KML polygon has no outerBoundaryIs")
+    rings = [ring(outer, "outline")]
+    inners = [e for e in polygon.iter() if e.tag in (f"{_KML}innerBoundaryIs", "innerBoundaryIs")]
+    for k, inner in enumerate(inners):
+        rings.append(ring(inner, f"hole {k + 1}"))
+    return {"type": "Polygon", "coordinates": rings}
+
+
+def _first(node: ElementTree.Element, tag: str) -> ElementTree.Element | None:
+    """The first element named `tag`, in KML's namespace or none."""
+    return next((e for e in node.iter() if e.tag in (f"{_KML}{tag}", tag)), None)

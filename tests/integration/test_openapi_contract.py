@@ -36,6 +36,7 @@ def _allow(response: httpx.Response) -> set[str]:
         ("POST", "/api/v1/agent-tokens/7", {"DELETE"}),
         # a literal path is not also its templated neighbour's (/surveys/{survey_id}: GET)
         ("OPTIONS", "/api/v1/surveys/preview", {"POST"}),
+        ("GET", "/api/v1/surveys/import", {"POST"}),  # not a survey id: ids are hex
     ],
 )
 def test_wrong_method_names_every_allowed_method(

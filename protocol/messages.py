@@ -35,6 +35,7 @@ from pydantic import (
     BeforeValidator,
     ConfigDict,
     Field,
+    Strict,
     TypeAdapter,
     ValidationError,
     field_validator,
@@ -83,6 +84,15 @@ def _clip(text: object) -> object:
 MessageText = Annotated[str, BeforeValidator(_clip), Field(max_length=MAX_MESSAGE_CHARS)]
 
 
+# Numbers and booleans in a request body are JSON's own. FastAPI validates a parsed body in
+# pydantic's lax Python mode, which takes `false` for 0, `true` for 1 and "5" for 5: a
+# client's type mistake would fly (a battery reserve of `false` is a reserve of 0 %).
+# Strict, each is a 422 naming the field. A whole number is still a number.
+Number = Annotated[float, Strict()]
+Integer = Annotated[int, Strict()]
+Boolean = Annotated[bool, Strict()]
+
+
 def _fits_float32(value: float) -> float:
     problem = wire_problem("float", value)
     if problem is not None:
@@ -95,6 +105,7 @@ def _fits_float32(value: float) -> float:
 # type's, from protocol.mavlink_wire; the schema shows them too.
 Float32 = Annotated[
     float,
+    Strict(),
     Field(
         allow_inf_nan=False,
         json_schema_extra={
@@ -104,7 +115,9 @@ Float32 = Annotated[
     ),
     AfterValidator(_fits_float32),
 ]
-UInt16 = Annotated[int, Field(ge=WIRE_RANGES["uint16_t"][0], le=WIRE_RANGES["uint16_t"][1])]
+UInt16 = Annotated[
+    int, Strict(), Field(ge=WIRE_RANGES["uint16_t"][0], le=WIRE_RANGES["uint16_t"][1])
+]
 
 
 class CloseCode(IntEnum):
@@ -143,14 +156,14 @@ class ArmCommand(Message):
 
 class DisarmCommand(Message):
     name: Literal["disarm"] = "disarm"
-    force: bool = Field(default=False, description="Disarm even in flight (motors stop).")
+    force: Boolean = Field(default=False, description="Disarm even in flight (motors stop).")
 
 
 class TakeoffCommand(Message):
     """Guided take-off: switches to the guided mode and arms first if needed, as QGC does."""
 
     name: Literal["takeoff"] = "takeoff"
-    altitude: float = Field(gt=0.5, le=500, description="Metres above home.")
+    altitude: Number = Field(gt=0.5, le=500, description="Metres above home.")
 
 
 class LandCommand(Message):
@@ -170,9 +183,9 @@ class SetModeCommand(Message):
 
 class GotoCommand(Message):
     name: Literal["goto"] = "goto"
-    lat: float = Field(ge=-90, le=90)
-    lon: float = Field(ge=-180, le=180)
-    altitude: float = Field(gt=0.5, le=500, description="Metres above home.")
+    lat: Number = Field(ge=-90, le=90)
+    lon: Number = Field(ge=-180, le=180)
+    altitude: Number = Field(gt=0.5, le=500, description="Metres above home.")
 
 
 class HoldCommand(Message):
@@ -183,7 +196,7 @@ class HoldCommand(Message):
 
 class ChangeSpeedCommand(Message):
     name: Literal["change_speed"] = "change_speed"
-    speed: float = Field(gt=0, le=50, description="m/s")
+    speed: Number = Field(gt=0, le=50, description="m/s")
     speed_type: Literal["ground", "air"] = "ground"
 
 
@@ -191,10 +204,10 @@ class SetHomeCommand(Message):
     """Set home (the RTL destination) to the vehicle's position, or to a given point."""
 
     name: Literal["set_home"] = "set_home"
-    use_current: bool = True
-    lat: float | None = Field(default=None, ge=-90, le=90)
-    lon: float | None = Field(default=None, ge=-180, le=180)
-    alt_msl: float | None = Field(default=None, ge=-1000, le=10000, description="metres AMSL")
+    use_current: Boolean = True
+    lat: Number | None = Field(default=None, ge=-90, le=90)
+    lon: Number | None = Field(default=None, ge=-180, le=180)
+    alt_msl: Number | None = Field(default=None, ge=-1000, le=10000, description="metres AMSL")
 
     @model_validator(mode="after")
     def _point_given(self) -> SetHomeCommand:
@@ -251,7 +264,7 @@ class MissionItem(Message):
     """One mission item, as MISSION_ITEM_INT carries it (positions in degrees)."""
 
     command: UInt16 = Field(description="MAV_CMD number, e.g. 16 NAV_WAYPOINT")
-    frame: int = Field(
+    frame: Integer = Field(
         default=mavlink2.MAV_FRAME_GLOBAL_RELATIVE_ALT,
         ge=0,
         le=21,
@@ -263,10 +276,10 @@ class MissionItem(Message):
     param2: Float32 = 0.0
     param3: Float32 = 0.0
     param4: Float32 = 0.0
-    lat: float = Field(default=0.0, ge=-90, le=90)
-    lon: float = Field(default=0.0, ge=-180, le=180)
-    alt: float = Field(default=0.0, ge=-1000, le=10000, description="metres (a float32)")
-    autocontinue: bool = True
+    lat: Number = Field(default=0.0, ge=-90, le=90)
+    lon: Number = Field(default=0.0, ge=-180, le=180)
+    alt: Number = Field(default=0.0, ge=-1000, le=10000, description="metres (a float32)")
+    autocontinue: Boolean = True
 
     @field_validator("frame")
     @classmethod
@@ -291,7 +304,7 @@ class MissionClearCommand(Message):
 
 class MissionSetCurrentCommand(Message):
     name: Literal["mission_set_current"] = "mission_set_current"
-    seq: int = Field(ge=1, le=MAX_MISSION_ITEMS, description="1 is the first item after home")
+    seq: Integer = Field(ge=1, le=MAX_MISSION_ITEMS, description="1 is the first item after home")
 
 
 class ManualStartCommand(Message):

@@ -43,7 +43,7 @@ from protocol.messages import (
     SetModeCommand,
     TakeoffCommand,
 )
-from vehicle_agents.fcu_link import FcuLink, MavMessage, next_match
+from vehicle_agents.fcu_link import FcuLink, LinkChange, MavMessage, next_match
 from vehicle_agents.mav_results import result_name
 from vehicle_agents.missions import MissionClient
 from vehicle_agents.modes import is_armed, mode_name
@@ -74,6 +74,11 @@ class CommandTimeouts:
     # After MAV_RESULT_IN_PROGRESS, how long the final COMMAND_ACK may take. Within the
     # hub's command timeout (15 s by default) even when the first attempts went unheard.
     in_progress_s: float = 10.0
+    # After an accepted reboot the autopilot goes quiet, but the link is only seen down
+    # after a heartbeat timeout: commands in between would wait out every retry for an
+    # answer that cannot come. They are refused at once for this long, or until the link
+    # has gone down (the link-down answer takes over) or come back.
+    reboot_quiet_s: float = 5.0
 
 
 class CommandRefused(Exception):
@@ -97,10 +102,27 @@ class CommandExecutor:
         self.timeouts = timeouts or CommandTimeouts()
         self.params = ParamClient(link)
         self.missions = MissionClient(link)
+        self._reboot_accepted_at: float | None = None  # monotonic
+        link.state_listeners.append(self._on_link_change)
+
+    def _on_link_change(self, _change: LinkChange) -> None:
+        self._reboot_accepted_at = None  # down or back: the link's own state answers now
+
+    def _rebooting(self) -> bool:
+        since = self._reboot_accepted_at
+        if since is not None and time.monotonic() - since > self.timeouts.reboot_quiet_s:
+            self._reboot_accepted_at = since = None  # it never went quiet: not rebooting
+        return since is not None
 
     async def execute(self, command: Command) -> CommandOutcome:
         if not self.link.connected:
             return CommandOutcome(status="failed", message="flight controller link is down")
+        if self._rebooting():
+            return CommandOutcome(
+                status="failed",
+                message=f"{command.name}: the flight controller is rebooting; "
+                "wait for its link to come back",
+            )
         try:
             return await self._dispatch(command)
         except CommandRefused as refusal:
@@ -148,7 +170,10 @@ class CommandExecutor:
                     status="refused", message="set_home: lat, lon and alt_msl are required"
                 )
             case RebootCommand():
-                return await self.command_long(mavlink2.MAV_CMD_PREFLIGHT_REBOOT_SHUTDOWN, [1])
+                outcome = await self.command_long(mavlink2.MAV_CMD_PREFLIGHT_REBOOT_SHUTDOWN, [1])
+                if outcome.status == "accepted":
+                    self._reboot_accepted_at = time.monotonic()
+                return outcome
             case ParamListCommand():
                 return await self.params.read_all()
             case ParamGetCommand(param=name):

@@ -17,7 +17,7 @@ from backend.auth.password_policy import MIN_LENGTH, password_problem
 from backend.auth.policy import Permission, Role
 from backend.errors import InvalidRequest
 from backend.storage.models import UserRow
-from protocol.messages import VehicleId
+from protocol.messages import Boolean, VehicleId
 
 router = SecuredRouter(tags=["admin"])
 
@@ -48,7 +48,7 @@ class UserCreate(BaseModel):
 
 class UserUpdate(BaseModel):
     role: Role | None = None
-    disabled: bool | None = None
+    disabled: Boolean | None = None
     password: Password | None = None
 
     @field_validator("password")

@@ -31,6 +31,7 @@ from backend.auth.policy import (
 from backend.errors import Forbidden, InvalidRequest, RateLimited, Unauthenticated
 from backend.hub import Hub
 from backend.storage.models import UserRow
+from protocol.messages import Integer
 
 router = SecuredRouter(prefix="/auth", tags=["auth"])
 
@@ -64,7 +65,7 @@ class ApiTokenRequest(BaseModel):
     scopes: list[Permission] | None = Field(
         default=None, description="Permissions to keep (a subset of the role's); all if unset"
     )
-    expires_in_days: int | None = Field(default=90, ge=1, le=3650)
+    expires_in_days: Integer | None = Field(default=90, ge=1, le=3650)
 
 
 class ApiToken(BaseModel):

@@ -17,6 +17,7 @@ from backend.missions.schemas import Mission
 from protocol.messages import (
     Command,
     CommandOutcome,
+    Integer,
     MissionClearCommand,
     MissionDownloadCommand,
     MissionItem,
@@ -35,7 +36,7 @@ OverrideQuery = Annotated[
 
 
 class CurrentItem(BaseModel):
-    seq: int = Field(ge=1, le=2000)
+    seq: Integer = Field(ge=1, le=2000)
 
 
 class MissionResult(BaseModel):

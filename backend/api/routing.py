@@ -37,17 +37,24 @@ def install_method_not_allowed(app: FastAPI, routers: Iterable[APIRouter], prefi
     """Answer a 405 with every method the path takes. Starlette names only the methods of
     the first route that matched the path, and a path often has one route per method."""
     table = [
-        (compile_path(prefix + route.path)[0], route.methods or set())
+        (compile_path(prefix + route.path)[0], route.path.count("{"), route.methods or set())
         for router in routers
         for route in router.routes
         if isinstance(route, APIRoute)
     ]
 
+    def allowed(path: str) -> list[str]:
+        # The most literal templates that match, as the OpenAPI document's path items
+        # are: /surveys/preview (POST) also matches /surveys/{survey_id} (GET), which
+        # does not make GET a method of /surveys/preview.
+        matching = [(params, methods) for pattern, params, methods in table if pattern.match(path)]
+        fewest = min((params for params, _ in matching), default=0)
+        return sorted({m for params, methods in matching if params == fewest for m in methods})
+
     async def answer(request: Request, error: HTTPException) -> Response:
         if error.status_code != 405:
             return await http_exception_handler(request, error)
-        path = request.url.path
-        methods = sorted({m for pattern, ms in table if pattern.match(path) for m in ms})
+        methods = allowed(request.url.path)
         allow = ", ".join(methods) or (error.headers or {}).get("Allow", "")
         return JSONResponse(
             {"detail": f"{request.method} is not allowed here; allowed: {allow}"},

@@ -18,7 +18,7 @@ from backend.safety.schemas import SafetyRailsModel, ViolationModel
 from backend.safety.snapshot import position
 from backend.storage.rails import SITE, vehicle_scope
 from common.geodesy import haversine_m
-from protocol.messages import GotoCommand, VehicleId
+from protocol.messages import GotoCommand, Number, VehicleId
 
 router = SecuredRouter(tags=["safety"])
 
@@ -125,9 +125,9 @@ class GotoCheck(BaseModel):
 
     model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
 
-    lat: float = Field(ge=-90, le=90)
-    lon: float = Field(ge=-180, le=180)
-    altitude: float = Field(gt=0.5, le=500, description="Metres above home")
+    lat: Number = Field(ge=-90, le=90)
+    lon: Number = Field(ge=-180, le=180)
+    altitude: Number = Field(gt=0.5, le=500, description="Metres above home")
 
 
 class GotoCheckResponse(BaseModel):

@@ -14,6 +14,7 @@ from typing import Annotated, Any, Literal
 from fastapi import Path, Query
 from fastapi.responses import JSONResponse, PlainTextResponse, Response
 from pydantic import BaseModel, Field
+from starlette.convertors import Convertor, register_url_convertor
 
 from backend.api.deps import HubDep
 from backend.api.security import CurrentPrincipal, SecuredRouter, requires
@@ -111,6 +112,22 @@ async def preview_survey(body: SurveyRequest, hub: HubDep) -> SurveyPreview:
     )
 
 
+class _SurveyIdConvertor(Convertor[str]):
+    """A survey id in a path is hex, so /surveys/preview and /surveys/import are never
+    taken for one: a GET on them is a 405 naming POST, not the survey route's 422."""
+
+    regex = "[0-9a-f]{1,32}"
+
+    def convert(self, value: str) -> str:
+        return value
+
+    def to_string(self, value: str) -> str:
+        return value
+
+
+# Starlette's convertors are a registry keyed by name; this one is ours alone.
+register_url_convertor("survey_id", _SurveyIdConvertor())
+
 SurveyIdPath = Annotated[str, Path(min_length=1, max_length=32, pattern=r"^[0-9a-f]+$")]
 
 
@@ -153,7 +170,9 @@ async def list_surveys(hub: HubDep) -> SurveyList:
 
 
 @router.get(
-    "/surveys/{survey_id}", response_model=SurveyDetail, openapi_extra=requires(Permission.READ)
+    "/surveys/{survey_id:survey_id}",
+    response_model=SurveyDetail,
+    openapi_extra=requires(Permission.READ),
 )
 async def get_survey(survey_id: SurveyIdPath, hub: HubDep) -> SurveyDetail:
     return _detail(hub, await hub.surveys.find(survey_id))

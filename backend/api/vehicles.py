@@ -64,9 +64,9 @@ async def send_command(
     """Send a command and return the flight controller's answer.
 
     The command is checked against the safety rails first; a refusal lists every
-    violated rule. ``set_mode`` to the mission mode (AUTO, PX4 AUTO.MISSION) also runs the
-    mission check on the mission on board (downloaded first): a mission that fails it,
-    or none, is refused (422) unless an admin gives ``override_reason``.
+    violated rule. ``set_mode`` to the mission mode (ArduPilot AUTO, PX4 MISSION) also
+    runs the mission check on the mission on board (downloaded first): a mission that
+    fails it, or none, is refused (422) unless an admin gives ``override_reason``.
     ``mission_set_current`` beyond the mission is refused at once (422). A refusal by the
     flight controller is an answer (status ``refused``, with its reason), so it comes back
     as 200; a missing answer is 504.

@@ -7,9 +7,10 @@ from __future__ import annotations
 from backend.safety.violations import MISSION_UNCHECKED, Violation
 from protocol.messages import Command, MissionItem, SetModeCommand
 
-# The modes that fly the stored mission: ArduPilot's AUTO (every vehicle type), PX4's
-# AUTO.MISSION.
-MISSION_MODES = frozenset({"AUTO", "AUTO.MISSION"})
+# The modes that fly the stored mission, by the names the agent lists (pymavlink's mode
+# tables): ArduPilot's AUTO (every vehicle type) and PX4's MISSION (AUTO.MISSION in PX4's
+# own terms, custom main mode 4, sub mode 4).
+MISSION_MODES = frozenset({"AUTO", "MISSION"})
 
 
 def starts_mission(command: Command) -> bool:

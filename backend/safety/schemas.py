@@ -17,6 +17,7 @@ from backend.safety.geometry import MAX_POLYGON_VERTICES, validate_polygon
 from backend.safety.rails import DEFAULT_BATTERY_RESERVE_PCT, SafetyRails
 from backend.safety.violations import RuleName, Violation
 from common.geodesy import GeoPoint
+from protocol.messages import Number
 
 MAX_ALTITUDE_M = 10_000.0
 MAX_DISTANCE_M = 1_000_000.0
@@ -27,8 +28,8 @@ class _Strict(BaseModel):
 
 
 class GeoPointModel(_Strict):
-    lat: float = Field(ge=-90, le=90, description="Latitude, degrees north (WGS84)")
-    lon: float = Field(ge=-180, le=180, description="Longitude, degrees east (WGS84)")
+    lat: Number = Field(ge=-90, le=90, description="Latitude, degrees north (WGS84)")
+    lon: Number = Field(ge=-180, le=180, description="Longitude, degrees east (WGS84)")
 
 
 class GeofenceModel(_Strict):
@@ -42,7 +43,7 @@ class GeofenceModel(_Strict):
             f"at most {MAX_POLYGON_VERTICES}, no crossing edges, within 100 km of its centre."
         ),
     )
-    max_altitude_m: float | None = Field(
+    max_altitude_m: Number | None = Field(
         default=None,
         ge=0,
         le=MAX_ALTITUDE_M,
@@ -74,19 +75,19 @@ class SafetyRailsModel(_Strict):
     """Site-wide rails, or one vehicle's overrides (null fields fall back to the site's)."""
 
     geofence: GeofenceModel | None = Field(default=None, description="Null for no geofence")
-    max_distance_from_home_m: float | None = Field(
+    max_distance_from_home_m: Number | None = Field(
         default=None, gt=0, le=MAX_DISTANCE_M, description="Horizontal range limit, metres"
     )
-    min_altitude_m: float | None = Field(
+    min_altitude_m: Number | None = Field(
         default=None, ge=0, le=MAX_ALTITUDE_M, description="Floor for targets, metres above home"
     )
-    max_altitude_m: float | None = Field(
+    max_altitude_m: Number | None = Field(
         default=None, ge=0, le=MAX_ALTITUDE_M, description="Ceiling, metres above home"
     )
-    min_launch_battery_pct: float | None = Field(
+    min_launch_battery_pct: Number | None = Field(
         default=None, ge=0, le=100, description="Battery needed to arm or take off, percent"
     )
-    battery_reserve_pct: float = Field(
+    battery_reserve_pct: Number = Field(
         default=DEFAULT_BATTERY_RESERVE_PCT,
         ge=0,
         le=100,

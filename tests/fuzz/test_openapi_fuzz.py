@@ -3,7 +3,9 @@ viewer: no 5xx, no status the OpenAPI document does not list, bodies that match 
 models, and 405s whose Allow header names the path's methods.
 
 It runs the `schemathesis` CLI (every phase: examples, coverage, fuzzing, stateful) with a
-fixed seed and a bounded number of examples per operation, so it stays near a minute.
+fixed seed and a bounded number of examples per operation, so it stays near a minute or
+two a role. The vehicle routes mostly name the fleet's own vehicles (schemathesis.toml),
+so commands, missions and parameter writes really reach the agents and the simulators.
 """
 
 from __future__ import annotations
@@ -18,10 +20,14 @@ import httpx
 import pytest
 
 from gcs.launcher import LocalFleet
+from tests.conftest import _environment
 from tests.helpers import access_token, api_client, running_fleet
 
-EXAMPLES_PER_OPERATION = 12
+EXAMPLES_PER_OPERATION = 6
 SEED = 20261125
+# A role's run takes one to three minutes on a busy 2-core machine (the coverage phase is
+# most of it, whatever the examples per operation); the suite's 180 s would cut it short.
+RUN_LIMIT_S = 420
 CONFIG = Path(__file__).with_name("schemathesis.toml")
 SKIPPED_PATHS = [
     # The fuzzer would end its own session, or disable its own account, and then fuzz
@@ -30,14 +36,16 @@ SKIPPED_PATHS = [
     "/api/v1/users/{username}",
     "/api/v1/auth/api-tokens/{token_id}",  # token ids are small: it would revoke its own
 ]
-# pydantic's lax mode (FastAPI's) takes JSON false for 0 and 0 for false, which this check
-# reports as a schema-violating request accepted; every other check runs.
-EXCLUDED_CHECKS = "negative_data_rejection"
 
 
 @pytest.fixture(scope="module")
 def demo_fleet(tmp_path_factory: pytest.TempPathFactory) -> Iterator[LocalFleet]:
-    with running_fleet(tmp_path_factory.mktemp("fuzz"), vehicles=2, speedup=5.0) as fleet:
+    # At the default 20 vehicle requests a second most of the fuzzer's commands would be
+    # 429s; the limit has tests of its own, and here the commands should reach the fleet.
+    with (
+        _environment(GCS_COMMANDS_PER_SECOND="1000"),
+        running_fleet(tmp_path_factory.mktemp("fuzz"), vehicles=2, speedup=5.0) as fleet,
+    ):
         yield fleet
 
 
@@ -64,8 +72,6 @@ def _schemathesis(base: str, token: str, report: Path) -> subprocess.CompletedPr
         f"{base}/openapi.json",
         "--checks",
         "all",
-        "--exclude-checks",
-        EXCLUDED_CHECKS,
         "--max-examples",
         str(EXAMPLES_PER_OPERATION),
         "--seed",
@@ -80,9 +86,12 @@ def _schemathesis(base: str, token: str, report: Path) -> subprocess.CompletedPr
     ]
     for path in SKIPPED_PATHS:
         command += ["--exclude-path", path]
-    return subprocess.run(command, capture_output=True, text=True, timeout=300, cwd=report.parent)
+    return subprocess.run(
+        command, capture_output=True, text=True, timeout=RUN_LIMIT_S, cwd=report.parent
+    )
 
 
+@pytest.mark.timeout(RUN_LIMIT_S + 60)
 @pytest.mark.parametrize("role", ["admin", "viewer"])
 def test_api_answers_what_its_document_says(
     demo_fleet: LocalFleet, tokens: dict[str, str], role: str, tmp_path: Path

@@ -13,11 +13,15 @@ from pathlib import Path
 from typing import Any
 
 from protocol.messages import CommandOutcome, CommandResult, encode
-from tests.conftest import ADMIN_PASSWORD, hub_settings, scratch_postgres
+from tests.conftest import ADMIN_PASSWORD, POSTGRES_ADDRESS, hub_settings, scratch_postgres
 from tests.helpers import access_token, api_client, poll_until, running_hub
 from tests.integration.test_hub_bad_input import ScriptedAgent, scripted_agent
 from tests.integration.test_security import PASSWORD, _no_command_reaches, _user
 from tests.tcp_proxy import CuttableProxy
+
+# The server the suite uses (GCS_TEST_POSTGRES_ADDRESS may name another), behind the proxy.
+_host, _, _port = POSTGRES_ADDRESS.rpartition(":")
+POSTGRES = (_host, int(_port))
 
 SAFETY_COMMANDS = ("land", "rtl", "hold")
 
@@ -43,7 +47,7 @@ def answering(agent: ScriptedAgent) -> Iterator[list[dict[str, Any]]]:
 @contextmanager
 def hub_behind(proxy: CuttableProxy, tmp_path: Path) -> Iterator[str]:
     with scratch_postgres() as url:
-        proxied = url.replace("127.0.0.1:5432", f"127.0.0.1:{proxy.port}")
+        proxied = url.replace(POSTGRES_ADDRESS, f"127.0.0.1:{proxy.port}")
         with running_hub(hub_settings(tmp_path, database_url=proxied, spool_retry_s=0.2)) as base:
             yield base
 
@@ -52,7 +56,7 @@ def test_land_rtl_and_hold_go_through_a_database_outage_and_nothing_is_lost(
     tmp_path: Path,
 ) -> None:
     with (
-        CuttableProxy(("127.0.0.1", 5432)) as proxy,
+        CuttableProxy(POSTGRES) as proxy,
         hub_behind(proxy, tmp_path) as base,
         ExitStack() as clients,
     ):
@@ -115,8 +119,8 @@ def test_land_rtl_and_hold_go_through_a_database_outage_and_nothing_is_lost(
 def test_a_spool_left_by_a_hub_that_stopped_mid_outage_is_stored_at_the_next_start(
     tmp_path: Path,
 ) -> None:
-    with CuttableProxy(("127.0.0.1", 5432)) as proxy, scratch_postgres() as url:
-        proxied = url.replace("127.0.0.1:5432", f"127.0.0.1:{proxy.port}")
+    with CuttableProxy(POSTGRES) as proxy, scratch_postgres() as url:
+        proxied = url.replace(POSTGRES_ADDRESS, f"127.0.0.1:{proxy.port}")
         settings = hub_settings(tmp_path, database_url=proxied, spool_retry_s=0.2)
         with running_hub(settings) as base:
             admin = api_client(base, access_token(base, "admin", ADMIN_PASSWORD))
@@ -146,8 +150,8 @@ def test_a_spool_left_by_a_hub_that_stopped_mid_outage_is_stored_at_the_next_sta
 
 def test_the_cache_keeps_a_token_for_its_lifetime_only(tmp_path: Path) -> None:
     """A cached principal never outlives its token, even with the database down."""
-    with CuttableProxy(("127.0.0.1", 5432)) as proxy, scratch_postgres() as url:
-        proxied = url.replace("127.0.0.1:5432", f"127.0.0.1:{proxy.port}")
+    with CuttableProxy(POSTGRES) as proxy, scratch_postgres() as url:
+        proxied = url.replace(POSTGRES_ADDRESS, f"127.0.0.1:{proxy.port}")
         settings = hub_settings(tmp_path, database_url=proxied, access_token_ttl_s=2.0)
         with running_hub(settings) as base:
             token = access_token(base, "admin", ADMIN_PASSWORD)

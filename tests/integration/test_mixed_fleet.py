@@ -168,3 +168,30 @@ def test_px4_missions_start_at_item_zero_on_the_wire_and_number_as_everywhere(
     current = send_command(api, PX4, name="mission_set_current", seq=2)
     assert current["status"] == "accepted", current
     watcher.wait_until(lambda v: state_of(v, PX4).get("mission_current") == 2, 10, "item 2")
+
+
+def test_px4s_mission_mode_flies_only_a_checked_mission(
+    clients: tuple[httpx.Client, FleetWatcher],
+) -> None:
+    """PX4's mission mode is MISSION in the modes the agent lists, not AUTO: the hub's
+    mission check before AUTO holds for it too (issue 12.12)."""
+    api, watcher = clients
+    state = listed_once_ready(clients, PX4, "the PX4 copter")["state"]
+    url = f"/api/v1/vehicles/{PX4}/mission"
+    assert api.delete(url).status_code == 200
+    refused = api.post(
+        f"/api/v1/vehicles/{PX4}/commands", json={"name": "set_mode", "mode": "MISSION"}
+    )
+    assert refused.status_code == 422, refused.text
+    assert [v["rule"] for v in refused.json()["violations"]] == ["mission_unchecked"]
+    assert state_of(watcher.vehicles, PX4).get("mode") != "MISSION"
+
+    lat, lon = state["lat"], state["lon"]
+    items = [{"command": WAYPOINT, "lat": lat + 20 * NORTH, "lon": lon, "alt": 10}]
+    assert api.post(url, json={"items": items}).status_code == 200
+    try:
+        assert send_command(api, PX4, name="set_mode", mode="MISSION")["status"] == "accepted"
+        watcher.wait_until(lambda v: state_of(v, PX4).get("mode") == "MISSION", 10, "MISSION")
+    finally:
+        send_command(api, PX4, name="hold")
+        api.delete(url)

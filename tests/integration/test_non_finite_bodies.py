@@ -58,3 +58,29 @@ def test_unparsable_bodies_are_422(hub: str, admin_token: str, body: bytes) -> N
         response = api.put("/api/v1/vehicles/v1/params/WPNAV_SPEED", content=body, headers=JSON)
     assert response.status_code == 422, response.text
     assert response.json()["detail"][0]["loc"] == ["body"]
+
+
+@pytest.mark.parametrize("wrong", [False, True, "5"], ids=["false", "true", "numeric string"])
+def test_a_number_given_as_a_boolean_or_a_string_is_refused_naming_the_field(
+    hub: str, enrol: Enrol, admin_token: str, wrong: object
+) -> None:
+    """Lax validation took `false` for 0 and "5" for 5: a site's battery reserve of 0 %
+    from a client's type mistake. Numbers, integers and booleans are JSON's own."""
+    with scripted_agent(hub, "v1", enrol("v1")), api_client(hub, admin_token) as api:
+        rails = api.put("/api/v1/safety/rails", json={"battery_reserve_pct": wrong})
+        assert rails.status_code == 422, rails.text
+        assert [item["loc"] for item in rails.json()["detail"]] == [["body", "battery_reserve_pct"]]
+        assert api.get("/api/v1/safety/rails").json()["battery_reserve_pct"] > 0
+        takeoff = api.post(
+            "/api/v1/vehicles/v1/commands", json={"name": "takeoff", "altitude": wrong}
+        )
+        assert takeoff.status_code == 422, takeoff.text
+        assert ["body", "takeoff", "altitude"] in [item["loc"] for item in takeoff.json()["detail"]]
+        # lat and lon as whole numbers are numbers still: only command and autocontinue
+        item = {"command": True if wrong == "5" else wrong, "lat": 1, "lon": 1, "autocontinue": 1}
+        mission = api.post("/api/v1/vehicles/v1/mission-check", json={"items": [item]})
+        assert mission.status_code == 422, mission.text
+        assert {tuple(i["loc"]) for i in mission.json()["detail"]} == {
+            ("body", "items", 0, "command"),
+            ("body", "items", 0, "autocontinue"),
+        }

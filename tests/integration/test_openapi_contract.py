@@ -34,6 +34,9 @@ def _allow(response: httpx.Response) -> set[str]:
         ("PATCH", "/api/v1/vehicles/v1/safety-rails", {"GET", "PUT", "DELETE"}),
         ("GET", "/api/v1/fleet/commands", {"POST"}),
         ("POST", "/api/v1/agent-tokens/7", {"DELETE"}),
+        # a literal path is not also its templated neighbour's (/surveys/{survey_id}: GET)
+        ("OPTIONS", "/api/v1/surveys/preview", {"POST"}),
+        ("GET", "/api/v1/surveys/import", {"POST"}),  # not a survey id: ids are hex
     ],
 )
 def test_wrong_method_names_every_allowed_method(

@@ -10,7 +10,7 @@ from typing import Any, Literal
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 from backend.missions.schemas import Mission, MissionCheckResponse
-from protocol.messages import VehicleId
+from protocol.messages import Boolean, Integer, Number, VehicleId
 
 
 class _Strict(BaseModel):
@@ -19,20 +19,20 @@ class _Strict(BaseModel):
 
 class GeoJsonPolygon(_Strict):
     type: Literal["Polygon"]
-    coordinates: list[list[list[float]]] = Field(
+    coordinates: list[list[list[Number]]] = Field(
         min_length=1,
         description="[longitude, latitude] rings: the outline first, then holes (no-fly areas)",
     )
 
 
 class CameraModel(_Strict):
-    sensor_width_mm: float = Field(gt=0, le=100)
-    sensor_height_mm: float = Field(gt=0, le=100)
-    image_width_px: int = Field(gt=0, le=100_000)
-    image_height_px: int = Field(gt=0, le=100_000)
-    focal_length_mm: float = Field(gt=0, le=1000)
-    landscape: bool = True
-    distance_trigger: bool = True
+    sensor_width_mm: Number = Field(gt=0, le=100)
+    sensor_height_mm: Number = Field(gt=0, le=100)
+    image_width_px: Integer = Field(gt=0, le=100_000)
+    image_height_px: Integer = Field(gt=0, le=100_000)
+    focal_length_mm: Number = Field(gt=0, le=1000)
+    landscape: Boolean = True
+    distance_trigger: Boolean = True
 
 
 class SurveyRequest(_Strict):
@@ -40,16 +40,18 @@ class SurveyRequest(_Strict):
     camera: str | CameraModel = Field(
         description="A preset's name (e.g. sony_a6000_16mm) or the camera's figures"
     )
-    altitude_m: float | None = Field(default=None, gt=0, description="Above home; or give gsd_cm")
-    gsd_cm: float | None = Field(default=None, gt=0, description="cm per pixel; or give altitude_m")
-    side_overlap_pct: float = Field(default=70.0, ge=0, lt=100)
-    front_overlap_pct: float = Field(default=80.0, ge=0, lt=100)
-    angle_deg: float | None = Field(
+    altitude_m: Number | None = Field(default=None, gt=0, description="Above home; or give gsd_cm")
+    gsd_cm: Number | None = Field(
+        default=None, gt=0, description="cm per pixel; or give altitude_m"
+    )
+    side_overlap_pct: Number = Field(default=70.0, ge=0, lt=100)
+    front_overlap_pct: Number = Field(default=80.0, ge=0, lt=100)
+    angle_deg: Number | None = Field(
         default=None, ge=0, lt=180, description="Lane heading; null chooses the fastest"
     )
-    speed_ms: float = Field(default=10.0, gt=0, le=30)
-    turnaround_m: float = Field(default=10.0, ge=0, le=200)
-    hover_and_capture: bool = False
+    speed_ms: Number = Field(default=10.0, gt=0, le=30)
+    turnaround_m: Number = Field(default=10.0, ge=0, le=200)
+    hover_and_capture: Boolean = False
     vehicle_ids: list[VehicleId] = Field(min_length=1, max_length=64)
 
     @model_validator(mode="after")

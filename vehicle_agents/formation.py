@@ -1,0 +1,201 @@
+"""The formation follower: close to the aircraft, it flies this vehicle's slot behind a
+leader whose state the hub relays.
+
+Each tick (10 Hz or more, well inside ArduCopter's GUID_TIMEOUT of 3 s and PX4's
+offboard loss timeout COM_OF_LOSS_T of 1 s) it predicts the leader forward over the
+link's delay at its velocity (AP_Follow's estimate), puts the slot around it, and
+sends SET_POSITION_TARGET_GLOBAL_INT with the slot's position and the leader's velocity
+as feed-forward. Position alone would make the autopilot chase a point that has
+already moved on, trailing by speed / PSC_POSXY_P (the seed's 2.5 m); the velocity
+feed-forward removes that lag.
+
+ArduPilot flies these in GUIDED. PX4 takes them only in OFFBOARD, and only once
+setpoints are already streaming: the agent starts the stream before it asks for the
+switch, and if the stream stops PX4 falls back to its COM_OBL_RC_ACT action on its own.
+
+It holds (a position target at its own stopping place, velocity zero) when:
+- the leader's state is older than ``stale_s`` (1 s): flying a guess would be blind;
+- another vehicle is within the minimum separation: it backs off away from it instead;
+- the slot would put it inside a known obstacle's margin (not wired yet).
+A mode change it did not make (the RC transmitter's switch) takes it out of the
+formation at once: it stops sending, so the pilot's mode rules.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+from enum import StrEnum
+
+from pymavlink.dialects.v20 import ardupilotmega as mavlink2
+
+from common.formation import LeaderState, Offset, slot_target
+from common.geodesy import LocalFrame
+
+# Position and velocity used; acceleration, yaw and yaw rate ignored. ArduCopter reads
+# any set bit of a group as "ignore the group", PX4 each axis: both fly this the same.
+POSVEL_TYPE_MASK = (
+    mavlink2.POSITION_TARGET_TYPEMASK_AX_IGNORE
+    | mavlink2.POSITION_TARGET_TYPEMASK_AY_IGNORE
+    | mavlink2.POSITION_TARGET_TYPEMASK_AZ_IGNORE
+    | mavlink2.POSITION_TARGET_TYPEMASK_YAW_IGNORE
+    | mavlink2.POSITION_TARGET_TYPEMASK_YAW_RATE_IGNORE
+)
+# The same with a yaw: a leader flown by the agent faces along its route.
+POSVEL_YAW_TYPE_MASK = POSVEL_TYPE_MASK & ~mavlink2.POSITION_TARGET_TYPEMASK_YAW_IGNORE
+
+
+@dataclass(frozen=True)
+class FollowerSettings:
+    rate_hz: float = 10.0  # setpoints a second
+    stale_s: float = 1.0  # a leader state older than this makes the follower hold
+    max_lead_s: float = 0.5  # the most the leader is predicted forward
+    back_off_ms: float = 1.0  # how fast it moves away from an intruder
+    # A slot is never flown lower than this above home, whatever the leader does (a
+    # leader landing, or climbing out, must not drag a follower below it into the ground).
+    min_alt_m: float = 1.0
+
+
+class Action(StrEnum):
+    TRACK = "track"
+    HOLD_STALE = "hold_stale"
+    BACK_OFF = "back_off"
+    LEFT = "left"  # out of the formation: sends nothing
+
+
+@dataclass(frozen=True)
+class Setpoint:
+    """What to send this tick: a local position (north, east, up) and velocity."""
+
+    action: Action
+    position: tuple[float, float, float] | None
+    velocity: tuple[float, float, float]
+    reason: str = ""
+
+
+class Follower:
+    """One follower's slot-keeping; pure state, fed by the agent and asked each tick."""
+
+    def __init__(
+        self,
+        frame: LocalFrame,
+        offset: Offset,
+        min_separation_m: float,
+        settings: FollowerSettings | None = None,
+    ) -> None:
+        self.frame = frame
+        self.offset = offset
+        self.min_separation_m = min_separation_m
+        self.settings = settings or FollowerSettings()
+        self.leader: LeaderState | None = None
+        self.left_reason: str | None = None
+        self._hold: tuple[float, float, float] | None = None
+
+    def set_offset(self, offset: Offset) -> None:
+        """A new slot in flight (a shape or spacing change): the position controller,
+        with its acceleration limit, glides the vehicle to it."""
+        self.offset = offset
+
+    def on_leader(self, state: LeaderState) -> None:
+        if self.leader is None or state.time_s >= self.leader.time_s:
+            self.leader = state
+
+    def leave(self, reason: str) -> None:
+        """Out of the formation (an RC mode change, the operator's stop)."""
+        self.left_reason = reason
+
+    def tick(
+        self,
+        now_s: float,
+        own: tuple[float, float, float],
+        others: Mapping[str, tuple[float, float, float]] = {},
+    ) -> Setpoint:
+        """This tick's setpoint, from the vehicle's own position (north, east, up) and
+        every other vehicle's it knows of."""
+        if self.left_reason is not None:
+            return Setpoint(Action.LEFT, None, (0.0, 0.0, 0.0), self.left_reason)
+        intruder = _nearest(own, others)
+        if intruder is not None and intruder[1] < self.min_separation_m:
+            name, distance, where = intruder
+            away = [a - b for a, b in zip(own, where, strict=True)]
+            norm = math.hypot(*away) or 1.0
+            v = [self.settings.back_off_ms * a / norm for a in away]
+            self._hold = None
+            # The target is where it is now; the velocity carries it away.
+            return Setpoint(
+                Action.BACK_OFF,
+                own,
+                (v[0], v[1], v[2]),
+                f"{name} is {distance:.1f} m away, within the {self.min_separation_m:g} m "
+                "separation",
+            )
+        if self.leader is None or now_s - self.leader.time_s > self.settings.stale_s:
+            if self._hold is None:
+                self._hold = own
+            age = "none yet" if self.leader is None else f"{now_s - self.leader.time_s:.1f} s old"
+            return Setpoint(Action.HOLD_STALE, self._hold, (0.0, 0.0, 0.0), f"leader state {age}")
+        self._hold = None
+        predicted = self.leader.predicted(now_s, self.settings.max_lead_s)
+        (north, east, up), (vn, ve, vu) = slot_target(predicted, self.offset)
+        if up < self.settings.min_alt_m:
+            up, vu = self.settings.min_alt_m, max(vu, 0.0)
+        return Setpoint(Action.TRACK, (north, east, up), (vn, ve, vu))
+
+    def message(
+        self,
+        setpoint: Setpoint,
+        time_boot_ms: int,
+        target_system: int,
+        target_component: int,
+        yaw_rad: float | None = None,
+    ) -> mavlink2.MAVLink_set_position_target_global_int_message | None:
+        """The SET_POSITION_TARGET_GLOBAL_INT for a setpoint (None once out of formation):
+        altitude above home, velocity north-east-down."""
+        return position_target(
+            self.frame, setpoint, time_boot_ms, target_system, target_component, yaw_rad
+        )
+
+
+def position_target(
+    frame: LocalFrame,
+    setpoint: Setpoint,
+    time_boot_ms: int,
+    target_system: int,
+    target_component: int,
+    yaw_rad: float | None = None,
+) -> mavlink2.MAVLink_set_position_target_global_int_message | None:
+    if setpoint.position is None:
+        return None
+    north, east, up = setpoint.position
+    lat, lon = frame.to_geo(east, north)
+    vn, ve, vu = setpoint.velocity
+    return mavlink2.MAVLink_set_position_target_global_int_message(
+        time_boot_ms & 0xFFFFFFFF,
+        target_system,
+        target_component,
+        mavlink2.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT,
+        POSVEL_TYPE_MASK if yaw_rad is None else POSVEL_YAW_TYPE_MASK,
+        round(lat * 1e7),
+        round(lon * 1e7),
+        up,
+        vn,
+        ve,
+        -vu,
+        0.0,
+        0.0,
+        0.0,
+        0.0 if yaw_rad is None else yaw_rad,
+        0.0,
+    )
+
+
+def _nearest(
+    own: tuple[float, float, float], others: Mapping[str, tuple[float, float, float]]
+) -> tuple[str, float, tuple[float, float, float]] | None:
+    best: tuple[str, float, tuple[float, float, float]] | None = None
+    for name, where in others.items():
+        d = math.dist(own, where)
+        if best is None or d < best[1]:
+            best = (name, d, where)
+    return best

@@ -23,6 +23,7 @@ from vehicle_agents.commands import CommandExecutor
 from vehicle_agents.config import AgentSettings, default_vehicle_id, hub_http_base
 from vehicle_agents.fcu_events import FcuLinkEvents
 from vehicle_agents.fcu_link import FcuLink, MavMessage
+from vehicle_agents.formation import FormationRunner
 from vehicle_agents.forwarding import MavlinkForwarder
 from vehicle_agents.hub_failsafe import HubLinkFailsafe
 from vehicle_agents.hub_link import HubLink, VehicleIdInUse
@@ -42,7 +43,7 @@ from vehicle_agents.tlog_uploads import TlogUploader
 
 log = logging.getLogger(__name__)
 
-CAPABILITIES = ["telemetry", "commands", "events", "manual"]
+CAPABILITIES = ["telemetry", "commands", "events", "manual", "formation"]
 SCAN_CAPABILITY = "scans"
 
 
@@ -87,6 +88,8 @@ async def _run(settings: AgentSettings) -> None:
         executor = CommandExecutor(link)
         pilot = ManualPilot(link, executor, events.emit)
         tasks.create_task(pilot.run())
+        formation = FormationRunner(link, executor, events.emit)
+        tasks.create_task(formation.run())
         scans = None
         if settings.lidar:
             relay = scan_relay(settings, link, vehicle_id)
@@ -100,6 +103,7 @@ async def _run(settings: AgentSettings) -> None:
             executor.execute,
             live_state=lambda: current_state(link, outbox),
             on_manual=pilot.on_frame,
+            on_formation=formation.on_hub,
             scans=scans,
         )
         tasks.create_task(publish_telemetry(link, outbox, settings.telemetry_rate_hz))

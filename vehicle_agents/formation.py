@@ -23,15 +23,33 @@ formation at once: it stops sending, so the pilot's mode rules.
 
 from __future__ import annotations
 
+import asyncio
+import logging
 import math
-from collections.abc import Mapping
+import time
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from enum import StrEnum
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
-from common.formation import LeaderState, Offset, slot_target
+from common.formation import LeaderState, Offset, OffsetFrame, slot_target
 from common.geodesy import LocalFrame
+from protocol.messages import (
+    EventKind,
+    FormationEnd,
+    FormationSlot,
+    HoldCommand,
+    LeaderUpdate,
+)
+from vehicle_agents.commands import CommandExecutor
+from vehicle_agents.fcu_link import FcuLink, MavMessage
+from vehicle_agents.modes import mode_name
+
+log = logging.getLogger(__name__)
+
+EmitEvent = Callable[[EventKind, str, int | None], None]
+FormationMessage = FormationSlot | FormationEnd | LeaderUpdate
 
 # Position and velocity used; acceleration, yaw and yaw rate ignored. ArduCopter reads
 # any set bit of a group as "ignore the group", PX4 each axis: both fly this the same.
@@ -55,6 +73,9 @@ class FollowerSettings:
     # A slot is never flown lower than this above home, whatever the leader does (a
     # leader landing, or climbing out, must not drag a follower below it into the ground).
     min_alt_m: float = 1.0
+    # PX4 enters OFFBOARD only with setpoints already streaming (more than 2 Hz for a
+    # while): the switch is asked for after this long of them. ArduPilot does not mind.
+    prestream_s: float = 0.5
 
 
 class Action(StrEnum):
@@ -199,3 +220,173 @@ def _nearest(
         if best is None or d < best[1]:
             best = (name, d, where)
     return best
+
+
+class FormationRunner:
+    """The agent's side of a formation: slots and leader states from the hub in, a
+    setpoint to the flight controller every tick, events out when it holds, backs off,
+    or leaves because someone else changed the mode (the RC pilot outranks it)."""
+
+    def __init__(
+        self,
+        link: FcuLink,
+        executor: CommandExecutor,
+        emit: EmitEvent,
+        settings: FollowerSettings | None = None,
+        clock: Callable[[], float] = time.time,
+    ) -> None:
+        self._link = link
+        self._executor = executor
+        self._emit = emit
+        self.settings = settings or FollowerSettings()
+        self._clock = clock  # Unix time: the leader's samples are stamped with it
+        self.formation_id: str | None = None
+        self.follower: Follower | None = None
+        self._neighbours: dict[str, tuple[float, float, float]] = {}
+        self._started_at = 0.0
+        self._mode_asked = False
+        self._seen_guided = False
+        self._last_action: Action | None = None
+        self._ending: FormationEnd | None = None
+        self._face_heading = False
+        self.sent = 0
+        link.listeners.append(self._on_message)
+
+    def on_hub(self, message: FormationMessage) -> None:
+        match message:
+            case FormationSlot():
+                self._on_slot(message)
+            case LeaderUpdate() if message.formation_id == self.formation_id:
+                assert self.follower is not None
+                self.follower.on_leader(
+                    LeaderState(
+                        message.north,
+                        message.east,
+                        message.up,
+                        message.vn,
+                        message.ve,
+                        message.vu,
+                        math.radians(message.heading_deg),
+                        message.time,
+                    )
+                )
+                self._neighbours = {
+                    n.vehicle_id: (n.north, n.east, n.up) for n in message.neighbours
+                }
+            case FormationEnd() if message.formation_id == self.formation_id:
+                self._ending = message
+
+    def _on_slot(self, slot: FormationSlot) -> None:
+        offset = Offset(slot.x, slot.y, slot.up, OffsetFrame(slot.frame))
+        if self.follower is not None and slot.formation_id == self.formation_id:
+            self.follower.set_offset(offset)
+            self.follower.min_separation_m = slot.min_separation_m
+            self._emit("formation", f"new slot in {slot.formation_id}: {_describe(offset)}", 6)
+            return
+        self.formation_id = slot.formation_id
+        frame = LocalFrame(slot.origin_lat, slot.origin_lon)
+        self.follower = Follower(frame, offset, slot.min_separation_m, self.settings)
+        self._face_heading = slot.face_heading
+        self._started_at = self._clock()
+        self._mode_asked = self._seen_guided = False
+        self._last_action = None
+        self._neighbours = {}
+        self._emit("formation", f"joined {slot.formation_id}: {_describe(offset)}", 6)
+
+    def _on_message(self, message: MavMessage) -> None:
+        """The RC pilot's (or another GCS's) mode change takes the vehicle out."""
+        if self.follower is None or self.follower.left_reason is not None:
+            return
+        if message.get_type() != "HEARTBEAT" or message.get_srcSystem() != self._link.target_system:
+            return
+        guided = self._guided_mode()
+        mode = mode_name(message)
+        if mode == guided:
+            self._seen_guided = True
+        elif self._seen_guided:
+            reason = f"the vehicle changed to {mode} (RC or another GCS): out of the formation"
+            self.follower.leave(reason)
+            self._emit("formation", f"left {self.formation_id}: {reason}", 4)
+
+    def _guided_mode(self) -> str | None:
+        return self._link.modes.guided_mode if self._link.modes is not None else None
+
+    def _own_position(self, frame: LocalFrame) -> tuple[float, float, float] | None:
+        position = self._link.latest.get("GLOBAL_POSITION_INT")
+        if position is None:
+            return None
+        east, north = frame.to_local(position.lat / 1e7, position.lon / 1e7)
+        return north, east, position.relative_alt / 1000.0
+
+    async def tick(self) -> None:
+        follower = self.follower
+        if self._ending is not None:
+            ending, self._ending = self._ending, None
+            await self._end(ending)
+            return
+        if follower is None or follower.left_reason is not None or self._link.target_system is None:
+            return
+        own = self._own_position(follower.frame)
+        if own is None:
+            return
+        now = self._clock()
+        setpoint = follower.tick(now, own, self._neighbours)
+        if setpoint.action is not self._last_action:
+            self._last_action = setpoint.action
+            if setpoint.action in (Action.HOLD_STALE, Action.BACK_OFF):
+                self._emit("formation", f"{setpoint.action.value}: {setpoint.reason}", 4)
+            elif setpoint.action is Action.TRACK:
+                self._emit("formation", "tracking its slot", 6)
+        boot_ms = int((now - self._started_at) * 1000)
+        yaw = None
+        if self._face_heading and setpoint.action is Action.TRACK and follower.leader:
+            yaw = follower.leader.heading_rad
+        message = follower.message(
+            setpoint, boot_ms, self._link.target_system, self._link.target_component, yaw
+        )
+        if message is None:
+            return
+        try:
+            self._link.send(message)
+            self.sent += 1
+        except ConnectionError:
+            return  # the flight controller link is down; the link says so itself
+        if not self._mode_asked and now - self._started_at >= self.settings.prestream_s:
+            self._mode_asked = True
+            self._enter_guided()
+
+    def _enter_guided(self) -> None:
+        modes = self._link.modes
+        guided = self._guided_mode()
+        if modes is None or guided is None:
+            return
+        setting = modes.settings[guided]
+        self._link.send_command_long(
+            mavlink2.MAV_CMD_DO_SET_MODE,
+            0,
+            [setting.base_mode, setting.custom_mode, setting.custom_sub_mode],
+        )
+
+    async def _end(self, ending: FormationEnd) -> None:
+        follower, self.follower = self.follower, None
+        self.formation_id = None
+        if follower is None:
+            return
+        self._emit("formation", f"left {ending.formation_id}: {ending.reason or 'ended'}", 5)
+        if follower.left_reason is None:
+            # stop here: PX4 would otherwise run its offboard-loss action when the
+            # setpoints stop, ArduPilot drift on its last target until GUID_TIMEOUT
+            outcome = await self._executor.execute(HoldCommand())
+            if outcome.status != "accepted":
+                self._emit("formation", f"hold at the end refused: {outcome.message}", 2)
+
+    async def run(self) -> None:
+        period = 1.0 / self.settings.rate_hz
+        while True:
+            await self.tick()
+            await asyncio.sleep(period)
+
+
+def _describe(offset: Offset) -> str:
+    axes = "forward/right" if offset.frame is OffsetFrame.HEADING else "north/east"
+    return f"{offset.x:.1f} m, {offset.y:.1f} m ({axes}), {offset.up:+.1f} m up"

@@ -23,7 +23,10 @@ from protocol.messages import (
     CommandRequest,
     CommandResult,
     ErrorReply,
+    FormationEnd,
+    FormationSlot,
     Hello,
+    LeaderUpdate,
     LiveState,
     ManualFrame,
     Ping,
@@ -92,6 +95,7 @@ class HubLink:
         live_state: Callable[[], VehicleState] | None = None,
         on_manual: Callable[[ManualFrame], None] | None = None,
         scans: ScanOutbox | None = None,
+        on_formation: Callable[[FormationSlot | FormationEnd | LeaderUpdate], None] | None = None,
     ) -> None:
         self.url = url
         self._token = token
@@ -101,6 +105,7 @@ class HubLink:
         self.timeouts = timeouts or HubTimeouts()
         self._live_state = live_state
         self._on_manual = on_manual
+        self._on_formation = on_formation
         self._scans = scans
         self.connected = asyncio.Event()
         self.disconnected = asyncio.Event()
@@ -264,6 +269,10 @@ class HubLink:
                 # Handled at once, never queued: the newest stick position is the one flown.
                 if self._on_manual is not None:
                     self._on_manual(message)
+            case FormationSlot() | FormationEnd() | LeaderUpdate():
+                # at once, like stick frames: the newest leader state is the one flown
+                if self._on_formation is not None:
+                    self._on_formation(message)
             case Welcome():
                 log.warning("unexpected second welcome from hub")
 

@@ -1,0 +1,208 @@
+"""A formation through the hub: real hub, simulator and agent processes on loopback.
+
+The leader (a vehicle) flies a square; the hub relays its state at 10 Hz to the
+followers' agents, which send SET_POSITION_TARGET_GLOBAL_INT with velocity feed-forward.
+The simulators run at real time: the leader's samples are stamped and predicted on the
+wall clock, as they would be in the field.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Iterator
+from typing import Any
+
+import pytest
+
+from backend.missions.formation.route import LeaderRoute
+from common.formation import Offset, OffsetFrame, slot_target
+from common.geodesy import LocalFrame
+from gcs.launcher import LocalFleet
+from tests.helpers import FleetWatcher, access_token, api_client, ready, running_fleet, send_command
+
+pytestmark = pytest.mark.integration
+
+LEADER, RIGHT, LEFT = "sim_1", "sim_3", "sim_2"  # the right slot is on the sim_3 side
+ALTITUDES = {LEADER: 8.0, RIGHT: 2.0, LEFT: 3.0}
+SIDE_M, SPEED_MS, PAUSE_S = 10.0, 1.5, 2.0
+MIN_SEPARATION_M = 2.0
+
+
+@pytest.fixture(scope="module")
+def airborne(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[LocalFleet, str]]:
+    with running_fleet(tmp_path_factory.mktemp("formation"), vehicles=3, speedup=1.0) as fleet:
+        base = fleet.plan.hub_http
+        token = access_token(base, "admin", fleet.plan.admin_password)
+        with FleetWatcher(base, token) as watcher, api_client(base, token) as api:
+            for vehicle, altitude in ALTITUDES.items():
+                watcher.wait_until(ready(vehicle), 60, f"{vehicle} ready")
+                assert send_command(api, vehicle, name="set_mode", mode="GUIDED")["status"] == (
+                    "accepted"
+                )
+                assert send_command(api, vehicle, name="arm")["status"] == "accepted"
+                outcome = send_command(api, vehicle, name="takeoff", altitude=altitude)
+                assert outcome["status"] == "accepted"
+            for vehicle, altitude in ALTITUDES.items():
+                watcher.wait_until(
+                    lambda v, n=vehicle, a=altitude: (v[n]["state"]["alt_rel"] or 0) >= a - 0.3,
+                    60,
+                    f"{vehicle} at {altitude} m",
+                )
+        yield fleet, token
+
+
+def _square(frame: LocalFrame) -> list[dict[str, float]]:
+    out = []
+    for north, east in [(0, 0), (SIDE_M, 0), (SIDE_M, SIDE_M), (0, SIDE_M), (0, 0)]:
+        lat, lon = frame.to_geo(east, north)
+        out.append({"lat": lat, "lon": lon, "alt_m": ALTITUDES[LEADER]})
+    return out
+
+
+def _request(frame: LocalFrame, **overrides: Any) -> dict[str, Any]:
+    body: dict[str, Any] = {
+        "leader_id": LEADER,
+        "route": _square(frame),
+        "speed_ms": SPEED_MS,
+        "pause_s": PAUSE_S,
+        "followers": [
+            {"vehicle_id": RIGHT, "up": ALTITUDES[RIGHT] - ALTITUDES[LEADER]},
+            {"vehicle_id": LEFT, "up": ALTITUDES[LEFT] - ALTITUDES[LEADER]},
+        ],
+        "shape": "triangle",
+        "spacing_m": 3.0,
+        "min_separation_m": MIN_SEPARATION_M,
+    }
+    body.update(overrides)
+    return body
+
+
+def _local(frame: LocalFrame, state: dict[str, Any]) -> tuple[float, float, float]:
+    east, north = frame.to_local(state["lat"], state["lon"])
+    return north, east, state["alt_rel"]
+
+
+def test_bad_formations_are_refused_with_reasons(airborne: tuple[LocalFleet, str]) -> None:
+    fleet, token = airborne
+    base = fleet.plan.hub_http
+    with FleetWatcher(base, token) as watcher, api_client(base, token) as api:
+        watcher.wait_until(ready(LEADER), 10, "the fleet")
+        here = watcher.state(LEADER)
+        frame = LocalFrame(here["lat"], here["lon"])
+        cases = [
+            ({"followers": [{"vehicle_id": LEADER}]}, "sim_1 cannot lead and follow"),
+            ({"spacing_m": 1.0}, "minimum separation is 2 m"),
+            ({"speed_ms": 9.0}, "above the vehicles' limit"),
+        ]
+        for overrides, reason in cases:
+            answer = api.post("/api/v1/formations", json=_request(frame, **overrides))
+            assert answer.status_code == 422, answer.text
+            assert reason in answer.text
+
+
+def test_leader_flies_a_square_and_the_followers_keep_their_slots(
+    airborne: tuple[LocalFleet, str],
+) -> None:
+    fleet, token = airborne
+    base = fleet.plan.hub_http
+    with FleetWatcher(base, token) as watcher, api_client(base, token) as api:
+        watcher.wait_until(ready(LEADER), 10, "the fleet")
+        here = watcher.state(LEADER)
+        frame = LocalFrame(here["lat"], here["lon"])
+        answer = api.post("/api/v1/formations", json=_request(frame))
+        assert answer.status_code == 200, answer.text
+        formation = answer.json()
+        # a member of a running formation cannot join another
+        busy = api.post("/api/v1/formations", json=_request(frame))
+        assert busy.status_code == 422
+        assert "already in another formation" in busy.text
+
+        slots = {v: Offset(o["x"], o["y"], o["up"], OffsetFrame(o["frame"])) for v, o in formation["slots"].items()}  # fmt: skip
+        route_frame = LocalFrame(*frame.to_geo(0.0, 0.0))
+        points = [(0.0, 0.0, 8.0), (SIDE_M, 0.0, 8.0), (SIDE_M, SIDE_M, 8.0), (0.0, SIDE_M, 8.0), (0.0, 0.0, 8.0)]  # fmt: skip
+        route = LeaderRoute(points, SPEED_MS, PAUSE_S)
+        errors: dict[str, list[float]] = {RIGHT: [], LEFT: []}
+        closest = math.inf
+
+        def sample(vehicles: dict[str, Any]) -> bool:
+            nonlocal closest
+            now = time.time()
+            states = {v: (vehicles.get(v) or {}).get("state") or {} for v in ALTITUDES}
+            if any(s.get("lat") is None for s in states.values()):
+                return False
+            places = {v: _local(route_frame, s) for v, s in states.items()}
+            pts = list(places.values())
+            closest = min(
+                [closest] + [math.dist(a, b) for i, a in enumerate(pts) for b in pts[i + 1 :]]
+            )
+            t = now - formation["started_at"]
+            if route.leg_at(t) is not None and route.leg_at(t - 3.0) is not None:
+                # on a leg, past its first 3 s (the leader still turning out of the corner)
+                leader = states[LEADER]
+                from common.formation import LeaderState
+
+                north, east, up = places[LEADER]
+                state = LeaderState(
+                    north, east, up, leader["vn"], leader["ve"], 0.0,
+                    math.radians(leader["heading_deg"]), now,
+                )  # fmt: skip
+                for follower in errors:
+                    slot, _ = slot_target(state, slots[follower])
+                    errors[follower].append(math.dist(slot[:2], places[follower][:2]))
+            return t > route.duration_s
+
+        watcher.wait_until(sample, route.duration_s + 30, "the square flown")
+        rms = {f: math.sqrt(sum(e * e for e in es) / len(es)) for f, es in errors.items()}
+        print(f"formation through the hub: RMS {rms}, closest pair {closest:.2f} m")
+        assert all(len(es) > 50 for es in errors.values()), errors
+        assert max(rms.values()) <= 0.5, rms
+        assert closest >= MIN_SEPARATION_M
+
+        stopped = api.post(f"/api/v1/formations/{formation['id']}/stop")
+        assert stopped.status_code == 200, stopped.text
+        assert stopped.json()["stopped"] == "stopped by the operator"
+        watcher.wait_until(
+            lambda v: all((v[n].get("state") or {}).get("mode") == "BRAKE" for n in ALTITUDES),
+            15,
+            "every member holding",
+        )
+        texts = [e["text"] for e in watcher.events if e.get("kind") == "formation"]
+        assert any(t.startswith("left formation-") for t in texts), texts
+
+
+def test_rc_mode_change_takes_a_member_out(airborne: tuple[LocalFleet, str]) -> None:
+    fleet, token = airborne
+    base = fleet.plan.hub_http
+    with FleetWatcher(base, token) as watcher, api_client(base, token) as api:
+        watcher.wait_until(ready(LEADER), 10, "the fleet")
+        for vehicle in ALTITUDES:
+            assert send_command(api, vehicle, name="set_mode", mode="GUIDED")["status"] == (
+                "accepted"
+            )
+        here = watcher.state(LEADER)
+        frame = LocalFrame(here["lat"], here["lon"])
+        answer = api.post("/api/v1/formations", json=_request(frame, pause_s=30.0))
+        assert answer.status_code == 200, answer.text
+        watcher.wait_until(
+            lambda v: any(
+                e.get("kind") == "formation" and "tracking" in e["text"] for e in watcher.events
+            ),
+            10,
+            "the followers tracking",
+        )
+        # another GCS (or the RC switch) puts a follower in LOITER
+        assert send_command(api, LEFT, name="set_mode", mode="LOITER")["status"] == "accepted"
+        watcher.wait_until(
+            lambda v: any(
+                e.get("kind") == "formation" and "changed to LOITER" in e["text"]
+                for e in watcher.events
+            ),
+            10,
+            "the follower leaving",
+        )
+        # it stays where the pilot put it: the agent sends no more targets nor modes
+        deadline = time.monotonic() + 2.0
+        watcher.wait_until(lambda v: time.monotonic() > deadline, 5, "two seconds")
+        assert watcher.state(LEFT)["mode"] == "LOITER"
+        api.post(f"/api/v1/formations/{answer.json()['id']}/stop")

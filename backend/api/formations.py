@@ -24,7 +24,11 @@ class FormationStatus(BaseModel):
     id: str
     leader_id: str | None = Field(description="Null for a virtual leader")
     slots: dict[str, OffsetModel] = Field(description="Each follower's slot")
-    started_at: float = Field(description="Unix time the route's clock started")
+    started_at: float = Field(description="Unix time the formation started")
+    formed_at: float | None = Field(
+        description="Unix time every follower reached its slot and the route's clock "
+        "started; null while they join"
+    )
     route_duration_s: float
     stopped: str | None = Field(description="Why it stopped; null while it flies")
 
@@ -38,6 +42,7 @@ class FormationStatus(BaseModel):
                 for v, o in formation.offsets.items()
             },
             started_at=formation.started_at,
+            formed_at=formation.formed_at,
             route_duration_s=formation.plan.route.duration_s,
             stopped=formation.stopped,
         )

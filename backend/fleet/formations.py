@@ -28,7 +28,7 @@ from backend.fleet.safety_gate import SafetyGate, snapshot_of
 from backend.missions.formation import FormationPlan, plan_formation
 from backend.missions.formation.planner import check_separation, follower_offsets
 from backend.missions.formation.schemas import FormationRequest, ShapeChange
-from common.formation import LeaderState, Offset
+from common.formation import LeaderState, Offset, slot_target
 from protocol.messages import FormationEnd, FormationSlot, LeaderUpdate, Message, Neighbour
 
 log = logging.getLogger(__name__)
@@ -36,6 +36,9 @@ log = logging.getLogger(__name__)
 # A leader sample older than this is not relayed: the followers' own 1 s rule then holds
 # them, rather than a relayed state that looks fresh.
 MAX_RELAY_AGE_S = 1.0
+# The route's clock starts once every follower is this close to its slot (horizontally
+# and vertically): a leg flown while followers are still joining measures nothing.
+FORM_UP_M = 0.5
 
 
 @dataclass
@@ -45,6 +48,7 @@ class ActiveFormation:
     plan: FormationPlan
     started_at: float
     stopped: str | None = None  # why, once stopped
+    formed_at: float | None = None  # when every follower reached its slot: the route starts
     offsets: dict[str, Offset] = field(default_factory=dict)
 
     @property
@@ -176,7 +180,8 @@ class FormationService:
     def leader_state(self, formation: ActiveFormation, now: float) -> LeaderState | None:
         """The route's state now (a virtual leader), or the leader vehicle's last report."""
         if formation.plan.leader_id is None:
-            return formation.plan.route.state_at(now - formation.started_at)
+            v = formation.plan.route.state_at(self._route_time(formation, now))
+            return LeaderState(v.north, v.east, v.up, v.vn, v.ve, v.vu, v.heading_rad, now)
         record = self._registry.get(formation.plan.leader_id)
         state, seen = record.state, record.last_seen
         here = self._local(formation, formation.plan.leader_id)
@@ -194,16 +199,33 @@ class FormationService:
             seen,
         )
 
+    def _route_time(self, formation: ActiveFormation, now: float) -> float:
+        return 0.0 if formation.formed_at is None else now - formation.formed_at
+
+    def _formed(self, formation: ActiveFormation, leader: LeaderState) -> bool:
+        """Every follower within FORM_UP_M of its slot around the leader."""
+        for follower, offset in formation.offsets.items():
+            here = self._local(formation, follower)
+            if here is None:
+                return False
+            (north, east, up), _ = slot_target(leader, offset)
+            if math.dist((north, east, up), (here.north, here.east, here.up)) > FORM_UP_M:
+                return False
+        return True
+
     async def relay_once(self) -> None:
         now = self._clock()
         for formation in self.active():
-            route = formation.plan.route.state_at(now - formation.started_at)
+            route = formation.plan.route.state_at(self._route_time(formation, now))
             if formation.plan.leader_id is not None:
                 # the leader vehicle flies the route itself, at a zero offset
                 await self._send(formation.plan.leader_id, _update(formation, route, now, []))
             leader = self.leader_state(formation, now)
             if leader is None:
                 continue
+            if formation.formed_at is None and self._formed(formation, leader):
+                formation.formed_at = now
+                log.info("%s formed up: the route starts", formation.id)
             places = [p for v in formation.members if (p := self._local(formation, v))]
             for follower in formation.followers:
                 others = [p for p in places if p.vehicle_id != follower]

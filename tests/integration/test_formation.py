@@ -16,16 +16,24 @@ from typing import Any
 import pytest
 
 from backend.missions.formation.route import LeaderRoute
-from common.formation import Offset, OffsetFrame, slot_target
+from common.formation import LeaderState, Offset, OffsetFrame, slot_target
 from common.geodesy import LocalFrame
 from gcs.launcher import LocalFleet
-from tests.helpers import FleetWatcher, access_token, api_client, ready, running_fleet, send_command
+from tests.helpers import (
+    FleetWatcher,
+    access_token,
+    api_client,
+    poll_until,
+    ready,
+    running_fleet,
+    send_command,
+)
 
 pytestmark = pytest.mark.integration
 
 LEADER, RIGHT, LEFT = "sim_1", "sim_3", "sim_2"  # the right slot is on the sim_3 side
 ALTITUDES = {LEADER: 8.0, RIGHT: 2.0, LEFT: 3.0}
-SIDE_M, SPEED_MS, PAUSE_S = 10.0, 1.5, 2.0
+SIDE_M, SPEED_MS, PAUSE_S = 20.0, 1.5, 2.0
 MIN_SEPARATION_M = 2.0
 
 
@@ -118,9 +126,19 @@ def test_leader_flies_a_square_and_the_followers_keep_their_slots(
         assert busy.status_code == 422
         assert "already in another formation" in busy.text
 
-        slots = {v: Offset(o["x"], o["y"], o["up"], OffsetFrame(o["frame"])) for v, o in formation["slots"].items()}  # fmt: skip
+        # the followers join their slots, then the route's clock starts
+        formed_at = poll_until(
+            lambda: api.get(f"/api/v1/formations/{formation['id']}").json()["formed_at"],
+            60,
+            "the followers in their slots",
+        )
+        slots = {
+            v: Offset(o["x"], o["y"], o["up"], OffsetFrame(o["frame"]))
+            for v, o in formation["slots"].items()
+        }
         route_frame = LocalFrame(*frame.to_geo(0.0, 0.0))
-        points = [(0.0, 0.0, 8.0), (SIDE_M, 0.0, 8.0), (SIDE_M, SIDE_M, 8.0), (0.0, SIDE_M, 8.0), (0.0, 0.0, 8.0)]  # fmt: skip
+        corners = [(0.0, 0.0), (SIDE_M, 0.0), (SIDE_M, SIDE_M), (0.0, SIDE_M), (0.0, 0.0)]
+        points = [(n, e, ALTITUDES[LEADER]) for n, e in corners]
         route = LeaderRoute(points, SPEED_MS, PAUSE_S)
         errors: dict[str, list[float]] = {RIGHT: [], LEFT: []}
         closest = math.inf
@@ -136,12 +154,9 @@ def test_leader_flies_a_square_and_the_followers_keep_their_slots(
             closest = min(
                 [closest] + [math.dist(a, b) for i, a in enumerate(pts) for b in pts[i + 1 :]]
             )
-            t = now - formation["started_at"]
-            if route.leg_at(t) is not None and route.leg_at(t - 3.0) is not None:
-                # on a leg, past its first 3 s (the leader still turning out of the corner)
+            t = now - formed_at
+            if route.leg_at(t) is not None:
                 leader = states[LEADER]
-                from common.formation import LeaderState
-
                 north, east, up = places[LEADER]
                 state = LeaderState(
                     north, east, up, leader["vn"], leader["ve"], 0.0,

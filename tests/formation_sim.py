@@ -70,6 +70,7 @@ class FormationRun:
     errors_z: dict[int, list[float]] = field(default_factory=dict)
     min_separation_m: float = math.inf
     actions: dict[int, list[Action]] = field(default_factory=dict)
+    action_times: list[float] = field(default_factory=list)  # the route's clock, per tick
 
     def rms_xy(self, follower: int) -> float:
         e = self.errors_xy[follower]
@@ -116,6 +117,8 @@ def fly_formation(
     feed_forward: bool = True,
     settings: FollowerSettings | None = None,
     on_tick: Callable[[float, list[SimVehicle], list[Follower]], None] | None = None,
+    leader_cut_at_s: float | None = None,
+    route_laps: float = 1.0,
 ) -> FormationRun:
     """Take off, settle in the slots, fly the square once, and measure the tracking."""
     frame = LocalFrame(DEFAULT_HOME.lat, DEFAULT_HOME.lon, DEFAULT_HOME.alt)
@@ -144,7 +147,7 @@ def fly_formation(
     )
     in_flight: deque[LeaderState] = deque()  # leader states on their way to the followers
     t = 0.0
-    end = settle_s + route.duration_s + 2.0
+    end = settle_s + route.duration_s * route_laps + 2.0
     while t < end:
         route_t = t - settle_s
         # the leader flies its route: position, velocity feed-forward and the leg's heading
@@ -158,13 +161,16 @@ def fly_formation(
             msg = position_target(frame, leader_sp, int(t * 1000), 1, 1, want.heading_rad)
             assert msg is not None
             leader.send(msg)
-        # its state, stamped now, arrives after the link's delay
-        in_flight.append(leader.state(frame, t))
+        # its state, stamped now, arrives after the link's delay (until the link is cut)
+        if leader_cut_at_s is None or route_t < leader_cut_at_s:
+            in_flight.append(leader.state(frame, t))
         while in_flight and in_flight[0].time_s <= t - link_delay_s + 1e-9:
             state = in_flight.popleft()
             for c in controllers:
                 c.on_leader(state)
         positions = {v.system_id: v.local(frame) for v in everyone}
+        if started:
+            run.action_times.append(route_t)
         for vehicle, controller in zip(followers, controllers, strict=True):
             if not started:
                 break

@@ -82,6 +82,7 @@ class Action(StrEnum):
     TRACK = "track"
     HOLD_STALE = "hold_stale"
     BACK_OFF = "back_off"
+    HOLD_CLEAR = "hold_clear"  # its slot is within the separation of another vehicle
     LEFT = "left"  # out of the formation: sends nothing
 
 
@@ -156,11 +157,24 @@ class Follower:
                 self._hold = own
             age = "none yet" if self.leader is None else f"{now_s - self.leader.time_s:.1f} s old"
             return Setpoint(Action.HOLD_STALE, self._hold, (0.0, 0.0, 0.0), f"leader state {age}")
-        self._hold = None
         predicted = self.leader.predicted(now_s, self.settings.max_lead_s)
         (north, east, up), (vn, ve, vu) = slot_target(predicted, self.offset)
         if up < self.settings.min_alt_m:
             up, vu = self.settings.min_alt_m, max(vu, 0.0)
+        crowded = _nearest((north, east, up), others)
+        if crowded is not None and crowded[1] < self.min_separation_m:
+            # flying into the slot would break the separation (and, once backed off,
+            # would bring it straight back in): hold clear where it is instead
+            if self._hold is None:
+                self._hold = own
+            return Setpoint(
+                Action.HOLD_CLEAR,
+                self._hold,
+                (0.0, 0.0, 0.0),
+                f"its slot is {crowded[1]:.1f} m from {crowded[0]}, within the "
+                f"{self.min_separation_m:g} m separation",
+            )
+        self._hold = None
         return Setpoint(Action.TRACK, (north, east, up), (vn, ve, vu))
 
     def message(
@@ -333,7 +347,7 @@ class FormationRunner:
         setpoint = follower.tick(now, own, self._neighbours)
         if setpoint.action is not self._last_action:
             self._last_action = setpoint.action
-            if setpoint.action in (Action.HOLD_STALE, Action.BACK_OFF):
+            if setpoint.action in (Action.HOLD_STALE, Action.BACK_OFF, Action.HOLD_CLEAR):
                 self._emit("formation", f"{setpoint.action.value}: {setpoint.reason}", 4)
             elif setpoint.action is Action.TRACK:
                 self._emit("formation", "tracking its slot", 6)
@@ -353,7 +367,9 @@ class FormationRunner:
             return  # the flight controller link is down; the link says so itself
         if not self._mode_asked and now - self._started_at >= self.settings.prestream_s:
             self._mode_asked = True
-            self._enter_guided()
+            heartbeat = self._link.latest.get("HEARTBEAT")
+            if heartbeat is None or mode_name(heartbeat) != self._guided_mode():
+                self._enter_guided()
 
     def _enter_guided(self) -> None:
         modes = self._link.modes

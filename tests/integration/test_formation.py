@@ -210,12 +210,11 @@ def test_rc_mode_change_takes_a_member_out(airborne: tuple[LocalFleet, str]) -> 
         frame = LocalFrame(here["lat"], here["lon"])
         answer = api.post("/api/v1/formations", json=_request(frame, pause_s=30.0))
         assert answer.status_code == 200, answer.text
-        watcher.wait_until(
-            lambda v: any(
-                e.get("kind") == "formation" and "tracking" in e["text"] for e in watcher.events
-            ),
-            10,
-            "the followers tracking",
+        formation_id = answer.json()["id"]
+        poll_until(
+            lambda: api.get(f"/api/v1/formations/{formation_id}").json()["formed_at"],
+            60,
+            "the followers in their slots",
         )
         # another GCS (or the RC switch) puts a follower in LOITER
         assert send_command(api, LEFT, name="set_mode", mode="LOITER")["status"] == "accepted"

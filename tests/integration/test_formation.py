@@ -216,6 +216,21 @@ def test_rc_mode_change_takes_a_member_out(airborne: tuple[LocalFleet, str]) -> 
             60,
             "the followers in their slots",
         )
+        # the spacing changes in flight; one that breaks the separation is refused
+        wider = api.patch(f"/api/v1/formations/{formation_id}", json={"spacing_m": 4.0})
+        assert wider.status_code == 200, wider.text
+        assert wider.json()["slots"][RIGHT]["y"] == pytest.approx(4.0 / math.sqrt(2.0))
+        tight = api.patch(f"/api/v1/formations/{formation_id}", json={"spacing_m": 1.0})
+        assert tight.status_code == 422
+        assert "minimum separation is 2 m" in tight.text
+        watcher.wait_until(
+            lambda v: any(
+                e.get("kind") == "formation" and e["text"].startswith("new slot")
+                for e in watcher.events
+            ),
+            10,
+            "the followers told their new slots",
+        )
         # another GCS (or the RC switch) puts a follower in LOITER
         assert send_command(api, LEFT, name="set_mode", mode="LOITER")["status"] == "accepted"
         watcher.wait_until(

@@ -336,8 +336,10 @@ class FormationRunner:
         follower = self.follower
         if self._ending is not None:
             ending, self._ending = self._ending, None
-            await self._end(ending)
-            return
+            # an end that was overtaken by the next formation's slot ends nothing
+            if ending.formation_id == self.formation_id:
+                await self._end(ending)
+                return
         if follower is None or follower.left_reason is not None or self._link.target_system is None:
             return
         own = self._own_position(follower.frame)

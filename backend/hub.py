@@ -18,6 +18,7 @@ from backend.auth.principal_cache import PrincipalCache
 from backend.auth.rate_limit import Limit, RateLimiter
 from backend.control.lease import LeaseBook
 from backend.fleet.commands import CommandDispatcher
+from backend.fleet.formations import FormationService
 from backend.fleet.registry import FleetRegistry, VehicleRecord
 from backend.fleet.safety_gate import SafetyGate
 from backend.mapping.tiles import TileLibrary
@@ -71,6 +72,7 @@ class Hub:
     passwords: PasswordWork
     safety: SafetyGate
     scans: ScanService
+    formations: FormationService
     # Audit and command-log rows waiting out a database outage.
     spool: RowSpool
     # The offline tile sets in the tiles folder.
@@ -138,7 +140,8 @@ class Hub:
             passwords=PasswordWork(
                 settings.password_hash_threads, settings.password_hash_max_pending
             ),
-            safety=SafetyGate(RailsRepository(engine), settings),
+            safety=(safety := SafetyGate(RailsRepository(engine), settings)),
+            formations=FormationService(registry, safety),
             scans=ScanService(
                 ScanRepository(engine),
                 bus,
@@ -169,6 +172,7 @@ class Hub:
                 tasks.create_task(self.writer.run())
                 tasks.create_task(self.scans.run())
                 tasks.create_task(self._watch_obstacles())
+                tasks.create_task(self.formations.run())
                 tasks.create_task(self._apply_retention())
                 tasks.create_task(self._drain_spool())
                 tasks.create_task(self.surveys.run())

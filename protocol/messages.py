@@ -409,6 +409,8 @@ class VehicleState(Message):
     heading_deg: float | None = None
     groundspeed: float | None = Field(default=None, description="m/s")
     climb_rate: float | None = Field(default=None, description="m/s, up is positive")
+    vn: float | None = Field(default=None, description="m/s north (GLOBAL_POSITION_INT.vx)")
+    ve: float | None = Field(default=None, description="m/s east (GLOBAL_POSITION_INT.vy)")
     roll_deg: float | None = None
     pitch_deg: float | None = None
     battery_voltage: float | None = None
@@ -513,6 +515,7 @@ EventKind = Literal[
     "manual",  # browser manual control started, ended or held by the deadman
     "upload",  # the agent's onboard .tlog could not be handed over (or was, after failing)
     "camera",  # the camera fired (CAMERA_FEEDBACK); the event's photo says where
+    "formation",  # a follower joined, held, backed off or left its formation
 ]
 
 
@@ -891,6 +894,64 @@ class SurveyUpdate(Message):
     )
 
 
+FormationId = Annotated[str, Field(pattern=r"^[A-Za-z0-9_.-]{1,64}$", max_length=64)]
+_OFFSET_M = 500.0
+_LOCAL_M = 100_000.0  # a formation's route stays within 100 km of its first waypoint
+_SPEED_MS = 100.0
+
+
+class FormationSlot(Message):
+    """Fly this slot in a formation; sent again with a new offset when the shape or
+    spacing changes in flight. Positions in the formation's messages are metres north,
+    east and up (above home) on the tangent plane at ``origin``."""
+
+    type: Literal["formation"] = "formation"
+    formation_id: FormationId
+    origin_lat: float = Field(ge=-90, le=90)
+    origin_lon: float = Field(ge=-180, le=180)
+    x: float = Field(ge=-_OFFSET_M, le=_OFFSET_M, description="forward (heading) or north")
+    y: float = Field(ge=-_OFFSET_M, le=_OFFSET_M, description="right (heading) or east")
+    up: float = Field(ge=-_OFFSET_M, le=_OFFSET_M, description="metres above the leader")
+    frame: Literal["heading", "ne"] = "heading"
+    min_separation_m: float = Field(gt=0, le=100)
+    face_heading: bool = Field(
+        default=False, description="turn to the leader's heading (a leader flying the route)"
+    )
+
+
+class FormationEnd(Message):
+    """Leave the formation and hold."""
+
+    type: Literal["formation_end"] = "formation_end"
+    formation_id: FormationId
+    reason: str = Field(default="", max_length=200)
+
+
+class Neighbour(Message):
+    vehicle_id: VehicleId
+    north: float = Field(ge=-_LOCAL_M, le=_LOCAL_M)
+    east: float = Field(ge=-_LOCAL_M, le=_LOCAL_M)
+    up: float = Field(ge=-_LOCAL_M, le=_LOCAL_M)
+
+
+class LeaderUpdate(Message):
+    """The leader's state relayed to a follower (newest wins), with the other members'
+    positions for the separation check. ``time`` is when the leader was there (Unix
+    seconds): the follower predicts it forward over the link's delay."""
+
+    type: Literal["leader"] = "leader"
+    formation_id: FormationId
+    time: float = Field(ge=0, le=MAX_UNIX_TIME)
+    north: float = Field(ge=-_LOCAL_M, le=_LOCAL_M)
+    east: float = Field(ge=-_LOCAL_M, le=_LOCAL_M)
+    up: float = Field(ge=-_LOCAL_M, le=_LOCAL_M)
+    vn: float = Field(ge=-_SPEED_MS, le=_SPEED_MS)
+    ve: float = Field(ge=-_SPEED_MS, le=_SPEED_MS)
+    vu: float = Field(ge=-_SPEED_MS, le=_SPEED_MS)
+    heading_deg: float = Field(ge=0, le=360)
+    neighbours: list[Neighbour] = Field(default_factory=list, max_length=64)
+
+
 # The hub pings an agent to learn whether it is still there (another agent wants its
 # vehicle id); the agent answers with a pong.
 AgentToHub: TypeAlias = Annotated[
@@ -898,7 +959,16 @@ AgentToHub: TypeAlias = Annotated[
     Field(discriminator="type"),
 ]
 HubToAgent: TypeAlias = Annotated[
-    Welcome | CommandRequest | Ack | Resend | ErrorReply | Ping | ManualFrame,
+    Welcome
+    | CommandRequest
+    | Ack
+    | Resend
+    | ErrorReply
+    | Ping
+    | ManualFrame
+    | FormationSlot
+    | FormationEnd
+    | LeaderUpdate,
     Field(discriminator="type"),
 ]
 ClientToHub: TypeAlias = Annotated[

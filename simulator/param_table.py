@@ -59,6 +59,7 @@ PARAM_DEFS: tuple[ParamDef, ...] = (
     ParamDef("BATT_LOW_TIMER", ParamType.INT8, 0, 120, "batt_low_timer"),
     ParamDef("BATT_LOW_VOLT", ParamType.REAL32, 0, 100, "batt_low_volt"),
     ParamDef("DISARM_DELAY", ParamType.INT8, 0, 127, "disarm_delay"),
+    ParamDef("GUID_TIMEOUT", ParamType.REAL32, 0.1, 5.0, "guid_timeout"),
     ParamDef("LAND_ALT_LOW", ParamType.INT16, 100, 10000, "land_alt_low", _CM),
     ParamDef("LAND_SPEED", ParamType.INT16, 30, 200, "land_speed", _CM),
     ParamDef("LAND_SPEED_HIGH", ParamType.INT16, 0, 2500, "land_speed_high", _CM),

@@ -23,6 +23,8 @@ class CopterParams:
     psc_posz_p: float = 1.0  # PSC_POSZ_P
     angle_max: float = math.radians(30.0)  # ANGLE_MAX
     yaw_rate_max: float = math.radians(60.0)  # ATC_SLEW_YAW
+    # GUID_TIMEOUT: a GUIDED velocity target older than this is dropped (the vehicle stops)
+    guid_timeout: float = 3.0
     wp_yaw_behavior: int = 2  # WP_YAW_BEHAVIOR: face next waypoint except during RTL
 
     # Return to launch (ModeRTL)

@@ -90,6 +90,13 @@ class Setpoint:
     face_travel: bool = True
     accel_xy: float | None = None
     on_wheels: bool = False
+    # A velocity feed-forward (north, east, up m/s) added to the position correction, as
+    # AC_PosControl::input_pos_vel_accel_xy adds GUIDED's velocity target: the vehicle
+    # then flies with a moving target instead of chasing it with a lag.
+    velocity_ff: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    # A heading to turn to at the yaw rate limit (a GUIDED target's yaw); None: as
+    # ``face_travel`` says.
+    yaw_target: float | None = None
 
 
 @dataclass
@@ -172,8 +179,10 @@ class Airframe:
     def _step_powered(self, sp: Setpoint, dt: float, params: CopterParams) -> None:
         # Horizontal: desired velocity toward the target, reached at bounded acceleration.
         accel = sp.accel_xy if sp.accel_xy is not None else params.wpnav_accel
+        ff_n, ff_e, ff_up = sp.velocity_ff
         want_n = want_e = 0.0
         if sp.target_ne is not None:
+            want_n, want_e = ff_n, ff_e
             err_n, err_e = sp.target_ne[0] - self.north, sp.target_ne[1] - self.east
             distance = math.hypot(err_n, err_e)
             if distance > 1e-9:
@@ -181,7 +190,12 @@ class Airframe:
                     sp.speed_xy,
                     sqrt_controller(distance, params.psc_posxy_p, accel, dt),
                 )
-                want_n, want_e = err_n / distance * speed, err_e / distance * speed
+                want_n += err_n / distance * speed
+                want_e += err_e / distance * speed
+            # the sum, feed-forward and correction, is held to the speed limit
+            total = math.hypot(want_n, want_e)
+            if total > sp.speed_xy:
+                want_n, want_e = want_n / total * sp.speed_xy, want_e / total * sp.speed_xy
         dvn, dve = want_n - self.vn, want_e - self.ve
         dv = math.hypot(dvn, dve)
         max_dv = accel * dt
@@ -190,7 +204,7 @@ class Airframe:
 
         # Vertical: to the target altitude, or at the demanded climb rate.
         if sp.target_alt is not None:
-            want_up = sqrt_controller(
+            want_up = ff_up + sqrt_controller(
                 sp.target_alt - self.alt, params.psc_posz_p, params.wpnav_accel_z, dt
             )
         else:
@@ -237,7 +251,12 @@ class Airframe:
         # a multirotor on its skids does not turn; a ground vehicle steers at any speed
         turning_speed = 0.05 if sp.on_wheels else FACE_TRAVEL_MIN_SPEED
         can_turn = sp.on_wheels or not self.on_ground
-        if sp.face_travel and self.groundspeed > turning_speed and can_turn:
+        if sp.yaw_target is not None and can_turn:
+            error = wrap_pi(sp.yaw_target - self.yaw)
+            turn = _clamp(error, -params.yaw_rate_max * dt, params.yaw_rate_max * dt)
+            self.yaw = wrap_2pi(self.yaw + turn)
+            self.yaw_rate = turn / dt
+        elif sp.face_travel and self.groundspeed > turning_speed and can_turn:
             error = wrap_pi(math.atan2(self.ve, self.vn) - self.yaw)
             turn = _clamp(error, -params.yaw_rate_max * dt, params.yaw_rate_max * dt)
             self.yaw = wrap_2pi(self.yaw + turn)

@@ -28,6 +28,7 @@ from vehicle_agents.commands import CommandExecutor
 from vehicle_agents.config import AgentSettings, default_vehicle_id, hub_http_base
 from vehicle_agents.fcu_events import FcuLinkEvents
 from vehicle_agents.fcu_link import FcuLink, MavMessage
+from vehicle_agents.formation import FormationRunner
 from vehicle_agents.forwarding import MavlinkForwarder
 from vehicle_agents.hub_failsafe import HubLinkFailsafe
 from vehicle_agents.hub_link import HubLink, VehicleIdInUse
@@ -52,7 +53,7 @@ log = logging.getLogger(__name__)
 # CAMERA_FEEDBACK.flags: a photo (CAMERA_FEEDBACK_FLAGS; not a video or a bad capture).
 CAMERA_FEEDBACK_PHOTO = 0
 
-CAPABILITIES = ["telemetry", "commands", "events", "manual"]
+CAPABILITIES = ["telemetry", "commands", "events", "manual", "formation"]
 SCAN_CAPABILITY = "scans"
 
 
@@ -97,6 +98,8 @@ async def _run(settings: AgentSettings) -> None:
         executor = CommandExecutor(link)
         pilot = ManualPilot(link, executor, events.emit, source_system=settings.source_system)
         tasks.create_task(pilot.run())
+        formation = FormationRunner(link, executor, events.emit)
+        tasks.create_task(formation.run())
         scans = None
         if settings.lidar:
             relay = scan_relay(settings, link, vehicle_id)
@@ -111,6 +114,7 @@ async def _run(settings: AgentSettings) -> None:
             manual_commands(pilot, executor.execute),
             live_state=lambda: current_state(link, outbox),
             on_manual=pilot.on_frame,
+            on_formation=formation.on_hub,
             scans=scans,
         )
         tasks.create_task(publish_telemetry(link, outbox, settings.telemetry_rate_hz))

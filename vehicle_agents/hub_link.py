@@ -23,7 +23,10 @@ from protocol.messages import (
     CommandRequest,
     CommandResult,
     ErrorReply,
+    FormationEnd,
+    FormationSlot,
     Hello,
+    LeaderUpdate,
     LiveState,
     ManualApplied,
     ManualFrame,
@@ -93,6 +96,7 @@ class HubLink:
         live_state: Callable[[], VehicleState] | None = None,
         on_manual: Callable[[ManualFrame], ManualApplied | None] | None = None,
         scans: ScanOutbox | None = None,
+        on_formation: Callable[[FormationSlot | FormationEnd | LeaderUpdate], None] | None = None,
     ) -> None:
         self.url = url
         self._token = token
@@ -102,6 +106,7 @@ class HubLink:
         self.timeouts = timeouts or HubTimeouts()
         self._live_state = live_state
         self._on_manual = on_manual
+        self._on_formation = on_formation
         self._scans = scans
         self.connected = asyncio.Event()
         self.disconnected = asyncio.Event()
@@ -275,6 +280,10 @@ class HubLink:
                         applied = None
                     if applied is not None:
                         tasks.create_task(websocket.send(encode(applied)))
+            case FormationSlot() | FormationEnd() | LeaderUpdate():
+                # at once, like stick frames: the newest leader state is the one flown
+                if self._on_formation is not None:
+                    self._on_formation(message)
             case Welcome():
                 log.warning("unexpected second welcome from hub")
 

@@ -83,6 +83,9 @@ def snapshot(
         fields["alt_rel"] = position.relative_alt / 1000
         if position.hdg != _UINT16_UNKNOWN:
             fields["heading_deg"] = position.hdg / 100
+        # cm/s north and east: a formation's leader is predicted forward along these
+        fields["vn"] = position.vx / 100
+        fields["ve"] = position.vy / 100
     if (hud := latest.get("VFR_HUD")) is not None:
         fields["groundspeed"] = float(hud.groundspeed)
         fields["climb_rate"] = float(hud.climb)

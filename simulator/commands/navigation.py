@@ -10,6 +10,8 @@ from simulator.commands.base import Command, HandlerBase, as_int, log
 from simulator.mavconst import (
     DO_REPOSITION_FLAGS_CHANGE_MODE,
     POSITION_TARGET_IGNORE_POSITION,
+    POSITION_TARGET_IGNORE_VELOCITY,
+    POSITION_TARGET_IGNORE_YAW,
     MavCmd,
     MavFrame,
     MavResult,
@@ -58,19 +60,33 @@ class Navigation(HandlerBase):
         return copter.guided_goto(lat, lon, alt)
 
     def _position_target(self, msg: Any) -> None:
-        """SET_POSITION_TARGET_GLOBAL_INT: position targets in GUIDED, ignored otherwise."""
+        """SET_POSITION_TARGET_GLOBAL_INT in GUIDED, ignored otherwise
+        (GCS_MAVLINK_Copter::handle_message_set_position_target_global_int): a position, a
+        velocity, or both. As there, any set bit of a group ignores the whole group, and
+        an acceleration-only target is not flown."""
         copter = self.copter
         if not copter.in_guided:
             return
-        if int(msg.type_mask) & POSITION_TARGET_IGNORE_POSITION == POSITION_TARGET_IGNORE_POSITION:
-            log.debug("velocity/acceleration-only position targets are not simulated")
+        mask = int(msg.type_mask)
+        pos_ignore = bool(mask & POSITION_TARGET_IGNORE_POSITION)
+        vel_ignore = bool(mask & POSITION_TARGET_IGNORE_VELOCITY)
+        velocity = (float(msg.vx), float(msg.vy), float(msg.vz))
+        yaw = None if mask & POSITION_TARGET_IGNORE_YAW else float(msg.yaw)
+        if pos_ignore:
+            if vel_ignore:
+                log.debug("acceleration-only position targets are not simulated")
+            elif copter.guided_posvel(None, velocity, yaw) is not MavResult.ACCEPTED:
+                copter.guided_hold()
             return
         lat, lon = int(msg.lat_int) / 1e7, int(msg.lon_int) / 1e7
         alt = self._relative_alt(int(msg.coordinate_frame), float(msg.alt))
         if alt is None or not (-90.0 <= lat <= 90.0 and -180.0 <= lon <= 180.0):
             copter.guided_hold()  # ArduCopter re-initialises guided on a bad target
             return
-        copter.guided_goto(lat, lon, alt)
+        if vel_ignore:
+            copter.guided_goto(lat, lon, alt)
+        elif copter.guided_posvel((lat, lon, alt), velocity, yaw) is not MavResult.ACCEPTED:
+            copter.guided_hold()
 
     def _set_home(self, cmd: Command) -> MavResult:
         """GCS_MAVLINK::handle_command_do_set_home: param1=1, or no position given, is

@@ -118,13 +118,7 @@ class Copter(Arming, Modes, Guided, Auto, ReturnAndLand, Failsafes):
         if self.mode is CopterMode.AUTO and self._auto_phase is not AutoPhase.IDLE:
             return self._auto_setpoint()
         if self.mode is CopterMode.GUIDED:
-            return Setpoint(
-                self._hold_ne,
-                self._hold_alt,
-                speed_xy=self._speed_xy,
-                speed_up=self._speed_up,
-                speed_down=self._speed_down,
-            )
+            return self._guided_setpoint()
         # LOITER, and AUTO without a mission (only reachable by a forced arm): hold
         if self.mode is CopterMode.LOITER and (sticks := self.overridden_sticks()) is not None:
             return self._loiter_sticks(sticks)

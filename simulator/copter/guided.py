@@ -8,6 +8,8 @@ from simulator.copter.state import CopterState
 from simulator.mavconst import CopterMode, MavFrame, MavResult
 from simulator.params import CopterParams
 from simulator.personality import PX4_TAKEOFF_ALT_M
+from simulator.physics import Setpoint
+from simulator.vehicle import DT
 
 # Modes that accept MAV_CMD_NAV_TAKEOFF on the ground (Mode::has_user_takeoff).
 _USER_TAKEOFF = frozenset({CopterMode.GUIDED, CopterMode.LOITER})
@@ -29,6 +31,8 @@ class Guided(CopterState):
         )
         self._hold_ne = self.body.stopping_point(p.wpnav_accel)
         self._hold_alt = self._stopping_alt()
+        self._guided_vel = None
+        self._guided_yaw = None
 
     def guided_hold(self) -> None:
         """Re-initialise GUIDED to hold position (what ArduCopter does on a bad target)."""
@@ -79,7 +83,61 @@ class Guided(CopterState):
         self._hold_ne = self.ne_of(lat, lon)
         self._hold_alt = self._relative_to_origin(relative_alt)
         self._taking_off = False
+        self._guided_vel = None  # a position-only target flies to it and stops
+        self._guided_yaw = None
         return MavResult.ACCEPTED
+
+    def guided_posvel(
+        self,
+        position: tuple[float, float, float] | None,
+        velocity_ned: tuple[float, float, float],
+        yaw: float | None = None,
+    ) -> MavResult:
+        """A GUIDED position-and-velocity target (ModeGuided::set_destination_posvelaccel),
+        or a velocity-only one (``position`` None: ModeGuided::set_velaccel). The target
+        then moves at that velocity between messages, as AC_PosControl integrates it, and
+        the velocity is the position controller's feed-forward. ``position`` is (lat, lon,
+        altitude above home); the velocity is north, east, down in m/s."""
+        if self.mode is not CopterMode.GUIDED:
+            return MavResult.FAILED
+        if not all(math.isfinite(v) for v in velocity_ned):
+            return MavResult.DENIED
+        if position is None:
+            if self._guided_vel is None:
+                # from a position hold, the target starts where the vehicle is
+                self._hold_ne = (self.body.north, self.body.east)
+                self._hold_alt = self.body.alt
+        elif self.guided_goto(*position) is not MavResult.ACCEPTED:
+            return MavResult.DENIED
+        vn, ve, vd = velocity_ned
+        self._guided_yaw = yaw if yaw is not None and math.isfinite(yaw) else None
+        self._guided_vel = (vn, ve, -vd)
+        self._guided_vel_at = self.time_s
+        self._taking_off = False
+        return MavResult.ACCEPTED
+
+    def _guided_setpoint(self) -> Setpoint:
+        """GUIDED's demand this step: the target moves on at its velocity until
+        GUID_TIMEOUT passes without a fresh one (ModeGuided::posvel_control_run then
+        zeroes the velocity and the vehicle stops on the last target)."""
+        velocity = (0.0, 0.0, 0.0)
+        if self._guided_vel is not None:
+            if self.time_s - self._guided_vel_at > self.params.guid_timeout:
+                self._guided_vel = None
+            else:
+                velocity = self._guided_vel
+                north, east = self._hold_ne
+                self._hold_ne = (north + velocity[0] * DT, east + velocity[1] * DT)
+                self._hold_alt = max(0.0, self._hold_alt + velocity[2] * DT)
+        return Setpoint(
+            self._hold_ne,
+            self._hold_alt,
+            speed_xy=self._speed_xy,
+            speed_up=self._speed_up,
+            speed_down=self._speed_down,
+            velocity_ff=velocity,
+            yaw_target=self._guided_yaw,
+        )
 
     def set_guided_speed(self, kind: int, speed: float) -> MavResult:
         """MAV_CMD_DO_CHANGE_SPEED in GUIDED or AUTO: 0/1 horizontal, 2 climb, 3 descent, m/s."""

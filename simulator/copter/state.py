@@ -58,6 +58,10 @@ class CopterState(Vehicle):
         self._speed_up = p.wpnav_speed_up
         self._speed_down = p.wpnav_speed_dn
         self._takeoff_alt: float | None = None  # accepted, waiting for the motors
+        # GUIDED's velocity target (north, east, up m/s) and when it came; None: position only
+        self._guided_vel: tuple[float, float, float] | None = None
+        self._guided_vel_at = 0.0
+        self._guided_yaw: float | None = None  # radians, a target's yaw to turn to
         self._taking_off = False
         self._land_ne = (0.0, 0.0)
         self._rtl_stage = RtlStage.CLIMB

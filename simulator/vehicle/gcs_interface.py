@@ -59,6 +59,18 @@ class GcsCommands(VehicleState):
     def guided_goto(self, lat: float, lon: float, relative_alt: float) -> MavResult:
         """Go to a position while in guided."""
 
+    def guided_posvel(
+        self,
+        position: tuple[float, float, float] | None,
+        velocity_ned: tuple[float, float, float],
+        yaw: float | None = None,
+    ) -> MavResult:
+        """A position-and-velocity target in guided. A vehicle without a velocity model
+        (the rover) flies the position alone and refuses a velocity-only target."""
+        if position is None:
+            return MavResult.DENIED
+        return self.guided_goto(*position)
+
     @abstractmethod
     def guided_hold(self) -> None:
         """Re-initialise guided to hold position (what ArduPilot does on a bad target)."""

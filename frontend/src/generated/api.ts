@@ -692,6 +692,69 @@ export interface paths {
         patch?: never;
         trace?: never;
     };
+    "/api/v1/formations": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        get?: never;
+        put?: never;
+        /**
+         * Start Formation
+         * @description Check the formation (separation of every slot, roles, readiness, speed, and the
+         *     route with every slot around it against the rails) and start it: each member gets its
+         *     slot, and the leader's state is relayed to the followers at 10 Hz.
+         */
+        post: operations["start_formation_api_v1_formations_post"];
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
+    "/api/v1/formations/{formation_id}": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        /** Get Formation */
+        get: operations["get_formation_api_v1_formations__formation_id__get"];
+        put?: never;
+        post?: never;
+        delete?: never;
+        options?: never;
+        head?: never;
+        /**
+         * Change Formation
+         * @description A new shape or spacing in flight; the followers glide to their new slots.
+         */
+        patch: operations["change_formation_api_v1_formations__formation_id__patch"];
+        trace?: never;
+    };
+    "/api/v1/formations/{formation_id}/stop": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        get?: never;
+        put?: never;
+        /**
+         * Stop Formation
+         * @description Every member leaves the formation and holds where it is.
+         */
+        post: operations["stop_formation_api_v1_formations__formation_id__stop_post"];
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
     "/api/v1/vehicles/{vehicle_id}/scans/latest": {
         parameters: {
             query?: never;
@@ -1597,6 +1660,89 @@ export interface components {
             /** Samples */
             samples: components["schemas"]["Sample"][];
         };
+        /** FollowerModel */
+        FollowerModel: {
+            /** Vehicle Id */
+            vehicle_id: string;
+            /** @description Its slot; null takes the next slot of the shape preset */
+            offset?: components["schemas"]["OffsetModel"] | null;
+            /**
+             * Up
+             * @description Metres above the leader in a preset slot
+             * @default 0
+             */
+            up: number;
+        };
+        /** FormationRequest */
+        FormationRequest: {
+            /**
+             * Leader Id
+             * @description The leading vehicle; null for a virtual leader
+             */
+            leader_id?: string | null;
+            /** Route */
+            route: components["schemas"]["RoutePoint"][];
+            /**
+             * Speed Ms
+             * @description The leader's speed along the route
+             */
+            speed_ms: number;
+            /**
+             * Pause S
+             * @description Pause at each waypoint
+             * @default 0
+             */
+            pause_s: number;
+            /** Followers */
+            followers: components["schemas"]["FollowerModel"][];
+            /** @default wedge */
+            shape: components["schemas"]["Shape"];
+            /**
+             * Spacing M
+             * @default 3
+             */
+            spacing_m: number;
+            /**
+             * Min Separation M
+             * @description No two vehicles ever closer than this
+             * @default 2
+             */
+            min_separation_m: number;
+        };
+        /** FormationStatus */
+        FormationStatus: {
+            /** Id */
+            id: string;
+            /**
+             * Leader Id
+             * @description Null for a virtual leader
+             */
+            leader_id: string | null;
+            /**
+             * Slots
+             * @description Each follower's slot
+             */
+            slots: {
+                [key: string]: components["schemas"]["OffsetModel"];
+            };
+            /**
+             * Started At
+             * @description Unix time the formation started
+             */
+            started_at: number;
+            /**
+             * Formed At
+             * @description Unix time every follower reached its slot and the route's clock started; null while they join
+             */
+            formed_at: number | null;
+            /** Route Duration S */
+            route_duration_s: number;
+            /**
+             * Stopped
+             * @description Why it stopped; null while it flies
+             */
+            stopped: string | null;
+        };
         /** GeoJsonPolygon */
         GeoJsonPolygon: {
             /**
@@ -2067,6 +2213,32 @@ export interface components {
                 number
             ][];
         };
+        /**
+         * OffsetFrame
+         * @enum {string}
+         */
+        OffsetFrame: "heading" | "ne";
+        /** OffsetModel */
+        OffsetModel: {
+            /**
+             * X
+             * @description Metres forward (heading) or north (ne)
+             */
+            x: number;
+            /**
+             * Y
+             * @description Metres right (heading) or east (ne)
+             */
+            y: number;
+            /**
+             * Up
+             * @description Metres above the leader
+             * @default 0
+             */
+            up: number;
+            /** @default heading */
+            frame: components["schemas"]["OffsetFrame"];
+        };
         /** ParamGetCommand */
         ParamGetCommand: {
             /**
@@ -2174,6 +2346,18 @@ export interface components {
          * @enum {string}
          */
         Role: "viewer" | "operator" | "admin";
+        /** RoutePoint */
+        RoutePoint: {
+            /** Lat */
+            lat: number;
+            /** Lon */
+            lon: number;
+            /**
+             * Alt M
+             * @description The leader's altitude above home
+             */
+            alt_m: number;
+        };
         /**
          * SafetyRailsModel
          * @description Site-wide rails, or one vehicle's overrides (null fields fall back to the site's).
@@ -2378,6 +2562,20 @@ export interface components {
              * @description A mode name the vehicle lists.
              */
             mode: string;
+        };
+        /**
+         * Shape
+         * @enum {string}
+         */
+        Shape: "line" | "wedge" | "triangle" | "column" | "circle";
+        /**
+         * ShapeChange
+         * @description A new shape or spacing in flight: the followers glide to their new slots.
+         */
+        ShapeChange: {
+            shape?: components["schemas"]["Shape"] | null;
+            /** Spacing M */
+            spacing_m?: number | null;
         };
         /** SiteOrigin */
         SiteOrigin: {
@@ -2890,6 +3088,16 @@ export interface components {
              * @description m/s, up is positive
              */
             climb_rate?: number | null;
+            /**
+             * Vn
+             * @description m/s north (GLOBAL_POSITION_INT.vx)
+             */
+            vn?: number | null;
+            /**
+             * Ve
+             * @description m/s east (GLOBAL_POSITION_INT.vy)
+             */
+            ve?: number | null;
             /** Roll Deg */
             roll_deg?: number | null;
             /** Pitch Deg */
@@ -5936,6 +6144,297 @@ export interface operations {
                 };
             };
             /** @description Needs the 'read' permission */
+            403: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description No such vehicle, flight, log, user or token (named in the message) */
+            404: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed) */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Unprocessable"];
+                };
+            };
+            /** @description The database is unavailable; try again after Retry-After seconds */
+            503: {
+                headers: {
+                    /** @description Seconds to wait */
+                    "Retry-After"?: number;
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+        };
+    };
+    start_formation_api_v1_formations_post: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        requestBody: {
+            content: {
+                "application/json": components["schemas"]["FormationRequest"];
+            };
+        };
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["FormationStatus"];
+                };
+            };
+            /** @description Not authenticated */
+            401: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description Needs the 'command' permission */
+            403: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description The request body is over the size limit */
+            413: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed) */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Unprocessable"];
+                };
+            };
+            /** @description The database is unavailable; try again after Retry-After seconds */
+            503: {
+                headers: {
+                    /** @description Seconds to wait */
+                    "Retry-After"?: number;
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+        };
+    };
+    get_formation_api_v1_formations__formation_id__get: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path: {
+                formation_id: string;
+            };
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["FormationStatus"];
+                };
+            };
+            /** @description Not authenticated */
+            401: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description Needs the 'read' permission */
+            403: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description No such vehicle, flight, log, user or token (named in the message) */
+            404: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed) */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Unprocessable"];
+                };
+            };
+            /** @description The database is unavailable; try again after Retry-After seconds */
+            503: {
+                headers: {
+                    /** @description Seconds to wait */
+                    "Retry-After"?: number;
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+        };
+    };
+    change_formation_api_v1_formations__formation_id__patch: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path: {
+                formation_id: string;
+            };
+            cookie?: never;
+        };
+        requestBody: {
+            content: {
+                "application/json": components["schemas"]["ShapeChange"];
+            };
+        };
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["FormationStatus"];
+                };
+            };
+            /** @description Not authenticated */
+            401: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description Needs the 'command' permission */
+            403: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description No such vehicle, flight, log, user or token (named in the message) */
+            404: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description The request body is over the size limit */
+            413: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed) */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Unprocessable"];
+                };
+            };
+            /** @description The database is unavailable; try again after Retry-After seconds */
+            503: {
+                headers: {
+                    /** @description Seconds to wait */
+                    "Retry-After"?: number;
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+        };
+    };
+    stop_formation_api_v1_formations__formation_id__stop_post: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path: {
+                formation_id: string;
+            };
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["FormationStatus"];
+                };
+            };
+            /** @description Not authenticated */
+            401: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description Needs the 'command' permission */
             403: {
                 headers: {
                     [name: string]: unknown;

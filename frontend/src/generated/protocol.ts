@@ -16,7 +16,17 @@
 export type AnyMessage = AgentToHub | HubToAgent | ClientToHub | HubToClient;
 export type AgentToHub =
   Hello | Telemetry | LiveState | Event | CommandResult | Unavailable | Pong | ManualApplied;
-export type HubToAgent = Welcome | CommandRequest | Ack | Resend | ErrorReply | Ping | ManualFrame;
+export type HubToAgent =
+  | Welcome
+  | CommandRequest
+  | Ack
+  | Resend
+  | ErrorReply
+  | Ping
+  | ManualFrame
+  | FormationSlot
+  | FormationEnd
+  | LeaderUpdate;
 export type ClientToHub = Ping | ControlRequest | ManualInput | SubscribeScans | UnsubscribeScans;
 export type HubToClient =
   | FleetSnapshot
@@ -109,6 +119,14 @@ export interface VehicleState {
    * m/s, up is positive
    */
   climb_rate: number | null;
+  /**
+   * m/s north (GLOBAL_POSITION_INT.vx)
+   */
+  vn: number | null;
+  /**
+   * m/s east (GLOBAL_POSITION_INT.vy)
+   */
+  ve: number | null;
   roll_deg: number | null;
   pitch_deg: number | null;
   battery_voltage: number | null;
@@ -200,7 +218,8 @@ export interface Event {
     | "id_clash"
     | "manual"
     | "upload"
-    | "camera";
+    | "camera"
+    | "formation";
   /**
    * MAV_SEVERITY: 0 emergency .. 7 debug
    */
@@ -544,6 +563,70 @@ export interface ManualAxes {
    * MANUAL_CONTROL buttons
    */
   buttons: number;
+}
+/**
+ * Fly this slot in a formation; sent again with a new offset when the shape or
+ * spacing changes in flight. Positions in the formation's messages are metres north,
+ * east and up (above home) on the tangent plane at ``origin``.
+ */
+export interface FormationSlot {
+  type: "formation";
+  formation_id: string;
+  origin_lat: number;
+  origin_lon: number;
+  /**
+   * forward (heading) or north
+   */
+  x: number;
+  /**
+   * right (heading) or east
+   */
+  y: number;
+  /**
+   * metres above the leader
+   */
+  up: number;
+  frame: "heading" | "ne";
+  min_separation_m: number;
+  /**
+   * turn to the leader's heading (a leader flying the route)
+   */
+  face_heading: boolean;
+}
+/**
+ * Leave the formation and hold.
+ */
+export interface FormationEnd {
+  type: "formation_end";
+  formation_id: string;
+  reason: string;
+}
+/**
+ * The leader's state relayed to a follower (newest wins), with the other members'
+ * positions for the separation check. ``time`` is when the leader was there (Unix
+ * seconds): the follower predicts it forward over the link's delay.
+ */
+export interface LeaderUpdate {
+  type: "leader";
+  formation_id: string;
+  time: number;
+  north: number;
+  east: number;
+  up: number;
+  vn: number;
+  ve: number;
+  vu: number;
+  heading_deg: number;
+  /**
+   * @maxItems 64
+   */
+  neighbours?: Neighbour[];
+}
+export interface Neighbour {
+  vehicle_id: string;
+  north: number;
+  east: number;
+  up: number;
 }
 /**
  * Ask for (or give back) the manual-control lease of one vehicle. Needs the

@@ -1,0 +1,254 @@
+"""Formations in flight: the hub hands each member its slot and relays the leader's state.
+
+The followers' control runs in their agents (vehicle_agents/formation.py), close to the
+aircraft; the hub only moves data. At ``rate_hz`` it sends every follower the newest
+leader state (newest wins, nothing queues behind a slow link) with the other members'
+positions for the separation check.
+
+A virtual leader is the route's clock on the hub. A vehicle leader is itself a member:
+its agent follows the virtual route at a zero offset, facing along it, and the followers
+take the leader vehicle's reported state, so they keep station on where it really is.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import itertools
+import logging
+import math
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+from starlette.websockets import WebSocketDisconnect
+
+from backend.errors import Conflict, NotFound
+from backend.fleet.registry import FleetRegistry
+from backend.fleet.safety_gate import SafetyGate, snapshot_of
+from backend.missions.formation import FormationPlan, plan_formation
+from backend.missions.formation.planner import check_separation, follower_offsets
+from backend.missions.formation.schemas import FormationRequest, ShapeChange
+from common.formation import LeaderState, Offset, slot_target
+from protocol.messages import FormationEnd, FormationSlot, LeaderUpdate, Message, Neighbour
+
+log = logging.getLogger(__name__)
+
+# A leader sample older than this is not relayed: the followers' own 1 s rule then holds
+# them, rather than a relayed state that looks fresh.
+MAX_RELAY_AGE_S = 1.0
+# The route's clock starts once every follower is this close to its slot (horizontally
+# and vertically): a leg flown while followers are still joining measures nothing.
+FORM_UP_M = 0.5
+
+
+@dataclass
+class ActiveFormation:
+    id: str
+    request: FormationRequest
+    plan: FormationPlan
+    started_at: float
+    stopped: str | None = None  # why, once stopped
+    formed_at: float | None = None  # when every follower reached its slot: the route starts
+    offsets: dict[str, Offset] = field(default_factory=dict)
+
+    @property
+    def followers(self) -> list[str]:
+        return list(self.offsets)
+
+    @property
+    def members(self) -> list[str]:
+        leader = [self.plan.leader_id] if self.plan.leader_id else []
+        return leader + self.followers
+
+
+class FormationService:
+    def __init__(
+        self,
+        registry: FleetRegistry,
+        safety: SafetyGate,
+        rate_hz: float = 10.0,
+        clock: Callable[[], float] = time.time,
+    ) -> None:
+        self._registry = registry
+        self._safety = safety
+        self._period = 1.0 / rate_hz
+        self._clock = clock
+        self._formations: dict[str, ActiveFormation] = {}
+        self._ids = itertools.count(1)
+
+    def busy(self) -> set[str]:
+        return {v for f in self.active() for v in f.members}
+
+    def active(self) -> list[ActiveFormation]:
+        return [f for f in self._formations.values() if f.stopped is None]
+
+    def get(self, formation_id: str) -> ActiveFormation:
+        formation = self._formations.get(formation_id)
+        if formation is None:
+            raise NotFound(f"no formation {formation_id!r}")
+        return formation
+
+    async def start(self, request: FormationRequest, max_speed_ms: float = 5.0) -> ActiveFormation:
+        """Check the request (FormationRefused names the reason), then send each member
+        its slot. The followers hold until the first leader state reaches them."""
+        members = [f.vehicle_id for f in request.followers]
+        if request.leader_id:
+            members.append(request.leader_id)
+        vehicles, not_ready = {}, {}
+        for vehicle_id in members:
+            record = self._registry.get(vehicle_id)  # VehicleNotFound for an unknown id
+            if record.channel is None:
+                raise Conflict(f"{vehicle_id} is not connected")
+            vehicles[vehicle_id] = snapshot_of(record)
+            state = record.state
+            if state is not None and state.ready_to_fly is False:
+                not_ready[vehicle_id] = state.not_ready_reason or "not ready"
+        rails = self._safety.site_rails()
+        plan = plan_formation(
+            request,
+            rails=rails,
+            vehicles=vehicles,
+            not_ready=not_ready,
+            busy=self.busy(),
+            max_speed_ms=max_speed_ms,
+        )
+        formation = ActiveFormation(
+            f"formation-{next(self._ids)}", request, plan, self._clock(), offsets=plan.offsets
+        )
+        self._formations[formation.id] = formation
+        await self._send_slots(formation)
+        return formation
+
+    async def change_shape(self, formation_id: str, change: ShapeChange) -> ActiveFormation:
+        """New slots in flight; the followers' position controllers glide to them."""
+        formation = self.get(formation_id)
+        if formation.stopped is not None:
+            raise Conflict(f"{formation_id} has stopped")
+        offsets = follower_offsets(formation.request, change.shape, change.spacing_m)
+        check_separation(offsets, formation.plan.min_separation_m)
+        formation.offsets = offsets
+        await self._send_slots(formation)
+        return formation
+
+    async def stop(self, formation_id: str, reason: str = "stopped by the operator") -> None:
+        formation = self.get(formation_id)
+        if formation.stopped is not None:
+            return
+        formation.stopped = reason
+        for vehicle_id in formation.members:
+            await self._send(vehicle_id, FormationEnd(formation_id=formation.id, reason=reason))
+
+    async def _send_slots(self, formation: ActiveFormation) -> None:
+        origin = formation.plan.frame.origin
+        slots = dict(formation.offsets)
+        if formation.plan.leader_id:
+            slots[formation.plan.leader_id] = Offset(0.0, 0.0, 0.0)
+        for vehicle_id, offset in slots.items():
+            await self._send(
+                vehicle_id,
+                FormationSlot(
+                    formation_id=formation.id,
+                    origin_lat=origin.lat,
+                    origin_lon=origin.lon,
+                    x=offset.x,
+                    y=offset.y,
+                    up=offset.up,
+                    frame=offset.frame.value,
+                    min_separation_m=formation.plan.min_separation_m,
+                    face_heading=vehicle_id == formation.plan.leader_id,
+                ),
+            )
+
+    async def _send(self, vehicle_id: str, message: Message) -> None:
+        channel = self._registry.get(vehicle_id).channel
+        if channel is None:
+            return  # offline: its agent holds on the stale leader state
+        try:
+            await channel.send_frame(message)
+        except (RuntimeError, OSError, WebSocketDisconnect) as error:
+            log.info("formation message to %s not sent: %s", vehicle_id, error)
+
+    # -- the relay -------------------------------------------------------------
+
+    def _local(self, formation: ActiveFormation, vehicle_id: str) -> Neighbour | None:
+        state = self._registry.get(vehicle_id).state
+        if state is None or state.lat is None or state.lon is None or state.alt_rel is None:
+            return None
+        east, north = formation.plan.frame.to_local(state.lat, state.lon)
+        return Neighbour(vehicle_id=vehicle_id, north=north, east=east, up=state.alt_rel)
+
+    def leader_state(self, formation: ActiveFormation, now: float) -> LeaderState | None:
+        """The route's state now (a virtual leader), or the leader vehicle's last report."""
+        if formation.plan.leader_id is None:
+            v = formation.plan.route.state_at(self._route_time(formation, now))
+            return LeaderState(v.north, v.east, v.up, v.vn, v.ve, v.vu, v.heading_rad, now)
+        record = self._registry.get(formation.plan.leader_id)
+        state, seen = record.state, record.last_seen
+        here = self._local(formation, formation.plan.leader_id)
+        if state is None or seen is None or here is None or now - seen > MAX_RELAY_AGE_S:
+            return None
+        heading = math.radians(state.heading_deg or 0.0)
+        return LeaderState(
+            here.north,
+            here.east,
+            here.up,
+            state.vn or 0.0,
+            state.ve or 0.0,
+            state.climb_rate or 0.0,
+            heading,
+            seen,
+        )
+
+    def _route_time(self, formation: ActiveFormation, now: float) -> float:
+        return 0.0 if formation.formed_at is None else now - formation.formed_at
+
+    def _formed(self, formation: ActiveFormation, leader: LeaderState) -> bool:
+        """Every follower within FORM_UP_M of its slot around the leader."""
+        for follower, offset in formation.offsets.items():
+            here = self._local(formation, follower)
+            if here is None:
+                return False
+            (north, east, up), _ = slot_target(leader, offset)
+            if math.dist((north, east, up), (here.north, here.east, here.up)) > FORM_UP_M:
+                return False
+        return True
+
+    async def relay_once(self) -> None:
+        now = self._clock()
+        for formation in self.active():
+            route = formation.plan.route.state_at(self._route_time(formation, now))
+            if formation.plan.leader_id is not None:
+                # the leader vehicle flies the route itself, at a zero offset
+                await self._send(formation.plan.leader_id, _update(formation, route, now, []))
+            leader = self.leader_state(formation, now)
+            if leader is None:
+                continue
+            if formation.formed_at is None and self._formed(formation, leader):
+                formation.formed_at = now
+                log.info("%s formed up: the route starts", formation.id)
+            places = [p for v in formation.members if (p := self._local(formation, v))]
+            for follower in formation.followers:
+                others = [p for p in places if p.vehicle_id != follower]
+                await self._send(follower, _update(formation, leader, leader.time_s, others))
+
+    async def run(self) -> None:
+        while True:
+            await self.relay_once()
+            await asyncio.sleep(self._period)
+
+
+def _update(
+    formation: ActiveFormation, leader: LeaderState, time_s: float, others: list[Neighbour]
+) -> LeaderUpdate:
+    return LeaderUpdate(
+        formation_id=formation.id,
+        time=time_s,
+        north=leader.north,
+        east=leader.east,
+        up=leader.up,
+        vn=leader.vn,
+        ve=leader.ve,
+        vu=leader.vu,
+        heading_deg=math.degrees(leader.heading_rad) % 360.0,
+        neighbours=others,
+    )

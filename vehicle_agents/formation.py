@@ -1,0 +1,410 @@
+"""The formation follower: close to the aircraft, it flies this vehicle's slot behind a
+leader whose state the hub relays.
+
+Each tick (10 Hz or more, well inside ArduCopter's GUID_TIMEOUT of 3 s and PX4's
+offboard loss timeout COM_OF_LOSS_T of 1 s) it predicts the leader forward over the
+link's delay at its velocity (AP_Follow's estimate), puts the slot around it, and
+sends SET_POSITION_TARGET_GLOBAL_INT with the slot's position and the leader's velocity
+as feed-forward. Position alone would make the autopilot chase a point that has
+already moved on, trailing by speed / PSC_POSXY_P (the seed's 2.5 m); the velocity
+feed-forward removes that lag.
+
+ArduPilot flies these in GUIDED. PX4 takes them only in OFFBOARD, and only once
+setpoints are already streaming: the agent starts the stream before it asks for the
+switch, and if the stream stops PX4 falls back to its COM_OBL_RC_ACT action on its own.
+
+It holds (a position target at its own stopping place, velocity zero) when:
+- the leader's state is older than ``stale_s`` (1 s): flying a guess would be blind;
+- another vehicle is within the minimum separation: it backs off away from it instead;
+- the slot would put it inside a known obstacle's margin (not wired yet).
+A mode change it did not make (the RC transmitter's switch) takes it out of the
+formation at once: it stops sending, so the pilot's mode rules.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+import math
+import time
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from enum import StrEnum
+
+from pymavlink.dialects.v20 import ardupilotmega as mavlink2
+
+from common.formation import LeaderState, Offset, OffsetFrame, slot_target
+from common.geodesy import LocalFrame
+from protocol.messages import (
+    EventKind,
+    FormationEnd,
+    FormationSlot,
+    HoldCommand,
+    LeaderUpdate,
+)
+from vehicle_agents.commands import CommandExecutor
+from vehicle_agents.fcu_link import FcuLink, MavMessage
+from vehicle_agents.modes import mode_name
+
+log = logging.getLogger(__name__)
+
+EmitEvent = Callable[[EventKind, str, int | None], None]
+FormationMessage = FormationSlot | FormationEnd | LeaderUpdate
+
+# Position and velocity used; acceleration, yaw and yaw rate ignored. ArduCopter reads
+# any set bit of a group as "ignore the group", PX4 each axis: both fly this the same.
+POSVEL_TYPE_MASK = (
+    mavlink2.POSITION_TARGET_TYPEMASK_AX_IGNORE
+    | mavlink2.POSITION_TARGET_TYPEMASK_AY_IGNORE
+    | mavlink2.POSITION_TARGET_TYPEMASK_AZ_IGNORE
+    | mavlink2.POSITION_TARGET_TYPEMASK_YAW_IGNORE
+    | mavlink2.POSITION_TARGET_TYPEMASK_YAW_RATE_IGNORE
+)
+# The same with a yaw: a leader flown by the agent faces along its route.
+POSVEL_YAW_TYPE_MASK = POSVEL_TYPE_MASK & ~mavlink2.POSITION_TARGET_TYPEMASK_YAW_IGNORE
+
+
+@dataclass(frozen=True)
+class FollowerSettings:
+    rate_hz: float = 10.0  # setpoints a second
+    stale_s: float = 1.0  # a leader state older than this makes the follower hold
+    max_lead_s: float = 0.5  # the most the leader is predicted forward
+    back_off_ms: float = 1.0  # how fast it moves away from an intruder
+    # A slot is never flown lower than this above home, whatever the leader does (a
+    # leader landing, or climbing out, must not drag a follower below it into the ground).
+    min_alt_m: float = 1.0
+    # PX4 enters OFFBOARD only with setpoints already streaming (more than 2 Hz for a
+    # while): the switch is asked for after this long of them. ArduPilot does not mind.
+    prestream_s: float = 0.5
+
+
+class Action(StrEnum):
+    TRACK = "track"
+    HOLD_STALE = "hold_stale"
+    BACK_OFF = "back_off"
+    HOLD_CLEAR = "hold_clear"  # its slot is within the separation of another vehicle
+    LEFT = "left"  # out of the formation: sends nothing
+
+
+@dataclass(frozen=True)
+class Setpoint:
+    """What to send this tick: a local position (north, east, up) and velocity."""
+
+    action: Action
+    position: tuple[float, float, float] | None
+    velocity: tuple[float, float, float]
+    reason: str = ""
+
+
+class Follower:
+    """One follower's slot-keeping; pure state, fed by the agent and asked each tick."""
+
+    def __init__(
+        self,
+        frame: LocalFrame,
+        offset: Offset,
+        min_separation_m: float,
+        settings: FollowerSettings | None = None,
+    ) -> None:
+        self.frame = frame
+        self.offset = offset
+        self.min_separation_m = min_separation_m
+        self.settings = settings or FollowerSettings()
+        self.leader: LeaderState | None = None
+        self.left_reason: str | None = None
+        self._hold: tuple[float, float, float] | None = None
+
+    def set_offset(self, offset: Offset) -> None:
+        """A new slot in flight (a shape or spacing change): the position controller,
+        with its acceleration limit, glides the vehicle to it."""
+        self.offset = offset
+
+    def on_leader(self, state: LeaderState) -> None:
+        if self.leader is None or state.time_s >= self.leader.time_s:
+            self.leader = state
+
+    def leave(self, reason: str) -> None:
+        """Out of the formation (an RC mode change, the operator's stop)."""
+        self.left_reason = reason
+
+    def tick(
+        self,
+        now_s: float,
+        own: tuple[float, float, float],
+        others: Mapping[str, tuple[float, float, float]] = {},
+    ) -> Setpoint:
+        """This tick's setpoint, from the vehicle's own position (north, east, up) and
+        every other vehicle's it knows of."""
+        if self.left_reason is not None:
+            return Setpoint(Action.LEFT, None, (0.0, 0.0, 0.0), self.left_reason)
+        intruder = _nearest(own, others)
+        if intruder is not None and intruder[1] < self.min_separation_m:
+            name, distance, where = intruder
+            away = [a - b for a, b in zip(own, where, strict=True)]
+            norm = math.hypot(*away) or 1.0
+            v = [self.settings.back_off_ms * a / norm for a in away]
+            self._hold = None
+            # The target is where it is now; the velocity carries it away.
+            return Setpoint(
+                Action.BACK_OFF,
+                own,
+                (v[0], v[1], v[2]),
+                f"{name} is {distance:.1f} m away, within the {self.min_separation_m:g} m "
+                "separation",
+            )
+        if self.leader is None or now_s - self.leader.time_s > self.settings.stale_s:
+            if self._hold is None:
+                self._hold = own
+            age = "none yet" if self.leader is None else f"{now_s - self.leader.time_s:.1f} s old"
+            return Setpoint(Action.HOLD_STALE, self._hold, (0.0, 0.0, 0.0), f"leader state {age}")
+        predicted = self.leader.predicted(now_s, self.settings.max_lead_s)
+        (north, east, up), (vn, ve, vu) = slot_target(predicted, self.offset)
+        if up < self.settings.min_alt_m:
+            up, vu = self.settings.min_alt_m, max(vu, 0.0)
+        crowded = _nearest((north, east, up), others)
+        if crowded is not None and crowded[1] < self.min_separation_m:
+            # flying into the slot would break the separation (and, once backed off,
+            # would bring it straight back in): hold clear where it is instead
+            if self._hold is None:
+                self._hold = own
+            return Setpoint(
+                Action.HOLD_CLEAR,
+                self._hold,
+                (0.0, 0.0, 0.0),
+                f"its slot is {crowded[1]:.1f} m from {crowded[0]}, within the "
+                f"{self.min_separation_m:g} m separation",
+            )
+        self._hold = None
+        return Setpoint(Action.TRACK, (north, east, up), (vn, ve, vu))
+
+    def message(
+        self,
+        setpoint: Setpoint,
+        time_boot_ms: int,
+        target_system: int,
+        target_component: int,
+        yaw_rad: float | None = None,
+    ) -> mavlink2.MAVLink_set_position_target_global_int_message | None:
+        """The SET_POSITION_TARGET_GLOBAL_INT for a setpoint (None once out of formation):
+        altitude above home, velocity north-east-down."""
+        return position_target(
+            self.frame, setpoint, time_boot_ms, target_system, target_component, yaw_rad
+        )
+
+
+def position_target(
+    frame: LocalFrame,
+    setpoint: Setpoint,
+    time_boot_ms: int,
+    target_system: int,
+    target_component: int,
+    yaw_rad: float | None = None,
+) -> mavlink2.MAVLink_set_position_target_global_int_message | None:
+    if setpoint.position is None:
+        return None
+    north, east, up = setpoint.position
+    lat, lon = frame.to_geo(east, north)
+    vn, ve, vu = setpoint.velocity
+    return mavlink2.MAVLink_set_position_target_global_int_message(
+        time_boot_ms & 0xFFFFFFFF,
+        target_system,
+        target_component,
+        mavlink2.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT,
+        POSVEL_TYPE_MASK if yaw_rad is None else POSVEL_YAW_TYPE_MASK,
+        round(lat * 1e7),
+        round(lon * 1e7),
+        up,
+        vn,
+        ve,
+        -vu,
+        0.0,
+        0.0,
+        0.0,
+        0.0 if yaw_rad is None else yaw_rad,
+        0.0,
+    )
+
+
+def _nearest(
+    own: tuple[float, float, float], others: Mapping[str, tuple[float, float, float]]
+) -> tuple[str, float, tuple[float, float, float]] | None:
+    best: tuple[str, float, tuple[float, float, float]] | None = None
+    for name, where in others.items():
+        d = math.dist(own, where)
+        if best is None or d < best[1]:
+            best = (name, d, where)
+    return best
+
+
+class FormationRunner:
+    """The agent's side of a formation: slots and leader states from the hub in, a
+    setpoint to the flight controller every tick, events out when it holds, backs off,
+    or leaves because someone else changed the mode (the RC pilot outranks it)."""
+
+    def __init__(
+        self,
+        link: FcuLink,
+        executor: CommandExecutor,
+        emit: EmitEvent,
+        settings: FollowerSettings | None = None,
+        clock: Callable[[], float] = time.time,
+    ) -> None:
+        self._link = link
+        self._executor = executor
+        self._emit = emit
+        self.settings = settings or FollowerSettings()
+        self._clock = clock  # Unix time: the leader's samples are stamped with it
+        self.formation_id: str | None = None
+        self.follower: Follower | None = None
+        self._neighbours: dict[str, tuple[float, float, float]] = {}
+        self._started_at = 0.0
+        self._mode_asked = False
+        self._seen_guided = False
+        self._last_action: Action | None = None
+        self._ending: FormationEnd | None = None
+        self._face_heading = False
+        self.sent = 0
+        link.listeners.append(self._on_message)
+
+    def on_hub(self, message: FormationMessage) -> None:
+        match message:
+            case FormationSlot():
+                self._on_slot(message)
+            case LeaderUpdate() if message.formation_id == self.formation_id:
+                assert self.follower is not None
+                self.follower.on_leader(
+                    LeaderState(
+                        message.north,
+                        message.east,
+                        message.up,
+                        message.vn,
+                        message.ve,
+                        message.vu,
+                        math.radians(message.heading_deg),
+                        message.time,
+                    )
+                )
+                self._neighbours = {
+                    n.vehicle_id: (n.north, n.east, n.up) for n in message.neighbours
+                }
+            case FormationEnd() if message.formation_id == self.formation_id:
+                self._ending = message
+
+    def _on_slot(self, slot: FormationSlot) -> None:
+        offset = Offset(slot.x, slot.y, slot.up, OffsetFrame(slot.frame))
+        if self.follower is not None and slot.formation_id == self.formation_id:
+            self.follower.set_offset(offset)
+            self.follower.min_separation_m = slot.min_separation_m
+            self._emit("formation", f"new slot in {slot.formation_id}: {_describe(offset)}", 6)
+            return
+        self.formation_id = slot.formation_id
+        frame = LocalFrame(slot.origin_lat, slot.origin_lon)
+        self.follower = Follower(frame, offset, slot.min_separation_m, self.settings)
+        self._face_heading = slot.face_heading
+        self._started_at = self._clock()
+        self._mode_asked = self._seen_guided = False
+        self._last_action = None
+        self._neighbours = {}
+        self._emit("formation", f"joined {slot.formation_id}: {_describe(offset)}", 6)
+
+    def _on_message(self, message: MavMessage) -> None:
+        """The RC pilot's (or another GCS's) mode change takes the vehicle out."""
+        if self.follower is None or self.follower.left_reason is not None:
+            return
+        if message.get_type() != "HEARTBEAT" or message.get_srcSystem() != self._link.target_system:
+            return
+        guided = self._guided_mode()
+        mode = mode_name(message)
+        if mode == guided:
+            self._seen_guided = True
+        elif self._seen_guided:
+            reason = f"the vehicle changed to {mode} (RC or another GCS): out of the formation"
+            self.follower.leave(reason)
+            self._emit("formation", f"left {self.formation_id}: {reason}", 4)
+
+    def _guided_mode(self) -> str | None:
+        return self._link.modes.guided_mode if self._link.modes is not None else None
+
+    def _own_position(self, frame: LocalFrame) -> tuple[float, float, float] | None:
+        position = self._link.latest.get("GLOBAL_POSITION_INT")
+        if position is None:
+            return None
+        east, north = frame.to_local(position.lat / 1e7, position.lon / 1e7)
+        return north, east, position.relative_alt / 1000.0
+
+    async def tick(self) -> None:
+        follower = self.follower
+        if self._ending is not None:
+            ending, self._ending = self._ending, None
+            # an end that was overtaken by the next formation's slot ends nothing
+            if ending.formation_id == self.formation_id:
+                await self._end(ending)
+                return
+        if follower is None or follower.left_reason is not None or self._link.target_system is None:
+            return
+        own = self._own_position(follower.frame)
+        if own is None:
+            return
+        now = self._clock()
+        setpoint = follower.tick(now, own, self._neighbours)
+        if setpoint.action is not self._last_action:
+            self._last_action = setpoint.action
+            if setpoint.action in (Action.HOLD_STALE, Action.BACK_OFF, Action.HOLD_CLEAR):
+                self._emit("formation", f"{setpoint.action.value}: {setpoint.reason}", 4)
+            elif setpoint.action is Action.TRACK:
+                self._emit("formation", "tracking its slot", 6)
+        boot_ms = int((now - self._started_at) * 1000)
+        yaw = None
+        if self._face_heading and setpoint.action is Action.TRACK and follower.leader:
+            yaw = follower.leader.heading_rad
+        message = follower.message(
+            setpoint, boot_ms, self._link.target_system, self._link.target_component, yaw
+        )
+        if message is None:
+            return
+        try:
+            self._link.send(message)
+            self.sent += 1
+        except ConnectionError:
+            return  # the flight controller link is down; the link says so itself
+        if not self._mode_asked and now - self._started_at >= self.settings.prestream_s:
+            self._mode_asked = True
+            heartbeat = self._link.latest.get("HEARTBEAT")
+            if heartbeat is None or mode_name(heartbeat) != self._guided_mode():
+                self._enter_guided()
+
+    def _enter_guided(self) -> None:
+        modes = self._link.modes
+        guided = self._guided_mode()
+        if modes is None or guided is None:
+            return
+        setting = modes.settings[guided]
+        self._link.send_command_long(
+            mavlink2.MAV_CMD_DO_SET_MODE,
+            0,
+            [setting.base_mode, setting.custom_mode, setting.custom_sub_mode],
+        )
+
+    async def _end(self, ending: FormationEnd) -> None:
+        follower, self.follower = self.follower, None
+        self.formation_id = None
+        if follower is None:
+            return
+        self._emit("formation", f"left {ending.formation_id}: {ending.reason or 'ended'}", 5)
+        if follower.left_reason is None:
+            # stop here: PX4 would otherwise run its offboard-loss action when the
+            # setpoints stop, ArduPilot drift on its last target until GUID_TIMEOUT
+            outcome = await self._executor.execute(HoldCommand())
+            if outcome.status != "accepted":
+                self._emit("formation", f"hold at the end refused: {outcome.message}", 2)
+
+    async def run(self) -> None:
+        period = 1.0 / self.settings.rate_hz
+        while True:
+            await self.tick()
+            await asyncio.sleep(period)
+
+
+def _describe(offset: Offset) -> str:
+    axes = "forward/right" if offset.frame is OffsetFrame.HEADING else "north/east"
+    return f"{offset.x:.1f} m, {offset.y:.1f} m ({axes}), {offset.up:+.1f} m up"

@@ -1,0 +1,194 @@
+"""The dashboard's survey panel in headless Chromium against a real fleet (hub, two
+simulators, two agents) at ten times real speed: an area drawn with the mouse, the hub's
+preview (lanes per drone on the map, photos, time, area, battery), the launch, and the
+progress the live feed's `survey` messages bring. Screenshots go to test-output/survey/."""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Iterator
+from pathlib import Path
+
+import httpx
+import pytest
+from playwright.sync_api import Browser, Page, expect
+
+from common.geodesy import LocalFrame
+from gcs.launcher import FleetPlan, LocalFleet, free_port
+from tests.browser.conftest import log_in
+from tests.browser.test_missions import PixelMap, _assert_on_open_map, _box
+from tests.helpers import access_token, api_client, poll_until
+
+pytestmark = [pytest.mark.browser, pytest.mark.integration]
+
+ROOT = Path(__file__).resolve().parents[2]
+OUTPUT = ROOT / "test-output" / "survey"
+VEHICLES = ["sim_1", "sim_2"]
+SPEEDUP = 10.0
+# A small area north of the homes, so the flight is short: 80 m by 60 m.
+WEST_M, SOUTH_M, WIDE_M, DEEP_M = -40.0, 40.0, 80.0, 60.0
+FLIGHT_S = 240  # the take-off, the first lane and its photos, at ten times speed, under load
+
+
+@pytest.fixture(scope="module")
+def survey_fleet(tmp_path_factory: pytest.TempPathFactory) -> Iterator[LocalFleet]:
+    plan = FleetPlan(
+        port=free_port(),
+        data_dir=tmp_path_factory.mktemp("survey-ui"),
+        vehicles=len(VEHICLES),
+        speedup=SPEEDUP,
+    )
+    with LocalFleet(plan) as fleet:
+        fleet.start(
+            hub_env={
+                "GCS_BASEMAP_URL": "",
+                "GCS_SURVEY_UPDATE_INTERVAL_S": "0.2",
+                "GCS_COMMANDS_PER_SECOND": "1000",
+            }
+        )
+        fleet.wait_until_ready()
+        yield fleet
+
+
+@pytest.fixture
+def survey_page(browser: Browser) -> Iterator[Page]:
+    context = browser.new_context(viewport={"width": 1600, "height": 1000})
+    opened = context.new_page()
+    errors: list[str] = []
+    opened.on("pageerror", lambda error: errors.append(str(error)))
+    yield opened
+    context.close()
+    assert errors == [], f"JavaScript errors on the page: {errors}"
+
+
+def _ready_on_ground(api: httpx.Client) -> bool:
+    states = {v["id"]: v["state"] or {} for v in api.get("/api/v1/vehicles").json()}
+    return all(
+        states.get(vid, {}).get("home_lat") is not None and not states[vid].get("armed")
+        for vid in VEHICLES
+    )
+
+
+def _space(page: Page) -> dict[str, float]:
+    """The open map left of the panels, below the controls along its top."""
+    area, panel = _box(page, "#map"), _box(page, ".survey-panel")
+    top, bottom = area["y"] + 70, area["y"] + area["height"] - 40
+    return {"x": area["x"], "y": top, "width": panel["x"] - area["x"] - 20, "height": bottom - top}
+
+
+def _frame_area(page: Page, frame: LocalFrame) -> PixelMap:
+    """Zoom until the area fills a good part of the open map, then drag it to its middle."""
+    pixels = PixelMap(page)
+    space = _space(page)
+    for _ in range(8):
+        width_px = WIDE_M / pixels.metres_per_px()
+        if width_px > space["width"] * 0.8 or DEEP_M / pixels.metres_per_px() > space["height"] * 0.7:
+            page.locator(".leaflet-control-zoom-out").click()
+        elif width_px < space["width"] * 0.25:
+            page.locator(".leaflet-control-zoom-in").click()
+        else:
+            break
+        pixels = PixelMap(page)
+    centre = pixels.pixel(*frame.to_geo(WEST_M + WIDE_M / 2, SOUTH_M + DEEP_M / 2))
+    wanted = (space["x"] + space["width"] / 2, space["y"] + space["height"] / 2)
+    start = pixels.a
+    page.mouse.move(*start)
+    page.mouse.down()
+    page.mouse.move(start[0] + wanted[0] - centre[0], start[1] + wanted[1] - centre[1], steps=15)
+    page.mouse.up()
+    return PixelMap(page)
+
+
+def test_a_drawn_area_is_previewed_launched_and_its_progress_shown(
+    survey_page: Page, survey_fleet: LocalFleet
+) -> None:
+    page, plan = survey_page, survey_fleet.plan
+    token = access_token(plan.hub_http, "admin", plan.admin_password)
+    with api_client(plan.hub_http, token) as api:
+        poll_until(lambda: _ready_on_ground(api), 60, "both drones ready with a home")
+        lat, lon, _ = plan.vehicle_home(0)
+        frame = LocalFrame(lat, lon)
+
+        log_in(page, plan.hub_http, "admin", plan.admin_password)
+        expect(page.locator(".vehicle-marker")).to_have_count(len(VEHICLES), timeout=30_000)
+        page.locator('[data-action="survey-toggle"]').click()
+        expect(page.locator(".survey-body")).to_be_visible()
+        pixels = _frame_area(page, frame)
+
+        def at(east: float, north: float) -> tuple[float, float]:
+            x, y = pixels.pixel(*frame.to_geo(east, north))
+            _assert_on_open_map(page, x, y)
+            return x, y
+
+        # Draw the outline with the mouse: four corners, then close the ring.
+        page.locator('[data-action="survey-draw"]').click()
+        corners = [
+            (WEST_M, SOUTH_M),
+            (WEST_M + WIDE_M, SOUTH_M),
+            (WEST_M + WIDE_M, SOUTH_M + DEEP_M),
+            (WEST_M, SOUTH_M + DEEP_M),
+        ]
+        for corner in corners:
+            page.mouse.click(*at(*corner))
+        expect(page.locator("path.survey-vertex")).to_have_count(4)
+        page.locator('[data-action="survey-close"]').click()
+        expect(page.locator("path.survey-area")).to_have_count(1)
+
+        # The camera and the flight, then the drones: the preview follows.
+        page.locator('[data-field="survey-height"]').fill("30")
+        page.locator('[data-field="survey-height"]').dispatch_event("change")
+        for field, value in (("survey-side", "60"), ("survey-front", "70"), ("survey-angle", "0")):
+            page.locator(f'[data-field="{field}"]').fill(value)
+            page.locator(f'[data-field="{field}"]').dispatch_event("change")
+        for vid in VEHICLES:
+            page.locator(f'.survey-drone[data-vehicle-id="{vid}"] input').check()
+
+        summary = page.locator('[data-field="survey-summary"]')
+        expect(summary).to_have_attribute("data-state", "ok", timeout=20_000)
+        rows = page.locator('[data-field="survey-parts"] tr:not(.survey-refusal)')
+        expect(rows).to_have_count(len(VEHICLES))
+        photos = int(page.locator('[data-field="survey-photos"]').inner_text())
+        lanes = int(page.locator('[data-field="survey-lanes"]').inner_text())
+        assert photos > 0 and lanes >= 2
+        # Every lane of the preview is on the map, in one colour per drone.
+        expect(page.locator("path.survey-lane")).to_have_count(lanes)
+        strokes = {
+            line.get_attribute("stroke") for line in page.locator("path.survey-lane").all()
+        }
+        assert len(strokes) == len(VEHICLES), strokes
+        # The mouse drew the area asked for (80 m by 60 m), to within a few pixels' worth.
+        area_text = page.locator('[data-field="survey-area"]').inner_text()
+        area_m2 = float(re.sub(r"[^0-9.]", "", area_text))
+        assert area_m2 == pytest.approx(WIDE_M * DEEP_M, rel=0.1)
+        for row in rows.all():
+            assert re.search(r"\d+ %", row.inner_text()), "no battery estimate"
+            assert re.search(r"\d+:\d\d", row.inner_text()), "no time"
+        OUTPUT.mkdir(parents=True, exist_ok=True)
+        page.screenshot(path=OUTPUT / "survey-preview.png")
+
+        # Launch: the survey is created and started, and its progress rises.
+        page.locator('[data-action="survey-launch"]').click()
+        progress = page.locator('[data-field="survey-progress"]')
+        expect(progress).to_have_attribute("data-state", "flying", timeout=60_000)
+        overall = page.locator('[data-field="survey-overall"]')
+        survey_id = page.locator('[data-field="survey-state"]').inner_text().split()[1].rstrip(":")
+        poll_until(
+            lambda: (
+                int(overall.get_attribute("data-lanes-done") or 0) >= 1
+                and int(overall.get_attribute("data-photos") or 0) >= 1
+            ),
+            FLIGHT_S,
+            "a lane flown and photos taken",
+            every_s=0.5,
+        )
+        # The panel says what the hub says; the flown lanes fade and the photos show.
+        hub = api.get(f"/api/v1/surveys/{survey_id}/progress").json()
+        assert hub["lanes_done"] >= 1 and hub["photos"] >= 1
+        expect(page.locator("path.survey-lane-done").first).to_be_attached(timeout=10_000)
+        expect(page.locator("path.survey-photo").first).to_be_attached(timeout=10_000)
+        expect(page.locator(".survey-drone-progress li")).to_have_count(len(VEHICLES))
+        page.screenshot(path=OUTPUT / "survey-progress.png")
+
+        # Abort brings everyone home (and leaves the fleet idle for whatever runs next).
+        page.locator('[data-action="survey-abort"]').click()
+        expect(progress).to_have_attribute("data-state", "aborted", timeout=30_000)

@@ -82,7 +82,8 @@ def _frame_area(page: Page, frame: LocalFrame) -> PixelMap:
     space = _space(page)
     for _ in range(8):
         width_px = WIDE_M / pixels.metres_per_px()
-        if width_px > space["width"] * 0.8 or DEEP_M / pixels.metres_per_px() > space["height"] * 0.7:
+        deep_px = DEEP_M / pixels.metres_per_px()
+        if width_px > space["width"] * 0.8 or deep_px > space["height"] * 0.7:
             page.locator(".leaflet-control-zoom-out").click()
         elif width_px < space["width"] * 0.25:
             page.locator(".leaflet-control-zoom-in").click()
@@ -135,13 +136,23 @@ def test_a_drawn_area_is_previewed_launched_and_its_progress_shown(
         expect(page.locator("path.survey-area")).to_have_count(1)
 
         # The camera and the flight, then the drones: the preview follows.
-        page.locator('[data-field="survey-height"]').fill("30")
-        page.locator('[data-field="survey-height"]').dispatch_event("change")
-        for field, value in (("survey-side", "60"), ("survey-front", "70"), ("survey-angle", "0")):
-            page.locator(f'[data-field="{field}"]').fill(value)
-            page.locator(f'[data-field="{field}"]').dispatch_event("change")
         for vid in VEHICLES:
             page.locator(f'.survey-drone[data-vehicle-id="{vid}"] input').check()
+        # Bad input is refused by the hub with the field named, and nothing can launch.
+        page.locator('[data-field="survey-front"]').fill("100")
+        status = page.locator('[data-field="survey-status"]')
+        expect(status).to_contain_text("front_overlap_pct", timeout=20_000)
+        expect(page.locator('[data-action="survey-launch"]')).to_be_disabled()
+        # Slow lanes (2 m/s: 5 s a lane at ten times speed) leave time to take a drone out
+        # mid-survey below.
+        for field, value in (
+            ("survey-height", "30"),
+            ("survey-side", "60"),
+            ("survey-front", "70"),
+            ("survey-angle", "0"),
+            ("survey-speed", "2"),
+        ):
+            page.locator(f'[data-field="{field}"]').fill(value)
 
         summary = page.locator('[data-field="survey-summary"]')
         expect(summary).to_have_attribute("data-state", "ok", timeout=20_000)
@@ -149,12 +160,11 @@ def test_a_drawn_area_is_previewed_launched_and_its_progress_shown(
         expect(rows).to_have_count(len(VEHICLES))
         photos = int(page.locator('[data-field="survey-photos"]').inner_text())
         lanes = int(page.locator('[data-field="survey-lanes"]').inner_text())
-        assert photos > 0 and lanes >= 2
+        assert photos > 0
+        assert lanes >= 2
         # Every lane of the preview is on the map, in one colour per drone.
         expect(page.locator("path.survey-lane")).to_have_count(lanes)
-        strokes = {
-            line.get_attribute("stroke") for line in page.locator("path.survey-lane").all()
-        }
+        strokes = {line.get_attribute("stroke") for line in page.locator("path.survey-lane").all()}
         assert len(strokes) == len(VEHICLES), strokes
         # The mouse drew the area asked for (80 m by 60 m), to within a few pixels' worth.
         area_text = page.locator('[data-field="survey-area"]').inner_text()
@@ -183,11 +193,44 @@ def test_a_drawn_area_is_previewed_launched_and_its_progress_shown(
         )
         # The panel says what the hub says; the flown lanes fade and the photos show.
         hub = api.get(f"/api/v1/surveys/{survey_id}/progress").json()
-        assert hub["lanes_done"] >= 1 and hub["photos"] >= 1
+        assert hub["lanes_done"] >= 1
+        assert hub["photos"] >= 1
         expect(page.locator("path.survey-lane-done").first).to_be_attached(timeout=10_000)
         expect(page.locator("path.survey-photo").first).to_be_attached(timeout=10_000)
         expect(page.locator(".survey-drone-progress li")).to_have_count(len(VEHICLES))
         page.screenshot(path=OUTPUT / "survey-progress.png")
+
+        # A drone taken out mid-survey: the hand-over is offered, accepted with one click,
+        # and the drone still flying takes its unflown lanes.
+        def flying_with_lanes_left() -> str | None:
+            drones = api.get(f"/api/v1/surveys/{survey_id}/progress").json()["drones"]
+            left = {
+                d["vehicle_id"]: d["lanes_total"] - d["lanes_done"]
+                for d in drones
+                if d["state"] == "flying"
+            }
+            best = max(left, key=lambda vid: left[vid], default=None)
+            return best if best is not None and left[best] >= 2 else None
+
+        lost = poll_until(flying_with_lanes_left, 60, "a drone flying with lanes left")
+        keeper = next(vid for vid in VEHICLES if vid != lost)
+        before = api.get(f"/api/v1/surveys/{survey_id}/progress").json()
+        keeper_total = next(d for d in before["drones"] if d["vehicle_id"] == keeper)["lanes_total"]
+        dropped = api.post(f"/api/v1/surveys/{survey_id}/vehicles/{lost}/abort")
+        assert dropped.status_code == 200, dropped.text
+        offer = page.locator('[data-field="survey-handover"]')
+        expect(offer).to_contain_text(f"{lost} dropped out", timeout=30_000)
+        page.screenshot(path=OUTPUT / "survey-handover.png")
+        offer.locator('[data-action="survey-accept"]').click()
+        expect(offer).to_have_count(0, timeout=30_000)
+        expect(progress).to_have_attribute("data-state", "flying", timeout=30_000)
+        after = api.get(f"/api/v1/surveys/{survey_id}/progress").json()
+        assert after["state"] == "flying"
+        assert next(d for d in after["drones"] if d["vehicle_id"] == keeper)["lanes_total"] > (
+            keeper_total
+        ), after
+        lost_row = page.locator(f'.survey-drone-progress li[data-vehicle-id="{lost}"]')
+        expect(lost_row).to_have_attribute("data-state", "dropped")
 
         # Abort brings everyone home (and leaves the fleet idle for whatever runs next).
         page.locator('[data-action="survey-abort"]').click()

@@ -113,6 +113,7 @@ export class SurveyPanel {
   private readonly status: HTMLElement;
   private readonly launchButton: HTMLButtonElement;
   private readonly progressBox: HTMLElement;
+  private readonly planning: HTMLElement;
   private readonly fileInput: HTMLInputElement;
 
   constructor(
@@ -181,8 +182,12 @@ export class SurveyPanel {
     // -- the preview and the launch
     this.summary = el("dl", "survey-summary", "survey-summary");
     const table = el("table", "survey-parts");
-    table.createTHead().innerHTML =
-      "<tr><th>Drone</th><th>Lanes</th><th>Photos</th><th>Time</th><th>Battery</th></tr>";
+    const headRow = table.createTHead().insertRow();
+    for (const text of ["Drone", "Lanes", "Photos", "Time", "Battery"]) {
+      const cell = document.createElement("th");
+      cell.textContent = text;
+      headRow.append(cell);
+    }
     this.parts = table.createTBody();
     this.parts.dataset.field = "survey-parts";
     this.launchButton = button("survey-launch", "Launch survey", "Create the survey, upload every part and start");
@@ -193,15 +198,19 @@ export class SurveyPanel {
     this.progressBox = el("div", "survey-progress", "survey-progress");
     this.progressBox.hidden = true;
 
-    for (const input of [this.camera, this.heightKind, this.height, this.side, this.front, this.angle, this.speed]) {
-      input.addEventListener("change", () => this.schedulePreview());
+    // Every keystroke re-plans (debounced): the preview follows the inputs as they change.
+    for (const input of [this.camera, this.heightKind]) input.addEventListener("change", () => this.schedulePreview());
+    for (const input of [this.height, this.side, this.front, this.angle, this.speed]) {
+      input.addEventListener("input", () => this.schedulePreview());
     }
     const hint = el("p", "mission-hint");
     hint.textContent = "Draw: click the map for each corner, then click the first corner or Close ring.";
-    const planning = el("div", "survey-planning");
-    planning.append(areaTools, hint, fields, this.drones, this.summary, table, this.launchButton);
-    planning.hidden = !canCommand;
-    this.body.append(planning, this.status, this.progressBox, this.fileInput);
+    this.planning = el("div", "survey-planning");
+    this.planning.append(areaTools, hint, fields, this.drones, this.summary, table, this.launchButton);
+    this.planning.hidden = !canCommand;
+    // The flight's progress on top: while a survey flies the planning form folds away,
+    // so the hand-over prompt is never scrolled out of sight.
+    this.body.append(this.progressBox, this.status, this.planning, this.fileInput);
     this.element.append(toggle, this.body);
     L.DomEvent.disableClickPropagation(this.element);
     L.DomEvent.disableScrollPropagation(this.element);
@@ -230,7 +239,7 @@ export class SurveyPanel {
   /** A `survey` message from the live feed. */
   onSurvey(update: SurveyUpdate): void {
     // A dashboard opened mid-survey follows the one that is flying.
-    if (this.surveyId === null && !ENDED.has(update.state)) this.surveyId = update.survey_id;
+    if (!this.surveyIsLive() && !ENDED.has(update.state)) this.surveyId = update.survey_id;
     if (update.survey_id !== this.surveyId) return;
     this.progress = update;
     this.renderProgress();
@@ -543,7 +552,9 @@ export class SurveyPanel {
     const update = this.progress;
     this.progressBox.hidden = update === null;
     this.progressBox.replaceChildren();
+    this.planning.hidden = !this.canCommand || this.surveyIsLive();
     if (!update) return;
+    if (ENDED.has(update.state)) this.launchButton.disabled = !this.preview?.ok;
     this.progressBox.dataset.state = update.state;
     const head = el("div", "survey-progress-head", "survey-state");
     head.textContent = `Survey ${update.survey_id}: ${update.state.replace("_", " ")}`;

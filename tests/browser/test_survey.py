@@ -6,7 +6,7 @@ progress the live feed's `survey` messages bring. Screenshots go to test-output/
 from __future__ import annotations
 
 import re
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import httpx
@@ -22,6 +22,7 @@ from tests.helpers import access_token, api_client, poll_until
 pytestmark = [pytest.mark.browser, pytest.mark.integration]
 
 ROOT = Path(__file__).resolve().parents[2]
+QGC_SURVEY = ROOT / "tests" / "data" / "qgc" / "survey.plan"
 OUTPUT = ROOT / "test-output" / "survey"
 VEHICLES = ["sim_1", "sim_2"]
 SPEEDUP = 10.0
@@ -98,6 +99,72 @@ def _frame_area(page: Page, frame: LocalFrame) -> PixelMap:
     page.mouse.move(start[0] + wanted[0] - centre[0], start[1] + wanted[1] - centre[1], steps=15)
     page.mouse.up()
     return PixelMap(page)
+
+
+def _draw_ring(
+    page: Page,
+    at: Callable[[float, float], tuple[float, float]],
+    corners: list[tuple[float, float]],
+) -> None:
+    for corner in corners:
+        page.mouse.click(*at(*corner))
+    expect(page.locator("path.survey-vertex")).to_have_count(len(corners))
+
+
+def _area_m2(page: Page) -> float:
+    text = page.locator('[data-field="survey-area"]').inner_text()
+    return float(re.sub(r"[^0-9.]", "", text)) * (10_000 if text.endswith("ha") else 1)
+
+
+def test_a_hole_drawn_in_the_area_and_a_qgc_survey_opened(
+    survey_page: Page, survey_fleet: LocalFleet
+) -> None:
+    page, plan = survey_page, survey_fleet.plan
+    lat, lon, _ = plan.vehicle_home(0)
+    frame = LocalFrame(lat, lon)
+    log_in(page, plan.hub_http, "admin", plan.admin_password)
+    expect(page.locator(".vehicle-marker")).to_have_count(len(VEHICLES), timeout=30_000)
+    page.locator('[data-action="survey-toggle"]').click()
+    pixels = _frame_area(page, frame)
+
+    def at(east: float, north: float) -> tuple[float, float]:
+        x, y = pixels.pixel(*frame.to_geo(east, north))
+        _assert_on_open_map(page, x, y)
+        return x, y
+
+    page.locator('[data-action="survey-draw"]').click()
+    _draw_ring(page, at, _rectangle(WEST_M, SOUTH_M, WIDE_M, DEEP_M))
+    page.locator('[data-action="survey-close"]').click()
+    page.locator(f'.survey-drone[data-vehicle-id="{VEHICLES[0]}"] input').check()
+    summary = page.locator('[data-field="survey-summary"]')
+    expect(summary).to_have_attribute("data-state", "ok", timeout=20_000)
+    whole = _area_m2(page)
+
+    # A 30 m by 20 m no-fly hole in the middle, closed by a click on its first corner.
+    page.locator('[data-action="survey-hole"]').click()
+    hole = _rectangle(WEST_M + 25, SOUTH_M + 20, 30, 20)
+    _draw_ring(page, at, hole)
+    page.mouse.click(*at(*hole[0]))
+    expect(page.locator("path.survey-hole")).to_have_count(1)
+    expect(page.locator("path.survey-vertex")).to_have_count(0)
+    expect(summary).to_have_attribute("data-state", "ok", timeout=20_000)
+    poll_until(lambda: _area_m2(page) < whole - 400, 20, "the preview without the hole")
+    assert _area_m2(page) == pytest.approx(whole - 600, rel=0.1)
+    page.screenshot(path=OUTPUT / "survey-hole.png")
+
+    # A QGC plan's Survey item opens with its polygon and camera; the area is in Zurich,
+    # far from these drones, and the hub's refusal says so.
+    page.locator('[data-field="survey-file"]').set_input_files(QGC_SURVEY)
+    status = page.locator('[data-field="survey-status"]')
+    expect(status).to_contain_text("km from the area", timeout=20_000)
+    expect(page.locator("path.survey-hole")).to_have_count(0)
+    expect(page.locator("path.survey-area")).to_have_count(1)
+    expect(page.locator('[data-field="survey-camera"]')).to_have_value("file")
+    expect(page.locator('[data-action="survey-launch"]')).to_be_disabled()
+
+
+def _rectangle(west: float, south: float, wide: float, deep: float) -> list[tuple[float, float]]:
+    return [(west, south), (west + wide, south), (west + wide, south + deep), (west, south + deep)]
 
 
 def test_a_drawn_area_is_previewed_launched_and_its_progress_shown(

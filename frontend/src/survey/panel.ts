@@ -91,6 +91,8 @@ export class SurveyPanel {
   private previewTimer: number | undefined;
   private previewAbort: AbortController | null = null;
   private surveyId: string | null = null;
+  /** A camera's figures from an opened file (a QGC Survey), offered as "From file". */
+  private fileCamera: SurveyRequest["camera"] | null = null;
   private progress: SurveyProgress | null = null;
   private detailAt = 0;
   private detailBusy = false;
@@ -328,6 +330,12 @@ export class SurveyPanel {
       this.rings = area.coordinates.map((ring) => ring.slice(0, -1).map(([lon, lat]) => L.latLng(lat, lon)));
       this.drawing = null;
       if (typeof fields.camera === "string") this.camera.value = fields.camera;
+      else if (fields.camera) {
+        this.fileCamera = fields.camera;
+        this.camera.querySelector('option[value="file"]')?.remove();
+        this.camera.append(new Option(`From ${file.name}`, "file"));
+        this.camera.value = "file";
+      }
       if (fields.altitude_m != null) [this.heightKind.value, this.height.value] = ["altitude", String(fields.altitude_m)];
       else if (fields.gsd_cm != null) [this.heightKind.value, this.height.value] = ["gsd", String(fields.gsd_cm)];
       if (fields.side_overlap_pct != null) this.side.value = String(fields.side_overlap_pct);
@@ -376,7 +384,7 @@ export class SurveyPanel {
     const angle = this.angle.value.trim() === "" ? null : number(this.angle);
     return {
       area,
-      camera: this.camera.value,
+      camera: this.camera.value === "file" && this.fileCamera ? this.fileCamera : this.camera.value,
       altitude_m: this.heightKind.value === "altitude" ? height : null,
       gsd_cm: this.heightKind.value === "gsd" ? height : null,
       side_overlap_pct: number(this.side),

@@ -123,9 +123,9 @@ export class SurveyPanel {
     private readonly canCommand: boolean,
   ) {
     this.layer = new SurveyLayer(map);
-    this.element = el("div", "mission-panel survey-panel");
+    this.element = el("div", "survey-panel");
     const toggle = button("survey-toggle", "Survey", "Plan and fly an area survey");
-    this.body = el("div", "mission-body survey-body");
+    this.body = el("div", "survey-body");
     this.body.hidden = true;
     toggle.addEventListener("click", () => {
       this.body.hidden = !this.body.hidden;

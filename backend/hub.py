@@ -21,9 +21,12 @@ from backend.fleet.commands import CommandDispatcher
 from backend.fleet.registry import FleetRegistry, VehicleRecord
 from backend.fleet.safety_gate import SafetyGate
 from backend.mapping.tiles import TileLibrary
+from backend.realtime import manual_control
 from backend.realtime.bus import InProcessBus, ReliableSubscription, Topic
 from backend.realtime.collaborators import AgentConnection, ClientConnection
 from backend.realtime.live_events import live_event
+from backend.scans.obstacles import describe as describe_obstacle
+from backend.scans.pointmap import MapObstacle
 from backend.scans.service import ScanService
 from backend.settings import HubSettings
 from backend.storage.database import make_engine, migrate
@@ -45,6 +48,7 @@ from backend.viz3d.scene import FleetScene
 from backend.viz3d.server import VizServer
 from protocol.messages import CloseCode, MissionItem
 
+SEVERITY_INFO = 6  # MAV_SEVERITY_INFO: an obstacle found or gone
 log = logging.getLogger(__name__)
 
 
@@ -148,6 +152,7 @@ class Hub:
         writer.on_sequences = hub.deliver_sequence_news
         hub.surveys = SurveyService(hub, bus, SurveyRepository(engine), settings)
         await hub.surveys.load()
+        await manual_control.revoke_left_open(hub, engine)
         if settings.viz_enabled:
             hub.viz = await asyncio.to_thread(VizServer.start)
             hub.viz_http = httpx.AsyncClient(timeout=httpx.Timeout(10.0))
@@ -163,12 +168,18 @@ class Hub:
             async with asyncio.TaskGroup() as tasks:
                 tasks.create_task(self.writer.run())
                 tasks.create_task(self.scans.run())
+                tasks.create_task(self._watch_obstacles())
                 tasks.create_task(self._apply_retention())
                 tasks.create_task(self._drain_spool())
                 tasks.create_task(self.surveys.run())
+                tasks.create_task(manual_control.watch_expiry(self))
                 if self.scene is not None:
                     mirror = SceneMirror(
-                        self.scene, self.bus, self.registry, self.settings.viz_update_interval_s
+                        self.scene,
+                        self.bus,
+                        self.registry,
+                        self.settings.viz_update_interval_s,
+                        scans=self.scans,
                     )
                     tasks.create_task(mirror.run())
         finally:
@@ -215,6 +226,28 @@ class Hub:
                 if any(removed.values()):
                     log.info("retention removed %s", removed)
             await asyncio.sleep(self.settings.retention_interval_s)
+
+    async def _watch_obstacles(self) -> None:
+        """Obstacles found in the point map, or gone from it, as events."""
+        while True:
+            await asyncio.sleep(self.settings.scan_obstacle_interval_s)
+            try:
+                await self.refresh_obstacles()
+            except Exception:
+                # A map that cannot be clustered this time must never stop the hub.
+                log.exception("obstacle extraction failed")
+
+    async def refresh_obstacles(self) -> list[MapObstacle]:
+        """The point map's obstacles now, with lasting ids; the changes since the last
+        look are published as events of the vehicle whose scan last went into the map."""
+        changes = await self.scans.refresh_obstacles()
+        vehicle_id = self.scans.mapped_by
+        if vehicle_id is not None:
+            for change, obstacles in (("found", changes.appeared), ("gone", changes.gone)):
+                for obstacle in obstacles:
+                    text = describe_obstacle(obstacle, change)
+                    await self.store_event(vehicle_id, "obstacle", text, severity=SEVERITY_INFO)
+        return changes.current
 
     async def _drain_spool(self) -> None:
         """Store the rows spooled during a database outage as soon as it is over."""

@@ -171,6 +171,12 @@ class HubSettings(BaseSettings):
     survey_update_interval_s: float = Field(
         default=1.0, gt=0, le=60, description="a survey's progress goes out at most this often"
     )
+    scan_obstacle_interval_s: float = Field(
+        default=5.0,
+        gt=0,
+        description="how often obstacles are extracted from the point map; one found or "
+        "gone is an event (kind 'obstacle')",
+    )
 
     def site_frame(self) -> LocalFrame | None:
         """The site's east-north-up frame, if an origin is configured."""

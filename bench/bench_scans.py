@@ -16,7 +16,8 @@ Figures and their bars (docs/DESIGN.md, issue 18):
   batches of 200 on SQLite);
 - the point map's memory after ``--map-scans`` scans (360,000: an hour of 10 Hz scans
   from 10 drones circling the yard; a static site's map holds its surfaces, so it stops
-  growing once they are seen, and GCS_SCAN_MAP_MAX_VOXELS bounds it in any case).
+  growing once they are seen, and GCS_SCAN_MAP_MAX_VOXELS bounds it in any case), and
+  its memory at that bound (a fleet that keeps seeing new ground).
 Prints a table; asserts nothing.
 """
 
@@ -165,6 +166,20 @@ def map_memory(scans: int, drones: int = 10) -> tuple[int, float, float]:
     return len(point_map), used / 1e6, time.perf_counter() - started
 
 
+def map_memory_at_bound(max_voxels: int = 500_000) -> tuple[int, float]:
+    """The point map's worst case: a fleet that keeps seeing new ground fills it to its
+    bound (GCS_SCAN_MAP_MAX_VOXELS), after which it evicts; traced bytes there."""
+    rng = np.random.default_rng(1)
+    tracemalloc.start()
+    base = tracemalloc.get_traced_memory()[0]
+    point_map = PointMap(max_voxels=max_voxels)
+    for i in range(max_voxels // 700 + 100):  # scans of 700 points each on unseen ground
+        point_map.add(rng.uniform(-2000.0, 2000.0, size=(700, 3)), float(i))
+    used = tracemalloc.get_traced_memory()[0] - base
+    tracemalloc.stop()
+    return len(point_map), used / 1e6
+
+
 def _cpu_seconds(pid: int) -> float:
     fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
     return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
@@ -197,6 +212,7 @@ def main() -> None:
     median, p99, points = point_error(frames)
     ingest_us, store_us = hub_cost(frames)
     voxels, map_mb, map_s = map_memory(args.map_scans)
+    bound_voxels, bound_mb = map_memory_at_bound()
     rows = [
         (
             "bytes per 720-beam scan (frame + WebSocket header)",
@@ -214,6 +230,11 @@ def main() -> None:
             f"point map after {args.map_scans} scans (10 drones)",
             f"{voxels} voxels, {map_mb:.1f} MB traced ({map_s:.0f} s)",
             "bounded: 500,000 voxels",
+        ),
+        (
+            "point map at its bound (new ground all the time)",
+            f"{bound_voxels} voxels, {bound_mb:.1f} MB traced",
+            "",
         ),
     ]
     if not args.skip_agent:

@@ -43,6 +43,7 @@ from pydantic import (
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from protocol.mavlink_wire import WIRE_RANGES, wire_problem
+from protocol.scans import scan_frame_schema
 
 PROTOCOL_VERSION = 1
 # Telemetry frames are a few hundred bytes; 64 KiB leaves room for later scan data
@@ -293,6 +294,22 @@ class MissionSetCurrentCommand(Message):
     seq: int = Field(ge=1, le=MAX_MISSION_ITEMS, description="1 is the first item after home")
 
 
+class ManualStartCommand(Message):
+    """Open browser control on the vehicle (the hub sends it when it grants a lease): the
+    agent checks that the autopilot will take MANUAL_CONTROL from it (ArduPilot
+    MAV_GCS_SYSID/SYSID_MYGCS and RC_OVERRIDE_TIME, PX4 COM_RC_IN_MODE) and switches to
+    the pilot mode, which pauses a mission in progress. Refused with the reason
+    otherwise. Not for the REST endpoint: a lease comes from the control message."""
+
+    name: Literal["manual_start"] = "manual_start"
+
+
+class ManualStopCommand(Message):
+    """Close browser control (the lease was released): the vehicle holds."""
+
+    name: Literal["manual_stop"] = "manual_stop"
+
+
 Command = Annotated[
     ArmCommand
     | DisarmCommand
@@ -311,7 +328,9 @@ Command = Annotated[
     | MissionUploadCommand
     | MissionDownloadCommand
     | MissionClearCommand
-    | MissionSetCurrentCommand,
+    | MissionSetCurrentCommand
+    | ManualStartCommand
+    | ManualStopCommand,
     Field(discriminator="name"),
 ]
 
@@ -740,13 +759,25 @@ class ManualAxes(Message):
 
 class ControlRequest(Message):
     """Ask for (or give back) the manual-control lease of one vehicle. Needs the
-    'command' permission; one pilot per vehicle."""
+    'command' permission; one pilot per vehicle. An acquire is granted (a `lease` naming
+    the holder, to every client) only once the vehicle's agent has checked that the
+    autopilot takes MANUAL_CONTROL from it and switched to its pilot mode; otherwise
+    an `error` gives the reason (e.g. SYSID_MYGCS or COM_RC_IN_MODE). Release and
+    revoke put the vehicle in its hold mode."""
 
     type: Literal["control"] = "control"
     vehicle_id: VehicleId
     action: Literal["acquire", "release", "revoke"] = Field(
         description="revoke: an admin ends whoever's lease"
     )
+
+
+# Where a frame's values come from. The agent holds the vehicle when a "gamepad" or
+# "program" stream repeats the same off-centre values for its frozen time (a frozen
+# device, or a client streaming its last reading); an on-screen stick or a key held
+# still is a pilot holding a steady input, and the page's own liveness (hidden, blurred,
+# pointer lost) stops those streams.
+InputSource = Literal["gamepad", "touch", "keyboard", "program"]
 
 
 class ManualInput(Message):
@@ -758,15 +789,37 @@ class ManualInput(Message):
     vehicle_id: VehicleId
     seq: int = Field(ge=0, le=MAX_SEQ)
     axes: ManualAxes
+    source: InputSource = Field(
+        default="program",
+        description="gamepad and program streams that repeat the same off-centre values "
+        "for 3 s count as frozen and hold the vehicle; touch and keyboard do not",
+    )
+    sent_ms: float | None = Field(
+        default=None,
+        ge=0,
+        le=1e15,
+        description="the client's own clock when it read the input (ms); the agent "
+        "echoes it (manual_echo) so the pilot sees the input-to-vehicle round trip",
+    )
 
 
 class LeaseState(Message):
-    """Who flies a vehicle by hand now (holder None: nobody), sent to every client."""
+    """Who flies a vehicle by hand now (holder None: nobody), sent to every client when
+    it changes, and for every vehicle with a lease history when a client connects. A
+    lease ends when released, revoked by an admin, expired (no input for 2 s), on the
+    vehicle (the agent's deadman, frozen input, its hold button, a mode change from the
+    RC transmitter or another GCS), or with a hub restart; `reason` says which."""
 
     type: Literal["lease"] = "lease"
     vehicle_id: VehicleId
     holder: str | None = Field(default=None, max_length=200)
     reason: str = Field(default="", max_length=200)
+    resume_mode: str | None = Field(
+        default=None,
+        max_length=MAX_NAME_CHARS,
+        description="a mission was in progress when the lease began and is paused: "
+        "set this mode to resume it (ArduPilot AUTO, PX4 AUTO.MISSION)",
+    )
 
 
 class ManualFrame(Message):
@@ -775,6 +828,27 @@ class ManualFrame(Message):
     type: Literal["manual"] = "manual"
     seq: int = Field(ge=0, le=MAX_SEQ)
     axes: ManualAxes
+    source: InputSource = "program"
+    sent_ms: float | None = Field(default=None, ge=0, le=1e15)
+
+
+class ManualApplied(Message):
+    """The agent sent this frame to the flight controller as MANUAL_CONTROL (about twice
+    a second while a stream lasts): the hub passes it to the lease holder."""
+
+    type: Literal["manual_applied"] = "manual_applied"
+    seq: int = Field(ge=0, le=MAX_SEQ)
+    sent_ms: float | None = Field(default=None, ge=0, le=1e15)
+
+
+class ManualEcho(Message):
+    """To the lease holder: its frame ``seq`` went out to the flight controller. Its
+    ``sent_ms`` against the client's clock now is the input-to-vehicle round trip."""
+
+    type: Literal["manual_echo"] = "manual_echo"
+    vehicle_id: VehicleId
+    seq: int = Field(ge=0, le=MAX_SEQ)
+    sent_ms: float | None = Field(default=None, ge=0, le=1e15)
 
 
 class SurveyDroneProgress(Message):
@@ -807,7 +881,7 @@ class SurveyUpdate(Message):
 # The hub pings an agent to learn whether it is still there (another agent wants its
 # vehicle id); the agent answers with a pong.
 AgentToHub: TypeAlias = Annotated[
-    Hello | Telemetry | LiveState | Event | CommandResult | Unavailable | Pong,
+    Hello | Telemetry | LiveState | Event | CommandResult | Unavailable | Pong | ManualApplied,
     Field(discriminator="type"),
 ]
 HubToAgent: TypeAlias = Annotated[
@@ -826,7 +900,8 @@ HubToClient: TypeAlias = Annotated[
     | Pong
     | ErrorReply
     | LeaseState
-    | SurveyUpdate,
+    | SurveyUpdate
+    | ManualEcho,
     Field(discriminator="type"),
 ]
 
@@ -886,6 +961,8 @@ def json_schema() -> dict[str, Any]:
         "hub_to_agent": hub_to_agent.json_schema(),
         "client_to_hub": client_to_hub.json_schema(),
         "hub_to_client": hub_to_client.json_schema(),
+        # LIDAR scans: binary WebSocket frames, not JSON (protocol/scans.py)
+        "scan_frame": scan_frame_schema(),
     }
 
 

@@ -308,3 +308,31 @@ def split_client_scan_frame(data: bytes) -> tuple[str, ScanFrame]:
         raise ScanFrameError("magic: not a subscriber's scan frame (expected b'GSCV')")
     size = data[4]
     return data[5 : 5 + size].decode(), decode_scan(data[5 + size :])
+
+
+_FIELD_BYTES = {"4s": 4, "u8": 1, "u16": 2, "u64": 8, "f32": 4, "f64": 8}
+
+
+def scan_frame_schema() -> dict[str, object]:
+    """The binary frames' layout as data, exported beside the JSON messages' schema
+    (``python -m protocol.messages``): each header field with its type and byte offset."""
+    fields: list[dict[str, object]] = []
+    offset = 0
+    for name, kind in SCAN_HEADER_FIELDS:
+        fields.append({"name": name, "type": kind, "offset": offset})
+        offset += _FIELD_BYTES.get(kind, 0)
+    return {
+        "byte_order": "little",
+        "magic": SCAN_MAGIC.decode(),
+        "version": SCAN_VERSION,
+        "header_bytes": HEADER_BYTES,
+        "fields": fields,
+        "flags": {"replayed": FLAG_REPLAYED},
+        "no_return": NO_RETURN,
+        "max_beams": MAX_BEAMS,
+        "max_bytes": MAX_SCAN_BYTES,
+        "to_subscribers": {
+            "magic": CLIENT_SCAN_MAGIC.decode(),
+            "layout": "magic (4) | vehicle id length u8 | vehicle id (UTF-8) | scan frame",
+        },
+    }

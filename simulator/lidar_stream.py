@@ -1,7 +1,9 @@
 """The simulated LIDAR's serial line, served over TCP: every client gets the sensor's bytes.
 
 A real T-mini Pro is a serial port; here the same bytes go to whoever connects (the
-agent's driver reads ``tcp://HOST:PORT`` as it reads ``/dev/ttyUSB0``). A client that falls
+agent's driver reads ``tcp://HOST:PORT`` as it reads ``/dev/ttyUSB0``). Like the sensor, a
+connection idles until it sends the start command, and answers the stop and health
+commands (simulator/ydlidar_wire.py), so the driver's start-up is exercised too. A client that falls
 behind loses bytes, as a serial port's receive buffer would overflow, never the
 simulator's memory; the parser resynchronises on the next packet header.
 """
@@ -17,7 +19,15 @@ from simulator.config import ListenAddress
 from simulator.lidar import Lidar, LidarSpec, Pose
 from simulator.vehicle import Vehicle
 from simulator.world import World, default_scene, load_scene
-from simulator.ydlidar_wire import encode_beams
+from simulator.ydlidar_wire import (
+    COMMAND,
+    GET_HEALTH,
+    SCAN_RESPONSE,
+    START_SCAN,
+    STOP_SCAN,
+    encode_beams,
+    health,
+)
 
 log = logging.getLogger(__name__)
 
@@ -41,7 +51,8 @@ class LidarStream:
         self.lidar = Lidar(self.world, LidarSpec(rate_hz=rate_hz), seed=seed)
         self.address: ListenAddress | None = None
         self._server: asyncio.Server | None = None
-        self._writers: set[asyncio.StreamWriter] = set()
+        self._clients: set[asyncio.StreamWriter] = set()
+        self._writers: set[asyncio.StreamWriter] = set()  # the clients that started the scan
         self._last_time = -1.0
         self.dropped_bytes = 0
 
@@ -57,7 +68,7 @@ class LidarStream:
     async def stop(self) -> None:
         if self._server is not None:
             self._server.close()
-        for writer in list(self._writers):
+        for writer in list(self._clients):
             writer.close()
         if self._server is not None:
             await self._server.wait_closed()
@@ -87,14 +98,32 @@ class LidarStream:
                 continue
             writer.write(data)
 
+    def _command(self, command: int, writer: asyncio.StreamWriter) -> None:
+        if command == START_SCAN:
+            if writer not in self._writers:
+                writer.write(SCAN_RESPONSE)
+                self._writers.add(writer)
+        elif command == STOP_SCAN:
+            self._writers.discard(writer)
+        elif command == GET_HEALTH:
+            writer.write(health())
+
     async def _on_client(self, reader: asyncio.StreamReader, writer: asyncio.StreamWriter) -> None:
-        self._writers.add(writer)
+        pending = b""
+        self._clients.add(writer)
         try:
-            while await reader.read(4096):  # the T-mini Pro takes no commands we simulate
-                pass
+            while data := await reader.read(4096):
+                pending += data
+                while len(pending) >= 2:
+                    if pending[0] != COMMAND:  # not a command's start: the sensor ignores it
+                        pending = pending[1:]
+                        continue
+                    self._command(pending[1], writer)
+                    pending = pending[2:]
         except (ConnectionError, OSError):
             pass
         finally:
+            self._clients.discard(writer)
             self._writers.discard(writer)
             writer.close()
             with contextlib.suppress(ConnectionError, OSError):

@@ -20,6 +20,8 @@ PX4_PARAM_DEFS: tuple[ParamDef, ...] = (
     ParamDef("CAL_ACC0_ID", ParamType.INT32, INT32_MIN, INT32_MAX, default=1310988),
     ParamDef("COM_FLTMODE1", ParamType.INT32, -1, 13, default=-1),
     ParamDef("COM_LOW_BAT_ACT", ParamType.INT32, 0, 3),  # reported, not simulated
+    # PX4 1.14's default: RC or MAVLink manual input, whichever comes first
+    ParamDef("COM_RC_IN_MODE", ParamType.INT32, 0, 4, default=3),
     ParamDef("MAV_SYS_ID", ParamType.INT32, 1, 250),
     ParamDef("MIS_TAKEOFF_ALT", ParamType.REAL32, 0, 80, default=2.5),
     ParamDef("MPC_XY_CRUISE", ParamType.REAL32, 3, 20, "wpnav_speed"),

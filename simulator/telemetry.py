@@ -332,6 +332,11 @@ class TelemetryBuilder:
             mavlink2.MAV_VTOL_STATE_UNDEFINED, int(self.copter.landed_state())
         )
 
+    def timesync(self, ts1: int) -> MavMessage:
+        """The answer to a TIMESYNC request: nanoseconds since boot, the clock of
+        time_boot_ms (ArduPilot: AP_HAL::micros64() * 1000)."""
+        return mavlink2.MAVLink_timesync_message(int(self.copter.time_s * 1e6) * 1000, ts1)
+
     def autopilot_version(self) -> MavMessage:
         major, minor, patch = FIRMWARE_VERSION
         version = (major << 24) | (minor << 16) | (patch << 8) | FIRMWARE_TYPE_OFFICIAL

@@ -8,6 +8,14 @@ intensity version's samples are 3 bytes: intensity, then a u16 whose upper 14 bi
 distance in millimetres (the low 2 bits carry the intensity's top bits). CS is the XOR of
 the header word, FSA, each sample (its first byte, then its u16), ``LSN << 8 | CT`` and LSA.
 The agent's driver (vehicle_agents/sensors/ydlidar.py) parses exactly these bytes.
+
+Commands go the other way as ``A5 <cmd>``: 0x60 starts the scan, 0x65 stops it, 0x91 asks
+for the health. A real T-mini Pro idles after power-up until it gets 0x60 (YDLidar-SDK's
+driver sends stop, health, then start), and answers a command with a response
+descriptor: ``A5 5A | u32 (length in bits 0..29, mode in bits 30..31: 0 one answer, 1
+continuous) | type``, then the answer: 0x60 gets ``A5 5A 05 00 00 40 81`` and the packets
+follow; 0x91 gets ``A5 5A 03 00 00 00 06`` and 3 bytes (status: 0 good, 2 error; then a
+u16 error code).
 """
 
 from __future__ import annotations
@@ -17,6 +25,12 @@ import struct
 from simulator.lidar import Beams
 
 HEADER = 0x55AA
+COMMAND = 0xA5
+START_SCAN = 0x60
+STOP_SCAN = 0x65
+GET_HEALTH = 0x91
+SCAN_RESPONSE = bytes([0xA5, 0x5A, 0x05, 0x00, 0x00, 0x40, 0x81])
+HEALTH_RESPONSE = bytes([0xA5, 0x5A, 0x03, 0x00, 0x00, 0x00, 0x06])
 MAX_SAMPLES = 40  # what a T-mini Pro puts in one packet
 MAX_DISTANCE_MM = 0x3FFF
 RETURN_INTENSITY = 180
@@ -63,3 +77,8 @@ def encode_beams(beams: Beams, rate_hz: float) -> bytes:
         out += packet(0, angles[start:end], distances[start:end])
         start = end
     return bytes(out)
+
+
+def health(status: int = 0, error_code: int = 0) -> bytes:
+    """The answer to GET_HEALTH: its descriptor and 3 bytes."""
+    return HEALTH_RESPONSE + struct.pack("<BH", status, error_code)

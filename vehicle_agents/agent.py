@@ -7,13 +7,17 @@ import logging
 import sqlite3
 import time
 import uuid
-from collections.abc import Callable
+from collections.abc import Awaitable, Callable
 
 from protocol.messages import (
     PROTOCOL_VERSION,
+    Command,
+    CommandOutcome,
     Event,
     EventKind,
     Hello,
+    ManualStartCommand,
+    ManualStopCommand,
     Photo,
     Telemetry,
     VehicleState,
@@ -31,9 +35,11 @@ from vehicle_agents.manual import ManualPilot
 from vehicle_agents.mission_progress import ReachedItems
 from vehicle_agents.missions import mission_number
 from vehicle_agents.outbox import Outbox, SpillFile
-from vehicle_agents.sensors.fcu_time import FcuClock, PoseHistory
+from vehicle_agents.sensors.fcu_time import FcuClock, PoseHistory, ask_timesync
 from vehicle_agents.sensors.relay import DiskBacklog, ScanOutbox, ScanRelay, parse_mount
-from vehicle_agents.sensors.sources import ObstacleDistanceSource, ScanSource, YdlidarSource
+from vehicle_agents.sensors.ros2 import SCHEME as ROS2_SCHEME
+from vehicle_agents.sensors.ros2 import LaserScanSource
+from vehicle_agents.sensors.sources import MavlinkRangeSource, ScanSource, YdlidarSource
 from vehicle_agents.statustext import StatusTextJoiner
 from vehicle_agents.streams import StreamRequester
 from vehicle_agents.telemetry import link_snapshot
@@ -89,19 +95,20 @@ async def _run(settings: AgentSettings) -> None:
         link.listeners.append(events.on_message)
         link.state_listeners.append(FcuLinkEvents(events.emit).on_link_change)
         executor = CommandExecutor(link)
-        pilot = ManualPilot(link, executor, events.emit)
+        pilot = ManualPilot(link, executor, events.emit, source_system=settings.source_system)
         tasks.create_task(pilot.run())
         scans = None
         if settings.lidar:
             relay = scan_relay(settings, link, vehicle_id)
             scans = relay.outbox
             tasks.create_task(relay.run())
+            tasks.create_task(ask_timesync(link.send))
         hub = HubLink(
             settings.hub,
             token,
             hello,
             outbox,
-            executor.execute,
+            manual_commands(pilot, executor.execute),
             live_state=lambda: current_state(link, outbox),
             on_manual=pilot.on_frame,
             scans=scans,
@@ -136,6 +143,21 @@ async def _run(settings: AgentSettings) -> None:
             tasks.create_task(uploader.run())
 
 
+def manual_commands(
+    pilot: ManualPilot, execute: Callable[[Command], Awaitable[CommandOutcome]]
+) -> Callable[[Command], Awaitable[CommandOutcome]]:
+    """The lease's start and end go to the manual pilot, every other command to the FCU."""
+
+    async def run(command: Command) -> CommandOutcome:
+        if isinstance(command, ManualStartCommand):
+            return await pilot.start()
+        if isinstance(command, ManualStopCommand):
+            return await pilot.stop()
+        return await execute(command)
+
+    return run
+
+
 def scan_relay(settings: AgentSettings, link: FcuLink, vehicle_id: str) -> ScanRelay:
     """The LIDAR's turns, stamped with the flight controller's clock and pose."""
     assert settings.lidar is not None
@@ -143,9 +165,11 @@ def scan_relay(settings: AgentSettings, link: FcuLink, vehicle_id: str) -> ScanR
     link.listeners.append(poses.on_message)
     source: ScanSource
     if settings.lidar == "mavlink":
-        obstacle_distance = ObstacleDistanceSource()
-        link.listeners.append(obstacle_distance.on_message)
-        source = obstacle_distance
+        ranges = MavlinkRangeSource()
+        link.listeners.append(ranges.on_message)
+        source = ranges
+    elif settings.lidar.startswith(ROS2_SCHEME):
+        source = LaserScanSource(settings.lidar)
     else:
         source = YdlidarSource(settings.lidar, settings.lidar_resolution_deg, settings.lidar_baud)
     backlog = None

@@ -28,6 +28,8 @@ from protocol.messages import (
     GotoCommand,
     HoldCommand,
     LandCommand,
+    ManualStartCommand,
+    ManualStopCommand,
     MissionClearCommand,
     MissionDownloadCommand,
     MissionSetCurrentCommand,
@@ -161,6 +163,11 @@ class CommandExecutor:
                 return await self.missions.clear()
             case MissionSetCurrentCommand(seq=seq):
                 return await self.missions.set_current(seq)
+            case ManualStartCommand() | ManualStopCommand():
+                # The agent routes these to its ManualPilot (vehicle_agents/manual.py).
+                return CommandOutcome(
+                    status="refused", message=f"{command.name}: no manual pilot on this agent"
+                )
 
     async def _takeoff(self, altitude: float) -> CommandOutcome:
         modes = self.link.modes
@@ -402,14 +409,14 @@ class CommandExecutor:
         if command == mavlink2.MAV_CMD_PREFLIGHT_REBOOT_SHUTDOWN:
             return "the vehicle is armed, and autopilots refuse to reboot while armed"
         plain_disarm = params[:2] == [0.0, 0.0]
-        if command == mavlink2.MAV_CMD_COMPONENT_ARM_DISARM and plain_disarm and self._airborne():
+        if command == mavlink2.MAV_CMD_COMPONENT_ARM_DISARM and plain_disarm and self.airborne():
             return (
                 "the vehicle is in the air, and a plain disarm is refused in flight; "
                 "a forced disarm stops the motors"
             )
         return None
 
-    def _airborne(self) -> bool:
+    def airborne(self) -> bool:
         state = self.link.latest.get("EXTENDED_SYS_STATE")
         if state is not None and state.landed_state != mavlink2.MAV_LANDED_STATE_UNDEFINED:
             return int(state.landed_state) in _AIRBORNE

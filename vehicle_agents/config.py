@@ -96,8 +96,9 @@ class AgentSettings(BaseSettings):
     lidar: str | None = Field(
         default=None,
         description="a 2-D LIDAR to relay: a YDLIDAR's serial device (/dev/ttyUSB0), the "
-        "simulator's tcp://HOST:PORT, or 'mavlink' for OBSTACLE_DISTANCE from the flight "
-        "controller",
+        "simulator's tcp://HOST:PORT, 'mavlink' for the flight controller's "
+        "OBSTACLE_DISTANCE (PX4) or DISTANCE_SENSOR (ArduPilot's proximity sectors), or "
+        "ros2:TOPIC for a ROS 2 LaserScan topic (where rclpy is installed)",
     )
     lidar_baud: int = Field(default=230400, gt=0, description="the LIDAR's serial baud rate")
     lidar_resolution_deg: float = Field(
@@ -134,6 +135,18 @@ class AgentSettings(BaseSettings):
 
         stream_plan(rates)  # names MAVLink knows, rates >= 0: refused here, before flight
         return rates
+
+    @field_validator("lidar")
+    @classmethod
+    def _lidar(cls, value: str | None) -> str | None:
+        from vehicle_agents.sensors.ros2 import SCHEME, rclpy_available
+
+        if value is not None and value.startswith(SCHEME) and not rclpy_available():
+            raise ValueError(
+                f"{value}: a ROS 2 LaserScan topic needs rclpy, which is not importable here "
+                "(source the ROS 2 installation's setup script first)"
+            )
+        return value
 
     @field_validator("lidar_mount")
     @classmethod

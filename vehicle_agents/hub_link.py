@@ -25,6 +25,7 @@ from protocol.messages import (
     ErrorReply,
     Hello,
     LiveState,
+    ManualApplied,
     ManualFrame,
     Ping,
     Pong,
@@ -90,7 +91,7 @@ class HubLink:
         on_command: CommandHandler,
         timeouts: HubTimeouts | None = None,
         live_state: Callable[[], VehicleState] | None = None,
-        on_manual: Callable[[ManualFrame], None] | None = None,
+        on_manual: Callable[[ManualFrame], ManualApplied | None] | None = None,
         scans: ScanOutbox | None = None,
     ) -> None:
         self.url = url
@@ -264,13 +265,16 @@ class HubLink:
                 # Handled at once, never queued: the newest stick position is the one flown.
                 if self._on_manual is not None:
                     try:
-                        self._on_manual(message)
+                        applied = self._on_manual(message)
                     except Exception:
                         # A frame that cannot be flown (the flight controller's link went
                         # down under it) is lost, like any late stick input; raised here
                         # it would end the hub session, and the link would flap at the
                         # pilot's 25 Hz while the flight controller is away.
                         log.exception("stick input %d not flown", message.seq)
+                        applied = None
+                    if applied is not None:
+                        tasks.create_task(websocket.send(encode(applied)))
             case Welcome():
                 log.warning("unexpected second welcome from hub")
 

@@ -1,21 +1,43 @@
 """Flying by hand from the browser: stick frames become MANUAL_CONTROL, with a deadman.
 
+Browser control opens only when the hub grants a lease (``manual_start``): the agent
+first checks that the autopilot will take MANUAL_CONTROL from it, and refuses with the
+reason instead of streaming frames the autopilot would drop:
+
+- ArduPilot takes MANUAL_CONTROL (an RC override) only from its GCS's system id,
+  ``MAV_GCS_SYSID`` (4.7 on, up to ``MAV_GCS_SYSID_HI`` when that is greater;
+  ``SYSID_MYGCS`` before, default 255), and times overrides out after
+  ``RC_OVERRIDE_TIME`` seconds (0 turns them off; -1 never times out).
+- PX4 takes it only when ``COM_RC_IN_MODE`` allows MAVLink input: 1 (MAVLink only),
+  2 (RC and MAVLink with fallback) or 3 (RC or MAVLink, keep first); 0 is RC only and
+  4 disables manual input. PX4 checks only the target system, not the sender's id.
+
+It then switches to a pilot mode (ArduPilot LOITER, PX4 POSCTL), which pauses a mission
+in progress; the mission resumes from the same item when its mode (AUTO) is set again.
+
 The agent sits next to the aircraft, so the deadman lives here: no fresh frame for
 ``deadman_s`` (0.5 s) puts the vehicle in its hold mode (Copter BRAKE, Rover HOLD,
 Plane LOITER, PX4 AUTO.LOITER) and says so in an event. A dropped hub link stops the
-frames, so it ends the same way.
+frames, so it ends the same way. A "gamepad" or "program" stream that repeats the same
+off-centre values for ``frozen_s`` is a frozen device (or a client streaming its last
+reading) and holds the vehicle too: a live analogue stick is never bit-identical for
+long, while a key or an on-screen stick held still is, so those two are left to the
+page's own liveness (it stops sending when hidden, blurred or the pointer is lost).
 
 Why MANUAL_CONTROL rather than velocity targets: on ArduPilot it is an RC override of
 roll, pitch, throttle and yaw (x pitch, y roll, z throttle 0..1000 with 500 at mid
-stick, r yaw), so the vehicle flies in a pilot mode (LOITER here) with the autopilot's
-own stick shaping, limits and fences, and the RC transmitter keeps priority. ArduPilot
-accepts it only from its GCS (SYSID_MYGCS / MAV_GCS_SYSID, default 255; the agent
-speaks as 254, see the README). PX4 accepts it when COM_RC_IN_MODE allows MAVLink
-input, and flies it in POSCTL.
+stick, r yaw), so the vehicle flies in a pilot mode with the autopilot's own stick
+shaping, limits and fences, and the RC transmitter keeps priority; PX4 flies it in
+POSCTL the same way. Velocity targets (SET_POSITION_TARGET_LOCAL_NED in GUIDED/OFFBOARD)
+would bypass the transmitter's priority and need a 2 Hz-or-faster stream of their own.
 
 Order of authority: a mode change the agent did not make (the RC transmitter's mode
-switch, or another GCS) ends browser control at once; frames are ignored from then
-until the hub grants a new lease and a fresh stream starts.
+switch, or another GCS) ends browser control at once; the hub then ends the lease.
+
+Buttons (MANUAL_CONTROL's bitmask, acted on when pressed): bit 0 "select" as the seed
+framework's controller did it (below 3 m: land, or disarm on the ground, when the
+motors run; arm when they do not; ignored higher up), bit 1 "hold" (hold and give back
+control).
 """
 
 from __future__ import annotations
@@ -28,23 +50,53 @@ from dataclasses import dataclass
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
-from protocol.messages import EventKind, HoldCommand, ManualFrame
+from protocol.messages import (
+    ArmCommand,
+    CommandOutcome,
+    DisarmCommand,
+    EventKind,
+    HoldCommand,
+    LandCommand,
+    ManualApplied,
+    ManualFrame,
+    SetModeCommand,
+)
 from vehicle_agents.commands import CommandExecutor
 from vehicle_agents.fcu_link import FcuLink, MavMessage
-from vehicle_agents.modes import mode_name
+from vehicle_agents.modes import is_armed, mode_name
 
 log = logging.getLogger(__name__)
 
 EmitEvent = Callable[[EventKind, str, int | None], None]
 
-# The pilot modes that take stick input and hold position when the sticks centre.
-PILOT_MODES = ("LOITER", "POSCTL", "MANUAL")
+# The pilot modes that take stick input and hold position when the sticks centre, per
+# autopilot: PX4's "LOITER" (AUTO.LOITER, Hold) flies no sticks, its POSCTL does.
+PILOT_MODES = {"ardupilot": ("LOITER", "MANUAL"), "px4": ("POSCTL",)}
+# Modes that fly the uploaded mission: taking the sticks pauses it, setting it resumes.
+MISSION_MODES = ("AUTO", "AUTO.MISSION")
+# PX4 COM_RC_IN_MODE values that let MAVLink manual input through.
+PX4_MAVLINK_INPUT = {1: "MAVLink only", 2: "RC and MAVLink", 3: "RC or MAVLink, keep first"}
+BUTTON_SELECT = 1 << 0
+BUTTON_HOLD = 1 << 1
+SELECT_BELOW_M = 3.0  # the seed's select button acts only this close to the ground
+# Sources whose values must keep changing (see the module's docstring).
+FREEZABLE_SOURCES = ("gamepad", "program")
+MID_THROTTLE = 500
+ENDED_SEVERITY = 4  # WARNING: the hub ends the lease on a manual event this severe
 
 
 @dataclass(frozen=True)
 class ManualTimeouts:
     deadman_s: float = 0.5  # no fresh frame for this long: hold
+    first_frame_s: float = 3.0  # from the lease's start to the first frame
+    frozen_s: float = 3.0  # a gamepad's same off-centre values this long: hold
     check_s: float = 0.05  # how often the deadman looks
+    echo_s: float = 0.5  # how often a flown frame is echoed to the pilot (its delay)
+
+
+def _off_centre(frame: ManualFrame) -> bool:
+    axes = frame.axes
+    return bool(axes.x or axes.y or axes.r or axes.z != MID_THROTTLE)
 
 
 class ManualPilot:
@@ -55,67 +107,167 @@ class ManualPilot:
         emit: EmitEvent,
         timeouts: ManualTimeouts | None = None,
         clock: Callable[[], float] = time.monotonic,
+        source_system: int = 254,
     ) -> None:
         self._link = link
         self._executor = executor
         self._emit = emit
         self.timeouts = timeouts or ManualTimeouts()
         self._clock = clock
-        self.active = False
-        self._last_at = 0.0
+        self._source_system = source_system
+        self.active = False  # browser control is open (a lease started it)
+        self._last_at = 0.0  # the last fresh frame (or the start, plus its grace)
         self._last_seq = -1
+        self._last_values: tuple[int, int, int, int, int] | None = None
+        self._changed_at = 0.0
+        self._frozen_source = False
+        self._buttons = 0
+        self._pressed: list[int] = []  # button bits pressed, acted on by check()
         self._pilot_mode: str | None = None
-        # Set when the RC pilot (or another GCS) took over: frames from this stream on
-        # are ignored; a gap in the stream (a new lease) clears it.
-        self._overridden = False
         self._seen_pilot_mode = False  # the switch to the pilot mode has shown
+        self._echoed_at = -1e9
         self.sent = 0
+        self.ignored = 0  # frames that came with no browser control open
         link.listeners.append(self._on_message)
 
-    def on_frame(self, frame: ManualFrame) -> None:
+    # -- the lease's start and end, from the hub ------------------------------------
+
+    async def start(self) -> CommandOutcome:
+        """Open browser control: check the autopilot will take it, enter the pilot mode."""
+        refusal = await self._refusal()
+        if refusal is not None:
+            return CommandOutcome(status="refused", message=f"manual control: {refusal}")
+        modes = self._link.modes
+        candidates = PILOT_MODES.get(modes.autopilot, ()) if modes is not None else ()
+        pilot_mode = next((m for m in candidates if modes and m in modes.settings), None)
+        if pilot_mode is None:
+            return CommandOutcome(
+                status="refused", message="manual control: the vehicle has no pilot mode"
+            )
+        heartbeat = self._link.latest.get("HEARTBEAT")
+        before = mode_name(heartbeat) if heartbeat is not None else None
+        # Open before the mode change, so that the heartbeat showing the pilot mode (it
+        # may come with the ACK) is seen, and any later change ends browser control.
+        self._pilot_mode = pilot_mode
+        self._seen_pilot_mode = before == pilot_mode
+        self._last_seq = -1
+        self._last_values = None
+        self._buttons = 0
+        self._pressed.clear()
         now = self._clock()
-        if self._overridden:
-            if now - self._last_at <= self.timeouts.deadman_s:
-                self._last_at = now  # the same stream: still ignored
-                return
-            self._overridden = False
-        if self.active and frame.seq <= self._last_seq:
-            return  # older than what was flown: never stream a stale value
-        if self._link.target_system is None or not self._link.connected:
+        # The deadman's clock starts with a grace for the stream's first frame (longer
+        # than the hub's lease expiry, which ends a lease that never streams first).
+        self._last_at = now + self.timeouts.first_frame_s - self.timeouts.deadman_s
+        self._changed_at = now
+        self.active = True
+        if before != pilot_mode:
+            outcome = await self._executor.execute(SetModeCommand(mode=pilot_mode))
+            if outcome.status != "accepted":
+                self.active = False
+                return CommandOutcome(
+                    status="refused",
+                    message=f"manual control: {pilot_mode} refused: {outcome.message}",
+                    result=outcome.result,
+                )
+            # Accepted: the autopilot is in the pilot mode now, and a heartbeat it sent
+            # before the ACK came before the ACK on the same link, so any other mode
+            # from here on is someone else's change.
+            self._seen_pilot_mode = True
+        paused = before if before in MISSION_MODES else None
+        text = f"manual control from the browser started in {pilot_mode}"
+        if paused is not None:
+            text += f"; the mission is paused ({paused} resumes it)"
+        self._emit("manual", text, 5)
+        return CommandOutcome(
+            status="accepted",
+            message=text,
+            values={"mission_paused": 1.0} if paused is not None else None,
+        )
+
+    async def stop(self) -> CommandOutcome:
+        """The lease was given back: the vehicle holds where it is."""
+        if not self.active:
+            return CommandOutcome(status="accepted", message="manual control was not open")
+        self.active = False
+        self._emit("manual", "manual control from the browser released: holding", 5)
+        return await self._executor.execute(HoldCommand())
+
+    async def _refusal(self) -> str | None:
+        """Why the autopilot would drop our MANUAL_CONTROL, or None if it will take it."""
+        modes = self._link.modes
+        if modes is None or self._link.target_system is None:
+            return "the flight controller is not identified yet"
+        if modes.autopilot == "ardupilot":
+            low = await self._param("MAV_GCS_SYSID")
+            high = await self._param("MAV_GCS_SYSID_HI") if low is not None else None
+            gcs_id = low or await self._param("SYSID_MYGCS")
+            if gcs_id is None:
+                return "could not read MAV_GCS_SYSID or SYSID_MYGCS"
+            name, value = gcs_id
+            # 4.7 accepts the range MAV_GCS_SYSID..MAV_GCS_SYSID_HI when HI is greater.
+            top = high[1] if high is not None and high[1] > value else value
+            if not round(value) <= self._source_system <= round(top):
+                accepted = f"{value:g}" if top == value else f"{value:g}..{top:g}"
+                return (
+                    f"ArduPilot takes MANUAL_CONTROL only from its GCS ({name} = "
+                    f"{accepted}); set {name} to {self._source_system}, the agent's id"
+                )
+            override = await self._param("RC_OVERRIDE_TIME")
+            if override is not None and override[1] == 0:
+                return "RC_OVERRIDE_TIME is 0, which turns RC overrides off"
+        elif modes.autopilot == "px4":
+            rc_in = await self._param("COM_RC_IN_MODE")
+            if rc_in is None:
+                return "could not read COM_RC_IN_MODE"
+            if round(rc_in[1]) not in PX4_MAVLINK_INPUT:
+                return (
+                    f"COM_RC_IN_MODE = {rc_in[1]:g} lets no MAVLink manual input in; "
+                    "set it to 1, 2 or 3"
+                )
+        return None
+
+    async def _param(self, name: str) -> tuple[str, float] | None:
+        outcome = await self._executor.params.read(name)
+        if outcome.status != "accepted" or not outcome.values:
+            return None
+        return name, outcome.values[name]
+
+    # -- the stream -----------------------------------------------------------------
+
+    def on_frame(self, frame: ManualFrame) -> ManualApplied | None:
+        """Fly one frame; now and then, what to tell the hub about it (its echo)."""
+        if not self.active or self._link.target_system is None:
+            self.ignored += 1  # nothing takes control without a lease
+            return None
+        if frame.seq <= self._last_seq:
+            return None  # older than what was flown: never stream a stale value
+        if not self._link.connected:
             # No flight controller to fly: the frame is dropped, and the deadman holds the
             # vehicle if the link comes back after the stream stopped.
-            return
-        if not self.active:
-            self.active = True
-            self._last_seq = -1
-            self._pilot_mode = self._enter_pilot_mode()
-            self._emit("manual", "manual control from the browser started", 5)
+            return None
+        now = self._clock()
+        axes = frame.axes
+        values = (axes.x, axes.y, axes.z, axes.r, axes.buttons)
+        if values != self._last_values or not _off_centre(frame):
+            self._changed_at = now
+        self._last_values = values
+        self._frozen_source = frame.source in FREEZABLE_SOURCES
         self._last_at = now
         self._last_seq = frame.seq
-        axes = frame.axes
+        pressed = axes.buttons & ~self._buttons
+        self._buttons = axes.buttons
+        if pressed:
+            self._pressed.append(pressed)
         self._link.send(
             mavlink2.MAVLink_manual_control_message(
                 self._link.target_system, axes.x, axes.y, axes.z, axes.r, axes.buttons
             )
         )
         self.sent += 1
-
-    def _enter_pilot_mode(self) -> str | None:
-        """Switch to a mode that flies stick input (fire and forget: the heartbeat says
-        whether it took; MANUAL_CONTROL in another mode is ignored by the autopilot)."""
-        modes = self._link.modes
-        if modes is None:
+        if now - self._echoed_at < self.timeouts.echo_s:
             return None
-        for name in PILOT_MODES:
-            setting = modes.settings.get(name)
-            if setting is not None:
-                self._link.send_command_long(
-                    mavlink2.MAV_CMD_DO_SET_MODE,
-                    0,
-                    [setting.base_mode, setting.custom_mode, setting.custom_sub_mode],
-                )
-                return name
-        return None
+        self._echoed_at = now
+        return ManualApplied(seq=frame.seq, sent_ms=frame.sent_ms)
 
     def _on_message(self, message: MavMessage) -> None:
         if not self.active or message.get_type() != "HEARTBEAT":
@@ -125,23 +277,59 @@ class ManualPilot:
         mode = mode_name(message)
         if self._pilot_mode is not None and self._seen_pilot_mode and mode != self._pilot_mode:
             self.active = False
-            self._overridden = True
             self._emit("manual", f"manual control ended: the vehicle changed to {mode}", 4)
         elif mode == self._pilot_mode:
             self._seen_pilot_mode = True
 
     async def check(self) -> None:
-        """The deadman: hold when the stream stopped."""
-        if not self.active or self._clock() - self._last_at <= self.timeouts.deadman_s:
+        """The deadman and the frozen-input watch; the buttons pressed since last time."""
+        if not self.active:
             return
+        now = self._clock()
+        silence = now - self._last_at
+        if silence > self.timeouts.deadman_s:
+            await self._hold(f"manual input stopped for {silence:.2f} s: holding")
+            return
+        if self._frozen_source and now - self._changed_at > self.timeouts.frozen_s:
+            await self._hold(
+                f"manual input frozen: the same off-centre values for "
+                f"{now - self._changed_at:.1f} s: holding"
+            )
+            return
+        while self._pressed and self.active:
+            await self._button(self._pressed.pop(0))
+
+    async def _hold(self, why: str) -> None:
         self.active = False
-        self._seen_pilot_mode = False
-        silence = self._clock() - self._last_at
-        log.warning("manual input stopped for %.2f s: holding", silence)
-        self._emit("manual", f"manual input stopped for {silence:.2f} s: holding", 4)
+        log.warning("%s", why)
+        self._emit("manual", why, ENDED_SEVERITY)
         outcome = await self._executor.execute(HoldCommand())
         if outcome.status != "accepted":
             self._emit("manual", f"hold after manual input refused: {outcome.message}", 2)
+
+    async def _button(self, pressed: int) -> None:
+        if pressed & BUTTON_HOLD:
+            await self._hold("hold button pressed: holding, manual control given back")
+            return
+        if not pressed & BUTTON_SELECT:
+            return
+        heartbeat = self._link.latest.get("HEARTBEAT")
+        position = self._link.latest.get("GLOBAL_POSITION_INT")
+        altitude = position.relative_alt / 1000.0 if position is not None else 0.0
+        if altitude >= SELECT_BELOW_M:
+            self._emit("manual", f"select ignored at {altitude:.1f} m (acts below 3 m)", 5)
+            return
+        if not is_armed(heartbeat):
+            outcome = await self._executor.execute(ArmCommand())
+            action = "arm"
+        elif self._executor.airborne():
+            # ArduPilot and PX4 disarm by themselves once landed.
+            outcome = await self._executor.execute(LandCommand())
+            action = "land"
+        else:
+            outcome = await self._executor.execute(DisarmCommand())
+            action = "disarm"
+        self._emit("manual", f"select: {action}: {outcome.message}", 5)
 
     async def run(self) -> None:
         while True:

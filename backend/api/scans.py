@@ -234,8 +234,9 @@ async def point_map(
     openapi_extra=requires(Permission.READ),
 )
 async def obstacles(hub: HubDep) -> list[ObstacleBody]:
-    """Clusters in the point map (above the ground), with their extents in site ENU."""
-    found = await asyncio.to_thread(hub.scans.point_map.obstacles)
+    """Clusters in the point map (above the ground), with their extents in site ENU; an
+    obstacle keeps its id while it is seen (found and gone are events, kind "obstacle")."""
+    found = await hub.refresh_obstacles()
     site = hub.scans.site
     if site is None:
         return []

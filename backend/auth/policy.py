@@ -153,6 +153,7 @@ AGENT_MESSAGE_PERMISSIONS: dict[str, Permission] = {
     "command_result": Permission.AGENT,
     "unavailable": Permission.AGENT,
     "pong": Permission.AGENT,
+    "manual_applied": Permission.AGENT,
 }
 
 

@@ -2,8 +2,10 @@
 
 Pure bookkeeping with an injected clock; the live feed applies it and audits the
 changes. The hub forwards a manual-input frame only when ``admit`` says so: the lease
-holder's own frame, newer than the last (newest wins), at most ``max_rate_hz``.
-Leases live only in memory, so a hub restart leaves none active.
+holder's own frame, newer than the last (newest wins); the relay caps the rate.
+Leases live only in memory, so a hub restart leaves none active; the audit log tells
+the restarted hub which were open, and it reports those as revoked
+(backend/realtime/manual_control.py).
 """
 
 from __future__ import annotations
@@ -14,6 +16,7 @@ from dataclasses import dataclass, field
 
 from backend.auth.policy import Permission, Principal, authorize
 from backend.errors import Forbidden
+from protocol.messages import LeaseState
 
 
 @dataclass(frozen=True)
@@ -36,6 +39,11 @@ class Lease:
     expires_at: float  # on the book's clock
     last_seq: int = -1
     last_input_at: float | None = None
+    # The agent is still checking the autopilot and entering the pilot mode: the lease
+    # is reserved (a second operator is refused) but does not expire meanwhile.
+    starting: bool = False
+    # A mission was flying when the lease began: this mode resumes it.
+    resume_mode: str | None = None
 
 
 @dataclass
@@ -55,14 +63,40 @@ class LeaseBook:
     limits: LeaseLimits = field(default_factory=LeaseLimits)
     clock: Callable[[], float] = time.monotonic
     refused: RefusalCounts = field(default_factory=RefusalCounts)
+    # The last lease state said of each vehicle, for dashboards that connect later.
+    last_states: dict[str, LeaseState] = field(default_factory=dict)
     _leases: dict[str, Lease] = field(default_factory=dict)
 
     def holder(self, vehicle_id: str) -> Lease | None:
         lease = self._leases.get(vehicle_id)
-        if lease is not None and self.clock() >= lease.expires_at:
-            del self._leases[vehicle_id]
-            return None
+        if lease is not None and not lease.starting and self.clock() >= lease.expires_at:
+            return None  # expired: expired() takes it away and the hub says so
         return lease
+
+    def expired(self) -> list[Lease]:
+        """Take away the leases whose input stopped renewing them."""
+        now = self.clock()
+        gone = [
+            lease
+            for lease in self._leases.values()
+            if not lease.starting and now >= lease.expires_at
+        ]
+        for lease in gone:
+            del self._leases[lease.vehicle_id]
+        return gone
+
+    def current(self) -> list[Lease]:
+        return [lease for v in list(self._leases) if (lease := self.holder(v)) is not None]
+
+    def started(self, lease: Lease) -> None:
+        """The agent opened browser control: input now renews the lease."""
+        lease.starting = False
+        lease.expires_at = self.clock() + self.limits.expiry_s
+
+    def cancel(self, lease: Lease) -> None:
+        """The agent refused to open browser control: the reservation goes."""
+        if self._leases.get(lease.vehicle_id) is lease:
+            del self._leases[lease.vehicle_id]
 
     def acquire(self, vehicle_id: str, principal: Principal) -> Lease:
         """Grant the lease to an operator; the holder asking again just renews it."""
@@ -73,7 +107,7 @@ class LeaseBook:
         if lease is not None and lease.holder != principal.name:
             raise LeaseRefused(f"{vehicle_id} is flown by hand by {lease.holder}")
         if lease is None:
-            lease = Lease(vehicle_id, principal.name, principal.token_id, 0.0)
+            lease = Lease(vehicle_id, principal.name, principal.token_id, 0.0, starting=True)
             self._leases[vehicle_id] = lease
         lease.expires_at = self.clock() + self.limits.expiry_s
         return lease
@@ -97,18 +131,16 @@ class LeaseBook:
     def admit(self, vehicle_id: str, user: str, seq: int) -> Lease:
         """Whether a manual-input frame may be forwarded; renews the lease if so."""
         lease = self.holder(vehicle_id)
-        if lease is None or lease.holder != user:
+        if lease is None or lease.holder != user or lease.starting:
             self.refused.no_lease += 1
             raise LeaseRefused(f"{user} does not hold the manual-control lease of {vehicle_id}")
         if seq <= lease.last_seq:
             self.refused.old_seq += 1
             raise LeaseRefused(f"seq: {seq} is not newer than {lease.last_seq}")
+        # Input faster than max_rate_hz is admitted here and collapses to its newest
+        # frame in the relay (backend/realtime/manual_relay.py), which counts the rest
+        # in refused.too_fast: a refusal here would keep a burst's oldest frame instead.
         now = self.clock()
-        if lease.last_input_at is not None and now - lease.last_input_at < (
-            1.0 / self.limits.max_rate_hz
-        ):
-            self.refused.too_fast += 1
-            raise LeaseRefused(f"input faster than {self.limits.max_rate_hz:.0f} Hz")
         lease.last_seq = seq
         lease.last_input_at = now
         lease.expires_at = now + self.limits.expiry_s

@@ -14,9 +14,9 @@ from backend.auth.credentials import bearer_token
 from backend.auth.policy import AGENT_MESSAGE_PERMISSIONS, Principal, authorize_message
 from backend.errors import Forbidden
 from backend.fleet.commands import AgentChannel
+from backend.realtime import manual_control
 from backend.realtime.agent_admission import Clash, judge
 from backend.realtime.bus import Topic
-from backend.realtime.client_feed import announce_lease
 from backend.realtime.collaborators import GatewayServices
 from backend.realtime.frames import FrameTooLarge, PeerConnection
 from backend.storage.records import LostFrames, StoredEvent, TelemetryEnvelope
@@ -30,6 +30,7 @@ from protocol.messages import (
     Event,
     Hello,
     LiveState,
+    ManualApplied,
     Ping,
     Pong,
     ProtocolError,
@@ -346,17 +347,16 @@ class AgentSession(PeerConnection):
                     )
             case Pong():
                 pass  # its arrival answered answers_within()
+            case ManualApplied(seq=seq, sent_ms=sent_ms):
+                await manual_control.echo(self.hub, hello.vehicle_id, seq, sent_ms)
             case Hello():
                 await self.reject(
                     ErrorReply(code="unexpected_message", message="hello was already received")
                 )
 
     async def _end_manual_control(self, vehicle_id: str, why: str) -> None:
-        """The agent ended browser control (deadman hold, the RC pilot's mode change):
-        the lease goes with it, so the stream cannot quietly take the vehicle back."""
-        if self.hub.leases.revoke(vehicle_id) is not None:
-            log.info("manual-control lease of %s ended: %s", vehicle_id, why)
-            await announce_lease(self.hub, vehicle_id, why)
+        """The agent ended browser control (deadman hold, the RC pilot's mode change)."""
+        await manual_control.end_on_vehicle(self.hub, vehicle_id, why)
 
     async def _ingest_scan(self, hello: Hello, data: bytes) -> None:
         """A binary frame is a LIDAR scan. A refused one is counted in the vehicle's scan

@@ -18,10 +18,11 @@ from backend.auth.policy import (
     authorize,
     authorize_message,
 )
-from backend.control.lease import LeaseRefused
+from backend.control.lease import Lease, LeaseRefused
 from backend.errors import Forbidden, VehicleNotFound
+from backend.realtime import manual_control
 from backend.realtime.bus import LatestSubscription, Topic
-from backend.realtime.collaborators import FeedServices, GatewayServices
+from backend.realtime.collaborators import FeedServices
 from backend.realtime.frames import FrameTooLarge, PeerConnection
 from backend.realtime.live_events import EventSubscription
 from backend.realtime.manual_relay import ManualRelay
@@ -32,7 +33,6 @@ from protocol.messages import (
     ControlRequest,
     ErrorReply,
     FleetSnapshot,
-    LeaseState,
     ManualFrame,
     ManualInput,
     Ping,
@@ -99,7 +99,9 @@ class ClientFeed(PeerConnection):
         self.hub = hub
         self.user = ""
         self.token_id: int | None = None
-        self._manual = ManualRelay(hub.registry)
+        self._manual = ManualRelay(
+            hub.registry, hub.leases.limits.max_rate_hz, on_collapse=self._count_collapse
+        )
         self.scans = ScanSubscription()
 
     async def serve(self) -> None:
@@ -140,6 +142,10 @@ class ClientFeed(PeerConnection):
         try:
             fleet = [record.summary() for record in self.hub.registry.all()]
             await self.send(FleetSnapshot(vehicles=fleet))
+            # Who flies what by hand, and how the last leases ended (a hub restart's
+            # revocations among them).
+            for state in list(self.hub.leases.last_states.values()):
+                await self.send(state)
             sent = {summary.id: _info(summary) for summary in fleet}
             async with asyncio.TaskGroup() as tasks:
                 pusher = tasks.create_task(self._push(updates, sent))
@@ -265,22 +271,37 @@ class ClientFeed(PeerConnection):
             if "lease" in refusal.message:
                 await self.send(ErrorReply(code="forbidden", message=refusal.message))
             return
-        self._manual.put(message.vehicle_id, ManualFrame(seq=message.seq, axes=message.axes))
+        self._manual.put(
+            message.vehicle_id,
+            # Its fields were validated as the ManualInput arrived: the hot path (25 Hz
+            # per pilot) builds the relayed frame without validating them again.
+            ManualFrame.model_construct(
+                type="manual",
+                seq=message.seq,
+                axes=message.axes,
+                source=message.source,
+                sent_ms=message.sent_ms,
+            ),
+        )
+
+    def _count_collapse(self) -> None:
+        self.hub.leases.refused.too_fast += 1
 
     async def _control(self, message: ControlRequest) -> None:
         vehicle_id = message.vehicle_id
         leases = self.hub.leases
         outcome, reason = "ok", ""
+        ended: Lease | None = None
         try:
             if self.hub.registry.get(vehicle_id).channel is None:
                 raise LeaseRefused(f"{vehicle_id} is offline")
             if message.action == "acquire":
-                leases.acquire(vehicle_id, self.principal)
+                lease = await manual_control.acquire(self.hub, vehicle_id, self.principal)
             elif message.action == "release":
-                leases.release(vehicle_id, self.principal)
+                ended = leases.release(vehicle_id, self.principal)
                 reason = f"released by {self.user}"
             else:
-                leases.revoke(vehicle_id, self.principal)
+                ended = leases.revoke(vehicle_id, self.principal)
                 reason = f"revoked by {self.user}"
         except (Forbidden, VehicleNotFound) as refusal:
             outcome = "refused"
@@ -296,15 +317,9 @@ class ClientFeed(PeerConnection):
                 {"action": message.action, "reason": reason},
             )
         )
-        if outcome == "ok":
-            await announce_lease(self.hub, vehicle_id, reason)
-
-
-async def announce_lease(hub: FeedServices | GatewayServices, vehicle_id: str, reason: str) -> None:
-    """Tell every dashboard who flies ``vehicle_id`` by hand now."""
-    lease = hub.leases.holder(vehicle_id)
-    state = LeaseState(vehicle_id=vehicle_id, holder=lease.holder if lease else None, reason=reason)
-    for feed in list(hub.client_feeds):
-        if isinstance(feed, ClientFeed):
-            with contextlib.suppress(RuntimeError, OSError, WebSocketDisconnect):
-                await feed.send(state)
+        if outcome != "ok":
+            return
+        if message.action == "acquire":
+            await manual_control.announce(self.hub, manual_control.lease_state(lease))
+        elif ended is not None:
+            await manual_control.end(self.hub, ended, reason, stop_vehicle=True)

@@ -9,7 +9,7 @@ sessions by the two connection types, so it never imports the sessions either.
 from __future__ import annotations
 
 import asyncio
-from typing import Protocol
+from typing import Protocol, runtime_checkable
 
 from backend.audit import AuditEntry
 from backend.auth.accounts import Accounts
@@ -21,6 +21,7 @@ from backend.settings import HubSettings
 from backend.storage.records import StoredEvent
 from backend.storage.repository import Repository
 from backend.storage.sequences import Gap, StreamKey
+from protocol.messages import Message
 
 
 class AgentConnection(Protocol):
@@ -56,6 +57,14 @@ class ClientConnection(Protocol):
     async def close(self, code: int, reason: str) -> None: ...
 
 
+@runtime_checkable
+class LeaseListener(Protocol):
+    """A client connection that is told who flies each vehicle by hand (the live feed;
+    the 3D view's relay is not)."""
+
+    async def send(self, message: Message) -> None: ...
+
+
 class FeedServices(Protocol):
     """What a client feed uses of the hub."""
 
@@ -76,6 +85,9 @@ class FeedServices(Protocol):
 
     @property
     def leases(self) -> LeaseBook: ...
+
+    @property
+    def dispatcher(self) -> CommandDispatcher: ...
 
     async def record(self, entry: AuditEntry) -> None: ...
 
@@ -115,6 +127,8 @@ class GatewayServices(Protocol):
 
     @property
     def scans(self) -> ScanIngest: ...
+
+    async def record(self, entry: AuditEntry) -> None: ...
 
     async def store_event(
         self, vehicle_id: str, kind: str, text: str, severity: int | None = None

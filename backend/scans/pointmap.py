@@ -42,6 +42,7 @@ class PointMap:
         self.max_voxels = max_voxels
         self._voxels: dict[int, float] = {}
         self.evicted = 0
+        self.version = 0  # counts changes: a reader redraws only a map that changed
 
     def __len__(self) -> int:
         return len(self._voxels)
@@ -49,6 +50,7 @@ class PointMap:
     def add(self, enu: Array, time: float) -> None:
         if not len(enu):
             return
+        self.version += 1
         cells = np.floor(enu / self.voxel_m).astype(np.int64) + _BIAS
         cells = cells[np.all((cells >= 0) & (cells <= _MASK), axis=1)]
         keys = np.unique((cells[:, 0] << (2 * _BITS)) | (cells[:, 1] << _BITS) | cells[:, 2])
@@ -72,44 +74,49 @@ class PointMap:
 
     def obstacles(self, min_voxels: int = 5) -> list[MapObstacle]:
         """Clusters of occupied ground cells (8-connected), ground itself left out."""
-        points = self.points()
-        above = points[points[:, 2] >= GROUND_CLEARANCE_M]
-        if not len(above):
-            return []
-        cells = np.floor(above[:, :2] / self.voxel_m).astype(np.int64)
-        by_cell: dict[tuple[int, int], list[int]] = {}
-        for i, (x, y) in enumerate(cells.tolist()):
-            by_cell.setdefault((x, y), []).append(i)
-        seen: set[tuple[int, int]] = set()
-        found: list[MapObstacle] = []
-        for cell in by_cell:
-            if cell in seen:
-                continue
-            seen.add(cell)
-            stack, members = [cell], []
-            while stack:
-                x, y = stack.pop()
-                members.extend(by_cell[(x, y)])
-                for dx, dy in NEIGHBOURS:
-                    near = (x + dx, y + dy)
-                    if near in by_cell and near not in seen:
-                        seen.add(near)
-                        stack.append(near)
-            if len(members) < min_voxels:
-                continue
-            group = above[members]
-            low, high = group.min(axis=0), group.max(axis=0)
-            half = self.voxel_m / 2.0
-            found.append(
-                MapObstacle(
-                    len(found) + 1,
-                    float(low[0] - half),
-                    float(high[0] + half),
-                    float(low[1] - half),
-                    float(high[1] + half),
-                    float(low[2] - half),
-                    float(high[2] + half),
-                    len(members),
-                )
+        return find_obstacles(self.points(), self.voxel_m, min_voxels)
+
+
+def find_obstacles(points: Array, voxel_m: float, min_voxels: int = 5) -> list[MapObstacle]:
+    """The obstacles of a copy of the map's points (``PointMap.points``): a caller may
+    search them off the event loop while the map goes on growing."""
+    above = points[points[:, 2] >= GROUND_CLEARANCE_M]
+    if not len(above):
+        return []
+    cells = np.floor(above[:, :2] / voxel_m).astype(np.int64)
+    by_cell: dict[tuple[int, int], list[int]] = {}
+    for i, (x, y) in enumerate(cells.tolist()):
+        by_cell.setdefault((x, y), []).append(i)
+    seen: set[tuple[int, int]] = set()
+    found: list[MapObstacle] = []
+    for cell in by_cell:
+        if cell in seen:
+            continue
+        seen.add(cell)
+        stack, members = [cell], []
+        while stack:
+            x, y = stack.pop()
+            members.extend(by_cell[(x, y)])
+            for dx, dy in NEIGHBOURS:
+                near = (x + dx, y + dy)
+                if near in by_cell and near not in seen:
+                    seen.add(near)
+                    stack.append(near)
+        if len(members) < min_voxels:
+            continue
+        group = above[members]
+        low, high = group.min(axis=0), group.max(axis=0)
+        half = voxel_m / 2.0
+        found.append(
+            MapObstacle(
+                len(found) + 1,
+                float(low[0] - half),
+                float(high[0] + half),
+                float(low[1] - half),
+                float(high[1] + half),
+                float(low[2] - half),
+                float(high[2] + half),
+                len(members),
             )
-        return found
+        )
+    return found

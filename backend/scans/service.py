@@ -8,15 +8,21 @@ vehicle's diagnostics; the agent's connection survives either way):
    return" and counted, so no point is ever placed at infinity.
 2. Time: more than `FUTURE_LIMIT_S` ahead of the hub's clock, or older than
    `PAST_LIMIT_S` (the agent keeps ten minutes), is refused.
-3. Rate: live scans beyond ``scan_max_rate_hz`` per vehicle are refused. Replayed scans
-   (after an outage) are paced by storage instead: the store's queue is bounded and
-   waits, so backpressure reaches the agent.
+3. Rate: live scans beyond ``scan_max_rate_hz`` per vehicle are refused, counted on the
+   scans' own times, not on their arrival: a hub that stalls (its store applying
+   backpressure while an outage's backlog replays) reads a second's worth of a 10 Hz
+   sensor's scans in a burst, and those are not too many. An agent that spaces fake
+   times to pass reaches the future limit within seconds. Replayed scans (after an
+   outage) are paced by storage instead: the store's queue is bounded and waits, so
+   backpressure reaches the agent.
 4. The vehicle: a scan arrives on an agent's own connection, whose token was checked
    against its vehicle id at the hello; a frame has no vehicle id of its own, so one
    agent cannot send scans for another.
 
 Then it is queued for the store (every scan), placed in the point map, and, if live,
-published for subscribers, newest wins per vehicle.
+published for subscribers, newest wins per vehicle. Obstacles are extracted from the map
+now and then (`refresh_obstacles`) and tracked, so that each keeps an id and its
+appearing and going can be published as events.
 """
 
 from __future__ import annotations
@@ -31,6 +37,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from backend.realtime.bus import Bus, Topic
+from backend.scans.obstacles import ObstacleChanges, ObstacleTracker
 from backend.scans.pointmap import PointMap
 from backend.scans.points import WorldPoints, world_points
 from backend.storage.scans import ScanRepository, StoredScan
@@ -102,6 +109,11 @@ class ScanService:
         self._recent: dict[str, deque[float]] = {}
         self._queue: asyncio.Queue[StoredScan] = asyncio.Queue(queue_limit)
         self._clock = clock
+        self.obstacles = ObstacleTracker()
+        self.mapped_by: str | None = None  # the vehicle whose scan last went into the map
+        self._map_changes = 0
+        self._obstacles_at = -1  # the map change the obstacles were last found at
+        self._obstacle_lock = asyncio.Lock()
 
     def diagnostics_of(self, vehicle_id: str) -> ScanDiagnostics:
         return self.diagnostics.setdefault(vehicle_id, ScanDiagnostics())
@@ -118,6 +130,8 @@ class ScanService:
         site = self.site_for(frame)
         points = world_points(frame, site)
         self.point_map.add(points.enu, frame.utc_time)
+        self.mapped_by = vehicle_id
+        self._map_changes += 1
         stored = StoredScan(vehicle_id, stream_id, frame.seq, frame.utc_time, frame.beams, data)
         await self._queue.put(stored)  # reliable: waits when the store is behind
         if frame.replayed:
@@ -128,6 +142,16 @@ class ScanService:
             delivery = ScanDelivery(vehicle_id, client_scan_frame(vehicle_id, data))
             await self.bus.publish(Topic.SCANS, vehicle_id, delivery)
         return frame
+
+    async def refresh_obstacles(self) -> ObstacleChanges:
+        """The obstacles in the point map now, matched to the last ones found (in a
+        thread: clustering a full map takes a while); no work if the map is unchanged."""
+        async with self._obstacle_lock:
+            if self._obstacles_at == self._map_changes:
+                return ObstacleChanges(self.obstacles.current, [], [])
+            self._obstacles_at = self._map_changes
+            found = await asyncio.to_thread(self.point_map.obstacles)
+            return self.obstacles.update(found)
 
     def site_for(self, frame: ScanFrame) -> LocalFrame:
         """The site's frame; without a configured origin, the first scan's position
@@ -152,13 +176,18 @@ class ScanService:
             raise ScanRejected("time_past", f"utc_time: {now - frame.utc_time:.0f} s in the past")
         if not frame.replayed:
             recent = self._recent.setdefault(vehicle_id, deque())
-            while recent and recent[0] <= now - 1.0:
-                recent.popleft()
+            at = frame.utc_time
+            while recent and (recent[0] <= at - 1.0 or recent[-1] > at):
+                # out of the window, or after this scan: the agent's clock stepped back
+                if recent[0] <= at - 1.0:
+                    recent.popleft()
+                else:
+                    recent.pop()
             if len(recent) >= self.max_rate_hz:
                 raise ScanRejected(
                     "rate", f"more than {self.max_rate_hz:g} scans/s from {vehicle_id}"
                 )
-            recent.append(now)
+            recent.append(at)
         ranges = np.frombuffer(frame.ranges, dtype=np.uint16)  # a view: writes go through
         beyond = ranges > round(frame.range_max_m / frame.range_scale)
         if beyond.any():

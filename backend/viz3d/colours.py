@@ -1,5 +1,6 @@
 """One colour per vehicle, from its id: the same on the 2D map and in the 3D view
-(frontend/src/viz3d/colours.ts computes it the same way; a test checks they agree)."""
+(frontend/src/viz3d/colours.ts computes it the same way; no test yet checks that the two
+agree, and the 2D map does not use it yet)."""
 
 from __future__ import annotations
 

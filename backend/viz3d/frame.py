@@ -12,8 +12,9 @@ from collections import Counter
 
 import numpy as np
 import numpy.typing as npt
+from pymap3d.ecef import geodetic2ecef
 
-from common.geodesy import GeoPoint, LocalFrame
+from common.geodesy import WGS84, GeoPoint, LocalFrame
 from protocol.messages import VehicleState
 
 # Farther than this from the origin is not a fleet we can draw truthfully (the tangent
@@ -124,3 +125,33 @@ def attitude_wxyz(
             cr * cp * sy - sr * sp * cy,
         ]
     )
+
+
+def _enu_axes(origin: GeoPoint) -> Vector:
+    """(3, 3) rows: the origin's east, north and up unit vectors in ECEF."""
+    lat, lon = math.radians(origin.lat), math.radians(origin.lon)
+    return np.array(
+        [
+            [-math.sin(lon), math.cos(lon), 0.0],
+            [-math.sin(lat) * math.cos(lon), -math.sin(lat) * math.sin(lon), math.cos(lat)],
+            [math.cos(lat) * math.cos(lon), math.cos(lat) * math.sin(lon), math.sin(lat)],
+        ]
+    )
+
+
+def reframe(points: npt.NDArray[np.floating], source: LocalFrame, target: LocalFrame) -> Vector:
+    """(n, 3) east-north-up points of one local frame, in another: the scans' site frame
+    may have another origin than the scene's. Both are rotations of ECEF about their
+    origins, so this is one exact rigid transform (no per-point geodesy): a scan's 720
+    points cost microseconds."""
+    points = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+    if source.origin == target.origin or not len(points):
+        return points
+    s, t = source.origin, target.origin
+    source_axes, target_axes = _enu_axes(s), _enu_axes(t)
+    offset = np.array(geodetic2ecef(s.lat, s.lon, s.alt, WGS84)) - np.array(
+        geodetic2ecef(t.lat, t.lon, t.alt, WGS84)
+    )
+    ecef = points @ source_axes + offset  # relative to the target's origin
+    moved: Vector = ecef @ target_axes.T
+    return moved

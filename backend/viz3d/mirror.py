@@ -4,30 +4,55 @@ Vehicle changes arrive on the bus as they happen (50 vehicles at 10 Hz is 500 a 
 The mirror takes them newest-wins per vehicle, and at most once per period applies what
 has changed as one atomic scene update: the browser gets a bounded number of updates a
 second whatever the fleet's size and rate, and never a stale state before a newer one.
+Scans are taken the same way (each vehicle's newest, at most once per period), and the
+accumulated point map, which only grows slowly, less often.
 """
 
 from __future__ import annotations
 
 import asyncio
 import logging
+import time
 
 from backend.fleet.registry import FleetRegistry
 from backend.realtime.bus import Bus, LatestSubscription, Topic
+from backend.scans.pointmap import Array, find_obstacles
+from backend.scans.service import ScanDelivery, ScanService
 from backend.viz3d.scene import FleetScene
+from common.geodesy import LocalFrame
 
 log = logging.getLogger(__name__)
+
+# The point map is redrawn at most this often, and only its newest voxels: it is the
+# scene's heaviest message, and it changes little from one second to the next.
+POINT_MAP_INTERVAL_S = 2.0
+POINT_MAP_MAX_POINTS = 100_000
+POINT_MAP_SHARE = 10.0
 
 
 class SceneMirror:
     def __init__(
-        self, scene: FleetScene, bus: Bus, registry: FleetRegistry, interval_s: float
+        self,
+        scene: FleetScene,
+        bus: Bus,
+        registry: FleetRegistry,
+        interval_s: float,
+        scans: ScanService | None = None,
     ) -> None:
         self.scene = scene
         self.bus = bus
         self.registry = registry
         self.interval_s = interval_s
+        self.scans = scans
 
     async def run(self) -> None:
+        async with asyncio.TaskGroup() as tasks:
+            tasks.create_task(self._vehicles())
+            if self.scans is not None:
+                tasks.create_task(self._scans(self.scans))
+                tasks.create_task(self._point_map(self.scans))
+
+    async def _vehicles(self) -> None:
         updates = LatestSubscription()
         # Subscribe before reading the registry, so no change falls between the two.
         self.bus.subscribe(Topic.VEHICLE_STATE, updates)
@@ -43,3 +68,44 @@ class SceneMirror:
                 await asyncio.sleep(self.interval_s)
         finally:
             self.bus.unsubscribe(Topic.VEHICLE_STATE, updates)
+
+    async def _scans(self, scans: ScanService) -> None:
+        updates = LatestSubscription()
+        self.bus.subscribe(Topic.SCANS, updates)
+        try:
+            while True:
+                deliveries: list[ScanDelivery] = await updates.drain()
+                await asyncio.to_thread(self._show_scans, scans, deliveries)
+                await asyncio.sleep(self.interval_s)
+        finally:
+            self.bus.unsubscribe(Topic.SCANS, updates)
+
+    def _show_scans(self, scans: ScanService, deliveries: list[ScanDelivery]) -> None:
+        site = scans.site
+        if site is None:
+            return
+        with self.scene.batch():
+            for delivery in deliveries:
+                # The service's newest scan of the vehicle, its points already placed
+                # (at least as new as the delivery that woke us).
+                if (latest := scans.latest.get(delivery.vehicle_id)) is not None:
+                    self.scene.show_scan(delivery.vehicle_id, latest.points.enu, site)
+
+    def _show_point_map(self, points: Array, voxel_m: float, site: LocalFrame) -> None:
+        self.scene.show_point_map(points, find_obstacles(points, voxel_m), site)
+
+    async def _point_map(self, scans: ScanService) -> None:
+        drawn = -1
+        while True:
+            point_map = scans.point_map
+            took = 0.0
+            if point_map.version != drawn and scans.site is not None:
+                drawn = point_map.version
+                # Copied here, on the loop that adds to it; searched and drawn in a thread.
+                points = point_map.points(limit=POINT_MAP_MAX_POINTS)
+                started = time.monotonic()
+                await asyncio.to_thread(self._show_point_map, points, point_map.voxel_m, scans.site)
+                took = time.monotonic() - started
+            # The obstacle search is pure Python (seconds over a large map): waiting ten
+            # times as long as it took keeps it to a tenth of a core, GIL included.
+            await asyncio.sleep(max(POINT_MAP_INTERVAL_S, POINT_MAP_SHARE * took))

@@ -10,7 +10,8 @@ from __future__ import annotations
 
 import threading
 from collections import deque
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Iterator, Sequence
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -18,8 +19,10 @@ import numpy.typing as npt
 import viser
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
+from backend.scans.pointmap import MapObstacle
 from backend.viz3d.colours import rgb, vehicle_colour
-from backend.viz3d.frame import SceneFrame, Vector, attitude_wxyz
+from backend.viz3d.frame import SceneFrame, Vector, attitude_wxyz, reframe
+from common.geodesy import LocalFrame
 from protocol.messages import MissionItem, VehicleSummary
 
 # A flat arrowhead, 2 m long, pointing along the body's forward (x) axis.
@@ -32,6 +35,10 @@ _BODY_FACES = np.array([[0, 1, 2], [0, 2, 3], [0, 4, 1], [0, 3, 4], [1, 4, 2], [
 # does not fill with copies of one point.
 TRAIL_STEP_M = 0.25
 MAX_TRAIL_POINTS = 2_000
+# A trail is sent whole (viser cannot append to a line), so it is redrawn at most this
+# often per vehicle: 50 trails rebuilt at every 10 Hz batch were most of a batch's cost
+# (bench/bench_viz.py). The model itself moves at every batch; its trail follows it.
+TRAIL_REDRAW_S = 0.5
 # RTL, LAND and TAKEOFF fly from where they are.
 NOT_MISSION_POSITIONS = frozenset(
     {mavlink2.MAV_CMD_NAV_RETURN_TO_LAUNCH, mavlink2.MAV_CMD_NAV_LAND, mavlink2.MAV_CMD_NAV_TAKEOFF}
@@ -51,11 +58,16 @@ VEHICLES = Layer("vehicles", "Vehicles")
 TRAILS = Layer("trails", "Trails")
 HOMES = Layer("homes", "Homes")
 MISSIONS = Layer("missions", "Missions")
-# Layers whose data comes with later features. Each appears in the panel when its first
-# data is drawn through `show_points` (scans, the point map) or a method of its own
-# (survey lanes, the mosaic plane, formation slots), never before.
+# Layers of the sensors' data: each appears in the panel when its first data is drawn
+# (a vehicle's latest scan, the accumulated point map, the obstacles found in it), never
+# before. Survey lanes, the mosaic plane and formation slots will join them the same way
+# when their features exist.
 SCANS = Layer("scans", "LIDAR scans")
 POINT_MAP = Layer("point_map", "Point map")
+OBSTACLES = Layer("obstacles", "Obstacles")
+POINT_MAP_COLOUR = (150, 150, 150)
+OBSTACLE_COLOUR = (255, 80, 0)
+MAX_OBSTACLES = 200
 
 
 @dataclass
@@ -65,6 +77,7 @@ class _Vehicle:
     colour: tuple[int, int, int]
     trail: deque[tuple[float, Vector]] = field(default_factory=deque)
     trail_handle: viser.LineSegmentsHandle | None = None
+    trail_drawn_at: float = float("-inf")
     home: viser.IcosphereHandle | None = None
     position: Vector | None = None
 
@@ -84,11 +97,12 @@ class FleetScene:
         # One group node per layer, made first, so the panel's checkbox hides the group.
         self._groups = {
             layer.key: server.scene.add_frame(f"/{layer.key}", show_axes=False)
-            for layer in (GRID, VEHICLES, TRAILS, HOMES, MISSIONS, SCANS, POINT_MAP)
+            for layer in (GRID, VEHICLES, TRAILS, HOMES, MISSIONS, SCANS, POINT_MAP, OBSTACLES)
         }
         self._mission_paths: dict[str, viser.LineSegmentsHandle] = {}
         self._next_waypoints: dict[str, viser.IcosphereHandle] = {}
         self._follow: dict[int, str] = {}  # viser client id -> vehicle id
+        self._obstacles: list[viser.BoxHandle] = []
         self.batches = 0
         server.scene.set_up_direction("+z")
         server.scene.configure_environment_map(hdri=None)  # no CDN: the scene is lit plainly
@@ -116,6 +130,12 @@ class FleetScene:
             self._follow_cameras()
             self._show_skipped()
             self.batches += 1
+
+    @contextmanager
+    def batch(self) -> Iterator[None]:
+        """Calls made inside reach the browser as one atomic update."""
+        with self._lock, self.server.atomic():
+            yield
 
     def vehicle_position(self, vehicle_id: str) -> Vector | None:
         vehicle = self._vehicles.get(vehicle_id)
@@ -180,13 +200,16 @@ class FleetScene:
     ) -> None:
         now = when if when is not None else (vehicle.trail[-1][0] if vehicle.trail else 0.0)
         trail = vehicle.trail
-        if trail and float(np.linalg.norm(trail[-1][1] - position)) < TRAIL_STEP_M:
+        if not trail or float(np.linalg.norm(trail[-1][1] - position)) >= TRAIL_STEP_M:
+            trail.append((now, position))
+            while trail and (trail[0][0] < now - self.trail_s or len(trail) > MAX_TRAIL_POINTS):
+                trail.popleft()
+        # Drawn when it has a point not drawn yet (one kept back by the pacing is drawn
+        # later, even if the vehicle has stopped), at most every TRAIL_REDRAW_S.
+        undrawn = bool(trail) and trail[-1][0] > vehicle.trail_drawn_at
+        if len(trail) < 2 or not undrawn or now - vehicle.trail_drawn_at < TRAIL_REDRAW_S:
             return
-        trail.append((now, position))
-        while trail and (trail[0][0] < now - self.trail_s or len(trail) > MAX_TRAIL_POINTS):
-            trail.popleft()
-        if len(trail) < 2:
-            return
+        vehicle.trail_drawn_at = now
         points = np.array([point for _, point in trail], dtype=np.float32)
         segments = np.stack([points[:-1], points[1:]], axis=1)
         if vehicle.trail_handle is None:
@@ -280,11 +303,8 @@ class FleetScene:
         colour: tuple[int, int, int],
         point_size: float = 0.15,
     ) -> None:
-        """Points already in the local frame (metres east, north, up), replacing the
-        layer's previous points under ``key``: the hook for a vehicle's latest LIDAR scan
-        (layer SCANS, key the vehicle) and the accumulated map (POINT_MAP). Scans reach
-        the hub as ranges from a pose; turning them into these points is the scans
-        feature's job, and its arrival adds the call."""
+        """Points already in the scene's frame (metres east, north, up), replacing the
+        layer's previous points under ``key``."""
         points = np.asarray(points_enu, dtype=np.float32).reshape(-1, 3)
         points = points[np.isfinite(points).all(axis=1)]
         with self._lock, self.server.atomic():
@@ -292,6 +312,51 @@ class FleetScene:
                 f"/{layer.key}/{key}", points, colors=colour, point_size=point_size
             )
             self._show_layer(layer)
+
+    def show_scan(
+        self, vehicle_id: str, points: npt.NDArray[np.floating], site: LocalFrame
+    ) -> bool:
+        """A vehicle's latest scan: its world points as the scans feature placed them
+        (``backend.scans.points``, each beam from the pose of its instant) in the site's
+        frame, moved into the scene's, in the vehicle's colour. False, and nothing drawn,
+        while the scene has no origin yet."""
+        if self.frame.local is None:
+            return False
+        local = reframe(points, site, self.frame.local)
+        self.show_points(SCANS, vehicle_id, local, rgb(vehicle_colour(vehicle_id)))
+        return True
+
+    def show_point_map(
+        self, points: npt.NDArray[np.floating], obstacles: Sequence[MapObstacle], site: LocalFrame
+    ) -> bool:
+        """The site's accumulated point map and the obstacles found in it, both in the
+        site's frame (``site``), moved into the scene's. False while it has no origin."""
+        if self.frame.local is None:
+            return False
+        local = self.frame.local
+        with self._lock, self.server.atomic():
+            if len(points):
+                self.show_points(POINT_MAP, "all", reframe(points, site, local), POINT_MAP_COLOUR)
+            for handle in self._obstacles:
+                handle.remove()
+            self._obstacles = []
+            # The largest first, and a bounded number: one box is one scene message.
+            for obstacle in sorted(obstacles, key=lambda o: -o.voxels)[:MAX_OBSTACLES]:
+                low = (obstacle.east_min, obstacle.north_min, obstacle.up_min)
+                high = (obstacle.east_max, obstacle.north_max, obstacle.up_max)
+                corners = reframe(np.array([low, high]), site, local)
+                self._obstacles.append(
+                    self.server.scene.add_box(
+                        f"/{OBSTACLES.key}/{obstacle.id}",
+                        color=OBSTACLE_COLOUR,
+                        dimensions=tuple(np.abs(corners[1] - corners[0]).tolist()),
+                        wireframe=True,
+                        position=corners.mean(axis=0),
+                    )
+                )
+            if obstacles:
+                self._show_layer(OBSTACLES)
+        return True
 
     # -- the panel ---------------------------------------------------------------
 

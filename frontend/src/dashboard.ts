@@ -12,6 +12,7 @@ import { PROTOCOL_VERSION } from "./generated/protocol";
 import type { Header } from "./header";
 import { FleetMap } from "./map";
 import { OpsPanels } from "./panels/opsPanels";
+import { PilotPanel } from "./pilot/pilotPanel";
 import { MissionTools } from "./missions";
 import { ReplayPanel } from "./replayPanel";
 import { type CurrentUser, type HubConfig, type HubToClient, can } from "./types";
@@ -50,6 +51,7 @@ export class Dashboard {
   private viz3d: Viz3dPane | null = null;
   private missions: MissionTools | null = null;
   private survey: SurveyPanel | null = null;
+  private pilot: PilotPanel | null = null;
   private expiryTimer: number | undefined;
   private stopped = false;
 
@@ -91,6 +93,7 @@ export class Dashboard {
       ops.select(id);
       missions.select(id);
       scans.follow(id);
+      pilot.select(id);
     };
     const map = new FleetMap(document.getElementById("map")!, config, (id) => select(id, false));
     const table = new FleetTable(
@@ -102,6 +105,15 @@ export class Dashboard {
     this.table = table;
     const ops = new OpsPanels(document.querySelector<HTMLElement>(".layout")!, can(user, "command") ? runCommand : null);
     this.ops = ops;
+    // The pilot view sits under the selected vehicle's panel; it sends on this socket.
+    const pilot = new PilotPanel(
+      user,
+      (message) => this.socket?.send(message) ?? false,
+      can(user, "command") ? runCommand : null,
+      (text) => header.showNotice(text),
+    );
+    ops.element.firstElementChild?.after(pilot.element);
+    this.pilot = pilot;
     this.viz3d = new Viz3dPane(document.getElementById("map")!);
     const missions = new MissionTools(map.leaflet, can(user, "command"));
     this.missions = missions;
@@ -121,6 +133,7 @@ export class Dashboard {
       table.update(changed);
       map.update(changed);
       ops.update(changed, removed);
+      pilot.update(changed);
       missions.update(changed);
       survey.update(changed);
       let online = 0;
@@ -148,6 +161,13 @@ export class Dashboard {
           survey.onSurvey(message);
           break;
         case "pong":
+          pilot.onPong(message.nonce);
+          break;
+        case "lease":
+          pilot.onLease(message);
+          break;
+        case "manual_echo":
+          pilot.onEcho(message);
           break;
       }
     };
@@ -183,6 +203,8 @@ export class Dashboard {
     this.replay = null;
     document.querySelector(".layout")?.classList.remove("flights-open");
     this.store = null;
+    this.pilot?.destroy();
+    this.pilot = null;
     this.ops?.destroy();
     this.ops = null;
     this.missions?.destroy();

@@ -6,7 +6,7 @@
 // value, the charts' x axis and the time display all use it. Playback advances it
 // by (real time elapsed × speed) each animation frame, and the marker's position
 // and heading are interpolated between the samples around it.
-import { fetchEvents, fetchFlightTelemetry, flightExportUrl } from "./api";
+import { apiUrl, fetchEvents, fetchFlightTelemetry, flightExportUrl } from "./api";
 import { formatAuditTime } from "./auditPanel";
 import { actionButton, element, field, setText } from "./dom";
 import { FlightList } from "./flightList";
@@ -14,6 +14,7 @@ import { MISSING, formatAltitude, formatSpeed } from "./format";
 import type { FleetMap } from "./map";
 import { ReplayCharts } from "./replayCharts";
 import { ReplayLayer, eventTone } from "./replayMap";
+import { ReplayScans } from "./replayScans";
 import { EventFeed } from "./events/eventFeed";
 import { EventLog } from "./events/eventLog";
 import { FlightTrack, formatClock, type ReplayState } from "./replayTrack";
@@ -27,10 +28,24 @@ export const REPLAY_SPEEDS = [1, 2, 5, 10, 30] as const;
 /** A frame later than this (a background tab) does not jump the replay ahead. */
 const MAX_FRAME_S = 0.25;
 
-const EXPORTS: { format: FlightExportFormat; label: string; title: string }[] = [
-  { format: "csv", label: "CSV", title: "Samples as CSV" },
-  { format: "geojson", label: "GeoJSON", title: "Track as GeoJSON" },
-  { format: "tlog", label: "tlog", title: "MAVLink telemetry log" },
+interface FlightExport {
+  format: FlightExportFormat | "ply";
+  label: string;
+  title: string;
+  url: (id: number) => string;
+}
+
+const EXPORTS: FlightExport[] = [
+  { format: "csv", label: "CSV", title: "Samples as CSV", url: (id) => flightExportUrl(id, "csv") },
+  { format: "geojson", label: "GeoJSON", title: "Track as GeoJSON", url: (id) => flightExportUrl(id, "geojson") },
+  { format: "tlog", label: "tlog", title: "MAVLink telemetry log", url: (id) => flightExportUrl(id, "tlog") },
+  // The LIDAR's world points of the flight, for CloudCompare or PDAL (none without scans).
+  {
+    format: "ply",
+    label: "Points",
+    title: "LIDAR world points as PLY",
+    url: (id) => apiUrl(`flights/${id}/points.ply`).toString(),
+  },
 ];
 
 type ReplayViewState = "empty" | "loading" | "ready" | "error";
@@ -65,6 +80,7 @@ export class ReplayPanel {
   private readonly list: FlightList;
   private readonly layer: ReplayLayer;
   private readonly charts: ReplayCharts;
+  private readonly scans: ReplayScans;
 
   private readonly view: HTMLElement;
   private readonly title: HTMLElement;
@@ -95,6 +111,7 @@ export class ReplayPanel {
     this.list = new FlightList((flight) => void this.load(flight));
     this.layer = new ReplayLayer(map.leaflet, (t) => this.seek(t));
     this.charts = new ReplayCharts((t) => this.seek(t));
+    this.scans = new ReplayScans(map.leaflet);
 
     this.title = element("h3", { className: "replay-title" });
     this.status = field("p", "replay-status", { className: "panel-status" });
@@ -236,9 +253,9 @@ export class ReplayPanel {
     this.list.select(flight.id);
     this.element.dataset.flightId = String(flight.id);
     this.title.textContent = `${flight.vehicle_id} · ${formatAuditTime(flight.start_time)}`;
-    for (const [index, { format }] of EXPORTS.entries()) {
+    for (const [index, { format, url }] of EXPORTS.entries()) {
       const link = this.exportLinks[index];
-      link.href = flightExportUrl(flight.id, format);
+      link.href = url(flight.id);
       link.download = `flight-${flight.id}-${flight.vehicle_id}.${format}`;
     }
     this.setViewState("loading", "Loading the flight…");
@@ -275,6 +292,7 @@ export class ReplayPanel {
     if (track.isEmpty) return;
 
     this.layer.show(track, events);
+    this.scans.show(flight.vehicle_id);
     const log = new EventLog(Number.MAX_SAFE_INTEGER);
     log.add(events);
     this.eventFeed.setEvents(log.all);
@@ -339,6 +357,7 @@ export class ReplayPanel {
     this.element.dataset.replayT = t.toFixed(2);
     const state = track.stateAt(t);
     this.layer.moveTo(state.position, this.playing && this.follow.checked);
+    this.scans.moveTo(track.origin + t);
     this.charts.setPosition(t);
     setText(this.values.time, `${formatClock(t)} / ${formatClock(track.duration)}`);
     setText(this.values.at, formatAuditTime(track.origin + t));
@@ -364,6 +383,7 @@ export class ReplayPanel {
     this.track = null;
     this.t = 0;
     this.layer.clear();
+    this.scans.clear();
     this.charts.destroy();
     this.eventTicks.replaceChildren();
     this.eventFeed.setEvents([]);

@@ -67,6 +67,12 @@ class MessageHandler(ArmingAndModes, Navigation, Parameters, Missions, Requests)
             if self._for_us(msg.target) and sender_ok:
                 self.copter.manual_control(int(msg.x), int(msg.y), int(msg.z), int(msg.r))
             return []
+        if kind == "TIMESYNC":
+            # GCS_MAVLINK::handle_timesync: a request (tc1 == 0) gets the board's
+            # nanoseconds since boot in tc1, with the request's ts1
+            if int(msg.tc1) == 0:
+                return [Reply(self.telemetry.timesync(int(msg.ts1)))]
+            return []
         # HEARTBEAT, REQUEST_DATA_STREAM (accepted and ignored: streams keep their rates),
         # and anything else the simulator does not model
         return []

@@ -120,7 +120,8 @@ def test_a_mode_picked_from_the_list_is_reported_back(
     # ArduCopter's own list (not a generic one), the current mode selected.
     assert {"STABILIZE", "LOITER", "GUIDED", "RTL", "BRAKE"} <= set(modes), modes
     current = row.locator('[data-field="mode"]').inner_text()
-    assert picker.input_value() == current
+    # The picker shows the reported mode once the panel has drawn the vehicle's update.
+    expect(picker).to_have_value(current)
     wanted = next(mode for mode in ("LOITER", "STABILIZE") if mode != current)
 
     picker.select_option(wanted)

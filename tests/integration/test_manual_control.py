@@ -1,7 +1,8 @@
 """Flying by hand through the hub: the lease, the 25 Hz stream, the agent's deadman.
 
 Real hub, simulator and agent processes on loopback, the simulator at real time so that
-the agent's 0.5 s deadman (wall clock) is 0.5 s of simulated flight.
+the agent's 0.5 s deadman (wall clock) is 0.5 s of simulated flight. An ArduPilot copter
+flies; a PX4 one stands by for PX4's COM_RC_IN_MODE check. The last test restarts the hub.
 """
 
 from __future__ import annotations
@@ -28,18 +29,26 @@ from tests.helpers import (
     ready,
     running_fleet,
     send_command,
+    speed_of,
 )
 
 pytestmark = pytest.mark.integration
 
 VEHICLE = "sim_1"
+PX4_VEHICLE = "sim_2"
 RATE_HZ = 25.0
+WAYPOINT = 16
+OPERATOR_PASSWORD = "stick-and-rudder-42"
 
 
 class Pilot:
     """A dashboard's socket that flies: sends frames, keeps what the hub says back."""
 
-    def __init__(self, base_url: str, token: str) -> None:
+    def __init__(
+        self, base_url: str, token: str, vehicle: str = VEHICLE, source: str = "program"
+    ) -> None:
+        self.vehicle = vehicle
+        self.source = source
         url = base_url.replace("http://", "ws://") + CLIENT_WS_PATH
         self.socket: ClientConnection = connect(
             url, additional_headers={"Authorization": f"Bearer {token}"}
@@ -48,6 +57,7 @@ class Pilot:
         self._reader = threading.Thread(target=self._read, daemon=True)
         self._reader.start()
         self.seq = 0
+        self.buttons = 0  # MANUAL_CONTROL's button bits in every frame streamed
         self.last_sent_at = 0.0
 
     def _read(self) -> None:
@@ -61,14 +71,47 @@ class Pilot:
         return [message for message in list(self.received) if message["type"] == kind]
 
     def control(self, action: str) -> None:
-        self.socket.send(json.dumps({"type": "control", "vehicle_id": VEHICLE, "action": action}))
+        self.socket.send(
+            json.dumps({"type": "control", "vehicle_id": self.vehicle, "action": action})
+        )
 
     def stick(self, x: int, y: int = 0, z: int = 500, r: int = 0) -> None:
         self.seq += 1
-        axes = {"x": x, "y": y, "z": z, "r": r}
-        self.socket.send(
-            json.dumps({"type": "manual", "vehicle_id": VEHICLE, "seq": self.seq, "axes": axes})
-        )
+        axes = {"x": x, "y": y, "z": z, "r": r, "buttons": self.buttons}
+        frame = {
+            "type": "manual",
+            "vehicle_id": self.vehicle,
+            "seq": self.seq,
+            "axes": axes,
+            "source": self.source,
+            "sent_ms": time.monotonic() * 1000,
+        }
+        self.socket.send(json.dumps(frame))
+
+    def leases(self, holder: str | None = None, reason: str = "") -> list[dict[str, Any]]:
+        """The lease states said so far with this holder and a reason containing ``reason``."""
+        return [
+            m
+            for m in self.said("lease")
+            if m["vehicle_id"] == self.vehicle and m["holder"] == holder and reason in m["reason"]
+        ]
+
+    def refusals(self, text: str) -> list[dict[str, Any]]:
+        return [m for m in self.said("error") if text in m["message"]]
+
+    def take(self) -> dict[str, Any]:
+        """Ask for the lease; the hub's answer (the new lease state, or the refusal)."""
+        asked_at = len(self.received)
+        self.control("acquire")
+
+        def answer() -> list[dict[str, Any]]:
+            return [
+                m
+                for m in list(self.received)[asked_at:]
+                if m["type"] == "error" or (m["type"] == "lease" and m["holder"])
+            ]
+
+        return poll_until(answer, 30, "the lease or its refusal")[0]
 
     def stream(self, stop: threading.Event, x: int, z: int = 500) -> None:
         """Frames at RATE_HZ until ``stop``, paced on the monotonic clock (the pacing is
@@ -88,17 +131,75 @@ class Pilot:
 
 @pytest.fixture(scope="module")
 def flying(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[LocalFleet, str]]:
-    """One copter at 10 m in GUIDED, ArduPilot's SYSID_MYGCS set to the agent's 254."""
+    """One copter at 10 m in GUIDED; a PX4 copter on the ground beside it."""
     data_dir: Path = tmp_path_factory.mktemp("manual")
-    with running_fleet(data_dir, vehicles=1, speedup=1.0) as fleet:
+    with running_fleet(data_dir, vehicles=2, speedup=1.0, autopilots=("ardupilot", "px4")) as fleet:
         base = fleet.plan.hub_http
         token = access_token(base, "admin", fleet.plan.admin_password)
         with FleetWatcher(base, token) as watcher, api_client(base, token) as api:
             watcher.wait_until(ready(VEHICLE), 60, f"{VEHICLE} ready")
-            mygcs = api.put(f"/api/v1/vehicles/{VEHICLE}/params/SYSID_MYGCS", json={"value": 254})
-            assert mygcs.status_code == 200, mygcs.text
+            watcher.wait_until(ready(PX4_VEHICLE), 60, f"{PX4_VEHICLE} ready")
+            set_param(api, VEHICLE, "SYSID_MYGCS", 254)  # the agent's id, see the README
             take_off(api, watcher)
+            created = api.post(
+                "/api/v1/users",
+                json={"username": "pilot", "password": OPERATOR_PASSWORD, "role": "operator"},
+            )
+            assert created.status_code in (200, 201), created.text
         yield fleet, token
+
+
+def set_param(api: httpx.Client, vehicle: str, name: str, value: float) -> None:
+    answer = api.put(f"/api/v1/vehicles/{vehicle}/params/{name}", json={"value": value})
+    assert answer.status_code == 200, answer.text
+
+
+def test_the_agent_refuses_a_lease_the_autopilot_would_ignore(
+    flying: tuple[LocalFleet, str],
+) -> None:
+    """ArduPilot drops MANUAL_CONTROL from any system but SYSID_MYGCS (255 by default;
+    the agent is 254) and ignores overrides with RC_OVERRIDE_TIME 0; PX4 drops it with
+    COM_RC_IN_MODE 0 (RC only) or 4. The lease is refused with the reason, and frees."""
+    fleet, token = flying
+    base = fleet.plan.hub_http
+    with api_client(base, token) as api:
+        pilot = Pilot(base, token)
+        px4 = Pilot(base, token, vehicle=PX4_VEHICLE)
+        try:
+            # Browser control opens only with a lease, never by a bare REST command.
+            bare = api.post(f"/api/v1/vehicles/{VEHICLE}/commands", json={"name": "manual_start"})
+            assert bare.status_code == 422, bare.text
+            assert "comes with the manual-control lease" in bare.text
+            set_param(api, VEHICLE, "SYSID_MYGCS", 255)  # ArduPilot's default
+            refused = pilot.take()
+            assert refused["type"] == "error", refused
+            assert "SYSID_MYGCS = 255" in refused["message"]
+            assert "set SYSID_MYGCS to 254" in refused["message"]
+            set_param(api, VEHICLE, "SYSID_MYGCS", 254)
+            set_param(api, VEHICLE, "RC_OVERRIDE_TIME", 0)
+            pilot.received.clear()
+            refused = pilot.take()
+            assert "RC_OVERRIDE_TIME is 0" in refused["message"], refused
+            set_param(api, VEHICLE, "RC_OVERRIDE_TIME", 3)
+            # Nothing was granted, nothing changed on the vehicle: it still hovers in GUIDED.
+            assert pilot.leases("admin") == []
+            with FleetWatcher(base, token) as watcher:
+                watcher.wait_until(ready(VEHICLE), 10, "the fleet")
+                assert watcher.state(VEHICLE)["mode"] == "GUIDED"
+
+            set_param(api, PX4_VEHICLE, "COM_RC_IN_MODE", 0)
+            refused = px4.take()
+            assert "COM_RC_IN_MODE = 0" in refused["message"], refused
+            set_param(api, PX4_VEHICLE, "COM_RC_IN_MODE", 3)
+            px4.received.clear()
+            granted = px4.take()
+            assert granted["type"] == "lease", granted
+            assert granted["holder"] == "admin"
+            px4.control("release")
+            poll_until(lambda: px4.leases(None, "released by admin"), 10, "the release")
+        finally:
+            pilot.close()
+            px4.close()
 
 
 def take_off(api: httpx.Client, watcher: FleetWatcher) -> None:
@@ -129,15 +230,45 @@ def test_input_without_the_lease_is_refused(flying: tuple[LocalFleet, str]) -> N
         pilot.close()
 
 
+def test_bad_frames_are_refused_counted_and_never_flown(flying: tuple[LocalFleet, str]) -> None:
+    """Axes outside MANUAL_CONTROL's ranges and NaN are refused by the wire's schema
+    (each one answered, and counted towards the feed's bad-frame limit), before any
+    lease check: they cannot be forwarded, for there is no frame to forward."""
+    fleet, token = flying
+    pilot = Pilot(fleet.plan.hub_http, token)
+    try:
+        assert pilot.take()["holder"] == "admin"
+        bad = [{"x": 1001, "y": 0}, {"x": float("nan"), "y": 0}, {"x": 0, "y": 0, "z": -1}]
+        for axes in bad:
+            pilot.seq += 1
+            frame = {"type": "manual", "vehicle_id": VEHICLE, "seq": pilot.seq, "axes": axes}
+            pilot.socket.send(json.dumps(frame))
+        refusals = poll_until(
+            lambda: (
+                [m for m in pilot.said("error") if m["code"] == "invalid_message"]
+                if len(pilot.said("error")) >= len(bad)
+                else []
+            ),
+            5,
+            "the refusals",
+        )
+        assert len(refusals) == len(bad), refusals
+        assert any("axes.x" in m["message"] for m in refusals), refusals
+        assert any("axes.z" in m["message"] for m in refusals), refusals
+        # None renewed the lease: with no good frame, it expires.
+        poll_until(lambda: pilot.leases(None, "expired"), 10, "the lease to expire")
+    finally:
+        pilot.close()
+
+
 def test_sticks_fly_the_vehicle_and_silence_holds_it(flying: tuple[LocalFleet, str]) -> None:
     fleet, token = flying
     base = fleet.plan.hub_http
     with FleetWatcher(base, token) as watcher:
         watcher.wait_until(ready(VEHICLE), 10, "the fleet")
-        pilot = Pilot(base, token)
+        pilot = Pilot(base, token, source="touch")  # a steady on-screen stick
         try:
-            pilot.control("acquire")
-            lease = poll_until(lambda: pilot.said("lease"), 5, "the lease")[-1]
+            lease = pilot.take()
             assert lease["holder"] == "admin"
             before = dict(watcher.state(VEHICLE))
             heading = math.radians(before["heading_deg"])
@@ -152,6 +283,11 @@ def test_sticks_fly_the_vehicle_and_silence_holds_it(flying: tuple[LocalFleet, s
                     f"{VEHICLE} to fly on the sticks",
                 )[VEHICLE]["state"]
                 assert after["mode"] == "LOITER"  # the agent switched to the pilot mode
+                # The agent echoes flown frames to the holder: the input-to-vehicle delay.
+                echo = poll_until(lambda: pilot.said("manual_echo"), 5, "an echo")[-1]
+                assert echo["vehicle_id"] == VEHICLE
+                delay_ms = time.monotonic() * 1000 - echo["sent_ms"]
+                assert 0 < delay_ms < 2000, delay_ms
             finally:
                 stop.set()
                 streamer.join(5)
@@ -167,20 +303,18 @@ def test_sticks_fly_the_vehicle_and_silence_holds_it(flying: tuple[LocalFleet, s
                 lambda v: v[VEHICLE]["state"]["mode"] == "BRAKE", 5, "the deadman's BRAKE"
             )
             assert held
-            events = [e for e in watcher.events if e["kind"] == "manual" and "stopped" in e["text"]]
-            if not events:
-                watcher.wait_until(
-                    lambda v: any(e["kind"] == "manual" for e in watcher.events), 5, "the event"
-                )
-                events = [e for e in watcher.events if "stopped" in e["text"]]
+
+            def stopped_events() -> list[dict[str, Any]]:
+                return [
+                    e for e in watcher.events if e["kind"] == "manual" and "stopped" in e["text"]
+                ]
+
+            watcher.wait_until(lambda v: bool(stopped_events()), 5, "the deadman's event")
+            events = stopped_events()
             silence = float(events[-1]["text"].split("stopped for ")[1].split(" s")[0])
             assert 0.5 <= silence <= 0.6, events[-1]["text"]
             # And the hub ended the lease, so the stream cannot take it back unasked.
-            poll_until(
-                lambda: [m for m in pilot.said("lease") if m["holder"] is None],
-                5,
-                "the lease to end",
-            )
+            poll_until(lambda: pilot.leases(None, "stopped for"), 5, "the lease to end")
             assert time.monotonic() - stopped_at < 5
         finally:
             pilot.close()
@@ -200,20 +334,14 @@ def test_a_mode_change_the_agent_did_not_make_ends_the_lease(
         stop = threading.Event()
         streamer = threading.Thread(target=pilot.stream, args=(stop, 0), daemon=True)
         try:
-            pilot.control("acquire")
-            poll_until(lambda: [m for m in pilot.said("lease") if m["holder"]], 5, "the lease")
+            assert pilot.take()["holder"] == "admin"
             streamer.start()
             watcher.wait_until(
                 lambda v: v[VEHICLE]["state"]["mode"] == "LOITER", 5, "the pilot mode"
             )
             switched = send_command(api, VEHICLE, name="set_mode", mode="RTL")
             assert switched["status"] == "accepted"
-            ended = poll_until(
-                lambda: [m for m in pilot.said("lease") if m["holder"] is None],
-                5,
-                "the lease to end",
-            )[-1]
-            assert "changed to RTL" in ended["reason"]
+            poll_until(lambda: pilot.leases(None, "changed to RTL"), 5, "the lease to end")
             # Frames still streaming are now refused at the hub, never forwarded.
             poll_until(
                 lambda: [m for m in pilot.said("error") if "lease" in m["message"]],
@@ -226,4 +354,238 @@ def test_a_mode_change_the_agent_did_not_make_ends_the_lease(
             stop.set()
             if streamer.is_alive():
                 streamer.join(5)
+            pilot.close()
+
+
+def test_a_frozen_input_holds_the_vehicle(flying: tuple[LocalFleet, str]) -> None:
+    """The complaint: a gamepad froze while the page kept streaming its last values, so
+    the deadman never fired. Fresh frames (new seq, 25 Hz) with the same off-centre
+    values from a gamepad hold the vehicle after the frozen time (3 s)."""
+    fleet, token = flying
+    base = fleet.plan.hub_http
+    with FleetWatcher(base, token) as watcher:
+        watcher.wait_until(ready(VEHICLE), 10, "the fleet")
+        pilot = Pilot(base, token, source="gamepad")
+        stop = threading.Event()
+        streamer = threading.Thread(target=pilot.stream, args=(stop, 300), daemon=True)
+        try:
+            assert pilot.take()["holder"] == "admin"
+            streamer.start()  # the same 30 % forward, forever
+            started = time.monotonic()
+            watcher.wait_until(
+                lambda v: v[VEHICLE]["state"]["mode"] == "BRAKE", 10, "the frozen input's BRAKE"
+            )
+            held_after = time.monotonic() - started
+            assert 3.0 <= held_after <= 5.0, held_after
+            assert streamer.is_alive()  # the stream never stopped: the values froze
+            ended = poll_until(lambda: pilot.leases(None, "frozen"), 5, "the lease to end")
+            assert "the same off-centre values" in ended[-1]["reason"]
+            poll_until(lambda: pilot.refusals("does not hold"), 5, "the stream refused")
+        finally:
+            stop.set()
+            if streamer.is_alive():
+                streamer.join(5)
+            pilot.close()
+
+
+def test_one_pilot_at_a_time_and_an_admin_revokes(flying: tuple[LocalFleet, str]) -> None:
+    fleet, token = flying
+    base = fleet.plan.hub_http
+    operator_token = access_token(base, "pilot", OPERATOR_PASSWORD)
+    with FleetWatcher(base, token) as watcher:
+        watcher.wait_until(ready(VEHICLE), 10, "the fleet")
+        operator = Pilot(base, operator_token)
+        admin = Pilot(base, token)
+        stop = threading.Event()
+        streamer = threading.Thread(target=operator.stream, args=(stop, 0), daemon=True)
+        try:
+            assert operator.take()["holder"] == "pilot"
+            streamer.start()
+            # Every dashboard is told who flies it, the second operator among them.
+            poll_until(lambda: admin.leases("pilot"), 5, "the admin's dashboard to see it")
+            refused = admin.take()
+            assert refused["type"] == "error"
+            assert f"{VEHICLE} is flown by hand by pilot" in refused["message"]
+
+            admin.control("revoke")
+            ended = poll_until(lambda: operator.leases(None, "revoked by admin"), 5, "revoked")
+            assert ended[-1]["holder"] is None
+            # The hub told the agent: the vehicle holds, and the stream goes nowhere.
+            watcher.wait_until(lambda v: v[VEHICLE]["state"]["mode"] == "BRAKE", 5, "BRAKE")
+            poll_until(lambda: operator.refusals("does not hold"), 5, "the stream refused")
+        finally:
+            stop.set()
+            if streamer.is_alive():
+                streamer.join(5)
+            operator.close()
+            admin.close()
+
+
+def test_a_lease_without_input_expires(flying: tuple[LocalFleet, str]) -> None:
+    fleet, token = flying
+    base = fleet.plan.hub_http
+    with FleetWatcher(base, token) as watcher:
+        watcher.wait_until(ready(VEHICLE), 10, "the fleet")
+        pilot = Pilot(base, token)
+        try:
+            assert pilot.take()["holder"] == "admin"
+            granted_at = time.monotonic()
+            watcher.wait_until(lambda v: v[VEHICLE]["state"]["mode"] == "LOITER", 5, "LOITER")
+            ended = poll_until(lambda: pilot.leases(None, "expired"), 10, "the expiry")
+            assert 2.0 <= time.monotonic() - granted_at < 5.0
+            assert "no input from admin for 2 s" in ended[-1]["reason"]
+            watcher.wait_until(lambda v: v[VEHICLE]["state"]["mode"] == "BRAKE", 5, "BRAKE")
+        finally:
+            pilot.close()
+
+
+def test_a_mission_pauses_under_the_lease_and_resumes_after(
+    flying: tuple[LocalFleet, str],
+) -> None:
+    fleet, token = flying
+    base = fleet.plan.hub_http
+    with FleetWatcher(base, token) as watcher, api_client(base, token) as api:
+        watcher.wait_until(ready(VEHICLE), 10, "the fleet")
+        here = watcher.state(VEHICLE)
+        north = 1 / 111_320.0
+        items = [
+            {"command": WAYPOINT, "lat": here["lat"] + 15 * north, "lon": here["lon"], "alt": 10},
+            {"command": WAYPOINT, "lat": here["lat"] + 60 * north, "lon": here["lon"], "alt": 10},
+            {"command": WAYPOINT, "lat": here["lat"], "lon": here["lon"], "alt": 10},
+        ]
+        uploaded = api.post(f"/api/v1/vehicles/{VEHICLE}/mission", json={"items": items})
+        assert uploaded.status_code == 200, uploaded.text
+        assert send_command(api, VEHICLE, name="set_mode", mode="AUTO")["status"] == "accepted"
+        watcher.wait_until(
+            lambda v: v[VEHICLE]["state"].get("mission_current") == 2, 60, "on its way to item 2"
+        )
+        pilot = Pilot(base, token)
+        stop = threading.Event()
+        streamer = threading.Thread(target=pilot.stream, args=(stop, 0), daemon=True)
+        try:
+            granted = pilot.take()
+            assert granted["resume_mode"] == "AUTO", granted
+            streamer.start()  # centred sticks: the vehicle stops and stays
+            paused = watcher.wait_until(
+                lambda v: (
+                    v[VEHICLE]["state"]["mode"] == "LOITER" and speed_of(v[VEHICLE]["state"]) < 0.3
+                ),
+                20,
+                "the mission paused in LOITER",
+            )[VEHICLE]["state"]
+            assert paused["mission_current"] == 2
+            stop.set()
+            streamer.join(5)
+            pilot.control("release")
+            released = poll_until(lambda: pilot.leases(None, "released"), 5, "the release")
+            assert released[-1]["resume_mode"] == "AUTO"  # the dashboard offers to resume
+
+            resumed = send_command(api, VEHICLE, name="set_mode", mode="AUTO")
+            assert resumed["status"] == "accepted"
+            # It carries on from item 2, not from the start.
+            watcher.wait_until(
+                lambda v: (
+                    v[VEHICLE]["state"]["mode"] == "AUTO" and speed_of(v[VEHICLE]["state"]) > 1.0
+                ),
+                20,
+                "the mission resumed",
+            )
+            assert watcher.state(VEHICLE)["mission_current"] >= 2
+            watcher.wait_until(
+                lambda v: v[VEHICLE]["state"].get("mission_current") == 3, 60, "item 3 next"
+            )
+            assert send_command(api, VEHICLE, name="hold")["status"] == "accepted"
+        finally:
+            stop.set()
+            if streamer.is_alive():
+                streamer.join(5)
+            pilot.close()
+
+
+def press(pilot: Pilot, bit: int) -> None:
+    """Hold a button for a few frames of the stream, as a thumb does."""
+    pilot.buttons = bit
+    sent = pilot.seq
+    poll_until(lambda: pilot.seq >= sent + 5, 5, "five frames with the button", every_s=0.05)
+    pilot.buttons = 0
+
+
+def test_the_select_and_hold_buttons(flying: tuple[LocalFleet, str]) -> None:
+    """The seed's select button: ignored high up; on the ground it arms, and disarms
+    again. The hold button holds the vehicle and gives control back."""
+    fleet, token = flying
+    base = fleet.plan.hub_http
+    with FleetWatcher(base, token) as watcher:
+        watcher.wait_until(ready(VEHICLE), 10, "the fleet")
+        watcher.wait_until(ready(PX4_VEHICLE), 10, "the PX4 copter")
+        high = Pilot(base, token)
+        ground = Pilot(base, token, vehicle=PX4_VEHICLE)
+        stop = threading.Event()
+        streams = [
+            threading.Thread(target=pilot.stream, args=(stop, 0), daemon=True)
+            for pilot in (high, ground)
+        ]
+        try:
+            assert high.take()["holder"] == "admin"
+            assert ground.take()["holder"] == "admin"
+            for stream in streams:
+                stream.start()
+            # At 10 m the select button does nothing but say so.
+            press(high, 1)
+            watcher.wait_until(
+                lambda v: any("select ignored at" in e["text"] for e in watcher.events),
+                5,
+                "select ignored high up",
+            )
+            assert watcher.state(VEHICLE)["mode"] == "LOITER"
+            # On the ground, disarmed: select arms; pressed again, it disarms.
+            assert watcher.state(PX4_VEHICLE)["armed"] is False
+            press(ground, 1)
+            watcher.wait_until(lambda v: v[PX4_VEHICLE]["state"]["armed"], 10, "armed")
+            press(ground, 1)
+            watcher.wait_until(lambda v: not v[PX4_VEHICLE]["state"]["armed"], 10, "disarmed again")
+            # The hold button: BRAKE, and the lease goes back.
+            press(high, 2)
+            watcher.wait_until(lambda v: v[VEHICLE]["state"]["mode"] == "BRAKE", 5, "BRAKE")
+            poll_until(lambda: high.leases(None, "hold button pressed"), 5, "the lease ended")
+        finally:
+            stop.set()
+            for stream in streams:
+                if stream.is_alive():
+                    stream.join(5)
+            ground.control("release")
+            high.close()
+            ground.close()
+
+
+def test_a_lease_survives_a_hub_restart_only_as_revoked(flying: tuple[LocalFleet, str]) -> None:
+    """Last: it restarts the hub. The hub is killed with a lease held; the restarted hub
+    reports that lease revoked to every dashboard, refuses the old pilot's stream, and
+    the agent's deadman held the vehicle meanwhile."""
+    fleet, token = flying
+    base = fleet.plan.hub_http
+    pilot = Pilot(base, token)
+    try:
+        assert pilot.take()["holder"] == "admin"
+        for _ in range(5):
+            pilot.stick(0)
+    finally:
+        pilot.close()
+    fleet.kill("hub")
+    fleet.start_hub()
+    fleet.wait_until_ready()
+    token = access_token(base, "admin", fleet.plan.admin_password)
+    with FleetWatcher(base, token) as watcher:
+        watcher.wait_until(ready(VEHICLE), 30, "the agent back")
+        assert watcher.state(VEHICLE)["mode"] == "BRAKE"  # the deadman, with no hub
+        pilot = Pilot(base, token)
+        try:
+            revoked = poll_until(
+                lambda: pilot.leases(None, "revoked: the hub restarted"), 10, "the revocation"
+            )
+            assert "while admin held it" in revoked[-1]["reason"]
+            pilot.seq = 1000
+            pilot.stick(500)
+            poll_until(lambda: pilot.refusals("does not hold"), 5, "the old stream refused")
+        finally:
             pilot.close()

@@ -7,6 +7,7 @@ import contextlib
 import io
 import json
 import math
+import re
 import threading
 import time
 from array import array
@@ -243,3 +244,41 @@ def test_a_flights_world_points_export_as_ply(
     radius = np.hypot(vertices["x"], vertices["y"])
     assert len(radius) > 200  # 720 beams on a 5 m circle, downsampled to 10 cm voxels
     assert np.all(np.abs(radius - 5.0) < 0.1)
+
+
+def test_an_obstacle_found_in_the_point_map_is_an_event_and_keeps_its_id(tmp_path: Path) -> None:
+    # The site's origin 3 m below the drone: its scans' 5 m circle stands above the ground.
+    origin = f"{HOME.lat},{HOME.lon},{HOME.alt_msl - 3.0}"
+    settings = hub_settings(tmp_path, site_origin=origin, scan_obstacle_interval_s=0.2)
+    with running_hub(settings) as base:
+        token = access_token(base, "admin", ADMIN_PASSWORD)
+        with api_client(base, token) as api:
+            agent_token = api.post("/api/v1/vehicles/v1/agent-tokens").json()["token"]
+            with feed(base, token) as dashboard, agent(base, agent_token, "v1") as socket:
+                socket.send(scan(0))
+
+                def obstacle_events() -> list[dict[str, Any]] | None:
+                    found = []
+                    with contextlib.suppress(TimeoutError):
+                        while True:
+                            message = json.loads(dashboard.recv(timeout=0.2))
+                            if message["type"] == "events":
+                                found += [e for e in message["events"] if e["kind"] == "obstacle"]
+                    return found or None
+
+                events = poll_until(obstacle_events, 10, "an obstacle event")
+                assert events is not None
+                assert events[0]["vehicle_id"] == "v1"
+                # a 5 m circle around the drone, at its height
+                assert re.match(
+                    r"obstacle 1 found: 10\.\d m x 10\.\d m, up to 3\.\d m", events[0]["text"]
+                )
+                listed = api.get("/api/v1/scans/obstacles").json()
+                assert [o["id"] for o in listed] == [1]
+                socket.send(scan(1, at=time.time() + 0.1))  # seen again: the same obstacle
+                poll_until(
+                    lambda: api.get("/api/v1/vehicles/v1/scans/diagnostics").json()["live"] == 2,
+                    10,
+                    "the second scan",
+                )
+                assert [o["id"] for o in api.get("/api/v1/scans/obstacles").json()] == [1]

@@ -383,3 +383,14 @@ def test_every_streamed_message_encodes() -> None:
         assert decoded.get_msgId() == msg_id
         assert decoded.get_srcSystem() == SYSID
     assert set(DEFAULT_RATES_HZ) <= vehicle.telemetry.supported
+
+
+def test_timesync_requests_get_the_boards_nanoseconds_since_boot() -> None:
+    vehicle = Vehicle()
+    vehicle.copter.advance(12.5)
+    [reply] = vehicle.send(mavlink2.MAVLink_timesync_message(0, 987_654_321))
+    assert reply.to_sender_only
+    assert reply.message.get_type() == "TIMESYNC"
+    assert reply.message.ts1 == 987_654_321
+    assert reply.message.tc1 == pytest.approx(vehicle.copter.time_s * 1e9, abs=1e3)
+    assert vehicle.send(mavlink2.MAVLink_timesync_message(5, 6)) == []  # an answer, not ours

@@ -14,9 +14,9 @@ import pytest
 from simulator import ListenAddress, SimulatorConfig, SimulatorServer
 from simulator.lidar import Lidar, LidarSpec, Pose
 from simulator.world import Cylinder, World, box, load_scene, wall
-from simulator.ydlidar_wire import encode_beams
+from simulator.ydlidar_wire import encode_beams, health
 from vehicle_agents.sensors.sources import Turn, TurnAssembler
-from vehicle_agents.sensors.ydlidar import YdlidarParser
+from vehicle_agents.sensors.ydlidar import GET_HEALTH, START_SCAN, YdlidarParser
 
 EXACT = LidarSpec(noise_sigma_m=0.0, dropout=0.0)
 
@@ -141,6 +141,11 @@ async def _serve_and_parse() -> None:
     try:
         assert server.lidar_address is not None
         reader, writer = await asyncio.open_connection("127.0.0.1", server.lidar_address.port)
+        # Idle until started, as the sensor is: the health answer is the first byte back.
+        writer.write(GET_HEALTH)
+        async with asyncio.timeout(10):
+            assert await reader.readexactly(10) == health()
+        writer.write(START_SCAN)
         parser, assembler = YdlidarParser(), TurnAssembler()
         turns: list[Turn] = []
         async with asyncio.timeout(10):
@@ -150,7 +155,8 @@ async def _serve_and_parse() -> None:
                     if turn is not None:
                         turns.append(turn)
         writer.close()
-        assert parser.stats.bad_checksums == 0
+        assert parser.stats.bad_checksums == parser.stats.skipped_bytes == 0
+        assert parser.stats.responses == 1  # the start command's answer, then packets
         assert sum(1 for r in turns[-1].ranges if r) > 300  # the default yard around home
     finally:
         await server.stop()

@@ -90,3 +90,30 @@ def test_the_encoder_refuses_what_the_decoder_would() -> None:
         encode_scan(
             ScanFrame(**{**{f: getattr(frame, f) for f in frame.__slots__}, "ranges": array("H")})
         )
+
+
+def test_the_layout_is_exported_with_the_protocols_schema() -> None:
+    from protocol.messages import json_schema
+
+    layout = json_schema()["scan_frame"]
+    fields = {f["name"]: f for f in layout["fields"]}
+    assert layout["header_bytes"] == HEADER_BYTES
+    assert fields["ranges"]["offset"] == HEADER_BYTES  # the header's fields add up
+    data = encode_scan(_frame())
+    seq = fields["seq"]["offset"]
+    assert int.from_bytes(data[seq : seq + 8], "little") == 41
+    beams = fields["beams"]["offset"]
+    assert int.from_bytes(data[beams : beams + 2], "little") == 720
+
+
+def test_the_dashboards_decoder_reads_the_exported_layout() -> None:
+    import re
+    from pathlib import Path
+
+    from protocol.scans import scan_frame_schema
+
+    layout = scan_frame_schema()
+    source = (Path(__file__).parents[2] / "frontend/src/scans/scanFrame.ts").read_text()
+    assert re.search(rf"const HEADER_BYTES = {layout['header_bytes']};", source)
+    assert f'const SCAN_MAGIC = "{layout["magic"]}";' in source
+    assert f'const CLIENT_MAGIC = "{layout["to_subscribers"]["magic"]}";' in source  # type: ignore[index]

@@ -9,7 +9,8 @@ from array import array
 import numpy as np
 import pytest
 
-from backend.scans.pointmap import PointMap
+from backend.scans.obstacles import ObstacleTracker, describe
+from backend.scans.pointmap import MapObstacle, PointMap
 from backend.scans.points import world_points
 from common.geodesy import LocalFrame
 from protocol.scans import Mount, ScanFrame, ScanPose
@@ -74,3 +75,23 @@ def test_obstacles_are_clusters_above_the_ground_with_their_extents() -> None:
     assert found.east_min == pytest.approx(2.6, abs=0.11)  # to the voxel
     assert found.east_max == pytest.approx(3.4, abs=0.11)
     assert found.north_min == pytest.approx(1.6, abs=0.11)
+
+
+def _obstacle(east: float, north: float, size: float = 1.0) -> MapObstacle:
+    return MapObstacle(0, east, east + size, north, north + size, 0.0, 2.0, 10)
+
+
+def test_obstacles_keep_their_ids_while_seen_and_their_coming_and_going_are_told() -> None:
+    tracker = ObstacleTracker()
+    first = tracker.update([_obstacle(0, 0), _obstacle(10, 0)])
+    assert [o.id for o in first.appeared] == [1, 2]
+    assert not first.gone
+    # the first grew as more of it was seen, the second left the map, a third came
+    second = tracker.update([_obstacle(20, 0), _obstacle(-0.5, -0.5, size=2.0)])
+    assert [(o.id, o.east_min) for o in second.current] == [(3, 20), (1, -0.5)]
+    assert [o.id for o in second.appeared] == [3]
+    assert [o.id for o in second.gone] == [2]
+    assert not tracker.update([_obstacle(20.2, 0), _obstacle(0, 0)]).appeared
+    assert "obstacle 3 found: 1.0 m x 1.0 m, up to 2.0 m, centred 20.5 m east" in describe(
+        second.appeared[0], "found"
+    )

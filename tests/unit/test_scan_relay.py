@@ -8,15 +8,17 @@ import math
 import random
 from pathlib import Path
 from types import SimpleNamespace
+from typing import Any
 
 import pytest
+from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from protocol.scans import FLAG_REPLAYED, decode_scan, encode_scan
 from simulator.lidar import Lidar, LidarSpec, Pose
 from simulator.world import default_scene
 from simulator.ydlidar_wire import encode_beams
 from tests.unit.test_scan_frame import _frame
-from vehicle_agents.sensors.fcu_time import FcuClock, PoseHistory
+from vehicle_agents.sensors.fcu_time import FcuClock, PoseHistory, ask_timesync
 from vehicle_agents.sensors.relay import DiskBacklog, ScanOutbox
 from vehicle_agents.sensors.sources import TurnAssembler
 from vehicle_agents.sensors.ydlidar import YdlidarParser
@@ -114,3 +116,58 @@ def test_a_disk_backlog_survives_the_agent_and_keeps_its_order(tmp_path: Path) -
         assert len(again) == 0
 
     asyncio.run(run())
+
+
+def test_timesync_stamps_tighten_the_clock_and_a_companions_are_ignored() -> None:
+    now = [0.0]
+    poses = PoseHistory(FcuClock(), monotonic=lambda: now[0])
+    offset = 50.0  # the agent's monotonic reading at the board's boot
+
+    def attitude(board_s: float) -> None:  # the streams arrive 20 ms late, every one
+        now[0] = offset + board_s + 0.020
+        poses.on_message(_message("ATTITUDE", board_s, roll=0.0, pitch=0.0, yaw=0.0))
+
+    for i in range(100):
+        attitude(i * 0.1)
+    assert poses.clock.to_fcu(offset + 5.0) == pytest.approx(5.0 - 0.020, abs=1e-6)
+    # a companion computer's request, on its own clock: not the flight controller's
+    now[0] = offset + 10.0
+    poses.on_message(SimpleNamespace(get_type=lambda: "TIMESYNC", tc1=0, ts1=7_000 * 10**9))
+    assert poses.timesync_ignored == 1
+    # the flight controller's answers twice a second (tc1: its nanoseconds since boot),
+    # 1 ms on the way, among the streams
+    for i in range(100, 400):
+        attitude(i * 0.1)
+        if i % 5 == 0:
+            board_s = i * 0.1 + 0.05
+            now[0] = offset + board_s + 0.001
+            answer = SimpleNamespace(get_type=lambda: "TIMESYNC", tc1=round(board_s * 1e9), ts1=1)
+            poses.on_message(answer)
+    assert poses.timesync_ignored == 1
+    assert poses.clock.to_fcu(offset + 40.0) == pytest.approx(40.0 - 0.001, abs=2e-4)
+
+
+def test_the_agent_asks_for_timesync_and_a_down_link_does_not_stop_it() -> None:
+    async def run() -> list[Any]:
+        sent: list[Any] = []
+        tries = [0]
+        enough = asyncio.Event()
+
+        def send(message: Any) -> None:
+            tries[0] += 1
+            if tries[0] == 1:  # the first try: the link is down
+                raise ConnectionError("flight controller link is down")
+            sent.append(message)
+            if len(sent) == 2:
+                enough.set()
+
+        asker = asyncio.create_task(ask_timesync(send, every_s=0.0, monotonic_ns=lambda: 42))
+        await asyncio.wait_for(enough.wait(), 5)
+        asker.cancel()
+        return sent
+
+    sent = asyncio.run(run())
+    packed = [m.pack(mavlink2.MAVLink(None, srcSystem=255)) for m in sent]
+    assert len(sent) >= 2
+    assert {(m.tc1, m.ts1) for m in sent} == {(0, 42)}
+    assert all(data[0] == 0xFD for data in packed)  # MAVLink 2 frames

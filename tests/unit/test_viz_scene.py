@@ -12,7 +12,7 @@ import viser
 from websockets.sync.client import connect
 
 from backend.viz3d.colours import rgb, vehicle_colour
-from backend.viz3d.frame import SceneFrame, attitude_wxyz
+from backend.viz3d.frame import SceneFrame, attitude_wxyz, reframe
 from backend.viz3d.scene import SCANS, FleetScene
 from backend.viz3d.server import VizServer
 from common.geodesy import LocalFrame
@@ -183,3 +183,34 @@ def test_a_browser_joining_mid_flight_gets_the_current_scene_at_once(
     # Only the newest position is replayed, and it is the vehicle's position now.
     assert len(positions) == 1
     np.testing.assert_allclose(positions[0], latest, atol=1e-6)
+
+
+def test_a_trail_is_redrawn_at_a_bounded_rate_and_catches_up_when_the_vehicle_stops(
+    viz: VizServer, scene: FleetScene
+) -> None:
+    def at(t: float, metres_north: float) -> None:
+        lat = HOME[0] + metres_north / 111_200.0
+        scene.apply([_summary("alpha", t, lat=lat, lon=HOME[1], alt_msl=500.0)])
+
+    at(0.0, 0.0)
+    at(1.0, 2.0)  # the first segment: drawn
+    first = np.asarray(_node(viz.viser, "/trails/alpha").points).copy()
+    at(1.1, 3.0)  # 0.1 s later: kept, not sent
+    np.testing.assert_array_equal(_node(viz.viser, "/trails/alpha").points, first)
+    at(1.7, 3.0)  # stopped there: the kept point is drawn once the period has passed
+    drawn = _node(viz.viser, "/trails/alpha").points
+    assert len(drawn) == 2
+    np.testing.assert_allclose(
+        drawn[-1][1], _node(viz.viser, "/vehicles/alpha").position, atol=1e-2
+    )
+
+
+def test_reframing_between_two_origins_matches_the_geodesy_round_trip() -> None:
+    site = LocalFrame(*HOME)
+    other = LocalFrame(47.41, 8.53, 500.0)  # 1.6 km away, 12 m higher
+    points = np.random.default_rng(0).uniform(-3000, 3000, (50, 3))
+    expected = []
+    for east, north, up in points:
+        where = site.from_enu(east, north, up)
+        expected.append(other.to_enu(where.lat, where.lon, where.alt))
+    np.testing.assert_allclose(reframe(points, site, other), expected, atol=1e-6)

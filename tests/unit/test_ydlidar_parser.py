@@ -10,8 +10,8 @@ import pytest
 
 from simulator.lidar import Lidar, LidarSpec, Pose
 from simulator.world import default_scene
-from simulator.ydlidar_wire import encode_beams, packet
-from vehicle_agents.sensors.ydlidar import Packet, YdlidarParser
+from simulator.ydlidar_wire import SCAN_RESPONSE, encode_beams, health, packet
+from vehicle_agents.sensors.ydlidar import Health, Packet, YdlidarParser
 
 
 def _stream(seconds: float = 0.5) -> bytes:
@@ -102,3 +102,17 @@ def test_random_garbage_never_raises_and_memory_stays_bounded() -> None:
         assert len(parser._buffer) <= 64 * 1024 + 2048
     assert parser.stats.bad_checksums > 0
     assert parser.stats.packets > 0
+
+
+def test_the_answers_to_the_drivers_commands_are_read_not_counted_as_garbage() -> None:
+    # What a T-mini Pro sends after stop, health and start: the health answer (here an
+    # error), the start answer, then packets; and an answer of a kind the driver never asks.
+    one = packet(0, [90.0, 91.0], [1500, 1600])
+    data = health(2, 0x0102) + SCAN_RESPONSE + one + bytes([0xA5, 0x5A, 0x14, 0, 0, 0, 0x04]) + one
+    for chunks in ([data], _split(data, random.Random(3)), [bytes([b]) for b in data]):
+        packets, parser = _parse(chunks)
+        assert [p.distances_mm for p in packets] == [[1500, 1600]] * 2
+        assert parser.stats.responses == 2
+        assert parser.health == Health(2, 0x0102)
+        assert parser.stats.skipped_bytes == 7  # the unknown answer's descriptor
+        assert parser.stats.bad_checksums == 0

@@ -3,8 +3,14 @@
 A LIDAR's bytes carry no time: the agent stamps them on arrival (`time.monotonic`). The
 flight controller stamps its own messages (``time_boot_ms``), so the agent maps its clock
 onto the flight controller's from messages that carry that stamp (ATTITUDE,
-GLOBAL_POSITION_INT, SYSTEM_TIME): a line fitted through (arrival, stamp) pairs, raised to
-the least delayed of them, since a message can arrive late but never early. The line's
+GLOBAL_POSITION_INT, SYSTEM_TIME, and TIMESYNC's nanoseconds since boot): a line fitted
+through (arrival, stamp) pairs, raised to the least delayed of them, since a message can
+arrive late but never early. TIMESYNC is the two-way time protocol, but a round trip
+needs the flight controller to answer in time and assumes the two ways take as long;
+its stamps are used here as one more one-way sample (the flight controller's own request
+carries its clock in ``ts1``, its answer in ``tc1``), and only once they agree with the
+streams' clock within `TIMESYNC_AGREE_S`, since a companion computer on the same link
+sends TIMESYNC on a clock of its own. The line's
 slope is the ratio of the two clocks (1 for a real board; the simulator's sped-up clock
 runs faster), so the mapping holds on either.
 
@@ -15,12 +21,16 @@ ATTITUDE.
 
 from __future__ import annotations
 
+import asyncio
 import bisect
+import contextlib
 import math
 import time
 from collections import deque
 from collections.abc import Callable
 from typing import Any
+
+from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from protocol.scans import ScanPose
 from vehicle_agents.sensors.envelope import lower_envelope_slope
@@ -29,6 +39,21 @@ CLOCK_WINDOW = 400  # samples: 10-20 s of the streams that carry time_boot_ms
 REFIT_EVERY = 20
 POSE_WINDOW = 100  # reports of each kind: 10 s at 10 Hz
 STAMPED = frozenset({"ATTITUDE", "GLOBAL_POSITION_INT", "SYSTEM_TIME"})
+TIMESYNC_AGREE_S = 1.0
+TIMESYNC_EVERY_S = 2.0
+
+
+async def ask_timesync(
+    send: Callable[[Any], None],
+    every_s: float = TIMESYNC_EVERY_S,
+    monotonic_ns: Callable[[], int] = time.monotonic_ns,
+) -> None:
+    """Ask the flight controller for its clock now and then (TIMESYNC with ``tc1`` 0;
+    ArduPilot and PX4 answer with their nanoseconds since boot), for `PoseHistory`."""
+    while True:
+        with contextlib.suppress(ConnectionError):  # down: the streams' clock waits too
+            send(mavlink2.MAVLink_timesync_message(0, monotonic_ns()))
+        await asyncio.sleep(every_s)
 
 
 class FcuClock:
@@ -72,6 +97,10 @@ class FcuClock:
         assert self._offset is not None
         return self._rate * monotonic_s + self._offset
 
+    def to_monotonic(self, fcu_s: float) -> float:
+        assert self._offset is not None
+        return (fcu_s - self._offset) / self._rate
+
     @property
     def rate(self) -> float:
         return self._rate
@@ -96,10 +125,14 @@ class PoseHistory:
         self._pos: deque[tuple[float, float, float]] = deque(maxlen=POSE_WINDOW)
         self._att_t: deque[float] = deque(maxlen=POSE_WINDOW)
         self._att: deque[tuple[float, float, float]] = deque(maxlen=POSE_WINDOW)
+        self.timesync_ignored = 0  # TIMESYNC on another clock, or before the streams'
 
     def on_message(self, message: Any) -> None:
         """An FcuLink listener."""
         kind = message.get_type()
+        if kind == "TIMESYNC":
+            self._timesync(message)
+            return
         if kind not in STAMPED:
             return
         boot_s = message.time_boot_ms / 1000.0
@@ -120,6 +153,15 @@ class PoseHistory:
                 boot_s,
                 (float(message.roll), float(message.pitch), float(message.yaw)),
             )
+
+    def _timesync(self, message: Any) -> None:
+        board_ns = int(message.ts1) if int(message.tc1) == 0 else int(message.tc1)
+        arrived = self._monotonic()
+        boot_s = board_ns / 1e9
+        if not self.clock.synced or abs(self.clock.to_fcu(arrived) - boot_s) > TIMESYNC_AGREE_S:
+            self.timesync_ignored += 1
+            return
+        self.clock.add(arrived, boot_s)
 
     @staticmethod
     def _push(

@@ -176,7 +176,9 @@ class ScanRelay:
         clock = self.poses.clock
         if turn.fcu_start_s is not None:
             start, end = turn.fcu_start_s, turn.fcu_start_s + turn.duration_s
-            utc = self._wall()
+            # the board's stamp, on the agent's clock once it is known
+            age = self._monotonic() - clock.to_monotonic(start) if clock.synced else 0.0
+            utc = self._wall() - max(0.0, age)
         else:
             if not clock.synced:
                 return None
@@ -191,6 +193,9 @@ class ScanRelay:
         pose_start, pose_end = self.poses.at(start), self.poses.at(end)
         if pose_start is None or pose_end is None:
             return None
+        angle_min = turn.angle_min
+        if turn.north_aligned:  # from north to the nose: the vehicle's yaw at that instant
+            angle_min = math.remainder(angle_min + pose_start.yaw, 2.0 * math.pi)
         seq = self._seq
         self._seq += 1
         return ScanFrame(
@@ -198,7 +203,7 @@ class ScanRelay:
             sensor_time_us=max(0, round(start * 1e6)),
             utc_time=utc,
             duration_s=min(1.0, max(1e-3, end - start)),
-            angle_min=turn.angle_min,
+            angle_min=angle_min,
             angle_increment=turn.angle_increment,
             range_max_m=turn.range_max_m,
             pose_start=pose_start,

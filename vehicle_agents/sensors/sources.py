@@ -3,12 +3,13 @@
 - `YdlidarSource`: a YDLIDAR on a serial port (``/dev/ttyUSB0``, 230400 baud for a
   T-mini Pro), or the simulator's LIDAR socket (``tcp://HOST:PORT``), whose bytes are the
   same; parsed by `vehicle_agents.sensors.ydlidar`.
-- `ObstacleDistanceSource`: MAVLink OBSTACLE_DISTANCE from the flight controller, for a
-  rangefinder wired to the autopilot (ArduPilot's proximity library sends 72 sectors;
-  SITL can simulate one).
-- ROS 2 ``sensor_msgs/LaserScan``: where rclpy is installed, a node can hand its scans to
-  `ScanQueue.put` (a `Turn` maps one-to-one onto a LaserScan). rclpy is not a dependency
-  of the agent and is imported by nothing here.
+- `MavlinkRangeSource`: MAVLink OBSTACLE_DISTANCE and DISTANCE_SENSOR from the flight
+  controller, for a rangefinder wired to the autopilot (ArduPilot's proximity library
+  reports 8 sectors as DISTANCE_SENSOR, PX4 72 as OBSTACLE_DISTANCE; SITL can simulate
+  either).
+- `vehicle_agents.sensors.ros2.LaserScanSource`: a ROS 2 ``sensor_msgs/LaserScan``
+  topic, where rclpy is installed (a `Turn` maps one-to-one onto a LaserScan). rclpy is
+  not a dependency of the agent and is imported only when that source starts.
 """
 
 from __future__ import annotations
@@ -25,8 +26,16 @@ from collections.abc import AsyncIterator, Callable
 from dataclasses import dataclass, field
 from typing import Any, Protocol
 
+from pymavlink.dialects.v20 import ardupilotmega as mavlink2
+
 from vehicle_agents.sensors.envelope import lower_envelope_slope
-from vehicle_agents.sensors.ydlidar import Packet, YdlidarParser
+from vehicle_agents.sensors.ydlidar import (
+    GET_HEALTH,
+    START_SCAN,
+    STOP_SCAN,
+    Packet,
+    YdlidarParser,
+)
 
 log = logging.getLogger(__name__)
 
@@ -39,7 +48,9 @@ class Turn:
     """One full turn of the head. Beam ``i`` points at ``angle_min + i * angle_increment``
     (radians, counter-clockwise from the sensor's forward axis) and was measured at
     ``start + i * duration_s / beams``. ``start`` is agent monotonic seconds, unless
-    ``fcu_start_s`` gives the flight controller's own time for it (MAVLink sources)."""
+    ``fcu_start_s`` gives the flight controller's own time for it (MAVLink sources).
+    A ``north_aligned`` turn's angles count from north (the relay turns them into the
+    sensor's frame with the vehicle's yaw)."""
 
     start: float
     duration_s: float
@@ -48,6 +59,10 @@ class Turn:
     ranges: array[int]  # millimetres, 0 for no return
     range_max_m: float
     fcu_start_s: float | None = None
+    north_aligned: bool = False  # angle_min counts from north, not the sensor's forward
+
+
+SNAPSHOT_S = 1e-3  # a flight controller's ranges are one instant's, not a sweep's
 
 
 class ScanSource(Protocol):
@@ -156,8 +171,14 @@ class TurnAssembler:
         )
 
 
+# What YDLidar-SDK's driver sends to start a sensor: stop whatever it was doing, ask its
+# health, start the scan. A T-mini Pro idles until it gets the start command.
+STARTUP = STOP_SCAN + GET_HEALTH + START_SCAN
+
+
 class YdlidarSource:
-    """A YDLIDAR on ``tcp://HOST:PORT`` (the simulator) or a serial device path."""
+    """A YDLIDAR on ``tcp://HOST:PORT`` (the simulator) or a serial device path. The same
+    commands start it on either, and the sensor's health answer is logged if not good."""
 
     def __init__(
         self,
@@ -182,8 +203,19 @@ class YdlidarSource:
         }
 
     async def turns(self) -> AsyncIterator[Turn]:
+        reported = None
         async for chunk, arrived in self._chunks():
-            for packet in self.parser.feed(chunk):
+            packets = self.parser.feed(chunk)
+            if self.parser.health != reported:
+                reported = self.parser.health
+                if reported is not None and reported.status != 0:
+                    log.warning(
+                        "LIDAR %s reports status %d, error code %#06x",
+                        self.url,
+                        reported.status,
+                        reported.error_code,
+                    )
+            for packet in packets:
                 turn = self.assembler.add(packet, arrived)
                 if turn is not None:
                     self._update_stats()
@@ -194,9 +226,13 @@ class YdlidarSource:
             host, _, port = self.url.removeprefix("tcp://").rpartition(":")
             reader, writer = await asyncio.open_connection(host, int(port))
             try:
+                writer.write(STARTUP)
+                await writer.drain()
                 while data := await reader.read(READ_SIZE):
                     yield data, self._monotonic()
             finally:
+                with contextlib.suppress(ConnectionError, OSError):
+                    writer.write(STOP_SCAN)
                 writer.close()
                 with contextlib.suppress(ConnectionError, OSError):
                     await writer.wait_closed()
@@ -209,6 +245,9 @@ class YdlidarSource:
         import serial  # type: ignore[import-untyped]  # pyserial: in the agent's base set
 
         port = serial.Serial(self.url, self.baud, timeout=0.05)
+        port.write(STOP_SCAN)
+        port.reset_input_buffer()  # the packets of a scan left running
+        port.write(GET_HEALTH + START_SCAN)
         queue: asyncio.Queue[tuple[bytes, float]] = asyncio.Queue(maxsize=256)
         loop = asyncio.get_running_loop()
         stop = threading.Event()
@@ -232,28 +271,63 @@ class YdlidarSource:
         finally:
             stop.set()
             await asyncio.to_thread(reader.join, 1.0)
+            with contextlib.suppress(OSError, serial.SerialException):
+                port.write(STOP_SCAN)  # the head stops spinning
             port.close()
 
 
-class ObstacleDistanceSource:
-    """OBSTACLE_DISTANCE from the flight controller (an FcuLink listener feeds it).
+class MavlinkRangeSource:
+    """Ranges the flight controller measured, from its MAVLink stream (an FcuLink listener
+    feeds `on_message`); each message, or each burst of them, is one turn.
 
-    Distances are centimetres per sector, ``max_distance + 1`` (or UINT16_MAX) for no
-    obstacle, 0 for unknown; sectors run clockwise from ``angle_offset`` in the frame the
-    message names (MAV_FRAME_BODY_FRD, ArduPilot's): so the increment is negative here.
+    - OBSTACLE_DISTANCE (PX4's collision prevention sends it, 72 sectors of 5 degrees;
+      ArduPilot takes it in from companion computers): centimetres per sector,
+      ``max_distance + 1`` for no obstacle, UINT16_MAX for unknown, 0 for touching.
+      Sectors run clockwise from ``angle_offset``; in MAV_FRAME_BODY_FRD from the nose,
+      in MAV_FRAME_GLOBAL or MAV_FRAME_LOCAL_NED (the default) from north.
+    - DISTANCE_SENSOR: ArduPilot's proximity library sends its 8 horizontal sectors as a
+      burst of 8 of these (orientations MAV_SENSOR_ROTATION_NONE to _YAW_315, 45 degrees
+      apart clockwise), a plain rangefinder one. Readings at or beyond ``max_distance``
+      are no return; up- and down-facing (pitched) sensors are not part of a 2-D scan and
+      are counted, not used. A burst ends when all 8 directions came, or when a message
+      of another instant or a direction already in it starts the next.
+
+    Once OBSTACLE_DISTANCE has been seen, DISTANCE_SENSOR is left out: both describe the
+    same surroundings, and OBSTACLE_DISTANCE is the finer one.
     """
 
-    UNKNOWN_CM = 0
-    NO_OBSTACLE = 65535
+    NO_READING = 65535
+    SECTORS = 8  # MAV_SENSOR_ROTATION_NONE .. MAV_SENSOR_ROTATION_YAW_315
+    FRAME_BODY_FRD = mavlink2.MAV_FRAME_BODY_FRD
+    NORTH_FRAMES = frozenset({mavlink2.MAV_FRAME_GLOBAL, mavlink2.MAV_FRAME_LOCAL_NED})
 
     def __init__(self, queue_size: int = 4) -> None:
         self._queue: asyncio.Queue[Turn] = asyncio.Queue(maxsize=queue_size)
-        self.stats: dict[str, int] = {"messages": 0, "dropped": 0}
+        self.stats: dict[str, int] = {
+            "obstacle_distance": 0,
+            "distance_sensor": 0,
+            "not_horizontal": 0,
+            "unknown_frame": 0,
+            "dropped": 0,
+        }
+        self._obstacle_distance_seen = False
+        self._burst: dict[int, tuple[int, int]] = {}  # orientation: (cm, max cm)
+        self._burst_ms: int | None = None
 
     def on_message(self, message: Any) -> None:
-        if message.get_type() != "OBSTACLE_DISTANCE":
+        kind = message.get_type()
+        if kind == "OBSTACLE_DISTANCE":
+            self._obstacle_distance(message)
+        elif kind == "DISTANCE_SENSOR" and not self._obstacle_distance_seen:
+            self._distance_sensor(message)
+
+    def _obstacle_distance(self, message: Any) -> None:
+        self.stats["obstacle_distance"] += 1
+        self._obstacle_distance_seen = True
+        frame = int(getattr(message, "frame", 0))
+        if frame != self.FRAME_BODY_FRD and frame not in self.NORTH_FRAMES:
+            self.stats["unknown_frame"] += 1
             return
-        self.stats["messages"] += 1
         increment = float(message.increment_f) or float(message.increment)
         if increment <= 0.0:
             return
@@ -261,17 +335,55 @@ class ObstacleDistanceSource:
         max_cm = int(message.max_distance)
         ranges = array("H", bytes(2 * count))
         for i, cm in enumerate(message.distances[:count]):
-            if self.UNKNOWN_CM < cm <= max_cm and cm != self.NO_OBSTACLE:
-                ranges[i] = cm * 10
-        turn = Turn(
-            start=0.0,
-            duration_s=max(1e-3, 1.0 / 10.0),  # a sector sweep is not timed: one message
-            angle_min=-math.radians(float(message.angle_offset)),
-            angle_increment=-math.radians(increment),
-            ranges=ranges,
-            range_max_m=max_cm / 100.0,
-            fcu_start_s=int(message.time_usec) / 1e6,
+            if cm <= max_cm and cm != self.NO_READING:
+                ranges[i] = max(cm, 1) * 10  # 0 cm is touching, not "no return"
+        self._put(
+            Turn(
+                start=0.0,
+                duration_s=SNAPSHOT_S,
+                angle_min=-math.radians(float(message.angle_offset)),
+                angle_increment=-math.radians(increment),
+                ranges=ranges,
+                range_max_m=max_cm / 100.0,
+                fcu_start_s=int(message.time_usec) / 1e6,
+                north_aligned=frame in self.NORTH_FRAMES,
+            )
         )
+
+    def _distance_sensor(self, message: Any) -> None:
+        self.stats["distance_sensor"] += 1
+        orientation = int(message.orientation)
+        if orientation >= self.SECTORS:  # pitched up or down, or a custom rotation
+            self.stats["not_horizontal"] += 1
+            return
+        at_ms = int(message.time_boot_ms)
+        if self._burst and (at_ms != self._burst_ms or orientation in self._burst):
+            self._flush()
+        self._burst_ms = at_ms
+        self._burst[orientation] = (int(message.current_distance), int(message.max_distance))
+        if len(self._burst) == self.SECTORS:
+            self._flush()
+
+    def _flush(self) -> None:
+        burst, self._burst = self._burst, {}
+        assert self._burst_ms is not None
+        ranges = array("H", bytes(2 * self.SECTORS))
+        for orientation, (cm, max_cm) in burst.items():
+            if 0 < cm < max_cm:
+                ranges[orientation] = cm * 10
+        self._put(
+            Turn(
+                start=0.0,
+                duration_s=SNAPSHOT_S,
+                angle_min=0.0,
+                angle_increment=-math.radians(360.0 / self.SECTORS),  # clockwise
+                ranges=ranges,
+                range_max_m=max(max_cm for _, max_cm in burst.values()) / 100.0,
+                fcu_start_s=self._burst_ms / 1000.0,
+            )
+        )
+
+    def _put(self, turn: Turn) -> None:
         if self._queue.full():  # newest wins
             self._queue.get_nowait()
             self.stats["dropped"] += 1

@@ -4,8 +4,12 @@ The format is YDLIDAR's published one (see simulator/ydlidar_wire.py for the lay
 maintained Python package parses it from a byte stream: YDLIDAR's own SDK is C++ with
 SWIG bindings that open the port themselves (so they cannot read the simulator's socket
 or a test's corrupted bytes), and PyLidar3 speaks only the old X4's 2-byte samples and
-is unmaintained. This is the ~100 lines that feed on whatever bytes arrive, split or
-merged anyhow, and never raise on garbage: it counts what it throws away.
+is unmaintained (neither is on PyPI as a maintained package; the SDK is built from
+source). Slamtec's RPLIDAR does have a maintained reader (adafruit-circuitpython-rplidar),
+but its format is another, and the seed experiment's sensor is a YDLIDAR T-mini Pro.
+This is the ~150 lines that feed on whatever bytes arrive, split or
+merged anyhow, and never raise on garbage: it counts what it throws away. It also reads
+the answers to the driver's commands (start, health) that come before the packets.
 
 Pure Python (bytes slicing and integer XOR), no numpy: the agent's base install stays
 small, and a 10 Hz, 720-sample stream costs well under 1 % of a core (bench/bench_scans.py).
@@ -19,6 +23,15 @@ from functools import reduce
 from operator import xor
 
 HEADER = b"\xaa\x55"
+RESPONSE = b"\xa5\x5a"  # a command's answer: descriptor, then (one-shot answers) payload
+RESPONSE_BYTES = 7
+# The answers the driver asks for: type -> (mode, payload length); mode 1 is continuous
+# (the scan packets follow, with their own headers), 0 one answer of that length.
+RESPONSES = {0x81: (1, 5), 0x06: (0, 3)}
+HEALTH = 0x06
+START_SCAN = b"\xa5\x60"
+STOP_SCAN = b"\xa5\x65"
+GET_HEALTH = b"\xa5\x91"
 HEADER_WORD = 0x55AA
 HEADER_BYTES = 10
 SAMPLE_BYTES = 3  # intensity models: intensity, then a u16 of distance << 2
@@ -43,12 +56,22 @@ class ParserStats:
     packets: int = 0
     bad_checksums: int = 0
     skipped_bytes: int = 0  # bytes before a header: noise, or a packet's lost start
+    responses: int = 0  # answers to the driver's commands
+
+
+@dataclass(frozen=True, slots=True)
+class Health:
+    """The sensor's answer to GET_HEALTH: status 0 is good, 1 a warning, 2 an error."""
+
+    status: int
+    error_code: int
 
 
 class YdlidarParser:
     def __init__(self) -> None:
         self._buffer = bytearray()
         self.stats = ParserStats()
+        self.health: Health | None = None
 
     def feed(self, data: bytes) -> list[Packet]:
         """Every whole packet in the bytes received so far; the rest waits for more."""
@@ -58,9 +81,19 @@ class YdlidarParser:
         start = 0
         while True:
             at = buffer.find(HEADER, start)
+            answer = buffer.find(RESPONSE, start, None if at < 0 else at)
+            if answer >= 0:
+                self.stats.skipped_bytes += answer - start
+                taken = self._response(buffer, answer)
+                if taken is None:  # not all here yet
+                    start = answer
+                    break
+                start = answer + (taken or 2)  # 0: not an answer we know, skip its marker
+                self.stats.skipped_bytes += 0 if taken else 2
+                continue
             if at < 0:
-                # keep a trailing 0xAA: it may be the first half of a header
-                keep = 1 if buffer.endswith(b"\xaa") else 0
+                # keep a trailing 0xAA or 0xA5: it may be the first half of a header
+                keep = 1 if buffer and buffer[-1] in (0xAA, 0xA5) else 0
                 self.stats.skipped_bytes += len(buffer) - start - keep
                 start = len(buffer) - keep
                 break
@@ -91,6 +124,24 @@ class YdlidarParser:
             self.stats.skipped_bytes += len(buffer) - HEADER_BYTES
             del buffer[:-HEADER_BYTES]
         return packets
+
+    def _response(self, buffer: bytearray, at: int) -> int | None:
+        """The length of the command answer at ``at`` (0 if it is none the driver asks
+        for), or None until all of it is here."""
+        if len(buffer) - at < RESPONSE_BYTES:
+            return None
+        word, kind = struct.unpack_from("<IB", buffer, at + 2)
+        mode, length = word >> 30, word & 0x3FFFFFFF
+        if RESPONSES.get(kind) != (mode, length):
+            return 0
+        size = RESPONSE_BYTES + (length if mode == 0 else 0)
+        if len(buffer) - at < size:
+            return None
+        if kind == HEALTH:
+            status, code = struct.unpack_from("<BH", buffer, at + RESPONSE_BYTES)
+            self.health = Health(status, code)
+        self.stats.responses += 1
+        return size
 
 
 def _checksum(ct: int, count: int, fsa: int, lsa: int, body: bytes) -> int:

@@ -781,7 +781,8 @@ export interface paths {
         };
         /**
          * Obstacles
-         * @description Clusters in the point map (above the ground), with their extents in site ENU.
+         * @description Clusters in the point map (above the ground), with their extents in site ENU; an
+         *     obstacle keeps its id while it is seen (found and gone are events, kind "obstacle").
          */
         get: operations["obstacles_api_v1_scans_obstacles_get"];
         put?: never;
@@ -1463,7 +1464,7 @@ export interface components {
             /** Vehicle Id */
             vehicle_id: string;
             /** Command */
-            command: components["schemas"]["ArmCommand"] | components["schemas"]["DisarmCommand"] | components["schemas"]["TakeoffCommand"] | components["schemas"]["LandCommand"] | components["schemas"]["ReturnToLaunchCommand"] | components["schemas"]["SetModeCommand"] | components["schemas"]["GotoCommand"] | components["schemas"]["HoldCommand"] | components["schemas"]["ChangeSpeedCommand"] | components["schemas"]["SetHomeCommand"] | components["schemas"]["RebootCommand"] | components["schemas"]["ParamListCommand"] | components["schemas"]["ParamGetCommand"] | components["schemas"]["ParamSetCommand"] | components["schemas"]["MissionUploadCommand"] | components["schemas"]["MissionDownloadCommand"] | components["schemas"]["MissionClearCommand"] | components["schemas"]["MissionSetCurrentCommand"];
+            command: components["schemas"]["ArmCommand"] | components["schemas"]["DisarmCommand"] | components["schemas"]["TakeoffCommand"] | components["schemas"]["LandCommand"] | components["schemas"]["ReturnToLaunchCommand"] | components["schemas"]["SetModeCommand"] | components["schemas"]["GotoCommand"] | components["schemas"]["HoldCommand"] | components["schemas"]["ChangeSpeedCommand"] | components["schemas"]["SetHomeCommand"] | components["schemas"]["RebootCommand"] | components["schemas"]["ParamListCommand"] | components["schemas"]["ParamGetCommand"] | components["schemas"]["ParamSetCommand"] | components["schemas"]["MissionUploadCommand"] | components["schemas"]["MissionDownloadCommand"] | components["schemas"]["MissionClearCommand"] | components["schemas"]["MissionSetCurrentCommand"] | components["schemas"]["ManualStartCommand"] | components["schemas"]["ManualStopCommand"];
             outcome: components["schemas"]["CommandOutcome"];
         };
         /** CurrentItem */
@@ -1690,12 +1691,12 @@ export interface components {
              */
             vehicle_ids?: string[] | null;
             /** Command */
-            command: components["schemas"]["ArmCommand"] | components["schemas"]["DisarmCommand"] | components["schemas"]["TakeoffCommand"] | components["schemas"]["LandCommand"] | components["schemas"]["ReturnToLaunchCommand"] | components["schemas"]["SetModeCommand"] | components["schemas"]["GotoCommand"] | components["schemas"]["HoldCommand"] | components["schemas"]["ChangeSpeedCommand"] | components["schemas"]["SetHomeCommand"] | components["schemas"]["RebootCommand"] | components["schemas"]["ParamListCommand"] | components["schemas"]["ParamGetCommand"] | components["schemas"]["ParamSetCommand"] | components["schemas"]["MissionUploadCommand"] | components["schemas"]["MissionDownloadCommand"] | components["schemas"]["MissionClearCommand"] | components["schemas"]["MissionSetCurrentCommand"];
+            command: components["schemas"]["ArmCommand"] | components["schemas"]["DisarmCommand"] | components["schemas"]["TakeoffCommand"] | components["schemas"]["LandCommand"] | components["schemas"]["ReturnToLaunchCommand"] | components["schemas"]["SetModeCommand"] | components["schemas"]["GotoCommand"] | components["schemas"]["HoldCommand"] | components["schemas"]["ChangeSpeedCommand"] | components["schemas"]["SetHomeCommand"] | components["schemas"]["RebootCommand"] | components["schemas"]["ParamListCommand"] | components["schemas"]["ParamGetCommand"] | components["schemas"]["ParamSetCommand"] | components["schemas"]["MissionUploadCommand"] | components["schemas"]["MissionDownloadCommand"] | components["schemas"]["MissionClearCommand"] | components["schemas"]["MissionSetCurrentCommand"] | components["schemas"]["ManualStartCommand"] | components["schemas"]["ManualStopCommand"];
         };
         /** GroupCommandResponse */
         GroupCommandResponse: {
             /** Command */
-            command: components["schemas"]["ArmCommand"] | components["schemas"]["DisarmCommand"] | components["schemas"]["TakeoffCommand"] | components["schemas"]["LandCommand"] | components["schemas"]["ReturnToLaunchCommand"] | components["schemas"]["SetModeCommand"] | components["schemas"]["GotoCommand"] | components["schemas"]["HoldCommand"] | components["schemas"]["ChangeSpeedCommand"] | components["schemas"]["SetHomeCommand"] | components["schemas"]["RebootCommand"] | components["schemas"]["ParamListCommand"] | components["schemas"]["ParamGetCommand"] | components["schemas"]["ParamSetCommand"] | components["schemas"]["MissionUploadCommand"] | components["schemas"]["MissionDownloadCommand"] | components["schemas"]["MissionClearCommand"] | components["schemas"]["MissionSetCurrentCommand"];
+            command: components["schemas"]["ArmCommand"] | components["schemas"]["DisarmCommand"] | components["schemas"]["TakeoffCommand"] | components["schemas"]["LandCommand"] | components["schemas"]["ReturnToLaunchCommand"] | components["schemas"]["SetModeCommand"] | components["schemas"]["GotoCommand"] | components["schemas"]["HoldCommand"] | components["schemas"]["ChangeSpeedCommand"] | components["schemas"]["SetHomeCommand"] | components["schemas"]["RebootCommand"] | components["schemas"]["ParamListCommand"] | components["schemas"]["ParamGetCommand"] | components["schemas"]["ParamSetCommand"] | components["schemas"]["MissionUploadCommand"] | components["schemas"]["MissionDownloadCommand"] | components["schemas"]["MissionClearCommand"] | components["schemas"]["MissionSetCurrentCommand"] | components["schemas"]["ManualStartCommand"] | components["schemas"]["ManualStopCommand"];
             /** Results */
             results: components["schemas"]["VehicleCommandResult"][];
         };
@@ -1860,6 +1861,32 @@ export interface components {
             username: string;
             /** Password */
             password: string;
+        };
+        /**
+         * ManualStartCommand
+         * @description Open browser control on the vehicle (the hub sends it when it grants a lease): the
+         *     agent checks that the autopilot will take MANUAL_CONTROL from it (ArduPilot
+         *     MAV_GCS_SYSID/SYSID_MYGCS and RC_OVERRIDE_TIME, PX4 COM_RC_IN_MODE) and switches to
+         *     the pilot mode, which pauses a mission in progress. Refused with the reason
+         *     otherwise. Not for the REST endpoint: a lease comes from the control message.
+         */
+        ManualStartCommand: {
+            /**
+             * @description discriminator enum property added by openapi-typescript
+             * @enum {string}
+             */
+            name: "manual_start";
+        };
+        /**
+         * ManualStopCommand
+         * @description Close browser control (the lease was released): the vehicle holds.
+         */
+        ManualStopCommand: {
+            /**
+             * @description discriminator enum property added by openapi-typescript
+             * @enum {string}
+             */
+            name: "manual_stop";
         };
         /** Metrics */
         Metrics: {
@@ -3623,7 +3650,7 @@ export interface operations {
         };
         requestBody: {
             content: {
-                "application/json": components["schemas"]["ArmCommand"] | components["schemas"]["DisarmCommand"] | components["schemas"]["TakeoffCommand"] | components["schemas"]["LandCommand"] | components["schemas"]["ReturnToLaunchCommand"] | components["schemas"]["SetModeCommand"] | components["schemas"]["GotoCommand"] | components["schemas"]["HoldCommand"] | components["schemas"]["ChangeSpeedCommand"] | components["schemas"]["SetHomeCommand"] | components["schemas"]["RebootCommand"] | components["schemas"]["ParamListCommand"] | components["schemas"]["ParamGetCommand"] | components["schemas"]["ParamSetCommand"] | components["schemas"]["MissionUploadCommand"] | components["schemas"]["MissionDownloadCommand"] | components["schemas"]["MissionClearCommand"] | components["schemas"]["MissionSetCurrentCommand"];
+                "application/json": components["schemas"]["ArmCommand"] | components["schemas"]["DisarmCommand"] | components["schemas"]["TakeoffCommand"] | components["schemas"]["LandCommand"] | components["schemas"]["ReturnToLaunchCommand"] | components["schemas"]["SetModeCommand"] | components["schemas"]["GotoCommand"] | components["schemas"]["HoldCommand"] | components["schemas"]["ChangeSpeedCommand"] | components["schemas"]["SetHomeCommand"] | components["schemas"]["RebootCommand"] | components["schemas"]["ParamListCommand"] | components["schemas"]["ParamGetCommand"] | components["schemas"]["ParamSetCommand"] | components["schemas"]["MissionUploadCommand"] | components["schemas"]["MissionDownloadCommand"] | components["schemas"]["MissionClearCommand"] | components["schemas"]["MissionSetCurrentCommand"] | components["schemas"]["ManualStartCommand"] | components["schemas"]["ManualStopCommand"];
             };
         };
         responses: {

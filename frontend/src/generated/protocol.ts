@@ -14,7 +14,8 @@
  * Any frame of protocol version 1, in either direction.
  */
 export type AnyMessage = AgentToHub | HubToAgent | ClientToHub | HubToClient;
-export type AgentToHub = Hello | Telemetry | LiveState | Event | CommandResult | Unavailable | Pong;
+export type AgentToHub =
+  Hello | Telemetry | LiveState | Event | CommandResult | Unavailable | Pong | ManualApplied;
 export type HubToAgent = Welcome | CommandRequest | Ack | Resend | ErrorReply | Ping | ManualFrame;
 export type ClientToHub = Ping | ControlRequest | ManualInput | SubscribeScans | UnsubscribeScans;
 export type HubToClient =
@@ -25,7 +26,8 @@ export type HubToClient =
   | Pong
   | ErrorReply
   | LeaseState
-  | SurveyUpdate;
+  | SurveyUpdate
+  | ManualEcho;
 
 /**
  * First frame from an agent: who it is and what it can do.
@@ -294,6 +296,15 @@ export interface Pong {
   type: "pong";
   nonce: string | null;
 }
+/**
+ * The agent sent this frame to the flight controller as MANUAL_CONTROL (about twice
+ * a second while a stream lasts): the hub passes it to the lease holder.
+ */
+export interface ManualApplied {
+  type: "manual_applied";
+  seq: number;
+  sent_ms: number | null;
+}
 export interface Welcome {
   type: "welcome";
   protocol: number;
@@ -320,7 +331,9 @@ export interface CommandRequest {
     | MissionUploadCommand
     | MissionDownloadCommand
     | MissionClearCommand
-    | MissionSetCurrentCommand;
+    | MissionSetCurrentCommand
+    | ManualStartCommand
+    | ManualStopCommand;
   /**
    * How long the agent may try before giving up.
    */
@@ -453,6 +466,22 @@ export interface MissionSetCurrentCommand {
   seq: number;
 }
 /**
+ * Open browser control on the vehicle (the hub sends it when it grants a lease): the
+ * agent checks that the autopilot will take MANUAL_CONTROL from it (ArduPilot
+ * MAV_GCS_SYSID/SYSID_MYGCS and RC_OVERRIDE_TIME, PX4 COM_RC_IN_MODE) and switches to
+ * the pilot mode, which pauses a mission in progress. Refused with the reason
+ * otherwise. Not for the REST endpoint: a lease comes from the control message.
+ */
+export interface ManualStartCommand {
+  name: "manual_start";
+}
+/**
+ * Close browser control (the lease was released): the vehicle holds.
+ */
+export interface ManualStopCommand {
+  name: "manual_stop";
+}
+/**
  * Everything up to these sequence numbers of the stream is stored; the agent may
  * forget it. Sent after the database commit, never on receipt.
  */
@@ -491,6 +520,8 @@ export interface ManualFrame {
   type: "manual";
   seq: number;
   axes: ManualAxes;
+  source: "gamepad" | "touch" | "keyboard" | "program";
+  sent_ms: number | null;
 }
 export interface ManualAxes {
   /**
@@ -516,7 +547,11 @@ export interface ManualAxes {
 }
 /**
  * Ask for (or give back) the manual-control lease of one vehicle. Needs the
- * 'command' permission; one pilot per vehicle.
+ * 'command' permission; one pilot per vehicle. An acquire is granted (a `lease` naming
+ * the holder, to every client) only once the vehicle's agent has checked that the
+ * autopilot takes MANUAL_CONTROL from it and switched to its pilot mode; otherwise
+ * an `error` gives the reason (e.g. SYSID_MYGCS or COM_RC_IN_MODE). Release and
+ * revoke put the vehicle in its hold mode.
  */
 export interface ControlRequest {
   type: "control";
@@ -536,6 +571,14 @@ export interface ManualInput {
   vehicle_id: string;
   seq: number;
   axes: ManualAxes;
+  /**
+   * gamepad and program streams that repeat the same off-centre values for 3 s count as frozen and hold the vehicle; touch and keyboard do not
+   */
+  source: "gamepad" | "touch" | "keyboard" | "program";
+  /**
+   * the client's own clock when it read the input (ms); the agent echoes it (manual_echo) so the pilot sees the input-to-vehicle round trip
+   */
+  sent_ms: number | null;
 }
 /**
  * Send me this vehicle's scans (binary frames, protocol/scans.py), newest only.
@@ -659,13 +702,21 @@ export interface ScanSubscriptions {
   vehicles: string[];
 }
 /**
- * Who flies a vehicle by hand now (holder None: nobody), sent to every client.
+ * Who flies a vehicle by hand now (holder None: nobody), sent to every client when
+ * it changes, and for every vehicle with a lease history when a client connects. A
+ * lease ends when released, revoked by an admin, expired (no input for 2 s), on the
+ * vehicle (the agent's deadman, frozen input, its hold button, a mode change from the
+ * RC transmitter or another GCS), or with a hub restart; `reason` says which.
  */
 export interface LeaseState {
   type: "lease";
   vehicle_id: string;
   holder: string | null;
   reason: string;
+  /**
+   * a mission was in progress when the lease began and is paused: set this mode to resume it (ArduPilot AUTO, PX4 AUTO.MISSION)
+   */
+  resume_mode: string | null;
 }
 /**
  * An area survey's progress, at most one a second per survey (newest wins): lanes
@@ -705,6 +756,16 @@ export interface SurveyDroneProgress {
    * why it dropped out
    */
   reason: string | null;
+}
+/**
+ * To the lease holder: its frame ``seq`` went out to the flight controller. Its
+ * ``sent_ms`` against the client's clock now is the input-to-vehicle round trip.
+ */
+export interface ManualEcho {
+  type: "manual_echo";
+  vehicle_id: string;
+  seq: number;
+  sent_ms: number | null;
 }
 
 export const PROTOCOL_VERSION = 1;

@@ -1,0 +1,443 @@
+// The pilot view: take a vehicle's manual-control lease, fly it with on-screen sticks,
+// the keyboard or a gamepad, and see what it does. Frames go out at 25 Hz only while
+// this browser holds the lease and can vouch for its input: the page hidden, the window
+// blurred, the gamepad gone or frozen, or the hub's link down stop them, and the panel
+// says why; the agent's 0.5 s deadman then holds the vehicle and the lease ends. It
+// never starts again by itself: the pilot takes control again.
+import type { Runner } from "../panels/selectedVehicle";
+import { AttitudeIndicator } from "../panels/attitude";
+import { actionButton, element, field, setText } from "../dom";
+import { MISSING, formatAltitude, formatBattery, formatSpeed } from "../format";
+import type { LeaseState, ManualEcho, ManualInput } from "../generated/protocol";
+import type { ClientToHub, CurrentUser, VehicleSummary } from "../types";
+import {
+  BUTTON_HOLD,
+  BUTTON_SELECT,
+  GamepadInput,
+  type InputSource,
+  KeyboardInput,
+  type SourceName,
+  TouchSticks,
+} from "./inputs";
+import { type PilotSettings, loadMapping, loadSettings, saveMapping, saveSettings } from "./settings";
+import { AXES, type AxisName, Shaper, toManualAxes } from "./shaping";
+import "./pilot.css";
+
+/** 25 Hz: what browser GCSs send, and the hub's floor for a lease's stream. */
+export const SEND_INTERVAL_MS = 40;
+const PING_EVERY_MS = 1000;
+
+export type Send = (message: ClientToHub) => boolean;
+
+export class PilotPanel {
+  readonly element: HTMLElement;
+  private readonly leases = new Map<string, LeaseState>();
+  private vehicleId: string | null = null;
+  private vehicle: VehicleSummary | null = null;
+  private source: InputSource | null = null;
+  private sourceName: SourceName = "touch";
+  private settings: PilotSettings | null = null;
+  private readonly mapping;
+  private shaper: Shaper | null = null;
+  private sending = false;
+  private stoppedWhy: string | null = null;
+  private seq = 0;
+  private lastTickMs = 0;
+  private timer: number | undefined;
+  private pingTimer: number | undefined;
+  private pingNonce = 0;
+  private pingSentAt = new Map<string, number>();
+  private windowFocused = true;
+  private readonly listeners = new AbortController();
+  private readonly attitude = new AttitudeIndicator();
+  private readonly ui: Record<
+    "title" | "holder" | "status" | "delay" | "rtt" | "alt" | "speed" | "battery" | "position" | "mode" | "axes",
+    HTMLElement
+  >;
+  private readonly take: HTMLButtonElement;
+  private readonly release: HTMLButtonElement;
+  private readonly revoke: HTMLButtonElement;
+  private readonly resume: HTMLButtonElement;
+  private readonly sourcePicker: HTMLSelectElement;
+  private readonly sticks: HTMLElement;
+  private readonly stickZones: [HTMLElement, HTMLElement];
+  private readonly buttons: HTMLElement;
+  private readonly settingsForm: HTMLElement;
+
+  constructor(
+    private readonly user: CurrentUser,
+    private readonly send: Send,
+    private readonly runCommand: Runner | null,
+    private readonly notify: (text: string) => void,
+  ) {
+    this.mapping = loadMapping(user.username);
+    const value = (name: string) => field("dd", name, { className: "stat-value", textContent: MISSING });
+    this.ui = {
+      title: element("h2", { className: "panel-title", textContent: "Fly by hand" }),
+      holder: field("p", "lease-holder", { className: "pilot-holder", textContent: "Select a vehicle" }),
+      status: field("output", "pilot-status", { className: "pilot-status", textContent: "not flying" }),
+      delay: value("pilot-delay"),
+      rtt: value("pilot-hub-rtt"),
+      alt: value("pilot-alt"),
+      speed: value("pilot-speed"),
+      battery: value("pilot-battery"),
+      position: value("pilot-position"),
+      mode: value("pilot-mode"),
+      axes: field("code", "pilot-axes", { className: "pilot-axes" }),
+    };
+    this.ui.status.setAttribute("aria-live", "assertive");
+    const canFly = runCommand !== null && user.permissions.includes("command");
+    this.take = actionButton("take-control", "Take control", () => this.requestLease());
+    this.release = actionButton("release-control", "Release", () => this.control("release"));
+    this.revoke = actionButton("revoke-control", "Revoke", () => this.control("revoke"));
+    this.resume = actionButton("resume-mission", "Resume mission", () => void this.resumeMission());
+    this.sourcePicker = field("select", "pilot-source", { className: "pilot-source" });
+    for (const [name, label] of [["touch", "On-screen sticks"], ["keyboard", "Keyboard (WASD, arrows)"], ["gamepad", "Gamepad"]]) {
+      this.sourcePicker.append(element("option", { value: name, textContent: label }));
+    }
+    this.sourcePicker.setAttribute("aria-label", "Input");
+    this.sourcePicker.addEventListener("change", () => {
+      this.sourceName = this.sourcePicker.value as SourceName;
+      if (this.sending) this.startSource();
+    });
+    this.stickZones = [
+      element("div", { className: "pilot-stick" }),
+      element("div", { className: "pilot-stick" }),
+    ];
+    this.stickZones[0].dataset.stick = "left";
+    this.stickZones[1].dataset.stick = "right";
+    this.sticks = element("div", { className: "pilot-sticks", hidden: true }, ...this.stickZones);
+    this.buttons = element(
+      "div",
+      { className: "pilot-buttons", hidden: true },
+      actionButton("pilot-select", "Select (arm / land)", () => this.press(BUTTON_SELECT)),
+      actionButton("pilot-hold", "Hold", () => this.press(BUTTON_HOLD)),
+    );
+    this.settingsForm = element("details", { className: "pilot-settings" });
+    const stat = (label: string, node: HTMLElement) =>
+      element("div", { className: "stat" }, element("dt", { textContent: label }), node);
+    this.element = element(
+      "section",
+      { className: "pilot-panel" },
+      this.ui.title,
+      this.ui.holder,
+      canFly
+        ? element("div", { className: "pilot-controls" }, this.sourcePicker, this.take, this.release, this.resume)
+        : element("span"),
+      user.permissions.includes("admin") ? this.revoke : element("span"),
+      this.ui.status,
+      this.sticks,
+      this.buttons,
+      element(
+        "div",
+        { className: "selected-body" },
+        this.attitude.element,
+        element(
+          "dl",
+          { className: "stats" },
+          stat("Mode", this.ui.mode),
+          stat("Altitude", this.ui.alt),
+          stat("Speed", this.ui.speed),
+          stat("Battery", this.ui.battery),
+          stat("Position", this.ui.position),
+          stat("Input → vehicle (round trip)", this.ui.delay),
+          stat("Hub round trip", this.ui.rtt),
+        ),
+      ),
+      this.ui.axes,
+      canFly ? this.settingsForm : element("span"),
+    );
+    this.element.dataset.panel = "pilot";
+    this.attitude.element.dataset.field = "pilot-attitude";
+
+    const options = { signal: this.listeners.signal };
+    document.addEventListener("visibilitychange", () => this.check(), options);
+    window.addEventListener("blur", () => ((this.windowFocused = false), this.check()), options);
+    window.addEventListener("focus", () => (this.windowFocused = true), options);
+    window.addEventListener("gamepaddisconnected", () => this.check(), options);
+    this.render();
+  }
+
+  // -- what the dashboard feeds in ----------------------------------------------------
+
+  select(vehicleId: string): void {
+    if (vehicleId === this.vehicleId) return;
+    if (this.sending) this.stop("another vehicle selected"); // its lease ends by the deadman
+    this.vehicleId = vehicleId;
+    this.vehicle = null;
+    this.settings = loadSettings(this.user.username, vehicleId);
+    this.renderSettings();
+    this.render();
+  }
+
+  update(changed: Iterable<VehicleSummary>): void {
+    for (const vehicle of changed) if (vehicle.id === this.vehicleId) this.vehicle = vehicle;
+    this.renderVehicle();
+  }
+
+  onLease(state: LeaseState): void {
+    this.leases.set(state.vehicle_id, state);
+    if (state.vehicle_id !== this.vehicleId) return;
+    const mine = state.holder === this.user.username;
+    if (mine && !this.sending && this.stoppedWhy === null) this.startSending();
+    if (!mine && this.sending) this.stop(`lease ended: ${state.reason || "no reason given"}`);
+    if (!mine && state.holder === null && this.stoppedWhy !== null) {
+      this.stoppedWhy = `${this.stoppedWhy}; lease ended: ${state.reason}`;
+    }
+    this.render();
+  }
+
+  onPong(nonce: string | null | undefined): void {
+    if (!nonce) return;
+    const sentAt = this.pingSentAt.get(nonce);
+    if (sentAt === undefined) return;
+    this.pingSentAt.delete(nonce);
+    setText(this.ui.rtt, `${Math.round(performance.now() - sentAt)} ms`);
+  }
+
+  /** The agent flew our frame: its send time against now is input to vehicle and back. */
+  onEcho(echo: ManualEcho): void {
+    if (echo.vehicle_id !== this.vehicleId || typeof echo.sent_ms !== "number" || !this.sending) return;
+    setText(this.ui.delay, `${Math.round(performance.now() - echo.sent_ms)} ms`);
+  }
+
+  destroy(): void {
+    this.stop("dashboard closed");
+    this.listeners.abort();
+    this.element.remove();
+  }
+
+  // -- the lease ------------------------------------------------------------------------
+
+  private requestLease(): void {
+    if (!this.vehicleId) return;
+    this.stoppedWhy = null;
+    this.control("acquire");
+    setText(this.ui.status, "asking for control…");
+  }
+
+  private control(action: "acquire" | "release" | "revoke"): void {
+    if (!this.vehicleId) return;
+    if (action === "release") this.stop("released");
+    if (!this.send({ type: "control", vehicle_id: this.vehicleId, action })) {
+      this.notify("Not connected to the hub: try again when the link is back.");
+    }
+  }
+
+  private async resumeMission(): Promise<void> {
+    const mode = this.vehicleId ? this.leases.get(this.vehicleId)?.resume_mode : null;
+    if (!this.vehicleId || !mode || !this.runCommand) return;
+    const answer = await this.runCommand(this.vehicleId, { name: "set_mode", mode });
+    setText(this.ui.status, answer.text);
+  }
+
+  // -- the stream -----------------------------------------------------------------------
+
+  private startSource(): void {
+    this.source?.destroy();
+    const settings = this.settings ?? loadSettings(this.user.username, this.vehicleId ?? "");
+    this.sticks.hidden = this.sourceName !== "touch";
+    this.buttons.hidden = false;
+    if (this.sourceName === "touch") this.source = new TouchSticks(this.stickZones[0], this.stickZones[1]);
+    else if (this.sourceName === "keyboard") this.source = new KeyboardInput(settings.keyboard);
+    else this.source = new GamepadInput(this.mapping);
+    this.shaper = new Shaper(settings.shaping);
+  }
+
+  private startSending(): void {
+    this.sending = true;
+    this.stoppedWhy = null;
+    this.startSource();
+    this.lastTickMs = performance.now();
+    this.timer = window.setInterval(() => this.tick(), SEND_INTERVAL_MS);
+    this.pingTimer = window.setInterval(() => this.ping(), PING_EVERY_MS);
+    this.ping();
+    this.tick();
+  }
+
+  /** Why input must not go out now, or null. */
+  private problem(nowMs: number): string | null {
+    if (document.visibilityState === "hidden") return "page hidden";
+    if (!this.windowFocused) return "window lost focus";
+    return this.source?.problem(nowMs) ?? null;
+  }
+
+  private check(): void {
+    if (!this.sending) return;
+    const why = this.problem(performance.now());
+    if (why) this.stop(why);
+  }
+
+  private tick(): void {
+    if (!this.sending || !this.vehicleId || !this.source || !this.shaper) return;
+    const now = performance.now();
+    const reading = this.source.read(now);
+    const why = this.problem(now);
+    if (why) {
+      this.stop(why); // never stream a value nobody vouches for
+      return;
+    }
+    const shaped = this.shaper.shape(reading.axes, Math.min(0.2, (now - this.lastTickMs) / 1000));
+    this.lastTickMs = now;
+    const message: ManualInput = {
+      type: "manual",
+      vehicle_id: this.vehicleId,
+      seq: ++this.seq,
+      axes: toManualAxes(shaped, reading.buttons),
+      source: this.source.name,
+      sent_ms: now, // this page's monotonic clock; echoed back by the agent
+    };
+    if (!this.send(message)) {
+      this.stop("link to the hub lost");
+      return;
+    }
+    const axes = message.axes;
+    setText(this.ui.axes, `x ${axes.x}  y ${axes.y}  z ${axes.z}  r ${axes.r}`);
+  }
+
+  private stop(why: string): void {
+    if (this.sending) {
+      this.stoppedWhy = why;
+    }
+    this.sending = false;
+    window.clearInterval(this.timer);
+    window.clearInterval(this.pingTimer);
+    this.source?.destroy();
+    this.source = null;
+    this.sticks.hidden = true;
+    this.buttons.hidden = true;
+    this.render();
+  }
+
+  private press(bit: number): void {
+    const source = this.source;
+    if (source instanceof TouchSticks) source.presses.press(bit);
+  }
+
+  private ping(): void {
+    const nonce = `pilot-${++this.pingNonce}`;
+    this.pingSentAt.clear();
+    this.pingSentAt.set(nonce, performance.now());
+    this.send({ type: "ping", nonce });
+  }
+
+  // -- drawing --------------------------------------------------------------------------
+
+  private render(): void {
+    const lease = this.vehicleId ? this.leases.get(this.vehicleId) : undefined;
+    const holder = lease?.holder ?? null;
+    const mine = holder === this.user.username;
+    setText(this.ui.title, this.vehicleId ? `Fly ${this.vehicleId} by hand` : "Fly by hand");
+    let holderText = "Select a vehicle";
+    if (this.vehicleId) {
+      holderText = holder ? `Flown by hand by ${holder}` : "Nobody flies it by hand";
+      if (!holder && lease?.reason) holderText += ` (last lease: ${lease.reason})`;
+    }
+    setText(this.ui.holder, holderText);
+    this.take.disabled = !this.vehicleId || holder !== null;
+    this.release.disabled = !mine;
+    this.revoke.disabled = !holder || mine;
+    this.resume.hidden = !(lease?.resume_mode && !holder);
+    if (lease?.resume_mode) this.resume.textContent = `Resume mission (${lease.resume_mode})`;
+    let status = "not flying";
+    if (this.sending) status = `flying with ${this.sourcePicker.selectedOptions[0]?.textContent ?? this.sourceName}, 25 Hz`;
+    else if (this.stoppedWhy) status = `stopped: ${this.stoppedWhy} — the vehicle holds`;
+    setText(this.ui.status, status);
+    this.ui.status.dataset.state = this.sending ? "sending" : this.stoppedWhy ? "stopped" : "idle";
+    this.renderVehicle();
+  }
+
+  private renderVehicle(): void {
+    const state = this.vehicle?.state ?? null;
+    setText(this.ui.mode, state?.mode ?? MISSING);
+    setText(this.ui.alt, formatAltitude(state?.alt_rel));
+    setText(this.ui.speed, formatSpeed(state?.groundspeed));
+    setText(this.ui.battery, formatBattery(state));
+    const lat = state?.lat;
+    const lon = state?.lon;
+    setText(this.ui.position, typeof lat === "number" && typeof lon === "number" ? `${lat.toFixed(6)}, ${lon.toFixed(6)}` : MISSING);
+    this.attitude.update(state?.roll_deg ?? 0, state?.pitch_deg ?? 0, state?.heading_deg ?? null);
+  }
+
+  private renderSettings(): void {
+    const settings = this.settings;
+    if (!settings || !this.vehicleId) return;
+    const vehicleId = this.vehicleId;
+    const save = () => saveSettings(this.user.username, vehicleId, settings);
+    const number = (name: string, value: number, step: number, set: (v: number) => void) => {
+      const input = field("input", name, { type: "number", value: String(value), step: String(step), className: "pilot-number" });
+      input.addEventListener("change", () => {
+        const parsed = Number(input.value);
+        if (!Number.isFinite(parsed)) return;
+        set(parsed);
+        save();
+      });
+      return input;
+    };
+    const rows = AXES.map((axis: AxisName) => {
+      const shape = settings.shaping[axis];
+      return element(
+        "tr",
+        {},
+        element("th", { textContent: axis }),
+        element("td", {}, number(`shape-${axis}-deadzone`, shape.deadzone, 0.01, (v) => (shape.deadzone = Math.min(0.5, Math.max(0, v))))),
+        element("td", {}, number(`shape-${axis}-expo`, shape.expo, 0.05, (v) => (shape.expo = Math.min(1, Math.max(0, v))))),
+        element("td", {}, number(`shape-${axis}-slew`, shape.slewPerS, 0.5, (v) => (shape.slewPerS = Math.min(20, Math.max(0.1, v))))),
+        element("td", {}, number(`shape-${axis}-max`, shape.max, 0.05, (v) => (shape.max = Math.min(1, Math.max(0, v))))),
+      );
+    });
+    const header = element("tr", {}, ...["", "dead zone", "expo", "slew /s", "max"].map((t) => element("th", { textContent: t })));
+    const keyboard = element(
+      "p",
+      { className: "pilot-keyboard" },
+      "Keyboard step ",
+      number("keyboard-step", settings.keyboard.step, 0.05, (v) => (settings.keyboard.step = Math.min(1, Math.max(0.01, v)))),
+      " sensitivity ",
+      number("keyboard-sensitivity", settings.keyboard.sensitivity, 0.05, (v) => (settings.keyboard.sensitivity = Math.min(1, Math.max(0.05, v)))),
+    );
+    this.settingsForm.replaceChildren(
+      element("summary", { textContent: `Stick shaping for ${vehicleId}, keyboard, gamepad mapping` }),
+      element("table", { className: "pilot-shaping" }, header, ...rows),
+      keyboard,
+      this.mappingForm(),
+    );
+  }
+
+  /** The gamepad mapping screen: which axis (and which way) is which, which buttons act. */
+  private mappingForm(): HTMLElement {
+    const mapping = this.mapping;
+    const save = () => saveMapping(this.user.username, mapping);
+    const indexPicker = (name: string, current: number, count: number, set: (v: number) => void) => {
+      const picker = field("select", name);
+      for (let i = 0; i < count; i++) picker.append(element("option", { value: String(i), textContent: String(i), selected: i === current }));
+      picker.addEventListener("change", () => (set(Number(picker.value)), save()));
+      return picker;
+    };
+    const rows = AXES.map((axis: AxisName) => {
+      const map = mapping.axes[axis];
+      const invert = field("input", `map-${axis}-invert`, { type: "checkbox", checked: map.invert });
+      invert.addEventListener("change", () => ((map.invert = invert.checked), save()));
+      return element(
+        "tr",
+        {},
+        element("th", { textContent: axis }),
+        element("td", {}, indexPicker(`map-${axis}-axis`, map.axis, 8, (v) => (map.axis = v))),
+        element("td", {}, element("label", {}, invert, " invert")),
+      );
+    });
+    const live = field("code", "gamepad-live", { textContent: "move a stick to see its axis" });
+    const poll = window.setInterval(() => {
+      if (!live.isConnected) return window.clearInterval(poll);
+      const pad = navigator.getGamepads?.().find((p) => p?.connected);
+      setText(live, pad ? pad.axes.map((v, i) => `${i}: ${v.toFixed(2)}`).join("  ") : "no gamepad connected");
+    }, 200);
+    return element(
+      "fieldset",
+      { className: "pilot-mapping" },
+      element("legend", { textContent: "Gamepad mapping" }),
+      element("table", {}, ...rows),
+      element("p", {}, "Select button ", indexPicker("map-select", mapping.select, 16, (v) => (mapping.select = v)), " hold button ", indexPicker("map-hold", mapping.hold, 16, (v) => (mapping.hold = v))),
+      live,
+    );
+  }
+}

@@ -17,6 +17,7 @@ import { MissionTools } from "./missions";
 import { ReplayPanel } from "./replayPanel";
 import { type CurrentUser, type HubConfig, type HubToClient, can } from "./types";
 import { ScanLayer } from "./scans/scanLayer";
+import { SurveyPanel } from "./survey";
 import { Viz3dPane } from "./viz3d/pane";
 
 // Without the hub's config there is no protocol version to compare: assume ours.
@@ -49,6 +50,7 @@ export class Dashboard {
   private ops: OpsPanels | null = null;
   private viz3d: Viz3dPane | null = null;
   private missions: MissionTools | null = null;
+  private survey: SurveyPanel | null = null;
   private pilot: PilotPanel | null = null;
   private expiryTimer: number | undefined;
   private stopped = false;
@@ -115,6 +117,8 @@ export class Dashboard {
     this.viz3d = new Viz3dPane(document.getElementById("map")!);
     const missions = new MissionTools(map.leaflet, can(user, "command"));
     this.missions = missions;
+    const survey = new SurveyPanel(map.leaflet, can(user, "command"));
+    this.survey = survey;
     const scans = new ScanLayer(map.leaflet, (message) => this.socket?.send(message));
     this.scans = scans;
 
@@ -124,12 +128,14 @@ export class Dashboard {
         table.remove(id);
         map.remove(id);
         missions.remove(id);
+        survey.remove(id);
       }
       table.update(changed);
       map.update(changed);
       ops.update(changed, removed);
       pilot.update(changed);
       missions.update(changed);
+      survey.update(changed);
       let online = 0;
       for (const vehicle of all.values()) if (linkState(vehicle) !== "offline") online++;
       header.setCounts(all.size, online);
@@ -150,6 +156,9 @@ export class Dashboard {
           break;
         case "error":
           header.showNotice(`Hub: ${message.message}`);
+          break;
+        case "survey":
+          survey.onSurvey(message);
           break;
         case "pong":
           pilot.onPong(message.nonce);
@@ -200,6 +209,8 @@ export class Dashboard {
     this.ops = null;
     this.missions?.destroy();
     this.missions = null;
+    this.survey?.destroy();
+    this.survey = null;
     this.table?.destroy();
     this.table = null;
     this.scans?.destroy();

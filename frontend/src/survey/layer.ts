@@ -1,0 +1,105 @@
+// The survey on the map: the area being drawn (outline and holes), the planned lanes in
+// one colour per drone, and during the flight the lanes flown (faded) and the photos
+// (dots where CAMERA_FEEDBACK placed them).
+//
+// Plain Leaflet vectors, as the mission editor draws: clicks add vertices to the ring
+// being drawn, a click on its first vertex (or "Close ring") closes it. No drawing plugin
+// is installed, and a polygon with holes is all this needs.
+import * as L from "leaflet";
+
+/** One colour per drone, in the order the drones are listed (distinct on the base maps). */
+export const DRONE_COLOURS = ["#ff7f0e", "#1f9bff", "#2ca02c", "#e377c2", "#bcbd22", "#17becf", "#d62728", "#9467bd"];
+
+export function droneColour(index: number): string {
+  return DRONE_COLOURS[index % DRONE_COLOURS.length];
+}
+
+export interface LaneDrawing {
+  vehicleId: string;
+  colour: string;
+  /** [[lat, lon], [lat, lon]] from start to end. */
+  path: [number, number][];
+  done: boolean;
+}
+
+export class SurveyLayer {
+  private readonly area = L.layerGroup();
+  private readonly plan = L.layerGroup();
+  private readonly photos = L.layerGroup();
+
+  constructor(map: L.Map) {
+    this.plan.addTo(map);
+    this.photos.addTo(map);
+    this.area.addTo(map);
+  }
+
+  /** Closed rings (outline first, then holes) and the ring being drawn, if any. */
+  drawArea(rings: readonly L.LatLng[][], open: readonly L.LatLng[] | null, onCloseRing: () => void): void {
+    this.area.clearLayers();
+    rings.forEach((ring, index) => {
+      L.polygon(ring, {
+        className: index === 0 ? "survey-area" : "survey-hole",
+        color: index === 0 ? "#ffd43b" : "#ff6b6b",
+        weight: 2,
+        fillOpacity: index === 0 ? 0.08 : 0.25,
+        interactive: false,
+      }).addTo(this.area);
+    });
+    if (open && open.length > 0) {
+      L.polyline([...open], { className: "survey-drawing", color: "#ffd43b", dashArray: "4 4", interactive: false }).addTo(
+        this.area,
+      );
+      open.forEach((at, index) => {
+        const vertex = L.circleMarker(at, {
+          className: index === 0 ? "survey-vertex survey-vertex-first" : "survey-vertex",
+          radius: index === 0 ? 7 : 4,
+          color: "#ffd43b",
+          fillOpacity: 1,
+          // The first vertex closes the ring; the others must not swallow the map's click.
+          interactive: index === 0,
+          bubblingMouseEvents: false,
+        });
+        if (index === 0) vertex.on("click", () => onCloseRing());
+        vertex.addTo(this.area);
+      });
+    }
+  }
+
+  drawLanes(lanes: readonly LaneDrawing[]): void {
+    this.plan.clearLayers();
+    for (const lane of lanes) {
+      L.polyline(lane.path, {
+        className: lane.done ? "survey-lane survey-lane-done" : "survey-lane",
+        color: lane.colour,
+        weight: 3,
+        opacity: lane.done ? 0.25 : 0.9,
+        interactive: false,
+      }).addTo(this.plan);
+    }
+  }
+
+  drawPhotos(photos: readonly { at: [number, number]; colour: string }[]): void {
+    this.photos.clearLayers();
+    for (const photo of photos) {
+      L.circleMarker(photo.at, {
+        className: "survey-photo",
+        radius: 2,
+        color: photo.colour,
+        fillOpacity: 1,
+        weight: 1,
+        interactive: false,
+      }).addTo(this.photos);
+    }
+  }
+
+  clearPlan(): void {
+    this.plan.clearLayers();
+    this.photos.clearLayers();
+  }
+
+  destroy(): void {
+    this.area.remove();
+    this.plan.remove();
+    this.photos.remove();
+  }
+}

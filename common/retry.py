@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import asyncio
 from collections.abc import Awaitable, Callable
+from contextvars import ContextVar
 from dataclasses import dataclass
 
 from tenacity import RetryCallState, Retrying, wait_exponential, wait_random_exponential
@@ -78,19 +79,27 @@ class Retries:
         self.failures = 0
 
 
-def _raise_if_stopping() -> None:
-    """Refuse to start another attempt in a task that has been asked to stop.
+def stop_retrying_when(stopping: asyncio.Event) -> None:
+    """From now on, every retry loop in this task, and in the tasks it starts, ends (with
+    ``CancelledError``) instead of waiting for another attempt once ``stopping`` is set.
 
-    On Python 3.11 a ``TaskGroup`` whose child fails while the task around it is being
-    cancelled raises only the child's error: the link's reader reports the closed socket
-    at the moment SIGTERM cancels the agent, the loop's ``except*`` takes the error, and
-    the cancellation is gone. The loop would then retry for ever and the process ignore
-    every further SIGTERM. Every retry loop comes through here before it waits, so this
-    is the one place to see the request that was swallowed (``Task.cancelling()`` still
-    counts it) and to honour it.
+    The process's stop signal sets it as well as cancelling the main task, because the
+    cancellation alone can be lost: on Python 3.11 a ``TaskGroup`` whose child fails while
+    the task around it is being cancelled raises only the child's error. The link's reader
+    reports the closed socket at the moment SIGTERM arrives, the loop's ``except*`` takes
+    the error, and the loop would retry for ever, deaf to every further SIGTERM.
+    (``Task.cancelling()`` cannot tell: 3.11's ``TaskGroup`` leaves a request of its own
+    uncounted-back after any child fails, stop or no stop.)
     """
-    task = asyncio.current_task()
-    if task is not None and task.cancelling():
+    _stopping.set(stopping)
+
+
+_stopping: ContextVar[asyncio.Event | None] = ContextVar("retry_stopping", default=None)
+
+
+def _raise_if_stopping() -> None:
+    stopping = _stopping.get()
+    if stopping is not None and stopping.is_set():
         raise asyncio.CancelledError
 
 

@@ -20,6 +20,7 @@ from typing import Any
 from pydantic import ValidationError
 
 from common.log_escaping import escape_control_characters_in_logs
+from common.retry import stop_retrying_when
 from vehicle_agents.config import (
     ENV_PREFIX,
     AgentSettings,
@@ -190,10 +191,13 @@ def run_until_signalled(
         task = asyncio.current_task()
         assert task is not None
         loop = asyncio.get_running_loop()
+        stopping = asyncio.Event()
+        stop_retrying_when(stopping)  # before main starts its tasks, so they all see it
 
         def stop(signum: signal.Signals) -> None:
             signals.append(signum.name)
             log.info("%s: %s received, stopping", name, signum.name)
+            stopping.set()
             task.cancel()
 
         for signum in (signal.SIGINT, signal.SIGTERM):

@@ -55,6 +55,8 @@ def _concrete(path: str) -> str:
         "tlog_id": "999999",
         "format": "csv",
         "param": "WPNAV_SPEED",
+        "survey_id": "0123456789abcdef",
+        "formation_id": "0123456789abcdef",
     }
     return re.sub(r"\{(\w+)\}", lambda match: values[match.group(1)], path)
 

@@ -6223,6 +6223,24 @@ export interface operations {
                     "application/json": components["schemas"]["ErrorMessage"];
                 };
             };
+            /** @description No such vehicle, flight, log, user or token (named in the message) */
+            404: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description The vehicle is not connected, its flight controller refused, or the resource exists */
+            409: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
             /** @description The request body is over the size limit */
             413: {
                 headers: {
@@ -6374,6 +6392,15 @@ export interface operations {
                     "application/json": components["schemas"]["ErrorMessage"];
                 };
             };
+            /** @description The vehicle is not connected, its flight controller refused, or the resource exists */
+            409: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
             /** @description The request body is over the size limit */
             413: {
                 headers: {
@@ -6445,6 +6472,15 @@ export interface operations {
             };
             /** @description No such vehicle, flight, log, user or token (named in the message) */
             404: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description The vehicle is not connected, its flight controller refused, or the resource exists */
+            409: {
                 headers: {
                     [name: string]: unknown;
                 };

@@ -90,3 +90,7 @@ def test_the_3d_view_shows_the_fleet_and_follows_it(page: Page, fleet: LocalFlee
     after = poll_until(lambda: _changed(viz, before), 30, "the canvas to change")
     (OUTPUT / "vehicle-climbed.png").write_bytes(after)
     assert _colours(after, page) > 20
+
+    # The suite's shared fleet: the next test that flies it expects its vehicles landed.
+    row.locator('button[data-action="land"]').click()
+    expect(row.locator('[data-field="armed"]')).to_contain_text("disarmed", timeout=120_000)

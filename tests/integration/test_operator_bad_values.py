@@ -15,7 +15,7 @@ import json
 import math
 import secrets
 from collections.abc import Callable, Iterator
-from typing import Any, get_args
+from typing import Annotated, Any, get_args, get_origin
 
 import httpx
 import pytest
@@ -64,12 +64,21 @@ def _commands(bad: float | str) -> list[tuple[str, dict[str, Any]]]:
     return commands
 
 
+def _types(annotation: Any) -> set[Any]:
+    """The plain types an annotation admits, through unions and ``Annotated`` (the strict
+    ``Number`` is one, and ``Number | None`` holds one)."""
+    args = get_args(annotation)
+    if get_origin(annotation) is Annotated:
+        return _types(args[0])
+    return set().union(*(_types(arg) for arg in args)) if args else {annotation}
+
+
 def _numbers(model: type[BaseModel]) -> set[str]:
     """The fields of ``model`` that hold a number (a bool is not one)."""
     return {
         name
         for name, field in model.model_fields.items()
-        if {int, float} & set(get_args(field.annotation) or [field.annotation])
+        if {int, float} & _types(field.annotation)
     }
 
 

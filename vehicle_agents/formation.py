@@ -30,11 +30,14 @@ import time
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from enum import StrEnum
+from typing import TYPE_CHECKING
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from common.formation import LeaderState, Offset, OffsetFrame, slot_target
-from common.geodesy import LocalFrame
+
+if TYPE_CHECKING:
+    from common.geodesy import LocalFrame
 from protocol.messages import (
     EventKind,
     FormationEnd,
@@ -298,6 +301,10 @@ class FormationRunner:
             self._emit("formation", f"new slot in {slot.formation_id}: {_describe(offset)}", 6)
             return
         self.formation_id = slot.formation_id
+        # pymap3d brings numpy: imported when a formation starts, not at the agent's start
+        # (a Pi Zero's start-up and memory budget, tests/unit/test_onboard_footprint.py)
+        from common.geodesy import LocalFrame
+
         frame = LocalFrame(slot.origin_lat, slot.origin_lon)
         self.follower = Follower(frame, offset, slot.min_separation_m, self.settings)
         self._face_heading = slot.face_heading

@@ -5,7 +5,7 @@ from __future__ import annotations
 from pydantic import BaseModel, ConfigDict, Field
 
 from common.formation import OffsetFrame, Shape
-from protocol.messages import VehicleId
+from protocol.messages import Number, VehicleId
 
 MAX_FOLLOWERS = 32
 MAX_ROUTE_POINTS = 500
@@ -16,15 +16,15 @@ class _Strict(BaseModel):
 
 
 class RoutePoint(_Strict):
-    lat: float = Field(ge=-90, le=90)
-    lon: float = Field(ge=-180, le=180)
-    alt_m: float = Field(ge=0, le=10_000, description="The leader's altitude above home")
+    lat: Number = Field(ge=-90, le=90)
+    lon: Number = Field(ge=-180, le=180)
+    alt_m: Number = Field(ge=0, le=10_000, description="The leader's altitude above home")
 
 
 class OffsetModel(_Strict):
-    x: float = Field(ge=-500, le=500, description="Metres forward (heading) or north (ne)")
-    y: float = Field(ge=-500, le=500, description="Metres right (heading) or east (ne)")
-    up: float = Field(default=0.0, ge=-500, le=500, description="Metres above the leader")
+    x: Number = Field(ge=-500, le=500, description="Metres forward (heading) or north (ne)")
+    y: Number = Field(ge=-500, le=500, description="Metres right (heading) or east (ne)")
+    up: Number = Field(default=0.0, ge=-500, le=500, description="Metres above the leader")
     frame: OffsetFrame = OffsetFrame.HEADING
 
 
@@ -33,7 +33,7 @@ class FollowerModel(_Strict):
     offset: OffsetModel | None = Field(
         default=None, description="Its slot; null takes the next slot of the shape preset"
     )
-    up: float = Field(
+    up: Number = Field(
         default=0.0, ge=-500, le=500, description="Metres above the leader in a preset slot"
     )
 
@@ -43,12 +43,12 @@ class FormationRequest(_Strict):
         default=None, description="The leading vehicle; null for a virtual leader"
     )
     route: list[RoutePoint] = Field(min_length=2, max_length=MAX_ROUTE_POINTS)
-    speed_ms: float = Field(gt=0, le=30, description="The leader's speed along the route")
-    pause_s: float = Field(default=0.0, ge=0, le=3600, description="Pause at each waypoint")
+    speed_ms: Number = Field(gt=0, le=30, description="The leader's speed along the route")
+    pause_s: Number = Field(default=0.0, ge=0, le=3600, description="Pause at each waypoint")
     followers: list[FollowerModel] = Field(min_length=1, max_length=MAX_FOLLOWERS)
     shape: Shape = Shape.WEDGE
-    spacing_m: float = Field(default=3.0, gt=0, le=500)
-    min_separation_m: float = Field(
+    spacing_m: Number = Field(default=3.0, gt=0, le=500)
+    min_separation_m: Number = Field(
         default=2.0, gt=0, le=100, description="No two vehicles ever closer than this"
     )
 
@@ -57,4 +57,4 @@ class ShapeChange(_Strict):
     """A new shape or spacing in flight: the followers glide to their new slots."""
 
     shape: Shape | None = None
-    spacing_m: float | None = Field(default=None, gt=0, le=500)
+    spacing_m: Number | None = Field(default=None, gt=0, le=500)

@@ -577,7 +577,8 @@ def test_a_lease_survives_a_hub_restart_only_as_revoked(flying: tuple[LocalFleet
     token = access_token(base, "admin", fleet.plan.admin_password)
     with FleetWatcher(base, token) as watcher:
         watcher.wait_until(ready(VEHICLE), 30, "the agent back")
-        assert watcher.state(VEHICLE)["mode"] == "BRAKE"  # the deadman, with no hub
+        # The deadman, with no hub (the first state seen may predate it: waited on).
+        watcher.wait_until(lambda v: v[VEHICLE]["state"]["mode"] == "BRAKE", 15, "BRAKE")
         pilot = Pilot(base, token)
         try:
             revoked = poll_until(

@@ -1,6 +1,6 @@
 """One colour per vehicle, from its id: the same on the 2D map and in the 3D view
-(frontend/src/viz3d/colours.ts computes it the same way; no test yet checks that the two
-agree, and the 2D map does not use it yet)."""
+(frontend/src/viz3d/colours.ts computes it the same way for the 2D map's labels;
+tests/browser/test_viz3d.py checks that the two agree)."""
 
 from __future__ import annotations
 

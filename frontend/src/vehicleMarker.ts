@@ -1,8 +1,5 @@
-// One vehicle on the map: a heading arrow with the vehicle id beside it.
-// The marker element is `<div class="vehicle-marker" data-vehicle-id="...">`.
-import * as L from "leaflet";
-import { linkState } from "./format";
-import type { VehicleSummary } from "./types";
+// The vehicle's symbol: a heading arrow, or a dot without a heading. The live map draws
+// its outline on a canvas (map/vehicleLayer.ts); the replay shows this SVG.
 
 const SVG_NS = "http://www.w3.org/2000/svg";
 export const ICON_SIZE = 28;
@@ -30,63 +27,4 @@ export function vehicleSymbol(): SVGSVGElement {
     svgElement("circle", { class: "vehicle-dot", cx: "14", cy: "14", r: "7" }),
   );
   return symbol;
-}
-
-export class VehicleMarker {
-  readonly marker: L.Marker;
-  private readonly content: HTMLDivElement;
-  private readonly symbol: SVGSVGElement;
-  private lastHeading: number | null | undefined = undefined; // undefined: never drawn
-
-  constructor(
-    readonly id: string,
-    position: L.LatLngExpression,
-    onClick: (id: string) => void,
-  ) {
-    this.content = document.createElement("div");
-    this.content.className = "vehicle-marker-body";
-
-    this.symbol = vehicleSymbol();
-
-    const label = document.createElement("span");
-    label.className = "vehicle-label";
-    label.textContent = id;
-    this.content.append(this.symbol, label);
-
-    const icon = L.divIcon({
-      className: "vehicle-marker",
-      html: this.content,
-      iconSize: [ICON_SIZE, ICON_SIZE],
-      iconAnchor: [ICON_SIZE / 2, ICON_SIZE / 2],
-    });
-    // Leaflet creates the element lazily (and again if the marker is re-added).
-    const createIcon = icon.createIcon.bind(icon);
-    icon.createIcon = (oldIcon?: HTMLElement) => {
-      const element = createIcon(oldIcon);
-      element.dataset.vehicleId = id;
-      return element;
-    };
-
-    this.marker = L.marker(position, { icon, keyboard: true, title: id, riseOnHover: true });
-    this.marker.on("click", () => onClick(id));
-  }
-
-  update(vehicle: VehicleSummary, position: L.LatLngExpression): void {
-    this.marker.setLatLng(position);
-    const state = vehicle.state;
-    const heading = state?.heading_deg ?? null;
-    if (heading !== this.lastHeading) {
-      this.lastHeading = heading;
-      this.symbol.style.transform = heading === null ? "" : `rotate(${heading}deg)`;
-      this.content.classList.toggle("no-heading", heading === null);
-    }
-    const link = linkState(vehicle);
-    this.content.classList.toggle("offline", link !== "online");
-    this.content.classList.toggle("armed", Boolean(state?.armed));
-  }
-
-  setSelected(selected: boolean): void {
-    this.content.classList.toggle("selected", selected);
-    this.marker.setZIndexOffset(selected ? 1000 : 0);
-  }
 }

@@ -9,6 +9,7 @@ from pathlib import Path
 import pytest
 from playwright.sync_api import Frame, Page, expect
 
+from backend.viz3d.colours import rgb, vehicle_colour
 from gcs.launcher import LocalFleet
 from tests.browser.conftest import log_in
 from tests.helpers import poll_until
@@ -59,6 +60,11 @@ def test_the_3d_view_shows_the_fleet_and_follows_it(page: Page, fleet: LocalFlee
     expect(page.locator("tr[data-vehicle-id]")).to_have_count(3, timeout=30_000)
     row = page.locator(f'tr[data-vehicle-id="{VEHICLE}"]')
     expect(row.locator('[data-field="armed"]')).to_have_text("disarmed · ready", timeout=30_000)
+    # Each vehicle wears the same colour on the 2D map as in the 3D view.
+    for vehicle_id in (fleet.vehicle_id(index) for index in range(3)):
+        label = page.locator(f'.vehicle-marker[data-vehicle-id="{vehicle_id}"] .vehicle-label')
+        shown = label.evaluate("e => getComputedStyle(e).borderLeftColor")
+        assert shown == "rgb({}, {}, {})".format(*rgb(vehicle_colour(vehicle_id))), vehicle_id
 
     page.locator(".viz3d-toggle").click()
     iframe = page.frame_locator(".viz3d-pane iframe")

@@ -10,6 +10,7 @@ import type { VehicleSummary } from "../types";
 import { CanvasOverlay } from "./canvasOverlay";
 import { type LabelBox, placeLabels } from "./labels";
 import { TRAIL_COLOUR, SELECTED_TRAIL_COLOUR, TrailLayer } from "./trails";
+import { vehicleColour } from "../viz3d/colours";
 
 const SYMBOL_PX = 28;
 const DRAW_EVERY_MS = 50; // 20 Hz: twice the telemetry rate, a third of the frames
@@ -150,6 +151,9 @@ export class VehicleLayer extends CanvasOverlay {
     element.hidden = true;
     element.dataset.clusterSize = "1";
     const body = L.DomUtil.create("div", "vehicle-marker-body", element);
+    // The vehicle's own colour, as in the 3D view, on its label; the symbol's fill keeps
+    // saying online, armed or offline.
+    body.style.setProperty("--vehicle-colour", vehicleColour(id));
     const row = L.DomUtil.create("div", "vehicle-label-row", body);
     const label = L.DomUtil.create("button", "vehicle-label", row);
     label.type = "button";

@@ -1,6 +1,6 @@
 // One colour per vehicle, the same on the 2D map and in the 3D view: the palette entry
 // picked by the CRC-32 of the id's UTF-8 bytes (backend/viz3d/colours.py does the same;
-// the 2D map is to use it too).
+// tests/browser/test_viz3d.py checks the two agree on the map's labels).
 export const PALETTE = [
   "#e6194b",
   "#3cb44b",

@@ -45,6 +45,7 @@ from backend.storage.writer import StorageWriter
 from backend.surveys.service import SurveyService
 from backend.viz3d.frame import SceneFrame, parse_origin
 from backend.viz3d.mirror import SceneMirror
+from backend.viz3d.replay import ReplayPanels
 from backend.viz3d.scene import FleetScene
 from backend.viz3d.server import VizServer
 from protocol.messages import CloseCode, MissionItem
@@ -90,6 +91,7 @@ class Hub:
     viz: VizServer | None = None
     viz_http: httpx.AsyncClient | None = None
     scene: FleetScene | None = None
+    replays: ReplayPanels | None = None
     # Area surveys: created in start(), as they send commands through the hub itself.
     surveys: SurveyService = field(init=False)
 
@@ -163,6 +165,7 @@ class Hub:
             hub.scene = await asyncio.to_thread(
                 FleetScene, hub.viz.viser, frame, settings.viz_trail_s
             )
+            hub.replays = ReplayPanels(hub.viz.viser, frame, logbook)
         return hub
 
     async def run(self) -> None:

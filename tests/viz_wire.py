@@ -19,3 +19,23 @@ def scene_messages(frame: bytes) -> list[dict[str, Any]]:
     inner = zstandard.ZstdDecompressor().decompress(frame[16 : 16 + packed], plain)
     messages: list[dict[str, Any]] = msgspec.msgpack.decode(inner)["messages"]
     return messages
+
+
+def viewer_camera() -> bytes:
+    """What a browser sends first: its camera. viser counts a viewer as connected (and
+    calls ``on_client_connect``) only once this has arrived."""
+    from viser import _messages as viser_messages
+
+    camera = viser_messages.ViewerCameraMessage(
+        wxyz=(1.0, 0.0, 0.0, 0.0),
+        position=(0.0, -50.0, 30.0),
+        fov=1.0,
+        near=0.01,
+        far=1000.0,
+        image_height=480,
+        image_width=640,
+        look_at=(0.0, 0.0, 0.0),
+        up_direction=(0.0, 0.0, 1.0),
+    )
+    # The client sends plain msgpack (the server reads it with Message.deserialize).
+    return msgspec.msgpack.encode(camera.as_serializable_dict())

@@ -26,11 +26,11 @@ from common.geodesy import LocalFrame
 from protocol.messages import MissionItem, VehicleSummary
 
 # A flat arrowhead, 2 m long, pointing along the body's forward (x) axis.
-_BODY_VERTICES = np.array(
+BODY_VERTICES = np.array(
     [[1.2, 0.0, 0.0], [-0.8, 0.7, 0.0], [-0.4, 0.0, 0.15], [-0.8, -0.7, 0.0], [-0.4, 0.0, -0.1]],
     dtype=np.float32,
 )
-_BODY_FACES = np.array([[0, 1, 2], [0, 2, 3], [0, 4, 1], [0, 3, 4], [1, 4, 2], [2, 4, 3]])
+BODY_FACES = np.array([[0, 1, 2], [0, 2, 3], [0, 4, 1], [0, 3, 4], [1, 4, 2], [2, 4, 3]])
 # A trail point is kept only this far from the last one, so a hovering vehicle's trail
 # does not fill with copies of one point.
 TRAIL_STEP_M = 0.25
@@ -173,7 +173,7 @@ class FleetScene:
         root = f"/{VEHICLES.key}/{vehicle_id}"
         frame = self.server.scene.add_frame(root, show_axes=False, position=position)
         self.server.scene.add_mesh_simple(
-            f"{root}/body", _BODY_VERTICES, _BODY_FACES, color=colour, side="double"
+            f"{root}/body", BODY_VERTICES, BODY_FACES, color=colour, side="double"
         )
         label = self.server.scene.add_label(f"{root}/label", vehicle_id, position=(0, 0, 1.5))
         self._show_layer(VEHICLES)

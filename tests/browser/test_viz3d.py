@@ -75,6 +75,8 @@ def test_the_3d_view_shows_the_fleet_and_follows_it(page: Page, fleet: LocalFlee
     # The scene arrived: the vehicles' nodes are in viser's scene tree.
     expect(iframe.get_by_text(VEHICLE, exact=False).first).to_be_attached(timeout=30_000)
     assert any(url.endswith("/viz") for url in sockets), sockets
+    # This viewer's own replay panel (tests/unit/test_viz_replay.py drives it).
+    expect(iframe.get_by_text("Replay a flight").first).to_be_attached(timeout=30_000)
 
     before = _canvas_png(viz)
     (OUTPUT / "fleet-on-the-ground.png").write_bytes(before)

@@ -4,6 +4,7 @@ import * as L from "leaflet";
 import "leaflet/dist/leaflet.css";
 import { BaseMaps } from "./map/baseLayers";
 import { CursorPosition } from "./map/cursorPosition";
+import { GeofenceLayer } from "./map/geofence";
 import "./map/map.css";
 import { TrailLayer } from "./map/trails";
 import { VehicleLayer } from "./map/vehicleLayer";
@@ -17,6 +18,7 @@ export class FleetMap {
   private readonly vehicles: VehicleLayer;
   private readonly trails: TrailLayer;
   private readonly baseMaps: BaseMaps;
+  private readonly geofence = new GeofenceLayer();
   private selectedId: string | null = null;
   private hasFitted = false;
   /** The live view to return to when the replay ends. */
@@ -46,8 +48,10 @@ export class FleetMap {
         container.classList.toggle("no-basemap", shown);
         if (shown) this.moveGrid();
       },
-      overlays: { Trails: this.trails },
+      overlays: { Trails: this.trails, Geofence: this.geofence.layer },
     });
+    this.geofence.layer.addTo(this.map);
+    this.geofence.show(null);
     void this.baseMaps.start();
   }
 
@@ -90,6 +94,7 @@ export class FleetMap {
   }
 
   select(id: string | null, pan: boolean): void {
+    if (id !== this.selectedId) this.geofence.show(id);
     this.selectedId = id;
     const position = this.vehicles.select(id);
     if (position && pan) this.map.panTo(position);
@@ -98,6 +103,7 @@ export class FleetMap {
   /** Removes the map and its layers, leaving the container empty for a later session. */
   destroy(): void {
     this.baseMaps.destroy();
+    this.geofence.destroy();
     this.vehicles.clear();
     this.map.remove();
     this.container.classList.remove("no-basemap", "replaying");

@@ -31,6 +31,7 @@ from backend.api import (
     tiles,
     vehicles,
     viz,
+    viz_viewers,
     websockets,
 )
 from backend.api.docs import install_docs
@@ -109,6 +110,7 @@ def create_app(settings: HubSettings | None = None) -> FastAPI:
     )
     modules: tuple[ModuleType, ...] = (system, auth, vehicles, params, missions, fleet_commands)
     modules += (safety, surveys, formations, scans, *logs.ROUTE_MODULES, admin, tiles)
+    modules += (viz_viewers,)
     routers = [module.router for module in modules]
     document_errors(app, routers)
     for router in routers:

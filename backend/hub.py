@@ -48,6 +48,7 @@ from backend.viz3d.mirror import SceneMirror
 from backend.viz3d.replay import ReplayPanels
 from backend.viz3d.scene import FleetScene
 from backend.viz3d.server import VizServer
+from backend.viz3d.viewers import Viewers
 from protocol.messages import CloseCode, MissionItem
 
 SEVERITY_INFO = 6  # MAV_SEVERITY_INFO: an obstacle found or gone
@@ -92,6 +93,7 @@ class Hub:
     viz_http: httpx.AsyncClient | None = None
     scene: FleetScene | None = None
     replays: ReplayPanels | None = None
+    viewers: Viewers | None = None
     # Area surveys: created in start(), as they send commands through the hub itself.
     surveys: SurveyService = field(init=False)
 
@@ -166,6 +168,7 @@ class Hub:
                 FleetScene, hub.viz.viser, frame, settings.viz_trail_s
             )
             hub.replays = ReplayPanels(hub.viz.viser, frame, logbook)
+            hub.viewers = Viewers(hub.viz.viser, hub.scene)
         return hub
 
     async def run(self) -> None:

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import threading
 from collections import deque
-from collections.abc import Iterable, Iterator, Sequence
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 
@@ -102,6 +102,8 @@ class FleetScene:
         self._mission_paths: dict[str, viser.LineSegmentsHandle] = {}
         self._next_waypoints: dict[str, viser.IcosphereHandle] = {}
         self._follow: dict[int, str] = {}  # viser client id -> vehicle id
+        # Called (on viser's thread) with the vehicle and the viewer that clicked it.
+        self.on_vehicle_click: Callable[[str, viser.ClientHandle], None] | None = None
         self._obstacles: list[viser.BoxHandle] = []
         self.batches = 0
         server.scene.set_up_direction("+z")
@@ -172,9 +174,10 @@ class FleetScene:
         colour = rgb(vehicle_colour(vehicle_id))
         root = f"/{VEHICLES.key}/{vehicle_id}"
         frame = self.server.scene.add_frame(root, show_axes=False, position=position)
-        self.server.scene.add_mesh_simple(
+        body = self.server.scene.add_mesh_simple(
             f"{root}/body", BODY_VERTICES, BODY_FACES, color=colour, side="double"
         )
+        body.on_click(lambda event: self._clicked(vehicle_id, event.client))
         label = self.server.scene.add_label(f"{root}/label", vehicle_id, position=(0, 0, 1.5))
         self._show_layer(VEHICLES)
         self._follow_choice.options = ("(none)", *sorted([*self._vehicles, vehicle_id]))
@@ -385,12 +388,20 @@ class FleetScene:
         if client is None:
             return
         choice = event.target.value
+        self.follow(client.client_id, None if choice == "(none)" else choice)
+
+    def follow(self, client_id: int, vehicle_id: str | None) -> None:
+        """This viewer's camera follows the vehicle from where it is now (None: stops)."""
         with self._lock:
-            if choice == "(none)":
-                self._follow.pop(client.client_id, None)
+            if vehicle_id is None:
+                self._follow.pop(client_id, None)
             else:
-                self._follow[client.client_id] = choice
+                self._follow[client_id] = vehicle_id
             self._follow_cameras()
+
+    def _clicked(self, vehicle_id: str, client: viser.ClientHandle) -> None:
+        if self.on_vehicle_click is not None:
+            self.on_vehicle_click(vehicle_id, client)
 
     def _follow_cameras(self) -> None:
         if not self._follow:
@@ -405,9 +416,10 @@ class FleetScene:
             if position is None:
                 continue
             offset = client.camera.position - client.camera.look_at
+            # Position first: viser moves look_at along with a new position.
             with client.atomic():
-                client.camera.look_at = position
                 client.camera.position = position + offset
+                client.camera.look_at = position
 
     def _show_skipped(self) -> None:
         skipped = self.frame.skipped

@@ -130,6 +130,12 @@ function postJson<T>(path: string, payload: unknown, options?: RequestOptions): 
   );
 }
 
+/** Turns this dashboard's own 3D viewer to the vehicle, which it then follows
+ * (backend/viz3d/viewers.py: the viewer's page told us its id and secret). */
+export function selectInViewer(viewer: number, secret: string, vehicleId: string): Promise<unknown> {
+  return postJson(`viz/viewers/${viewer}/selection`, { secret, vehicle_id: vehicleId });
+}
+
 // ---------------------------------------------------------------- auth
 
 /** Logs in; the hub sets the session cookie. Throws ApiError 401 / 429 with the hub's words. */

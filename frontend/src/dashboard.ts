@@ -94,6 +94,7 @@ export class Dashboard {
       missions.select(id);
       scans.follow(id);
       pilot.select(id);
+      this.viz3d?.select(id);
     };
     const map = new FleetMap(document.getElementById("map")!, config, (id) => select(id, false));
     const table = new FleetTable(
@@ -114,7 +115,7 @@ export class Dashboard {
     );
     ops.element.firstElementChild?.after(pilot.element);
     this.pilot = pilot;
-    this.viz3d = new Viz3dPane(document.getElementById("map")!);
+    this.viz3d = new Viz3dPane(document.getElementById("map")!, (id) => select(id, true));
     const missions = new MissionTools(map.leaflet, can(user, "command"));
     this.missions = missions;
     const survey = new SurveyPanel(map.leaflet, can(user, "command"));

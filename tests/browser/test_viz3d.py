@@ -82,6 +82,15 @@ def test_the_3d_view_shows_the_fleet_and_follows_it(page: Page, fleet: LocalFlee
     (OUTPUT / "fleet-on-the-ground.png").write_bytes(before)
     assert _colours(before, page) > 20, "the 3D canvas is blank"
 
+    # Selecting a vehicle on the dashboard turns this page's own 3D viewer to it (the
+    # camera itself: tests/unit/test_viz_viewers.py).
+    with page.expect_response(
+        lambda r: "/viz/viewers/" in r.url and r.request.method == "POST", timeout=30_000
+    ) as turned:
+        row.locator('[data-field="id"], td').first.click()
+    assert turned.value.status == 200, turned.value.text()
+    assert turned.value.json()["vehicle_id"] == VEHICLE
+
     row.locator('input[data-field="takeoff-altitude"]').fill("15")
     row.locator('button[data-action="takeoff"]').click()
     expect(row.locator('[data-field="command-result"]')).to_contain_text("accepted", timeout=30_000)

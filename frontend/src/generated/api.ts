@@ -1215,6 +1215,28 @@ export interface paths {
         patch?: never;
         trace?: never;
     };
+    "/api/v1/viz/viewers/{viewer_id}/selection": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        get?: never;
+        put?: never;
+        /**
+         * Select In Viewer
+         * @description Turn this 3D viewer's camera to the vehicle, which it then follows. 404 for an
+         *     unknown viewer or a wrong secret (one answer for both); 409 while the vehicle has no
+         *     position in the view, or when the 3D view is off.
+         */
+        post: operations["select_in_viewer_api_v1_viz_viewers__viewer_id__selection_post"];
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
 }
 export type webhooks = Record<string, never>;
 export interface components {
@@ -3187,6 +3209,30 @@ export interface components {
              */
             last_seen?: number | null;
             state?: components["schemas"]["VehicleState"] | null;
+        };
+        /** ViewerLooksAt */
+        ViewerLooksAt: {
+            /** Vehicle Id */
+            vehicle_id: string;
+            /**
+             * Look At
+             * @description East, north, up in the view, m
+             */
+            look_at: [
+                number,
+                number,
+                number
+            ];
+        };
+        /** ViewerSelection */
+        ViewerSelection: {
+            /**
+             * Secret
+             * @description What the viewer's page said
+             */
+            secret: string;
+            /** Vehicle Id */
+            vehicle_id: string;
         };
         /** ViolationModel */
         ViolationModel: {
@@ -8204,6 +8250,88 @@ export interface operations {
                 };
                 content: {
                     "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description The database is unavailable; try again after Retry-After seconds */
+            503: {
+                headers: {
+                    /** @description Seconds to wait */
+                    "Retry-After"?: number;
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+        };
+    };
+    select_in_viewer_api_v1_viz_viewers__viewer_id__selection_post: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path: {
+                viewer_id: number;
+            };
+            cookie?: never;
+        };
+        requestBody: {
+            content: {
+                "application/json": components["schemas"]["ViewerSelection"];
+            };
+        };
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ViewerLooksAt"];
+                };
+            };
+            /** @description Not authenticated */
+            401: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description Needs the 'read' permission */
+            403: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description No such vehicle, flight, log, user or token (named in the message) */
+            404: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description The request body is over the size limit */
+            413: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed) */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Unprocessable"];
                 };
             };
             /** @description The database is unavailable; try again after Retry-After seconds */

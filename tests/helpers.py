@@ -73,8 +73,12 @@ class FleetWatcher:
     def __init__(self, base_url: str, token: str) -> None:
         ws_url = base_url.replace("http://", "ws://") + CLIENT_WS_PATH
         self._stack = ExitStack()
+        # max_queue=None: frames are taken off the socket as they come, whenever the
+        # test reads them. With the default flow control, a watcher the test stopped
+        # reading leaves the hub's closing frame behind unread updates, and closing it
+        # waits out close_timeout (10 s) at the end of every such test.
         self._socket: ClientConnection = self._stack.enter_context(
-            connect(ws_url, additional_headers={"Authorization": f"Bearer {token}"})
+            connect(ws_url, additional_headers={"Authorization": f"Bearer {token}"}, max_queue=None)
         )
         self.vehicles: dict[str, dict[str, Any]] = {}
         self.events: list[dict[str, Any]] = []  # every live event received, in order

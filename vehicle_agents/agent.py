@@ -232,7 +232,11 @@ class TelemetryPublisher:
         self._armed = state.armed
 
     def _on_message(self, message: MavMessage) -> None:
-        if message.get_type() == "HEARTBEAT" and is_armed(message) != self._armed:
+        if (
+            message.get_type() == "HEARTBEAT"
+            and message.get_srcComponent() == self._link.target_component  # the autopilot's
+            and is_armed(message) != self._armed
+        ):
             self.publish()
 
     async def run(self, rate_hz: float) -> None:

@@ -33,15 +33,16 @@ def _heartbeat(armed: bool) -> Any:
     )
 
 
-async def _published(armed_in_one_read: list[bool]) -> list[Telemetry]:
-    """The snapshots in the outbox after a periodic one and then these heartbeats,
-    handed over in one batch as the link's reader thread does."""
+async def _published(armed_in_one_read: list[bool], component: int = 1) -> list[Telemetry]:
+    """The snapshots in the outbox after a periodic one and then these heartbeats from
+    the vehicle's ``component``, handed over in one batch as the link's reader thread
+    does (the autopilot is component 1)."""
     link = FcuLink("tcp:127.0.0.1:1")
     link.target_system = VEHICLE
     outbox = Outbox("s", limit=100)
     publisher = TelemetryPublisher(link, outbox)
     publisher.publish()  # the rate's snapshot, before the heartbeats
-    mav = mavlink2.MAVLink(None, srcSystem=VEHICLE, srcComponent=1)
+    mav = mavlink2.MAVLink(None, srcSystem=VEHICLE, srcComponent=component)
     link._inbox.extend(
         mav.decode(bytearray(_heartbeat(armed).pack(mav))) for armed in armed_in_one_read
     )
@@ -62,3 +63,10 @@ def test_an_arm_and_a_disarm_between_two_snapshots_are_both_published() -> None:
 def test_heartbeats_that_change_nothing_add_no_snapshot() -> None:
     snapshots = asyncio.run(_published([False, False, True, True]))
     assert [s.state.armed for s in snapshots] == [False, True]
+
+
+def test_another_component_s_heartbeat_adds_no_snapshot() -> None:
+    """A camera or gimbal on the same system sends heartbeats of its own, which say
+    nothing of the motors."""
+    snapshots = asyncio.run(_published([True], component=mavlink2.MAV_COMP_ID_CAMERA))
+    assert len(snapshots) == 1

@@ -284,7 +284,7 @@ def test_the_readmes_client_steps_work_in_order(fleet: LocalFleet, tmp_path: Pat
     [track] = [f for f in features if f["geometry"]["type"] == "LineString"]
     # The flight just flown: step 5 takes the newest that has ended.
     assert track["properties"]["flight_id"] == flown
-    # Step 4 lands once it has climbed: a short track, but a track.
+    # Climbed to 9 m and landed, as step 4 does: a short track, but a track.
     assert len(track["geometry"]["coordinates"]) >= 2
     [page] = json_values(audit)
     assert 1 <= len(page["entries"]) <= 5

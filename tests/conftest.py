@@ -15,7 +15,14 @@ from sqlalchemy import Engine
 from backend.settings import HubSettings
 from backend.storage.database import make_engine
 from gcs.launcher import LocalFleet, free_port
-from tests.helpers import access_token, api_client, poll_until, running_fleet, running_hub
+from tests.helpers import (
+    access_token,
+    api_client,
+    poll_until,
+    running_fleet,
+    running_hub,
+    settle_fleet,
+)
 
 ADMIN_PASSWORD = "test-admin-password"
 # Fast enough that a take-off and landing take seconds, slow enough that the
@@ -118,6 +125,17 @@ def enrol(admin_api: httpx.Client) -> Callable[[str], str]:
 @pytest.fixture(scope="session")
 def fleet_admin_token(fleet: LocalFleet) -> str:
     return access_token(fleet.plan.hub_http, "admin", fleet.plan.admin_password)
+
+
+@pytest.fixture
+def settled_fleet(fleet: LocalFleet, fleet_admin_token: str) -> Iterator[LocalFleet]:
+    """The shared fleet in a known state (see `settle_fleet`: landed, disarmed, no survey
+    or lease, a pack to fly on) before the test, and again after it, so that a test that
+    flies leaves the fleet as it found it for the tests after it."""
+    vehicles = [fleet.vehicle_id(index) for index in range(fleet.plan.vehicles)]
+    settle_fleet(fleet.plan.hub_http, fleet_admin_token, vehicles)
+    yield fleet
+    settle_fleet(fleet.plan.hub_http, fleet_admin_token, vehicles)
 
 
 # The PostgreSQL server the storage tests use (trust auth); GCS_TEST_POSTGRES_ADDRESS

@@ -73,12 +73,17 @@ class FleetWatcher:
     def __init__(self, base_url: str, token: str) -> None:
         ws_url = base_url.replace("http://", "ws://") + CLIENT_WS_PATH
         self._stack = ExitStack()
+        # max_queue=None: frames are taken off the socket as they come, whenever the
+        # test reads them. With the default flow control, a watcher the test stopped
+        # reading leaves the hub's closing frame behind unread updates, and closing it
+        # waits out close_timeout (10 s) at the end of every such test.
         self._socket: ClientConnection = self._stack.enter_context(
-            connect(ws_url, additional_headers={"Authorization": f"Bearer {token}"})
+            connect(ws_url, additional_headers={"Authorization": f"Bearer {token}"}, max_queue=None)
         )
         self.vehicles: dict[str, dict[str, Any]] = {}
         self.events: list[dict[str, Any]] = []  # every live event received, in order
         self.surveys: dict[str, dict[str, Any]] = {}  # the newest progress of each survey
+        self.lease_holders: dict[str, str | None] = {}  # who flies each vehicle by hand
         self.dropped_events = 0
 
     def close(self) -> None:
@@ -117,6 +122,8 @@ class FleetWatcher:
                 self.dropped_events += message["dropped"]
             elif message["type"] == "survey":
                 self.surveys[message["survey_id"]] = message
+            elif message["type"] == "lease":
+                self.lease_holders[message["vehicle_id"]] = message["holder"]
         return self.vehicles
 
     def state(self, vehicle_id: str) -> dict[str, Any]:
@@ -158,6 +165,23 @@ def ready(vehicle: str) -> Callable[[Vehicles], bool]:
     return check
 
 
+def on_the_ground(vehicle: str) -> Callable[[Vehicles], bool]:
+    """A predicate for `FleetWatcher.wait_until`: ready, disarmed, and on the ground as
+    the autopilot itself says (``landed_state``), which is what the hub checks before a
+    survey or a formation takes the vehicle. EXTENDED_SYS_STATE comes at 1 Hz, so for up
+    to a second after the disarm the landed state still says "landing"."""
+
+    def check(vehicles: Vehicles) -> bool:
+        state = state_of(vehicles, vehicle)
+        return bool(
+            ready(vehicle)(vehicles)
+            and state.get("armed") is False
+            and state.get("landed_state") == "on_ground"
+        )
+
+    return check
+
+
 def access_token(base_url: str, username: str, password: str) -> str:
     """A bearer token through the OAuth2 password flow, as an integration gets one."""
     response = httpx.post(
@@ -180,6 +204,54 @@ def send_command(api: httpx.Client, vehicle: str, **command: Any) -> dict[str, A
     assert response.status_code == 200, response.text
     outcome: dict[str, Any] = response.json()["outcome"]
     return outcome
+
+
+# -- a shared fleet as a test may assume it -------------------------------------------
+
+# Surveys that hold their drones: planned (checked, nothing uploaded) or flying.
+ACTIVE_SURVEY_STATES = ("planned", "flying", "handover_offered")
+# A pack below this cannot fly a survey's mission past the rails: say so, not a 422 later.
+SETTLED_BATTERY_PCT = 40.0
+
+
+def settle_fleet(
+    base_url: str, token: str, vehicles: Sequence[str], timeout_s: float = 120
+) -> None:
+    """Bring a fleet that tests share to the state each may assume: no survey holding a
+    drone, every vehicle connected, landed and disarmed (on the ground as its autopilot
+    says), nobody flying one by hand, and a pack to fly on. A vehicle still armed or in
+    the air is landed where it is; one already settled costs a look, nothing more."""
+    with api_client(base_url, token) as api, FleetWatcher(base_url, token) as watcher:
+        for survey in api.get("/api/v1/surveys").json()["surveys"]:
+            if survey["state"] in ACTIVE_SURVEY_STATES:
+                aborted = api.post(f"/api/v1/surveys/{survey['survey_id']}/abort")
+                assert aborted.status_code == 200, aborted.text
+        watcher.wait_until(
+            lambda v: all(ready(vehicle)(v) for vehicle in vehicles),
+            timeout_s,
+            "the fleet connected and reporting",
+        )
+        up = [vehicle for vehicle in vehicles if not on_the_ground(vehicle)(watcher.vehicles)]
+        if up:
+            # Each vehicle's own answer is not checked: one may be landing already, and
+            # the wait below is what counts.
+            landing = {"vehicle_ids": up, "command": {"name": "land"}}
+            answer = api.post("/api/v1/fleet/commands", json=landing)
+            assert answer.status_code == 200, answer.text
+        watcher.wait_until(
+            lambda v: (
+                all(on_the_ground(vehicle)(v) for vehicle in vehicles)
+                and not any(watcher.lease_holders.get(vehicle) for vehicle in vehicles)
+            ),
+            timeout_s,
+            f"{', '.join(vehicles)} landed and disarmed, with no lease held",
+        )
+        low = {
+            vehicle: battery
+            for vehicle in vehicles
+            if (battery := watcher.state(vehicle)["battery_remaining"]) < SETTLED_BATTERY_PCT
+        }
+        assert not low, f"packs below {SETTLED_BATTERY_PCT:g} %, too low to fly on: {low}"
 
 
 # -- processes -------------------------------------------------------------------------

@@ -35,6 +35,7 @@ from vehicle_agents.hub_link import HubLink, VehicleIdInUse
 from vehicle_agents.manual import ManualPilot
 from vehicle_agents.mission_progress import ReachedItems
 from vehicle_agents.missions import mission_number
+from vehicle_agents.modes import is_armed
 from vehicle_agents.outbox import Outbox, SpillFile
 from vehicle_agents.sensors.fcu_time import FcuClock, PoseHistory, ask_timesync
 from vehicle_agents.sensors.relay import DiskBacklog, ScanOutbox, ScanRelay, parse_mount
@@ -117,7 +118,7 @@ async def _run(settings: AgentSettings) -> None:
             on_formation=formation.on_hub,
             scans=scans,
         )
-        tasks.create_task(publish_telemetry(link, outbox, settings.telemetry_rate_hz))
+        tasks.create_task(TelemetryPublisher(link, outbox).run(settings.telemetry_rate_hz))
         tasks.create_task(hub.run())
         failsafe = HubLinkFailsafe(
             hub.connected,
@@ -207,17 +208,44 @@ def current_state(link: FcuLink, outbox: Outbox) -> VehicleState:
     )
 
 
-async def publish_telemetry(link: FcuLink, outbox: Outbox, rate_hz: float) -> None:
-    """Snapshot the vehicle at a fixed rate into the outbox, numbering each one."""
-    period = 1.0 / rate_hz
-    seq = 0
-    next_at = time.monotonic()
-    while True:
-        state = current_state(link, outbox)
-        outbox.put("telemetry", seq, encode(Telemetry(seq=seq, time=time.time(), state=state)))
-        seq += 1
-        next_at += period
-        await asyncio.sleep(max(0.0, next_at - time.monotonic()))
+class TelemetryPublisher:
+    """Snapshots of the vehicle into the outbox, numbered: at a fixed rate, and at once
+    when a HEARTBEAT says the motors armed or disarmed. The hub's flight log finds
+    flights from arm to disarm in these snapshots; an arming shorter than the period (a
+    take-off landed straight away, an arm and a disarm) would otherwise fall between two
+    of them and leave no flight at all."""
+
+    def __init__(self, link: FcuLink, outbox: Outbox) -> None:
+        self._link = link
+        self._outbox = outbox
+        self._seq = 0
+        self._armed: bool | None = None  # as the last snapshot said
+        # Listeners run as each message is handled, before the next one of the batch:
+        # the snapshot taken here still holds the heartbeat that changed.
+        link.listeners.append(self._on_message)
+
+    def publish(self) -> None:
+        state = current_state(self._link, self._outbox)
+        body = encode(Telemetry(seq=self._seq, time=time.time(), state=state))
+        self._outbox.put("telemetry", self._seq, body)
+        self._seq += 1
+        self._armed = state.armed
+
+    def _on_message(self, message: MavMessage) -> None:
+        if (
+            message.get_type() == "HEARTBEAT"
+            and message.get_srcComponent() == self._link.target_component  # the autopilot's
+            and is_armed(message) != self._armed
+        ):
+            self.publish()
+
+    async def run(self, rate_hz: float) -> None:
+        period = 1.0 / rate_hz
+        next_at = time.monotonic()
+        while True:
+            self.publish()
+            next_at += period
+            await asyncio.sleep(max(0.0, next_at - time.monotonic()))
 
 
 class EventSource:

@@ -21,7 +21,10 @@ def _altitude(page: Page) -> float:
     return float(match.group()) if match else 0.0
 
 
-def test_dashboard_shows_the_fleet_and_takes_off(page: Page, fleet: LocalFleet) -> None:
+def test_dashboard_shows_the_fleet_and_takes_off(page: Page, settled_fleet: LocalFleet) -> None:
+    # settled_fleet: the take-off below is landed again after the test, for the tests
+    # after it on the shared fleet (a surveys' check refuses a drone still in the air).
+    fleet = settled_fleet
     log_in(page, fleet.plan.hub_http, "admin", fleet.plan.admin_password)
     expect(page.locator(".vehicle-marker")).to_have_count(3, timeout=30_000)
     expect(page.locator("tr[data-vehicle-id]")).to_have_count(3)

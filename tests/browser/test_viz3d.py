@@ -52,7 +52,10 @@ def _colours(png: bytes, page: Page) -> int:
     )
 
 
-def test_the_3d_view_shows_the_fleet_and_follows_it(page: Page, fleet: LocalFleet) -> None:
+def test_the_3d_view_shows_the_fleet_and_follows_it(
+    page: Page, fleet: LocalFleet, settled_fleet: LocalFleet
+) -> None:
+    # settled_fleet: landed before it flies, and landed again after, pass or fail.
     OUTPUT.mkdir(parents=True, exist_ok=True)
     sockets: list[str] = []
     page.on("websocket", lambda ws: sockets.append(ws.url))

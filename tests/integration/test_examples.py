@@ -258,6 +258,11 @@ def test_the_readmes_client_steps_work_in_order(fleet: LocalFleet, tmp_path: Pat
     log_in, first_call, feed, command, _ = shell([*steps[:4], 'printf %s "$TOKEN" > token']).split(
         separator
     )
+    # Both commands answered before the wait for their flight, so a refusal says so.
+    takeoff, landing = json_values(command)
+    assert takeoff["outcome"]["status"] == "accepted", takeoff
+    [landed] = landing["results"]
+    assert (landed["vehicle_id"], landed["outcome"]["status"]) == (vehicle, "accepted")
     [flown] = poll_until(
         lambda: [f for f in finished_flights() if f not in flown_before],
         120,
@@ -274,10 +279,6 @@ def test_the_readmes_client_steps_work_in_order(fleet: LocalFleet, tmp_path: Pat
     assert vehicle in {v["id"] for v in vehicles}
     assert "pong: hello" in feed.splitlines()
     assert feed.strip().splitlines()[0].startswith("fleet: ")
-    takeoff, landing = json_values(command)
-    assert takeoff["outcome"]["status"] == "accepted", takeoff
-    [landed] = landing["results"]
-    assert (landed["vehicle_id"], landed["outcome"]["status"]) == (vehicle, "accepted")
     assert export.strip() == ""
     features = json.loads((tmp_path / "flight.geojson").read_text())["features"]
     [track] = [f for f in features if f["geometry"]["type"] == "LineString"]

@@ -50,7 +50,10 @@ def _ready(vehicles: dict[str, dict[str, Any]], count: int) -> bool:
 
 
 def test_arm_takeoff_land_through_rest(
-    fleet: LocalFleet, fleet_admin_token: str, monkeypatch: pytest.MonkeyPatch
+    fleet: LocalFleet,
+    fleet_admin_token: str,
+    monkeypatch: pytest.MonkeyPatch,
+    settled_fleet: LocalFleet,  # landed before it flies, and landed again after, pass or fail
 ) -> None:
     base = fleet.plan.hub_http
     vehicle = fleet.vehicle_id(0)

@@ -41,7 +41,9 @@ def _ready(vehicles: dict[str, dict[str, Any]]) -> bool:
 
 
 def test_mission_checked_uploaded_read_back_and_flown(
-    fleet: LocalFleet, fleet_admin_token: str
+    fleet: LocalFleet,
+    fleet_admin_token: str,
+    settled_fleet: LocalFleet,  # landed before it flies, and landed again after, pass or fail
 ) -> None:
     base = fleet.plan.hub_http
     url = f"/api/v1/vehicles/{VEHICLE}/mission"

@@ -14,6 +14,7 @@ from __future__ import annotations
 import json
 import math
 import secrets
+import time
 from collections.abc import Callable, Iterator
 from typing import Annotated, Any, get_args, get_origin
 
@@ -178,18 +179,20 @@ def test_every_rest_route_refuses_the_number_naming_the_field(
         _still_answering(one_vehicle, api, wpnav_speed)
 
 
-def _said(socket: ClientConnection, kind: str) -> dict[str, Any]:
-    """The next message of this kind (fleet states and events in between are read past)."""
-    while True:
-        message: dict[str, Any] = json.loads(socket.recv(timeout=10))
-        if message["type"] == kind:
+def _said(socket: ClientConnection, *kinds: str, timeout_s: float = 30) -> dict[str, Any]:
+    """The next message of one of these kinds (fleet states and events in between are
+    read past: they keep coming, so the wait has a deadline of its own)."""
+    deadline = time.monotonic() + timeout_s
+    while (remaining := deadline - time.monotonic()) > 0:
+        try:
+            message: dict[str, Any] = json.loads(socket.recv(timeout=remaining))
+        except TimeoutError:
+            break
+        if message["type"] in kinds:
             return message
+    raise AssertionError(f"no {' or '.join(kinds)} message within {timeout_s} s")
 
 
-@pytest.mark.skip(
-    reason="hangs since the lease became a manual_start the agent checks (#20's merge); "
-    "to be reworked: open on issue #13"
-)
 def test_stick_input_refuses_the_number_naming_the_axis(
     one_vehicle: LocalFleet, operator: str
 ) -> None:
@@ -204,9 +207,16 @@ def test_stick_input_refuses_the_number_naming_the_axis(
     ):
         with FleetWatcher(base, operator) as watcher:
             watcher.wait_until(connected(VEHICLE), 30, f"{VEHICLE} connected")
+        # The lease opens only once the agent has checked that the autopilot takes
+        # MANUAL_CONTROL from it: ArduPilot from its GCS's id, which must be the agent's
+        # 254 (the README's setup), not the default 255.
+        gcs_id = api.put(f"/api/v1/vehicles/{VEHICLE}/params/SYSID_MYGCS", json={"value": 254})
+        assert gcs_id.status_code == 200, gcs_id.text
         wpnav_speed = _wpnav_speed(api)
         pilot.send(json.dumps({"type": "control", "vehicle_id": VEHICLE, "action": "acquire"}))
-        assert _said(pilot, "lease")["holder"] == "op"
+        granted = _said(pilot, "lease", "error")  # a refusal is an error: say which
+        assert granted["type"] == "lease", granted
+        assert granted["holder"] == "op", granted
         seq = 0
         # fewer than the 20 bad frames after which the hub closes a socket
         for bad in (1e300, math.nan, -math.inf):

@@ -18,7 +18,13 @@ from shapely.geometry import Polygon, box
 
 from common.geodesy import LocalFrame
 from gcs.launcher import FleetPlan, LocalFleet, free_port
-from tests.helpers import FleetWatcher, access_token, api_client, poll_until, ready
+from tests.helpers import (
+    FleetWatcher,
+    access_token,
+    api_client,
+    on_the_ground,
+    poll_until,
+)
 
 pytestmark = pytest.mark.integration
 
@@ -78,13 +84,9 @@ def watcher(fleet: LocalFleet, token: str) -> Iterator[FleetWatcher]:
 
 
 def _on_ground_and_ready(vehicles: dict[str, Any]) -> bool:
-    for vid in VEHICLES:
-        if not ready(vid)(vehicles):
-            return False
-        state = vehicles[vid]["state"]
-        if state["armed"] or (state["alt_rel"] or 0) > 0.5 or state.get("home_lat") is None:
-            return False
-    return True
+    # On the ground as the hub's busy check sees it: the autopilot's landed state, which
+    # trails the disarm by up to a second, not only the disarm.
+    return all(on_the_ground(vid)(vehicles) for vid in VEHICLES)
 
 
 def _area(fleet: LocalFleet) -> tuple[dict[str, Any], LocalFrame]:
@@ -209,10 +211,6 @@ def test_three_drones_fly_the_survey_and_their_photos_cover_the_area(
     assert any(e["text"].startswith("photo ") for e in events["events"])
 
 
-@pytest.mark.skip(
-    reason="after the session's merges the drones of the module's previous survey are still "
-    "airborne when this one is created (422 'busy: it is flying'); open on issue #17"
-)
 def test_a_survey_carries_on_across_a_hub_restart(
     api: httpx.Client, fleet: LocalFleet, token: str
 ) -> None:
@@ -256,10 +254,6 @@ def test_a_survey_carries_on_across_a_hub_restart(
         assert _progress(again, survey_id)["covered_pct"] == 100.0
 
 
-@pytest.mark.skip(
-    reason="after the session's merges the drones of the module's previous survey are still "
-    "airborne when this one is created (422 'busy: it is flying'); open on issue #17"
-)
 def test_a_lost_drone_s_lanes_are_handed_over_and_the_area_still_covered(
     api: httpx.Client, watcher: FleetWatcher, fleet: LocalFleet
 ) -> None:
@@ -310,16 +304,12 @@ def test_a_lost_drone_s_lanes_are_handed_over_and_the_area_still_covered(
     assert done["covered_pct"] == 100.0
 
 
-@pytest.mark.skip(
-    reason="after the session's merges the drones of the module's previous survey are still "
-    "airborne when this one is created (422 'busy: it is flying'); open on issue #17"
-)
 def test_a_drone_sent_home_mid_survey_drops_out_and_an_abort_sends_all_home(
     api: httpx.Client, watcher: FleetWatcher, fleet: LocalFleet
 ) -> None:
     # Runs last: sim_2's agent is gone after the hand-over test; sim_1 and sim_3 fly.
     watcher.wait_until(
-        lambda v: all(ready(vid)(v) and not v[vid]["state"]["armed"] for vid in ("sim_1", "sim_3")),
+        lambda v: all(on_the_ground(vid)(v) for vid in ("sim_1", "sim_3")),
         90,
         "sim_1 and sim_3 ready on the ground",
     )

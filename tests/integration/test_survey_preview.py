@@ -57,13 +57,11 @@ def _request(state: dict[str, Any], **changes: Any) -> dict[str, Any]:
     return body
 
 
-@pytest.mark.skip(
-    reason="on the suite's shared fleet after earlier flights (a vehicle still airborne, a "
-    "drained battery) since the session's merges; passes alone; open on issue #17"
-)
 def test_preview_gives_each_drone_a_checked_mission(
-    api: httpx.Client, watcher: FleetWatcher
+    settled_fleet: LocalFleet, api: httpx.Client, watcher: FleetWatcher
 ) -> None:
+    # settled_fleet: on the ground with a pack to fly on, whatever flew before, so that
+    # every part passes the mission check.
     for vehicle in VEHICLES:
         watcher.wait_until(ready(vehicle), 60, f"{vehicle} ready")
     response = api.post("/api/v1/surveys/preview", json=_request(watcher.state("sim_1")))
@@ -114,13 +112,10 @@ def test_a_self_intersecting_area_is_refused_saying_where(
     assert "Self-intersection" in response.text
 
 
-@pytest.mark.skip(
-    reason="on the suite's shared fleet after earlier flights (a vehicle still airborne, a "
-    "drained battery) since the session's merges; passes alone; open on issue #17"
-)
 def test_files_import_and_a_planned_survey_exports_each_drone_s_mission(
-    api: httpx.Client, watcher: FleetWatcher
+    settled_fleet: LocalFleet, api: httpx.Client, watcher: FleetWatcher
 ) -> None:
+    # settled_fleet: a survey takes only drones on the ground and in no other survey.
     plan_text = (Path(__file__).resolve().parents[1] / "data" / "qgc" / "survey.plan").read_text()
     imported = api.post("/api/v1/surveys/import", json={"format": "plan", "content": plan_text})
     assert imported.status_code == 200, imported.text

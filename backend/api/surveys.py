@@ -22,7 +22,7 @@ from backend.auth.policy import Permission
 from backend.errors import InvalidRequest
 from backend.fleet.safety_gate import snapshot_of
 from backend.missions.schemas import Mission, MissionCheckResponse
-from backend.missions.survey.camera import CameraError
+from backend.missions.survey.camera import PRESETS, CameraError
 from backend.missions.survey.interop import (
     MAX_FILE_BYTES,
     InteropError,
@@ -41,6 +41,39 @@ from backend.safety.snapshot import home, position
 from protocol.messages import SurveyUpdate, VehicleId
 
 router = SecuredRouter(tags=["surveys"])
+
+
+class CameraPreset(BaseModel):
+    """A camera a survey may name by ``id`` (its ``camera.preset``), with its figures."""
+
+    id: str
+    name: str
+    sensor_width_mm: float
+    sensor_height_mm: float
+    image_width_px: int
+    image_height_px: int
+    focal_length_mm: float
+    distance_trigger: bool = Field(description="False: one DO_DIGICAM_CONTROL per photo")
+
+
+@router.get(
+    "/surveys/cameras", response_model=list[CameraPreset], openapi_extra=requires(Permission.READ)
+)
+async def camera_presets() -> list[CameraPreset]:
+    """The camera presets, so a client offers exactly the hub's (the dashboard does)."""
+    return [
+        CameraPreset(
+            id=key,
+            name=camera.name,
+            sensor_width_mm=camera.sensor_width_mm,
+            sensor_height_mm=camera.sensor_height_mm,
+            image_width_px=camera.image_width_px,
+            image_height_px=camera.image_height_px,
+            focal_length_mm=camera.focal_length_mm,
+            distance_trigger=camera.distance_trigger,
+        )
+        for key, camera in PRESETS.items()
+    ]
 
 
 @router.post(

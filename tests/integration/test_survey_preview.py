@@ -12,6 +12,7 @@ import httpx
 import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
+from backend.missions.survey.camera import PRESETS
 from backend.missions.survey.interop import read_qgc_plan_items, read_wpl
 from gcs.launcher import LocalFleet
 from tests.helpers import FleetWatcher, api_client, ready
@@ -143,3 +144,20 @@ def test_files_import_and_a_planned_survey_exports_each_drone_s_mission(
     finally:
         # A planned survey holds its drones: free them for the rest of the suite.
         assert api.post(f"/api/v1/surveys/{survey['id']}/abort").status_code == 200
+
+
+def test_the_camera_presets_are_the_hubs_with_their_figures(
+    fleet: LocalFleet, fleet_admin_token: str
+) -> None:
+    with api_client(fleet.plan.hub_http, fleet_admin_token) as api:
+        answer = api.get("/api/v1/surveys/cameras")
+    assert answer.status_code == 200, answer.text
+    listed = {camera["id"]: camera for camera in answer.json()}
+    assert set(listed) == set(PRESETS)
+    for key, camera in PRESETS.items():
+        shown = listed[key]
+        assert (shown["name"], shown["focal_length_mm"]) == (camera.name, camera.focal_length_mm)
+        assert (shown["image_width_px"], shown["distance_trigger"]) == (
+            camera.image_width_px,
+            camera.distance_trigger,
+        )

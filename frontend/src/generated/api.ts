@@ -458,6 +458,26 @@ export interface paths {
         patch?: never;
         trace?: never;
     };
+    "/api/v1/surveys/cameras": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        /**
+         * Camera Presets
+         * @description The camera presets, so a client offers exactly the hub's (the dashboard does).
+         */
+        get: operations["camera_presets_api_v1_surveys_cameras_get"];
+        put?: never;
+        post?: never;
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
     "/api/v1/surveys/preview": {
         parameters: {
             query?: never;
@@ -1430,6 +1450,31 @@ export interface components {
             /**
              * Distance Trigger
              * @default true
+             */
+            distance_trigger: boolean;
+        };
+        /**
+         * CameraPreset
+         * @description A camera a survey may name by ``id`` (its ``camera.preset``), with its figures.
+         */
+        CameraPreset: {
+            /** Id */
+            id: string;
+            /** Name */
+            name: string;
+            /** Sensor Width Mm */
+            sensor_width_mm: number;
+            /** Sensor Height Mm */
+            sensor_height_mm: number;
+            /** Image Width Px */
+            image_width_px: number;
+            /** Image Height Px */
+            image_height_px: number;
+            /** Focal Length Mm */
+            focal_length_mm: number;
+            /**
+             * Distance Trigger
+             * @description False: one DO_DIGICAM_CONTROL per photo
              */
             distance_trigger: boolean;
         };
@@ -5393,6 +5438,55 @@ export interface operations {
                 };
                 content: {
                     "application/json": components["schemas"]["Unprocessable"];
+                };
+            };
+            /** @description The database is unavailable; try again after Retry-After seconds */
+            503: {
+                headers: {
+                    /** @description Seconds to wait */
+                    "Retry-After"?: number;
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+        };
+    };
+    camera_presets_api_v1_surveys_cameras_get: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["CameraPreset"][];
+                };
+            };
+            /** @description Not authenticated */
+            401: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description Needs the 'read' permission */
+            403: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
                 };
             };
             /** @description The database is unavailable; try again after Retry-After seconds */

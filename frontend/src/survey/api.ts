@@ -12,6 +12,7 @@ export type SurveyRun = Schemas["SurveyRun"];
 export type SurveyProgress = Schemas["SurveyUpdate"];
 export type GeoJsonPolygon = Schemas["GeoJsonPolygon"];
 export type SurveyFileFormat = Schemas["SurveyFile"]["format"];
+export type CameraPreset = Schemas["CameraPreset"];
 
 function post<T>(path: string, body: unknown, signal?: AbortSignal): Promise<T> {
   return request<T>(path, {
@@ -23,6 +24,11 @@ function post<T>(path: string, body: unknown, signal?: AbortSignal): Promise<T> 
 }
 
 const survey = (id: string) => `surveys/${encodeURIComponent(id)}`;
+
+/** The hub's camera presets: the only names a survey's `camera.preset` may take. */
+export function cameraPresets(): Promise<CameraPreset[]> {
+  return request<CameraPreset[]>("surveys/cameras");
+}
 
 /** The plan split across the drones, each part checked by the rails; nothing is uploaded. */
 export function previewSurvey(body: SurveyRequest, signal?: AbortSignal): Promise<SurveyPreview> {

@@ -16,6 +16,7 @@ import {
   type SurveyRequest,
   abortSurvey,
   acceptHandover,
+  cameraPresets,
   createSurvey,
   getSurvey,
   importArea,
@@ -27,13 +28,6 @@ import { type LaneDrawing, SurveyLayer, droneColour } from "./layer";
 const PREVIEW_DELAY_MS = 400;
 /** The flown lanes and photos are re-read at most this often while a survey flies. */
 const DETAIL_EVERY_MS = 1000;
-// The hub's presets (backend/missions/survey/camera.py PRESETS); an unknown name is a 422.
-const CAMERA_PRESETS: [string, string][] = [
-  ["sony_a6000_16mm", "Sony a6000, 16 mm"],
-  ["dji_phantom4_pro", "DJI Phantom 4 Pro"],
-  ["dji_mavic3e_wide", "DJI Mavic 3E wide"],
-  ["micasense_rededge_mx", "MicaSense RedEdge-MX"],
-];
 const ENDED = new Set(["done", "aborted", "failed"]);
 
 function el<K extends keyof HTMLElementTagNameMap>(tag: K, className: string, field?: string): HTMLElementTagNameMap[K] {
@@ -153,7 +147,7 @@ export class SurveyPanel {
 
     // -- the camera and the flight
     this.camera = el("select", "survey-select", "survey-camera");
-    for (const [value, text] of CAMERA_PRESETS) this.camera.append(new Option(text, value));
+    void this.loadCameras();
     const cameraLabel = el("label", "survey-field");
     cameraLabel.append("Camera ", this.camera);
     this.heightKind = el("select", "survey-select", "survey-height-kind");
@@ -410,6 +404,22 @@ export class SurveyPanel {
     }
     this.summary.dataset.state = "pending";
     this.previewTimer = window.setTimeout(() => void this.runPreview(body), PREVIEW_DELAY_MS);
+  }
+
+  /** The hub's presets, with their figures in each option's title. */
+  private async loadCameras(): Promise<void> {
+    try {
+      for (const camera of await cameraPresets()) {
+        const option = new Option(camera.name, camera.id);
+        option.title =
+          `${camera.sensor_width_mm} x ${camera.sensor_height_mm} mm sensor, ` +
+          `${camera.image_width_px} x ${camera.image_height_px} px, ${camera.focal_length_mm} mm`;
+        this.camera.append(option);
+      }
+      if (this.rings.length > 0) this.schedulePreview(); // an area drawn meanwhile
+    } catch (error) {
+      this.say(`Camera presets: ${this.errorText(error)}`, true);
+    }
   }
 
   private async runPreview(body: SurveyRequest): Promise<void> {

@@ -5,6 +5,7 @@ from __future__ import annotations
 import asyncio
 import logging
 import time
+from collections.abc import Collection
 from dataclasses import dataclass, field
 
 import httpx
@@ -29,6 +30,7 @@ from backend.realtime.live_events import live_event
 from backend.scans.obstacles import describe as describe_obstacle
 from backend.scans.pointmap import MapObstacle
 from backend.scans.service import ScanService
+from backend.scans.views import obstacle_views, point_map_view, site_origin
 from backend.settings import HubSettings
 from backend.storage.database import make_engine, migrate
 from backend.storage.logbook import Logbook
@@ -49,9 +51,17 @@ from backend.viz3d.replay import ReplayPanels
 from backend.viz3d.scene import FleetScene
 from backend.viz3d.server import VizServer
 from backend.viz3d.viewers import Viewers
-from protocol.messages import CloseCode, MissionItem
+from protocol.messages import (
+    MAX_MAP_POINTS_SENT,
+    CloseCode,
+    MapLayer,
+    MissionItem,
+    ObstaclesUpdate,
+    PointMapUpdate,
+)
 
 SEVERITY_INFO = 6  # MAV_SEVERITY_INFO: an obstacle found or gone
+POINT_MAP_PUBLISH_S = 2.0
 log = logging.getLogger(__name__)
 
 
@@ -178,6 +188,7 @@ class Hub:
                 tasks.create_task(self.writer.run())
                 tasks.create_task(self.scans.run())
                 tasks.create_task(self._watch_obstacles())
+                tasks.create_task(self._publish_point_map())
                 tasks.create_task(self.formations.run())
                 tasks.create_task(self._apply_retention())
                 tasks.create_task(self._drain_spool())
@@ -249,7 +260,8 @@ class Hub:
 
     async def refresh_obstacles(self) -> list[MapObstacle]:
         """The point map's obstacles now, with lasting ids; the changes since the last
-        look are published as events of the vehicle whose scan last went into the map."""
+        look are published as events of the vehicle whose scan last went into the map,
+        and the new list to the feeds that subscribed to the map's obstacles."""
         changes = await self.scans.refresh_obstacles()
         vehicle_id = self.scans.mapped_by
         if vehicle_id is not None:
@@ -257,7 +269,38 @@ class Hub:
                 for obstacle in obstacles:
                     text = describe_obstacle(obstacle, change)
                     await self.store_event(vehicle_id, "obstacle", text, severity=SEVERITY_INFO)
+        if changes.appeared or changes.gone:
+            update = self._obstacles_now(changes.current)
+            await self.bus.publish(Topic.MAP, update.type, update)
         return changes.current
+
+    def _obstacles_now(self, current: list[MapObstacle]) -> ObstaclesUpdate:
+        site = self.scans.site
+        return ObstaclesUpdate(site=site_origin(site), obstacles=obstacle_views(current, site))
+
+    async def map_now(self, layers: Collection[MapLayer]) -> list[PointMapUpdate | ObstaclesUpdate]:
+        now: list[PointMapUpdate | ObstaclesUpdate] = []
+        if "points" in layers:
+            view = await asyncio.to_thread(point_map_view, self.scans, MAX_MAP_POINTS_SENT)
+            now.append(PointMapUpdate(map=view))
+        if "obstacles" in layers:
+            now.append(self._obstacles_now(self.scans.obstacles.current))
+        return now
+
+    async def _publish_point_map(self) -> None:
+        """The point map to the feeds that subscribed to it, when it has changed, at most
+        every POINT_MAP_PUBLISH_S: it changes little from one second to the next, and its
+        newest voxels are the heaviest message on the feed."""
+        published = -1
+        while True:
+            await asyncio.sleep(POINT_MAP_PUBLISH_S)
+            version = self.scans.map_version
+            if version == published or not self.bus.subscribers(Topic.MAP):
+                continue
+            published = version
+            points: tuple[MapLayer] = ("points",)
+            [update] = await self.map_now(points)
+            await self.bus.publish(Topic.MAP, update.type, update)
 
     async def _drain_spool(self) -> None:
         """Store the rows spooled during a database outage as soon as it is over."""

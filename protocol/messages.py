@@ -745,6 +745,80 @@ class ScanSubscriptions(Message):
     vehicles: list[VehicleId] = Field(max_length=MAX_SCAN_SUBSCRIPTIONS)
 
 
+MapLayer: TypeAlias = Literal["points", "obstacles"]
+MAX_MAP_POINTS = 500_000  # the most the REST point map gives at once
+MAX_MAP_POINTS_SENT = 20_000  # the newest voxels of a point_map message
+MAX_OBSTACLES_SENT = 1_000
+
+
+class SubscribeMap(Message):
+    """Send me the site's map as it changes: ``points`` (the voxel point map, its newest
+    voxels, at most every few seconds) and ``obstacles`` (the clusters found in it, when
+    the set changes). The current state comes at once; a slow reader gets the newest."""
+
+    type: Literal["subscribe_map"] = "subscribe_map"
+    layers: list[MapLayer] = Field(min_length=1, max_length=2)
+
+
+class UnsubscribeMap(Message):
+    type: Literal["unsubscribe_map"] = "unsubscribe_map"
+    layers: list[MapLayer] = Field(min_length=1, max_length=2)
+
+
+class MapSubscriptions(Message):
+    """The map layers this feed now receives (the answer to a (un)subscribe)."""
+
+    type: Literal["map_subscriptions"] = "map_subscriptions"
+    layers: list[MapLayer] = Field(max_length=2)
+
+
+class SiteOrigin(BaseModel):
+    """The origin of the site's east/north/up metres (the scans' and the point map's)."""
+
+    lat: float
+    lon: float
+    alt_msl: float
+
+
+class Obstacle(BaseModel):
+    """A cluster of the point map, above the ground: its extent in site east/north/up
+    metres; it keeps its id while it is seen."""
+
+    id: int
+    east_min: float
+    east_max: float
+    north_min: float
+    north_max: float
+    up_min: float
+    up_max: float
+    voxels: int
+    outline: list[tuple[float, float]] = Field(
+        max_length=4, description="the extent's corners as latitude, longitude (degrees)"
+    )
+
+
+class PointMapView(BaseModel):
+    site: SiteOrigin | None
+    voxel_m: float
+    voxels: int = Field(description="voxels in the map (``points`` may hold fewer)")
+    evicted: int = Field(description="voxels dropped so far to keep the map in its bound")
+    points: list[tuple[float, float, float]] = Field(
+        max_length=MAX_MAP_POINTS,
+        description="voxel centres, east/north/up metres from the site origin, newest first",
+    )
+
+
+class PointMapUpdate(Message):
+    type: Literal["point_map"] = "point_map"
+    map: PointMapView
+
+
+class ObstaclesUpdate(Message):
+    type: Literal["obstacles"] = "obstacles"
+    site: SiteOrigin | None
+    obstacles: list[Obstacle] = Field(max_length=MAX_OBSTACLES_SENT)
+
+
 class Ping(Message):
     type: Literal["ping"] = "ping"
     nonce: str | None = Field(default=None, max_length=64)
@@ -972,7 +1046,13 @@ HubToAgent: TypeAlias = Annotated[
     Field(discriminator="type"),
 ]
 ClientToHub: TypeAlias = Annotated[
-    Ping | ControlRequest | ManualInput | SubscribeScans | UnsubscribeScans,
+    Ping
+    | ControlRequest
+    | ManualInput
+    | SubscribeScans
+    | UnsubscribeScans
+    | SubscribeMap
+    | UnsubscribeMap,
     Field(discriminator="type"),
 ]
 HubToClient: TypeAlias = Annotated[
@@ -984,7 +1064,10 @@ HubToClient: TypeAlias = Annotated[
     | ErrorReply
     | LeaseState
     | SurveyUpdate
-    | ManualEcho,
+    | ManualEcho
+    | MapSubscriptions
+    | PointMapUpdate
+    | ObstaclesUpdate,
     Field(discriminator="type"),
 ]
 

@@ -113,6 +113,8 @@ def type_of(schema: Schema) -> str:
         key = schema.get("discriminator", {}).get("propertyName", "type")
         return f"one of the [commands](#commands), by `{key}`" if mapping else "one of several"
     kind = schema.get("type")
+    if kind == "array" and "prefixItems" in schema:  # a tuple: (east, north, up), say
+        return "[" + ", ".join(type_of(item) for item in schema["prefixItems"]) + "]"
     if kind == "array":
         return f"list of {type_of(schema['items'])}"
     if kind == "object" and isinstance(schema.get("additionalProperties"), dict):
@@ -307,6 +309,12 @@ def render() -> str:
         "the poses at the turn's start and end; 1,580 bytes for 720 beams). Only the newest "
         "scan of each subscribed vehicle is kept for a feed: a client that reads slowly "
         "gets fewer scans, never a queue. A feed that subscribed to nothing gets none.",
+        "7. The site map: after [`subscribe_map`](#subscribemap) with its `layers` (answered "
+        "with [`map_subscriptions`](#mapsubscriptions)) and until "
+        "[`unsubscribe_map`](#unsubscribemap), the hub sends each layer as it is at once, "
+        "then as it changes: [`point_map`](#pointmapupdate), the newest voxels of the point "
+        "map, at most every 2 s, and [`obstacles`](#obstaclesupdate), the clusters found in "
+        "it, when one is found or gone. A slow reader gets the newest of each, never a queue.",
         "",
         f"A client may send these messages only, each needing a permission ({client_permissions}); "
         "anything else is answered with an [`error`](#errorreply).",

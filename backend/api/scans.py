@@ -20,20 +20,15 @@ from backend.errors import NotFound
 from backend.scans.export import ply_bytes
 from backend.scans.pointmap import PointMap
 from backend.scans.points import WorldPoints, world_points
+from backend.scans.views import obstacle_views, point_map_view, site_origin
 from common.geodesy import LocalFrame
+from protocol.messages import MAX_MAP_POINTS, Obstacle, PointMapView, SiteOrigin
 from protocol.scans import decode_scan
 
 router = SecuredRouter(tags=["scans"])
 
 MAX_SCANS_PAGE = 100
 DEFAULT_SCAN_HISTORY_S = 60.0
-MAX_MAP_POINTS = 500_000
-
-
-class SiteOrigin(BaseModel):
-    lat: float
-    lon: float
-    alt_msl: float
 
 
 class ScanPoints(BaseModel):
@@ -71,33 +66,6 @@ class ScanDiagnosticsBody(BaseModel):
     stored: int
     cleaned_ranges: int = Field(description="ranges beyond the sensor's maximum, dropped")
     rejected: dict[str, int] = Field(description="refused scans by reason")
-
-
-class PointMapBody(BaseModel):
-    site: SiteOrigin | None
-    voxel_m: float
-    voxels: int
-    evicted: int
-    points: list[tuple[float, float, float]] = Field(description="voxel centres, east/north/up")
-
-
-class ObstacleBody(BaseModel):
-    id: int
-    east_min: float
-    east_max: float
-    north_min: float
-    north_max: float
-    up_min: float
-    up_max: float
-    voxels: int
-    outline: list[tuple[float, float]] = Field(
-        description="the extent's corners as latitude, longitude (degrees), for a map"
-    )
-
-
-def _origin(site: LocalFrame) -> SiteOrigin:
-    o = site.origin
-    return SiteOrigin(lat=o.lat, lon=o.lon, alt_msl=o.alt)
 
 
 def _body(hub: HubDep, vehicle_id: str, data: bytes) -> ScanPoints:
@@ -171,7 +139,7 @@ async def scans_between(
         start=start_at,
         end=end_at,
         limit=limit,
-        site=None if site is None else _origin(site),
+        site=None if site is None else site_origin(site),
         scans=scans,
         truncated=len(rows) > limit,
     )
@@ -199,7 +167,7 @@ async def scan_diagnostics(vehicle_id: VehicleIdPath, hub: HubDep) -> ScanDiagno
 
 @router.get(
     "/scans/map",
-    response_model=PointMapBody,
+    response_model=PointMapView,
     openapi_extra=requires(Permission.READ),
     responses={200: {"content": {"application/octet-stream": {}}}},
 )
@@ -207,50 +175,32 @@ async def point_map(
     hub: HubDep,
     format: Annotated[Literal["json", "ply"], Query(description="json, or a PLY file")] = "json",
     limit: Annotated[int, Query(ge=1, le=MAX_MAP_POINTS)] = 100_000,
-) -> PointMapBody | Response:
-    """The site's voxel point map (the most recently seen voxels, up to ``limit``)."""
+) -> PointMapView | Response:
+    """The site's voxel point map (the most recently seen voxels, up to ``limit``); the
+    live feed sends the same as ``point_map`` to a ``subscribe_map``."""
     scans = hub.scans
-    points = scans.point_map.points(limit)
-    site = None if scans.site is None else _origin(scans.site)
     if format == "ply":
+        site = site_origin(scans.site)
         origin = "unset" if site is None else f"{site.lat},{site.lon},{site.alt_msl}"
         return Response(
-            ply_bytes(points, f"gcs point map: ENU metres, site origin {origin}"),
+            ply_bytes(
+                scans.point_map.points(limit), f"gcs point map: ENU metres, site origin {origin}"
+            ),
             media_type="application/octet-stream",
             headers={"Content-Disposition": 'attachment; filename="pointmap.ply"'},
         )
-    return PointMapBody(
-        site=site,
-        voxel_m=scans.point_map.voxel_m,
-        voxels=len(scans.point_map),
-        evicted=scans.point_map.evicted,
-        points=[tuple(p) for p in points.round(3).tolist()],
-    )
+    return point_map_view(scans, limit)
 
 
 @router.get(
     "/scans/obstacles",
-    response_model=list[ObstacleBody],
+    response_model=list[Obstacle],
     openapi_extra=requires(Permission.READ),
 )
-async def obstacles(hub: HubDep) -> list[ObstacleBody]:
+async def obstacles(hub: HubDep) -> list[Obstacle]:
     """Clusters in the point map (above the ground), with their extents in site ENU; an
     obstacle keeps its id while it is seen (found and gone are events, kind "obstacle")."""
-    found = await hub.refresh_obstacles()
-    site = hub.scans.site
-    if site is None:
-        return []
-    bodies = []
-    for o in found:
-        corners = [
-            (o.east_min, o.north_min),
-            (o.east_max, o.north_min),
-            (o.east_max, o.north_max),
-            (o.east_min, o.north_max),
-        ]
-        outline = [site.to_geo(east, north) for east, north in corners]
-        bodies.append(ObstacleBody(**vars(o), outline=outline))
-    return bodies
+    return obstacle_views(await hub.refresh_obstacles(), hub.scans.site)
 
 
 FLIGHT_SCAN_PAGE = 500
@@ -287,9 +237,8 @@ async def flight_points(flight_id: FlightIdPath, hub: HubDep) -> Response:
     """The world points of a flight's scans (site east/north/up metres, voxel-downsampled
     like the point map) as a PLY file, for CloudCompare, PDAL or MeshLab."""
     name, points, site = await asyncio.to_thread(_flight_points, hub, flight_id)
-    origin = (
-        "unset" if site is None else ",".join(str(v) for v in _origin(site).model_dump().values())
-    )
+    shown = site_origin(site)
+    origin = "unset" if shown is None else ",".join(str(v) for v in shown.model_dump().values())
     return Response(
         ply_bytes(points.points(), f"gcs flight points: ENU metres, site origin {origin}"),
         media_type="application/octet-stream",

@@ -144,6 +144,8 @@ CLIENT_MESSAGE_PERMISSIONS: dict[str, Permission] = {
     "manual": Permission.COMMAND,
     "subscribe_scans": Permission.READ,
     "unsubscribe_scans": Permission.READ,
+    "subscribe_map": Permission.READ,
+    "unsubscribe_map": Permission.READ,
 }
 AGENT_MESSAGE_PERMISSIONS: dict[str, Permission] = {
     "hello": Permission.AGENT,

@@ -26,6 +26,7 @@ class Topic(StrEnum):
     VEHICLE_EVENT = "vehicle.event"  # LiveEvent, for clients (backend.realtime.live_events)
     SCANS = "scans"  # ScanDelivery (backend/scans), newest per vehicle, for subscribers
     SURVEYS = "surveys"  # SurveyUpdate, newest per survey, for clients
+    MAP = "map"  # PointMapUpdate and ObstaclesUpdate, newest per layer, for subscribers
 
 
 class Subscription(Protocol):
@@ -97,6 +98,10 @@ class Bus(Protocol):
 
     async def publish(self, topic: Topic, key: Hashable, message: Any) -> None: ...
 
+    def subscribers(self, topic: Topic) -> int:
+        """How many take this topic now: a publisher can skip building what nobody reads."""
+        ...
+
 
 class InProcessBus:
     def __init__(self) -> None:
@@ -107,6 +112,9 @@ class InProcessBus:
 
     def unsubscribe(self, topic: Topic, subscription: Subscription) -> None:
         self._subscriptions[topic].remove(subscription)
+
+    def subscribers(self, topic: Topic) -> int:
+        return len(self._subscriptions[topic])
 
     async def publish(self, topic: Topic, key: Hashable, message: Any) -> None:
         for subscription in list(self._subscriptions[topic]):

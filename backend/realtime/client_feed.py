@@ -35,11 +35,16 @@ from protocol.messages import (
     FleetSnapshot,
     ManualFrame,
     ManualInput,
+    MapLayer,
+    MapSubscriptions,
     Ping,
+    PointMapUpdate,
     Pong,
     ProtocolError,
     ScanSubscriptions,
+    SubscribeMap,
     SubscribeScans,
+    UnsubscribeMap,
     UnsubscribeScans,
     VehicleChange,
     VehicleSummary,
@@ -103,6 +108,8 @@ class ClientFeed(PeerConnection):
             hub.registry, hub.leases.limits.max_rate_hz, on_collapse=self._count_collapse
         )
         self.scans = ScanSubscription()
+        self.map = LatestSubscription()  # newest per layer, never a queue
+        self.map_layers: set[MapLayer] = set()
 
     async def serve(self) -> None:
         await self.websocket.accept()
@@ -152,10 +159,16 @@ class ClientFeed(PeerConnection):
                 event_pusher = tasks.create_task(self._push_events(events))
                 scan_pusher = tasks.create_task(self._push_scans())
                 survey_pusher = tasks.create_task(self._push_surveys(surveys))
+                map_pusher = tasks.create_task(self._push_map())
                 relay = tasks.create_task(self._manual.run())
                 expiry = tasks.create_task(
                     self._end_at_expiry(
-                        principal.expires_at, pusher, event_pusher, scan_pusher, survey_pusher
+                        principal.expires_at,
+                        pusher,
+                        event_pusher,
+                        scan_pusher,
+                        survey_pusher,
+                        map_pusher,
                     )
                 )
                 await self._listen()
@@ -163,6 +176,7 @@ class ClientFeed(PeerConnection):
                 survey_pusher.cancel()
                 event_pusher.cancel()
                 scan_pusher.cancel()
+                map_pusher.cancel()
                 relay.cancel()
                 expiry.cancel()
         except* FrameTooLarge as group:
@@ -177,6 +191,8 @@ class ClientFeed(PeerConnection):
             self.hub.bus.unsubscribe(Topic.SURVEYS, surveys)
             if self.scans.vehicles:
                 self.hub.bus.unsubscribe(Topic.SCANS, self.scans)
+            if self.map_layers:
+                self.hub.bus.unsubscribe(Topic.MAP, self.map)
             self.hub.client_feeds.discard(self)
 
     async def _end_at_expiry(self, expires_at: float | None, *pushers: asyncio.Task[None]) -> None:
@@ -240,6 +256,32 @@ class ClientFeed(PeerConnection):
             self.hub.bus.unsubscribe(Topic.SCANS, self.scans)
         await self.send(ScanSubscriptions(vehicles=sorted(self.scans.vehicles)))
 
+    async def _push_map(self) -> None:
+        """The map layers this feed asked for, newest only: a reader that stalls holds at
+        most one point map and one obstacle list, never a queue."""
+        while True:
+            for update in await self.map.drain():
+                layer = "points" if isinstance(update, PointMapUpdate) else "obstacles"
+                if layer in self.map_layers:
+                    await self.send(update)
+
+    async def _map_subscription(self, message: SubscribeMap | UnsubscribeMap) -> None:
+        had_any = bool(self.map_layers)
+        asked = set(message.layers)
+        added = asked - self.map_layers if isinstance(message, SubscribeMap) else set()
+        if isinstance(message, SubscribeMap):
+            self.map_layers |= asked
+        else:
+            self.map_layers -= asked
+        if self.map_layers and not had_any:
+            self.hub.bus.subscribe(Topic.MAP, self.map)
+        elif had_any and not self.map_layers:
+            self.hub.bus.unsubscribe(Topic.MAP, self.map)
+        await self.send(MapSubscriptions(layers=sorted(self.map_layers)))
+        # What a new layer holds now, so the client need not wait for its next change.
+        for update in await self.hub.map_now(added):
+            self.map.offer(update.type, update)
+
     async def _listen(self) -> None:
         while (frame := await self.receive()) is not None:
             try:
@@ -260,6 +302,8 @@ class ClientFeed(PeerConnection):
                 await self._control(message)
             elif isinstance(message, SubscribeScans | UnsubscribeScans):
                 await self._scan_subscription(message)
+            elif isinstance(message, SubscribeMap | UnsubscribeMap):
+                await self._map_subscription(message)
 
     async def _manual_input(self, message: ManualInput) -> None:
         """Forward the lease holder's input, newest first; refuse and count the rest."""

@@ -9,6 +9,7 @@ sessions by the two connection types, so it never imports the sessions either.
 from __future__ import annotations
 
 import asyncio
+from collections.abc import Collection
 from typing import Protocol, runtime_checkable
 
 from backend.audit import AuditEntry
@@ -21,7 +22,7 @@ from backend.settings import HubSettings
 from backend.storage.records import StoredEvent
 from backend.storage.repository import Repository
 from backend.storage.sequences import Gap, StreamKey
-from protocol.messages import Message
+from protocol.messages import MapLayer, Message, ObstaclesUpdate, PointMapUpdate
 
 
 class AgentConnection(Protocol):
@@ -90,6 +91,10 @@ class FeedServices(Protocol):
     def dispatcher(self) -> CommandDispatcher: ...
 
     async def record(self, entry: AuditEntry) -> None: ...
+
+    async def map_now(self, layers: Collection[MapLayer]) -> list[PointMapUpdate | ObstaclesUpdate]:
+        """The site map's layers as they are now, for a feed that has just subscribed."""
+        ...
 
 
 class GatewayServices(Protocol):

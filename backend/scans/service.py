@@ -115,6 +115,11 @@ class ScanService:
         self._obstacles_at = -1  # the map change the obstacles were last found at
         self._obstacle_lock = asyncio.Lock()
 
+    @property
+    def map_version(self) -> int:
+        """Counts the changes to the point map: equal counts, the same map."""
+        return self._map_changes
+
     def diagnostics_of(self, vehicle_id: str) -> ScanDiagnostics:
         return self.diagnostics.setdefault(vehicle_id, ScanDiagnostics())
 

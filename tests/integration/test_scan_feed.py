@@ -306,3 +306,57 @@ def test_an_obstacle_found_in_the_point_map_is_an_event_and_keeps_its_id(tmp_pat
                     "the second scan",
                 )
                 assert [o["id"] for o in api.get("/api/v1/scans/obstacles").json()] == [1]
+
+
+def _messages_of(socket: ClientConnection, kind: str, timeout_s: float) -> dict[str, Any]:
+    """The first JSON message of this type (others are skipped); fails after the timeout."""
+    deadline = time.monotonic() + timeout_s
+    while (remaining := deadline - time.monotonic()) > 0:
+        with contextlib.suppress(TimeoutError):
+            frame = socket.recv(timeout=remaining)
+            if isinstance(frame, str) and (message := json.loads(frame))["type"] == kind:
+                return dict(message)
+    raise AssertionError(f"no {kind} message within {timeout_s} s")
+
+
+def test_map_subscribers_get_the_point_map_and_obstacles_others_none(tmp_path: Path) -> None:
+    origin = f"{HOME.lat},{HOME.lon},{HOME.alt_msl - 3.0}"
+    settings = hub_settings(tmp_path, site_origin=origin, scan_obstacle_interval_s=0.2)
+    with running_hub(settings) as base:
+        token = access_token(base, "admin", ADMIN_PASSWORD)
+        with api_client(base, token) as api:
+            agent_token = api.post("/api/v1/vehicles/v1/agent-tokens").json()["token"]
+        with (
+            feed(base, token) as mapper,
+            feed(base, token) as bystander,
+            agent(base, agent_token, "v1") as socket,
+        ):
+            mapper.send(json.dumps({"type": "subscribe_map", "layers": ["points", "obstacles"]}))
+            answer = _messages_of(mapper, "map_subscriptions", 5)
+            assert answer["layers"] == ["obstacles", "points"]
+            # At once, what the map holds now: nothing yet.
+            assert _messages_of(mapper, "point_map", 5)["map"]["voxels"] == 0
+            assert _messages_of(mapper, "obstacles", 5)["obstacles"] == []
+
+            socket.send(scan(0))  # a 5 m circle around the drone, 3 m above the site origin
+            obstacles = _messages_of(mapper, "obstacles", 15)["obstacles"]
+            assert [o["id"] for o in obstacles] == [1]
+            assert len(obstacles[0]["outline"]) == 4
+            points = _messages_of(mapper, "point_map", 15)["map"]
+            assert points["site"]["lat"] == pytest.approx(HOME.lat)
+            assert points["voxels"] == len(points["points"]) > 100
+            # The circle's points are 5 m from the drone, 3 m up (10 cm voxels).
+            ranges = [math.hypot(east, north) for east, north, _ in points["points"]]
+            assert np.median(ranges) == pytest.approx(5.0, abs=0.1)
+
+            # The map's layers never reach a feed that did not ask for them.
+            seen = []
+            with contextlib.suppress(TimeoutError):
+                while True:
+                    frame = bystander.recv(timeout=1.0)
+                    if isinstance(frame, str):
+                        seen.append(json.loads(frame)["type"])
+            assert not {"point_map", "obstacles"} & set(seen), seen
+
+            mapper.send(json.dumps({"type": "unsubscribe_map", "layers": ["points"]}))
+            assert _messages_of(mapper, "map_subscriptions", 5)["layers"] == ["obstacles"]

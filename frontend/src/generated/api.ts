@@ -844,7 +844,8 @@ export interface paths {
         };
         /**
          * Point Map
-         * @description The site's voxel point map (the most recently seen voxels, up to ``limit``).
+         * @description The site's voxel point map (the most recently seen voxels, up to ``limit``); the
+         *     live feed sends the same as ``point_map`` to a ``subscribe_map``.
          */
         get: operations["point_map_api_v1_scans_map_get"];
         put?: never;
@@ -2253,8 +2254,12 @@ export interface components {
             /** Items */
             items: components["schemas"]["MissionItem"][];
         };
-        /** ObstacleBody */
-        ObstacleBody: {
+        /**
+         * Obstacle
+         * @description A cluster of the point map, above the ground: its extent in site east/north/up
+         *     metres; it keeps its id while it is seen.
+         */
+        Obstacle: {
             /** Id */
             id: number;
             /** East Min */
@@ -2273,7 +2278,7 @@ export interface components {
             voxels: number;
             /**
              * Outline
-             * @description the extent's corners as latitude, longitude (degrees), for a map
+             * @description the extent's corners as latitude, longitude (degrees)
              */
             outline: [
                 number,
@@ -2370,18 +2375,24 @@ export interface components {
          * @enum {string}
          */
         Permission: "read" | "command" | "audit" | "admin" | "agent";
-        /** PointMapBody */
-        PointMapBody: {
+        /** PointMapView */
+        PointMapView: {
             site: components["schemas"]["SiteOrigin"] | null;
             /** Voxel M */
             voxel_m: number;
-            /** Voxels */
+            /**
+             * Voxels
+             * @description voxels in the map (``points`` may hold fewer)
+             */
             voxels: number;
-            /** Evicted */
+            /**
+             * Evicted
+             * @description voxels dropped so far to keep the map in its bound
+             */
             evicted: number;
             /**
              * Points
-             * @description voxel centres, east/north/up
+             * @description voxel centres, east/north/up metres from the site origin, newest first
              */
             points: [
                 number,
@@ -2644,7 +2655,10 @@ export interface components {
             /** Spacing M */
             spacing_m?: number | null;
         };
-        /** SiteOrigin */
+        /**
+         * SiteOrigin
+         * @description The origin of the site's east/north/up metres (the scans' and the point map's).
+         */
         SiteOrigin: {
             /** Lat */
             lat: number;
@@ -6885,7 +6899,7 @@ export interface operations {
                     [name: string]: unknown;
                 };
                 content: {
-                    "application/json": components["schemas"]["PointMapBody"];
+                    "application/json": components["schemas"]["PointMapView"];
                     "application/octet-stream": unknown;
                 };
             };
@@ -6944,7 +6958,7 @@ export interface operations {
                     [name: string]: unknown;
                 };
                 content: {
-                    "application/json": components["schemas"]["ObstacleBody"][];
+                    "application/json": components["schemas"]["Obstacle"][];
                 };
             };
             /** @description Not authenticated */

@@ -27,7 +27,14 @@ export type HubToAgent =
   | FormationSlot
   | FormationEnd
   | LeaderUpdate;
-export type ClientToHub = Ping | ControlRequest | ManualInput | SubscribeScans | UnsubscribeScans;
+export type ClientToHub =
+  | Ping
+  | ControlRequest
+  | ManualInput
+  | SubscribeScans
+  | UnsubscribeScans
+  | SubscribeMap
+  | UnsubscribeMap;
 export type HubToClient =
   | FleetSnapshot
   | VehicleUpdate
@@ -37,7 +44,10 @@ export type HubToClient =
   | ErrorReply
   | LeaseState
   | SurveyUpdate
-  | ManualEcho;
+  | ManualEcho
+  | MapSubscriptions
+  | PointMapUpdate
+  | ObstaclesUpdate;
 
 /**
  * First frame from an agent: who it is and what it can do.
@@ -674,6 +684,27 @@ export interface UnsubscribeScans {
   type: "unsubscribe_scans";
   vehicle_id: string;
 }
+/**
+ * Send me the site's map as it changes: ``points`` (the voxel point map, its newest
+ * voxels, at most every few seconds) and ``obstacles`` (the clusters found in it, when
+ * the set changes). The current state comes at once; a slow reader gets the newest.
+ */
+export interface SubscribeMap {
+  type: "subscribe_map";
+  /**
+   * @minItems 1
+   * @maxItems 2
+   */
+  layers: ["points" | "obstacles"] | ["points" | "obstacles", "points" | "obstacles"];
+}
+export interface UnsubscribeMap {
+  type: "unsubscribe_map";
+  /**
+   * @minItems 1
+   * @maxItems 2
+   */
+  layers: ["points" | "obstacles"] | ["points" | "obstacles", "points" | "obstacles"];
+}
 export interface FleetSnapshot {
   type: "fleet";
   /**
@@ -849,6 +880,79 @@ export interface ManualEcho {
   vehicle_id: string;
   seq: number;
   sent_ms: number | null;
+}
+/**
+ * The map layers this feed now receives (the answer to a (un)subscribe).
+ */
+export interface MapSubscriptions {
+  type: "map_subscriptions";
+  /**
+   * @maxItems 2
+   */
+  layers: [] | ["points" | "obstacles"] | ["points" | "obstacles", "points" | "obstacles"];
+}
+export interface PointMapUpdate {
+  type: "point_map";
+  map: PointMapView;
+}
+export interface PointMapView {
+  site: SiteOrigin | null;
+  voxel_m: number;
+  /**
+   * voxels in the map (``points`` may hold fewer)
+   */
+  voxels: number;
+  /**
+   * voxels dropped so far to keep the map in its bound
+   */
+  evicted: number;
+  /**
+   * voxel centres, east/north/up metres from the site origin, newest first
+   *
+   * @maxItems 500000
+   */
+  points: [unknown, unknown, unknown][];
+}
+/**
+ * The origin of the site's east/north/up metres (the scans' and the point map's).
+ */
+export interface SiteOrigin {
+  lat: number;
+  lon: number;
+  alt_msl: number;
+}
+export interface ObstaclesUpdate {
+  type: "obstacles";
+  site: SiteOrigin | null;
+  /**
+   * @maxItems 1000
+   */
+  obstacles: Obstacle[];
+}
+/**
+ * A cluster of the point map, above the ground: its extent in site east/north/up
+ * metres; it keeps its id while it is seen.
+ */
+export interface Obstacle {
+  id: number;
+  east_min: number;
+  east_max: number;
+  north_min: number;
+  north_max: number;
+  up_min: number;
+  up_max: number;
+  voxels: number;
+  /**
+   * the extent's corners as latitude, longitude (degrees)
+   *
+   * @maxItems 4
+   */
+  outline:
+    | []
+    | [[unknown, unknown]]
+    | [[unknown, unknown], [unknown, unknown]]
+    | [[unknown, unknown], [unknown, unknown], [unknown, unknown]]
+    | [[unknown, unknown], [unknown, unknown], [unknown, unknown], [unknown, unknown]];
 }
 
 export const PROTOCOL_VERSION = 1;

@@ -161,6 +161,8 @@ _READ_SAMPLES: dict[str, dict[str, Any]] = {
     "ping": {"type": "ping", "nonce": "n1"},
     "subscribe_scans": {"type": "subscribe_scans", "vehicle_id": "V1"},
     "unsubscribe_scans": {"type": "unsubscribe_scans", "vehicle_id": "V1"},
+    "subscribe_map": {"type": "subscribe_map", "layers": ["obstacles"]},
+    "unsubscribe_map": {"type": "unsubscribe_map", "layers": ["obstacles"]},
 }
 
 

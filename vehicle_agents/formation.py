@@ -239,6 +239,43 @@ def _nearest(
     return best
 
 
+class ModeWatch:
+    """Whose mode the vehicle is in during a formation: the agent's, or a pilot's.
+
+    The agent may change only one thing, the mode it found at the join to the guided
+    mode. Any other change (away from guided once in it, or from the join's mode to
+    anything but guided before the agent's switch) is the RC pilot's or another GCS's,
+    and takes the vehicle out. A second formation on the same vehicles shows why both
+    halves matter: the followers are already in their slots, so the operator can act
+    within the pre-stream's half second, before the agent has asked for guided and
+    before a guided heartbeat has come; the agent must not then switch the pilot's
+    LOITER back to GUIDED."""
+
+    def __init__(self, guided: str | None, join_mode: str | None) -> None:
+        self.guided = guided
+        self.join_mode = join_mode
+        self.seen_guided = join_mode is not None and join_mode == guided
+
+    def observe(self, mode: str | None) -> str | None:
+        """The reason to leave, if ``mode`` (a heartbeat's) is someone else's doing."""
+        if mode is None:
+            return None
+        if mode == self.guided:
+            self.seen_guided = True
+            return None
+        if self.join_mode is None:
+            self.join_mode = mode  # the first heartbeat since the join
+            return None
+        if self.seen_guided or mode != self.join_mode:
+            return f"the vehicle changed to {mode} (RC or another GCS): out of the formation"
+        return None
+
+    def needs_switch(self, mode: str | None) -> bool:
+        """Whether the agent should ask for guided: the vehicle is still in the mode it
+        was in at the join (a pilot's change would have taken it out already)."""
+        return mode != self.guided and not self.seen_guided
+
+
 class FormationRunner:
     """The agent's side of a formation: slots and leader states from the hub in, a
     setpoint to the flight controller every tick, events out when it holds, backs off,
@@ -262,7 +299,7 @@ class FormationRunner:
         self._neighbours: dict[str, tuple[float, float, float]] = {}
         self._started_at = 0.0
         self._mode_asked = False
-        self._seen_guided = False
+        self._modes = ModeWatch(None, None)
         self._last_action: Action | None = None
         self._ending: FormationEnd | None = None
         self._face_heading = False
@@ -309,7 +346,11 @@ class FormationRunner:
         self.follower = Follower(frame, offset, slot.min_separation_m, self.settings)
         self._face_heading = slot.face_heading
         self._started_at = self._clock()
-        self._mode_asked = self._seen_guided = False
+        self._mode_asked = False
+        heartbeat = self._link.latest.get("HEARTBEAT")
+        self._modes = ModeWatch(
+            self._guided_mode(), mode_name(heartbeat) if heartbeat is not None else None
+        )
         self._last_action = None
         self._neighbours = {}
         self._emit("formation", f"joined {slot.formation_id}: {_describe(offset)}", 6)
@@ -320,12 +361,8 @@ class FormationRunner:
             return
         if message.get_type() != "HEARTBEAT" or message.get_srcSystem() != self._link.target_system:
             return
-        guided = self._guided_mode()
-        mode = mode_name(message)
-        if mode == guided:
-            self._seen_guided = True
-        elif self._seen_guided:
-            reason = f"the vehicle changed to {mode} (RC or another GCS): out of the formation"
+        reason = self._modes.observe(mode_name(message))
+        if reason is not None:
             self.follower.leave(reason)
             self._emit("formation", f"left {self.formation_id}: {reason}", 4)
 
@@ -377,7 +414,7 @@ class FormationRunner:
         if not self._mode_asked and now - self._started_at >= self.settings.prestream_s:
             self._mode_asked = True
             heartbeat = self._link.latest.get("HEARTBEAT")
-            if heartbeat is None or mode_name(heartbeat) != self._guided_mode():
+            if self._modes.needs_switch(mode_name(heartbeat) if heartbeat else None):
                 self._enter_guided()
 
     def _enter_guided(self) -> None:

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from typing import Any
 
 import httpx
@@ -38,7 +38,8 @@ SIDE_M, SPEED_MS, PAUSE_S = 20.0, 1.5, 2.0
 MIN_SEPARATION_M = 2.0
 
 
-def _airborne(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[LocalFleet, str]]:
+@pytest.fixture(scope="module")
+def airborne(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[LocalFleet, str]]:
     with running_fleet(tmp_path_factory.mktemp("formation"), vehicles=3, speedup=1.0) as fleet:
         base = fleet.plan.hub_http
         token = access_token(base, "admin", fleet.plan.admin_password)
@@ -58,18 +59,6 @@ def _airborne(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[LocalF
                     f"{vehicle} at {altitude} m",
                 )
         yield fleet, token
-
-
-@pytest.fixture(scope="module")
-def airborne(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[LocalFleet, str]]:
-    yield from _airborne(tmp_path_factory)
-
-
-@pytest.fixture
-def fresh_airborne(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[LocalFleet, str]]:
-    """A fleet of its own: on agents that have already flown one formation, a second
-    one's RC leave went unseen (open, see the closing note of issue 19)."""
-    yield from _airborne(tmp_path_factory)
 
 
 def _square(frame: LocalFrame) -> list[dict[str, float]]:
@@ -121,55 +110,83 @@ def test_bad_formations_are_refused_with_reasons(airborne: tuple[LocalFleet, str
             assert reason in answer.text
 
 
-def test_rc_mode_change_takes_a_member_out(fresh_airborne: tuple[LocalFleet, str]) -> None:
-    fleet, token = fresh_airborne
+def _start_formed(
+    api: httpx.Client, watcher: FleetWatcher, **overrides: Any
+) -> tuple[str, LocalFrame]:
+    """Every member in GUIDED, a formation started around the leader, and its followers
+    in their slots; its id and the route's frame."""
+    for vehicle in ALTITUDES:
+        assert send_command(api, vehicle, name="set_mode", mode="GUIDED")["status"] == "accepted"
+    here = watcher.state(LEADER)
+    frame = LocalFrame(here["lat"], here["lon"])
+    answer = api.post("/api/v1/formations", json=_request(frame, **overrides))
+    assert answer.status_code == 200, answer.text
+    formation_id: str = answer.json()["id"]
+    poll_until(
+        lambda: api.get(f"/api/v1/formations/{formation_id}").json()["formed_at"],
+        60,
+        "the followers in their slots",
+    )
+    return formation_id, frame
+
+
+def _formation_events(watcher: FleetWatcher, text: str) -> Callable[[Any], bool]:
+    return lambda v: any(e.get("kind") == "formation" and text in e["text"] for e in watcher.events)
+
+
+def test_a_second_formation_on_the_same_agents_and_an_rc_leave(
+    airborne: tuple[LocalFleet, str],
+) -> None:
+    """Two formations in a row on the same agents; in the second, an RC mode change the
+    moment it forms. The followers are already in their slots then, so it forms at once
+    and the change lands within the agent's pre-stream, before any guided heartbeat:
+    the agent used to miss it and switch the pilot's LOITER back to GUIDED."""
+    fleet, token = airborne
     base = fleet.plan.hub_http
     with FleetWatcher(base, token) as watcher, api_client(base, token) as api:
         watcher.wait_until(ready(LEADER), 10, "the fleet")
-        for vehicle in ALTITUDES:
-            assert send_command(api, vehicle, name="set_mode", mode="GUIDED")["status"] == (
-                "accepted"
-            )
-        here = watcher.state(LEADER)
-        frame = LocalFrame(here["lat"], here["lon"])
-        answer = api.post("/api/v1/formations", json=_request(frame, pause_s=30.0))
-        assert answer.status_code == 200, answer.text
-        formation_id = answer.json()["id"]
-        poll_until(
-            lambda: api.get(f"/api/v1/formations/{formation_id}").json()["formed_at"],
-            60,
-            "the followers in their slots",
-        )
+        first, _ = _start_formed(api, watcher, pause_s=30.0)
         # the spacing changes in flight; one that breaks the separation is refused
-        wider = api.patch(f"/api/v1/formations/{formation_id}", json={"spacing_m": 4.0})
+        wider = api.patch(f"/api/v1/formations/{first}", json={"spacing_m": 4.0})
         assert wider.status_code == 200, wider.text
         assert wider.json()["slots"][RIGHT]["y"] == pytest.approx(4.0 / math.sqrt(2.0))
-        tight = api.patch(f"/api/v1/formations/{formation_id}", json={"spacing_m": 1.0})
+        tight = api.patch(f"/api/v1/formations/{first}", json={"spacing_m": 1.0})
         assert tight.status_code == 422
         assert "minimum separation is 2 m" in tight.text
         watcher.wait_until(
-            lambda v: any(
-                e.get("kind") == "formation" and e["text"].startswith("new slot")
-                for e in watcher.events
-            ),
-            10,
-            "the followers told their new slots",
+            _formation_events(watcher, f"new slot in {first}"), 10, "the new slots told"
         )
-        # another GCS (or the RC switch) puts a follower in LOITER
-        assert send_command(api, LEFT, name="set_mode", mode="LOITER")["status"] == "accepted"
+        assert api.post(f"/api/v1/formations/{first}/stop").status_code == 200
         watcher.wait_until(
-            lambda v: any(
-                e.get("kind") == "formation" and "changed to LOITER" in e["text"]
-                for e in watcher.events
-            ),
-            10,
-            "the follower leaving",
+            lambda v: all((v[n].get("state") or {}).get("mode") == "BRAKE" for n in ALTITUDES),
+            15,
+            "every member holding",
         )
-        # it stays where the pilot put it: the agent sends no more targets nor modes
-        deadline = time.monotonic() + 2.0
-        watcher.wait_until(lambda v: time.monotonic() > deadline, 5, "two seconds")
-        assert watcher.state(LEFT)["mode"] == "LOITER"
-        api.post(f"/api/v1/formations/{answer.json()['id']}/stop")
+
+        second, _ = _start_formed(api, watcher, pause_s=30.0, spacing_m=4.0)
+        assert second != first
+        try:
+            # another GCS (or the RC switch) puts a follower in LOITER
+            assert send_command(api, LEFT, name="set_mode", mode="LOITER")["status"] == ("accepted")
+            watcher.wait_until(
+                _formation_events(watcher, f"left {second}: the vehicle changed to LOITER"),
+                10,
+                "the follower leaving",
+            )
+            # it stays where the pilot put it: the agent sends no more targets nor modes
+            deadline = time.monotonic() + 2.0
+            watcher.wait_until(lambda v: time.monotonic() > deadline, 5, "two seconds")
+            assert watcher.state(LEFT)["mode"] == "LOITER"
+            # the others fly on in the second formation
+            assert watcher.state(RIGHT)["mode"] == "GUIDED"
+        finally:
+            api.post(f"/api/v1/formations/{second}/stop")
+        # leave the vehicles as the next test expects them: holding, in GUIDED's reach
+        watcher.wait_until(
+            lambda v: (v[RIGHT].get("state") or {}).get("mode") == "BRAKE",
+            15,
+            "the rest holding",
+        )
 
 
 def test_leader_flies_a_square_and_the_followers_keep_their_slots(

@@ -20,7 +20,7 @@ from common.geodesy import GeoPoint, LocalFrame
 from simulator import DEFAULT_HOME
 from simulator.mavconst import CopterMode
 from tests.formation_sim import SimVehicle, take_off
-from vehicle_agents.formation import POSVEL_TYPE_MASK, Action, Follower
+from vehicle_agents.formation import POSVEL_TYPE_MASK, Action, Follower, ModeWatch
 
 HOME = LocalFrame(DEFAULT_HOME.lat, DEFAULT_HOME.lon)
 
@@ -228,6 +228,29 @@ def test_follower_never_targets_below_its_floor() -> None:
     assert sp.position is not None
     assert sp.position[2] == 1.0
     assert sp.velocity[2] == 0.0
+
+
+def test_a_mode_change_before_the_agents_switch_is_the_pilots() -> None:
+    """A second formation on followers already in their slots: the pilot switches to
+    LOITER within the pre-stream, before any guided heartbeat. That is a leave, and the
+    agent must not switch the vehicle back to GUIDED (it used to)."""
+    watch = ModeWatch("GUIDED", "GUIDED")  # the operator put it in GUIDED before starting
+    assert watch.observe("LOITER") is not None
+    assert not watch.needs_switch("LOITER")
+    braked = ModeWatch("GUIDED", "BRAKE")  # held after the first formation
+    assert braked.needs_switch("BRAKE")  # the agent's own switch, after its pre-stream
+    assert braked.observe("BRAKE") is None
+    left = braked.observe("LOITER")  # the pilot's, from BRAKE, before the agent's
+    assert "changed to LOITER" in (left or "")
+
+
+def test_the_agents_own_switch_to_guided_is_not_a_leave() -> None:
+    watch = ModeWatch("GUIDED", None)  # no heartbeat yet at the join
+    assert watch.observe("BRAKE") is None  # the first one gives the join's mode
+    assert watch.needs_switch("BRAKE")
+    assert watch.observe("GUIDED") is None
+    assert not watch.needs_switch("GUIDED")
+    assert "changed to RTL" in (watch.observe("RTL") or "")
 
 
 # -- the simulator answers velocity targets as ArduCopter does ------------------

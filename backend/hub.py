@@ -18,7 +18,7 @@ from backend.auth.principal_cache import PrincipalCache
 from backend.auth.rate_limit import Limit, RateLimiter
 from backend.control.lease import LeaseBook
 from backend.fleet.commands import CommandDispatcher
-from backend.fleet.formations import FormationService
+from backend.fleet.formations import FormationService, ScanPoints
 from backend.fleet.registry import FleetRegistry, VehicleRecord
 from backend.fleet.safety_gate import SafetyGate
 from backend.mapping.tiles import TileLibrary
@@ -28,6 +28,7 @@ from backend.realtime.collaborators import AgentConnection, ClientConnection
 from backend.realtime.live_events import live_event
 from backend.scans.obstacles import describe as describe_obstacle
 from backend.scans.pointmap import MapObstacle
+from backend.scans.points import in_frame
 from backend.scans.service import ScanService
 from backend.settings import HubSettings
 from backend.storage.database import make_engine, migrate
@@ -47,9 +48,12 @@ from backend.viz3d.frame import SceneFrame, parse_origin
 from backend.viz3d.mirror import SceneMirror
 from backend.viz3d.scene import FleetScene
 from backend.viz3d.server import VizServer
-from protocol.messages import CloseCode, MissionItem
+from common.geodesy import LocalFrame
+from protocol.messages import MAX_SCAN_POINTS, CloseCode, MissionItem
 
 SEVERITY_INFO = 6  # MAV_SEVERITY_INFO: an obstacle found or gone
+# A formation's followers get the leader's scans thinned to one point per cell this wide.
+SCAN_CELL_M = 0.2
 log = logging.getLogger(__name__)
 
 
@@ -153,6 +157,7 @@ class Hub:
             ),
         )
         writer.on_sequences = hub.deliver_sequence_news
+        hub.formations.scan_source = hub.leader_scan
         hub.surveys = SurveyService(hub, bus, SurveyRepository(engine), settings)
         await hub.surveys.load()
         await manual_control.revoke_left_open(hub, engine)
@@ -194,6 +199,18 @@ class Hub:
             self.passwords.close()
             self.tiles.close()
             self.engine.dispose()
+
+    def leader_scan(
+        self, vehicle_id: str, frame: LocalFrame, after_seq: int | None
+    ) -> ScanPoints | None:
+        """A formation leader's newest live scan on the formation's plane, if it is not
+        the one numbered ``after_seq`` (the formations' relay, backend/fleet)."""
+        latest = self.scans.latest.get(vehicle_id)
+        site = self.scans.site
+        if latest is None or site is None or latest.frame.seq == after_seq:
+            return None
+        north, east = in_frame(latest.points, site, frame, SCAN_CELL_M, MAX_SCAN_POINTS)
+        return ScanPoints(latest.frame.utc_time, latest.frame.seq, north, east)
 
     def deliver_sequence_news(self, acks: dict[StreamKey, int], gaps: list[Gap]) -> None:
         """Tell each agent what is now stored and which of its frames never arrived."""

@@ -16,7 +16,13 @@ switch, and if the stream stops PX4 falls back to its COM_OBL_RC_ACT action on i
 It holds (a position target at its own stopping place, velocity zero) when:
 - the leader's state is older than ``stale_s`` (1 s): flying a guess would be blind;
 - another vehicle is within the minimum separation: it backs off away from it instead;
-- the slot would put it inside a known obstacle's margin (not wired yet).
+- its slot lies within the clearance of an obstacle the leader's LIDAR saw (the hub
+  relays the leader's scans): it holds at the last safe point of its slot's path.
+
+With the consensus controller (chosen per formation) the slot is not the leader's alone:
+the target is the weighted mean of where the leader puts it and where each neighbour in
+its communication graph puts it (`common.formation.consensus_target`), so the followers
+agree on the leader and close on their slots together.
 A mode change it did not make (the RC transmitter's switch) takes it out of the
 formation at once: it stops sending, so the pilot's mode rules.
 """
@@ -34,7 +40,16 @@ from typing import TYPE_CHECKING
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
-from common.formation import LeaderState, Offset, OffsetFrame, slot_target
+from common.formation import (
+    ConsensusGains,
+    Controller,
+    LeaderState,
+    NeighbourState,
+    Offset,
+    OffsetFrame,
+    consensus_target,
+    slot_target,
+)
 
 if TYPE_CHECKING:
     from common.geodesy import LocalFrame
@@ -43,16 +58,18 @@ from protocol.messages import (
     FormationEnd,
     FormationSlot,
     HoldCommand,
+    LeaderScan,
     LeaderUpdate,
 )
 from vehicle_agents.commands import CommandExecutor
 from vehicle_agents.fcu_link import FcuLink, MavMessage
+from vehicle_agents.formation_obstacles import ScanObstacles
 from vehicle_agents.modes import mode_name
 
 log = logging.getLogger(__name__)
 
 EmitEvent = Callable[[EventKind, str, int | None], None]
-FormationMessage = FormationSlot | FormationEnd | LeaderUpdate
+FormationMessage = FormationSlot | FormationEnd | LeaderUpdate | LeaderScan
 
 # Position and velocity used; acceleration, yaw and yaw rate ignored. ArduCopter reads
 # any set bit of a group as "ignore the group", PX4 each axis: both fly this the same.
@@ -86,6 +103,7 @@ class Action(StrEnum):
     HOLD_STALE = "hold_stale"
     BACK_OFF = "back_off"
     HOLD_CLEAR = "hold_clear"  # its slot is within the separation of another vehicle
+    HOLD_OBSTACLE = "hold_obstacle"  # its slot is within the clearance of a scanned obstacle
     LEFT = "left"  # out of the formation: sends nothing
 
 
@@ -99,6 +117,16 @@ class Setpoint:
     reason: str = ""
 
 
+@dataclass(frozen=True)
+class NeighbourReport:
+    """A graph neighbour's last relayed state: position and velocity (north, east, up)
+    and when (the clock the follower compares it with)."""
+
+    position: tuple[float, float, float]
+    velocity: tuple[float, float, float]
+    time_s: float
+
+
 class Follower:
     """One follower's slot-keeping; pure state, fed by the agent and asked each tick."""
 
@@ -108,14 +136,25 @@ class Follower:
         offset: Offset,
         min_separation_m: float,
         settings: FollowerSettings | None = None,
+        controller: Controller = Controller.LEADER_FOLLOWER,
+        gains: ConsensusGains | None = None,
     ) -> None:
         self.frame = frame
         self.offset = offset
         self.min_separation_m = min_separation_m
         self.settings = settings or FollowerSettings()
+        self.controller = controller
+        self.gains = gains or ConsensusGains()
+        # consensus: each graph neighbour's slot and weight, and its last relayed state
+        self.graph: dict[str, tuple[Offset, float]] = {}
+        self.neighbours: dict[str, NeighbourReport] = {}
         self.leader: LeaderState | None = None
         self.left_reason: str | None = None
         self._hold: tuple[float, float, float] | None = None
+        # the leader's scans, and how far from what they show a slot must stay
+        self.obstacles = ScanObstacles()
+        self.clearance_m = 0.0  # 0: the scans are not checked
+        self._last_safe: tuple[float, float, float] | None = None
 
     def set_offset(self, offset: Offset) -> None:
         """A new slot in flight (a shape or spacing change): the position controller,
@@ -164,6 +203,27 @@ class Follower:
         (north, east, up), (vn, ve, vu) = slot_target(predicted, self.offset)
         if up < self.settings.min_alt_m:
             up, vu = self.settings.min_alt_m, max(vu, 0.0)
+        if self.controller is Controller.CONSENSUS:
+            (north, east, up), _ = consensus_target(
+                predicted, self.offset, self._graph_states(now_s), self.gains
+            )
+            up = max(up, self.settings.min_alt_m)
+        blocked = self._obstacle_near(north, east)
+        if blocked is not None:
+            distance, (on, oe) = blocked
+            # short of it: the last target that was clear, on the slot's way here
+            # (checked again: the map grows), else where it is
+            hold = self._last_safe
+            if hold is None or self._obstacle_near(hold[0], hold[1]) is not None:
+                hold = self._last_safe = own
+            return Setpoint(
+                Action.HOLD_OBSTACLE,
+                hold,
+                (0.0, 0.0, 0.0),
+                f"its slot is {distance:.1f} m from an obstacle the leader saw at "
+                f"{on:.1f} m north, {oe:.1f} m east, within the {self.clearance_m:g} m "
+                "clearance",
+            )
         crowded = _nearest((north, east, up), others)
         if crowded is not None and crowded[1] < self.min_separation_m:
             # flying into the slot would break the separation (and, once backed off,
@@ -178,7 +238,28 @@ class Follower:
                 f"{self.min_separation_m:g} m separation",
             )
         self._hold = None
+        self._last_safe = (north, east, up)
         return Setpoint(Action.TRACK, (north, east, up), (vn, ve, vu))
+
+    def _obstacle_near(self, north: float, east: float) -> tuple[float, tuple[float, float]] | None:
+        if self.clearance_m <= 0.0:
+            return None
+        return self.obstacles.nearest(north, east, self.clearance_m)
+
+    def _graph_states(self, now_s: float) -> list[NeighbourState]:
+        """The graph's neighbours with a fresh report, each predicted forward as the
+        leader is; a stale one drops out of the sum (the leader's pull remains)."""
+        out = []
+        for vehicle_id, (offset, weight) in self.graph.items():
+            report = self.neighbours.get(vehicle_id)
+            if report is None or now_s - report.time_s > self.settings.stale_s:
+                continue
+            lead = min(max(now_s - report.time_s, 0.0), self.settings.max_lead_s)
+            position = tuple(
+                p + v * lead for p, v in zip(report.position, report.velocity, strict=True)
+            )
+            out.append(NeighbourState((position[0], position[1], position[2]), offset, weight))
+        return out
 
     def message(
         self,
@@ -208,12 +289,13 @@ def position_target(
     north, east, up = setpoint.position
     lat, lon = frame.to_geo(east, north)
     vn, ve, vu = setpoint.velocity
+    mask = POSVEL_TYPE_MASK if yaw_rad is None else POSVEL_YAW_TYPE_MASK
     return mavlink2.MAVLink_set_position_target_global_int_message(
         time_boot_ms & 0xFFFFFFFF,
         target_system,
         target_component,
         mavlink2.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT,
-        POSVEL_TYPE_MASK if yaw_rad is None else POSVEL_YAW_TYPE_MASK,
+        mask,
         round(lat * 1e7),
         round(lon * 1e7),
         up,
@@ -327,6 +409,15 @@ class FormationRunner:
                 self._neighbours = {
                     n.vehicle_id: (n.north, n.east, n.up) for n in message.neighbours
                 }
+                self.follower.neighbours = {
+                    n.vehicle_id: NeighbourReport(
+                        (n.north, n.east, n.up), (n.vn, n.ve, n.vu), n.time or message.time
+                    )
+                    for n in message.neighbours
+                }
+            case LeaderScan() if message.formation_id == self.formation_id:
+                assert self.follower is not None
+                self.follower.obstacles.add(message.north, message.east, message.seq)
             case FormationEnd() if message.formation_id == self.formation_id:
                 self._ending = message
 
@@ -335,6 +426,8 @@ class FormationRunner:
         if self.follower is not None and slot.formation_id == self.formation_id:
             self.follower.set_offset(offset)
             self.follower.min_separation_m = slot.min_separation_m
+            self.follower.graph = _graph(slot)
+            self.follower.clearance_m = slot.obstacle_clearance_m
             self._emit("formation", f"new slot in {slot.formation_id}: {_describe(offset)}", 6)
             return
         self.formation_id = slot.formation_id
@@ -343,7 +436,16 @@ class FormationRunner:
         from common.geodesy import LocalFrame
 
         frame = LocalFrame(slot.origin_lat, slot.origin_lon)
-        self.follower = Follower(frame, offset, slot.min_separation_m, self.settings)
+        self.follower = Follower(
+            frame,
+            offset,
+            slot.min_separation_m,
+            self.settings,
+            Controller(slot.controller),
+            ConsensusGains(slot.k_leader, slot.k_neighbour),
+        )
+        self.follower.graph = _graph(slot)
+        self.follower.clearance_m = slot.obstacle_clearance_m
         self._face_heading = slot.face_heading
         self._started_at = self._clock()
         self._mode_asked = False
@@ -353,7 +455,8 @@ class FormationRunner:
         )
         self._last_action = None
         self._neighbours = {}
-        self._emit("formation", f"joined {slot.formation_id}: {_describe(offset)}", 6)
+        how = "" if slot.controller == "leader_follower" else f" ({slot.controller})"
+        self._emit("formation", f"joined {slot.formation_id}{how}: {_describe(offset)}", 6)
 
     def _on_message(self, message: MavMessage) -> None:
         """The RC pilot's (or another GCS's) mode change takes the vehicle out."""
@@ -393,7 +496,12 @@ class FormationRunner:
         setpoint = follower.tick(now, own, self._neighbours)
         if setpoint.action is not self._last_action:
             self._last_action = setpoint.action
-            if setpoint.action in (Action.HOLD_STALE, Action.BACK_OFF, Action.HOLD_CLEAR):
+            if setpoint.action in (
+                Action.HOLD_STALE,
+                Action.BACK_OFF,
+                Action.HOLD_CLEAR,
+                Action.HOLD_OBSTACLE,
+            ):
                 self._emit("formation", f"{setpoint.action.value}: {setpoint.reason}", 4)
             elif setpoint.action is Action.TRACK:
                 self._emit("formation", "tracking its slot", 6)
@@ -452,3 +560,9 @@ class FormationRunner:
 def _describe(offset: Offset) -> str:
     axes = "forward/right" if offset.frame is OffsetFrame.HEADING else "north/east"
     return f"{offset.x:.1f} m, {offset.y:.1f} m ({axes}), {offset.up:+.1f} m up"
+
+
+def _graph(slot: FormationSlot) -> dict[str, tuple[Offset, float]]:
+    return {
+        e.vehicle_id: (Offset(e.x, e.y, e.up, OffsetFrame(e.frame)), e.weight) for e in slot.graph
+    }

@@ -14,6 +14,7 @@ from backend.api.security import SecuredRouter, requires
 from backend.auth.policy import Permission
 from backend.fleet.formations import ActiveFormation
 from backend.missions.formation.schemas import FormationRequest, OffsetModel, ShapeChange
+from common.formation import Controller
 
 router = SecuredRouter(prefix="/formations", tags=["formations"])
 
@@ -30,6 +31,7 @@ class FormationStatus(BaseModel):
         "started; null while they join"
     )
     route_duration_s: float
+    controller: Controller
     stopped: str | None = Field(description="Why it stopped; null while it flies")
 
     @classmethod
@@ -44,6 +46,7 @@ class FormationStatus(BaseModel):
             started_at=formation.started_at,
             formed_at=formation.formed_at,
             route_duration_s=formation.plan.route.duration_s,
+            controller=formation.plan.controller,
             stopped=formation.stopped,
         )
 

@@ -17,7 +17,7 @@ import itertools
 import logging
 import math
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
 from starlette.websockets import WebSocketDisconnect
@@ -29,7 +29,16 @@ from backend.missions.formation import FormationPlan, plan_formation
 from backend.missions.formation.planner import check_separation, follower_offsets
 from backend.missions.formation.schemas import FormationRequest, ShapeChange
 from common.formation import LeaderState, Offset, slot_target
-from protocol.messages import FormationEnd, FormationSlot, LeaderUpdate, Message, Neighbour
+from common.geodesy import LocalFrame
+from protocol.messages import (
+    FormationEnd,
+    FormationSlot,
+    GraphEdge,
+    LeaderScan,
+    LeaderUpdate,
+    Message,
+    Neighbour,
+)
 
 log = logging.getLogger(__name__)
 
@@ -39,6 +48,25 @@ MAX_RELAY_AGE_S = 1.0
 # The route's clock starts once every follower is this close to its slot (horizontally
 # and vertically): a leg flown while followers are still joining measures nothing.
 FORM_UP_M = 0.5
+# The leader's scans go to the followers at most this often (the newest, never a queue):
+# an obstacle moves with the scene, not the sensor's 10 Hz, and each scan is kilobytes.
+SCAN_RELAY_HZ = 2.0
+
+
+@dataclass(frozen=True)
+class ScanPoints:
+    """A vehicle's newest scan as a formation's followers get it: its time, its number,
+    and its returns' north and east metres on the formation's plane."""
+
+    time: float
+    seq: int
+    north: Sequence[float]
+    east: Sequence[float]
+
+
+# (vehicle id, the formation's frame, the scan number already relayed) -> its newest
+# scan if newer; given by the hub's wiring (the scans sit above the fleet).
+ScanSource = Callable[[str, LocalFrame, int | None], ScanPoints | None]
 
 
 @dataclass
@@ -50,6 +78,8 @@ class ActiveFormation:
     stopped: str | None = None  # why, once stopped
     formed_at: float | None = None  # when every follower reached its slot: the route starts
     offsets: dict[str, Offset] = field(default_factory=dict)
+    scan_seq: int | None = None  # the leader's scan last relayed
+    scan_relayed_at: float = 0.0
 
     @property
     def followers(self) -> list[str]:
@@ -75,6 +105,7 @@ class FormationService:
         self._clock = clock
         self._formations: dict[str, ActiveFormation] = {}
         self._ids = itertools.count(1)
+        self.scan_source: ScanSource | None = None
 
     def busy(self) -> set[str]:
         return {v for f in self.active() for v in f.members}
@@ -143,7 +174,19 @@ class FormationService:
         slots = dict(formation.offsets)
         if formation.plan.leader_id:
             slots[formation.plan.leader_id] = Offset(0.0, 0.0, 0.0)
+        plan = formation.plan
         for vehicle_id, offset in slots.items():
+            graph = [
+                GraphEdge(
+                    vehicle_id=heard,
+                    x=slots[heard].x,
+                    y=slots[heard].y,
+                    up=slots[heard].up,
+                    frame=slots[heard].frame.value,
+                    weight=weight,
+                )
+                for heard, weight in plan.graph.get(vehicle_id, {}).items()
+            ]
             await self._send(
                 vehicle_id,
                 FormationSlot(
@@ -155,7 +198,12 @@ class FormationService:
                     up=offset.up,
                     frame=offset.frame.value,
                     min_separation_m=formation.plan.min_separation_m,
+                    obstacle_clearance_m=formation.request.obstacle_clearance_m,
                     face_heading=vehicle_id == formation.plan.leader_id,
+                    controller=plan.controller.value,
+                    k_leader=plan.gains.k_leader,
+                    k_neighbour=plan.gains.k_neighbour,
+                    graph=graph,
                 ),
             )
 
@@ -171,11 +219,23 @@ class FormationService:
     # -- the relay -------------------------------------------------------------
 
     def _local(self, formation: ActiveFormation, vehicle_id: str) -> Neighbour | None:
-        state = self._registry.get(vehicle_id).state
+        """A member's last report in the formation's frame, with its velocity and time
+        (a consensus follower predicts its neighbours forward over the delay)."""
+        record = self._registry.get(vehicle_id)
+        state = record.state
         if state is None or state.lat is None or state.lon is None or state.alt_rel is None:
             return None
         east, north = formation.plan.frame.to_local(state.lat, state.lon)
-        return Neighbour(vehicle_id=vehicle_id, north=north, east=east, up=state.alt_rel)
+        return Neighbour(
+            vehicle_id=vehicle_id,
+            north=north,
+            east=east,
+            up=state.alt_rel,
+            vn=_bounded(state.vn),
+            ve=_bounded(state.ve),
+            vu=_bounded(state.climb_rate),
+            time=record.last_seen,
+        )
 
     def leader_state(self, formation: ActiveFormation, now: float) -> LeaderState | None:
         """The route's state now (a virtual leader), or the leader vehicle's last report."""
@@ -230,6 +290,28 @@ class FormationService:
             for follower in formation.followers:
                 others = [p for p in places if p.vehicle_id != follower]
                 await self._send(follower, _update(formation, leader, leader.time_s, others))
+            await self._relay_scan(formation, now)
+
+    async def _relay_scan(self, formation: ActiveFormation, now: float) -> None:
+        """The leader vehicle's newest scan to every follower, at most SCAN_RELAY_HZ."""
+        leader_id = formation.plan.leader_id
+        if leader_id is None or self.scan_source is None:
+            return
+        if now - formation.scan_relayed_at < 1.0 / SCAN_RELAY_HZ:
+            return
+        scan = self.scan_source(leader_id, formation.plan.frame, formation.scan_seq)
+        if scan is None:
+            return
+        formation.scan_seq, formation.scan_relayed_at = scan.seq, now
+        message = LeaderScan(
+            formation_id=formation.id,
+            time=scan.time,
+            seq=scan.seq,
+            north=list(scan.north),
+            east=list(scan.east),
+        )
+        for follower in formation.followers:
+            await self._send(follower, message)
 
     async def run(self) -> None:
         while True:
@@ -252,3 +334,11 @@ def _update(
         heading_deg=math.degrees(leader.heading_rad) % 360.0,
         neighbours=others,
     )
+
+
+def _bounded(speed: float | None) -> float:
+    """A reported speed within the protocol's bounds (a glitching sensor's value must
+    not stop the relay)."""
+    if speed is None or not math.isfinite(speed):
+        return 0.0
+    return max(-99.0, min(99.0, speed))

@@ -137,10 +137,11 @@ def _formation_events(watcher: FleetWatcher, text: str) -> Callable[[Any], bool]
 def test_a_second_formation_on_the_same_agents_and_an_rc_leave(
     airborne: tuple[LocalFleet, str],
 ) -> None:
-    """Two formations in a row on the same agents; in the second, an RC mode change the
-    moment it forms. The followers are already in their slots then, so it forms at once
-    and the change lands within the agent's pre-stream, before any guided heartbeat:
-    the agent used to miss it and switch the pilot's LOITER back to GUIDED."""
+    """Two formations in a row on the same agents, the second by consensus; in it, an RC
+    mode change the moment it forms. The followers are already in their slots then, so
+    it forms at once and the change lands within the agent's pre-stream, before any
+    guided heartbeat: the agent used to miss it and switch the pilot's LOITER back to
+    GUIDED."""
     fleet, token = airborne
     base = fleet.plan.hub_http
     with FleetWatcher(base, token) as watcher, api_client(base, token) as api:
@@ -163,8 +164,14 @@ def test_a_second_formation_on_the_same_agents_and_an_rc_leave(
             "every member holding",
         )
 
-        second, _ = _start_formed(api, watcher, pause_s=30.0, spacing_m=4.0)
+        # the second one by consensus: each follower's slot also from the other's state,
+        # relayed by the hub; the followers form up on it
+        second, _ = _start_formed(api, watcher, pause_s=30.0, spacing_m=4.0, controller="consensus")
         assert second != first
+        assert api.get(f"/api/v1/formations/{second}").json()["controller"] == "consensus"
+        watcher.wait_until(
+            _formation_events(watcher, f"joined {second} (consensus)"), 10, "consensus joins"
+        )
         try:
             # another GCS (or the RC switch) puts a follower in LOITER
             assert send_command(api, LEFT, name="set_mode", mode="LOITER")["status"] == ("accepted")

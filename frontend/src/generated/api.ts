@@ -1530,6 +1530,15 @@ export interface components {
             command: components["schemas"]["ArmCommand"] | components["schemas"]["DisarmCommand"] | components["schemas"]["TakeoffCommand"] | components["schemas"]["LandCommand"] | components["schemas"]["ReturnToLaunchCommand"] | components["schemas"]["SetModeCommand"] | components["schemas"]["GotoCommand"] | components["schemas"]["HoldCommand"] | components["schemas"]["ChangeSpeedCommand"] | components["schemas"]["SetHomeCommand"] | components["schemas"]["RebootCommand"] | components["schemas"]["ParamListCommand"] | components["schemas"]["ParamGetCommand"] | components["schemas"]["ParamSetCommand"] | components["schemas"]["MissionUploadCommand"] | components["schemas"]["MissionDownloadCommand"] | components["schemas"]["MissionClearCommand"] | components["schemas"]["MissionSetCurrentCommand"] | components["schemas"]["ManualStartCommand"] | components["schemas"]["ManualStopCommand"];
             outcome: components["schemas"]["CommandOutcome"];
         };
+        /**
+         * Controller
+         * @description How a follower steers. Leader-following flies its slot around the leader's
+         *     predicted state (position target, the leader's velocity as feed-forward); consensus
+         *     also takes its neighbours' states, so the followers agree on where the leader is
+         *     and close on their slots together (velocity targets).
+         * @enum {string}
+         */
+        Controller: "leader_follower" | "consensus";
         /** CurrentItem */
         CurrentItem: {
             /** Seq */
@@ -1672,6 +1681,11 @@ export interface components {
              * @default 0
              */
             up: number;
+            /**
+             * Neighbours
+             * @description Consensus: the followers it hears (its communication graph's edges, weight 1); null hears every other follower
+             */
+            neighbours?: string[] | null;
         };
         /** FormationRequest */
         FormationRequest: {
@@ -1708,6 +1722,29 @@ export interface components {
              * @default 2
              */
             min_separation_m: number;
+            /**
+             * Obstacle Clearance M
+             * @description A follower whose slot comes this close (horizontally) to a point of the leader's LIDAR scans holds short of it; 0 turns the check off
+             * @default 2
+             */
+            obstacle_clearance_m: number;
+            /**
+             * @description leader_follower: each follower flies its slot around the leader; consensus: also agrees with its neighbours on where the leader is
+             * @default leader_follower
+             */
+            controller: components["schemas"]["Controller"];
+            /**
+             * K Leader
+             * @description Consensus: leader weight
+             * @default 1
+             */
+            k_leader: number;
+            /**
+             * K Neighbour
+             * @description Consensus: weight of each neighbour
+             * @default 0.5
+             */
+            k_neighbour: number;
         };
         /** FormationStatus */
         FormationStatus: {
@@ -1737,6 +1774,7 @@ export interface components {
             formed_at: number | null;
             /** Route Duration S */
             route_duration_s: number;
+            controller: components["schemas"]["Controller"];
             /**
              * Stopped
              * @description Why it stopped; null while it flies

@@ -32,6 +32,7 @@ from backend.scans.points import in_frame
 from backend.scans.service import ScanService
 from backend.settings import HubSettings
 from backend.storage.database import make_engine, migrate
+from backend.storage.formations import FormationRepository
 from backend.storage.logbook import Logbook
 from backend.storage.models import AuditRow, CommandRow
 from backend.storage.rails import RailsRepository
@@ -145,7 +146,7 @@ class Hub:
                 settings.password_hash_threads, settings.password_hash_max_pending
             ),
             safety=(safety := SafetyGate(RailsRepository(engine), settings)),
-            formations=FormationService(registry, safety),
+            formations=FormationService(registry, safety, repository=FormationRepository(engine)),
             scans=ScanService(
                 ScanRepository(engine),
                 bus,

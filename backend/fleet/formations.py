@@ -13,21 +13,25 @@ take the leader vehicle's reported state, so they keep station on where it reall
 from __future__ import annotations
 
 import asyncio
-import itertools
+import json
 import logging
 import math
+import secrets
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
+from sqlalchemy.exc import SQLAlchemyError
 from starlette.websockets import WebSocketDisconnect
 
 from backend.errors import Conflict, NotFound
+from backend.fleet.formation_metrics import TrackingMetrics, tracking_summary
 from backend.fleet.registry import FleetRegistry
 from backend.fleet.safety_gate import SafetyGate, snapshot_of
 from backend.missions.formation import FormationPlan, plan_formation
 from backend.missions.formation.planner import check_separation, follower_offsets
 from backend.missions.formation.schemas import FormationRequest, ShapeChange
+from backend.storage.formations import FormationRepository, StoredFormation
 from common.formation import LeaderState, Offset, slot_target
 from common.geodesy import LocalFrame
 from protocol.messages import (
@@ -75,9 +79,13 @@ class ActiveFormation:
     request: FormationRequest
     plan: FormationPlan
     started_at: float
+    started_by: str = ""
     stopped: str | None = None  # why, once stopped
+    stopped_by: str | None = None
+    stopped_at: float | None = None
     formed_at: float | None = None  # when every follower reached its slot: the route starts
     offsets: dict[str, Offset] = field(default_factory=dict)
+    metrics: TrackingMetrics = field(default_factory=TrackingMetrics)
     scan_seq: int | None = None  # the leader's scan last relayed
     scan_relayed_at: float = 0.0
 
@@ -98,13 +106,14 @@ class FormationService:
         safety: SafetyGate,
         rate_hz: float = 10.0,
         clock: Callable[[], float] = time.time,
+        repository: FormationRepository | None = None,
     ) -> None:
         self._registry = registry
         self._safety = safety
+        self._repository = repository
         self._period = 1.0 / rate_hz
         self._clock = clock
         self._formations: dict[str, ActiveFormation] = {}
-        self._ids = itertools.count(1)
         self.scan_source: ScanSource | None = None
 
     def busy(self) -> set[str]:
@@ -119,7 +128,9 @@ class FormationService:
             raise NotFound(f"no formation {formation_id!r}")
         return formation
 
-    async def start(self, request: FormationRequest, max_speed_ms: float = 5.0) -> ActiveFormation:
+    async def start(
+        self, request: FormationRequest, max_speed_ms: float = 5.0, by: str = ""
+    ) -> ActiveFormation:
         """Check the request (FormationRefused names the reason), then send each member
         its slot. The followers hold until the first leader state reaches them."""
         members = [f.vehicle_id for f in request.followers]
@@ -143,11 +154,18 @@ class FormationService:
             busy=self.busy(),
             max_speed_ms=max_speed_ms,
         )
+        # unique across the hub's restarts too: the id is the stored row's key
         formation = ActiveFormation(
-            f"formation-{next(self._ids)}", request, plan, self._clock(), offsets=plan.offsets
+            f"formation-{secrets.token_hex(4)}",
+            request,
+            plan,
+            self._clock(),
+            started_by=by,
+            offsets=plan.offsets,
         )
         self._formations[formation.id] = formation
         await self._send_slots(formation)
+        await self._store(formation)
         return formation
 
     async def change_shape(self, formation_id: str, change: ShapeChange) -> ActiveFormation:
@@ -158,16 +176,49 @@ class FormationService:
         offsets = follower_offsets(formation.request, change.shape, change.spacing_m)
         check_separation(offsets, formation.plan.min_separation_m)
         formation.offsets = offsets
+        formation.request = formation.request.model_copy(
+            update={k: v for k, v in change.model_dump().items() if v is not None}
+        )
         await self._send_slots(formation)
+        await self._store(formation)
         return formation
 
-    async def stop(self, formation_id: str, reason: str = "stopped by the operator") -> None:
+    async def stop(
+        self, formation_id: str, reason: str = "stopped by the operator", by: str | None = None
+    ) -> None:
         formation = self.get(formation_id)
         if formation.stopped is not None:
             return
-        formation.stopped = reason
+        formation.stopped, formation.stopped_by = reason, by
+        formation.stopped_at = self._clock()
         for vehicle_id in formation.members:
             await self._send(vehicle_id, FormationEnd(formation_id=formation.id, reason=reason))
+        await self._store(formation)
+
+    async def _store(self, formation: ActiveFormation) -> None:
+        """The formation's row: its request, who started and stopped it, and (once
+        stopped) its tracking figures. A store that fails is logged; the flight goes on."""
+        if self._repository is None:
+            return
+        stopped = formation.stopped_at is not None
+        row = StoredFormation(
+            id=formation.id,
+            started=formation.started_at,
+            started_by=formation.started_by,
+            leader_id=formation.plan.leader_id,
+            request_json=formation.request.model_dump_json(),
+            stopped=formation.stopped_at,
+            stopped_by=formation.stopped_by,
+            stop_reason=formation.stopped,
+            tracking_json=json.dumps(tracking_summary(formation.metrics)) if stopped else None,
+        )
+        try:
+            await asyncio.to_thread(self._repository.save, row)
+        except SQLAlchemyError as error:
+            log.warning("formation %s not stored: %s", formation.id, error)
+
+    def stored(self, limit: int) -> list[StoredFormation]:
+        return [] if self._repository is None else self._repository.recent(limit)
 
     async def _send_slots(self, formation: ActiveFormation) -> None:
         origin = formation.plan.frame.origin
@@ -286,11 +337,39 @@ class FormationService:
             if formation.formed_at is None and self._formed(formation, leader):
                 formation.formed_at = now
                 log.info("%s formed up: the route starts", formation.id)
+            self._measure(formation, leader, now)
             places = [p for v in formation.members if (p := self._local(formation, v))]
             for follower in formation.followers:
                 others = [p for p in places if p.vehicle_id != follower]
                 await self._send(follower, _update(formation, leader, leader.time_s, others))
             await self._relay_scan(formation, now)
+
+    def _measure(self, formation: ActiveFormation, leader: LeaderState, now: float) -> None:
+        """Each follower's error from its slot at the time of its own report, the
+        leader carried there at its velocity (at most a second either way)."""
+        leg = None
+        if formation.formed_at is not None:
+            index = formation.plan.route.leg_at(self._route_time(formation, now))
+            leg = None if index is None else index + 1
+        for follower, offset in formation.offsets.items():
+            seen = self._registry.get(follower).last_seen
+            here = self._local(formation, follower)
+            if seen is None or here is None:
+                continue
+            dt = max(-1.0, min(1.0, seen - leader.time_s))
+            then = LeaderState(
+                leader.north + leader.vn * dt,
+                leader.east + leader.ve * dt,
+                leader.up + leader.vu * dt,
+                leader.vn,
+                leader.ve,
+                leader.vu,
+                leader.heading_rad,
+                seen,
+            )
+            (north, east, up), _ = slot_target(then, offset)
+            error = (here.north - north, here.east - east, here.up - up)
+            formation.metrics.record(follower, seen, error, leg)
 
     async def _relay_scan(self, formation: ActiveFormation, now: float) -> None:
         """The leader vehicle's newest scan to every follower, at most SCAN_RELAY_HZ."""

@@ -44,21 +44,25 @@ def airborne(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[LocalFl
         base = fleet.plan.hub_http
         token = access_token(base, "admin", fleet.plan.admin_password)
         with FleetWatcher(base, token) as watcher, api_client(base, token) as api:
-            for vehicle, altitude in ALTITUDES.items():
-                watcher.wait_until(ready(vehicle), 60, f"{vehicle} ready")
-                assert send_command(api, vehicle, name="set_mode", mode="GUIDED")["status"] == (
-                    "accepted"
-                )
-                assert send_command(api, vehicle, name="arm")["status"] == "accepted"
-                outcome = send_command(api, vehicle, name="takeoff", altitude=altitude)
-                assert outcome["status"] == "accepted"
-            for vehicle, altitude in ALTITUDES.items():
-                watcher.wait_until(
-                    lambda v, n=vehicle, a=altitude: (v[n]["state"]["alt_rel"] or 0) >= a - 0.3,
-                    60,
-                    f"{vehicle} at {altitude} m",
-                )
+            take_off_all(watcher, api, ALTITUDES)
         yield fleet, token
+
+
+def take_off_all(watcher: FleetWatcher, api: httpx.Client, altitudes: dict[str, float]) -> None:
+    """Each vehicle ready, in GUIDED, armed and climbing to its altitude; back once all
+    are there."""
+    for vehicle, altitude in altitudes.items():
+        watcher.wait_until(ready(vehicle), 60, f"{vehicle} ready")
+        assert send_command(api, vehicle, name="set_mode", mode="GUIDED")["status"] == "accepted"
+        assert send_command(api, vehicle, name="arm")["status"] == "accepted"
+        outcome = send_command(api, vehicle, name="takeoff", altitude=altitude)
+        assert outcome["status"] == "accepted"
+    for vehicle, altitude in altitudes.items():
+        watcher.wait_until(
+            lambda v, n=vehicle, a=altitude: (v[n]["state"]["alt_rel"] or 0) >= a - 0.3,
+            60,
+            f"{vehicle} at {altitude} m",
+        )
 
 
 def _square(frame: LocalFrame) -> list[dict[str, float]]:
@@ -146,6 +150,9 @@ def test_a_second_formation_on_the_same_agents_and_an_rc_leave(
     base = fleet.plan.hub_http
     with FleetWatcher(base, token) as watcher, api_client(base, token) as api:
         watcher.wait_until(ready(LEADER), 10, "the fleet")
+        here = watcher.state(LEADER)
+        too_fast = _request(LocalFrame(here["lat"], here["lon"]), speed_ms=9.0)
+        assert api.post("/api/v1/formations", json=too_fast).status_code == 422  # audited
         first, _ = _start_formed(api, watcher, pause_s=30.0)
         # the spacing changes in flight; one that breaks the separation is refused
         wider = api.patch(f"/api/v1/formations/{first}", json={"spacing_m": 4.0})
@@ -194,6 +201,28 @@ def test_a_second_formation_on_the_same_agents_and_an_rc_leave(
             15,
             "the rest holding",
         )
+        # who started, changed and stopped which formation, refusals included
+        done = poll_until(
+            lambda: _audited(api, first, second) or None, 10, "the formations audited"
+        )
+        assert ("formation.start", LEADER, "ok", first) in done
+        assert ("formation.change", first, "ok", None) in done
+        assert ("formation.change", first, "refused", None) in done
+        assert ("formation.stop", second, "ok", None) in done
+        assert ("formation.start", LEADER, "refused", None) in done
+
+
+def _audited(api: httpx.Client, first: str, second: str) -> set[tuple[str, str, str, str | None]]:
+    """The formation entries of the audit log, by the admin, once both stops are in."""
+    found = set()
+    for action in ("formation.start", "formation.change", "formation.stop"):
+        for e in api.get("/api/v1/audit", params={"action": action}).json()["entries"]:
+            assert e["actor"] == "admin"
+            if action == "formation.change" and e["outcome"] == "refused":
+                assert "minimum separation is 2 m" in e["detail"]["reason"], e
+            found.add((action, e["target"], e["outcome"], e["detail"].get("formation_id")))
+    stops = {t for a, t, *_ in found if a == "formation.stop"}
+    return found if {first, second} <= stops else set()
 
 
 def test_leader_flies_a_square_and_the_followers_keep_their_slots(
@@ -221,6 +250,27 @@ def test_leader_flies_a_square_and_the_followers_keep_their_slots(
         assert any(t.startswith("left formation-") for t in texts), texts
         status = api.get(f"/api/v1/formations/{formation['id']}").json()
         assert status["stopped"] == "stopped by the operator"
+        # the hub's own tracking figures: every leg measured, within the test's bound
+        for follower in (RIGHT, LEFT):
+            tracking = status["tracking"][follower]
+            assert sorted(tracking["legs"]) == ["1", "2", "3", "4"], tracking
+            assert all(leg["samples"] > 10 for leg in tracking["legs"].values()), tracking
+            assert tracking["mission"]["rms_xy_m"] <= 0.6, tracking
+            assert tracking["live_xy_m"] is not None
+        # stored with the mission: who started and stopped it, and the same figures
+        stored = next(
+            f
+            for f in api.get("/api/v1/formations").json()["formations"]
+            if f["id"] == formation["id"]
+        )
+        assert (stored["started_by"], stored["stopped_by"]) == ("admin", "admin")
+        assert stored["stop_reason"] == "stopped by the operator"
+        assert stored["request"]["speed_ms"] == SPEED_MS
+        for follower in (RIGHT, LEFT):
+            kept = stored["tracking"][follower]["mission"]
+            live = status["tracking"][follower]["mission"]
+            assert kept["samples"] == live["samples"]
+            assert kept["rms_xy_m"] == pytest.approx(live["rms_xy_m"], abs=1e-3)
 
 
 def _fly_and_measure(

@@ -699,13 +699,19 @@ export interface paths {
             path?: never;
             cookie?: never;
         };
-        get?: never;
+        /**
+         * List Formations
+         * @description The latest formations as stored, newest first: who started and stopped each, what
+         *     it flew, and its tracking figures.
+         */
+        get: operations["list_formations_api_v1_formations_get"];
         put?: never;
         /**
          * Start Formation
          * @description Check the formation (separation of every slot, roles, readiness, speed, and the
          *     route with every slot around it against the rails) and start it: each member gets its
-         *     slot, and the leader's state is relayed to the followers at 10 Hz.
+         *     slot, and the leader's state is relayed to the followers at 10 Hz. Audited, refused
+         *     or not.
          */
         post: operations["start_formation_api_v1_formations_post"];
         delete?: never;
@@ -1287,7 +1293,7 @@ export interface components {
          * @description Every action the audit log records (the OpenAPI document lists them as an enum).
          * @enum {string}
          */
-        AuditAction: "login" | "logout" | "token.create" | "token.revoke" | "user.create" | "user.update" | "agent_token.create" | "agent_token.revoke" | "rails.update" | "rails.clear" | "command" | "control.lease" | "denied";
+        AuditAction: "login" | "logout" | "token.create" | "token.revoke" | "user.create" | "user.update" | "agent_token.create" | "agent_token.revoke" | "rails.update" | "rails.clear" | "command" | "control.lease" | "formation.start" | "formation.change" | "formation.stop" | "denied";
         /** AuditPage */
         AuditPage: {
             /** Entries */
@@ -1608,6 +1614,22 @@ export interface components {
             /** Detail */
             detail: string;
         };
+        /** ErrorStatsModel */
+        ErrorStatsModel: {
+            /**
+             * Samples
+             * @description Follower reports measured
+             */
+            samples: number;
+            /** Rms Xy M */
+            rms_xy_m: number;
+            /** Max Xy M */
+            max_xy_m: number;
+            /** Rms Z M */
+            rms_z_m: number;
+            /** Max Z M */
+            max_z_m: number;
+        };
         /** EventPage */
         EventPage: {
             /** Events */
@@ -1775,6 +1797,13 @@ export interface components {
             /** Route Duration S */
             route_duration_s: number;
             controller: components["schemas"]["Controller"];
+            /**
+             * Tracking
+             * @description Each follower's error from its slot (the leader carried to the time of the follower's report): live, and RMS and maximum per leg and over the mission
+             */
+            tracking: {
+                [key: string]: components["schemas"]["TrackingModel"];
+            };
             /**
              * Stopped
              * @description Why it stopped; null while it flies
@@ -2624,6 +2653,48 @@ export interface components {
             /** Alt Msl */
             alt_msl: number;
         };
+        /** StoredFormationModel */
+        StoredFormationModel: {
+            /** Id */
+            id: string;
+            /**
+             * Started
+             * @description Unix time
+             */
+            started: number;
+            /** Started By */
+            started_by: string;
+            /** Leader Id */
+            leader_id: string | null;
+            /**
+             * Request
+             * @description The formation as started (its shape and spacing as last changed)
+             */
+            request: {
+                [key: string]: unknown;
+            };
+            /** Stopped */
+            stopped: number | null;
+            /**
+             * Stopped By
+             * @description Null when the formation ended otherwise
+             */
+            stopped_by: string | null;
+            /** Stop Reason */
+            stop_reason: string | null;
+            /**
+             * Tracking
+             * @description Per follower: RMS and maximum errors per leg and over the mission, as they stood when it stopped
+             */
+            tracking: {
+                [key: string]: unknown;
+            } | null;
+        };
+        /** StoredFormations */
+        StoredFormations: {
+            /** Formations */
+            formations: components["schemas"]["StoredFormationModel"][];
+        };
         /** SurveyDetail */
         SurveyDetail: {
             progress: components["schemas"]["SurveyUpdate"];
@@ -2986,6 +3057,28 @@ export interface components {
             size: number;
             /** Uploaded At */
             uploaded_at: number;
+        };
+        /** TrackingModel */
+        TrackingModel: {
+            /**
+             * Live Xy M
+             * @description The newest horizontal error from its slot
+             */
+            live_xy_m: number | null;
+            /**
+             * Live Z M
+             * @description The newest vertical error
+             */
+            live_z_m: number | null;
+            /**
+             * Legs
+             * @description Per leg of the route (numbered from 1), while the leader flies it
+             */
+            legs: {
+                [key: string]: components["schemas"]["ErrorStatsModel"];
+            };
+            /** @description Over every leg so far */
+            mission: components["schemas"]["ErrorStatsModel"];
         };
         /**
          * Unprocessable
@@ -6192,6 +6285,66 @@ export interface operations {
             };
             /** @description No such vehicle, flight, log, user or token (named in the message) */
             404: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed) */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Unprocessable"];
+                };
+            };
+            /** @description The database is unavailable; try again after Retry-After seconds */
+            503: {
+                headers: {
+                    /** @description Seconds to wait */
+                    "Retry-After"?: number;
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+        };
+    };
+    list_formations_api_v1_formations_get: {
+        parameters: {
+            query?: {
+                limit?: number;
+            };
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["StoredFormations"];
+                };
+            };
+            /** @description Not authenticated */
+            401: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description Needs the 'read' permission */
+            403: {
                 headers: {
                     [name: string]: unknown;
                 };

@@ -55,6 +55,9 @@ from protocol.messages import MAX_SCAN_POINTS, CloseCode, MissionItem
 SEVERITY_INFO = 6  # MAV_SEVERITY_INFO: an obstacle found or gone
 # A formation's followers get the leader's scans thinned to one point per cell this wide.
 SCAN_CELL_M = 0.2
+# ...and without the returns this close above the leader's home: the ground, reached by a
+# scan tilted as the leader accelerates, is not an obstacle.
+SCAN_GROUND_M = 0.3
 log = logging.getLogger(__name__)
 
 
@@ -210,7 +213,12 @@ class Hub:
         site = self.scans.site
         if latest is None or site is None or latest.frame.seq == after_seq:
             return None
-        north, east = in_frame(latest.points, site, frame, SCAN_CELL_M, MAX_SCAN_POINTS)
+        state = self.registry.get(vehicle_id).state
+        home = state.home_alt_msl if state is not None else None
+        ground = None if home is None else home + SCAN_GROUND_M
+        north, east = in_frame(
+            latest.points, site, frame, SCAN_CELL_M, MAX_SCAN_POINTS, above_msl=ground
+        )
         return ScanPoints(latest.frame.utc_time, latest.frame.seq, north, east)
 
     def deliver_sequence_news(self, acks: dict[StreamKey, int], gaps: list[Gap]) -> None:

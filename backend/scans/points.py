@@ -93,14 +93,25 @@ def world_points(frame: ScanFrame, site: LocalFrame) -> WorldPoints:
 
 
 def in_frame(
-    points: WorldPoints, site: LocalFrame, frame: LocalFrame, cell_m: float, limit: int
+    points: WorldPoints,
+    site: LocalFrame,
+    frame: LocalFrame,
+    cell_m: float,
+    limit: int,
+    above_msl: float | None = None,
 ) -> tuple[list[float], list[float]]:
     """The points' north and east metres on another tangent plane (a formation's),
     one per ``cell_m`` cell and at most ``limit`` of them (evenly strided when more),
-    rounded to the centimetre: what a follower's agent is sent."""
+    rounded to the centimetre: what a follower's agent is sent. Points at or below
+    ``above_msl`` (metres above mean sea level) are left out: a tilted scan's beams that
+    reach the ground are not obstacles."""
     if not len(points):
         return [], []
     geo = points.geodetic(site)
+    if above_msl is not None:
+        geo = geo[geo[:, 2] > above_msl]
+        if not len(geo):
+            return [], []
     o = frame.origin
     east, north, _ = geodetic2enu(geo[:, 0], geo[:, 1], geo[:, 2], o.lat, o.lon, o.alt, WGS84)
     ne = np.column_stack([np.asarray(north, dtype=np.float64), np.asarray(east, dtype=np.float64)])

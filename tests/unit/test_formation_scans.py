@@ -130,3 +130,34 @@ def test_the_followers_map_is_bounded_and_keeps_the_newest() -> None:
 def test_a_scan_with_unpaired_points_is_refused() -> None:
     with pytest.raises(ValueError, match="same number of points"):
         LeaderScan(formation_id="f", time=1.0, seq=1, north=[1.0, 2.0], east=[1.0])
+
+
+def test_returns_from_the_ground_are_not_relayed_as_obstacles() -> None:
+    """The leader 3 m up, nose down 20 degrees (accelerating): its forward beams reach the
+    ground 8.2 m ahead. The relay leaves those out above the leader's home height."""
+    ranges = array("H", bytes(2 * BEAMS))
+    ranges[0] = round(3.0 / math.sin(math.radians(20)) * 1000)  # straight ahead
+    ranges[BEAMS // 4] = 4000  # 90 degrees right, level with the sensor: a wall
+    pose = ScanPose(HOME.origin.lat, HOME.origin.lon, HOME.origin.alt + 3.0, pitch=-0.349066)
+    frame = decode_scan(
+        encode_scan(
+            ScanFrame(
+                seq=1,
+                sensor_time_us=0,
+                utc_time=1.7e9,
+                duration_s=0.1,
+                angle_min=0.0,
+                angle_increment=-2 * math.pi / BEAMS,
+                range_max_m=12.0,
+                pose_start=pose,
+                pose_end=pose,
+                ranges=ranges,
+            )
+        )
+    )
+    points = world_points(frame, HOME)
+    everything = in_frame(points, HOME, HOME, 0.2, 1024)
+    assert len(everything[0]) == 2
+    north, east = in_frame(points, HOME, HOME, 0.2, 1024, above_msl=HOME.origin.alt + 0.3)
+    assert north == pytest.approx([0.0], abs=0.05)  # the wall, to the right
+    assert east == pytest.approx([4.0], abs=0.05)

@@ -289,13 +289,12 @@ def position_target(
     north, east, up = setpoint.position
     lat, lon = frame.to_geo(east, north)
     vn, ve, vu = setpoint.velocity
-    mask = POSVEL_TYPE_MASK if yaw_rad is None else POSVEL_YAW_TYPE_MASK
     return mavlink2.MAVLink_set_position_target_global_int_message(
         time_boot_ms & 0xFFFFFFFF,
         target_system,
         target_component,
         mavlink2.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT,
-        mask,
+        POSVEL_TYPE_MASK if yaw_rad is None else POSVEL_YAW_TYPE_MASK,
         round(lat * 1e7),
         round(lon * 1e7),
         up,

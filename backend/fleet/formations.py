@@ -21,6 +21,7 @@ import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
+from pydantic import ValidationError
 from sqlalchemy.exc import SQLAlchemyError
 from starlette.websockets import WebSocketDisconnect
 
@@ -382,13 +383,19 @@ class FormationService:
         if scan is None:
             return
         formation.scan_seq, formation.scan_relayed_at = scan.seq, now
-        message = LeaderScan(
-            formation_id=formation.id,
-            time=scan.time,
-            seq=scan.seq,
-            north=list(scan.north),
-            east=list(scan.east),
-        )
+        try:
+            message = LeaderScan(
+                formation_id=formation.id,
+                time=scan.time,
+                seq=scan.seq,
+                north=list(scan.north),
+                east=list(scan.east),
+            )
+        except ValidationError as error:
+            # points beyond the protocol's reach of the formation's origin: not relayed,
+            # and the relay of the leader's state goes on
+            log.warning("%s: scan %d not relayed: %s", formation.id, scan.seq, error)
+            return
         for follower in formation.followers:
             await self._send(follower, message)
 

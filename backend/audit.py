@@ -37,6 +37,9 @@ class AuditAction(StrEnum):
     RAILS_CLEAR = "rails.clear"
     COMMAND = "command"  # anything sent to a vehicle: commands, parameters, missions
     CONTROL_LEASE = "control.lease"  # manual control taken, given back or revoked; target: vehicle
+    FORMATION_START = "formation.start"  # target: the formation's id (the leader's if refused)
+    FORMATION_CHANGE = "formation.change"  # a new shape or spacing in flight
+    FORMATION_STOP = "formation.stop"
     DENIED = "denied"  # a route refused for want of a permission; target: method and path
 
 

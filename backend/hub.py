@@ -19,7 +19,7 @@ from backend.auth.principal_cache import PrincipalCache
 from backend.auth.rate_limit import Limit, RateLimiter
 from backend.control.lease import LeaseBook
 from backend.fleet.commands import CommandDispatcher
-from backend.fleet.formations import FormationService
+from backend.fleet.formations import FormationService, ScanPoints
 from backend.fleet.registry import FleetRegistry, VehicleRecord
 from backend.fleet.safety_gate import SafetyGate
 from backend.mapping.tiles import TileLibrary
@@ -29,10 +29,12 @@ from backend.realtime.collaborators import AgentConnection, ClientConnection
 from backend.realtime.live_events import live_event
 from backend.scans.obstacles import describe as describe_obstacle
 from backend.scans.pointmap import MapObstacle
+from backend.scans.points import in_frame
 from backend.scans.service import ScanService
 from backend.scans.views import obstacle_views, point_map_view, site_origin
 from backend.settings import HubSettings
 from backend.storage.database import make_engine, migrate
+from backend.storage.formations import FormationRepository
 from backend.storage.logbook import Logbook
 from backend.storage.models import AuditRow, CommandRow
 from backend.storage.rails import RailsRepository
@@ -51,8 +53,10 @@ from backend.viz3d.replay import ReplayPanels
 from backend.viz3d.scene import FleetScene
 from backend.viz3d.server import VizServer
 from backend.viz3d.viewers import Viewers
+from common.geodesy import LocalFrame
 from protocol.messages import (
     MAX_MAP_POINTS_SENT,
+    MAX_SCAN_POINTS,
     CloseCode,
     MapLayer,
     MissionItem,
@@ -62,6 +66,11 @@ from protocol.messages import (
 
 SEVERITY_INFO = 6  # MAV_SEVERITY_INFO: an obstacle found or gone
 POINT_MAP_PUBLISH_S = 2.0
+# A formation's followers get the leader's scans thinned to one point per cell this wide.
+SCAN_CELL_M = 0.2
+# ...and without the returns this close above the leader's home: the ground, reached by a
+# scan tilted as the leader accelerates, is not an obstacle.
+SCAN_GROUND_M = 0.3
 log = logging.getLogger(__name__)
 
 
@@ -155,7 +164,7 @@ class Hub:
                 settings.password_hash_threads, settings.password_hash_max_pending
             ),
             safety=(safety := SafetyGate(RailsRepository(engine), settings)),
-            formations=FormationService(registry, safety),
+            formations=FormationService(registry, safety, repository=FormationRepository(engine)),
             scans=ScanService(
                 ScanRepository(engine),
                 bus,
@@ -167,6 +176,7 @@ class Hub:
             ),
         )
         writer.on_sequences = hub.deliver_sequence_news
+        hub.formations.scan_source = hub.leader_scan
         hub.surveys = SurveyService(hub, bus, SurveyRepository(engine), settings)
         await hub.surveys.load()
         await manual_control.revoke_left_open(hub, engine)
@@ -211,6 +221,23 @@ class Hub:
             self.passwords.close()
             self.tiles.close()
             self.engine.dispose()
+
+    def leader_scan(
+        self, vehicle_id: str, frame: LocalFrame, after_seq: int | None
+    ) -> ScanPoints | None:
+        """A formation leader's newest live scan on the formation's plane, if it is not
+        the one numbered ``after_seq`` (the formations' relay, backend/fleet)."""
+        latest = self.scans.latest.get(vehicle_id)
+        site = self.scans.site
+        if latest is None or site is None or latest.frame.seq == after_seq:
+            return None
+        state = self.registry.get(vehicle_id).state
+        home = state.home_alt_msl if state is not None else None
+        ground = None if home is None else home + SCAN_GROUND_M
+        north, east = in_frame(
+            latest.points, site, frame, SCAN_CELL_M, MAX_SCAN_POINTS, above_msl=ground
+        )
+        return ScanPoints(latest.frame.utc_time, latest.frame.seq, north, east)
 
     def deliver_sequence_news(self, acks: dict[StreamKey, int], gaps: list[Gap]) -> None:
         """Tell each agent what is now stored and which of its frames never arrived."""

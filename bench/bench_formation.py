@@ -5,10 +5,11 @@ and the link's delay (0 to 300 ms at 1.5 m/s).
 
     .venv/bin/python bench/bench_formation.py
 
-Two controllers: the agent's follower (position + velocity feed-forward, the leader
-predicted over the delay) and the seed's (position only, no prediction). The figure is
-the worse follower's horizontal RMS error and its maximum, during the legs. The consensus
-controller is not built yet. Prints Markdown tables; asserts nothing.
+Three controllers: the agent's leader-following (position + velocity feed-forward, the
+leader predicted over the delay), its consensus (k_leader 1, k_neighbour 0.5, each
+follower hearing the other, its state delayed as the leader's), and the seed's (position
+only, no prediction). The figure is the worse follower's horizontal RMS error and its
+maximum, during the legs. Prints Markdown tables; asserts nothing.
 """
 
 from __future__ import annotations
@@ -18,11 +19,13 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
+from common.formation import ConsensusGains, Controller
 from tests.formation_sim import FormationRun, fly_formation
 from vehicle_agents.formation import FollowerSettings
 
 CONTROLLERS = {
-    "feed-forward": {"feed_forward": True},
+    "leader-following": {"feed_forward": True},
+    "consensus": {"controller": Controller.CONSENSUS, "gains": ConsensusGains(1.0, 0.5)},
     # the seed's open-loop waypoints: no velocity, no prediction over the delay
     "position only": {"feed_forward": False, "settings": FollowerSettings(max_lead_s=0.0)},
 }

@@ -135,3 +135,73 @@ def slot_target(
     dn, de, du = offset.north_east_up(leader.heading_rad)
     position = (leader.north + dn, leader.east + de, leader.up + du)
     return position, (leader.vn, leader.ve, leader.vu)
+
+
+class Controller(StrEnum):
+    """How a follower steers. Leader-following flies its slot around the leader's
+    predicted state (position target, the leader's velocity as feed-forward); consensus
+    also takes its neighbours' states, so the followers agree on where the leader is
+    and close on their slots together (velocity targets)."""
+
+    LEADER_FOLLOWER = "leader_follower"
+    CONSENSUS = "consensus"
+
+
+@dataclass(frozen=True, slots=True)
+class ConsensusGains:
+    """First-order leader-following consensus: ``k_leader`` weighs the pull to the slot
+    around the leader, ``k_neighbour`` (per unit edge weight) the pull to agreement with
+    the neighbours on where the leader is. Only their ratio shapes the target: the sum
+    is the autopilot's position gain (see `consensus_target`)."""
+
+    k_leader: float = 1.0
+    k_neighbour: float = 0.5
+
+
+@dataclass(frozen=True, slots=True)
+class NeighbourState:
+    """A neighbour in the communication graph: where it is (north, east, up), its slot,
+    and the edge's weight a_ij."""
+
+    position: tuple[float, float, float]
+    offset: Offset
+    weight: float = 1.0
+
+
+def consensus_target(
+    leader: LeaderState,
+    offset: Offset,
+    neighbours: Sequence[NeighbourState],
+    gains: ConsensusGains,
+) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
+    """The consensus law as a position target and velocity feed-forward for the
+    autopilot's position controller, which flies v = v_ff + K (target - p_i).
+
+    The law: v_i = v_L + k_L (p_L + d_i - p_i) + k_n sum_j a_ij ((p_j - d_j) - (p_i - d_i)).
+    Its target is the weighted mean of where the leader puts the slot (p_L + d_i) and
+    where each neighbour's position puts it (p_j - d_j + d_i), weights k_L and k_n a_ij,
+    and the feed-forward is v_L; the controller then flies the law with k_L + k_n
+    sum_j a_ij = K. Handing the autopilot the target, not a velocity, keeps its own
+    (faster, acceleration-limited) position loop the only one: a velocity target, or a
+    target built from the vehicle's own sampled position, would wrap a second, slower
+    loop round it that rings at every corner. Saturation is the autopilot's
+    (WPNAV_SPEED / MPC_XY_VEL_MAX). p_j - d_j is neighbour j's estimate of the leader:
+    the followers agree, so one that lags drags its neighbours less than the leader's
+    pull brings it on. The offsets turn with the leader's heading."""
+    d_i = offset.north_east_up(leader.heading_rad)
+    total = gains.k_leader
+    target = [
+        gains.k_leader * (p + d)
+        for p, d in zip((leader.north, leader.east, leader.up), d_i, strict=True)
+    ]
+    for n in neighbours:
+        w = gains.k_neighbour * n.weight
+        d_j = n.offset.north_east_up(leader.heading_rad)
+        total += w
+        for axis in range(3):
+            target[axis] += w * (n.position[axis] - d_j[axis] + d_i[axis])
+    return (target[0] / total, target[1] / total, target[2] / total), (
+        leader.vn,
+        leader.ve,
+        leader.vu,
+    )

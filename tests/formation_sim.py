@@ -19,14 +19,29 @@ from dataclasses import dataclass, field
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from backend.missions.formation.route import LeaderRoute
-from common.formation import LeaderState, Offset, Shape, shape_offsets, slot_target
+from common.formation import (
+    ConsensusGains,
+    Controller,
+    LeaderState,
+    Offset,
+    Shape,
+    shape_offsets,
+    slot_target,
+)
 from common.geodesy import GeoPoint, LocalFrame
 from simulator import DEFAULT_HOME, Copter
 from simulator.commands import MessageHandler
 from simulator.mavconst import CopterMode
 from simulator.streams import StreamSchedule
 from simulator.telemetry import DEFAULT_RATES_HZ, TelemetryBuilder
-from vehicle_agents.formation import Action, Follower, FollowerSettings, Setpoint, position_target
+from vehicle_agents.formation import (
+    Action,
+    Follower,
+    FollowerSettings,
+    NeighbourReport,
+    Setpoint,
+    position_target,
+)
 
 TICK_S = 0.1  # the follower's 10 Hz
 GCS_SYSID, GCS_COMPID = 255, 190
@@ -62,6 +77,11 @@ class SimVehicle:
         north, east, up = self.local(frame)
         b = self.copter.body
         return LeaderState(north, east, up, b.vn, b.ve, -b.vd, b.yaw, time_s)
+
+    def report(self, frame: LocalFrame, time_s: float) -> NeighbourReport:
+        """Its state as the hub relays it to a consensus neighbour."""
+        s = self.state(frame, time_s)
+        return NeighbourReport((s.north, s.east, s.up), (s.vn, s.ve, s.vu), time_s)
 
 
 @dataclass
@@ -116,11 +136,15 @@ def fly_formation(
     min_separation_m: float = 1.5,
     feed_forward: bool = True,
     settings: FollowerSettings | None = None,
+    controller: Controller = Controller.LEADER_FOLLOWER,
+    gains: ConsensusGains | None = None,
     on_tick: Callable[[float, list[SimVehicle], list[Follower]], None] | None = None,
     leader_cut_at_s: float | None = None,
     route_laps: float = 1.0,
 ) -> FormationRun:
-    """Take off, settle in the slots, fly the square once, and measure the tracking."""
+    """Take off, settle in the slots, fly the square once, and measure the tracking.
+    A consensus follower hears every other follower (weight 1), their states relayed
+    with the leader's, after the same delay."""
     frame = LocalFrame(DEFAULT_HOME.lat, DEFAULT_HOME.lon, DEFAULT_HOME.alt)
     ups = [a - leader_alt_m for a in follower_alts_m]
     offsets = shape_offsets(shape, len(follower_alts_m), spacing_m, ups)
@@ -132,7 +156,9 @@ def fly_formation(
         dn, de, _ = offset.north_east_up(0.0)
         lat, lon = frame.to_geo(de, dn)
         followers.append(SimVehicle(GeoPoint(lat, lon, DEFAULT_HOME.alt), i + 2))
-        controllers.append(Follower(frame, offset, min_separation_m, settings))
+        controllers.append(Follower(frame, offset, min_separation_m, settings, controller, gains))
+    for i, c in enumerate(controllers):
+        c.graph = {str(j + 2): (o, 1.0) for j, o in enumerate(offsets) if j != i}
     everyone = [leader, *followers]
     take_off(leader, leader_alt_m)
     for vehicle, alt in zip(followers, follower_alts_m, strict=True):
@@ -145,7 +171,8 @@ def fly_formation(
         {v.system_id: [] for v in followers},
         actions={v.system_id: [] for v in followers},
     )
-    in_flight: deque[LeaderState] = deque()  # leader states on their way to the followers
+    # leader states (and the followers' own, for consensus) on their way to the followers
+    in_flight: deque[tuple[LeaderState, dict[str, NeighbourReport]]] = deque()
     t = 0.0
     end = settle_s + route.duration_s * route_laps + 2.0
     while t < end:
@@ -163,11 +190,13 @@ def fly_formation(
             leader.send(msg)
         # its state, stamped now, arrives after the link's delay (until the link is cut)
         if leader_cut_at_s is None or route_t < leader_cut_at_s:
-            in_flight.append(leader.state(frame, t))
-        while in_flight and in_flight[0].time_s <= t - link_delay_s + 1e-9:
-            state = in_flight.popleft()
+            reports = {str(v.system_id): v.report(frame, t) for v in followers}
+            in_flight.append((leader.state(frame, t), reports))
+        while in_flight and in_flight[0][0].time_s <= t - link_delay_s + 1e-9:
+            state, reports = in_flight.popleft()
             for c in controllers:
                 c.on_leader(state)
+                c.neighbours = reports
         positions = {v.system_id: v.local(frame) for v in everyone}
         if started:
             run.action_times.append(route_t)

@@ -16,7 +16,13 @@ switch, and if the stream stops PX4 falls back to its COM_OBL_RC_ACT action on i
 It holds (a position target at its own stopping place, velocity zero) when:
 - the leader's state is older than ``stale_s`` (1 s): flying a guess would be blind;
 - another vehicle is within the minimum separation: it backs off away from it instead;
-- the slot would put it inside a known obstacle's margin (not wired yet).
+- its slot lies within the clearance of an obstacle the leader's LIDAR saw (the hub
+  relays the leader's scans): it holds at the last safe point of its slot's path.
+
+With the consensus controller (chosen per formation) the slot is not the leader's alone:
+the target is the weighted mean of where the leader puts it and where each neighbour in
+its communication graph puts it (`common.formation.consensus_target`), so the followers
+agree on the leader and close on their slots together.
 A mode change it did not make (the RC transmitter's switch) takes it out of the
 formation at once: it stops sending, so the pilot's mode rules.
 """
@@ -34,7 +40,16 @@ from typing import TYPE_CHECKING
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
-from common.formation import LeaderState, Offset, OffsetFrame, slot_target
+from common.formation import (
+    ConsensusGains,
+    Controller,
+    LeaderState,
+    NeighbourState,
+    Offset,
+    OffsetFrame,
+    consensus_target,
+    slot_target,
+)
 
 if TYPE_CHECKING:
     from common.geodesy import LocalFrame
@@ -43,16 +58,18 @@ from protocol.messages import (
     FormationEnd,
     FormationSlot,
     HoldCommand,
+    LeaderScan,
     LeaderUpdate,
 )
 from vehicle_agents.commands import CommandExecutor
 from vehicle_agents.fcu_link import FcuLink, MavMessage
+from vehicle_agents.formation_obstacles import ScanObstacles
 from vehicle_agents.modes import mode_name
 
 log = logging.getLogger(__name__)
 
 EmitEvent = Callable[[EventKind, str, int | None], None]
-FormationMessage = FormationSlot | FormationEnd | LeaderUpdate
+FormationMessage = FormationSlot | FormationEnd | LeaderUpdate | LeaderScan
 
 # Position and velocity used; acceleration, yaw and yaw rate ignored. ArduCopter reads
 # any set bit of a group as "ignore the group", PX4 each axis: both fly this the same.
@@ -86,6 +103,7 @@ class Action(StrEnum):
     HOLD_STALE = "hold_stale"
     BACK_OFF = "back_off"
     HOLD_CLEAR = "hold_clear"  # its slot is within the separation of another vehicle
+    HOLD_OBSTACLE = "hold_obstacle"  # its slot is within the clearance of a scanned obstacle
     LEFT = "left"  # out of the formation: sends nothing
 
 
@@ -99,6 +117,16 @@ class Setpoint:
     reason: str = ""
 
 
+@dataclass(frozen=True)
+class NeighbourReport:
+    """A graph neighbour's last relayed state: position and velocity (north, east, up)
+    and when (the clock the follower compares it with)."""
+
+    position: tuple[float, float, float]
+    velocity: tuple[float, float, float]
+    time_s: float
+
+
 class Follower:
     """One follower's slot-keeping; pure state, fed by the agent and asked each tick."""
 
@@ -108,14 +136,25 @@ class Follower:
         offset: Offset,
         min_separation_m: float,
         settings: FollowerSettings | None = None,
+        controller: Controller = Controller.LEADER_FOLLOWER,
+        gains: ConsensusGains | None = None,
     ) -> None:
         self.frame = frame
         self.offset = offset
         self.min_separation_m = min_separation_m
         self.settings = settings or FollowerSettings()
+        self.controller = controller
+        self.gains = gains or ConsensusGains()
+        # consensus: each graph neighbour's slot and weight, and its last relayed state
+        self.graph: dict[str, tuple[Offset, float]] = {}
+        self.neighbours: dict[str, NeighbourReport] = {}
         self.leader: LeaderState | None = None
         self.left_reason: str | None = None
         self._hold: tuple[float, float, float] | None = None
+        # the leader's scans, and how far from what they show a slot must stay
+        self.obstacles = ScanObstacles()
+        self.clearance_m = 0.0  # 0: the scans are not checked
+        self._last_safe: tuple[float, float, float] | None = None
 
     def set_offset(self, offset: Offset) -> None:
         """A new slot in flight (a shape or spacing change): the position controller,
@@ -164,6 +203,27 @@ class Follower:
         (north, east, up), (vn, ve, vu) = slot_target(predicted, self.offset)
         if up < self.settings.min_alt_m:
             up, vu = self.settings.min_alt_m, max(vu, 0.0)
+        if self.controller is Controller.CONSENSUS:
+            (north, east, up), _ = consensus_target(
+                predicted, self.offset, self._graph_states(now_s), self.gains
+            )
+            up = max(up, self.settings.min_alt_m)
+        blocked = self._obstacle_near(north, east)
+        if blocked is not None:
+            distance, (on, oe) = blocked
+            # short of it: the last target that was clear, on the slot's way here
+            # (checked again: the map grows), else where it is
+            hold = self._last_safe
+            if hold is None or self._obstacle_near(hold[0], hold[1]) is not None:
+                hold = self._last_safe = own
+            return Setpoint(
+                Action.HOLD_OBSTACLE,
+                hold,
+                (0.0, 0.0, 0.0),
+                f"its slot is {distance:.1f} m from an obstacle the leader saw at "
+                f"{on:.1f} m north, {oe:.1f} m east, within the {self.clearance_m:g} m "
+                "clearance",
+            )
         crowded = _nearest((north, east, up), others)
         if crowded is not None and crowded[1] < self.min_separation_m:
             # flying into the slot would break the separation (and, once backed off,
@@ -178,7 +238,28 @@ class Follower:
                 f"{self.min_separation_m:g} m separation",
             )
         self._hold = None
+        self._last_safe = (north, east, up)
         return Setpoint(Action.TRACK, (north, east, up), (vn, ve, vu))
+
+    def _obstacle_near(self, north: float, east: float) -> tuple[float, tuple[float, float]] | None:
+        if self.clearance_m <= 0.0:
+            return None
+        return self.obstacles.nearest(north, east, self.clearance_m)
+
+    def _graph_states(self, now_s: float) -> list[NeighbourState]:
+        """The graph's neighbours with a fresh report, each predicted forward as the
+        leader is; a stale one drops out of the sum (the leader's pull remains)."""
+        out = []
+        for vehicle_id, (offset, weight) in self.graph.items():
+            report = self.neighbours.get(vehicle_id)
+            if report is None or now_s - report.time_s > self.settings.stale_s:
+                continue
+            lead = min(max(now_s - report.time_s, 0.0), self.settings.max_lead_s)
+            position = tuple(
+                p + v * lead for p, v in zip(report.position, report.velocity, strict=True)
+            )
+            out.append(NeighbourState((position[0], position[1], position[2]), offset, weight))
+        return out
 
     def message(
         self,
@@ -239,6 +320,43 @@ def _nearest(
     return best
 
 
+class ModeWatch:
+    """Whose mode the vehicle is in during a formation: the agent's, or a pilot's.
+
+    The agent may change only one thing, the mode it found at the join to the guided
+    mode. Any other change (away from guided once in it, or from the join's mode to
+    anything but guided before the agent's switch) is the RC pilot's or another GCS's,
+    and takes the vehicle out. A second formation on the same vehicles shows why both
+    halves matter: the followers are already in their slots, so the operator can act
+    within the pre-stream's half second, before the agent has asked for guided and
+    before a guided heartbeat has come; the agent must not then switch the pilot's
+    LOITER back to GUIDED."""
+
+    def __init__(self, guided: str | None, join_mode: str | None) -> None:
+        self.guided = guided
+        self.join_mode = join_mode
+        self.seen_guided = join_mode is not None and join_mode == guided
+
+    def observe(self, mode: str | None) -> str | None:
+        """The reason to leave, if ``mode`` (a heartbeat's) is someone else's doing."""
+        if mode is None:
+            return None
+        if mode == self.guided:
+            self.seen_guided = True
+            return None
+        if self.join_mode is None:
+            self.join_mode = mode  # the first heartbeat since the join
+            return None
+        if self.seen_guided or mode != self.join_mode:
+            return f"the vehicle changed to {mode} (RC or another GCS): out of the formation"
+        return None
+
+    def needs_switch(self, mode: str | None) -> bool:
+        """Whether the agent should ask for guided: the vehicle is still in the mode it
+        was in at the join (a pilot's change would have taken it out already)."""
+        return mode != self.guided and not self.seen_guided
+
+
 class FormationRunner:
     """The agent's side of a formation: slots and leader states from the hub in, a
     setpoint to the flight controller every tick, events out when it holds, backs off,
@@ -262,7 +380,7 @@ class FormationRunner:
         self._neighbours: dict[str, tuple[float, float, float]] = {}
         self._started_at = 0.0
         self._mode_asked = False
-        self._seen_guided = False
+        self._modes = ModeWatch(None, None)
         self._last_action: Action | None = None
         self._ending: FormationEnd | None = None
         self._face_heading = False
@@ -290,6 +408,15 @@ class FormationRunner:
                 self._neighbours = {
                     n.vehicle_id: (n.north, n.east, n.up) for n in message.neighbours
                 }
+                self.follower.neighbours = {
+                    n.vehicle_id: NeighbourReport(
+                        (n.north, n.east, n.up), (n.vn, n.ve, n.vu), n.time or message.time
+                    )
+                    for n in message.neighbours
+                }
+            case LeaderScan() if message.formation_id == self.formation_id:
+                assert self.follower is not None
+                self.follower.obstacles.add(message.north, message.east, message.seq)
             case FormationEnd() if message.formation_id == self.formation_id:
                 self._ending = message
 
@@ -298,6 +425,8 @@ class FormationRunner:
         if self.follower is not None and slot.formation_id == self.formation_id:
             self.follower.set_offset(offset)
             self.follower.min_separation_m = slot.min_separation_m
+            self.follower.graph = _graph(slot)
+            self.follower.clearance_m = slot.obstacle_clearance_m
             self._emit("formation", f"new slot in {slot.formation_id}: {_describe(offset)}", 6)
             return
         self.formation_id = slot.formation_id
@@ -306,13 +435,27 @@ class FormationRunner:
         from common.geodesy import LocalFrame
 
         frame = LocalFrame(slot.origin_lat, slot.origin_lon)
-        self.follower = Follower(frame, offset, slot.min_separation_m, self.settings)
+        self.follower = Follower(
+            frame,
+            offset,
+            slot.min_separation_m,
+            self.settings,
+            Controller(slot.controller),
+            ConsensusGains(slot.k_leader, slot.k_neighbour),
+        )
+        self.follower.graph = _graph(slot)
+        self.follower.clearance_m = slot.obstacle_clearance_m
         self._face_heading = slot.face_heading
         self._started_at = self._clock()
-        self._mode_asked = self._seen_guided = False
+        self._mode_asked = False
+        heartbeat = self._link.latest.get("HEARTBEAT")
+        self._modes = ModeWatch(
+            self._guided_mode(), mode_name(heartbeat) if heartbeat is not None else None
+        )
         self._last_action = None
         self._neighbours = {}
-        self._emit("formation", f"joined {slot.formation_id}: {_describe(offset)}", 6)
+        how = "" if slot.controller == "leader_follower" else f" ({slot.controller})"
+        self._emit("formation", f"joined {slot.formation_id}{how}: {_describe(offset)}", 6)
 
     def _on_message(self, message: MavMessage) -> None:
         """The RC pilot's (or another GCS's) mode change takes the vehicle out."""
@@ -320,12 +463,8 @@ class FormationRunner:
             return
         if message.get_type() != "HEARTBEAT" or message.get_srcSystem() != self._link.target_system:
             return
-        guided = self._guided_mode()
-        mode = mode_name(message)
-        if mode == guided:
-            self._seen_guided = True
-        elif self._seen_guided:
-            reason = f"the vehicle changed to {mode} (RC or another GCS): out of the formation"
+        reason = self._modes.observe(mode_name(message))
+        if reason is not None:
             self.follower.leave(reason)
             self._emit("formation", f"left {self.formation_id}: {reason}", 4)
 
@@ -356,7 +495,12 @@ class FormationRunner:
         setpoint = follower.tick(now, own, self._neighbours)
         if setpoint.action is not self._last_action:
             self._last_action = setpoint.action
-            if setpoint.action in (Action.HOLD_STALE, Action.BACK_OFF, Action.HOLD_CLEAR):
+            if setpoint.action in (
+                Action.HOLD_STALE,
+                Action.BACK_OFF,
+                Action.HOLD_CLEAR,
+                Action.HOLD_OBSTACLE,
+            ):
                 self._emit("formation", f"{setpoint.action.value}: {setpoint.reason}", 4)
             elif setpoint.action is Action.TRACK:
                 self._emit("formation", "tracking its slot", 6)
@@ -377,7 +521,7 @@ class FormationRunner:
         if not self._mode_asked and now - self._started_at >= self.settings.prestream_s:
             self._mode_asked = True
             heartbeat = self._link.latest.get("HEARTBEAT")
-            if heartbeat is None or mode_name(heartbeat) != self._guided_mode():
+            if self._modes.needs_switch(mode_name(heartbeat) if heartbeat else None):
                 self._enter_guided()
 
     def _enter_guided(self) -> None:
@@ -415,3 +559,9 @@ class FormationRunner:
 def _describe(offset: Offset) -> str:
     axes = "forward/right" if offset.frame is OffsetFrame.HEADING else "north/east"
     return f"{offset.x:.1f} m, {offset.y:.1f} m ({axes}), {offset.up:+.1f} m up"
+
+
+def _graph(slot: FormationSlot) -> dict[str, tuple[Offset, float]]:
+    return {
+        e.vehicle_id: (Offset(e.x, e.y, e.up, OffsetFrame(e.frame)), e.weight) for e in slot.graph
+    }

@@ -26,6 +26,7 @@ from protocol.messages import (
     FormationEnd,
     FormationSlot,
     Hello,
+    LeaderScan,
     LeaderUpdate,
     LiveState,
     ManualApplied,
@@ -96,7 +97,8 @@ class HubLink:
         live_state: Callable[[], VehicleState] | None = None,
         on_manual: Callable[[ManualFrame], ManualApplied | None] | None = None,
         scans: ScanOutbox | None = None,
-        on_formation: Callable[[FormationSlot | FormationEnd | LeaderUpdate], None] | None = None,
+        on_formation: Callable[[FormationSlot | FormationEnd | LeaderUpdate | LeaderScan], None]
+        | None = None,
     ) -> None:
         self.url = url
         self._token = token
@@ -280,7 +282,7 @@ class HubLink:
                         applied = None
                     if applied is not None:
                         tasks.create_task(websocket.send(encode(applied)))
-            case FormationSlot() | FormationEnd() | LeaderUpdate():
+            case FormationSlot() | FormationEnd() | LeaderUpdate() | LeaderScan():
                 # at once, like stick frames: the newest leader state is the one flown
                 if self._on_formation is not None:
                     self._on_formation(message)

@@ -4,20 +4,65 @@ The checks and the relay are `backend.fleet.formations`; a refusal names its rea
 
 from __future__ import annotations
 
-from typing import Annotated
+import asyncio
+import json
+from collections.abc import AsyncIterator
+from contextlib import asynccontextmanager
+from typing import Annotated, Any
 
-from fastapi import Path
+from fastapi import Path, Query, Request
 from pydantic import BaseModel, Field
 
 from backend.api.deps import HubDep
-from backend.api.security import SecuredRouter, requires
-from backend.auth.policy import Permission
+from backend.api.security import CurrentPrincipal, SecuredRouter, audit_entry, requires
+from backend.audit import AuditAction
+from backend.auth.policy import Permission, Principal
+from backend.errors import GcsError
+from backend.fleet.formation_metrics import ErrorStats, FollowerTracking
 from backend.fleet.formations import ActiveFormation
+from backend.hub import Hub
 from backend.missions.formation.schemas import FormationRequest, OffsetModel, ShapeChange
+from common.formation import Controller
 
 router = SecuredRouter(prefix="/formations", tags=["formations"])
 
 FormationIdPath = Annotated[str, Path(pattern=r"^[A-Za-z0-9_.-]{1,64}$")]
+
+
+class ErrorStatsModel(BaseModel):
+    samples: int = Field(description="Follower reports measured")
+    rms_xy_m: float
+    max_xy_m: float
+    rms_z_m: float
+    max_z_m: float
+
+    @classmethod
+    def of(cls, stats: ErrorStats) -> ErrorStatsModel:
+        return cls(
+            samples=stats.samples,
+            rms_xy_m=stats.rms_xy_m,
+            max_xy_m=stats.max_xy_m,
+            rms_z_m=stats.rms_z_m,
+            max_z_m=stats.max_z_m,
+        )
+
+
+class TrackingModel(BaseModel):
+    live_xy_m: float | None = Field(description="The newest horizontal error from its slot")
+    live_z_m: float | None = Field(description="The newest vertical error")
+    legs: dict[int, ErrorStatsModel] = Field(
+        description="Per leg of the route (numbered from 1), while the leader flies it"
+    )
+    mission: ErrorStatsModel = Field(description="Over every leg so far")
+
+    @classmethod
+    def of(cls, tracking: FollowerTracking) -> TrackingModel:
+        return cls(
+            live_xy_m=tracking.live_xy_m,
+            live_z_m=tracking.live_z_m,
+            legs={leg: ErrorStatsModel.of(s) for leg, s in sorted(tracking.legs.items())},
+            mission=ErrorStatsModel.of(tracking.mission),
+        )
 
 
 class FormationStatus(BaseModel):
@@ -30,6 +75,11 @@ class FormationStatus(BaseModel):
         "started; null while they join"
     )
     route_duration_s: float
+    controller: Controller
+    tracking: dict[str, TrackingModel] = Field(
+        description="Each follower's error from its slot (the leader carried to the time "
+        "of the follower's report): live, and RMS and maximum per leg and over the mission"
+    )
     stopped: str | None = Field(description="Why it stopped; null while it flies")
 
     @classmethod
@@ -44,16 +94,75 @@ class FormationStatus(BaseModel):
             started_at=formation.started_at,
             formed_at=formation.formed_at,
             route_duration_s=formation.plan.route.duration_s,
+            controller=formation.plan.controller,
+            tracking={v: TrackingModel.of(t) for v, t in formation.metrics.followers.items()},
             stopped=formation.stopped,
         )
 
 
 @router.post("", response_model=FormationStatus, openapi_extra=requires(Permission.COMMAND))
-async def start_formation(body: FormationRequest, hub: HubDep) -> FormationStatus:
+async def start_formation(
+    body: FormationRequest, request: Request, principal: CurrentPrincipal, hub: HubDep
+) -> FormationStatus:
     """Check the formation (separation of every slot, roles, readiness, speed, and the
     route with every slot around it against the rails) and start it: each member gets its
-    slot, and the leader's state is relayed to the followers at 10 Hz."""
-    return FormationStatus.of(await hub.formations.start(body))
+    slot, and the leader's state is relayed to the followers at 10 Hz. Audited, refused
+    or not."""
+    target = body.leader_id or "virtual leader"
+    async with _audited(request, principal, hub, AuditAction.FORMATION_START, target) as note:
+        formation = await hub.formations.start(body, by=principal.name)
+        note.update(
+            formation_id=formation.id,
+            followers=formation.followers,
+            controller=formation.plan.controller.value,
+        )
+    return FormationStatus.of(formation)
+
+
+class StoredFormationModel(BaseModel):
+    id: str
+    started: float = Field(description="Unix time")
+    started_by: str
+    leader_id: str | None
+    request: dict[str, Any] = Field(
+        description="The formation as started (its shape and spacing as last changed)"
+    )
+    stopped: float | None
+    stopped_by: str | None = Field(description="Null when the formation ended otherwise")
+    stop_reason: str | None
+    tracking: dict[str, Any] | None = Field(
+        description="Per follower: RMS and maximum errors per leg and over the mission, "
+        "as they stood when it stopped"
+    )
+
+
+class StoredFormations(BaseModel):
+    formations: list[StoredFormationModel]
+
+
+@router.get("", response_model=StoredFormations, openapi_extra=requires(Permission.READ))
+async def list_formations(
+    hub: HubDep, limit: Annotated[int, Query(ge=1, le=500)] = 50
+) -> StoredFormations:
+    """The latest formations as stored, newest first: who started and stopped each, what
+    it flew, and its tracking figures."""
+    stored = await asyncio.to_thread(hub.formations.stored, limit)
+    return StoredFormations(
+        formations=[
+            StoredFormationModel(
+                id=f.id,
+                started=f.started,
+                started_by=f.started_by,
+                leader_id=f.leader_id,
+                request=json.loads(f.request_json),
+                stopped=f.stopped,
+                stopped_by=f.stopped_by,
+                stop_reason=f.stop_reason,
+                tracking=None if f.tracking_json is None else json.loads(f.tracking_json),
+            )
+            for f in stored
+        ]
+    )
 
 
 @router.get(
@@ -67,10 +176,18 @@ async def get_formation(formation_id: FormationIdPath, hub: HubDep) -> Formation
     "/{formation_id}", response_model=FormationStatus, openapi_extra=requires(Permission.COMMAND)
 )
 async def change_formation(
-    formation_id: FormationIdPath, body: ShapeChange, hub: HubDep
+    formation_id: FormationIdPath,
+    body: ShapeChange,
+    request: Request,
+    principal: CurrentPrincipal,
+    hub: HubDep,
 ) -> FormationStatus:
     """A new shape or spacing in flight; the followers glide to their new slots."""
-    return FormationStatus.of(await hub.formations.change_shape(formation_id, body))
+    action = AuditAction.FORMATION_CHANGE
+    async with _audited(request, principal, hub, action, formation_id) as note:
+        note.update(body.model_dump(exclude_none=True, mode="json"))
+        formation = await hub.formations.change_shape(formation_id, body)
+    return FormationStatus.of(formation)
 
 
 @router.post(
@@ -78,7 +195,29 @@ async def change_formation(
     response_model=FormationStatus,
     openapi_extra=requires(Permission.COMMAND),
 )
-async def stop_formation(formation_id: FormationIdPath, hub: HubDep) -> FormationStatus:
+async def stop_formation(
+    formation_id: FormationIdPath, request: Request, principal: CurrentPrincipal, hub: HubDep
+) -> FormationStatus:
     """Every member leaves the formation and holds where it is."""
-    await hub.formations.stop(formation_id)
+    async with _audited(request, principal, hub, AuditAction.FORMATION_STOP, formation_id):
+        await hub.formations.stop(formation_id, by=principal.name)
     return FormationStatus.of(hub.formations.get(formation_id))
+
+
+@asynccontextmanager
+async def _audited(
+    request: Request, principal: Principal, hub: Hub, action: AuditAction, target: str
+) -> AsyncIterator[dict[str, Any]]:
+    """Record who did ``action`` on ``target`` and how it ended: ok, or refused with the
+    reason (the refusal still reaches the caller)."""
+    detail: dict[str, Any] = {}
+    try:
+        yield detail
+    except GcsError as refusal:
+        await hub.record(
+            audit_entry(
+                request, principal, action, target, "refused", reason=refusal.message, **detail
+            )
+        )
+        raise
+    await hub.record(audit_entry(request, principal, action, target, "ok", **detail))

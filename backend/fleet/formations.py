@@ -13,23 +13,37 @@ take the leader vehicle's reported state, so they keep station on where it reall
 from __future__ import annotations
 
 import asyncio
-import itertools
+import json
 import logging
 import math
+import secrets
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
+from pydantic import ValidationError
+from sqlalchemy.exc import SQLAlchemyError
 from starlette.websockets import WebSocketDisconnect
 
 from backend.errors import Conflict, NotFound
+from backend.fleet.formation_metrics import TrackingMetrics, tracking_summary
 from backend.fleet.registry import FleetRegistry
 from backend.fleet.safety_gate import SafetyGate, snapshot_of
 from backend.missions.formation import FormationPlan, plan_formation
 from backend.missions.formation.planner import check_separation, follower_offsets
 from backend.missions.formation.schemas import FormationRequest, ShapeChange
+from backend.storage.formations import FormationRepository, StoredFormation
 from common.formation import LeaderState, Offset, slot_target
-from protocol.messages import FormationEnd, FormationSlot, LeaderUpdate, Message, Neighbour
+from common.geodesy import LocalFrame
+from protocol.messages import (
+    FormationEnd,
+    FormationSlot,
+    GraphEdge,
+    LeaderScan,
+    LeaderUpdate,
+    Message,
+    Neighbour,
+)
 
 log = logging.getLogger(__name__)
 
@@ -39,6 +53,25 @@ MAX_RELAY_AGE_S = 1.0
 # The route's clock starts once every follower is this close to its slot (horizontally
 # and vertically): a leg flown while followers are still joining measures nothing.
 FORM_UP_M = 0.5
+# The leader's scans go to the followers at most this often (the newest, never a queue):
+# an obstacle moves with the scene, not the sensor's 10 Hz, and each scan is kilobytes.
+SCAN_RELAY_HZ = 2.0
+
+
+@dataclass(frozen=True)
+class ScanPoints:
+    """A vehicle's newest scan as a formation's followers get it: its time, its number,
+    and its returns' north and east metres on the formation's plane."""
+
+    time: float
+    seq: int
+    north: Sequence[float]
+    east: Sequence[float]
+
+
+# (vehicle id, the formation's frame, the scan number already relayed) -> its newest
+# scan if newer; given by the hub's wiring (the scans sit above the fleet).
+ScanSource = Callable[[str, LocalFrame, int | None], ScanPoints | None]
 
 
 @dataclass
@@ -47,9 +80,15 @@ class ActiveFormation:
     request: FormationRequest
     plan: FormationPlan
     started_at: float
+    started_by: str = ""
     stopped: str | None = None  # why, once stopped
+    stopped_by: str | None = None
+    stopped_at: float | None = None
     formed_at: float | None = None  # when every follower reached its slot: the route starts
     offsets: dict[str, Offset] = field(default_factory=dict)
+    metrics: TrackingMetrics = field(default_factory=TrackingMetrics)
+    scan_seq: int | None = None  # the leader's scan last relayed
+    scan_relayed_at: float = 0.0
 
     @property
     def followers(self) -> list[str]:
@@ -68,13 +107,15 @@ class FormationService:
         safety: SafetyGate,
         rate_hz: float = 10.0,
         clock: Callable[[], float] = time.time,
+        repository: FormationRepository | None = None,
     ) -> None:
         self._registry = registry
         self._safety = safety
+        self._repository = repository
         self._period = 1.0 / rate_hz
         self._clock = clock
         self._formations: dict[str, ActiveFormation] = {}
-        self._ids = itertools.count(1)
+        self.scan_source: ScanSource | None = None
 
     def busy(self) -> set[str]:
         return {v for f in self.active() for v in f.members}
@@ -88,7 +129,9 @@ class FormationService:
             raise NotFound(f"no formation {formation_id!r}")
         return formation
 
-    async def start(self, request: FormationRequest, max_speed_ms: float = 5.0) -> ActiveFormation:
+    async def start(
+        self, request: FormationRequest, max_speed_ms: float = 5.0, by: str = ""
+    ) -> ActiveFormation:
         """Check the request (FormationRefused names the reason), then send each member
         its slot. The followers hold until the first leader state reaches them."""
         members = [f.vehicle_id for f in request.followers]
@@ -112,11 +155,18 @@ class FormationService:
             busy=self.busy(),
             max_speed_ms=max_speed_ms,
         )
+        # unique across the hub's restarts too: the id is the stored row's key
         formation = ActiveFormation(
-            f"formation-{next(self._ids)}", request, plan, self._clock(), offsets=plan.offsets
+            f"formation-{secrets.token_hex(4)}",
+            request,
+            plan,
+            self._clock(),
+            started_by=by,
+            offsets=plan.offsets,
         )
         self._formations[formation.id] = formation
         await self._send_slots(formation)
+        await self._store(formation)
         return formation
 
     async def change_shape(self, formation_id: str, change: ShapeChange) -> ActiveFormation:
@@ -127,23 +177,68 @@ class FormationService:
         offsets = follower_offsets(formation.request, change.shape, change.spacing_m)
         check_separation(offsets, formation.plan.min_separation_m)
         formation.offsets = offsets
+        formation.request = formation.request.model_copy(
+            update={k: v for k, v in change.model_dump().items() if v is not None}
+        )
         await self._send_slots(formation)
+        await self._store(formation)
         return formation
 
-    async def stop(self, formation_id: str, reason: str = "stopped by the operator") -> None:
+    async def stop(
+        self, formation_id: str, reason: str = "stopped by the operator", by: str | None = None
+    ) -> None:
         formation = self.get(formation_id)
         if formation.stopped is not None:
             return
-        formation.stopped = reason
+        formation.stopped, formation.stopped_by = reason, by
+        formation.stopped_at = self._clock()
         for vehicle_id in formation.members:
             await self._send(vehicle_id, FormationEnd(formation_id=formation.id, reason=reason))
+        await self._store(formation)
+
+    async def _store(self, formation: ActiveFormation) -> None:
+        """The formation's row: its request, who started and stopped it, and (once
+        stopped) its tracking figures. A store that fails is logged; the flight goes on."""
+        if self._repository is None:
+            return
+        stopped = formation.stopped_at is not None
+        row = StoredFormation(
+            id=formation.id,
+            started=formation.started_at,
+            started_by=formation.started_by,
+            leader_id=formation.plan.leader_id,
+            request_json=formation.request.model_dump_json(),
+            stopped=formation.stopped_at,
+            stopped_by=formation.stopped_by,
+            stop_reason=formation.stopped,
+            tracking_json=json.dumps(tracking_summary(formation.metrics)) if stopped else None,
+        )
+        try:
+            await asyncio.to_thread(self._repository.save, row)
+        except SQLAlchemyError as error:
+            log.warning("formation %s not stored: %s", formation.id, error)
+
+    def stored(self, limit: int) -> list[StoredFormation]:
+        return [] if self._repository is None else self._repository.recent(limit)
 
     async def _send_slots(self, formation: ActiveFormation) -> None:
         origin = formation.plan.frame.origin
         slots = dict(formation.offsets)
         if formation.plan.leader_id:
             slots[formation.plan.leader_id] = Offset(0.0, 0.0, 0.0)
+        plan = formation.plan
         for vehicle_id, offset in slots.items():
+            graph = [
+                GraphEdge(
+                    vehicle_id=heard,
+                    x=slots[heard].x,
+                    y=slots[heard].y,
+                    up=slots[heard].up,
+                    frame=slots[heard].frame.value,
+                    weight=weight,
+                )
+                for heard, weight in plan.graph.get(vehicle_id, {}).items()
+            ]
             await self._send(
                 vehicle_id,
                 FormationSlot(
@@ -155,7 +250,12 @@ class FormationService:
                     up=offset.up,
                     frame=offset.frame.value,
                     min_separation_m=formation.plan.min_separation_m,
+                    obstacle_clearance_m=formation.request.obstacle_clearance_m,
                     face_heading=vehicle_id == formation.plan.leader_id,
+                    controller=plan.controller.value,
+                    k_leader=plan.gains.k_leader,
+                    k_neighbour=plan.gains.k_neighbour,
+                    graph=graph,
                 ),
             )
 
@@ -171,11 +271,23 @@ class FormationService:
     # -- the relay -------------------------------------------------------------
 
     def _local(self, formation: ActiveFormation, vehicle_id: str) -> Neighbour | None:
-        state = self._registry.get(vehicle_id).state
+        """A member's last report in the formation's frame, with its velocity and time
+        (a consensus follower predicts its neighbours forward over the delay)."""
+        record = self._registry.get(vehicle_id)
+        state = record.state
         if state is None or state.lat is None or state.lon is None or state.alt_rel is None:
             return None
         east, north = formation.plan.frame.to_local(state.lat, state.lon)
-        return Neighbour(vehicle_id=vehicle_id, north=north, east=east, up=state.alt_rel)
+        return Neighbour(
+            vehicle_id=vehicle_id,
+            north=north,
+            east=east,
+            up=state.alt_rel,
+            vn=_bounded(state.vn),
+            ve=_bounded(state.ve),
+            vu=_bounded(state.climb_rate),
+            time=record.last_seen,
+        )
 
     def leader_state(self, formation: ActiveFormation, now: float) -> LeaderState | None:
         """The route's state now (a virtual leader), or the leader vehicle's last report."""
@@ -226,10 +338,66 @@ class FormationService:
             if formation.formed_at is None and self._formed(formation, leader):
                 formation.formed_at = now
                 log.info("%s formed up: the route starts", formation.id)
+            self._measure(formation, leader, now)
             places = [p for v in formation.members if (p := self._local(formation, v))]
             for follower in formation.followers:
                 others = [p for p in places if p.vehicle_id != follower]
                 await self._send(follower, _update(formation, leader, leader.time_s, others))
+            await self._relay_scan(formation, now)
+
+    def _measure(self, formation: ActiveFormation, leader: LeaderState, now: float) -> None:
+        """Each follower's error from its slot at the time of its own report, the
+        leader carried there at its velocity (at most a second either way)."""
+        leg = None
+        if formation.formed_at is not None:
+            index = formation.plan.route.leg_at(self._route_time(formation, now))
+            leg = None if index is None else index + 1
+        for follower, offset in formation.offsets.items():
+            seen = self._registry.get(follower).last_seen
+            here = self._local(formation, follower)
+            if seen is None or here is None:
+                continue
+            dt = max(-1.0, min(1.0, seen - leader.time_s))
+            then = LeaderState(
+                leader.north + leader.vn * dt,
+                leader.east + leader.ve * dt,
+                leader.up + leader.vu * dt,
+                leader.vn,
+                leader.ve,
+                leader.vu,
+                leader.heading_rad,
+                seen,
+            )
+            (north, east, up), _ = slot_target(then, offset)
+            error = (here.north - north, here.east - east, here.up - up)
+            formation.metrics.record(follower, seen, error, leg)
+
+    async def _relay_scan(self, formation: ActiveFormation, now: float) -> None:
+        """The leader vehicle's newest scan to every follower, at most SCAN_RELAY_HZ."""
+        leader_id = formation.plan.leader_id
+        if leader_id is None or self.scan_source is None:
+            return
+        if now - formation.scan_relayed_at < 1.0 / SCAN_RELAY_HZ:
+            return
+        scan = self.scan_source(leader_id, formation.plan.frame, formation.scan_seq)
+        if scan is None:
+            return
+        formation.scan_seq, formation.scan_relayed_at = scan.seq, now
+        try:
+            message = LeaderScan(
+                formation_id=formation.id,
+                time=scan.time,
+                seq=scan.seq,
+                north=list(scan.north),
+                east=list(scan.east),
+            )
+        except ValidationError as error:
+            # points beyond the protocol's reach of the formation's origin: not relayed,
+            # and the relay of the leader's state goes on
+            log.warning("%s: scan %d not relayed: %s", formation.id, scan.seq, error)
+            return
+        for follower in formation.followers:
+            await self._send(follower, message)
 
     async def run(self) -> None:
         while True:
@@ -252,3 +420,11 @@ def _update(
         heading_deg=math.degrees(leader.heading_rad) % 360.0,
         neighbours=others,
     )
+
+
+def _bounded(speed: float | None) -> float:
+    """A reported speed within the protocol's bounds (a glitching sensor's value must
+    not stop the relay)."""
+    if speed is None or not math.isfinite(speed):
+        return 0.0
+    return max(-99.0, min(99.0, speed))

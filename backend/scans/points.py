@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import numpy.typing as npt
-from pymap3d.enu import enu2geodetic
+from pymap3d.enu import enu2geodetic, geodetic2enu
 
 from common.geodesy import WGS84, LocalFrame
 from protocol.scans import ScanFrame
@@ -90,3 +90,34 @@ def world_points(frame: ScanFrame, site: LocalFrame) -> WorldPoints:
     enu = origin + np.column_stack([ned[:, 1], ned[:, 0], -ned[:, 2]])
     times = frame.utc_time + share * frame.duration_s
     return WorldPoints(enu, times)
+
+
+def in_frame(
+    points: WorldPoints,
+    site: LocalFrame,
+    frame: LocalFrame,
+    cell_m: float,
+    limit: int,
+    above_msl: float | None = None,
+) -> tuple[list[float], list[float]]:
+    """The points' north and east metres on another tangent plane (a formation's),
+    one per ``cell_m`` cell and at most ``limit`` of them (evenly strided when more),
+    rounded to the centimetre: what a follower's agent is sent. Points at or below
+    ``above_msl`` (metres above mean sea level) are left out: a tilted scan's beams that
+    reach the ground are not obstacles."""
+    if not len(points):
+        return [], []
+    geo = points.geodetic(site)
+    if above_msl is not None:
+        geo = geo[geo[:, 2] > above_msl]
+        if not len(geo):
+            return [], []
+    o = frame.origin
+    east, north, _ = geodetic2enu(geo[:, 0], geo[:, 1], geo[:, 2], o.lat, o.lon, o.alt, WGS84)
+    ne = np.column_stack([np.asarray(north, dtype=np.float64), np.asarray(east, dtype=np.float64)])
+    _, first = np.unique(np.floor(ne / cell_m).astype(np.int64), axis=0, return_index=True)
+    kept = ne[np.sort(first)]
+    if len(kept) > limit:
+        kept = kept[np.linspace(0, len(kept) - 1, limit).astype(np.int64)]
+    kept = np.round(kept, 2)
+    return kept[:, 0].tolist(), kept[:, 1].tolist()

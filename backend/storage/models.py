@@ -299,3 +299,21 @@ class SurveyRow(Base):
     created_by: Mapped[str] = mapped_column(String(64))
     # Text, not a bounded String: a large survey's photos run to megabytes.
     run_json: Mapped[str] = mapped_column(Text)
+
+
+class FormationRow(Base):
+    """One formation mission: who started it and with what (the request as JSON), who
+    stopped it and why, and its followers' tracking figures per leg and per mission."""
+
+    __tablename__ = "formations"
+    __table_args__ = (Index("ix_formations_started", "started"),)
+
+    id: Mapped[str] = mapped_column(String(64), primary_key=True)
+    started: Mapped[float] = mapped_column(Double)
+    started_by: Mapped[str] = mapped_column(String(64))
+    leader_id: Mapped[str | None] = mapped_column(String(64))
+    request_json: Mapped[str] = mapped_column(Text)
+    stopped: Mapped[float | None] = mapped_column(Double)
+    stopped_by: Mapped[str | None] = mapped_column(String(64))
+    stop_reason: Mapped[str | None] = mapped_column(Text)
+    tracking_json: Mapped[str | None] = mapped_column(Text)

@@ -23,6 +23,9 @@ const ACTIONS: Record<AuditAction, true> = {
   "rails.clear": true,
   command: true,
   "control.lease": true,
+  "formation.start": true,
+  "formation.change": true,
+  "formation.stop": true,
   denied: true,
 };
 

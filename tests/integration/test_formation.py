@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from typing import Any
 
 import httpx
@@ -38,38 +38,31 @@ SIDE_M, SPEED_MS, PAUSE_S = 20.0, 1.5, 2.0
 MIN_SEPARATION_M = 2.0
 
 
-def _airborne(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[LocalFleet, str]]:
+@pytest.fixture(scope="module")
+def airborne(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[LocalFleet, str]]:
     with running_fleet(tmp_path_factory.mktemp("formation"), vehicles=3, speedup=1.0) as fleet:
         base = fleet.plan.hub_http
         token = access_token(base, "admin", fleet.plan.admin_password)
         with FleetWatcher(base, token) as watcher, api_client(base, token) as api:
-            for vehicle, altitude in ALTITUDES.items():
-                watcher.wait_until(ready(vehicle), 60, f"{vehicle} ready")
-                assert send_command(api, vehicle, name="set_mode", mode="GUIDED")["status"] == (
-                    "accepted"
-                )
-                assert send_command(api, vehicle, name="arm")["status"] == "accepted"
-                outcome = send_command(api, vehicle, name="takeoff", altitude=altitude)
-                assert outcome["status"] == "accepted"
-            for vehicle, altitude in ALTITUDES.items():
-                watcher.wait_until(
-                    lambda v, n=vehicle, a=altitude: (v[n]["state"]["alt_rel"] or 0) >= a - 0.3,
-                    60,
-                    f"{vehicle} at {altitude} m",
-                )
+            take_off_all(watcher, api, ALTITUDES)
         yield fleet, token
 
 
-@pytest.fixture(scope="module")
-def airborne(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[LocalFleet, str]]:
-    yield from _airborne(tmp_path_factory)
-
-
-@pytest.fixture
-def fresh_airborne(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[LocalFleet, str]]:
-    """A fleet of its own: on agents that have already flown one formation, a second
-    one's RC leave went unseen (open, see the closing note of issue 19)."""
-    yield from _airborne(tmp_path_factory)
+def take_off_all(watcher: FleetWatcher, api: httpx.Client, altitudes: dict[str, float]) -> None:
+    """Each vehicle ready, in GUIDED, armed and climbing to its altitude; back once all
+    are there."""
+    for vehicle, altitude in altitudes.items():
+        watcher.wait_until(ready(vehicle), 60, f"{vehicle} ready")
+        assert send_command(api, vehicle, name="set_mode", mode="GUIDED")["status"] == "accepted"
+        assert send_command(api, vehicle, name="arm")["status"] == "accepted"
+        outcome = send_command(api, vehicle, name="takeoff", altitude=altitude)
+        assert outcome["status"] == "accepted"
+    for vehicle, altitude in altitudes.items():
+        watcher.wait_until(
+            lambda v, n=vehicle, a=altitude: (v[n]["state"]["alt_rel"] or 0) >= a - 0.3,
+            60,
+            f"{vehicle} at {altitude} m",
+        )
 
 
 def _square(frame: LocalFrame) -> list[dict[str, float]]:
@@ -121,55 +114,115 @@ def test_bad_formations_are_refused_with_reasons(airborne: tuple[LocalFleet, str
             assert reason in answer.text
 
 
-def test_rc_mode_change_takes_a_member_out(fresh_airborne: tuple[LocalFleet, str]) -> None:
-    fleet, token = fresh_airborne
+def _start_formed(
+    api: httpx.Client, watcher: FleetWatcher, **overrides: Any
+) -> tuple[str, LocalFrame]:
+    """Every member in GUIDED, a formation started around the leader, and its followers
+    in their slots; its id and the route's frame."""
+    for vehicle in ALTITUDES:
+        assert send_command(api, vehicle, name="set_mode", mode="GUIDED")["status"] == "accepted"
+    here = watcher.state(LEADER)
+    frame = LocalFrame(here["lat"], here["lon"])
+    answer = api.post("/api/v1/formations", json=_request(frame, **overrides))
+    assert answer.status_code == 200, answer.text
+    formation_id: str = answer.json()["id"]
+    poll_until(
+        lambda: api.get(f"/api/v1/formations/{formation_id}").json()["formed_at"],
+        60,
+        "the followers in their slots",
+    )
+    return formation_id, frame
+
+
+def _formation_events(watcher: FleetWatcher, text: str) -> Callable[[Any], bool]:
+    return lambda v: any(e.get("kind") == "formation" and text in e["text"] for e in watcher.events)
+
+
+def test_a_second_formation_on_the_same_agents_and_an_rc_leave(
+    airborne: tuple[LocalFleet, str],
+) -> None:
+    """Two formations in a row on the same agents, the second by consensus; in it, an RC
+    mode change the moment it forms. The followers are already in their slots then, so
+    it forms at once and the change lands within the agent's pre-stream, before any
+    guided heartbeat: the agent used to miss it and switch the pilot's LOITER back to
+    GUIDED."""
+    fleet, token = airborne
     base = fleet.plan.hub_http
     with FleetWatcher(base, token) as watcher, api_client(base, token) as api:
         watcher.wait_until(ready(LEADER), 10, "the fleet")
-        for vehicle in ALTITUDES:
-            assert send_command(api, vehicle, name="set_mode", mode="GUIDED")["status"] == (
-                "accepted"
-            )
         here = watcher.state(LEADER)
-        frame = LocalFrame(here["lat"], here["lon"])
-        answer = api.post("/api/v1/formations", json=_request(frame, pause_s=30.0))
-        assert answer.status_code == 200, answer.text
-        formation_id = answer.json()["id"]
-        poll_until(
-            lambda: api.get(f"/api/v1/formations/{formation_id}").json()["formed_at"],
-            60,
-            "the followers in their slots",
-        )
+        too_fast = _request(LocalFrame(here["lat"], here["lon"]), speed_ms=9.0)
+        assert api.post("/api/v1/formations", json=too_fast).status_code == 422  # audited
+        first, _ = _start_formed(api, watcher, pause_s=30.0)
         # the spacing changes in flight; one that breaks the separation is refused
-        wider = api.patch(f"/api/v1/formations/{formation_id}", json={"spacing_m": 4.0})
+        wider = api.patch(f"/api/v1/formations/{first}", json={"spacing_m": 4.0})
         assert wider.status_code == 200, wider.text
         assert wider.json()["slots"][RIGHT]["y"] == pytest.approx(4.0 / math.sqrt(2.0))
-        tight = api.patch(f"/api/v1/formations/{formation_id}", json={"spacing_m": 1.0})
+        tight = api.patch(f"/api/v1/formations/{first}", json={"spacing_m": 1.0})
         assert tight.status_code == 422
         assert "minimum separation is 2 m" in tight.text
         watcher.wait_until(
-            lambda v: any(
-                e.get("kind") == "formation" and e["text"].startswith("new slot")
-                for e in watcher.events
-            ),
-            10,
-            "the followers told their new slots",
+            _formation_events(watcher, f"new slot in {first}"), 10, "the new slots told"
         )
-        # another GCS (or the RC switch) puts a follower in LOITER
-        assert send_command(api, LEFT, name="set_mode", mode="LOITER")["status"] == "accepted"
+        assert api.post(f"/api/v1/formations/{first}/stop").status_code == 200
         watcher.wait_until(
-            lambda v: any(
-                e.get("kind") == "formation" and "changed to LOITER" in e["text"]
-                for e in watcher.events
-            ),
-            10,
-            "the follower leaving",
+            lambda v: all((v[n].get("state") or {}).get("mode") == "BRAKE" for n in ALTITUDES),
+            15,
+            "every member holding",
         )
-        # it stays where the pilot put it: the agent sends no more targets nor modes
-        deadline = time.monotonic() + 2.0
-        watcher.wait_until(lambda v: time.monotonic() > deadline, 5, "two seconds")
-        assert watcher.state(LEFT)["mode"] == "LOITER"
-        api.post(f"/api/v1/formations/{answer.json()['id']}/stop")
+
+        # the second one by consensus: each follower's slot also from the other's state,
+        # relayed by the hub; the followers form up on it
+        second, _ = _start_formed(api, watcher, pause_s=30.0, spacing_m=4.0, controller="consensus")
+        assert second != first
+        assert api.get(f"/api/v1/formations/{second}").json()["controller"] == "consensus"
+        watcher.wait_until(
+            _formation_events(watcher, f"joined {second} (consensus)"), 10, "consensus joins"
+        )
+        try:
+            # another GCS (or the RC switch) puts a follower in LOITER
+            assert send_command(api, LEFT, name="set_mode", mode="LOITER")["status"] == ("accepted")
+            watcher.wait_until(
+                _formation_events(watcher, f"left {second}: the vehicle changed to LOITER"),
+                10,
+                "the follower leaving",
+            )
+            # it stays where the pilot put it: the agent sends no more targets nor modes
+            deadline = time.monotonic() + 2.0
+            watcher.wait_until(lambda v: time.monotonic() > deadline, 5, "two seconds")
+            assert watcher.state(LEFT)["mode"] == "LOITER"
+            # the others fly on in the second formation
+            assert watcher.state(RIGHT)["mode"] == "GUIDED"
+        finally:
+            api.post(f"/api/v1/formations/{second}/stop")
+        # leave the vehicles as the next test expects them: holding, in GUIDED's reach
+        watcher.wait_until(
+            lambda v: (v[RIGHT].get("state") or {}).get("mode") == "BRAKE",
+            15,
+            "the rest holding",
+        )
+        # who started, changed and stopped which formation, refusals included
+        done = poll_until(
+            lambda: _audited(api, first, second) or None, 10, "the formations audited"
+        )
+        assert ("formation.start", LEADER, "ok", first) in done
+        assert ("formation.change", first, "ok", None) in done
+        assert ("formation.change", first, "refused", None) in done
+        assert ("formation.stop", second, "ok", None) in done
+        assert ("formation.start", LEADER, "refused", None) in done
+
+
+def _audited(api: httpx.Client, first: str, second: str) -> set[tuple[str, str, str, str | None]]:
+    """The formation entries of the audit log, by the admin, once both stops are in."""
+    found = set()
+    for action in ("formation.start", "formation.change", "formation.stop"):
+        for e in api.get("/api/v1/audit", params={"action": action}).json()["entries"]:
+            assert e["actor"] == "admin"
+            if action == "formation.change" and e["outcome"] == "refused":
+                assert "minimum separation is 2 m" in e["detail"]["reason"], e
+            found.add((action, e["target"], e["outcome"], e["detail"].get("formation_id")))
+    stops = {t for a, t, *_ in found if a == "formation.stop"}
+    return found if {first, second} <= stops else set()
 
 
 def test_leader_flies_a_square_and_the_followers_keep_their_slots(
@@ -197,6 +250,27 @@ def test_leader_flies_a_square_and_the_followers_keep_their_slots(
         assert any(t.startswith("left formation-") for t in texts), texts
         status = api.get(f"/api/v1/formations/{formation['id']}").json()
         assert status["stopped"] == "stopped by the operator"
+        # the hub's own tracking figures: every leg measured, within the test's bound
+        for follower in (RIGHT, LEFT):
+            tracking = status["tracking"][follower]
+            assert sorted(tracking["legs"]) == ["1", "2", "3", "4"], tracking
+            assert all(leg["samples"] > 10 for leg in tracking["legs"].values()), tracking
+            assert tracking["mission"]["rms_xy_m"] <= 0.6, tracking
+            assert tracking["live_xy_m"] is not None
+        # stored with the mission: who started and stopped it, and the same figures
+        stored = next(
+            f
+            for f in api.get("/api/v1/formations").json()["formations"]
+            if f["id"] == formation["id"]
+        )
+        assert (stored["started_by"], stored["stopped_by"]) == ("admin", "admin")
+        assert stored["stop_reason"] == "stopped by the operator"
+        assert stored["request"]["speed_ms"] == SPEED_MS
+        for follower in (RIGHT, LEFT):
+            kept = stored["tracking"][follower]["mission"]
+            live = status["tracking"][follower]["mission"]
+            assert kept["samples"] == live["samples"]
+            assert kept["rms_xy_m"] == pytest.approx(live["rms_xy_m"], abs=1e-3)
 
 
 def _fly_and_measure(

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import pytest
 from alembic.autogenerate import compare_metadata
 from alembic.migration import MigrationContext
@@ -10,6 +12,7 @@ from sqlalchemy.exc import DBAPIError
 
 from backend.audit import AuditEntry, AuditLog, AuditQuery
 from backend.storage.database import migrate
+from backend.storage.formations import FormationRepository, StoredFormation
 from backend.storage.models import Base
 from backend.storage.records import TelemetryEnvelope
 from backend.storage.repository import Repository
@@ -60,3 +63,22 @@ def test_audit_log_is_append_only(engine: Engine) -> None:
             connection.execute(text(statement))
     (entry,) = audit.query(AuditQuery())
     assert (entry.actor, entry.action, entry.outcome) == ("alice", "command", "ok")
+
+
+def test_a_formation_is_stored_when_started_and_again_when_stopped(engine: Engine) -> None:
+    migrate(engine)
+    formations = FormationRepository(engine)
+    started = StoredFormation("formation-1a2b", 100.0, "olivia", "sim_1", '{"speed_ms": 1.5}')
+    formations.save(started)
+    formations.save(replace(started, id="formation-3c4d", started=200.0, leader_id=None))
+    stopped = replace(
+        started,
+        stopped=160.0,
+        stopped_by="admin",
+        stop_reason="stopped by the operator",
+        tracking_json='{"sim_2": {"mission": {"rms_xy_m": 0.4}}}',
+    )
+    formations.save(stopped)  # the same row, overwritten
+    assert formations.get("formation-1a2b") == stopped
+    assert [f.id for f in formations.recent(10)] == ["formation-3c4d", "formation-1a2b"]
+    assert formations.get("formation-none") is None

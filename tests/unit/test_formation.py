@@ -15,12 +15,29 @@ from backend.missions.formation.schemas import FormationRequest
 from backend.safety.geofence import Geofence
 from backend.safety.rails import SafetyRails
 from backend.safety.snapshot import VehicleSnapshot
-from common.formation import LeaderState, Offset, OffsetFrame, Shape, shape_offsets, slot_target
+from common.formation import (
+    ConsensusGains,
+    Controller,
+    LeaderState,
+    NeighbourState,
+    Offset,
+    OffsetFrame,
+    Shape,
+    consensus_target,
+    shape_offsets,
+    slot_target,
+)
 from common.geodesy import GeoPoint, LocalFrame
 from simulator import DEFAULT_HOME
 from simulator.mavconst import CopterMode
 from tests.formation_sim import SimVehicle, take_off
-from vehicle_agents.formation import POSVEL_TYPE_MASK, Action, Follower
+from vehicle_agents.formation import (
+    POSVEL_TYPE_MASK,
+    Action,
+    Follower,
+    ModeWatch,
+    NeighbourReport,
+)
 
 HOME = LocalFrame(DEFAULT_HOME.lat, DEFAULT_HOME.lon)
 
@@ -132,11 +149,38 @@ def test_seed_formation_is_planned() -> None:
         ),
         ({"speed_ms": 12.0}, "12 m/s is above the vehicles' limit of 5 m/s"),
         ({"followers": [{"vehicle_id": "ghost"}]}, "ghost has not reported its state"),
+        (
+            {
+                "controller": "consensus",
+                "followers": [{"vehicle_id": "f1", "neighbours": ["f1"]}, {"vehicle_id": "f2"}],
+            },
+            "f1 cannot be its own neighbour",
+        ),
+        (
+            {
+                "controller": "consensus",
+                "followers": [{"vehicle_id": "f1", "neighbours": ["lead"]}, {"vehicle_id": "f2"}],
+            },
+            "f1's neighbour lead is not a follower of this formation",
+        ),
     ],
 )
 def test_bad_formations_are_refused_with_a_reason(overrides: dict[str, Any], reason: str) -> None:
     with pytest.raises(FormationRefused, match=reason):
         _plan(_request(**overrides))
+
+
+def test_a_consensus_formation_hears_every_other_follower_unless_told() -> None:
+    plan = _plan(_request(controller="consensus", k_neighbour=0.25))
+    assert plan.controller is Controller.CONSENSUS
+    assert plan.graph == {"f1": {"f2": 1.0}, "f2": {"f1": 1.0}}
+    assert plan.gains == ConsensusGains(1.0, 0.25)
+    one_way = _request(
+        controller="consensus",
+        followers=[{"vehicle_id": "f1", "neighbours": []}, {"vehicle_id": "f2"}],
+    )
+    assert _plan(one_way).graph == {"f1": {}, "f2": {"f1": 1.0}}
+    assert _plan(_request()).graph == {}  # leader-following hears no neighbours
 
 
 def test_busy_and_unready_vehicles_are_refused() -> None:
@@ -228,6 +272,87 @@ def test_follower_never_targets_below_its_floor() -> None:
     assert sp.position is not None
     assert sp.position[2] == 1.0
     assert sp.velocity[2] == 0.0
+
+
+# -- consensus ----------------------------------------------------------------------
+
+LEADER_EAST = LeaderState(0.0, 0.0, 8.0, 0.0, 1.5, 0.0, math.pi / 2, time_s=0.0)
+RIGHT_SLOT, LEFT_SLOT = Offset(-2.0, 2.0, -6.0), Offset(-2.0, -2.0, -5.0)
+
+
+def test_consensus_without_neighbours_is_the_leaders_slot() -> None:
+    target, velocity = consensus_target(LEADER_EAST, RIGHT_SLOT, [], ConsensusGains())
+    assert target == pytest.approx(slot_target(LEADER_EAST, RIGHT_SLOT)[0])
+    assert velocity == (0.0, 1.5, 0.0)  # the leader's, as feed-forward
+
+
+def test_consensus_flies_the_law_through_the_autopilots_position_loop() -> None:
+    """A neighbour lagging 1.5 m behind its slot pulls the target back by its weight's
+    share; the autopilot's v = v_ff + K (target - p) is then the law with k_L + k_n = K."""
+    slot, _ = slot_target(LEADER_EAST, LEFT_SLOT)
+    lagging = NeighbourState((slot[0], slot[1] - 1.5, slot[2]), LEFT_SLOT, weight=1.0)
+    gains = ConsensusGains(k_leader=1.0, k_neighbour=0.5)
+    target, v_ff = consensus_target(LEADER_EAST, RIGHT_SLOT, [lagging], gains)
+    own_slot, _ = slot_target(LEADER_EAST, RIGHT_SLOT)
+    assert target == pytest.approx((own_slot[0], own_slot[1] - 0.5, own_slot[2]))
+    # the law, from a follower 0.3 m north of its slot, with K = 1 and gains scaled to it
+    p_i = (own_slot[0] + 0.3, own_slot[1], own_slot[2])
+    k_l, k_n = 1.0 / 1.5, 0.5 / 1.5
+    d_i = RIGHT_SLOT.north_east_up(LEADER_EAST.heading_rad)
+    d_j = LEFT_SLOT.north_east_up(LEADER_EAST.heading_rad)
+    leader_p = (LEADER_EAST.north, LEADER_EAST.east, LEADER_EAST.up)
+    law = [
+        v_ff[a]
+        + k_l * (leader_p[a] + d_i[a] - p_i[a])
+        + k_n * ((lagging.position[a] - d_j[a]) - (p_i[a] - d_i[a]))
+        for a in range(3)
+    ]
+    autopilot = [v_ff[a] + 1.0 * (target[a] - p_i[a]) for a in range(3)]
+    assert autopilot == pytest.approx(law)
+
+
+def test_a_consensus_follower_drops_a_stale_neighbour() -> None:
+    follower = Follower(
+        HOME, RIGHT_SLOT, 2.0, controller=Controller.CONSENSUS, gains=ConsensusGains(1.0, 1.0)
+    )
+    follower.graph = {"f2": (LEFT_SLOT, 1.0)}
+    follower.on_leader(LEADER_EAST)
+    slot, _ = slot_target(LEADER_EAST, LEFT_SLOT)
+    behind = (slot[0], slot[1] - 2.0, slot[2])
+    follower.neighbours = {"f2": NeighbourReport(behind, (0.0, 1.5, 0.0), time_s=0.0)}
+    own_slot, _ = slot_target(LEADER_EAST, RIGHT_SLOT)
+    fresh = follower.tick(0.0, own=own_slot)
+    assert fresh.action is Action.TRACK
+    assert fresh.position == pytest.approx((own_slot[0], own_slot[1] - 1.0, own_slot[2]))
+    assert fresh.velocity == (0.0, 1.5, 0.0)
+    # the neighbour's report ages past 1 s while the leader's stays fresh: the leader's
+    # pull alone (at 1.5 m/s the slot has moved on 1.2 m by then)
+    follower.on_leader(LeaderState(0.0, 1.2, 8.0, 0.0, 1.5, 0.0, math.pi / 2, time_s=1.2))
+    alone = follower.tick(1.2, own=own_slot)
+    assert alone.position == pytest.approx(slot_target(follower.leader, RIGHT_SLOT)[0])
+
+
+def test_a_mode_change_before_the_agents_switch_is_the_pilots() -> None:
+    """A second formation on followers already in their slots: the pilot switches to
+    LOITER within the pre-stream, before any guided heartbeat. That is a leave, and the
+    agent must not switch the vehicle back to GUIDED (it used to)."""
+    watch = ModeWatch("GUIDED", "GUIDED")  # the operator put it in GUIDED before starting
+    assert watch.observe("LOITER") is not None
+    assert not watch.needs_switch("LOITER")
+    braked = ModeWatch("GUIDED", "BRAKE")  # held after the first formation
+    assert braked.needs_switch("BRAKE")  # the agent's own switch, after its pre-stream
+    assert braked.observe("BRAKE") is None
+    left = braked.observe("LOITER")  # the pilot's, from BRAKE, before the agent's
+    assert "changed to LOITER" in (left or "")
+
+
+def test_the_agents_own_switch_to_guided_is_not_a_leave() -> None:
+    watch = ModeWatch("GUIDED", None)  # no heartbeat yet at the join
+    assert watch.observe("BRAKE") is None  # the first one gives the join's mode
+    assert watch.needs_switch("BRAKE")
+    assert watch.observe("GUIDED") is None
+    assert not watch.needs_switch("GUIDED")
+    assert "changed to RTL" in (watch.observe("RTL") or "")
 
 
 # -- the simulator answers velocity targets as ArduCopter does ------------------

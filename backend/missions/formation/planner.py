@@ -9,7 +9,7 @@ slot around it) against the rails: geofence, altitudes, distance from home, batt
 from __future__ import annotations
 
 from collections.abc import Collection, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from backend.errors import InvalidRequest
 from backend.missions.formation.route import LeaderRoute
@@ -19,7 +19,15 @@ from backend.missions.waypoints import Waypoint
 from backend.safety.rails import SafetyRails
 from backend.safety.snapshot import VehicleSnapshot
 from backend.safety.violations import Violation
-from common.formation import Offset, OffsetFrame, Shape, closest_pair, shape_offsets
+from common.formation import (
+    ConsensusGains,
+    Controller,
+    Offset,
+    OffsetFrame,
+    Shape,
+    closest_pair,
+    shape_offsets,
+)
 from common.geodesy import LocalFrame
 
 LEADER = "leader"
@@ -42,6 +50,9 @@ class FormationPlan:
     route: LeaderRoute
     offsets: dict[str, Offset]  # per follower
     min_separation_m: float
+    controller: Controller = Controller.LEADER_FOLLOWER
+    gains: ConsensusGains = field(default_factory=ConsensusGains)
+    graph: dict[str, dict[str, float]] = field(default_factory=dict)  # follower: {heard: a_ij}
 
     def slot_points(self, heading_rad: float) -> dict[str, tuple[float, float, float]]:
         """Every member's place relative to the leader (the leader at the origin)."""
@@ -124,6 +135,7 @@ def plan_formation(
         )
     offsets = follower_offsets(request)
     check_separation(offsets, request.min_separation_m)
+    graph = communication_graph(request)
 
     first = request.route[0]
     frame = LocalFrame(first.lat, first.lon)
@@ -146,7 +158,41 @@ def plan_formation(
             f"{first_vehicle}'s slot along the route: {found[0].message}",
             violations,
         )
-    return FormationPlan(request.leader_id, frame, route, offsets, request.min_separation_m)
+    return FormationPlan(
+        request.leader_id,
+        frame,
+        route,
+        offsets,
+        request.min_separation_m,
+        request.controller,
+        ConsensusGains(request.k_leader, request.k_neighbour),
+        graph,
+    )
+
+
+def communication_graph(request: FormationRequest) -> dict[str, dict[str, float]]:
+    """Who each consensus follower hears (weight 1): its listed neighbours, else every
+    other follower. The leader is heard by all, so any graph converges; a neighbour that
+    is not a follower of this formation, or the follower itself, is refused."""
+    if request.controller is not Controller.CONSENSUS:
+        return {}
+    followers = [f.vehicle_id for f in request.followers]
+    graph: dict[str, dict[str, float]] = {}
+    for follower in request.followers:
+        heard = follower.neighbours
+        if heard is None:
+            heard = [v for v in followers if v != follower.vehicle_id]
+        for other in heard:
+            if other == follower.vehicle_id:
+                raise FormationRefused("followers", f"{other} cannot be its own neighbour")
+            if other not in followers:
+                raise FormationRefused(
+                    "followers",
+                    f"{follower.vehicle_id}'s neighbour {other} is not a follower of this "
+                    "formation",
+                )
+        graph[follower.vehicle_id] = dict.fromkeys(heard, 1.0)
+    return graph
 
 
 def _slot_waypoints(route: LeaderRoute, frame: LocalFrame, offset: Offset) -> list[Waypoint]:

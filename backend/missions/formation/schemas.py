@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from pydantic import BaseModel, ConfigDict, Field
 
-from common.formation import OffsetFrame, Shape
+from common.formation import Controller, OffsetFrame, Shape
 from protocol.messages import Number, VehicleId
 
 MAX_FOLLOWERS = 32
@@ -36,6 +36,12 @@ class FollowerModel(_Strict):
     up: Number = Field(
         default=0.0, ge=-500, le=500, description="Metres above the leader in a preset slot"
     )
+    neighbours: list[VehicleId] | None = Field(
+        default=None,
+        max_length=MAX_FOLLOWERS,
+        description="Consensus: the followers it hears (its communication graph's edges, "
+        "weight 1); null hears every other follower",
+    )
 
 
 class FormationRequest(_Strict):
@@ -50,6 +56,22 @@ class FormationRequest(_Strict):
     spacing_m: Number = Field(default=3.0, gt=0, le=500)
     min_separation_m: Number = Field(
         default=2.0, gt=0, le=100, description="No two vehicles ever closer than this"
+    )
+    obstacle_clearance_m: Number = Field(
+        default=2.0,
+        ge=0,
+        le=50,
+        description="A follower whose slot comes this close (horizontally) to a point of "
+        "the leader's LIDAR scans holds short of it; 0 turns the check off",
+    )
+    controller: Controller = Field(
+        default=Controller.LEADER_FOLLOWER,
+        description="leader_follower: each follower flies its slot around the leader; "
+        "consensus: also agrees with its neighbours on where the leader is",
+    )
+    k_leader: Number = Field(default=1.0, gt=0, le=100, description="Consensus: leader weight")
+    k_neighbour: Number = Field(
+        default=0.5, ge=0, le=100, description="Consensus: weight of each neighbour"
     )
 
 

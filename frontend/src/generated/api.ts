@@ -719,13 +719,19 @@ export interface paths {
             path?: never;
             cookie?: never;
         };
-        get?: never;
+        /**
+         * List Formations
+         * @description The latest formations as stored, newest first: who started and stopped each, what
+         *     it flew, and its tracking figures.
+         */
+        get: operations["list_formations_api_v1_formations_get"];
         put?: never;
         /**
          * Start Formation
          * @description Check the formation (separation of every slot, roles, readiness, speed, and the
          *     route with every slot around it against the rails) and start it: each member gets its
-         *     slot, and the leader's state is relayed to the followers at 10 Hz.
+         *     slot, and the leader's state is relayed to the followers at 10 Hz. Audited, refused
+         *     or not.
          */
         post: operations["start_formation_api_v1_formations_post"];
         delete?: never;
@@ -1330,7 +1336,7 @@ export interface components {
          * @description Every action the audit log records (the OpenAPI document lists them as an enum).
          * @enum {string}
          */
-        AuditAction: "login" | "logout" | "token.create" | "token.revoke" | "user.create" | "user.update" | "agent_token.create" | "agent_token.revoke" | "rails.update" | "rails.clear" | "command" | "control.lease" | "denied";
+        AuditAction: "login" | "logout" | "token.create" | "token.revoke" | "user.create" | "user.update" | "agent_token.create" | "agent_token.revoke" | "rails.update" | "rails.clear" | "command" | "control.lease" | "formation.start" | "formation.change" | "formation.stop" | "denied";
         /** AuditPage */
         AuditPage: {
             /** Entries */
@@ -1598,6 +1604,15 @@ export interface components {
             command: components["schemas"]["ArmCommand"] | components["schemas"]["DisarmCommand"] | components["schemas"]["TakeoffCommand"] | components["schemas"]["LandCommand"] | components["schemas"]["ReturnToLaunchCommand"] | components["schemas"]["SetModeCommand"] | components["schemas"]["GotoCommand"] | components["schemas"]["HoldCommand"] | components["schemas"]["ChangeSpeedCommand"] | components["schemas"]["SetHomeCommand"] | components["schemas"]["RebootCommand"] | components["schemas"]["ParamListCommand"] | components["schemas"]["ParamGetCommand"] | components["schemas"]["ParamSetCommand"] | components["schemas"]["MissionUploadCommand"] | components["schemas"]["MissionDownloadCommand"] | components["schemas"]["MissionClearCommand"] | components["schemas"]["MissionSetCurrentCommand"] | components["schemas"]["ManualStartCommand"] | components["schemas"]["ManualStopCommand"];
             outcome: components["schemas"]["CommandOutcome"];
         };
+        /**
+         * Controller
+         * @description How a follower steers. Leader-following flies its slot around the leader's
+         *     predicted state (position target, the leader's velocity as feed-forward); consensus
+         *     also takes its neighbours' states, so the followers agree on where the leader is
+         *     and close on their slots together (velocity targets).
+         * @enum {string}
+         */
+        Controller: "leader_follower" | "consensus";
         /** CurrentItem */
         CurrentItem: {
             /** Seq */
@@ -1666,6 +1681,22 @@ export interface components {
         ErrorMessage: {
             /** Detail */
             detail: string;
+        };
+        /** ErrorStatsModel */
+        ErrorStatsModel: {
+            /**
+             * Samples
+             * @description Follower reports measured
+             */
+            samples: number;
+            /** Rms Xy M */
+            rms_xy_m: number;
+            /** Max Xy M */
+            max_xy_m: number;
+            /** Rms Z M */
+            rms_z_m: number;
+            /** Max Z M */
+            max_z_m: number;
         };
         /** EventPage */
         EventPage: {
@@ -1740,6 +1771,11 @@ export interface components {
              * @default 0
              */
             up: number;
+            /**
+             * Neighbours
+             * @description Consensus: the followers it hears (its communication graph's edges, weight 1); null hears every other follower
+             */
+            neighbours?: string[] | null;
         };
         /** FormationRequest */
         FormationRequest: {
@@ -1776,6 +1812,29 @@ export interface components {
              * @default 2
              */
             min_separation_m: number;
+            /**
+             * Obstacle Clearance M
+             * @description A follower whose slot comes this close (horizontally) to a point of the leader's LIDAR scans holds short of it; 0 turns the check off
+             * @default 2
+             */
+            obstacle_clearance_m: number;
+            /**
+             * @description leader_follower: each follower flies its slot around the leader; consensus: also agrees with its neighbours on where the leader is
+             * @default leader_follower
+             */
+            controller: components["schemas"]["Controller"];
+            /**
+             * K Leader
+             * @description Consensus: leader weight
+             * @default 1
+             */
+            k_leader: number;
+            /**
+             * K Neighbour
+             * @description Consensus: weight of each neighbour
+             * @default 0.5
+             */
+            k_neighbour: number;
         };
         /** FormationStatus */
         FormationStatus: {
@@ -1805,6 +1864,14 @@ export interface components {
             formed_at: number | null;
             /** Route Duration S */
             route_duration_s: number;
+            controller: components["schemas"]["Controller"];
+            /**
+             * Tracking
+             * @description Each follower's error from its slot (the leader carried to the time of the follower's report): live, and RMS and maximum per leg and over the mission
+             */
+            tracking: {
+                [key: string]: components["schemas"]["TrackingModel"];
+            };
             /**
              * Stopped
              * @description Why it stopped; null while it flies
@@ -2667,6 +2734,48 @@ export interface components {
             /** Alt Msl */
             alt_msl: number;
         };
+        /** StoredFormationModel */
+        StoredFormationModel: {
+            /** Id */
+            id: string;
+            /**
+             * Started
+             * @description Unix time
+             */
+            started: number;
+            /** Started By */
+            started_by: string;
+            /** Leader Id */
+            leader_id: string | null;
+            /**
+             * Request
+             * @description The formation as started (its shape and spacing as last changed)
+             */
+            request: {
+                [key: string]: unknown;
+            };
+            /** Stopped */
+            stopped: number | null;
+            /**
+             * Stopped By
+             * @description Null when the formation ended otherwise
+             */
+            stopped_by: string | null;
+            /** Stop Reason */
+            stop_reason: string | null;
+            /**
+             * Tracking
+             * @description Per follower: RMS and maximum errors per leg and over the mission, as they stood when it stopped
+             */
+            tracking: {
+                [key: string]: unknown;
+            } | null;
+        };
+        /** StoredFormations */
+        StoredFormations: {
+            /** Formations */
+            formations: components["schemas"]["StoredFormationModel"][];
+        };
         /** SurveyDetail */
         SurveyDetail: {
             progress: components["schemas"]["SurveyUpdate"];
@@ -3029,6 +3138,28 @@ export interface components {
             size: number;
             /** Uploaded At */
             uploaded_at: number;
+        };
+        /** TrackingModel */
+        TrackingModel: {
+            /**
+             * Live Xy M
+             * @description The newest horizontal error from its slot
+             */
+            live_xy_m: number | null;
+            /**
+             * Live Z M
+             * @description The newest vertical error
+             */
+            live_z_m: number | null;
+            /**
+             * Legs
+             * @description Per leg of the route (numbered from 1), while the leader flies it
+             */
+            legs: {
+                [key: string]: components["schemas"]["ErrorStatsModel"];
+            };
+            /** @description Over every leg so far */
+            mission: components["schemas"]["ErrorStatsModel"];
         };
         /**
          * Unprocessable
@@ -6308,6 +6439,66 @@ export interface operations {
             };
             /** @description No such vehicle, flight, log, user or token (named in the message) */
             404: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed) */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Unprocessable"];
+                };
+            };
+            /** @description The database is unavailable; try again after Retry-After seconds */
+            503: {
+                headers: {
+                    /** @description Seconds to wait */
+                    "Retry-After"?: number;
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+        };
+    };
+    list_formations_api_v1_formations_get: {
+        parameters: {
+            query?: {
+                limit?: number;
+            };
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["StoredFormations"];
+                };
+            };
+            /** @description Not authenticated */
+            401: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description Needs the 'read' permission */
+            403: {
                 headers: {
                     [name: string]: unknown;
                 };

@@ -26,7 +26,8 @@ export type HubToAgent =
   | ManualFrame
   | FormationSlot
   | FormationEnd
-  | LeaderUpdate;
+  | LeaderUpdate
+  | LeaderScan;
 export type ClientToHub =
   | Ping
   | ControlRequest
@@ -602,6 +603,40 @@ export interface FormationSlot {
    * turn to the leader's heading (a leader flying the route)
    */
   face_heading: boolean;
+  /**
+   * leader_follower: position targets around the predicted leader with its velocity as feed-forward; consensus: velocity targets from the leader's and the graph neighbours' states
+   */
+  controller: "leader_follower" | "consensus";
+  /**
+   * consensus: the leader's weight
+   */
+  k_leader: number;
+  /**
+   * consensus: each neighbour's weight
+   */
+  k_neighbour: number;
+  /**
+   * consensus: this follower's neighbours
+   *
+   * @maxItems 64
+   */
+  graph?: GraphEdge[];
+  /**
+   * hold short when the slot comes this close to a point of the leader's scans (0: not checked)
+   */
+  obstacle_clearance_m: number;
+}
+/**
+ * A neighbour in a consensus follower's communication graph: its slot (the same
+ * axes as the follower's own) and the edge's weight.
+ */
+export interface GraphEdge {
+  vehicle_id: string;
+  x: number;
+  y: number;
+  up: number;
+  frame: "heading" | "ne";
+  weight: number;
 }
 /**
  * Leave the formation and hold.
@@ -632,11 +667,40 @@ export interface LeaderUpdate {
    */
   neighbours?: Neighbour[];
 }
+/**
+ * Another member's last report: for the separation check, and (with its velocity
+ * and time, to predict it as the leader is) for a consensus follower.
+ */
 export interface Neighbour {
   vehicle_id: string;
   north: number;
   east: number;
   up: number;
+  vn: number;
+  ve: number;
+  vu: number;
+  time: number | null;
+}
+/**
+ * The returns of one of the leader's LIDAR scans, relayed to each follower in the
+ * formation's frame (metres north and east on its tangent plane), thinned to one per
+ * cell and at most `MAX_SCAN_POINTS`. A 2-D scan says nothing of height: a follower
+ * treats each point as an obstacle from the ground up. ``time`` is the scan's (Unix
+ * seconds), ``seq`` the leader's scan number.
+ */
+export interface LeaderScan {
+  type: "leader_scan";
+  formation_id: string;
+  time: number;
+  seq: number;
+  /**
+   * @maxItems 1024
+   */
+  north: number[];
+  /**
+   * @maxItems 1024
+   */
+  east: number[];
 }
 /**
  * Ask for (or give back) the manual-control lease of one vehicle. Needs the

@@ -24,6 +24,7 @@ from backend.api import (
     logs,
     missions,
     params,
+    photos,
     safety,
     scans,
     surveys,
@@ -108,7 +109,7 @@ def create_app(settings: HubSettings | None = None) -> FastAPI:
         redoc_url=None,
     )
     modules: tuple[ModuleType, ...] = (system, auth, vehicles, params, missions, fleet_commands)
-    modules += (safety, surveys, formations, scans, *logs.ROUTE_MODULES, admin, tiles)
+    modules += (safety, surveys, photos, formations, scans, *logs.ROUTE_MODULES, admin, tiles)
     routers = [module.router for module in modules]
     document_errors(app, routers)
     for router in routers:

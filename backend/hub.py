@@ -22,6 +22,7 @@ from backend.fleet.formations import FormationService
 from backend.fleet.registry import FleetRegistry, VehicleRecord
 from backend.fleet.safety_gate import SafetyGate
 from backend.mapping.tiles import TileLibrary
+from backend.photos.ingest import PhotoIngest
 from backend.realtime import manual_control
 from backend.realtime.bus import InProcessBus, ReliableSubscription, Topic
 from backend.realtime.collaborators import AgentConnection, ClientConnection
@@ -33,6 +34,7 @@ from backend.settings import HubSettings
 from backend.storage.database import make_engine, migrate
 from backend.storage.logbook import Logbook
 from backend.storage.models import AuditRow, CommandRow
+from backend.storage.photos import PhotoRepository
 from backend.storage.rails import RailsRepository
 from backend.storage.records import StoredEvent
 from backend.storage.repository import Repository
@@ -92,6 +94,9 @@ class Hub:
     scene: FleetScene | None = None
     # Area surveys: created in start(), as they send commands through the hub itself.
     surveys: SurveyService = field(init=False)
+    # Survey photos from the agents' uploads; ``photos.sink`` takes each stored photo
+    # (the live mosaic, where the hub has one).
+    photos: PhotoIngest = field(init=False)
 
     @classmethod
     async def start(cls, settings: HubSettings) -> Hub:
@@ -155,6 +160,14 @@ class Hub:
         writer.on_sequences = hub.deliver_sequence_news
         hub.surveys = SurveyService(hub, bus, SurveyRepository(engine), settings)
         await hub.surveys.load()
+        hub.photos = PhotoIngest(
+            PhotoRepository(engine),
+            settings.photos_folder,
+            hub.surveys.known,
+            hub.surveys.find,
+            margin_m=settings.photo_survey_margin_m,
+            quota_bytes=settings.max_photo_bytes_per_vehicle,
+        )
         await manual_control.revoke_left_open(hub, engine)
         if settings.viz_enabled:
             hub.viz = await asyncio.to_thread(VizServer.start)

@@ -57,6 +57,7 @@ def _concrete(path: str) -> str:
         "param": "WPNAV_SPEED",
         "survey_id": "0123456789abcdef",
         "formation_id": "0123456789abcdef",
+        "photo_id": "ghost-1-00001",
     }
     return re.sub(r"\{(\w+)\}", lambda match: values[match.group(1)], path)
 

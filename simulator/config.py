@@ -73,6 +73,9 @@ class SimulatorConfig:
     scene: Path | None = None  # obstacles (simulator/world.py); None: the default yard
     # The camera's photos served over HTTP on this TCP address; None: CAMERA_FEEDBACK only.
     camera: ListenAddress | None = None
+    # Where the camera's synthetic ground is laid (its origin and elevation); None: home.
+    # Simulators of one fleet share it, so that their photos show one world.
+    ground: GeoPoint | None = None
 
     def __post_init__(self) -> None:
         if not 1 <= self.system_id <= 255:
@@ -235,6 +238,14 @@ def build_parser() -> argparse.ArgumentParser:
         "of a synthetic ground with ArUco targets from each shot's pose (default: "
         "CAMERA_FEEDBACK only, no images)",
     )
+    parser.add_argument(
+        "--ground",
+        type=_home,
+        default=None,
+        metavar="LAT,LON,ALT_MSL",
+        help="the camera's synthetic ground: its origin and elevation (default: home); give "
+        "a fleet's simulators the same one, so that their photos show the same ground",
+    )
     return parser
 
 
@@ -244,7 +255,7 @@ def _join_negative_values(argv: Sequence[str]) -> list[str]:
     joined: list[str] = []
     values = iter(argv)
     for arg in values:
-        if arg == "--home":
+        if arg in ("--home", "--ground"):
             value = next(values, None)
             joined.append(arg if value is None else f"{arg}={value}")
         else:
@@ -271,6 +282,7 @@ def parse_args(argv: Sequence[str] | None = None) -> SimulatorConfig:
             lidar_rate_hz=args.lidar_rate,
             scene=args.scene,
             camera=args.camera,
+            ground=args.ground,
         )
     except ValueError as error:  # a combination the options cannot express
         parser.error(str(error))

@@ -27,6 +27,7 @@ from collections.abc import Callable
 
 from pydantic import ValidationError
 
+from common.geodesy import GeoPoint
 from protocol.photos import CameraIntrinsics, PhotoPose
 from simulator.config import ListenAddress
 from simulator.vehicle import PhotoTaken
@@ -128,6 +129,31 @@ class PhotoServer:
                 )
         self.rendered += 1
         return "200 OK", "image/jpeg", jpeg
+
+
+JPEG_QUALITY = 90
+
+
+def nadir_renderer(origin: GeoPoint, seed: int = 1) -> Renderer:
+    """Photos of the synthetic ground laid around ``origin`` (its elevation the ground's):
+    every simulator given the same origin and seed sees the same ground and targets."""
+    import cv2  # the simulator extra's; imported only by a simulator with a camera
+
+    from simulator.camera_view import render_nadir
+    from simulator.ground import Ground
+
+    ground = Ground.around(origin.lat, origin.lon, origin.alt, seed=seed)
+
+    def render(pose: PhotoPose, camera: CameraIntrinsics) -> bytes:
+        rgb = render_nadir(pose, camera, ground)
+        ok, encoded = cv2.imencode(
+            ".jpg", cv2.cvtColor(rgb, cv2.COLOR_RGB2BGR), [cv2.IMWRITE_JPEG_QUALITY, JPEG_QUALITY]
+        )
+        if not ok:
+            raise ValueError("OpenCV could not encode the photo")
+        return bytes(encoded.tobytes())
+
+    return render
 
 
 def pose_of(photo: PhotoTaken, boot_epoch_s: float) -> PhotoPose:

@@ -198,9 +198,9 @@ class SimulatorServer:
             # numpy and OpenCV are imported only by a simulator that renders photos
             from simulator.photo_server import PhotoServer, nadir_renderer
 
-            self.photos = PhotoServer(
-                self.config.camera, nadir_renderer(self.config.home), self.telemetry.boot_epoch_s
-            )
+            ground = self.config.ground or self.config.home
+            render = await asyncio.to_thread(nadir_renderer, ground)  # the texture: a second
+            self.photos = PhotoServer(self.config.camera, render, self.telemetry.boot_epoch_s)
             await self.photos.start()
         self._ticker = asyncio.create_task(self._tick_forever(), name="simulator-tick")
         log.info(

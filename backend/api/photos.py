@@ -34,6 +34,7 @@ from backend.errors import Forbidden
 from backend.photos.checks import Refusal, Refused
 from backend.photos.export import write_zip
 from backend.photos.ingest import OffsetMismatch
+from backend.storage.photos import PhotoCount
 from protocol.messages import VehicleId
 from protocol.photos import MAX_PHOTO_BYTES, PhotoId
 
@@ -151,33 +152,74 @@ async def survey_photos(
     """Photos received and refused per drone (with the reasons), and the stored ones."""
     run = await hub.surveys.find(survey_id)
     counts = await asyncio.to_thread(hub.photos.repository.counts, survey_id)
+    by_drone = _tally(counts, hub.photos.unrecorded)
+    vehicles = [d.vehicle_id for d in run.drones]
+    vehicles += sorted({row.vehicle_id for row in counts} - set(vehicles))
+    stored = await asyncio.to_thread(hub.photos.repository.of_survey, survey_id)
+    return SurveyPhotos(
+        survey_id=survey_id,
+        drones=[
+            by_drone.get(v, DronePhotos(vehicle_id=v, received=0, failed=0, reasons={}))
+            for v in vehicles
+        ],
+        photos=[hub.photos.summary(record) for record in stored[:limit]],
+    )
+
+
+class VehiclePhotos(DronePhotos):
+    photos: list[dict[str, Any]] = Field(
+        description="its newest photos, stored and refused: id, state, reason, pose"
+    )
+
+
+@router.get(
+    "/vehicles/{vehicle_id}/photos",
+    response_model=VehiclePhotos,
+    openapi_extra=requires(Permission.READ),
+)
+async def vehicle_photos(
+    vehicle_id: Annotated[VehicleId, Path()],
+    hub: HubDep,
+    limit: Annotated[int, Query(ge=0, le=10_000)] = 100,
+) -> VehiclePhotos:
+    """One vehicle's photos, whatever their survey: counts with reasons, the newest."""
+    hub.registry.get(vehicle_id)
+    counts = await asyncio.to_thread(hub.photos.repository.vehicle_counts, vehicle_id)
+    tally = _tally(counts, hub.photos.unrecorded).get(vehicle_id)
+    records = await asyncio.to_thread(hub.photos.repository.of_vehicle, vehicle_id, limit)
+    return VehiclePhotos(
+        vehicle_id=vehicle_id,
+        received=tally.received if tally else 0,
+        failed=tally.failed if tally else 0,
+        reasons=tally.reasons if tally else {},
+        photos=[hub.photos.summary(record) for record in records],
+    )
+
+
+def _tally(
+    counts: list[PhotoCount], unrecorded: Counter[tuple[str, str]]
+) -> dict[str, DronePhotos]:
+    """Stored and refused photos per vehicle (refusals by their reason's code), with the
+    refusals no row records (another vehicle's token) for the vehicles in ``counts``'s
+    scope and those."""
     received: Counter[str] = Counter()
     reasons: defaultdict[str, Counter[str]] = defaultdict(Counter)
     for row in counts:
         if row.state == "stored":
             received[row.vehicle_id] += row.count
         else:
-            code = (row.reason or "refused").split(":")[0]
-            reasons[row.vehicle_id][code] += row.count
-    for (vehicle_id, code), count in hub.photos.unrecorded.items():
-        if run.drone(vehicle_id) is not None:
-            reasons[vehicle_id][code] += count
-    vehicles = [d.vehicle_id for d in run.drones]
-    vehicles += sorted(set(received) | set(reasons) - set(vehicles))
-    stored = await asyncio.to_thread(hub.photos.repository.of_survey, survey_id)
-    return SurveyPhotos(
-        survey_id=survey_id,
-        drones=[
-            DronePhotos(
-                vehicle_id=v,
-                received=received[v],
-                failed=sum(reasons[v].values()),
-                reasons=dict(reasons[v]),
-            )
-            for v in vehicles
-        ],
-        photos=[hub.photos.summary(record) for record in stored[:limit]],
-    )
+            reasons[row.vehicle_id][(row.reason or "refused").split(":")[0]] += row.count
+    for (vehicle_id, code), count in unrecorded.items():
+        reasons[vehicle_id][code] += count
+    return {
+        v: DronePhotos(
+            vehicle_id=v,
+            received=received[v],
+            failed=sum(reasons[v].values()),
+            reasons=dict(reasons[v]),
+        )
+        for v in set(received) | set(reasons)
+    }
 
 
 @router.get(

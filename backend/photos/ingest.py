@@ -338,6 +338,8 @@ class PhotoIngest:
         return {
             "photo_id": record.photo_id,
             "vehicle_id": record.vehicle_id,
+            "state": record.state,
+            "reason": record.reason,
             "size": record.size,
             "received_at": record.received_at,
             "pose": meta.get("pose"),

@@ -63,6 +63,27 @@ class PhotoRepository:
             )
             return [_record(row) for row in rows]
 
+    def of_vehicle(self, vehicle_id: str, limit: int) -> list[PhotoRecord]:
+        """The vehicle's photos, stored and refused, newest first."""
+        with Session(self.engine) as session:
+            rows = session.scalars(
+                select(PhotoRow)
+                .where(PhotoRow.vehicle_id == vehicle_id)
+                .order_by(PhotoRow.received_at.desc())
+                .limit(limit)
+            )
+            return [_record(row) for row in rows]
+
+    def vehicle_counts(self, vehicle_id: str) -> list[PhotoCount]:
+        """One vehicle's photos by state and reason, whatever their survey."""
+        with Session(self.engine) as session:
+            rows = session.execute(
+                select(PhotoRow.vehicle_id, PhotoRow.state, PhotoRow.reason, func.count())
+                .where(PhotoRow.vehicle_id == vehicle_id)
+                .group_by(PhotoRow.vehicle_id, PhotoRow.state, PhotoRow.reason)
+            )
+            return [PhotoCount(v, s, r, int(n)) for v, s, r, n in rows]
+
     def counts(self, survey_id: str) -> list[PhotoCount]:
         """Photos per vehicle, state and reason, for one survey."""
         with Session(self.engine) as session:

@@ -692,6 +692,91 @@ export interface paths {
         patch?: never;
         trace?: never;
     };
+    "/api/v1/vehicles/{vehicle_id}/photos/{photo_id}": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        /**
+         * Photo Upload Status
+         * @description How much of the photo the hub has (404: nothing yet), to resume a cut upload.
+         */
+        get: operations["photo_upload_status_api_v1_vehicles__vehicle_id__photos__photo_id__get"];
+        /**
+         * Upload Photo Chunk
+         * @description One chunk of a photo at byte ``offset`` (the body: raw JPEG bytes).
+         */
+        put: operations["upload_photo_chunk_api_v1_vehicles__vehicle_id__photos__photo_id__put"];
+        post?: never;
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
+    "/api/v1/surveys/{survey_id}/photos": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        /**
+         * Survey Photos
+         * @description Photos received and refused per drone (with the reasons), and the stored ones.
+         */
+        get: operations["survey_photos_api_v1_surveys__survey_id__photos_get"];
+        put?: never;
+        post?: never;
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
+    "/api/v1/vehicles/{vehicle_id}/photos": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        /**
+         * Vehicle Photos
+         * @description One vehicle's photos, whatever their survey: counts with reasons, the newest.
+         */
+        get: operations["vehicle_photos_api_v1_vehicles__vehicle_id__photos_get"];
+        put?: never;
+        post?: never;
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
+    "/api/v1/surveys/{survey_id}/photos.zip": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        /**
+         * Export Survey Photos
+         * @description The survey's geotagged photos for OpenDroneMap: ``images/``, ``image_list.txt``
+         *     and ``geo.txt`` in one zip.
+         */
+        get: operations["export_survey_photos_api_v1_surveys__survey_id__photos_zip_get"];
+        put?: never;
+        post?: never;
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
     "/api/v1/formations": {
         parameters: {
             query?: never;
@@ -1548,6 +1633,28 @@ export interface components {
              * @default false
              */
             force: boolean;
+        };
+        /** DronePhotos */
+        DronePhotos: {
+            /** Vehicle Id */
+            vehicle_id: string;
+            /**
+             * Received
+             * @description photos stored
+             */
+            received: number;
+            /**
+             * Failed
+             * @description photos refused
+             */
+            failed: number;
+            /**
+             * Reasons
+             * @description refusals by reason code
+             */
+            reasons: {
+                [key: string]: number;
+            };
         };
         /** DroneRun */
         DroneRun: {
@@ -2661,6 +2768,20 @@ export interface components {
             lane_paths: number[][][];
             check: components["schemas"]["MissionCheckResponse"];
         };
+        /** SurveyPhotos */
+        SurveyPhotos: {
+            /** Survey Id */
+            survey_id: string;
+            /** Drones */
+            drones: components["schemas"]["DronePhotos"][];
+            /**
+             * Photos
+             * @description each stored photo: id, vehicle, pose
+             */
+            photos: {
+                [key: string]: unknown;
+            }[];
+        };
         /** SurveyPreview */
         SurveyPreview: {
             /**
@@ -2963,6 +3084,29 @@ export interface components {
                 [key: string]: unknown;
             }[] | null;
         };
+        /** UploadStatus */
+        UploadStatus: {
+            /**
+             * Received
+             * @description bytes the hub has committed; the next chunk's offset
+             */
+            received: number;
+            /**
+             * Size
+             * @description the photo's size, once declared
+             */
+            size?: number | null;
+            /**
+             * State
+             * @description receiving, stored or refused
+             */
+            state: string;
+            /**
+             * Reason
+             * @description why it was refused
+             */
+            reason?: string | null;
+        };
         /** User */
         User: {
             /** Username */
@@ -3026,6 +3170,35 @@ export interface components {
             violations?: {
                 [key: string]: unknown;
             }[] | null;
+        };
+        /** VehiclePhotos */
+        VehiclePhotos: {
+            /** Vehicle Id */
+            vehicle_id: string;
+            /**
+             * Received
+             * @description photos stored
+             */
+            received: number;
+            /**
+             * Failed
+             * @description photos refused
+             */
+            failed: number;
+            /**
+             * Reasons
+             * @description refusals by reason code
+             */
+            reasons: {
+                [key: string]: number;
+            };
+            /**
+             * Photos
+             * @description its newest photos, stored and refused: id, state, reason, pose
+             */
+            photos: {
+                [key: string]: unknown;
+            }[];
         };
         /**
          * VehicleState
@@ -6132,6 +6305,386 @@ export interface operations {
                 content: {
                     "application/json": unknown;
                     "text/plain": unknown;
+                };
+            };
+            /** @description Not authenticated */
+            401: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description Needs the 'read' permission */
+            403: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description No such vehicle, flight, log, user or token (named in the message) */
+            404: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed) */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Unprocessable"];
+                };
+            };
+            /** @description The database is unavailable; try again after Retry-After seconds */
+            503: {
+                headers: {
+                    /** @description Seconds to wait */
+                    "Retry-After"?: number;
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+        };
+    };
+    photo_upload_status_api_v1_vehicles__vehicle_id__photos__photo_id__get: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path: {
+                vehicle_id: string;
+                photo_id: string;
+            };
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["UploadStatus"];
+                };
+            };
+            /** @description Not authenticated */
+            401: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description Needs the 'agent' permission */
+            403: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description No such vehicle, flight, log, user or token (named in the message) */
+            404: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed) */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Unprocessable"];
+                };
+            };
+            /** @description The database is unavailable; try again after Retry-After seconds */
+            503: {
+                headers: {
+                    /** @description Seconds to wait */
+                    "Retry-After"?: number;
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+        };
+    };
+    upload_photo_chunk_api_v1_vehicles__vehicle_id__photos__photo_id__put: {
+        parameters: {
+            query?: {
+                offset?: number;
+            };
+            header?: {
+                "x-photo-meta"?: string | null;
+            };
+            path: {
+                vehicle_id: string;
+                photo_id: string;
+            };
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["UploadStatus"];
+                };
+            };
+            /** @description The last chunk: the photo is checked and stored */
+            201: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content?: never;
+            };
+            /** @description Not authenticated */
+            401: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description Needs the 'agent' permission */
+            403: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description No such vehicle, flight, log, user or token (named in the message) */
+            404: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description Wrong offset: the body's `received` is where to go on */
+            409: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description More bytes than declared or than a photo may have */
+            413: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description Refused for good, with the reason and its `code` */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Unprocessable"];
+                };
+            };
+            /** @description The database is unavailable; try again after Retry-After seconds */
+            503: {
+                headers: {
+                    /** @description Seconds to wait */
+                    "Retry-After"?: number;
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+        };
+    };
+    survey_photos_api_v1_surveys__survey_id__photos_get: {
+        parameters: {
+            query?: {
+                limit?: number;
+            };
+            header?: never;
+            path: {
+                survey_id: string;
+            };
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["SurveyPhotos"];
+                };
+            };
+            /** @description Not authenticated */
+            401: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description Needs the 'read' permission */
+            403: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description No such vehicle, flight, log, user or token (named in the message) */
+            404: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed) */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Unprocessable"];
+                };
+            };
+            /** @description The database is unavailable; try again after Retry-After seconds */
+            503: {
+                headers: {
+                    /** @description Seconds to wait */
+                    "Retry-After"?: number;
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+        };
+    };
+    vehicle_photos_api_v1_vehicles__vehicle_id__photos_get: {
+        parameters: {
+            query?: {
+                limit?: number;
+            };
+            header?: never;
+            path: {
+                vehicle_id: string;
+            };
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["VehiclePhotos"];
+                };
+            };
+            /** @description Not authenticated */
+            401: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description Needs the 'read' permission */
+            403: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description No such vehicle, flight, log, user or token (named in the message) */
+            404: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed) */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Unprocessable"];
+                };
+            };
+            /** @description The database is unavailable; try again after Retry-After seconds */
+            503: {
+                headers: {
+                    /** @description Seconds to wait */
+                    "Retry-After"?: number;
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+        };
+    };
+    export_survey_photos_api_v1_surveys__survey_id__photos_zip_get: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path: {
+                survey_id: string;
+            };
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/zip": unknown;
                 };
             };
             /** @description Not authenticated */

@@ -23,6 +23,7 @@ from backend.api import (
     formations,
     logs,
     missions,
+    mosaics,
     params,
     safety,
     scans,
@@ -108,7 +109,7 @@ def create_app(settings: HubSettings | None = None) -> FastAPI:
         redoc_url=None,
     )
     modules: tuple[ModuleType, ...] = (system, auth, vehicles, params, missions, fleet_commands)
-    modules += (safety, surveys, formations, scans, *logs.ROUTE_MODULES, admin, tiles)
+    modules += (safety, surveys, formations, scans, *logs.ROUTE_MODULES, admin, tiles, mosaics)
     routers = [module.router for module in modules]
     document_errors(app, routers)
     for router in routers:

@@ -6,6 +6,7 @@ import asyncio
 import logging
 import time
 from dataclasses import dataclass, field
+from typing import Any
 
 import httpx
 from sqlalchemy import Engine
@@ -17,11 +18,13 @@ from backend.auth.password_work import PasswordWork
 from backend.auth.principal_cache import PrincipalCache
 from backend.auth.rate_limit import Limit, RateLimiter
 from backend.control.lease import LeaseBook
+from backend.errors import NotFound
 from backend.fleet.commands import CommandDispatcher
 from backend.fleet.formations import FormationService
 from backend.fleet.registry import FleetRegistry, VehicleRecord
 from backend.fleet.safety_gate import SafetyGate
 from backend.mapping.tiles import TileLibrary
+from backend.mosaic.service import MosaicService
 from backend.realtime import manual_control
 from backend.realtime.bus import InProcessBus, ReliableSubscription, Topic
 from backend.realtime.collaborators import AgentConnection, ClientConnection
@@ -92,6 +95,8 @@ class Hub:
     scene: FleetScene | None = None
     # Area surveys: created in start(), as they send commands through the hub itself.
     surveys: SurveyService = field(init=False)
+    # The live orthomosaic of each survey's photos (backend/mosaic/).
+    mosaic: MosaicService = field(init=False)
 
     @classmethod
     async def start(cls, settings: HubSettings) -> Hub:
@@ -155,6 +160,8 @@ class Hub:
         writer.on_sequences = hub.deliver_sequence_news
         hub.surveys = SurveyService(hub, bus, SurveyRepository(engine), settings)
         await hub.surveys.load()
+        hub.mosaic = MosaicService(settings.data_dir / "mosaics", hub.survey_area)
+        await hub.mosaic.load()
         await manual_control.revoke_left_open(hub, engine)
         if settings.viz_enabled:
             hub.viz = await asyncio.to_thread(VizServer.start)
@@ -176,6 +183,7 @@ class Hub:
                 tasks.create_task(self._apply_retention())
                 tasks.create_task(self._drain_spool())
                 tasks.create_task(self.surveys.run())
+                tasks.create_task(self.mosaic.run())
                 tasks.create_task(manual_control.watch_expiry(self))
                 if self.scene is not None:
                     mirror = SceneMirror(
@@ -187,6 +195,7 @@ class Hub:
                     )
                     tasks.create_task(mirror.run())
         finally:
+            await asyncio.to_thread(self.mosaic.close)  # the tiles in memory to disk
             if self.viz_http is not None:
                 await self.viz_http.aclose()
             if self.viz is not None:
@@ -194,6 +203,15 @@ class Hub:
             self.passwords.close()
             self.tiles.close()
             self.engine.dispose()
+
+    async def survey_area(self, survey_id: str) -> dict[str, Any] | None:
+        """A survey's area as GeoJSON, for its mosaic's coverage (None: no such survey)."""
+        try:
+            run = await self.surveys.find(survey_id)
+        except NotFound:
+            return None
+        area: dict[str, Any] = run.request.area.model_dump()
+        return area
 
     def deliver_sequence_news(self, acks: dict[StreamKey, int], gaps: list[Gap]) -> None:
         """Tell each agent what is now stored and which of its frames never arrived."""

@@ -11,16 +11,18 @@ a photo changes it. A tile outside the mosaic is a 404.
 from __future__ import annotations
 
 import asyncio
-from typing import Annotated
+from typing import Annotated, Literal
 
 from fastapi import Path, Request, Response
+from fastapi.responses import FileResponse
 from pydantic import Field
 
 from backend.api.deps import HubDep
 from backend.api.security import SecuredRouter, requires
 from backend.auth.policy import Permission
-from backend.errors import InvalidRequest, NotFound
+from backend.errors import Conflict, InvalidRequest, NotFound
 from backend.mapping.tiles import MAX_ZOOM
+from backend.mosaic.export import FORMATS, ExportError
 from backend.mosaic.progress import MosaicProgress
 from backend.mosaic.service import SURVEY_ID, MosaicService, UnknownMosaic
 
@@ -61,6 +63,31 @@ async def get_mosaic(survey_id: SurveyIdPath, hub: HubDep) -> MosaicDetail:
     """Photos processed and failed (each failure's reason), per vehicle too; the coverage
     of the survey's area in percent and as a GeoJSON outline; the zoom range and bounds."""
     return _progress(hub.mosaic, survey_id)
+
+
+@router.get(
+    "/mosaics/{survey_id}/export.{kind}",
+    openapi_extra=requires(Permission.READ),
+    response_class=FileResponse,
+    responses={
+        200: {"content": {media_type: {} for media_type in FORMATS.values()}},
+        404: {"description": "No photo of this survey has reached the mosaic"},
+        409: {"description": "The mosaic has no tiles yet"},
+    },
+)
+async def export_mosaic(
+    survey_id: SurveyIdPath, kind: Literal["tif", "mbtiles", "pmtiles"], hub: HubDep
+) -> FileResponse:
+    """The mosaic as a file: `tif` a Cloud-Optimised GeoTIFF (EPSG:3857, RGBA, at the
+    native zoom), `mbtiles` or `pmtiles` every zoom's tiles as PNG (drop either in the
+    hub's tiles folder to use it as an offline base map)."""
+    try:
+        path = await asyncio.to_thread(hub.mosaic.export, survey_id, kind)
+    except UnknownMosaic:
+        raise NotFound(f"no photo of survey {survey_id} has reached the mosaic") from None
+    except ExportError as error:
+        raise Conflict(str(error)) from None
+    return FileResponse(path, media_type=FORMATS[kind], filename=f"mosaic-{survey_id}.{kind}")
 
 
 @router.get(

@@ -12,11 +12,12 @@ import json
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+import numpy.typing as npt
 from pydantic import BaseModel, Field
-from shapely import to_geojson
+from shapely import to_geojson, transform
 from shapely.geometry import Point, Polygon, mapping, shape
 from shapely.geometry.base import BaseGeometry
-from shapely.ops import transform
 
 from backend.missions.survey.geo import polygon_from_geojson
 from backend.missions.survey.planner import PlanError
@@ -98,11 +99,11 @@ class Coverage:
         shape_ = self.covered if self.area is None else self.covered.intersection(self.area)
         frame = self.frame
 
-        def to_lonlat(east: Any, north: Any, z: Any = None) -> tuple[Any, Any]:
-            pairs = [frame.to_geo(float(e), float(n)) for e, n in zip(east, north, strict=True)]
-            return [lon for _, lon in pairs], [lat for lat, _ in pairs]
+        def to_lonlat(points: npt.NDArray[np.float64]) -> npt.NDArray[np.float64]:
+            pairs = [frame.to_geo(float(e), float(n)) for e, n in points]
+            return np.array([(lon, lat) for lat, lon in pairs]).reshape(-1, 2)
 
-        geo: dict[str, Any] = json.loads(to_geojson(transform(to_lonlat, shape_.simplify(0.05))))
+        geo: dict[str, Any] = json.loads(to_geojson(transform(shape_.simplify(0.05), to_lonlat)))
         return geo
 
     def bounds(self) -> tuple[float, float, float, float] | None:

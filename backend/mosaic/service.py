@@ -22,6 +22,7 @@ from pathlib import Path
 from typing import Any
 
 from backend.mosaic.engine import Applied, PhotoError, apply_photo, decode
+from backend.mosaic.export import export
 from backend.mosaic.georef import GeorefError, footprint, native_zoom, pixel_to_lonlat
 from backend.mosaic.photo import StoredPhoto
 from backend.mosaic.progress import (
@@ -158,6 +159,13 @@ class MosaicService:
             while len(self._encoded) > ENCODED_CACHE:
                 self._encoded.popitem(last=False)
         return served
+
+    def export(self, survey_id: str, kind: str) -> Path:
+        """The mosaic as a file (blocking: call it in a thread); ExportError if it has no
+        tiles yet. Under the survey's lock: no photo lands mid-export."""
+        survey = self._known(survey_id)
+        with survey.lock:
+            return export(survey.store, kind, survey.store.folder / "exports", survey_id)
 
     def survey(self, survey_id: str) -> SurveyMosaic:
         return self._known(survey_id)

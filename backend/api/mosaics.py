@@ -18,6 +18,7 @@ from fastapi.responses import FileResponse
 from pydantic import Field
 
 from backend.api.deps import HubDep
+from backend.api.responses import ErrorMessage
 from backend.api.security import SecuredRouter, requires
 from backend.auth.policy import Permission
 from backend.errors import Conflict, InvalidRequest, NotFound
@@ -72,7 +73,7 @@ async def get_mosaic(survey_id: SurveyIdPath, hub: HubDep) -> MosaicDetail:
     responses={
         200: {"content": {media_type: {} for media_type in FORMATS.values()}},
         404: {"description": "No photo of this survey has reached the mosaic"},
-        409: {"description": "The mosaic has no tiles yet"},
+        409: {"description": "The mosaic has no tiles yet", "model": ErrorMessage},
     },
 )
 async def export_mosaic(

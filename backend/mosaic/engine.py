@@ -29,7 +29,7 @@ FEATHER_PX = 6.0
 EDGE_RAMP_PX = 8
 # A pixel painted at least this opaquely by a photo counts as that photo's for the
 # nearest-nadir rule; in the faded edge it stays open to the next photo.
-OWNED = 0.98
+OWNED_ALPHA = 250
 MAX_CANVAS_PX = 64_000_000  # a sanity bound: a 12 MP photo's canvas is about 20 MP
 
 
@@ -137,26 +137,35 @@ def _blend(
 ) -> tuple[Rgba, npt.NDArray[np.float32]] | None:
     """The tile with the new photo's piece blended in, and its nadir distances; None when
     the photo wins no pixel of it (the tile stays as it is)."""
-    coverage = new[:, :, 3].astype(np.float32) * np.float32(1 / 255)
-    owned = coverage >= OWNED
+    alpha_new = new[:, :, 3]
+    whole = bool(alpha_new.min() == 255)  # the photo covers the whole tile: most tiles
     if old is None:
+        if whole:
+            return new, distances
+        owned = alpha_new >= OWNED_ALPHA
         return new, np.where(owned, distances, np.float32(np.inf)).astype(np.float32)
     old_rgba, old_nearest = old
     # The take-over: 1 where the new photo's nadir is FEATHER_PX nearer, 0 where it is
     # FEATHER_PX farther, linear between (inf - d is inf: an empty pixel is taken whole).
-    take = (old_nearest - distances) * np.float32(0.5 / FEATHER_PX) + np.float32(0.5)
-    np.clip(take, 0.0, 1.0, out=take)
-    weight = coverage * take
+    weight = old_nearest - distances
+    weight *= np.float32(0.5 / FEATHER_PX)
+    weight += np.float32(0.5)
+    np.clip(weight, 0.0, 1.0, out=weight)
+    if whole:
+        nearest = np.minimum(old_nearest, distances)
+    else:
+        weight *= alpha_new.astype(np.float32) * np.float32(1 / 255)
+        owned = alpha_new >= OWNED_ALPHA
+        nearest = np.where(owned, np.minimum(old_nearest, distances), old_nearest)
     if not weight.any():
         return None
-    nearest = np.where(owned, np.minimum(old_nearest, distances), old_nearest)
     old_alpha = old_rgba[:, :, 3]
     rgba = np.empty_like(old_rgba)
     if bool((old_alpha == 255).all()):
         # The common case inside the mosaic: opaque under opaque, one vectorised blend.
         rgba[:, :, :3] = cv2.blendLinear(new[:, :, :3], old_rgba[:, :, :3], weight, 1.0 - weight)
         rgba[:, :, 3] = 255
-        return rgba, nearest.astype(np.float32)
+        return rgba, nearest
     # "Over" with the old tile's transparency (non-premultiplied colours).
     w = weight[:, :, None]
     below = (1.0 - w) * (old_alpha[:, :, None].astype(np.float32) * np.float32(1 / 255))
@@ -165,4 +174,4 @@ def _blend(
     colour = (w * new[:, :, :3] + below * old_rgba[:, :, :3]) / safe
     rgba[:, :, :3] = np.clip(colour + 0.5, 0, 255).astype(np.uint8)
     rgba[:, :, 3] = np.clip(alpha[:, :, 0] * 255.0 + 0.5, 0, 255).astype(np.uint8)
-    return rgba, nearest.astype(np.float32)
+    return rgba, nearest

@@ -36,6 +36,7 @@ TILE_PX: Final = 256
 WORLD_M: Final = 2 * 20037508.342789244
 MAX_TILT_DEG: Final = 30.0  # beyond this the corners near the horizon smear over the map
 MIN_HEIGHT_M: Final = 1.0
+UPSAMPLE: Final = 1.1  # a zoom whose pixels are 10 % finer than the photo's still counts
 MAX_ZOOM: Final = 26  # 2 mm pixels at the equator
 GRID: Final = 5  # image points a side that the mercator homography is fitted to
 MERCATOR_R: Final = WORLD_M / (2 * math.pi)  # EPSG:3857's sphere: WGS84's semi-major axis
@@ -100,10 +101,11 @@ def tilt_deg(pose: PhotoPose) -> float:
 
 
 def native_zoom(gsd: float, lat: float) -> int:
-    """The zoom whose tile pixels on the ground are nearest the photo's GSD (in log
-    scale): finer would only interpolate, coarser would throw detail away."""
+    """The finest zoom whose tile pixels are no finer on the ground than the photo's GSD
+    (within UPSAMPLE): a finer one would only interpolate, at up to four times the pixels
+    to warp, blend and store."""
     metres_per_px_z0 = WORLD_M * math.cos(math.radians(lat)) / TILE_PX
-    return max(0, min(MAX_ZOOM, round(math.log2(metres_per_px_z0 / gsd))))
+    return max(0, min(MAX_ZOOM, math.floor(math.log2(UPSAMPLE * metres_per_px_z0 / gsd))))
 
 
 def footprint(pose: PhotoPose, camera: CameraIntrinsics) -> Footprint:

@@ -61,7 +61,7 @@ def atomic_write(path: Path, data: bytes) -> None:
         raise
 
 
-CACHE_TILES = 512  # about 200 MB: the tiles a few 12 MP photos cover
+CACHE_TILES = 384  # 512 KB each, about 200 MB: the tiles a few 12 MP photos cover
 
 
 @dataclass
@@ -72,7 +72,8 @@ class TileStore:
     max_zoom: int | None = None
     revision: int = 0
     versions: dict[TileKey, int] = field(default_factory=dict)
-    _cache: OrderedDict[TileKey, bytes] = field(default_factory=OrderedDict)
+    # Decoded, so a photo that lands on a tile just written reads it for nothing.
+    _cache: OrderedDict[TileKey, tuple[Rgba, Distances]] = field(default_factory=OrderedDict)
     _dirty: set[TileKey] = field(default_factory=set)
     _lock: threading.Lock = field(default_factory=threading.Lock)
 
@@ -110,14 +111,14 @@ class TileStore:
         if key not in self.versions:
             return None
         with self._lock:
-            data = self._cache.get(key)
-            if data is not None:
+            cached = self._cache.get(key)
+            if cached is not None:
                 self._cache.move_to_end(key)
-        if data is None:
-            try:
-                data = self.tile_path(key).read_bytes()
-            except FileNotFoundError:
-                return None
+                return cached  # never changed in place: writes replace the pair
+        try:
+            data = self.tile_path(key).read_bytes()
+        except FileNotFoundError:
+            return None
         if len(data) != PIXELS_BYTES * 3 // 2:
             return None  # a damaged tile is rebuilt from the photos that follow
         rgba = np.frombuffer(data, np.uint8, PIXELS_BYTES).reshape(TILE_PX, TILE_PX, 4).copy()
@@ -127,11 +128,11 @@ class TileStore:
         return rgba, distances
 
     def write(self, key: TileKey, rgba: Rgba, distances: Distances) -> None:
-        steps = np.minimum(distances * DISTANCE_STEPS, NO_DISTANCE - 1)
-        steps = np.where(np.isfinite(distances), steps, NO_DISTANCE).astype(np.uint16)
-        evicted: list[tuple[TileKey, bytes]] = []
+        if rgba.base is not None:
+            rgba = rgba.copy()  # a view would keep a whole warped canvas alive
+        evicted: list[tuple[TileKey, tuple[Rgba, Distances]]] = []
         with self._lock:
-            self._cache[key] = rgba.tobytes() + steps.tobytes()
+            self._cache[key] = (rgba, distances)
             self._cache.move_to_end(key)
             self._dirty.add(key)
             self.versions[key] = self.versions.get(key, 0) + 1
@@ -140,16 +141,16 @@ class TileStore:
                 if old in self._dirty:
                     self._dirty.discard(old)
                     evicted.append((old, data))
-        for old, data in evicted:
-            atomic_write(self.tile_path(old), data)
+        for old, state in evicted:
+            atomic_write(self.tile_path(old), _raw(*state))
 
     def flush(self) -> None:
         """Every tile changed in memory to disk, then the index that counts them."""
         with self._lock:
             dirty = [(key, self._cache[key]) for key in self._dirty]
             self._dirty.clear()
-        for key, data in dirty:
-            atomic_write(self.tile_path(key), data)
+        for key, state in dirty:
+            atomic_write(self.tile_path(key), _raw(*state))
         self.save_index()
 
     def pixels(self, key: TileKey) -> Rgba | None:
@@ -177,3 +178,10 @@ class TileStore:
 
     def keys(self, zoom: int) -> Iterator[TileKey]:
         return (key for key in list(self.versions) if key[0] == zoom)
+
+
+def _raw(rgba: Rgba, distances: Distances) -> bytes:
+    """A tile's state as its file holds it (see the module's docstring)."""
+    steps = np.minimum(distances * DISTANCE_STEPS, NO_DISTANCE - 1)
+    steps = np.where(np.isfinite(distances), steps, NO_DISTANCE).astype(np.uint16)
+    return rgba.tobytes() + steps.tobytes()

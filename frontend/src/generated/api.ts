@@ -1256,6 +1256,28 @@ export interface paths {
         patch?: never;
         trace?: never;
     };
+    "/api/v1/mosaics/{survey_id}/export.{kind}": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        /**
+         * Export Mosaic
+         * @description The mosaic as a file: `tif` a Cloud-Optimised GeoTIFF (EPSG:3857, RGBA, at the
+         *     native zoom), `mbtiles` or `pmtiles` every zoom's tiles as PNG (drop either in the
+         *     hub's tiles folder to use it as an offline base map).
+         */
+        get: operations["export_mosaic_api_v1_mosaics__survey_id__export__kind__get"];
+        put?: never;
+        post?: never;
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
     "/api/v1/mosaics/{survey_id}/tiles/{z}/{x}/{y}": {
         parameters: {
             query?: never;
@@ -8460,6 +8482,88 @@ export interface operations {
             };
             /** @description No photo of this survey has reached the mosaic */
             404: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed) */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Unprocessable"];
+                };
+            };
+            /** @description The database is unavailable; try again after Retry-After seconds */
+            503: {
+                headers: {
+                    /** @description Seconds to wait */
+                    "Retry-After"?: number;
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+        };
+    };
+    export_mosaic_api_v1_mosaics__survey_id__export__kind__get: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path: {
+                /** @description the survey's id */
+                survey_id: string;
+                kind: "tif" | "mbtiles" | "pmtiles";
+            };
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "image/tiff": unknown;
+                    "application/vnd.sqlite3": unknown;
+                    "application/vnd.pmtiles": unknown;
+                };
+            };
+            /** @description Not authenticated */
+            401: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description Needs the 'read' permission */
+            403: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description No photo of this survey has reached the mosaic */
+            404: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description The mosaic has no tiles yet */
+            409: {
                 headers: {
                     [name: string]: unknown;
                 };

@@ -23,6 +23,7 @@ from backend.api import (
     formations,
     logs,
     missions,
+    mosaics,
     params,
     photos,
     safety,
@@ -110,6 +111,7 @@ def create_app(settings: HubSettings | None = None) -> FastAPI:
     )
     modules: tuple[ModuleType, ...] = (system, auth, vehicles, params, missions, fleet_commands)
     modules += (safety, surveys, photos, formations, scans, *logs.ROUTE_MODULES, admin, tiles)
+    modules += (mosaics,)
     routers = [module.router for module in modules]
     document_errors(app, routers)
     for router in routers:

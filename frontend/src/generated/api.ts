@@ -1300,6 +1300,90 @@ export interface paths {
         patch?: never;
         trace?: never;
     };
+    "/api/v1/mosaics": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        /**
+         * List Mosaics
+         * @description Every survey mosaic the hub holds, with its progress.
+         */
+        get: operations["list_mosaics_api_v1_mosaics_get"];
+        put?: never;
+        post?: never;
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
+    "/api/v1/mosaics/{survey_id}": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        /**
+         * Get Mosaic
+         * @description Photos processed and failed (each failure's reason), per vehicle too; the coverage
+         *     of the survey's area in percent and as a GeoJSON outline; the zoom range and bounds.
+         */
+        get: operations["get_mosaic_api_v1_mosaics__survey_id__get"];
+        put?: never;
+        post?: never;
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
+    "/api/v1/mosaics/{survey_id}/export.{kind}": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        /**
+         * Export Mosaic
+         * @description The mosaic as a file: `tif` a Cloud-Optimised GeoTIFF (EPSG:3857, RGBA, at the
+         *     native zoom), `mbtiles` or `pmtiles` every zoom's tiles as PNG (drop either in the
+         *     hub's tiles folder to use it as an offline base map).
+         */
+        get: operations["export_mosaic_api_v1_mosaics__survey_id__export__kind__get"];
+        put?: never;
+        post?: never;
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
+    "/api/v1/mosaics/{survey_id}/tiles/{z}/{x}/{y}": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        /**
+         * Get Mosaic Tile
+         * @description One tile: JPEG where the photos cover all of it, PNG (transparent where they do
+         *     not) at the mosaic's edges.
+         */
+        get: operations["get_mosaic_tile_api_v1_mosaics__survey_id__tiles__z___x___y__get"];
+        put?: never;
+        post?: never;
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
 }
 export type webhooks = Record<string, never>;
 export interface components {
@@ -2293,6 +2377,73 @@ export interface components {
             /** Items */
             items: components["schemas"]["MissionItem"][];
         };
+        /** MosaicDetail */
+        MosaicDetail: {
+            /** Survey Id */
+            survey_id: string;
+            /**
+             * Processed
+             * @default 0
+             */
+            processed: number;
+            /**
+             * Failed
+             * @default 0
+             */
+            failed: number;
+            /**
+             * Pending
+             * @description photos queued for this survey, not yet done
+             * @default 0
+             */
+            pending: number;
+            /** By Vehicle */
+            by_vehicle?: {
+                [key: string]: components["schemas"]["VehicleCounts"];
+            };
+            /**
+             * Failures
+             * @description the latest 200 failures
+             */
+            failures?: components["schemas"]["PhotoFailure"][];
+            /**
+             * Coverage Pct
+             * @description percent of the survey's area under a photo; None: no area
+             */
+            coverage_pct?: number | null;
+            /**
+             * Outline
+             * @description GeoJSON (lon, lat) of the covered ground
+             */
+            outline?: {
+                [key: string]: unknown;
+            } | null;
+            /**
+             * Revision
+             * @description photos applied to the tiles so far
+             * @default 0
+             */
+            revision: number;
+            /** Min Zoom */
+            min_zoom?: number | null;
+            /** Max Zoom */
+            max_zoom?: number | null;
+            /**
+             * Bounds
+             * @description west, south, east, north of the covered ground
+             */
+            bounds?: [
+                number,
+                number,
+                number,
+                number
+            ] | null;
+            /**
+             * Tile Url
+             * @description the tile URL template ({z}/{x}/{y}) of this mosaic
+             */
+            tile_url: string;
+        };
         /** ObstacleBody */
         ObstacleBody: {
             /** Id */
@@ -2410,6 +2561,15 @@ export interface components {
          * @enum {string}
          */
         Permission: "read" | "command" | "audit" | "admin" | "agent";
+        /** PhotoFailure */
+        PhotoFailure: {
+            /** Photo Id */
+            photo_id: string;
+            /** Vehicle Id */
+            vehicle_id: string;
+            /** Reason */
+            reason: string;
+        };
         /** PointMapBody */
         PointMapBody: {
             site: components["schemas"]["SiteOrigin"] | null;
@@ -3170,6 +3330,19 @@ export interface components {
             violations?: {
                 [key: string]: unknown;
             }[] | null;
+        };
+        /** VehicleCounts */
+        VehicleCounts: {
+            /**
+             * Processed
+             * @default 0
+             */
+            processed: number;
+            /**
+             * Failed
+             * @default 0
+             */
+            failed: number;
         };
         /** VehiclePhotos */
         VehiclePhotos: {
@@ -8757,6 +8930,288 @@ export interface operations {
                 };
                 content: {
                     "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description The database is unavailable; try again after Retry-After seconds */
+            503: {
+                headers: {
+                    /** @description Seconds to wait */
+                    "Retry-After"?: number;
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+        };
+    };
+    list_mosaics_api_v1_mosaics_get: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["MosaicDetail"][];
+                };
+            };
+            /** @description Not authenticated */
+            401: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description Needs the 'read' permission */
+            403: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description The database is unavailable; try again after Retry-After seconds */
+            503: {
+                headers: {
+                    /** @description Seconds to wait */
+                    "Retry-After"?: number;
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+        };
+    };
+    get_mosaic_api_v1_mosaics__survey_id__get: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path: {
+                /** @description the survey's id */
+                survey_id: string;
+            };
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["MosaicDetail"];
+                };
+            };
+            /** @description Not authenticated */
+            401: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description Needs the 'read' permission */
+            403: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description No photo of this survey has reached the mosaic */
+            404: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed) */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Unprocessable"];
+                };
+            };
+            /** @description The database is unavailable; try again after Retry-After seconds */
+            503: {
+                headers: {
+                    /** @description Seconds to wait */
+                    "Retry-After"?: number;
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+        };
+    };
+    export_mosaic_api_v1_mosaics__survey_id__export__kind__get: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path: {
+                /** @description the survey's id */
+                survey_id: string;
+                kind: "tif" | "mbtiles" | "pmtiles";
+            };
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "image/tiff": unknown;
+                    "application/vnd.sqlite3": unknown;
+                    "application/vnd.pmtiles": unknown;
+                };
+            };
+            /** @description Not authenticated */
+            401: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description Needs the 'read' permission */
+            403: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description No photo of this survey has reached the mosaic */
+            404: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description The mosaic has no tiles yet */
+            409: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed) */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Unprocessable"];
+                };
+            };
+            /** @description The database is unavailable; try again after Retry-After seconds */
+            503: {
+                headers: {
+                    /** @description Seconds to wait */
+                    "Retry-After"?: number;
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+        };
+    };
+    get_mosaic_tile_api_v1_mosaics__survey_id__tiles__z___x___y__get: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path: {
+                /** @description the survey's id */
+                survey_id: string;
+                z: number;
+                x: number;
+                y: number;
+            };
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "image/jpeg": unknown;
+                    "image/png": unknown;
+                };
+            };
+            /** @description The tile has not changed since the ETag given */
+            304: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content?: never;
+            };
+            /** @description Not authenticated */
+            401: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description Needs the 'read' permission */
+            403: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description No such mosaic, or no tile there */
+            404: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed) */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Unprocessable"];
                 };
             };
             /** @description The database is unavailable; try again after Retry-After seconds */

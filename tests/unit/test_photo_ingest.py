@@ -15,18 +15,21 @@ import pytest
 from PIL import Image
 
 from backend.errors import NotFound
+from backend.hub import MosaicSink
 from backend.missions.survey.run import DroneState, SurveyRun, SurveyState
 from backend.missions.survey.schemas import SurveyRequest
 from backend.missions.survey.service import Fleet, plan_survey
+from backend.mosaic.service import MosaicService
 from backend.photos.checks import Refusal, Refused
 from backend.photos.export import write_zip
 from backend.photos.ingest import OffsetMismatch, PhotoIngest
-from backend.photos.stored import StoredPhoto
+from backend.photos.stored import PhotoSink, StoredPhoto
 from backend.storage.database import make_engine, migrate
 from backend.storage.photos import PhotoRepository
 from backend.surveys.service import new_run
 from common.geodesy import GeoPoint, LocalFrame
 from protocol.photos import CameraIntrinsics, PhotoMeta, PhotoPose
+from simulator.photo_server import nadir_renderer
 
 LAT, LON = 47.0, 8.0
 FRAME = LocalFrame(LAT, LON)
@@ -91,7 +94,7 @@ def ingest_for(tmp_path: Path, migrated: Path) -> Callable[..., PhotoIngest]:
     return make
 
 
-def _ingest(tmp_path: Path, run: SurveyRun, sink: Sink | None) -> PhotoIngest:
+def _ingest(tmp_path: Path, run: SurveyRun, sink: PhotoSink | None) -> PhotoIngest:
     engine = make_engine(f"sqlite:///{tmp_path / 'hub.sqlite'}")
 
     async def find(survey_id: str) -> SurveyRun:
@@ -283,3 +286,36 @@ def test_the_export_is_a_zip_opendronemap_takes(
     name, lon, lat, *_ = geo[2].split()
     assert name == "p1.jpg"
     assert FRAME.to_local(float(lat), float(lon)) == pytest.approx((50.0, 100.0), abs=0.01)
+
+
+def test_a_stored_survey_photo_goes_into_the_live_mosaic(tmp_path: Path, migrated: Path) -> None:
+    """Through the hub's own sink into a real mosaic: a photo of the simulator's ground,
+    rendered from its pose, uploaded in chunks, ends up in the survey's tiles."""
+    run = survey()
+
+    async def area_of(survey_id: str) -> dict[str, object] | None:
+        return run.request.area.model_dump() if survey_id == run.id else None
+
+    mosaic = MosaicService(tmp_path / "mosaics", area_of)
+    shutil.copy(migrated, tmp_path / "hub.sqlite")
+    ingest = _ingest(tmp_path, run, MosaicSink(mosaic))
+    lat, lon = FRAME.to_geo(150.0, 100.0)
+    pose = PhotoPose(
+        lat=lat, lon=lon, alt_msl=540.0, alt_rel=40.0, roll=0, pitch=0, yaw=0, time=1_010.0
+    )
+    data = nadir_renderer(GeoPoint(LAT, LON, 500.0))(pose, CAMERA)
+    meta = PhotoMeta(photo_id="m1", index=1, size_bytes=len(data), pose=pose, camera=CAMERA)
+
+    async def scenario() -> None:
+        worker = asyncio.create_task(mosaic.run())
+        try:
+            assert await send(ingest, "m1", data, meta.model_dump_json()) == "stored"
+            await asyncio.wait_for(mosaic.idle(), 60)
+        finally:
+            worker.cancel()
+
+    asyncio.run(scenario())
+    progress = mosaic.progress(run.id)
+    assert (progress.processed, progress.failed) == (1, 0)
+    assert progress.by_vehicle["d0"].processed == 1
+    assert progress.max_zoom is not None

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from sqlalchemy import Engine, func, select
+from sqlalchemy import ColumnElement, Engine, func, select
 from sqlalchemy.exc import IntegrityError
 from sqlalchemy.orm import Session
 
@@ -76,20 +76,17 @@ class PhotoRepository:
 
     def vehicle_counts(self, vehicle_id: str) -> list[PhotoCount]:
         """One vehicle's photos by state and reason, whatever their survey."""
-        with Session(self.engine) as session:
-            rows = session.execute(
-                select(PhotoRow.vehicle_id, PhotoRow.state, PhotoRow.reason, func.count())
-                .where(PhotoRow.vehicle_id == vehicle_id)
-                .group_by(PhotoRow.vehicle_id, PhotoRow.state, PhotoRow.reason)
-            )
-            return [PhotoCount(v, s, r, int(n)) for v, s, r, n in rows]
+        return self._counts(PhotoRow.vehicle_id == vehicle_id)
 
     def counts(self, survey_id: str) -> list[PhotoCount]:
         """Photos per vehicle, state and reason, for one survey."""
+        return self._counts(PhotoRow.survey_id == survey_id)
+
+    def _counts(self, where: ColumnElement[bool]) -> list[PhotoCount]:
         with Session(self.engine) as session:
             rows = session.execute(
                 select(PhotoRow.vehicle_id, PhotoRow.state, PhotoRow.reason, func.count())
-                .where(PhotoRow.survey_id == survey_id)
+                .where(where)
                 .group_by(PhotoRow.vehicle_id, PhotoRow.state, PhotoRow.reason)
                 .order_by(PhotoRow.vehicle_id)
             )

@@ -104,7 +104,8 @@ class PhotoUploader:
         self._notify = notify or (lambda text, severity: None)
         self.chunk_bytes = chunk_bytes
         self.concurrency = concurrency
-        self.bucket = TokenBucket(rate_bytes_per_s, max(rate_bytes_per_s, chunk_bytes))
+        # Bursts of one chunk at most: a narrow link never gets seconds of photo at once.
+        self.bucket = TokenBucket(rate_bytes_per_s, chunk_bytes)
         self.backoff = backoff
         self.stats = UploadStats()
         self._in_flight: set[str] = set()

@@ -166,6 +166,9 @@ class PhotoIngest:
             if received < meta.size_bytes:
                 return UploadState(received, meta.size_bytes, "receiving")
             await self._finish(vehicle_id, meta, part)
+            # Done: its lock is not needed again (a late duplicate finds the row and makes
+            # a lock of its own), so the locks held stay one per upload in progress.
+            self._locks.pop((vehicle_id, photo_id), None)
             return UploadState(received, meta.size_bytes, STORED)
 
     async def _begin(
@@ -323,6 +326,7 @@ class PhotoIngest:
         await asyncio.to_thread(self.repository.add, record)
         part, meta_path = self._partial(vehicle_id, photo_id)
         await asyncio.to_thread(_discard, part, meta_path)
+        self._locks.pop((vehicle_id, photo_id), None)
         log.info("photo %s from %s refused: %s", photo_id, vehicle_id, text)
         raise Refused(code, text, status)
 

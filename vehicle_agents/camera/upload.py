@@ -9,10 +9,12 @@ Per photo (the hub's side is backend/api/photos.py):
    answers the new committed offset; 409 with its own offset if ours was wrong (resume
    from there); 201 once the last chunk is in and the photo passed its checks. A photo
    id the hub already stored answers 200 ``stored`` at once: the upload is idempotent.
-3. A refusal (413, 422: a pose far from the survey, a corrupt image...) is for good: the
-   photo is removed from the queue and the operator gets an event with the hub's reason.
-   Everything else (no route to the hub, 5xx, 401/403 while a token is being fixed) is
-   retried with full-jitter backoff (common/retry.py), the photo kept.
+3. The hub's refusal of the photo itself (413 or 422 with a ``code``: a pose far from the
+   survey, a corrupt image...) is for good: the photo is removed from the queue and the
+   operator gets an event with the hub's reason. A 413 without one is a body limit on the
+   way (the hub's GCS_MAX_BODY_BYTES, a proxy's): the chunks are halved. Everything else
+   (no route to the hub, 5xx, 401/403 while a token is being fixed) is retried with
+   full-jitter backoff (common/retry.py), the photo kept.
 
 Bandwidth: chunks are small (256 KiB) and paced by a token bucket (``rate_bytes_per_s``),
 with at most ``concurrency`` photos in flight, so the WebSocket's telemetry always finds
@@ -40,7 +42,9 @@ CHUNK_BYTES = 256 * 1024
 REQUEST_TIMEOUT_S = 30.0
 UPLOAD_BACKOFF = Backoff(initial_s=1.0, max_s=15.0)
 IDLE_POLL_S = 1.0  # how often an idle uploader looks for new photos (put() also wakes it)
-REFUSED_FOR_GOOD = frozenset({400, 413, 422})
+MIN_CHUNK_BYTES = 16 * 1024
+QUOTA = "quota"  # the one refusal code that is not for good
+MAX_OFFSET_CORRECTIONS = 3  # 409s in a row for one photo before it is tried again later
 EVENT_TEXT_ROOM = 400
 
 Notify = Callable[[str, int], None]
@@ -162,6 +166,7 @@ class PhotoUploader:
             return  # the hub has it already
         if offset:
             self.stats.resumed += 1
+        corrections = 0
         while True:
             chunk = data[offset : offset + self.chunk_bytes]
             await self.bucket.take(len(chunk))
@@ -179,12 +184,22 @@ class PhotoUploader:
                     timeout_s=REQUEST_TIMEOUT_S,
                 )
             except HttpError as error:
-                if error.status == 409:  # the hub has another offset: go on from its
+                if error.status == 409 and corrections < MAX_OFFSET_CORRECTIONS:
+                    corrections += 1  # the hub has another offset: go on from its
                     offset = _received(error.body)
                     continue
-                if error.status in REFUSED_FOR_GOOD:
+                code = _code(error.body)
+                if code == QUOTA:  # the vehicle's share of the hub's disk: may be freed
+                    raise
+                if code is not None:  # the hub refused the photo itself, with its reason
                     raise Refused(_detail(error.body)) from None
+                if error.status == 413 and self.chunk_bytes > MIN_CHUNK_BYTES:
+                    # A hub (or a proxy) that takes smaller bodies than our chunks.
+                    self.chunk_bytes //= 2
+                    log.warning("photo chunks refused as too large; now %d bytes", self.chunk_bytes)
+                    continue
                 raise
+            corrections = 0
             self.stats.chunks += 1
             self.stats.bytes_sent += len(chunk)
             status = json.loads(answer.body)
@@ -215,6 +230,16 @@ def _received(body: str) -> int:
         return int(json.loads(body)["received"])
     except (ValueError, KeyError, TypeError):
         return 0
+
+
+def _code(body: str) -> str | None:
+    """The refusal's code (no_pose, corrupt_image...) when the answer is the hub's verdict
+    on the photo, not a limit or a fault on the way (a proxy's 413, a 5xx)."""
+    try:
+        code = json.loads(body).get("code")
+    except (ValueError, AttributeError):
+        return None
+    return code if isinstance(code, str) else None
 
 
 def _detail(body: str) -> str:

@@ -244,20 +244,28 @@ class PhotoIngest:
             )
         return meta
 
-    async def survey_of(self, vehicle_id: str, meta: PhotoMeta) -> SurveyRun | None:
-        """The survey named in the metadata, else the one the vehicle flew at that time."""
+    async def survey_of(
+        self, vehicle_id: str, meta: PhotoMeta, now: float | None = None
+    ) -> SurveyRun | None:
+        """The survey named in the metadata, else the one the vehicle was flying when the
+        photo was taken, else the one it is flying as the photo arrives. The photo's time
+        is the flight controller's clock, which a simulator sped up runs ahead of the hub's
+        (and a board without GPS time has wrong); the arrival covers those, the photo's own
+        time the photos that arrive late, after an outage."""
         if meta.survey_id is not None:
             try:
                 return await self._find_survey(meta.survey_id)
             except NotFound:
                 raise Refused(Refusal.UNKNOWN_SURVEY, f"no survey {meta.survey_id}") from None
-        taken = meta.pose.time
-        for run in self._active_surveys():
-            drone = run.drone(vehicle_id)
-            if drone is None or run.started is None or taken < run.started - CLOCK_SLACK_S:
-                continue
-            if drone.finished is None or taken <= drone.finished + CLOCK_SLACK_S:
-                return run
+        runs = [run for run in self._active_surveys() if run.drone(vehicle_id) is not None]
+        for instant in (meta.pose.time, time.time() if now is None else now):
+            for run in runs:
+                drone = run.drone(vehicle_id)
+                assert drone is not None
+                if run.started is None or instant < run.started - CLOCK_SLACK_S:
+                    continue
+                if drone.finished is None or instant <= drone.finished + CLOCK_SLACK_S:
+                    return run
         return None
 
     async def _finish(self, vehicle_id: str, meta: PhotoMeta, part: Path) -> None:

@@ -319,3 +319,26 @@ def test_a_stored_survey_photo_goes_into_the_live_mosaic(tmp_path: Path, migrate
     assert (progress.processed, progress.failed) == (1, 0)
     assert progress.by_vehicle["d0"].processed == 1
     assert progress.max_zoom is not None
+
+
+def test_a_photo_is_of_the_survey_flown_when_taken_or_else_when_it_arrives(
+    tmp_path: Path, ingest_for: Callable[..., PhotoIngest]
+) -> None:
+    run = survey()
+    run.drones[0].finished = 2_000.0
+    ingest = ingest_for(run)
+    data = jpeg()
+
+    def survey_at(taken: float, arrived: float) -> str | None:
+        meta = PhotoMeta.model_validate_json(meta_for("x", data)).model_copy(deep=True)
+        meta = meta.model_copy(update={"pose": meta.pose.model_copy(update={"time": taken})})
+        found = asyncio.run(ingest.survey_of("d0", meta, now=arrived))
+        return None if found is None else found.id
+
+    assert survey_at(1_500.0, 9_000.0) == run.id  # taken in flight, arrived after an outage
+    assert survey_at(7_000.0, 1_500.0) == run.id  # a clock running ahead (a sped-up sim)
+    assert survey_at(500.0, 9_000.0) is None  # before and long after: no survey
+    assert (
+        asyncio.run(ingest.survey_of("other", PhotoMeta.model_validate_json(meta_for("y", data))))
+        is None
+    )

@@ -23,7 +23,9 @@ from backend.api import (
     formations,
     logs,
     missions,
+    mosaics,
     params,
+    photos,
     safety,
     scans,
     surveys,
@@ -109,8 +111,8 @@ def create_app(settings: HubSettings | None = None) -> FastAPI:
         redoc_url=None,
     )
     modules: tuple[ModuleType, ...] = (system, auth, vehicles, params, missions, fleet_commands)
-    modules += (safety, surveys, formations, scans, *logs.ROUTE_MODULES, admin, tiles)
-    modules += (viz_viewers,)
+    modules += (safety, surveys, photos, formations, scans, *logs.ROUTE_MODULES, admin, tiles)
+    modules += (mosaics, viz_viewers)
     routers = [module.router for module in modules]
     document_errors(app, routers)
     for router in routers:

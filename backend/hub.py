@@ -7,6 +7,7 @@ import logging
 import time
 from collections.abc import Collection
 from dataclasses import dataclass, field
+from typing import Any
 
 import httpx
 from sqlalchemy import Engine
@@ -18,11 +19,16 @@ from backend.auth.password_work import PasswordWork
 from backend.auth.principal_cache import PrincipalCache
 from backend.auth.rate_limit import Limit, RateLimiter
 from backend.control.lease import LeaseBook
+from backend.errors import NotFound
 from backend.fleet.commands import CommandDispatcher
 from backend.fleet.formations import FormationService, ScanPoints
 from backend.fleet.registry import FleetRegistry, VehicleRecord
 from backend.fleet.safety_gate import SafetyGate
 from backend.mapping.tiles import TileLibrary
+from backend.mosaic.photo import StoredPhoto as MosaicPhoto
+from backend.mosaic.service import MosaicService
+from backend.photos.ingest import PhotoIngest
+from backend.photos.stored import StoredPhoto
 from backend.realtime import manual_control
 from backend.realtime.bus import InProcessBus, ReliableSubscription, Topic
 from backend.realtime.collaborators import AgentConnection, ClientConnection
@@ -37,6 +43,7 @@ from backend.storage.database import make_engine, migrate
 from backend.storage.formations import FormationRepository
 from backend.storage.logbook import Logbook
 from backend.storage.models import AuditRow, CommandRow
+from backend.storage.photos import PhotoRepository
 from backend.storage.rails import RailsRepository
 from backend.storage.records import StoredEvent
 from backend.storage.repository import Repository
@@ -115,6 +122,11 @@ class Hub:
     viewers: Viewers | None = None
     # Area surveys: created in start(), as they send commands through the hub itself.
     surveys: SurveyService = field(init=False)
+    # The live orthomosaic of each survey's photos (backend/mosaic/).
+    mosaic: MosaicService = field(init=False)
+    # Survey photos from the agents' uploads; each stored photo of a survey goes on to
+    # the mosaic (``photos.sink``).
+    photos: PhotoIngest = field(init=False)
 
     @classmethod
     async def start(cls, settings: HubSettings) -> Hub:
@@ -179,6 +191,17 @@ class Hub:
         hub.formations.scan_source = hub.leader_scan
         hub.surveys = SurveyService(hub, bus, SurveyRepository(engine), settings)
         await hub.surveys.load()
+        hub.mosaic = MosaicService(settings.data_dir / "mosaics", hub.survey_area)
+        await hub.mosaic.load()
+        hub.photos = PhotoIngest(
+            PhotoRepository(engine),
+            settings.photos_folder,
+            hub.surveys.known,
+            hub.surveys.find,
+            margin_m=settings.photo_survey_margin_m,
+            quota_bytes=settings.max_photo_bytes_per_vehicle,
+            sink=MosaicSink(hub.mosaic),
+        )
         await manual_control.revoke_left_open(hub, engine)
         if settings.viz_enabled:
             hub.viz = await asyncio.to_thread(VizServer.start)
@@ -203,6 +226,7 @@ class Hub:
                 tasks.create_task(self._apply_retention())
                 tasks.create_task(self._drain_spool())
                 tasks.create_task(self.surveys.run())
+                tasks.create_task(self.mosaic.run())
                 tasks.create_task(manual_control.watch_expiry(self))
                 if self.scene is not None:
                     mirror = SceneMirror(
@@ -214,6 +238,7 @@ class Hub:
                     )
                     tasks.create_task(mirror.run())
         finally:
+            await asyncio.to_thread(self.mosaic.close)  # the tiles in memory to disk
             if self.viz_http is not None:
                 await self.viz_http.aclose()
             if self.viz is not None:
@@ -238,6 +263,15 @@ class Hub:
             latest.points, site, frame, SCAN_CELL_M, MAX_SCAN_POINTS, above_msl=ground
         )
         return ScanPoints(latest.frame.utc_time, latest.frame.seq, north, east)
+
+    async def survey_area(self, survey_id: str) -> dict[str, Any] | None:
+        """A survey's area as GeoJSON, for its mosaic's coverage (None: no such survey)."""
+        try:
+            run = await self.surveys.find(survey_id)
+        except NotFound:
+            return None
+        area: dict[str, Any] = run.request.area.model_dump()
+        return area
 
     def deliver_sequence_news(self, acks: dict[StreamKey, int], gaps: list[Gap]) -> None:
         """Tell each agent what is now stored and which of its frames never arrived."""
@@ -367,6 +401,28 @@ class Hub:
         session = self.agent_sessions.get(vehicle_id)
         if session is not None and session.token_id == token_id:
             await session.close(CloseCode.UNAUTHORIZED, "agent token revoked")
+
+
+class MosaicSink:
+    """The photo ingest's sink: each stored photo of a survey into that survey's mosaic
+    (photos/ and mosaic/ are siblings that know nothing of each other; the hub joins them)."""
+
+    def __init__(self, mosaic: MosaicService) -> None:
+        self._mosaic = mosaic
+
+    async def add_photo(self, photo: StoredPhoto) -> None:
+        if photo.survey_id is None:  # no survey, no mosaic to put it in
+            return
+        await self._mosaic.add_photo(
+            MosaicPhoto(
+                photo.photo_id,
+                photo.vehicle_id,
+                photo.survey_id,
+                photo.path,
+                photo.pose,
+                photo.camera,
+            )
+        )
 
 
 def _bootstrap_accounts(accounts: Accounts, audit: AuditLog, settings: HubSettings) -> None:

@@ -168,6 +168,17 @@ class HubSettings(BaseSettings):
         le=100,
         description="a surveying drone whose battery falls below this is out of the survey",
     )
+    photo_survey_margin_m: float = Field(
+        default=500.0,
+        gt=0,
+        description="a photo whose position is further than this outside its survey's area "
+        "is refused (a wrong pose, or a photo of another survey)",
+    )
+    max_photo_bytes_per_vehicle: int = Field(
+        default=20 * 1024 * 1024 * 1024,
+        ge=1024,
+        description="all of one vehicle's stored photos together; an upload beyond is a 413",
+    )
     survey_update_interval_s: float = Field(
         default=1.0, gt=0, le=60, description="a survey's progress goes out at most this often"
     )
@@ -302,6 +313,10 @@ class HubSettings(BaseSettings):
             flights_days=self.retention_flights_days,
             audit_days=self.retention_audit_days,
         )
+
+    @property
+    def photos_folder(self) -> Path:
+        return self.data_dir / "photos"
 
     @property
     def tiles_folder(self) -> Path:

@@ -131,7 +131,12 @@ def _demo(args: argparse.Namespace) -> int:
     from gcs.launcher import FleetPlan, LocalFleet
 
     plan = FleetPlan.reusing_secrets(
-        args.data_dir, vehicles=args.vehicles, host=args.host, port=args.port, speedup=args.speedup
+        args.data_dir,
+        vehicles=args.vehicles,
+        host=args.host,
+        port=args.port,
+        speedup=args.speedup,
+        camera_model=args.camera_model,
     )
     fleet = LocalFleet(plan)
     log = logging.getLogger("gcs.demo")
@@ -242,6 +247,12 @@ def build_parser() -> argparse.ArgumentParser:
     demo.add_argument("--port", type=int, default=8000)
     demo.add_argument("--data-dir", type=Path, default=Path("data"))
     demo.add_argument("--speedup", type=float, default=1.0)
+    demo.add_argument(
+        "--camera-model",
+        metavar="SW_MM,SH_MM,W_PX,H_PX,F_MM",
+        help="fit every vehicle with a camera of this model (e.g. 6.3,4.7,1600,1200,4.5): "
+        "its survey photos, rendered by the simulator, go to the hub (default: no cameras)",
+    )
     return parser
 
 

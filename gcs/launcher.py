@@ -60,6 +60,10 @@ class FleetPlan:
     autopilots: tuple[str, ...] = ()
     # Each simulator fits a 2-D LIDAR (its bytes on a TCP port) and each agent relays it.
     lidars: bool = False
+    # Each simulator serves its camera's photos (a synthetic ground laid around ``home``,
+    # the same for all) and each agent uploads them; the value is the agents'
+    # --camera-model (sensor mm, image px, focal mm), None for no cameras.
+    camera_model: str | None = None
 
     @property
     def local_host(self) -> str:
@@ -157,6 +161,7 @@ class LocalFleet:
         self.processes: list[ManagedProcess] = []
         self.sim_ports: dict[int, int] = {}  # by vehicle index, to restart an agent
         self.lidar_ports: dict[int, int] = {}
+        self.camera_ports: dict[int, int] = {}
 
     def vehicle_id(self, index: int) -> str:
         return self.plan.vehicle_id(index)
@@ -219,6 +224,11 @@ class LocalFleet:
         if self.plan.lidars:
             self.lidar_ports[index] = free_port()
             lidar = ["--lidar", f"tcp:127.0.0.1:{self.lidar_ports[index]}"]
+        camera: list[str] = []
+        if self.plan.camera_model is not None:
+            self.camera_ports[index] = free_port()
+            ground = ",".join(f"{value:.7f}" for value in self.plan.home)
+            camera = ["--camera", f"tcp:127.0.0.1:{self.camera_ports[index]}", "--ground", ground]
         self.spawn(
             f"sim_{index + 1}",
             [
@@ -233,6 +243,7 @@ class LocalFleet:
                 str(self.plan.speedup),
                 *self.plan.vehicle_sim_args(index),
                 *lidar,
+                *camera,
             ],
         )
         self.start_agent(index, sim_port)
@@ -260,6 +271,16 @@ class LocalFleet:
                 *(
                     ["--lidar", f"tcp://127.0.0.1:{self.lidar_ports[index]}"]
                     if index in self.lidar_ports
+                    else []
+                ),
+                *(
+                    [
+                        "--camera",
+                        f"sim+http://127.0.0.1:{self.camera_ports[index]}",
+                        "--camera-model",
+                        self.plan.camera_model or "",
+                    ]
+                    if index in self.camera_ports
                     else []
                 ),
             ],

@@ -71,6 +71,11 @@ class SimulatorConfig:
     lidar: ListenAddress | None = None
     lidar_rate_hz: float = 10.0
     scene: Path | None = None  # obstacles (simulator/world.py); None: the default yard
+    # The camera's photos served over HTTP on this TCP address; None: CAMERA_FEEDBACK only.
+    camera: ListenAddress | None = None
+    # Where the camera's synthetic ground is laid (its origin and elevation); None: home.
+    # Simulators of one fleet share it, so that their photos show one world.
+    ground: GeoPoint | None = None
 
     def __post_init__(self) -> None:
         if not 1 <= self.system_id <= 255:
@@ -81,6 +86,8 @@ class SimulatorConfig:
             raise ValueError("the rover is simulated as ArduRover only (--autopilot ardupilot)")
         if self.lidar is not None and self.lidar.scheme != "tcp":
             raise ValueError("the LIDAR's bytes are served over TCP only (--lidar tcp:HOST:PORT)")
+        if self.camera is not None and self.camera.scheme != "tcp":
+            raise ValueError("the camera's photos are served over HTTP (--camera tcp:HOST:PORT)")
         if not 5.0 <= self.lidar_rate_hz <= 12.0:
             raise ValueError(f"LIDAR rate must be 5..12 Hz, got {self.lidar_rate_hz}")
         if self.gps2_fix is not None and not 0 <= self.gps2_fix <= 8:
@@ -222,6 +229,23 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="FILE",
         help="a JSON scene of obstacles for the LIDAR (default: a small yard around home)",
     )
+    parser.add_argument(
+        "--camera",
+        type=_listen,
+        default=None,
+        metavar="tcp:HOST:PORT",
+        help="serve the camera's photos over HTTP here (GET /photos/{index}): the nadir view "
+        "of a synthetic ground with ArUco targets from each shot's pose (default: "
+        "CAMERA_FEEDBACK only, no images)",
+    )
+    parser.add_argument(
+        "--ground",
+        type=_home,
+        default=None,
+        metavar="LAT,LON,ALT_MSL",
+        help="the camera's synthetic ground: its origin and elevation (default: home); give "
+        "a fleet's simulators the same one, so that their photos show the same ground",
+    )
     return parser
 
 
@@ -231,7 +255,7 @@ def _join_negative_values(argv: Sequence[str]) -> list[str]:
     joined: list[str] = []
     values = iter(argv)
     for arg in values:
-        if arg == "--home":
+        if arg in ("--home", "--ground"):
             value = next(values, None)
             joined.append(arg if value is None else f"{arg}={value}")
         else:
@@ -257,6 +281,8 @@ def parse_args(argv: Sequence[str] | None = None) -> SimulatorConfig:
             lidar=args.lidar,
             lidar_rate_hz=args.lidar_rate,
             scene=args.scene,
+            camera=args.camera,
+            ground=args.ground,
         )
     except ValueError as error:  # a combination the options cannot express
         parser.error(str(error))

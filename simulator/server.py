@@ -34,6 +34,7 @@ from simulator.vehicles import REBOOT_SILENCE_S, build_vehicle
 
 if TYPE_CHECKING:
     from simulator.lidar_stream import LidarStream
+    from simulator.photo_server import PhotoServer
 
 log = logging.getLogger(__name__)
 
@@ -162,6 +163,7 @@ class SimulatorServer:
         self._silent_until = 0.0  # a rebooting flight controller neither hears nor sends
         self.lidar: LidarStream | None = None
         self.lidar_address: ListenAddress | None = None
+        self.photos: PhotoServer | None = None
 
     # -- lifecycle -------------------------------------------------------------
 
@@ -192,6 +194,14 @@ class SimulatorServer:
                 seed=self.config.system_id,
             )
             self.lidar_address = await self.lidar.start()
+        if self.config.camera is not None:
+            # numpy and OpenCV are imported only by a simulator that renders photos
+            from simulator.photo_server import PhotoServer, nadir_renderer
+
+            ground = self.config.ground or self.config.home
+            render = await asyncio.to_thread(nadir_renderer, ground)  # the texture: a second
+            self.photos = PhotoServer(self.config.camera, render, self.telemetry.boot_epoch_s)
+            await self.photos.start()
         self._ticker = asyncio.create_task(self._tick_forever(), name="simulator-tick")
         log.info(
             "simulator sysid=%d listening on %s speedup=%g",
@@ -212,6 +222,8 @@ class SimulatorServer:
             self._tcp_server.close()
         if self.lidar is not None:
             await self.lidar.stop()
+        if self.photos is not None:
+            await self.photos.stop()
         for link in list(self.links):
             link.close()
         if self._client_tasks:
@@ -268,6 +280,8 @@ class SimulatorServer:
                 on_wire = event.seq - self.copter.mission_wire_offset
                 self._broadcast(self.telemetry.mission_item_reached(on_wire))
             else:
+                if self.photos is not None:  # before the feedback: the agent fetches on it
+                    self.photos.taken(event)
                 self._broadcast(self.telemetry.camera_feedback(event))
         signature = self._state_signature()
         if signature != self._signature:
@@ -294,6 +308,8 @@ class SimulatorServer:
         )
         for link in self.links:
             link.streams = StreamSchedule(DEFAULT_RATES_HZ, self._silent_until)
+        if self.photos is not None:
+            self.photos.restart(self.telemetry.boot_epoch_s)
         self._signature = self._state_signature()
         log.info("simulator sysid=%d rebooting", self.config.system_id)
 

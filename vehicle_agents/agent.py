@@ -130,6 +130,10 @@ async def _run(settings: AgentSettings) -> None:
             settings.hub_failsafe_timeout_s,
         )
         tasks.create_task(failsafe.run())
+        if settings.camera is not None:
+            from vehicle_agents.camera.wiring import start_camera  # only with a camera
+
+            start_camera(settings, link, vehicle_id, token, events.emit, tasks)
         if settings.tlog_dir is not None:
             recorder = TlogRecorder(settings.tlog_dir, vehicle_id)
             link.recorder = recorder.record

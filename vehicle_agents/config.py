@@ -18,6 +18,7 @@ from pydantic import Field, SecretStr, ValidationError, field_validator
 from pydantic_settings import BaseSettings, SettingsConfigDict
 
 from protocol.messages import AGENT_WS_PATH
+from protocol.photos import CameraIntrinsics
 
 
 class AgentSettings(BaseSettings):
@@ -116,6 +117,38 @@ class AgentSettings(BaseSettings):
         "about 10 MB; on disk in outbox_dir when it is set), replayed oldest first after "
         "the newest; when full, the oldest are dropped and counted",
     )
+    camera: str | None = Field(
+        default=None,
+        description="a nadir camera whose photos the autopilot's camera trigger "
+        "(CAMERA_FEEDBACK) takes: sim+http://HOST:PORT for the simulator's (gcs sim "
+        "--camera), opencv:DEVICE for a USB/CSI camera (opencv:0, opencv:/dev/video2; needs "
+        "OpenCV, the agent's `camera` extra)",
+    )
+    camera_model: str = Field(
+        default="13.2,8.8,5472,3648,8.8",
+        description="the camera: sensor width,height (mm),image width,height (px),focal "
+        "length (mm); the default is a DJI Phantom 4 Pro's, the survey preset "
+        "dji_phantom4_pro",
+    )
+    photo_dir: Path | None = Field(
+        default=None,
+        description="where photos wait for the hub (default: photos/ in outbox_dir)",
+    )
+    photo_budget_mb: float = Field(
+        default=4096.0,
+        gt=0,
+        description="the waiting photos are held under this many MiB; when over, the "
+        "oldest are deleted and counted",
+    )
+    photo_upload_rate_mb: float = Field(
+        default=2.0,
+        gt=0,
+        description="photo uploads use at most this many MiB/s on average, so telemetry "
+        "keeps its share of the link",
+    )
+    photo_upload_concurrency: int = Field(
+        default=1, ge=1, le=8, description="photos uploaded at once"
+    )
     stream_rates_hz: dict[str, float] = Field(
         default_factory=dict,
         description="extra or changed MAVLink message rates to request, e.g. "
@@ -156,6 +189,31 @@ class AgentSettings(BaseSettings):
         parse_mount(text)
         return text
 
+    @field_validator("camera_model")
+    @classmethod
+    def _camera_model(cls, text: str) -> str:
+        parse_camera_model(text)
+        return text
+
+    @field_validator("camera")
+    @classmethod
+    def _camera(cls, value: str | None) -> str | None:
+        if value is not None and not value.startswith(("sim+http://", "opencv:")):
+            raise ValueError(
+                f"{value}: a camera is sim+http://HOST:PORT (the simulator) or opencv:DEVICE"
+            )
+        return value
+
+    def photo_folder(self) -> Path:
+        """Where photos wait: photo_dir, else photos/ in outbox_dir."""
+        if self.photo_dir is not None:
+            return self.photo_dir
+        if self.outbox_dir is not None:
+            return self.outbox_dir / "photos"
+        raise SettingsError(
+            "a camera needs a folder for its photos: give it as " + ways_to_give("photo_dir")
+        )
+
     @field_validator("hub")
     @classmethod
     def _agent_endpoint(cls, url: str) -> str:
@@ -166,6 +224,26 @@ class AgentSettings(BaseSettings):
         if parts.path in ("", "/"):
             parts = parts._replace(path=AGENT_WS_PATH)
         return urlunsplit(parts)
+
+
+def parse_camera_model(text: str) -> CameraIntrinsics:
+    """``sensor_w,sensor_h,width_px,height_px,focal``: millimetres and pixels."""
+    parts = text.split(",")
+    try:
+        if len(parts) != 5:
+            raise ValueError
+        return CameraIntrinsics(
+            sensor_width_mm=float(parts[0]),
+            sensor_height_mm=float(parts[1]),
+            image_width_px=int(parts[2]),
+            image_height_px=int(parts[3]),
+            focal_length_mm=float(parts[4]),
+        )
+    except ValueError:
+        raise ValueError(
+            "expected sensor width,height (mm),image width,height (px),focal length (mm), "
+            f"e.g. 13.2,8.8,5472,3648,8.8; got {text!r}"
+        ) from None
 
 
 def default_vehicle_id(model: str, machine_id_file: Path = Path("/etc/machine-id")) -> str:
@@ -245,6 +323,8 @@ def load_agent_settings(
     }
     given = {name: value for name, value in overrides.items() if value is not None}
     settings = AgentSettings(**{**from_file, **given})
+    if settings.camera is not None:
+        settings.photo_folder()  # a camera without a folder for its photos: refused now
     if require_token and settings.token is None:
         raise SettingsError(
             "no agent token: give it as " + ways_to_give("token") + " (an admin creates it "

@@ -18,15 +18,14 @@ import logging
 import os
 import re
 import struct
-import urllib.error
 import urllib.parse
-import urllib.request
 from datetime import UTC, datetime
 from pathlib import Path
 from typing import IO, Any
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
+from vehicle_agents.hub_http import HttpError, send
 from vehicle_agents.modes import is_armed
 
 log = logging.getLogger(__name__)
@@ -181,16 +180,6 @@ class TlogUploadError(Exception):
         self.status = status
 
 
-class _NoRedirects(urllib.request.HTTPRedirectHandler):
-    """urllib would follow a 301/302/303 by resending the POST as a bodiless GET."""
-
-    def redirect_request(self, *args: Any, **kwargs: Any) -> None:
-        return None
-
-
-_opener = urllib.request.build_opener(_NoRedirects)
-
-
 def upload_tlog(path: Path, url: str, token: str, timeout_s: float = 60) -> None:
     """POST the file at ``path`` to ``url``, streamed from disk.
 
@@ -204,21 +193,18 @@ def upload_tlog(path: Path, url: str, token: str, timeout_s: float = 60) -> None
         raise ValueError(f"tlog upload URL must be http(s): {url!r}")
     with path.open("rb") as file:
         size = os.fstat(file.fileno()).st_size
-        request = urllib.request.Request(
-            url,
-            data=file,
-            method="POST",
-            headers={
-                "Content-Type": "application/octet-stream",
-                "Content-Length": str(size),
-                "Authorization": f"Bearer {token}",
-                "X-Filename": urllib.parse.quote(path.name, safe=""),
-            },
-        )
         try:
-            with _opener.open(request, timeout=timeout_s) as response:
-                response.read()
-        except urllib.error.HTTPError as error:
-            with error:
-                body = error.read(500).decode("utf-8", errors="replace")
-            raise TlogUploadError(path, error.code, error.reason, body) from None
+            send(
+                "POST",
+                url,
+                token=token,
+                body=file,
+                headers={
+                    "Content-Type": "application/octet-stream",
+                    "Content-Length": str(size),
+                    "X-Filename": urllib.parse.quote(path.name, safe=""),
+                },
+                timeout_s=timeout_s,
+            )
+        except HttpError as error:
+            raise TlogUploadError(path, error.status, error.reason, error.body) from None

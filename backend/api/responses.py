@@ -94,6 +94,8 @@ ROUTE_STATUSES: list[tuple[str, frozenset[str] | None, frozenset[int]]] = [
     (r"/auth/(login|token)", frozenset({"POST"}), frozenset({401, 429, 503})),
     (r"/users", frozenset({"POST"}), frozenset({409})),
     (r"/vehicles/\{vehicle_id\}/tlogs", frozenset({"POST"}), frozenset({413})),
+    # A photo's chunk: at another offset than the hub's (409), over the size (413).
+    (r"/vehicles/\{vehicle_id\}/photos/\{photo_id\}", frozenset({"PUT"}), frozenset({409, 413})),
     # A member that is unknown (404) or not connected (409); a formation that stopped (409).
     (r"/formations", frozenset({"POST"}), frozenset({404, 409})),
     (r"/formations/\{formation_id\}(/stop)?", frozenset({"PATCH", "POST"}), frozenset({409})),

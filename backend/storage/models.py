@@ -317,3 +317,27 @@ class FormationRow(Base):
     stopped_by: Mapped[str | None] = mapped_column(String(64))
     stop_reason: Mapped[str | None] = mapped_column(Text)
     tracking_json: Mapped[str | None] = mapped_column(Text)
+
+
+class PhotoRow(Base):
+    """A survey photo an agent uploaded: stored (its JPEG under the hub's photos folder)
+    or refused, with the reason. One row per (vehicle, photo id): uploads are idempotent."""
+
+    __tablename__ = "photos"
+    __table_args__ = (
+        UniqueConstraint("vehicle_id", "photo_id", name="uq_photos_vehicle_photo"),
+        Index("ix_photos_survey", "survey_id"),
+    )
+
+    id: Mapped[int] = mapped_column(RowId, primary_key=True, autoincrement=True)
+    vehicle_id: Mapped[str] = mapped_column(String(64))
+    photo_id: Mapped[str] = mapped_column(String(80))
+    survey_id: Mapped[str | None] = mapped_column(String(80), nullable=True)
+    state: Mapped[str] = mapped_column(String(16))  # "stored" or "refused"
+    reason: Mapped[str | None] = mapped_column(String(400), nullable=True)
+    received_at: Mapped[float] = mapped_column(Double)
+    path: Mapped[str | None] = mapped_column(String(512), nullable=True)
+    size: Mapped[int] = mapped_column(BigInteger)
+    # What the agent said of the photo (protocol.photos.PhotoMeta), as JSON; null when
+    # the refusal came before it could be read.
+    meta_json: Mapped[str | None] = mapped_column(Text, nullable=True)

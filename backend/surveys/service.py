@@ -295,6 +295,11 @@ class SurveyService:
     def active(self) -> list[SurveyRun]:
         return [run for run in self._runs.values() if run.state in ACTIVE_STATES]
 
+    def known(self) -> list[SurveyRun]:
+        """Every survey this hub has followed since it started, ended ones too: photos
+        reach the hub late after an outage."""
+        return list(self._runs.values())
+
     def get(self, survey_id: str) -> SurveyRun:
         run = self._runs.get(survey_id)
         if run is None:

@@ -105,6 +105,12 @@ class MessageHandler(ArmingAndModes, Navigation, Parameters, Missions, Requests)
                 result = self._reposition(cmd)
             case MavCmd.DO_CHANGE_SPEED:
                 result = copter.change_speed(as_int(cmd.param1), cmd.param2)
+            case MavCmd.DO_DIGICAM_CONTROL:
+                # GCS_MAVLINK::handle_command_do_digicam_control: param5 ("shot") 1 fires
+                # the camera now (COMMAND_INT carries it in x, scaled here by 1e-7)
+                if cmd.x == 1.0 or round(cmd.x * 1e7) == 1:
+                    copter.take_photo()
+                result = MavResult.ACCEPTED
             case MavCmd.DO_SET_HOME:
                 result = self._set_home(cmd)
                 if result is MavResult.ACCEPTED:

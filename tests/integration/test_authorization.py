@@ -58,6 +58,7 @@ def _concrete(path: str) -> str:
         "survey_id": "0123456789abcdef",
         "formation_id": "0123456789abcdef",
         "viewer_id": "999999",
+        "photo_id": "ghost-1-00001",
     }
     return re.sub(r"\{(\w+)\}", lambda match: values[match.group(1)], path)
 

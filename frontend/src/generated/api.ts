@@ -712,6 +712,91 @@ export interface paths {
         patch?: never;
         trace?: never;
     };
+    "/api/v1/vehicles/{vehicle_id}/photos/{photo_id}": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        /**
+         * Photo Upload Status
+         * @description How much of the photo the hub has (404: nothing yet), to resume a cut upload.
+         */
+        get: operations["photo_upload_status_api_v1_vehicles__vehicle_id__photos__photo_id__get"];
+        /**
+         * Upload Photo Chunk
+         * @description One chunk of a photo at byte ``offset`` (the body: raw JPEG bytes).
+         */
+        put: operations["upload_photo_chunk_api_v1_vehicles__vehicle_id__photos__photo_id__put"];
+        post?: never;
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
+    "/api/v1/surveys/{survey_id}/photos": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        /**
+         * Survey Photos
+         * @description Photos received and refused per drone (with the reasons), and the stored ones.
+         */
+        get: operations["survey_photos_api_v1_surveys__survey_id__photos_get"];
+        put?: never;
+        post?: never;
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
+    "/api/v1/vehicles/{vehicle_id}/photos": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        /**
+         * Vehicle Photos
+         * @description One vehicle's photos, whatever their survey: counts with reasons, the newest.
+         */
+        get: operations["vehicle_photos_api_v1_vehicles__vehicle_id__photos_get"];
+        put?: never;
+        post?: never;
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
+    "/api/v1/surveys/{survey_id}/photos.zip": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        /**
+         * Export Survey Photos
+         * @description The survey's geotagged photos for OpenDroneMap: ``images/``, ``image_list.txt``
+         *     and ``geo.txt`` in one zip.
+         */
+        get: operations["export_survey_photos_api_v1_surveys__survey_id__photos_zip_get"];
+        put?: never;
+        post?: never;
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
     "/api/v1/formations": {
         parameters: {
             query?: never;
@@ -1242,6 +1327,90 @@ export interface paths {
         patch?: never;
         trace?: never;
     };
+    "/api/v1/mosaics": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        /**
+         * List Mosaics
+         * @description Every survey mosaic the hub holds, with its progress.
+         */
+        get: operations["list_mosaics_api_v1_mosaics_get"];
+        put?: never;
+        post?: never;
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
+    "/api/v1/mosaics/{survey_id}": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        /**
+         * Get Mosaic
+         * @description Photos processed and failed (each failure's reason), per vehicle too; the coverage
+         *     of the survey's area in percent and as a GeoJSON outline; the zoom range and bounds.
+         */
+        get: operations["get_mosaic_api_v1_mosaics__survey_id__get"];
+        put?: never;
+        post?: never;
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
+    "/api/v1/mosaics/{survey_id}/export.{kind}": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        /**
+         * Export Mosaic
+         * @description The mosaic as a file: `tif` a Cloud-Optimised GeoTIFF (EPSG:3857, RGBA, at the
+         *     native zoom), `mbtiles` or `pmtiles` every zoom's tiles as PNG (drop either in the
+         *     hub's tiles folder to use it as an offline base map).
+         */
+        get: operations["export_mosaic_api_v1_mosaics__survey_id__export__kind__get"];
+        put?: never;
+        post?: never;
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
+    "/api/v1/mosaics/{survey_id}/tiles/{z}/{x}/{y}": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        /**
+         * Get Mosaic Tile
+         * @description One tile: JPEG where the photos cover all of it, PNG (transparent where they do
+         *     not) at the mosaic's edges.
+         */
+        get: operations["get_mosaic_tile_api_v1_mosaics__survey_id__tiles__z___x___y__get"];
+        put?: never;
+        post?: never;
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
     "/api/v1/viz/viewers/{viewer_id}/selection": {
         parameters: {
             query?: never;
@@ -1631,6 +1800,28 @@ export interface components {
              * @default false
              */
             force: boolean;
+        };
+        /** DronePhotos */
+        DronePhotos: {
+            /** Vehicle Id */
+            vehicle_id: string;
+            /**
+             * Received
+             * @description photos stored
+             */
+            received: number;
+            /**
+             * Failed
+             * @description photos refused
+             */
+            failed: number;
+            /**
+             * Reasons
+             * @description refusals by reason code
+             */
+            reasons: {
+                [key: string]: number;
+            };
         };
         /** DroneRun */
         DroneRun: {
@@ -2321,6 +2512,73 @@ export interface components {
             /** Items */
             items: components["schemas"]["MissionItem"][];
         };
+        /** MosaicDetail */
+        MosaicDetail: {
+            /** Survey Id */
+            survey_id: string;
+            /**
+             * Processed
+             * @default 0
+             */
+            processed: number;
+            /**
+             * Failed
+             * @default 0
+             */
+            failed: number;
+            /**
+             * Pending
+             * @description photos queued for this survey, not yet done
+             * @default 0
+             */
+            pending: number;
+            /** By Vehicle */
+            by_vehicle?: {
+                [key: string]: components["schemas"]["VehicleCounts"];
+            };
+            /**
+             * Failures
+             * @description the latest 200 failures
+             */
+            failures?: components["schemas"]["PhotoFailure"][];
+            /**
+             * Coverage Pct
+             * @description percent of the survey's area under a photo; None: no area
+             */
+            coverage_pct?: number | null;
+            /**
+             * Outline
+             * @description GeoJSON (lon, lat) of the covered ground
+             */
+            outline?: {
+                [key: string]: unknown;
+            } | null;
+            /**
+             * Revision
+             * @description photos applied to the tiles so far
+             * @default 0
+             */
+            revision: number;
+            /** Min Zoom */
+            min_zoom?: number | null;
+            /** Max Zoom */
+            max_zoom?: number | null;
+            /**
+             * Bounds
+             * @description west, south, east, north of the covered ground
+             */
+            bounds?: [
+                number,
+                number,
+                number,
+                number
+            ] | null;
+            /**
+             * Tile Url
+             * @description the tile URL template ({z}/{x}/{y}) of this mosaic
+             */
+            tile_url: string;
+        };
         /**
          * Obstacle
          * @description A cluster of the point map, above the ground: its extent in site east/north/up
@@ -2442,6 +2700,15 @@ export interface components {
          * @enum {string}
          */
         Permission: "read" | "command" | "audit" | "admin" | "agent";
+        /** PhotoFailure */
+        PhotoFailure: {
+            /** Photo Id */
+            photo_id: string;
+            /** Vehicle Id */
+            vehicle_id: string;
+            /** Reason */
+            reason: string;
+        };
         /** PointMapView */
         PointMapView: {
             site: components["schemas"]["SiteOrigin"] | null;
@@ -2851,6 +3118,20 @@ export interface components {
             lane_paths: number[][][];
             check: components["schemas"]["MissionCheckResponse"];
         };
+        /** SurveyPhotos */
+        SurveyPhotos: {
+            /** Survey Id */
+            survey_id: string;
+            /** Drones */
+            drones: components["schemas"]["DronePhotos"][];
+            /**
+             * Photos
+             * @description each stored photo: id, vehicle, pose
+             */
+            photos: {
+                [key: string]: unknown;
+            }[];
+        };
         /** SurveyPreview */
         SurveyPreview: {
             /**
@@ -3175,6 +3456,29 @@ export interface components {
                 [key: string]: unknown;
             }[] | null;
         };
+        /** UploadStatus */
+        UploadStatus: {
+            /**
+             * Received
+             * @description bytes the hub has committed; the next chunk's offset
+             */
+            received: number;
+            /**
+             * Size
+             * @description the photo's size, once declared
+             */
+            size?: number | null;
+            /**
+             * State
+             * @description receiving, stored or refused
+             */
+            state: string;
+            /**
+             * Reason
+             * @description why it was refused
+             */
+            reason?: string | null;
+        };
         /** User */
         User: {
             /** Username */
@@ -3238,6 +3542,48 @@ export interface components {
             violations?: {
                 [key: string]: unknown;
             }[] | null;
+        };
+        /** VehicleCounts */
+        VehicleCounts: {
+            /**
+             * Processed
+             * @default 0
+             */
+            processed: number;
+            /**
+             * Failed
+             * @default 0
+             */
+            failed: number;
+        };
+        /** VehiclePhotos */
+        VehiclePhotos: {
+            /** Vehicle Id */
+            vehicle_id: string;
+            /**
+             * Received
+             * @description photos stored
+             */
+            received: number;
+            /**
+             * Failed
+             * @description photos refused
+             */
+            failed: number;
+            /**
+             * Reasons
+             * @description refusals by reason code
+             */
+            reasons: {
+                [key: string]: number;
+            };
+            /**
+             * Photos
+             * @description its newest photos, stored and refused: id, state, reason, pose
+             */
+            photos: {
+                [key: string]: unknown;
+            }[];
         };
         /**
          * VehicleState
@@ -6468,6 +6814,386 @@ export interface operations {
             };
         };
     };
+    photo_upload_status_api_v1_vehicles__vehicle_id__photos__photo_id__get: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path: {
+                vehicle_id: string;
+                photo_id: string;
+            };
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["UploadStatus"];
+                };
+            };
+            /** @description Not authenticated */
+            401: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description Needs the 'agent' permission */
+            403: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description No such vehicle, flight, log, user or token (named in the message) */
+            404: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed) */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Unprocessable"];
+                };
+            };
+            /** @description The database is unavailable; try again after Retry-After seconds */
+            503: {
+                headers: {
+                    /** @description Seconds to wait */
+                    "Retry-After"?: number;
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+        };
+    };
+    upload_photo_chunk_api_v1_vehicles__vehicle_id__photos__photo_id__put: {
+        parameters: {
+            query?: {
+                offset?: number;
+            };
+            header?: {
+                "x-photo-meta"?: string | null;
+            };
+            path: {
+                vehicle_id: string;
+                photo_id: string;
+            };
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["UploadStatus"];
+                };
+            };
+            /** @description The last chunk: the photo is checked and stored */
+            201: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content?: never;
+            };
+            /** @description Not authenticated */
+            401: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description Needs the 'agent' permission */
+            403: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description No such vehicle, flight, log, user or token (named in the message) */
+            404: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description Wrong offset: the body's `received` is where to go on */
+            409: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description More bytes than declared or than a photo may have */
+            413: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description Refused for good, with the reason and its `code` */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Unprocessable"];
+                };
+            };
+            /** @description The database is unavailable; try again after Retry-After seconds */
+            503: {
+                headers: {
+                    /** @description Seconds to wait */
+                    "Retry-After"?: number;
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+        };
+    };
+    survey_photos_api_v1_surveys__survey_id__photos_get: {
+        parameters: {
+            query?: {
+                limit?: number;
+            };
+            header?: never;
+            path: {
+                survey_id: string;
+            };
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["SurveyPhotos"];
+                };
+            };
+            /** @description Not authenticated */
+            401: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description Needs the 'read' permission */
+            403: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description No such vehicle, flight, log, user or token (named in the message) */
+            404: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed) */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Unprocessable"];
+                };
+            };
+            /** @description The database is unavailable; try again after Retry-After seconds */
+            503: {
+                headers: {
+                    /** @description Seconds to wait */
+                    "Retry-After"?: number;
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+        };
+    };
+    vehicle_photos_api_v1_vehicles__vehicle_id__photos_get: {
+        parameters: {
+            query?: {
+                limit?: number;
+            };
+            header?: never;
+            path: {
+                vehicle_id: string;
+            };
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["VehiclePhotos"];
+                };
+            };
+            /** @description Not authenticated */
+            401: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description Needs the 'read' permission */
+            403: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description No such vehicle, flight, log, user or token (named in the message) */
+            404: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed) */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Unprocessable"];
+                };
+            };
+            /** @description The database is unavailable; try again after Retry-After seconds */
+            503: {
+                headers: {
+                    /** @description Seconds to wait */
+                    "Retry-After"?: number;
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+        };
+    };
+    export_survey_photos_api_v1_surveys__survey_id__photos_zip_get: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path: {
+                survey_id: string;
+            };
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/zip": unknown;
+                };
+            };
+            /** @description Not authenticated */
+            401: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description Needs the 'read' permission */
+            403: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description No such vehicle, flight, log, user or token (named in the message) */
+            404: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed) */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Unprocessable"];
+                };
+            };
+            /** @description The database is unavailable; try again after Retry-After seconds */
+            503: {
+                headers: {
+                    /** @description Seconds to wait */
+                    "Retry-After"?: number;
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+        };
+    };
     list_formations_api_v1_formations_get: {
         parameters: {
             query?: {
@@ -8549,6 +9275,288 @@ export interface operations {
                 };
                 content: {
                     "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description The database is unavailable; try again after Retry-After seconds */
+            503: {
+                headers: {
+                    /** @description Seconds to wait */
+                    "Retry-After"?: number;
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+        };
+    };
+    list_mosaics_api_v1_mosaics_get: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["MosaicDetail"][];
+                };
+            };
+            /** @description Not authenticated */
+            401: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description Needs the 'read' permission */
+            403: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description The database is unavailable; try again after Retry-After seconds */
+            503: {
+                headers: {
+                    /** @description Seconds to wait */
+                    "Retry-After"?: number;
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+        };
+    };
+    get_mosaic_api_v1_mosaics__survey_id__get: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path: {
+                /** @description the survey's id */
+                survey_id: string;
+            };
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["MosaicDetail"];
+                };
+            };
+            /** @description Not authenticated */
+            401: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description Needs the 'read' permission */
+            403: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description No photo of this survey has reached the mosaic */
+            404: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed) */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Unprocessable"];
+                };
+            };
+            /** @description The database is unavailable; try again after Retry-After seconds */
+            503: {
+                headers: {
+                    /** @description Seconds to wait */
+                    "Retry-After"?: number;
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+        };
+    };
+    export_mosaic_api_v1_mosaics__survey_id__export__kind__get: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path: {
+                /** @description the survey's id */
+                survey_id: string;
+                kind: "tif" | "mbtiles" | "pmtiles";
+            };
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "image/tiff": unknown;
+                    "application/vnd.sqlite3": unknown;
+                    "application/vnd.pmtiles": unknown;
+                };
+            };
+            /** @description Not authenticated */
+            401: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description Needs the 'read' permission */
+            403: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description No photo of this survey has reached the mosaic */
+            404: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description The mosaic has no tiles yet */
+            409: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed) */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Unprocessable"];
+                };
+            };
+            /** @description The database is unavailable; try again after Retry-After seconds */
+            503: {
+                headers: {
+                    /** @description Seconds to wait */
+                    "Retry-After"?: number;
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+        };
+    };
+    get_mosaic_tile_api_v1_mosaics__survey_id__tiles__z___x___y__get: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path: {
+                /** @description the survey's id */
+                survey_id: string;
+                z: number;
+                x: number;
+                y: number;
+            };
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "image/jpeg": unknown;
+                    "image/png": unknown;
+                };
+            };
+            /** @description The tile has not changed since the ETag given */
+            304: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content?: never;
+            };
+            /** @description Not authenticated */
+            401: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description Needs the 'read' permission */
+            403: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description No such mosaic, or no tile there */
+            404: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
+            /** @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed) */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Unprocessable"];
                 };
             };
             /** @description The database is unavailable; try again after Retry-After seconds */

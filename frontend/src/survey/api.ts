@@ -1,5 +1,5 @@
 // The hub's survey endpoints (backend/api/surveys.py), typed with the generated REST types.
-import { request } from "../api";
+import { ApiError, request } from "../api";
 import type { components } from "../generated/api";
 
 type Schemas = components["schemas"];
@@ -13,6 +13,7 @@ export type SurveyProgress = Schemas["SurveyUpdate"];
 export type GeoJsonPolygon = Schemas["GeoJsonPolygon"];
 export type SurveyFileFormat = Schemas["SurveyFile"]["format"];
 export type CameraPreset = Schemas["CameraPreset"];
+export type MosaicDetail = Schemas["MosaicDetail"];
 
 function post<T>(path: string, body: unknown, signal?: AbortSignal): Promise<T> {
   return request<T>(path, {
@@ -58,4 +59,14 @@ export function abortSurvey(id: string): Promise<SurveyDetail> {
 /** A survey request's fields (at least `area`) from a QGC .plan, a KML or a GeoJSON file. */
 export function importArea(format: SurveyFileFormat, content: string): Promise<Partial<SurveyRequest>> {
   return post<Partial<SurveyRequest>>("surveys/import", { format, content });
+}
+
+/** The survey's live orthomosaic (backend/api/mosaics.py); null until a photo reaches it. */
+export async function getMosaic(id: string): Promise<MosaicDetail | null> {
+  try {
+    return await request<MosaicDetail>(`mosaics/${encodeURIComponent(id)}`);
+  } catch (error) {
+    if (error instanceof ApiError && error.status === 404) return null;
+    throw error;
+  }
 }

@@ -1,11 +1,14 @@
 // The survey on the map: the area being drawn (outline and holes), the planned lanes in
 // one colour per drone, and during the flight the lanes flown (faded) and the photos
-// (dots where CAMERA_FEEDBACK placed them).
+// (dots where CAMERA_FEEDBACK placed them), over the live orthomosaic the hub builds from
+// the photos (a tile layer whose tiles are asked again whenever a photo lands).
 //
 // Plain Leaflet vectors, as the mission editor draws: clicks add vertices to the ring
 // being drawn, a click on its first vertex (or "Close ring") closes it. No drawing plugin
 // is installed, and a polygon with holes is all this needs.
 import * as L from "leaflet";
+
+import type { MosaicDetail } from "./api";
 
 /** One colour per drone, in the order the drones are listed (distinct on the base maps). */
 export const DRONE_COLOURS = ["#ff7f0e", "#1f9bff", "#2ca02c", "#e377c2", "#bcbd22", "#17becf", "#d62728", "#9467bd"];
@@ -26,8 +29,10 @@ export class SurveyLayer {
   private readonly area = L.layerGroup();
   private readonly plan = L.layerGroup();
   private readonly photos = L.layerGroup();
+  private mosaic: L.TileLayer | null = null;
+  private mosaicUrl = "";
 
-  constructor(map: L.Map) {
+  constructor(private readonly map: L.Map) {
     this.plan.addTo(map);
     this.photos.addTo(map);
     this.area.addTo(map);
@@ -92,12 +97,45 @@ export class SurveyLayer {
     }
   }
 
+  /** The survey's orthomosaic, above the base map: `revision` (photos applied) is in the
+   * tile URL, so each new photo has Leaflet ask for the tiles again; the hub answers the
+   * unchanged ones with a 304 (their ETag is their version). */
+  showMosaic(mosaic: MosaicDetail): void {
+    if (mosaic.max_zoom === null || mosaic.max_zoom === undefined) return;
+    // The hub's URL is from its root; the dashboard may be served below a path prefix.
+    const base = new URL(".", document.baseURI).pathname + mosaic.tile_url.replace(/^\//, "");
+    const url = `${base}?v=${mosaic.revision ?? 0}`;
+    if (url === this.mosaicUrl) return;
+    this.mosaicUrl = url;
+    if (this.mosaic) {
+      this.mosaic.setUrl(url);
+      return;
+    }
+    const b = mosaic.bounds;
+    this.mosaic = L.tileLayer(url, {
+      className: "survey-mosaic",
+      maxZoom: Math.max(this.map.getMaxZoom(), mosaic.max_zoom),
+      maxNativeZoom: mosaic.max_zoom,
+      minNativeZoom: mosaic.min_zoom ?? undefined,
+      bounds: b ? L.latLngBounds([b[1], b[0]], [b[3], b[2]]) : undefined,
+      zIndex: 10, // above the base maps' tiles
+    }).addTo(this.map);
+  }
+
+  clearMosaic(): void {
+    this.mosaic?.remove();
+    this.mosaic = null;
+    this.mosaicUrl = "";
+  }
+
   clearPlan(): void {
     this.plan.clearLayers();
     this.photos.clearLayers();
+    this.clearMosaic();
   }
 
   destroy(): void {
+    this.clearMosaic();
     this.area.remove();
     this.plan.remove();
     this.photos.remove();

@@ -18,6 +18,7 @@ import {
   acceptHandover,
   cameraPresets,
   createSurvey,
+  getMosaic,
   getSurvey,
   importArea,
   previewSurvey,
@@ -26,7 +27,7 @@ import {
 import { type LaneDrawing, SurveyLayer, droneColour } from "./layer";
 
 const PREVIEW_DELAY_MS = 400;
-/** The flown lanes and photos are re-read at most this often while a survey flies. */
+/** The flown lanes, photos and mosaic are re-read at most this often while a survey flies. */
 const DETAIL_EVERY_MS = 1000;
 const ENDED = new Set(["done", "aborted", "failed"]);
 
@@ -541,8 +542,11 @@ export class SurveyPanel {
     this.detailBusy = true;
     this.detailAt = Date.now();
     try {
-      const detail = await getSurvey(id);
-      if (!this.destroyed && id === this.surveyId) this.showDetail(detail);
+      const [detail, mosaic] = await Promise.all([getSurvey(id), getMosaic(id)]);
+      if (!this.destroyed && id === this.surveyId) {
+        this.showDetail(detail);
+        if (mosaic) this.layer.showMosaic(mosaic);
+      }
     } catch {
       // The next progress message tries again.
     } finally {

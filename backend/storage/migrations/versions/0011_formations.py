@@ -1,8 +1,8 @@
 """Formation missions: who started and stopped each, its request, and its followers'
 tracking figures
 
-Revision ID: 0010_formations
-Revises: 0009_surveys
+Revision ID: 0011_formations
+Revises: 0010_photos
 Create Date: 2026-11-27 23:00:00
 """
 
@@ -11,8 +11,8 @@ from collections.abc import Sequence
 import sqlalchemy as sa
 from alembic import op
 
-revision: str = "0010_formations"
-down_revision: str | None = "0009_surveys"
+revision: str = "0011_formations"
+down_revision: str | None = "0010_photos"
 branch_labels: str | Sequence[str] | None = None
 depends_on: str | Sequence[str] | None = None
 

@@ -1,0 +1,375 @@
+"""Resumable photo uploads: chunks at an offset, checked, stored once, counted.
+
+An upload in progress is a ``.part`` file and its metadata (``.json``) under
+``<photos>/.partial/<vehicle>/``, so a hub restarted mid-upload resumes it too: the
+committed offset is the ``.part`` file's size. The first chunk brings the metadata
+(protocol.photos.PhotoMeta); the pose and the survey are checked then, before megabytes
+follow. After the last chunk the image is checked (a whole JPEG of the camera's size),
+moved to ``<photos>/<vehicle>/<photo id>.jpg``, recorded, and handed to the sink (the
+live mosaic). A refusal is recorded too, with its reason, so it is counted once per
+photo however often the agent retries, and asked again it answers the same.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import json
+import logging
+import os
+import time
+from collections import Counter
+from collections.abc import Awaitable, Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from pydantic import ValidationError
+
+from backend.errors import NotFound
+from backend.missions.survey.run import CLOCK_SLACK_S, SurveyRun
+from backend.photos.checks import Refusal, Refused, check_against_survey, check_image
+from backend.photos.stored import PhotoSink, StoredPhoto
+from backend.storage.photos import PhotoRecord, PhotoRepository
+from protocol.photos import MAX_PHOTO_BYTES, PhotoMeta
+
+log = logging.getLogger(__name__)
+
+PARTIAL_DIR = ".partial"
+STORED, REFUSED = "stored", "refused"
+ActiveSurveys = Callable[[], list[SurveyRun]]
+FindSurvey = Callable[[str], Awaitable[SurveyRun]]
+
+
+@dataclass(frozen=True)
+class UploadState:
+    """What the hub has of one photo: ``received`` bytes of ``size``; ``state`` is
+    "receiving", "stored" or "refused" (with the reason)."""
+
+    received: int
+    size: int | None
+    state: str
+    reason: str | None = None
+
+    def body(self) -> dict[str, Any]:
+        return {k: v for k, v in self.__dict__.items() if v is not None}
+
+
+class OffsetMismatch(Exception):
+    def __init__(self, received: int) -> None:
+        super().__init__(f"the upload goes on at byte {received}")
+        self.received = received
+
+
+def safe_name(identifier: str) -> str:
+    """An id as a file or folder name: the protocol's patterns allow only
+    [A-Za-z0-9_.-], which leaves the dot names to refuse."""
+    if identifier in ("", ".", "..") or "/" in identifier or "\\" in identifier:
+        raise ValueError(f"{identifier!r} cannot name a file")
+    return identifier
+
+
+class PhotoIngest:
+    def __init__(
+        self,
+        repository: PhotoRepository,
+        root: Path,
+        active_surveys: ActiveSurveys,
+        find_survey: FindSurvey,
+        *,
+        margin_m: float,
+        quota_bytes: int,
+        sink: PhotoSink | None = None,
+    ) -> None:
+        self.repository = repository
+        self.root = root
+        self._active_surveys = active_surveys
+        self._find_survey = find_survey
+        self.margin_m = margin_m
+        self.quota_bytes = quota_bytes
+        self.sink = sink
+        self._locks: dict[tuple[str, str], asyncio.Lock] = {}
+        # Refusals with no row of their own (another vehicle's token: no row is written
+        # for a caller who may not speak for that vehicle), by (vehicle, code).
+        self.unrecorded: Counter[tuple[str, str]] = Counter()
+
+    def _partial(self, vehicle_id: str, photo_id: str) -> tuple[Path, Path]:
+        folder = self.root / PARTIAL_DIR / safe_name(vehicle_id)
+        name = safe_name(photo_id)
+        return folder / f"{name}.part", folder / f"{name}.json"
+
+    def _final(self, vehicle_id: str, photo_id: str) -> Path:
+        return self.root / safe_name(vehicle_id) / f"{safe_name(photo_id)}.jpg"
+
+    def _lock(self, vehicle_id: str, photo_id: str) -> asyncio.Lock:
+        return self._locks.setdefault((vehicle_id, photo_id), asyncio.Lock())
+
+    # -- asking ----------------------------------------------------------------------
+
+    async def state(self, vehicle_id: str, photo_id: str) -> UploadState:
+        """NotFound when the hub has nothing of that photo."""
+        record = await asyncio.to_thread(self.repository.get, vehicle_id, photo_id)
+        if record is not None:
+            return UploadState(
+                record.size if record.state == STORED else 0,
+                record.size,
+                record.state,
+                record.reason,
+            )
+        part, meta_path = self._partial(vehicle_id, photo_id)
+        try:
+            meta = PhotoMeta.model_validate_json(await asyncio.to_thread(meta_path.read_bytes))
+            received = (await asyncio.to_thread(part.stat)).st_size
+        except (OSError, ValidationError):
+            raise NotFound(f"no upload of photo {photo_id} from {vehicle_id}") from None
+        return UploadState(received, meta.size_bytes, "receiving")
+
+    # -- receiving -------------------------------------------------------------------
+
+    async def put_chunk(
+        self, vehicle_id: str, photo_id: str, offset: int, chunk: bytes, meta_json: str | None
+    ) -> UploadState:
+        """Take one chunk at ``offset``. Raises OffsetMismatch (the hub's offset) or
+        Refused (recorded, with its reason)."""
+        async with self._lock(vehicle_id, photo_id):
+            record = await asyncio.to_thread(self.repository.get, vehicle_id, photo_id)
+            if record is not None:
+                if record.state == REFUSED:  # asked again, answered the same
+                    reason = record.reason or "bad_metadata: refused"
+                    code = Refusal(reason.split(":")[0])
+                    raise Refused(code, reason, 413 if code is Refusal.TOO_LARGE else 422)
+                return UploadState(record.size, record.size, STORED)  # idempotent
+            part, meta_path = self._partial(vehicle_id, photo_id)
+            if offset == 0:
+                meta = await self._begin(vehicle_id, photo_id, meta_json, part, meta_path)
+            else:
+                try:
+                    meta = PhotoMeta.model_validate_json(
+                        await asyncio.to_thread(meta_path.read_bytes)
+                    )
+                except (OSError, ValidationError):
+                    raise OffsetMismatch(0) from None  # nothing here: start again
+            received = await asyncio.to_thread(_size, part)
+            if offset != received:
+                raise OffsetMismatch(received)
+            if received + len(chunk) > meta.size_bytes:
+                await self._refuse(
+                    vehicle_id,
+                    photo_id,
+                    meta,
+                    Refusal.TOO_LARGE,
+                    f"{received + len(chunk)} bytes sent, more than the {meta.size_bytes} "
+                    "the metadata declared",
+                    status=413,
+                )
+            await asyncio.to_thread(_append, part, chunk)
+            received += len(chunk)
+            if received < meta.size_bytes:
+                return UploadState(received, meta.size_bytes, "receiving")
+            await self._finish(vehicle_id, meta, part)
+            # Done: its lock is not needed again (a late duplicate finds the row and makes
+            # a lock of its own), so the locks held stay one per upload in progress.
+            self._locks.pop((vehicle_id, photo_id), None)
+            return UploadState(received, meta.size_bytes, STORED)
+
+    async def _begin(
+        self, vehicle_id: str, photo_id: str, meta_json: str | None, part: Path, meta_path: Path
+    ) -> PhotoMeta:
+        """Check what can be checked before the image comes; refusals are recorded, but
+        for the quota, which an admin may free."""
+        meta: PhotoMeta | None = None
+        run: SurveyRun | None = None
+        try:
+            meta = self._meta(photo_id, meta_json)
+            stored = await asyncio.to_thread(self.repository.stored_bytes, vehicle_id)
+            if stored + meta.size_bytes > self.quota_bytes:
+                raise Refused(
+                    Refusal.QUOTA,
+                    f"{vehicle_id}'s stored photos would pass their quota of "
+                    f"{self.quota_bytes} bytes ({stored} stored)",
+                    status=413,
+                )
+            run = await self.survey_of(vehicle_id, meta)
+            if run is not None:
+                check_against_survey(meta.pose, meta.camera, run, self.margin_m)
+        except Refused as refusal:
+            if refusal.code is Refusal.QUOTA:
+                raise
+            await self._refuse(
+                vehicle_id,
+                photo_id,
+                meta,
+                refusal.code,
+                refusal.reason,
+                survey_id=run.id if run is not None else None,
+                status=refusal.status,
+            )
+        assert meta is not None
+        if run is not None and meta.survey_id is None:
+            meta = meta.model_copy(update={"survey_id": run.id})
+        await asyncio.to_thread(part.parent.mkdir, parents=True, exist_ok=True)
+        await asyncio.to_thread(part.write_bytes, b"")  # a new start discards what was there
+        await asyncio.to_thread(meta_path.write_text, meta.model_dump_json())
+        return meta
+
+    @staticmethod
+    def _meta(photo_id: str, meta_json: str | None) -> PhotoMeta:
+        if meta_json is None:
+            raise Refused(
+                Refusal.BAD_METADATA,
+                "the first chunk (offset 0) must carry the photo's metadata as "
+                "JSON in the X-Photo-Meta header",
+            )
+        try:
+            meta = PhotoMeta.model_validate_json(meta_json)
+        except ValidationError as error:
+            problems = error.errors()
+            fields = {str(p["loc"][0]) for p in problems if p["loc"]}
+            text = "; ".join(
+                f"{'.'.join(str(part) for part in p['loc'])}: {p['msg']}" for p in problems[:5]
+            )
+            if "pose" in fields:
+                code = Refusal.NO_POSE
+            elif fields == {"size_bytes"} and any(p["type"] == "less_than_equal" for p in problems):
+                code = Refusal.TOO_LARGE
+                text = f"the photo is larger than the {MAX_PHOTO_BYTES} bytes a photo may be"
+            else:
+                code = Refusal.BAD_METADATA
+            raise Refused(
+                code, f"{code.value}: {text}", 413 if code is Refusal.TOO_LARGE else 422
+            ) from None
+        if meta.photo_id != photo_id:
+            raise Refused(
+                Refusal.BAD_METADATA,
+                f"the metadata names photo {meta.photo_id}, the address {photo_id}",
+            )
+        return meta
+
+    async def survey_of(
+        self, vehicle_id: str, meta: PhotoMeta, now: float | None = None
+    ) -> SurveyRun | None:
+        """The survey named in the metadata, else the one the vehicle was flying when the
+        photo was taken, else the one it is flying as the photo arrives. The photo's time
+        is the flight controller's clock, which a simulator sped up runs ahead of the hub's
+        (and a board without GPS time has wrong); the arrival covers those, the photo's own
+        time the photos that arrive late, after an outage."""
+        if meta.survey_id is not None:
+            try:
+                return await self._find_survey(meta.survey_id)
+            except NotFound:
+                raise Refused(Refusal.UNKNOWN_SURVEY, f"no survey {meta.survey_id}") from None
+        runs = [run for run in self._active_surveys() if run.drone(vehicle_id) is not None]
+        for instant in (meta.pose.time, time.time() if now is None else now):
+            for run in runs:
+                drone = run.drone(vehicle_id)
+                assert drone is not None
+                if run.started is None or instant < run.started - CLOCK_SLACK_S:
+                    continue
+                if drone.finished is None or instant <= drone.finished + CLOCK_SLACK_S:
+                    return run
+        return None
+
+    async def _finish(self, vehicle_id: str, meta: PhotoMeta, part: Path) -> None:
+        try:
+            await asyncio.to_thread(check_image, part, meta.camera)
+        except Refused as refusal:
+            await self._refuse(
+                vehicle_id,
+                meta.photo_id,
+                meta,
+                refusal.code,
+                refusal.reason,
+                survey_id=meta.survey_id,
+            )
+        final = self._final(vehicle_id, meta.photo_id)
+        await asyncio.to_thread(final.parent.mkdir, parents=True, exist_ok=True)
+        await asyncio.to_thread(os.replace, part, final)
+        record = PhotoRecord(
+            vehicle_id,
+            meta.photo_id,
+            meta.survey_id,
+            STORED,
+            None,
+            time.time(),
+            str(final),
+            meta.size_bytes,
+            meta.model_dump_json(),
+        )
+        await asyncio.to_thread(self.repository.add, record)
+        await asyncio.to_thread(_discard, part.with_suffix(".json"))
+        log.info("photo %s from %s stored (%d bytes)", meta.photo_id, vehicle_id, meta.size_bytes)
+        if self.sink is not None and meta.survey_id is not None:
+            photo = StoredPhoto(
+                meta.photo_id, vehicle_id, meta.survey_id, final, meta.pose, meta.camera
+            )
+            try:
+                await self.sink.add_photo(photo)
+            except Exception:
+                # The photo is stored and counted; a sink's failure must not undo that.
+                log.exception("the photo sink failed on %s", meta.photo_id)
+
+    async def _refuse(
+        self,
+        vehicle_id: str,
+        photo_id: str,
+        meta: PhotoMeta | None,
+        code: Refusal,
+        reason: str,
+        *,
+        survey_id: str | None = None,
+        status: int = 422,
+    ) -> None:
+        """Record the refusal, drop what was received, and raise it."""
+        text = reason if reason.startswith(f"{code.value}:") else f"{code.value}: {reason}"
+        record = PhotoRecord(
+            vehicle_id,
+            photo_id,
+            survey_id,
+            REFUSED,
+            text[:400],
+            time.time(),
+            None,
+            meta.size_bytes if meta else 0,
+            meta.model_dump_json() if meta else None,
+        )
+        await asyncio.to_thread(self.repository.add, record)
+        part, meta_path = self._partial(vehicle_id, photo_id)
+        await asyncio.to_thread(_discard, part, meta_path)
+        self._locks.pop((vehicle_id, photo_id), None)
+        log.info("photo %s from %s refused: %s", photo_id, vehicle_id, text)
+        raise Refused(code, text, status)
+
+    # -- counting --------------------------------------------------------------------
+
+    def count_unrecorded(self, vehicle_id: str, code: Refusal) -> None:
+        self.unrecorded[(vehicle_id, code.value)] += 1
+
+    @staticmethod
+    def summary(record: PhotoRecord) -> dict[str, Any]:
+        """A stored photo as the survey's photo list shows it."""
+        meta = json.loads(record.meta_json) if record.meta_json else {}
+        return {
+            "photo_id": record.photo_id,
+            "vehicle_id": record.vehicle_id,
+            "state": record.state,
+            "reason": record.reason,
+            "size": record.size,
+            "received_at": record.received_at,
+            "pose": meta.get("pose"),
+        }
+
+
+def _size(path: Path) -> int:
+    try:
+        return path.stat().st_size
+    except FileNotFoundError:
+        return 0
+
+
+def _append(path: Path, chunk: bytes) -> None:
+    with path.open("ab") as file:
+        file.write(chunk)
+
+
+def _discard(*paths: Path) -> None:
+    for path in paths:
+        path.unlink(missing_ok=True)

@@ -1,0 +1,177 @@
+"""The autopilot's camera trigger to a queued, posed, geotagged photo, through the
+simulator's real photo endpoint (its renderer here draws a plain test image)."""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import io
+from collections.abc import AsyncIterator
+from pathlib import Path
+
+import pytest
+from PIL import ExifTags, Image
+from pymavlink.dialects.v20 import ardupilotmega as mavlink2
+
+from protocol.photos import CameraIntrinsics, PhotoMeta, PhotoPose
+from simulator.config import ListenAddress
+from simulator.photo_server import PhotoServer
+from simulator.vehicle import PhotoTaken
+from tests.helpers import poll_until_async
+from vehicle_agents.camera.queue import PhotoQueue
+from vehicle_agents.camera.sources import SimulatedCamera
+from vehicle_agents.camera.trigger import CameraTrigger
+from vehicle_agents.sensors.fcu_time import FcuClock, PoseHistory
+
+CAMERA = CameraIntrinsics(
+    sensor_width_mm=13.2,
+    sensor_height_mm=8.8,
+    image_width_px=120,
+    image_height_px=80,
+    focal_length_mm=8.8,
+)
+BOOT_EPOCH = 1_764_288_000.0
+
+
+def render(pose: PhotoPose, camera: CameraIntrinsics) -> bytes:
+    out = io.BytesIO()
+    size = (camera.image_width_px, camera.image_height_px)
+    Image.new("RGB", size, (round(pose.yaw) % 256, 80, 40)).save(out, "JPEG")
+    return out.getvalue()
+
+
+class Clock:
+    def __init__(self) -> None:
+        self.now = 100.0
+
+    def __call__(self) -> float:
+        return self.now
+
+
+@contextlib.asynccontextmanager
+async def photo_server() -> AsyncIterator[PhotoServer]:
+    photos = PhotoServer(ListenAddress("tcp", "127.0.0.1", 0), render, BOOT_EPOCH)
+    await photos.start()
+    try:
+        yield photos
+    finally:
+        await photos.stop()
+
+
+async def queued(trigger: CameraTrigger) -> None:
+    task = asyncio.create_task(trigger.run())
+    try:
+        await poll_until_async(lambda: trigger.stats.queued, 10, "the photo queued")
+    finally:
+        task.cancel()
+
+
+def feedback(index: int, lat: float, lon: float) -> object:
+    return mavlink2.MAVLink_camera_feedback_message(
+        int((BOOT_EPOCH + 42.5) * 1e6),
+        1,
+        0,
+        index,
+        round(lat * 1e7),
+        round(lon * 1e7),
+        612.5,
+        30.25,
+        2.0,
+        -1.0,
+        91.0,
+        0.0,
+        mavlink2.CAMERA_FEEDBACK_PHOTO,
+        index,
+    )
+
+
+def trigger_for(server: PhotoServer, tmp_path: Path, clock: Clock) -> CameraTrigger:
+    assert server.address is not None
+    source = SimulatedCamera(f"sim+http://127.0.0.1:{server.address.port}", CAMERA)
+    poses = PoseHistory(FcuClock(), monotonic=clock)
+    queue = PhotoQueue(tmp_path, budget_bytes=10_000_000)
+    return CameraTrigger("sim_1", source, poses, queue, lambda t, s: None, monotonic=clock)
+
+
+def test_a_feedback_with_its_pose_becomes_a_geotagged_photo_of_that_pose(tmp_path: Path) -> None:
+    async def take() -> tuple[CameraTrigger, int]:
+        async with photo_server() as server:
+            server.taken(PhotoTaken(3, 42.5, -35.36, 149.16, 612.5, 30.25, 0.0, 0.0, 1.5))
+            trigger = trigger_for(server, tmp_path, Clock())
+            trigger.on_message(feedback(3, -35.3632621, 149.1652374))
+            await queued(trigger)
+            return trigger, server.rendered
+
+    trigger, rendered = asyncio.run(take())
+    photo = trigger.queue.oldest()
+    assert photo is not None
+    assert photo.meta.pose == PhotoPose(
+        lat=-35.3632621,
+        lon=149.1652374,
+        alt_msl=612.5,
+        alt_rel=30.25,
+        roll=2.0,
+        pitch=-1.0,
+        yaw=91.0,
+        time=BOOT_EPOCH + 42.5,
+    )
+    assert photo.meta.index == 3
+    assert photo.meta.camera == CAMERA
+    assert PhotoMeta.model_validate_json((tmp_path / f"{photo.photo_id}.json").read_bytes())
+    with Image.open(photo.path) as image:
+        assert image.size == (120, 80)
+        gps = image.getexif().get_ifd(ExifTags.IFD.GPSInfo)
+        assert gps[ExifTags.GPS.GPSLatitudeRef] == "S"
+    assert rendered == 1
+
+
+def test_a_feedback_without_a_position_is_posed_from_the_streams(tmp_path: Path) -> None:
+    """Position and attitude interpolated to the instant the trigger arrived, on the
+    flight controller's clock."""
+    clock = Clock()
+    trigger = asyncio.run(_posed_from_streams(tmp_path, clock))
+    photo = trigger.queue.oldest()
+    assert photo is not None
+    pose = photo.meta.pose
+    assert pose.lat == pytest.approx(10.0001, abs=1e-9)
+    assert pose.lon == pytest.approx(20.0)
+    assert pose.alt_msl == pytest.approx(150.0)
+    assert pose.alt_rel == pytest.approx(50.0)
+    assert pose.yaw == pytest.approx(11.459, abs=1e-3)  # 0.2 rad
+    assert pose.time == pytest.approx(BOOT_EPOCH + 42.5)
+
+
+async def _posed_from_streams(tmp_path: Path, clock: Clock) -> CameraTrigger:
+    async with photo_server() as server:
+        server.taken(PhotoTaken(1, 10.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0))
+        trigger = trigger_for(server, tmp_path, clock)
+        _feed_streams(trigger, clock)
+        clock.now = 100.05
+        trigger.on_message(feedback(1, 0.0, 0.0))
+        await queued(trigger)
+        return trigger
+
+
+def _feed_streams(trigger: CameraTrigger, clock: Clock) -> None:
+    listeners = [trigger.poses.on_message, trigger.on_message]
+    for boot_ms, lat, yaw in ((10_000, 10.0, 0.1), (10_100, 10.0002, 0.3)):
+        clock.now = 100.0 + (boot_ms - 10_000) / 1000
+        for message in (
+            mavlink2.MAVLink_global_position_int_message(
+                boot_ms, round(lat * 1e7), 200_000_000, 150_000, 50_000, 0, 0, 0, 0
+            ),
+            mavlink2.MAVLink_attitude_message(boot_ms, 0.0, 0.0, yaw, 0, 0, 0),
+        ):
+            for listen in listeners:
+                listen(message)
+
+
+def test_the_photo_endpoint_refuses_unknown_shots_and_bad_cameras() -> None:
+    server = PhotoServer(ListenAddress("tcp", "127.0.0.1", 0), render, BOOT_EPOCH)
+    status, _, body = asyncio.run(server.answer(b"GET /photos/9?sensor_width_mm=1 HTTP/1.1\r\n"))
+    assert status.startswith("400")
+    assert b"image_width_px" in body
+    query = "&".join(f"{k}={v}" for k, v in CAMERA.model_dump().items())
+    status, _, body = asyncio.run(server.answer(f"GET /photos/9?{query} HTTP/1.1\r\n".encode()))
+    assert status.startswith("404")
+    assert b"no shot 9" in body

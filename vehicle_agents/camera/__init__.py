@@ -1,0 +1,11 @@
+"""The camera: photos triggered by the autopilot, posed, geotagged, queued and uploaded.
+
+- `sources`: where the image comes from, behind one interface (the simulator's rendered
+  view, or a USB/CSI camera through OpenCV);
+- `trigger`: when: the autopilot's CAMERA_FEEDBACK, and the pose at the exposure instant;
+- `geotag`: EXIF and XMP in the JPEG, as OpenDroneMap reads them;
+- `queue`: the photos waiting on the onboard disk, within a budget;
+- `upload`: resumable HTTP uploads to the hub, bounded so telemetry keeps its bandwidth.
+
+Nothing here is imported unless the agent has a camera (``--camera``).
+"""

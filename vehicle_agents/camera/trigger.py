@@ -1,0 +1,183 @@
+"""From the autopilot's camera trigger to a posed, geotagged photo in the onboard queue.
+
+The mission's camera commands (DO_SET_CAM_TRIGG_DIST, DO_DIGICAM_CONTROL) make the
+autopilot fire the camera; ArduPilot's AP_Camera then sends CAMERA_FEEDBACK, with its
+shot counter and the vehicle's position and attitude at that instant. Each feedback is
+one photo: the source takes (or fetches) it, the pose at its exposure is found, and the
+JPEG is geotagged and queued for upload.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+import math
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+from protocol.photos import PhotoMeta, PhotoPose
+from vehicle_agents.camera.geotag import NotAJpeg, geotag
+from vehicle_agents.camera.queue import PhotoQueue
+from vehicle_agents.camera.sources import CameraSource, Capture, CaptureError, Shot
+from vehicle_agents.sensors.fcu_time import PoseHistory
+
+log = logging.getLogger(__name__)
+
+CAMERA_FEEDBACK_PHOTO = 0  # CAMERA_FEEDBACK_FLAGS: a photo (not video, not a bad capture)
+SHOT_QUEUE = 64  # triggers waiting for their photo; more are dropped and counted
+POSE_WAIT_S = 0.5  # how long a photo waits for the flight controller's pose to cover it
+POSE_POLL_S = 0.02
+PLAUSIBLE_EPOCH_S = 1e9  # a time_usec below this (2001) is not a Unix time
+
+Notify = Callable[[str, int], None]
+SEVERITY_WARNING = 4
+
+
+@dataclass
+class CameraStats:
+    triggers: int = 0
+    queued: int = 0
+    capture_failed: int = 0
+    no_pose: int = 0
+    dropped_triggers: int = 0
+
+
+class CameraTrigger:
+    """An FcuLink listener (`on_message`) and the task (`run`) that turns each of the
+    autopilot's camera triggers into a queued photo."""
+
+    def __init__(
+        self,
+        vehicle_id: str,
+        source: CameraSource,
+        poses: PoseHistory,
+        queue: PhotoQueue,
+        notify: Notify,
+        *,
+        monotonic: Callable[[], float] = time.monotonic,
+        wall: Callable[[], float] = time.time,
+    ) -> None:
+        self.vehicle_id = vehicle_id
+        self.source = source
+        self.poses = poses
+        self.queue = queue
+        self._notify = notify
+        self._monotonic = monotonic
+        self._wall = wall
+        self._shots: asyncio.Queue[Shot] = asyncio.Queue(maxsize=SHOT_QUEUE)
+        self._home_msl: float | None = None  # for the height above home of interpolated poses
+        self.stats = CameraStats()
+
+    def on_message(self, message: Any) -> None:
+        kind = message.get_type()
+        if kind == "GLOBAL_POSITION_INT" and (message.lat or message.lon):
+            self._home_msl = message.alt / 1000.0 - message.relative_alt / 1000.0
+        elif kind == "CAMERA_FEEDBACK" and int(message.flags) == CAMERA_FEEDBACK_PHOTO:
+            self.stats.triggers += 1
+            try:
+                self._shots.put_nowait(self.shot_of(message))
+            except asyncio.QueueFull:
+                self.stats.dropped_triggers += 1
+                log.warning("camera: shot %d dropped, %d waiting", message.img_idx, SHOT_QUEUE)
+
+    def shot_of(self, message: Any) -> Shot:
+        arrived = self._monotonic()
+        time_usec = int(message.time_usec)
+        # ArduPilot stamps it with the GPS's Unix time; 0 (or time since boot) without one.
+        utc = time_usec / 1e6 if time_usec / 1e6 > PLAUSIBLE_EPOCH_S else self._wall()
+        pose = None
+        if message.lat or message.lng:  # 0, 0: the autopilot had no position to give
+            pose = PhotoPose(
+                lat=message.lat / 1e7,
+                lon=message.lng / 1e7,
+                alt_msl=float(message.alt_msl),
+                alt_rel=float(message.alt_rel),
+                roll=_degrees(float(message.roll), 180.0),
+                pitch=max(-90.0, min(90.0, float(message.pitch))),
+                yaw=float(message.yaw) % 360.0,
+                time=utc,
+            )
+        return Shot(int(message.img_idx), arrived, utc, pose)
+
+    async def run(self) -> None:
+        while True:
+            shot = await self._shots.get()
+            try:
+                await self.take(shot)
+            except CaptureError as error:
+                self.stats.capture_failed += 1
+                self._notify(f"photo {shot.index} not taken: {error}", SEVERITY_WARNING)
+            except (NotAJpeg, OSError) as error:
+                self.stats.capture_failed += 1
+                self._notify(f"photo {shot.index} not stored: {error}", SEVERITY_WARNING)
+
+    async def take(self, shot: Shot) -> str | None:
+        """Capture, pose, geotag and queue one shot; its photo id, or None without a pose."""
+        capture = await self.source.capture(shot)
+        pose = await self.pose_of(shot, capture)
+        if pose is None:
+            self.stats.no_pose += 1
+            self._notify(
+                f"photo {shot.index} not kept: the flight controller's pose does not cover "
+                "its exposure",
+                SEVERITY_WARNING,
+            )
+            return None
+        camera = self.source.camera
+        tagged = await asyncio.to_thread(
+            geotag, capture.jpeg, pose, camera, model=type(self.source).__name__
+        )
+        photo_id = f"{self.vehicle_id}-{round(pose.time * 1000)}-{shot.index:05d}"
+        meta = PhotoMeta(
+            photo_id=photo_id, index=shot.index, size_bytes=len(tagged), pose=pose, camera=camera
+        )
+        await asyncio.to_thread(self.queue.put, meta, tagged)
+        self.stats.queued += 1
+        return photo_id
+
+    async def pose_of(self, shot: Shot, capture: Capture) -> PhotoPose | None:
+        """The pose at the exposure.
+
+        The autopilot's own record wins when the exposure is its trigger: AP_Camera writes
+        CAMERA_FEEDBACK at the shutter from the EKF's position and attitude at that very
+        instant, closer than the agent can get by interpolating 10 Hz streams that reach it
+        late. Interpolation (position from GLOBAL_POSITION_INT, attitude from ATTITUDE, by
+        the flight controller's clock) is for a feedback without a position, and for a
+        camera the agent fires itself (OpenCV), whose exposure is the agent's grab, some
+        time after the autopilot's trigger."""
+        if capture.exposed_at is None and shot.feedback_pose is not None:
+            return shot.feedback_pose
+        exposed = capture.exposed_at if capture.exposed_at is not None else shot.arrived
+        clock = self.poses.clock
+        if not clock.synced:
+            return None
+        instant = clock.to_fcu(exposed)
+        deadline = self._monotonic() + POSE_WAIT_S
+        while (latest := self.poses.latest_time()) is None or latest < instant:
+            if self._monotonic() >= deadline:
+                break
+            await asyncio.sleep(POSE_POLL_S)
+        pose = self.poses.at(instant)
+        if pose is None:
+            return None
+        utc = (
+            shot.utc if capture.exposed_at is None else self._wall() - (self._monotonic() - exposed)
+        )
+        home = self._home_msl
+        return PhotoPose(
+            lat=pose.lat,
+            lon=pose.lon,
+            alt_msl=pose.alt_msl,
+            alt_rel=pose.alt_msl - home if home is not None else 0.0,
+            roll=_degrees(math.degrees(pose.roll), 180.0),
+            pitch=max(-90.0, min(90.0, math.degrees(pose.pitch))),
+            yaw=math.degrees(pose.yaw) % 360.0,
+            time=utc,
+        )
+
+
+def _degrees(value: float, half_turn: float) -> float:
+    """An angle into [-half_turn, half_turn]."""
+    return (value + half_turn) % (2.0 * half_turn) - half_turn

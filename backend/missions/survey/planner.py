@@ -5,8 +5,11 @@ Works on shapely 2 geometry in metres (east, north) of a tangent plane at the ar
 needs nothing special.
 
 Lanes run along the grid angle. Each lane covers a strip one lane spacing wide; its ends
-are where the area's part of that strip begins and ends (not where the centre line meets the
-border), so a slanted edge is still covered. A lane is split where it would cross a hole.
+are half a trigger distance inside where the area's part of that strip begins and ends (not
+where the centre line meets the border), so a slanted edge is still covered and the photos'
+footprints at the requested overlaps just reach it. A lane is split where it would cross a
+hole. backend/missions/survey/bound.py gives the least path any lane plan on these rows can
+fly; the planner's is held to at most 1.05 times it.
 Lanes are grouped into cells (boustrophedon decomposition: a cell goes on while each row
 has exactly one segment overlapping the one before), each cell is flown back and forth,
 and the cells are chained nearest first, so a concave area is not crossed by long detours.
@@ -20,7 +23,6 @@ import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
-import numpy as np
 import shapely
 from shapely import affinity
 from shapely.geometry import LineString, MultiPolygon, Polygon, box
@@ -107,63 +109,20 @@ def validate_area(area: Polygon) -> Polygon:
     return area
 
 
-def lower_bound_m(area: Polygon, lane_spacing_m: float, turnaround_m: float, n_rows: int) -> float:
-    """The shortest path any lane plan at this spacing can have.
-
-    Sweeping a strip of width `lane_spacing_m` over the area needs at least area/spacing of
-    lanes; going from each row to the next needs at least one spacing; and every lane end
-    has its turnaround. Path lengths are checked against this bound.
-    """
-    return (
-        area.area / lane_spacing_m + max(n_rows - 1, 0) * lane_spacing_m + 2 * n_rows * turnaround_m
-    )
+Piece = tuple[float, float, float]  # a row's piece of the area: x from a to b at y, rotated
 
 
-def strip_bound_m(area: Polygon, calc: CameraCalc, angle_deg: float, turnaround_m: float) -> float:
-    """The shortest path a lane plan with the planner's rows at this spacing and angle can
-    have, and the bound path lengths are held to (at most 1.05 times it).
-
-    Each row's strip (one lane spacing wide) is covered at the requested overlaps only by
-    photos on its own lane, so the lane must reach within half a trigger distance of each
-    end of every piece of the area in the strip: at least the piece's length less one
-    trigger distance. Going from piece to piece takes at least one spacing (or the gap
-    between two pieces of a row, if less), and every lane has its two turnarounds. Unlike
-    area / spacing (lower_bound_m), this counts what no plan at this angle can avoid: a
-    slanted edge makes the end rows as long as the area is wide.
-    """
+def row_pieces(area: Polygon, spacing_m: float, angle_deg: float) -> list[Piece]:
+    """The pieces plan_lanes flies, in the frame rotated by -angle about the area's centroid:
+    per row from south to north, each lane's extent before it is cut to its photos."""
     area = validate_area(area)
-    spacing, trigger = calc.lane_spacing_m, calc.trigger_distance_m
     centre = area.centroid
     rotated = affinity.rotate(area, -angle_deg, origin=(centre.x, centre.y))
     assert isinstance(rotated, Polygon)
     _, miny, _, maxy = rotated.bounds
-    ys = _rows(miny, maxy, spacing, None)
-    rows = _segments(rotated, spacing, ys)
-    pieces = [(a, b, y) for row, y in zip(rows, ys, strict=True) for a, b in row]
-    return (
-        sum(max(0.0, (b - a) - trigger) for a, b, _ in pieces)
-        + _entries_m(pieces, turnaround_m)
-        + 2 * len(pieces) * turnaround_m
-    )
-
-
-def _entries_m(pieces: list[tuple[float, float, float]], turnaround_m: float) -> float:
-    """The least transit between pieces: every piece but the first is entered from where
-    another one was left. A lane is left and entered at a turnaround point, on its row and
-    at most one turnaround beyond an end of its piece, so each entry costs at least the
-    rows' separation across, and the ends' separation along less two turnarounds."""
-    if len(pieces) < 2:
-        return 0.0
-    ends = np.array([[(a, y), (b, y)] for a, b, y in pieces])  # piece, end, (x, y)
-    flat = ends.reshape(-1, 2)
-    nearest = []
-    for i in range(len(pieces)):
-        delta = np.abs(flat[None, :, :] - ends[i][:, None, :])  # my end, other end, xy
-        along = np.maximum(delta[..., 0] - 2 * turnaround_m, 0.0)
-        d = np.hypot(along, delta[..., 1])
-        d[:, 2 * i : 2 * i + 2] = np.inf  # not from itself
-        nearest.append(float(d.min()))
-    return sum(nearest) - max(nearest)
+    ys = _rows(miny, maxy, spacing_m, None)
+    rows = _segments(rotated, spacing_m, ys)
+    return [(a, b, y) for row, y in zip(rows, ys, strict=True) for a, b in row]
 
 
 def _rows(miny: float, maxy: float, spacing: float, grid_y: float | None) -> list[float]:
@@ -340,9 +299,14 @@ def plan_lanes(
                 b = max(a, grid.x0 + math.ceil((b - grid.x0) / trigger - 0.5 - 1e-6) * trigger)
                 shots = round((b - a) / trigger)
             else:
+                # A photo's footprint at the requested overlaps reaches half a trigger
+                # distance along the lane, so the lane starts and ends half a trigger
+                # distance inside the piece (a piece shorter than that gets its photos at
+                # its middle): no plan on this row can fly less (strip_bound_m).
+                a, b = (a + trigger / 2, b - trigger / 2) if b - a > trigger else ((a + b) / 2,) * 2
                 # As QGC and ArduPilot fly it: a photo at the entry (DO_SET_CAM_TRIGG_DIST
                 # with "trigger once"), one per trigger distance, and one at the exit (the
-                # stop command triggers once too). The lane is not lengthened.
+                # stop command triggers once too).
                 shots = max(1, math.ceil((b - a) / trigger - 1e-9))
             forward = (k % 2 == 0) != rev_x
             xs, xe = (a, b) if forward else (b, a)
@@ -367,10 +331,10 @@ def footprints(plan: LanePlan, side_m: float, frontal_m: float) -> list[Polygon]
     """Each photo's footprint (nadir, camera across the lanes), `side_m` x `frontal_m`."""
     out = []
     for lane in plan.lanes:
-        heading = math.degrees(math.atan2(lane.end[1] - lane.start[1], lane.end[0] - lane.start[0]))
+        # the plan's angle, not the lane's own heading: a lane may be a single point
         for x, y in lane.photos:
             rect = box(x - frontal_m / 2, y - side_m / 2, x + frontal_m / 2, y + side_m / 2)
-            out.append(affinity.rotate(rect, heading, origin=(x, y)))
+            out.append(affinity.rotate(rect, plan.angle_deg, origin=(x, y)))
     return out
 
 

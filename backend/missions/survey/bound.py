@@ -60,6 +60,7 @@ _SUBGRADIENT_STEPS = 150
 class Bound:
     """The lower bound and its parts, in metres."""
 
+    lanes: int
     lanes_m: float
     turnarounds_m: float
     transits_m: float
@@ -69,14 +70,25 @@ class Bound:
         return self.lanes_m + self.turnarounds_m + self.transits_m
 
 
-def lower_bound(area: Polygon, calc: CameraCalc, angle_deg: float, turnaround_m: float) -> Bound:
-    """The least path length of any lane plan on the planner's rows (module docstring)."""
+def lower_bound(
+    area: Polygon, calc: CameraCalc, angle_deg: float, turnaround_m: float, *, quick: bool = False
+) -> Bound:
+    """The least path length of any lane plan on the planner's rows (module docstring).
+    `quick` leaves the 1-tree out: a looser bound, for pruning the angle search."""
     pieces = row_pieces(area, calc.lane_spacing_m, angle_deg)
     trigger = calc.trigger_distance_m
+    distance = end_distances(pieces, trigger, turnaround_m)
+    if len(pieces) < 2:
+        transits = 0.0
+    elif quick:
+        transits = _nearest_entries_m(distance)
+    else:
+        transits = transit_bound_m(distance)
     return Bound(
+        lanes=len(pieces),
         lanes_m=sum(max(0.0, b - a - trigger) for a, b, _ in pieces),
         turnarounds_m=2 * turnaround_m * len(pieces),
-        transits_m=transit_bound_m(end_distances(pieces, trigger, turnaround_m)),
+        transits_m=transits,
     )
 
 

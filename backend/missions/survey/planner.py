@@ -23,12 +23,14 @@ import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
+import numpy as np
 import shapely
 from shapely import affinity
-from shapely.geometry import LineString, MultiPolygon, Polygon, box
+from shapely.geometry import LineString, MultiPolygon, Polygon
 from shapely.validation import explain_validity
 
 from backend.missions.survey.camera import CameraCalc
+from backend.missions.survey.sequence import Step, improve
 
 MAX_VERTICES = 10_000
 DEFAULT_TURNAROUND_M = 10.0  # QGC's default for multirotors
@@ -140,8 +142,11 @@ def _rows(miny: float, maxy: float, spacing: float, grid_y: float | None) -> lis
 def _segments(area: Polygon, spacing: float, ys: list[float]) -> list[list[tuple[float, float]]]:
     """Per row (from south to north in the rotated frame), the lanes' x extents."""
     minx, _, maxx, _ = area.bounds
-    strips = [box(minx - 1, y - spacing / 2, maxx + 1, y + spacing / 2) for y in ys]
-    pieces = shapely.intersection(strips, area)
+    # GEOS's rectangle clipping: the same pieces as an overlay with each strip, in half the
+    # time (its output may be invalid, but only the parts' bounds are used).
+    pieces = [
+        shapely.clip_by_rect(area, minx - 1, y - spacing / 2, maxx + 1, y + spacing / 2) for y in ys
+    ]
     holes = [Polygon(ring) for ring in area.interiors]
     out: list[list[tuple[float, float]]] = []
     for y, piece in zip(ys, pieces, strict=True):
@@ -286,12 +291,11 @@ def plan_lanes(
         # where the vehicle is, in the rotated frame
         dx, dy = start[0] - cx, start[1] - cy
         origin = (cx + dx * cos_a + dy * sin_a, cy - dx * sin_a + dy * cos_a)
-    lanes: list[Lane] = []
-    path: list[tuple[float, float]] = []
+    runs: list[tuple[float, float, float, int]] = []  # y, from x, to x, photos
+    steps: list[Step] = []
     for i, rev_rows, rev_x in _order(cells, ys, origin):
         cell = cells[i]
         for k, (r, a, b) in enumerate(reversed(cell) if rev_rows else cell):
-            y = ys[r]
             if grid is not None and holes.is_empty:
                 # Photos on the common grid: the first within half a trigger distance
                 # past the start, the last within half one before the end.
@@ -302,21 +306,31 @@ def plan_lanes(
                 # A photo's footprint at the requested overlaps reaches half a trigger
                 # distance along the lane, so the lane starts and ends half a trigger
                 # distance inside the piece (a piece shorter than that gets its photos at
-                # its middle): no plan on this row can fly less (strip_bound_m).
+                # its middle): no plan on this row can fly less (bound.py).
                 a, b = (a + trigger / 2, b - trigger / 2) if b - a > trigger else ((a + b) / 2,) * 2
                 # As QGC and ArduPilot fly it: a photo at the entry (DO_SET_CAM_TRIGG_DIST
                 # with "trigger once"), one per trigger distance, and one at the exit (the
                 # stop command triggers once too).
                 shots = max(1, math.ceil((b - a) / trigger - 1e-9))
             forward = (k % 2 == 0) != rev_x
-            xs, xe = (a, b) if forward else (b, a)
-            step = trigger if forward else -trigger
-            along = [xs + j * step for j in range(shots)]
-            photos = tuple(back(x, y) for x in [*along, xe])
-            turn = turnaround_m if forward else -turnaround_m
-            lane = Lane(back(xs, y), back(xe, y), photos)
-            lanes.append(lane)
-            path.extend([back(xs - turn, y), lane.start, lane.end, back(xe + turn, y)])
+            steps.append((len(runs), 0 if forward else 1))
+            runs.append((ys[r], a, b, shots))
+    turns = np.array(
+        [[(a - turnaround_m, y), (b + turnaround_m, y)] for y, a, b, _ in runs]
+    ).reshape(-1, 2, 2)
+    lanes: list[Lane] = []
+    path: list[tuple[float, float]] = []
+    for index, end in improve(steps, turns, origin):
+        y, a, b, shots = runs[index]
+        forward = end == 0
+        xs, xe = (a, b) if forward else (b, a)
+        step = trigger if forward else -trigger
+        along = [xs + j * step for j in range(shots)]
+        photos = tuple(back(x, y) for x in [*along, xe])
+        turn = turnaround_m if forward else -turnaround_m
+        lane = Lane(back(xs, y), back(xe, y), photos)
+        lanes.append(lane)
+        path.extend([back(xs - turn, y), lane.start, lane.end, back(xe + turn, y)])
     return LanePlan(
         lanes=tuple(lanes),
         path=tuple(path),
@@ -327,15 +341,52 @@ def plan_lanes(
     )
 
 
+def _rectangles(
+    centres: np.ndarray, along_m: np.ndarray | float, across_m: float, angle_deg: float
+) -> np.ndarray:
+    """Rectangles `along_m` long in the lanes' direction and `across_m` wide, one per centre
+    (an (n, 2) array), as an array of polygons built in one call."""
+    u = np.array([math.cos(math.radians(angle_deg)), math.sin(math.radians(angle_deg))])
+    v = np.array([-u[1], u[0]])
+    half_along = np.broadcast_to(np.asarray(along_m, dtype=float) / 2, (len(centres),))
+    corners = [(-1, -1), (1, -1), (1, 1), (-1, 1), (-1, -1)]
+    coords = np.stack(
+        [centres + (i * half_along)[:, None] * u + (j * across_m / 2) * v for i, j in corners],
+        axis=1,
+    )
+    return np.asarray(shapely.polygons(coords))
+
+
 def footprints(plan: LanePlan, side_m: float, frontal_m: float) -> list[Polygon]:
     """Each photo's footprint (nadir, camera across the lanes), `side_m` x `frontal_m`."""
-    out = []
+    # the plan's angle, not each lane's own heading: a lane may be a single point
+    photos = np.array([p for lane in plan.lanes for p in lane.photos], dtype=float).reshape(-1, 2)
+    return list(_rectangles(photos, frontal_m, side_m, plan.angle_deg))
+
+
+def swaths(plan: LanePlan, side_m: float, frontal_m: float) -> list[Polygon]:
+    """The union of the photos' footprints, lane by lane: a lane's photos lie on one line
+    and their footprints share that axis and width, so a run of photos at most one
+    footprint length apart covers exactly the rectangle from the first one's footprint to
+    the last one's. A few rectangles per lane instead of one per photo make the coverage
+    check a union of lanes, not of thousands of photos."""
+    u = np.array([math.cos(math.radians(plan.angle_deg)), math.sin(math.radians(plan.angle_deg))])
+    v = np.array([-u[1], u[0]])
+    centres, lengths = [], []
     for lane in plan.lanes:
-        # the plan's angle, not the lane's own heading: a lane may be a single point
-        for x, y in lane.photos:
-            rect = box(x - frontal_m / 2, y - side_m / 2, x + frontal_m / 2, y + side_m / 2)
-            out.append(affinity.rotate(rect, plan.angle_deg, origin=(x, y)))
-    return out
+        photos = np.asarray(lane.photos, dtype=float).reshape(-1, 2)
+        if not len(photos):
+            continue
+        along = np.sort(photos @ u)
+        across = float(np.mean(photos @ v))
+        breaks = np.flatnonzero(np.diff(along) > frontal_m) + 1
+        for run in np.split(along, breaks):
+            lo, hi = float(run[0]) - frontal_m / 2, float(run[-1]) + frontal_m / 2
+            centres.append((lo + hi) / 2 * u + across * v)
+            lengths.append(hi - lo)
+    if not centres:
+        return []
+    return list(_rectangles(np.array(centres), np.array(lengths), side_m, plan.angle_deg))
 
 
 def covered_fraction(area: Polygon, shapes: Sequence[Polygon]) -> float:
@@ -349,10 +400,10 @@ def coverage(plan: LanePlan, area: Polygon, calc: CameraCalc) -> tuple[float, fl
 
     The second uses each photo's footprint shrunk to one lane spacing by one trigger
     distance: if those cover a point, the real footprints around it overlap by at least the
-    requested side and front overlaps.
+    requested side and front overlaps. Both union the footprints lane by lane (swaths).
     """
-    real = footprints(plan, calc.footprint_side_m, calc.footprint_frontal_m)
-    adjusted = footprints(plan, calc.lane_spacing_m * 1.0001, calc.trigger_distance_m * 1.0001)
+    real = swaths(plan, calc.footprint_side_m, calc.footprint_frontal_m)
+    adjusted = swaths(plan, calc.lane_spacing_m * 1.0001, calc.trigger_distance_m * 1.0001)
     return covered_fraction(area, real), covered_fraction(area, adjusted)
 
 

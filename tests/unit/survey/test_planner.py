@@ -4,6 +4,7 @@ are refused with a message saying what to change."""
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import pytest
@@ -15,7 +16,15 @@ from backend.missions.survey.bound import lower_bound_m
 from backend.missions.survey.camera import calculate, preset
 from backend.missions.survey.geo import polygon_from_geojson
 from backend.missions.survey.mission import mission_items
-from backend.missions.survey.planner import PlanError, coverage, plan_lanes
+from backend.missions.survey.planner import (
+    Lane,
+    PlanError,
+    coverage,
+    covered_fraction,
+    footprints,
+    plan_lanes,
+    swaths,
+)
 from backend.missions.survey.report import best_angle, flight_time_s
 
 CALC = calculate(
@@ -87,6 +96,40 @@ def test_lanes_stop_half_a_trigger_distance_inside_the_area() -> None:
         assert xs == pytest.approx(
             [CALC.trigger_distance_m / 2, 1000 - CALC.trigger_distance_m / 2]
         )
+
+
+@pytest.mark.parametrize("name", ["convex", "U", "holed"])
+def test_the_lane_swaths_cover_what_every_photo_footprint_covers(name: str) -> None:
+    # The coverage check unions footprints lane by lane; with every third photo dropped the
+    # footprints leave gaps along the lanes, and both ways still agree to the square metre.
+    area = SHAPES[name]
+    plan = plan_lanes(area, CALC, angle_deg=30.0)
+    sparse = dataclasses.replace(
+        plan, lanes=tuple(Lane(x.start, x.end, x.photos[::3]) for x in plan.lanes)
+    )
+    for p in (plan, sparse):
+        for side, frontal in (
+            (CALC.footprint_side_m, CALC.footprint_frontal_m),
+            (CALC.lane_spacing_m, CALC.trigger_distance_m),
+        ):
+            every = covered_fraction(area, footprints(p, side, frontal))
+            assert covered_fraction(area, swaths(p, side, frontal)) == pytest.approx(
+                every, abs=1e-9
+            )
+    assert (
+        covered_fraction(area, swaths(sparse, CALC.lane_spacing_m, CALC.trigger_distance_m)) < 0.9
+    )
+
+
+@pytest.mark.parametrize("name", ["convex", "L", "holed"])
+def test_the_angle_search_finds_the_angle_planning_every_one_finds(name: str) -> None:
+    area = SHAPES[name]
+    times = {
+        float(a): flight_time_s(plan_lanes(area, CALC, angle_deg=a, turnaround_m=10), 10.0)
+        for a in range(0, 180, 5)
+    }
+    fastest = min(times, key=lambda a: (times[a], a))
+    assert best_angle(area, CALC, 10.0, turnaround_m=10) == fastest
 
 
 def test_a_concave_area_is_flown_without_a_detour_at_its_inner_corner() -> None:

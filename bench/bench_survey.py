@@ -29,10 +29,10 @@ from shapely.geometry import Polygon
 
 from backend.missions.survey.bound import lower_bound_m
 from backend.missions.survey.camera import calculate, preset
-from backend.missions.survey.geo import polygon_from_geojson
 from backend.missions.survey.planner import coverage, plan_lanes
 from backend.missions.survey.report import best_angle
 from backend.missions.survey.split import Drone, split
+from tests.survey_shapes import SHAPES, shape
 
 CALC = calculate(preset("sony_a6000_16mm"), gsd_cm=2.0, side_overlap_pct=70, front_overlap_pct=80)
 
@@ -52,29 +52,10 @@ def _area(km2: float) -> Polygon:
     return Polygon([(0, 0), (s, 0.1 * s), (1.05 * s, s), (-0.05 * s, 0.95 * s)])
 
 
-# The unit tests' shapes (tests/unit/survey/test_planner.py), at 100 m.
+# The unit tests' shapes (tests/survey_shapes.py), at 100 m.
 SHAPE_CALC = calculate(
     preset("sony_a6000_16mm"), altitude_m=100, side_overlap_pct=70, front_overlap_pct=80
 )
-SHAPES = {
-    "convex": Polygon([(0, 0), (900, -100), (1000, 700), (200, 900)]),
-    "L": Polygon([(0, 0), (600, 0), (600, 200), (200, 200), (200, 600), (0, 600)]),
-    "U": Polygon(
-        [(0, 0), (600, 0), (600, 600), (450, 600), (450, 150), (150, 150), (150, 600), (0, 600)]
-    ),
-    "holed": Polygon(
-        [(0, 0), (600, 0), (600, 600), (0, 600)], [[(200, 200), (400, 200), (400, 400), (200, 400)]]
-    ),
-    "thin": Polygon([(0, 0), (2000, 0), (2000, 60), (0, 60)]),
-    "zone-straddling": polygon_from_geojson(
-        {
-            "type": "Polygon",
-            "coordinates": [
-                [[5.99, 47.0], [6.01, 47.0], [6.012, 47.01], [5.992, 47.012], [5.99, 47.0]]
-            ],
-        }
-    )[0],
-}
 
 
 def _all(area: Polygon) -> None:
@@ -106,7 +87,8 @@ def main() -> None:
     print()
     print("| shape | path / bound, worst of 0-165° | at angle |")
     print("|---|---|---|")
-    for name, area in SHAPES.items():
+    for name in [*SHAPES, "zone-straddling"]:
+        area = shape(name)
         worst = max(
             (
                 plan_lanes(area, SHAPE_CALC, angle_deg=angle).path_length_m

@@ -26,35 +26,17 @@ from backend.missions.survey.planner import (
     swaths,
 )
 from backend.missions.survey.report import best_angle, flight_time_s
+from tests.survey_shapes import SHAPES, shape
 
 CALC = calculate(
     preset("sony_a6000_16mm"), altitude_m=100, side_overlap_pct=70, front_overlap_pct=80
 )
 
-SHAPES = {
-    "convex": Polygon([(0, 0), (900, -100), (1000, 700), (200, 900)]),
-    "L": Polygon([(0, 0), (600, 0), (600, 200), (200, 200), (200, 600), (0, 600)]),
-    "U": Polygon(
-        [(0, 0), (600, 0), (600, 600), (450, 600), (450, 150), (150, 150), (150, 600), (0, 600)]
-    ),
-    "holed": Polygon(
-        [(0, 0), (600, 0), (600, 600), (0, 600)], [[(200, 200), (400, 200), (400, 400), (200, 400)]]
-    ),
-    "thin": box(0, 0, 2000, 60),
-}
-
-
-def _zone_straddling() -> Polygon:
-    # 6°E is the boundary of UTM zones 31 and 32: this area lies across it.
-    ring = [[5.99, 47.0], [6.01, 47.0], [6.012, 47.01], [5.992, 47.012], [5.99, 47.0]]
-    polygon, _ = polygon_from_geojson({"type": "Polygon", "coordinates": [ring]})
-    return polygon
-
 
 @pytest.mark.parametrize("angle", [0.0, 30.0, 90.0])
 @pytest.mark.parametrize("name", [*SHAPES, "zone-straddling"])
 def test_footprints_cover_the_whole_area(name: str, angle: float) -> None:
-    area = _zone_straddling() if name == "zone-straddling" else SHAPES[name]
+    area = shape(name)
     plan = plan_lanes(area, CALC, angle_deg=angle)
     footprint, at_overlaps = coverage(plan, area, CALC)
     assert footprint == pytest.approx(1.0, abs=1e-9)
@@ -79,7 +61,7 @@ def test_path_is_within_five_percent_of_the_lower_bound(name: str, angle: float)
     # The bound (survey/bound.py) is what any lane plan on these rows must fly, the
     # unavoidable transits across a U's arms or around a hole included; it is checked
     # against the exact best plan in tests/unit/survey/test_bound.py.
-    area = _zone_straddling() if name == "zone-straddling" else SHAPES[name]
+    area = shape(name)
     plan = plan_lanes(area, CALC, angle_deg=angle)
     bound = lower_bound_m(area, CALC, angle, plan.turnaround_m)
     assert bound <= plan.path_length_m + 1e-6

@@ -44,16 +44,25 @@ order, found by dynamic programming over all orders and directions on small area
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from shapely.geometry import Polygon
+import shapely
+from shapely.geometry import LinearRing, Polygon
 
 from backend.missions.survey.camera import CameraCalc
-from backend.missions.survey.planner import Piece, row_pieces
+from backend.missions.survey.planner import (
+    Piece,
+    crossings,
+    hole_margin_m,
+    rotated_area,
+    row_pieces,
+)
 
 _FORCED = 1e7  # minus this on a lane's own edge keeps it in every spanning tree
 _SUBGRADIENT_STEPS = 150
+_MAX_HOLE_VERTICES = 400  # above this, transits are bounded straight (still a bound)
 
 
 @dataclass(frozen=True, slots=True)
@@ -75,9 +84,8 @@ def lower_bound(
 ) -> Bound:
     """The least path length of any lane plan on the planner's rows (module docstring).
     `quick` leaves the 1-tree out: a looser bound, for pruning the angle search."""
-    pieces = row_pieces(area, calc.lane_spacing_m, angle_deg)
+    pieces, distance = transit_distances(area, calc, angle_deg, turnaround_m, quick=quick)
     trigger = calc.trigger_distance_m
-    distance = end_distances(pieces, trigger, turnaround_m)
     if len(pieces) < 2:
         transits = 0.0
     elif quick:
@@ -90,6 +98,20 @@ def lower_bound(
         turnarounds_m=2 * turnaround_m * len(pieces),
         transits_m=transits,
     )
+
+
+def transit_distances(
+    area: Polygon, calc: CameraCalc, angle_deg: float, turnaround_m: float, *, quick: bool = False
+) -> tuple[list[Piece], np.ndarray]:
+    """The pieces, and the least transit between each two of their ends (end_distances,
+    raised to the way around the holes unless `quick`)."""
+    trigger = calc.trigger_distance_m
+    pieces = row_pieces(area, calc.lane_spacing_m, angle_deg, hole_margin_m(trigger, turnaround_m))
+    distance = end_distances(pieces, trigger, turnaround_m)
+    holes = list(rotated_area(area, angle_deg).interiors)
+    if not quick and 0 < sum(len(ring.coords) for ring in holes) <= _MAX_HOLE_VERTICES:
+        distance = np.maximum(distance, _around_holes(pieces, trigger, turnaround_m, holes))
+    return pieces, distance
 
 
 def lower_bound_m(area: Polygon, calc: CameraCalc, angle_deg: float, turnaround_m: float) -> float:
@@ -110,6 +132,33 @@ def end_distances(pieces: list[Piece], trigger_m: float, turnaround_m: float) ->
     gap = np.maximum(0.0, np.maximum(lo_[:, None] - hi_[None, :], lo_[None, :] - hi_[:, None]))
     distance: np.ndarray = np.hypot(gap, y_[:, None] - y_[None, :])
     return distance
+
+
+def _around_holes(
+    pieces: list[Piece], trigger_m: float, turnaround_m: float, holes: Sequence[LinearRing]
+) -> np.ndarray:
+    """end_distances for plans that keep out of the holes (no-fly areas): the shortest way
+    between two ends' middles that does not enter a hole (through the holes' corners,
+    Floyd-Warshall over the straight lines that keep out), less half of each end's
+    interval (moving an end along its interval changes that way by no more than it moves)."""
+    half = trigger_m / 2
+    lo, hi, ys = [], [], []
+    for a, b, y in pieces:
+        lo += [min(a + half, b - half) - turnaround_m, b - half + turnaround_m]
+        hi += [a + half - turnaround_m, max(a + half, b - half) + turnaround_m]
+        ys += [y, y]
+    mids = np.column_stack([(np.array(lo) + np.array(hi)) / 2, ys])
+    corners = np.array([c for ring in holes for c in ring.coords[:-1]])
+    nodes = np.concatenate([mids, corners])
+    straight = np.hypot(*(nodes[:, None, :] - nodes[None, :, :]).transpose(2, 0, 1))
+    blocked = crossings(nodes, nodes, shapely.union_all([Polygon(ring) for ring in holes]))
+    way = np.where(blocked, np.inf, straight)
+    for k in range(len(nodes)):
+        way = np.minimum(way, way[:, k, None] + way[None, k, :])
+    m = len(mids)
+    slack = (np.array(hi) - np.array(lo)) / 2
+    around: np.ndarray = way[:m, :m] - slack[:, None] - slack[None, :]
+    return around
 
 
 def transit_bound_m(distance: np.ndarray) -> float:

@@ -27,6 +27,7 @@ import numpy as np
 import shapely
 from shapely import affinity
 from shapely.geometry import LineString, MultiPolygon, Polygon
+from shapely.geometry.base import BaseGeometry
 from shapely.validation import explain_validity
 
 from backend.missions.survey.camera import CameraCalc
@@ -114,16 +115,30 @@ def validate_area(area: Polygon) -> Polygon:
 Piece = tuple[float, float, float]  # a row's piece of the area: x from a to b at y, rotated
 
 
-def row_pieces(area: Polygon, spacing_m: float, angle_deg: float) -> list[Piece]:
-    """The pieces plan_lanes flies, in the frame rotated by -angle about the area's centroid:
-    per row from south to north, each lane's extent before it is cut to its photos."""
+def hole_margin_m(trigger_m: float, turnaround_m: float) -> float:
+    """How far short of a hole a lane's piece ends: its turnaround leg may not enter the
+    hole, and the lane's last photo covers half a trigger distance past its end."""
+    return max(0.0, turnaround_m - trigger_m / 2)
+
+
+def rotated_area(area: Polygon, angle_deg: float) -> Polygon:
+    """The area in the frame plan_lanes lays rows in: rotated by -angle about its centroid."""
     area = validate_area(area)
     centre = area.centroid
     rotated = affinity.rotate(area, -angle_deg, origin=(centre.x, centre.y))
     assert isinstance(rotated, Polygon)
+    return rotated
+
+
+def row_pieces(
+    area: Polygon, spacing_m: float, angle_deg: float, hole_margin: float = 0.0
+) -> list[Piece]:
+    """The pieces plan_lanes flies, in the frame rotated by -angle about the area's centroid:
+    per row from south to north, each lane's extent before it is cut to its photos."""
+    rotated = rotated_area(area, angle_deg)
     _, miny, _, maxy = rotated.bounds
     ys = _rows(miny, maxy, spacing_m, None)
-    rows = _segments(rotated, spacing_m, ys)
+    rows = _segments(rotated, spacing_m, ys, hole_margin)
     return [(a, b, y) for row, y in zip(rows, ys, strict=True) for a, b in row]
 
 
@@ -139,8 +154,11 @@ def _rows(miny: float, maxy: float, spacing: float, grid_y: float | None) -> lis
     return [grid_y + k * spacing for k in range(first, last + 1)]
 
 
-def _segments(area: Polygon, spacing: float, ys: list[float]) -> list[list[tuple[float, float]]]:
-    """Per row (from south to north in the rotated frame), the lanes' x extents."""
+def _segments(
+    area: Polygon, spacing: float, ys: list[float], hole_margin: float = 0.0
+) -> list[list[tuple[float, float]]]:
+    """Per row (from south to north in the rotated frame), the lanes' x extents, cut
+    `hole_margin` short of where a hole meets the strip."""
     minx, _, maxx, _ = area.bounds
     # GEOS's rectangle clipping: the same pieces as an overlay with each strip, in half the
     # time (its output may be invalid, but only the parts' bounds are used).
@@ -161,6 +179,7 @@ def _segments(area: Polygon, spacing: float, ys: list[float]) -> list[list[tuple
                 if hole.intersects(LineString([(x0, y), (x1, y)])):
                     # No lane crosses a hole: cut the lane where the hole meets its strip.
                     hx0, _, hx1, _ = hole.intersection(part.envelope).bounds
+                    hx0, hx1 = hx0 - hole_margin, hx1 + hole_margin
                     extents = [
                         seg
                         for a, b in extents
@@ -200,6 +219,7 @@ def _cells(rows: list[list[tuple[float, float]]]) -> list[list[tuple[int, float,
 Cell = list[tuple[int, float, float]]
 Visit = tuple[int, bool, bool]  # cell, flown from its last row, first lane westward
 _MULTI_START_CELLS = 30  # above this, one greedy chain from the nearest cell
+_RESTARTS = 8  # around holes, the lane order's search also starts from 8 other chains
 
 
 def _ends(cell: Cell, ys: list[float], rev_rows: bool, rev_x: bool) -> tuple[Point, Point, float]:
@@ -221,24 +241,41 @@ def _ends(cell: Cell, ys: list[float], rev_rows: bool, rev_x: bool) -> tuple[Poi
     return (b0 if rev_x else a0, ys[r0]), (b1 if last_forward else a1, ys[r1]), transit
 
 
-def _order(cells: list[Cell], ys: list[float], origin: Point | None) -> list[Visit]:
+def _order(
+    cells: list[Cell], ys: list[float], origin: Point | None, holes: BaseGeometry
+) -> list[Visit]:
     """The order and direction to fly the cells in: from each possible first cell and
-    corner, the nearest next cell each time; the chain with the least transit wins."""
+    corner, the nearest next cell each time; the chain with the least transit wins. A
+    transit into a hole costs more than any chain, so one is taken only if none avoids it."""
     ways = [(i, rr, rx) for i in range(len(cells)) for rr in (False, True) for rx in (False, True)]
     ends = {w: _ends(cells[w[0]], ys, w[1], w[2]) for w in ways}
+    index = {w: k for k, w in enumerate(ways)}
+    penalty = np.zeros((len(ways), len(ways)))
+    if not holes.is_empty and len(cells) > 1:
+        exits = np.array([ends[w][1] for w in ways])
+        entries = np.array([ends[w][0] for w in ways])
+        width = float(np.ptp(np.concatenate([exits, entries]), axis=0).sum()) + 1.0
+        penalty = crossings(exits, entries, holes) * width * (len(cells) + 1)
 
     def chain(first: Visit) -> tuple[float, list[Visit]]:
         cost = math.dist(origin, ends[first][0]) if origin is not None else 0.0
         cost += ends[first][2]
-        order, done, here = [first], {first[0]}, ends[first][1]
+        order, done, here = [first], {first[0]}, first
         while len(done) < len(cells):
             step, way = min(
-                (math.dist(here, ends[w][0]) + ends[w][2], w) for w in ways if w[0] not in done
+                (
+                    math.dist(ends[here][1], ends[w][0])
+                    + ends[w][2]
+                    + penalty[index[here], index[w]],
+                    w,
+                )
+                for w in ways
+                if w[0] not in done
             )
             cost += step
             order.append(way)
             done.add(way[0])
-            here = ends[way][1]
+            here = way
         return cost, order
 
     if origin is not None and len(cells) > _MULTI_START_CELLS:
@@ -277,7 +314,7 @@ def plan_lanes(
     assert isinstance(rotated, Polygon)
     _, miny, _, maxy = rotated.bounds
     ys = _rows(miny, maxy, spacing, grid.y0 if grid else None)
-    rows = _segments(rotated, spacing, ys)
+    rows = _segments(rotated, spacing, ys, hole_margin_m(trigger, turnaround_m))
     cos_a, sin_a = math.cos(math.radians(angle_deg)), math.sin(math.radians(angle_deg))
 
     def back(x: float, y: float) -> tuple[float, float]:
@@ -293,7 +330,7 @@ def plan_lanes(
         origin = (cx + dx * cos_a + dy * sin_a, cy - dx * sin_a + dy * cos_a)
     runs: list[tuple[float, float, float, int]] = []  # y, from x, to x, photos
     steps: list[Step] = []
-    for i, rev_rows, rev_x in _order(cells, ys, origin):
+    for i, rev_rows, rev_x in _order(cells, ys, origin, holes):
         cell = cells[i]
         for k, (r, a, b) in enumerate(reversed(cell) if rev_rows else cell):
             if grid is not None and holes.is_empty:
@@ -318,9 +355,13 @@ def plan_lanes(
     turns = np.array(
         [[(a - turnaround_m, y), (b + turnaround_m, y)] for y, a, b, _ in runs]
     ).reshape(-1, 2, 2)
+    points = turns.reshape(-1, 2)
+    blocked = None if holes.is_empty else crossings(points, points, holes)
     lanes: list[Lane] = []
     path: list[tuple[float, float]] = []
-    for index, end in improve(steps, turns, origin):
+    for index, end in improve(
+        steps, turns, origin, blocked, restarts=0 if blocked is None else _RESTARTS
+    ):
         y, a, b, shots = runs[index]
         forward = end == 0
         xs, xe = (a, b) if forward else (b, a)
@@ -339,6 +380,16 @@ def plan_lanes(
         trigger_distance_m=trigger,
         turnaround_m=turnaround_m,
     )
+
+
+def crossings(froms: np.ndarray, tos: np.ndarray, holes: BaseGeometry) -> np.ndarray:
+    """Which straight transits from each of `froms` to each of `tos` ((n, 2) arrays) would
+    fly into a hole, not merely touch its edge, where a lane may end: (n_from, n_to)."""
+    inner = holes.buffer(-0.01)
+    shapely.prepare(inner)
+    pairs = np.stack(np.broadcast_arrays(froms[:, None, :], tos[None, :, :]), axis=2)
+    lines = shapely.linestrings(pairs.reshape(-1, 2, 2))
+    return np.asarray(shapely.intersects(lines, inner)).reshape(len(froms), len(tos))
 
 
 def _rectangles(

@@ -22,10 +22,20 @@ _MAX_MOVES = 2000
 _GAIN_M = 1e-6
 
 
-def improve(steps: list[Step], ends: np.ndarray, origin: tuple[float, float] | None) -> list[Step]:
+def improve(
+    steps: list[Step],
+    ends: np.ndarray,
+    origin: tuple[float, float] | None,
+    blocked: np.ndarray | None = None,
+    restarts: int = 0,
+) -> list[Step]:
     """`steps` reordered for a shorter path. `ends` holds each lane's turnaround points,
     (n, 2, 2): lane, west/east, (x, y); `origin` is where the vehicle comes from, if the
-    first transit counts."""
+    first transit counts; `blocked` (2n, 2n), which transits would cross a hole: each costs
+    more than any path, so the search first has as few of them as it can. With `restarts`,
+    the search also starts from that many nearest-neighbour chains (from lanes spread over
+    the list), and the best of all is kept: around holes, the cells' chain can leave the
+    search in a poor local optimum."""
     n = len(steps)
     if n == 0 or n > _MAX_LANES:
         return steps
@@ -34,14 +44,45 @@ def improve(steps: list[Step], ends: np.ndarray, origin: tuple[float, float] | N
     start, finish = m, m + 1  # the way in (from the origin, or free) and the way out (free)
     dist = np.zeros((m + 2, m + 2))
     dist[:m, :m] = np.hypot(*(points[:, None, :] - points[None, :, :]).transpose(2, 0, 1))
+    if blocked is not None:
+        dist[:m, :m] += blocked * (n + 1) * float(dist[:m, :m].max())
     if origin is not None:
         dist[start, :m] = dist[:m, start] = np.hypot(*(points - np.asarray(origin)).T)
-    seq = list(steps)
+    firsts = [
+        steps,
+        *(_nearest_chain(dist, n, (k * n // restarts, k % 2)) for k in range(restarts)),
+    ]
+    found = [_descend(list(first), dist, start, finish) for first in firsts]
+    return min(found, key=lambda seq: _cost(seq, dist, start))
+
+
+def _descend(seq: list[Step], dist: np.ndarray, start: int, finish: int) -> list[Step]:
+    """The best improving move each time, until none is left."""
     for _ in range(_MAX_MOVES):
         move = _best_move(seq, dist, start, finish)
         if move is None:
             break
         seq = _apply(seq, move)
+    return seq
+
+
+def _cost(seq: list[Step], dist: np.ndarray, start: int) -> float:
+    entry = np.array([2 * lane + end for lane, end in seq])
+    return float(dist[start, entry[0]] + dist[(entry ^ 1)[:-1], entry[1:]].sum())
+
+
+def _nearest_chain(dist: np.ndarray, n: int, first: Step) -> list[Step]:
+    """From `first`, the nearest unflown lane's nearer end each time."""
+    seq = [first]
+    done = np.zeros(n, dtype=bool)
+    done[first[0]] = True
+    for _ in range(n - 1):
+        lane, end = seq[-1]
+        row = dist[2 * lane + 1 - end, : 2 * n].reshape(n, 2).copy()
+        row[done] = np.inf
+        nxt, at = np.unravel_index(int(np.argmin(row)), row.shape)
+        seq.append((int(nxt), int(at)))
+        done[nxt] = True
     return seq
 
 

@@ -9,7 +9,12 @@ import numpy as np
 import pytest
 from shapely.geometry import Polygon, box
 
-from backend.missions.survey.bound import end_distances, lower_bound, transit_bound_m
+from backend.missions.survey.bound import (
+    end_distances,
+    lower_bound,
+    transit_bound_m,
+    transit_distances,
+)
 from backend.missions.survey.camera import calculate, preset
 from backend.missions.survey.planner import Piece, plan_lanes, row_pieces
 
@@ -55,11 +60,9 @@ def _best_transits_m(distance: np.ndarray) -> float:
     return float(best[-1].min())
 
 
-def _best_plan_m(pieces: list[Piece]) -> float:
-    trigger = CALC.trigger_distance_m
-    lanes = sum(max(0.0, b - a - trigger) for a, b, _ in pieces)
-    transits = _best_transits_m(end_distances(pieces, trigger, TURNAROUND_M))
-    return lanes + 2 * TURNAROUND_M * len(pieces) + transits
+def _best_plan_m(pieces: list[Piece], distance: np.ndarray) -> float:
+    lanes = sum(max(0.0, b - a - CALC.trigger_distance_m) for a, b, _ in pieces)
+    return lanes + 2 * TURNAROUND_M * len(pieces) + _best_transits_m(distance)
 
 
 @pytest.mark.parametrize("angle", [0.0, 35.0, 90.0])
@@ -68,15 +71,16 @@ def test_the_bound_is_below_the_best_plan_and_the_planner_above_the_bound(
     name: str, angle: float
 ) -> None:
     area = SMALL[name]
-    pieces = row_pieces(area, CALC.lane_spacing_m, angle)
+    # the same pieces and least transits (around holes) as the bound, every order tried
+    pieces, distance = transit_distances(area, CALC, angle, TURNAROUND_M)
     assert 2 <= len(pieces) <= 13, "keep the exact search small"
     bound = lower_bound(area, CALC, angle, TURNAROUND_M).total_m
-    best = _best_plan_m(pieces)
+    best = _best_plan_m(pieces, distance)
     plan = plan_lanes(area, CALC, angle_deg=angle, turnaround_m=TURNAROUND_M, whole_area=False)
     assert bound <= best + 1e-6
     assert best <= plan.path_length_m + 1e-6
-    # the 1-tree keeps the bound close to the best order, concave areas included
-    assert bound >= 0.97 * best
+    # the 1-tree keeps the bound close to the best order, concave and holed areas included
+    assert bound >= 0.95 * best
 
 
 def test_the_bound_counts_the_unavoidable_transit_of_a_u() -> None:

@@ -2,13 +2,16 @@
 
 The plans it bounds ("lane plans on these rows"): the area is cut into rows one lane spacing
 wide at the grid angle (planner.row_pieces, the rows the planner flies); the part of the
-area in a row's strip, less what lies across a hole, is one or more pieces, each an interval
-[a, b] along the row. Each piece is flown as one straight lane on the row's centre line,
-taking photos at most one trigger distance apart, in either direction; every lane has a
-turnaround leg of `turnaround_m` in line with it at each end; and straight transits join one
-lane's exit turnaround to the next lane's entry turnaround, the pieces in any order. The
-plan covers the area at the requested overlaps: every point lies in some photo's footprint
-shrunk to one lane spacing by one trigger distance (planner.coverage's second figure).
+area in a row's strip is one or more pieces, each an interval [a, b] along the row, cut
+where a hole crosses the row's centre line. Each piece is flown as one straight lane on the
+row's centre line, taking photos at most one trigger distance apart, in either direction;
+every lane has a turnaround leg of `turnaround_m` in line with it at each end; straight
+transits join one lane's exit turnaround to the next lane's entry turnaround, the pieces in
+any order; and nothing enters a hole (a no-fly area). So a lane against a hole ends at
+least a turnaround short of it, and what it must cover there ends max(0, turnaround - t/2)
+short of the hole (planner.hole_margin_m; t is the trigger distance): the pieces are cut
+there. The plan covers the pieces at the requested overlaps: every point lies in some
+photo's footprint shrunk to one lane spacing by t (planner.coverage's second figure).
 
 The bound is the sum of three parts, each no more than what any such plan flies:
 
@@ -26,7 +29,10 @@ The bound is the sum of three parts, each no more than what any such plan flies:
    overshoots at its two ends (triangle inequality), and those overshoots were left out of
    part 1, so part 1 + part 3 may use the intervals' distances. The order and directions
    are a travelling-salesman path over the pieces' end points in which each piece's two
-   ends are consecutive; its least length is bounded from below by Held and Karp's 1-tree
+   ends are consecutive. Between two ends, the least transit is the distance between their
+   intervals, and at least the shortest way between the intervals' middles that keeps out
+   of the holes (through their corners) less the intervals' half-widths; the larger is
+   used. The path's least length is bounded from below by Held and Karp's 1-tree
    bound (a spanning tree over the ends, each lane forced into it, with Lagrangian node
    weights; any weights give a valid bound, the subgradient steps only raise it) and by
    the simpler sum over pieces of the nearest end of another piece (every piece but the
@@ -34,8 +40,7 @@ The bound is the sum of three parts, each no more than what any such plan flies:
    what no plan can avoid on a concave area: a U's arms or the two sides of a hole are
    joined only through the base, so some transit there is longer than one spacing.
 
-Transits are measured straight, even across a hole, so the bound stays below plans that
-route around one. It depends on the rows' positions (their grid offset), so it is the bound
+It depends on the rows' positions (their grid offset), so it is the bound
 for the planner's rows; area / spacing is no bound at all once lanes stop half a trigger
 distance inside the area. tests/unit/survey/test_bound.py checks it against the exact best
 order, found by dynamic programming over all orders and directions on small areas.
@@ -118,17 +123,25 @@ def lower_bound_m(area: Polygon, calc: CameraCalc, angle_deg: float, turnaround_
     return lower_bound(area, calc, angle_deg, turnaround_m).total_m
 
 
-def end_distances(pieces: list[Piece], trigger_m: float, turnaround_m: float) -> np.ndarray:
-    """The least transit between each two pieces' ends: a (2n, 2n) matrix over the ends,
-    piece i's west end at 2 i and its east end at 2 i + 1 (a transit leaves one and enters
-    the other). Each end is the interval of its turnaround point's places (part 3)."""
+def _end_intervals(
+    pieces: list[Piece], trigger_m: float, turnaround_m: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per end (piece i's west end at 2 i, east end at 2 i + 1), the interval [lo, hi] its
+    turnaround point lies in on its row, and the row's y (part 3)."""
     half = trigger_m / 2
     lo, hi, ys = [], [], []
     for a, b, y in pieces:
         lo += [min(a + half, b - half) - turnaround_m, b - half + turnaround_m]
         hi += [a + half - turnaround_m, max(a + half, b - half) + turnaround_m]
         ys += [y, y]
-    lo_, hi_, y_ = np.array(lo), np.array(hi), np.array(ys)
+    return np.array(lo), np.array(hi), np.array(ys)
+
+
+def end_distances(pieces: list[Piece], trigger_m: float, turnaround_m: float) -> np.ndarray:
+    """The least transit between each two pieces' ends: a (2n, 2n) matrix over the ends,
+    piece i's west end at 2 i and its east end at 2 i + 1 (a transit leaves one and enters
+    the other). Each end is the interval of its turnaround point's places (part 3)."""
+    lo_, hi_, y_ = _end_intervals(pieces, trigger_m, turnaround_m)
     gap = np.maximum(0.0, np.maximum(lo_[:, None] - hi_[None, :], lo_[None, :] - hi_[:, None]))
     distance: np.ndarray = np.hypot(gap, y_[:, None] - y_[None, :])
     return distance
@@ -141,13 +154,8 @@ def _around_holes(
     between two ends' middles that does not enter a hole (through the holes' corners,
     Floyd-Warshall over the straight lines that keep out), less half of each end's
     interval (moving an end along its interval changes that way by no more than it moves)."""
-    half = trigger_m / 2
-    lo, hi, ys = [], [], []
-    for a, b, y in pieces:
-        lo += [min(a + half, b - half) - turnaround_m, b - half + turnaround_m]
-        hi += [a + half - turnaround_m, max(a + half, b - half) + turnaround_m]
-        ys += [y, y]
-    mids = np.column_stack([(np.array(lo) + np.array(hi)) / 2, ys])
+    lo, hi, ys = _end_intervals(pieces, trigger_m, turnaround_m)
+    mids = np.column_stack([(lo + hi) / 2, ys])
     corners = np.array([c for ring in holes for c in ring.coords[:-1]])
     nodes = np.concatenate([mids, corners])
     straight = np.hypot(*(nodes[:, None, :] - nodes[None, :, :]).transpose(2, 0, 1))
@@ -156,7 +164,7 @@ def _around_holes(
     for k in range(len(nodes)):
         way = np.minimum(way, way[:, k, None] + way[None, k, :])
     m = len(mids)
-    slack = (np.array(hi) - np.array(lo)) / 2
+    slack = (hi - lo) / 2
     around: np.ndarray = way[:m, :m] - slack[:, None] - slack[None, :]
     return around
 

@@ -58,7 +58,7 @@ def test_no_lane_turnaround_or_transit_enters_a_hole(angle: float) -> None:
         assert not LineString([a, b]).intersects(inside)
 
 
-@pytest.mark.parametrize("angle", [0.0, 30.0, 45.0, 60.0, 90.0, 135.0])
+@pytest.mark.parametrize("angle", [float(a) for a in range(0, 180, 15)])
 @pytest.mark.parametrize("name", [*SHAPES, "zone-straddling"])
 def test_path_is_within_five_percent_of_the_lower_bound(name: str, angle: float) -> None:
     # The bound (survey/bound.py) is what any lane plan on these rows must fly, the

@@ -328,6 +328,7 @@ def plan_lanes(
         # where the vehicle is, in the rotated frame
         dx, dy = start[0] - cx, start[1] - cy
         origin = (cx + dx * cos_a + dy * sin_a, cy - dx * sin_a + dy * cos_a)
+    keep_out = None if holes.is_empty else holes.buffer(-0.01)
     runs: list[tuple[float, float, float, int]] = []  # y, from x, to x, photos
     steps: list[Step] = []
     for i, rev_rows, rev_x in _order(cells, ys, origin, holes):
@@ -344,7 +345,10 @@ def plan_lanes(
                 # distance along the lane, so the lane starts and ends half a trigger
                 # distance inside the piece (a piece shorter than that gets its photos at
                 # its middle): no plan on this row can fly less (bound.py).
-                a, b = (a + trigger / 2, b - trigger / 2) if b - a > trigger else ((a + b) / 2,) * 2
+                if b - a > trigger:
+                    a, b = a + trigger / 2, b - trigger / 2
+                else:
+                    a = b = _point_lane(a, b, ys[r], trigger, turnaround_m, keep_out)
                 # As QGC and ArduPilot fly it: a photo at the entry (DO_SET_CAM_TRIGG_DIST
                 # with "trigger once"), one per trigger distance, and one at the exit (the
                 # stop command triggers once too).
@@ -380,6 +384,22 @@ def plan_lanes(
         trigger_distance_m=trigger,
         turnaround_m=turnaround_m,
     )
+
+
+def _point_lane(
+    a: float, b: float, y: float, trigger: float, turnaround_m: float, keep_out: BaseGeometry | None
+) -> float:
+    """Where to take the photos of a piece shorter than a trigger distance: anywhere from
+    b - t/2 to a + t/2 covers it; the middle, unless a turnaround from there would enter a
+    hole, then the end of that span away from the hole."""
+    middle = (a + b) / 2
+    if keep_out is None:
+        return middle
+    for x in (middle, b - trigger / 2, a + trigger / 2):
+        legs = LineString([(x - turnaround_m, y), (x + turnaround_m, y)])
+        if not legs.intersects(keep_out):
+            return x
+    return middle
 
 
 def crossings(froms: np.ndarray, tos: np.ndarray, holes: BaseGeometry) -> np.ndarray:

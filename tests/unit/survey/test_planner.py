@@ -7,6 +7,7 @@ from __future__ import annotations
 import dataclasses
 import math
 
+import numpy as np
 import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 from shapely import affinity
@@ -56,6 +57,36 @@ def test_no_lane_turnaround_or_transit_enters_a_hole(angle: float) -> None:
     plan = plan_lanes(area, CALC, angle_deg=angle)
     for a, b in zip(plan.path, plan.path[1:], strict=False):
         assert not LineString([a, b]).intersects(inside)
+
+
+def _random_holed_area(seed: int) -> Polygon:
+    rng = np.random.default_rng(seed)
+    outer = box(0, 0, rng.uniform(300, 900), rng.uniform(300, 900))
+    holes: list[Polygon] = []
+    for _ in range(3):
+        x, y = rng.uniform(60, outer.bounds[2] - 60), rng.uniform(60, outer.bounds[3] - 60)
+        r = rng.uniform(15, 60)
+        hole = affinity.rotate(
+            box(x - r, y - r * rng.uniform(0.3, 1), x + r, y + r), rng.uniform(0, 90)
+        )
+        if hole.within(outer.buffer(-5)) and all(hole.distance(h) > 5 for h in holes):
+            holes.append(hole)
+    return Polygon(outer.exterior, [h.exterior for h in holes])
+
+
+@pytest.mark.parametrize("turnaround", [10.0, 25.0])
+@pytest.mark.parametrize("seed", range(8))
+def test_lanes_and_turnarounds_keep_out_of_random_holes(seed: int, turnaround: float) -> None:
+    # Lanes end a turnaround short of a hole; a piece shorter than a trigger distance
+    # beside one takes its photos where neither turnaround reaches into it.
+    area = _random_holed_area(seed)
+    inside = [Polygon(ring).buffer(-0.01) for ring in area.interiors]
+    for angle in (0.0, 20.0, 70.0):
+        plan = plan_lanes(area, CALC, angle_deg=angle, turnaround_m=turnaround)
+        for i in range(len(plan.lanes)):
+            turn_in, start, end, turn_out = plan.path[4 * i : 4 * i + 4]
+            flown = LineString([turn_in, start, end, turn_out])
+            assert not any(flown.intersects(hole) for hole in inside)
 
 
 @pytest.mark.parametrize("angle", [float(a) for a in range(0, 180, 15)])

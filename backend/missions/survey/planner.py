@@ -166,6 +166,7 @@ def _segments(
         shapely.clip_by_rect(area, minx - 1, y - spacing / 2, maxx + 1, y + spacing / 2) for y in ys
     ]
     holes = [Polygon(ring) for ring in area.interiors]
+    hole_boxes = [hole.bounds for hole in holes]
     out: list[list[tuple[float, float]]] = []
     for y, piece in zip(ys, pieces, strict=True):
         parts = [
@@ -175,7 +176,9 @@ def _segments(
         for part in parts:
             x0, _, x1, _ = part.bounds
             extents = [(x0, x1)]
-            for hole in holes:
+            for hole, (bx0, by0, bx1, by1) in zip(holes, hole_boxes, strict=True):
+                if not (by0 <= y <= by1 and bx0 <= x1 and x0 <= bx1):
+                    continue  # the hole's box misses the lane: it cannot cross it
                 if hole.intersects(LineString([(x0, y), (x1, y)])):
                     # No lane crosses a hole: cut the lane where the hole meets its strip.
                     hx0, _, hx1, _ = hole.intersection(part.envelope).bounds
@@ -219,7 +222,7 @@ def _cells(rows: list[list[tuple[float, float]]]) -> list[list[tuple[int, float,
 Cell = list[tuple[int, float, float]]
 Visit = tuple[int, bool, bool]  # cell, flown from its last row, first lane westward
 _MULTI_START_CELLS = 30  # above this, one greedy chain from the nearest cell
-_RESTARTS = 8  # around holes, the lane order's search also starts from 8 other chains
+_RESTARTS_LANES = 640  # around holes, the lane search restarts 8 times, fewer past 80 lanes
 
 
 def _ends(cell: Cell, ys: list[float], rev_rows: bool, rev_x: bool) -> tuple[Point, Point, float]:
@@ -364,7 +367,11 @@ def plan_lanes(
     lanes: list[Lane] = []
     path: list[tuple[float, float]] = []
     for index, end in improve(
-        steps, turns, origin, blocked, restarts=0 if blocked is None else _RESTARTS
+        steps,
+        turns,
+        origin,
+        blocked,
+        restarts=0 if blocked is None else min(8, max(1, _RESTARTS_LANES // len(runs))),
     ):
         y, a, b, shots = runs[index]
         forward = end == 0
@@ -402,14 +409,33 @@ def _point_lane(
     return middle
 
 
-def crossings(froms: np.ndarray, tos: np.ndarray, holes: BaseGeometry) -> np.ndarray:
+def crossings(
+    froms: np.ndarray, tos: np.ndarray, holes: BaseGeometry, *, pairwise: bool = False
+) -> np.ndarray:
     """Which straight transits from each of `froms` to each of `tos` ((n, 2) arrays) would
-    fly into a hole, not merely touch its edge, where a lane may end: (n_from, n_to)."""
+    fly into a hole, not merely touch its edge, where a lane may end: (n_from, n_to), or
+    with `pairwise` from each of `froms` to the same row of `tos`: (n,)."""
+    if not pairwise and froms is tos:  # a transit crosses a hole either way: test once
+        i, j = np.triu_indices(len(froms), 1)
+        both = np.zeros((len(froms), len(froms)), dtype=bool)
+        both[i, j] = crossings(froms[i], froms[j], holes, pairwise=True)
+        return both | both.T
+    if pairwise:
+        pairs = np.stack([froms, tos], axis=1)
+    else:
+        pairs = np.stack(np.broadcast_arrays(froms[:, None, :], tos[None, :, :]), axis=2)
+        pairs = pairs.reshape(-1, 2, 2)
     inner = holes.buffer(-0.01)
     shapely.prepare(inner)
-    pairs = np.stack(np.broadcast_arrays(froms[:, None, :], tos[None, :, :]), axis=2)
-    lines = shapely.linestrings(pairs.reshape(-1, 2, 2))
-    return np.asarray(shapely.intersects(lines, inner)).reshape(len(froms), len(tos))
+    # Only a transit whose box meets a hole's box can cross it: test those alone.
+    lo, hi = pairs.min(axis=1), pairs.max(axis=1)
+    near = np.zeros(len(pairs), dtype=bool)
+    for part in getattr(inner, "geoms", [inner]):
+        x0, y0, x1, y1 = part.bounds
+        near |= (lo[:, 0] <= x1) & (hi[:, 0] >= x0) & (lo[:, 1] <= y1) & (hi[:, 1] >= y0)
+    hit = np.zeros(len(pairs), dtype=bool)
+    hit[near] = shapely.intersects(shapely.linestrings(pairs[near]), inner)
+    return hit if pairwise else hit.reshape(len(froms), len(tos))
 
 
 def _rectangles(

@@ -8,13 +8,17 @@ Lanes run along the grid angle. Each lane covers a strip one lane spacing wide; 
 are half a trigger distance inside where the area's part of that strip begins and ends (not
 where the centre line meets the border), so a slanted edge is still covered and the photos'
 footprints at the requested overlaps just reach it. A lane is split where it would cross a
-hole. backend/missions/survey/bound.py gives the least path any lane plan on these rows can
-fly; the planner's is held to at most 1.05 times it.
+hole (a no-fly area), and ends a turnaround short of it. backend/missions/survey/bound.py
+gives the least path any lane plan on these rows can fly; the planner's is held to at most
+1.05 times it (tests/unit/survey/test_planner.py).
 Lanes are grouped into cells (boustrophedon decomposition: a cell goes on while each row
 has exactly one segment overlapping the one before), each cell is flown back and forth,
-and the cells are chained nearest first, so a concave area is not crossed by long detours.
-Photos are taken at each lane's entry, every trigger distance, and at its exit, as QGC's
-survey has ArduPilot take them; each lane gets a turnaround (outside the area) at both ends.
+and the cells are chained nearest first, so a concave area is not crossed by long detours;
+then the lanes' order and directions are improved one move at a time (sequence.py). A
+straight transit into a hole is dearer than any path to both, so it is flown only where no
+order avoids it. Photos are taken at each lane's entry, every trigger distance, and at its
+exit, as QGC's survey has ArduPilot take them; each lane gets a turnaround (outside the
+area) at both ends.
 """
 
 from __future__ import annotations

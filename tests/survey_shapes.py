@@ -1,0 +1,31 @@
+"""The survey planner's test areas (metres), shared by tests/unit/survey/test_planner.py and
+bench/bench_survey.py, so the benchmark's path ratios are the tested shapes'."""
+
+from __future__ import annotations
+
+from shapely.geometry import Polygon, box
+
+from backend.missions.survey.geo import polygon_from_geojson
+
+SHAPES = {
+    "convex": Polygon([(0, 0), (900, -100), (1000, 700), (200, 900)]),
+    "L": Polygon([(0, 0), (600, 0), (600, 200), (200, 200), (200, 600), (0, 600)]),
+    "U": Polygon(
+        [(0, 0), (600, 0), (600, 600), (450, 600), (450, 150), (150, 150), (150, 600), (0, 600)]
+    ),
+    "holed": Polygon(
+        [(0, 0), (600, 0), (600, 600), (0, 600)], [[(200, 200), (400, 200), (400, 400), (200, 400)]]
+    ),
+    "thin": box(0, 0, 2000, 60),
+}
+
+
+def zone_straddling() -> Polygon:
+    # 6°E is the boundary of UTM zones 31 and 32: this area lies across it.
+    ring = [[5.99, 47.0], [6.01, 47.0], [6.012, 47.01], [5.992, 47.012], [5.99, 47.0]]
+    polygon, _ = polygon_from_geojson({"type": "Polygon", "coordinates": [ring]})
+    return polygon
+
+
+def shape(name: str) -> Polygon:
+    return zone_straddling() if name == "zone-straddling" else SHAPES[name]

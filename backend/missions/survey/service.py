@@ -12,7 +12,7 @@ import shapely
 from backend.missions.survey.camera import Camera, CameraCalc, calculate, preset
 from backend.missions.survey.geo import polygon_from_geojson
 from backend.missions.survey.mission import survey_mission
-from backend.missions.survey.planner import PlanError, covered_fraction, footprints
+from backend.missions.survey.planner import PlanError, covered_fraction, swaths
 from backend.missions.survey.report import best_angle
 from backend.missions.survey.schemas import SurveyRequest
 from backend.missions.survey.split import Drone, Part, split
@@ -79,15 +79,14 @@ def plan_survey(request: SurveyRequest, fleet: list[Fleet]) -> Survey:
     if angle is None:
         angle = best_angle(area, calc, request.speed_ms, turnaround_m=request.turnaround_m)
     parts = split(area, calc, drones, angle_deg=angle, turnaround_m=request.turnaround_m)
+    # The photos' footprints united lane by lane (the same union, a few shapes per lane).
     shots = [
-        f
-        for p in parts
-        for f in footprints(p.plan, calc.footprint_side_m, calc.footprint_frontal_m)
+        f for p in parts for f in swaths(p.plan, calc.footprint_side_m, calc.footprint_frontal_m)
     ]
     tight = [
         f
         for p in parts
-        for f in footprints(p.plan, calc.lane_spacing_m * 1.0001, calc.trigger_distance_m * 1.0001)
+        for f in swaths(p.plan, calc.lane_spacing_m * 1.0001, calc.trigger_distance_m * 1.0001)
     ]
     planned = []
     for p in parts:

@@ -57,6 +57,10 @@ def _concrete(path: str) -> str:
         "param": "WPNAV_SPEED",
         "survey_id": "0123456789abcdef",
         "formation_id": "0123456789abcdef",
+        "kind": "tif",  # a mosaic's export
+        "z": "1",  # a mosaic's tile
+        "x": "0",
+        "y": "0",
     }
     return re.sub(r"\{(\w+)\}", lambda match: values[match.group(1)], path)
 

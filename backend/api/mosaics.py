@@ -14,7 +14,7 @@ import asyncio
 from typing import Annotated, Literal
 
 from fastapi import Path, Request, Response
-from fastapi.responses import FileResponse
+from fastapi.responses import FileResponse, JSONResponse
 from pydantic import Field
 
 from backend.api.deps import HubDep
@@ -148,7 +148,12 @@ async def get_mosaic_tile(
     except UnknownMosaic:
         raise NotFound(f"no photo of survey {survey_id} has reached the mosaic") from None
     if served is None:
-        return Response(status_code=404, headers={"Cache-Control": CACHE_MISSING})
+        # The documented error body, and a short cache: the tile may come with a photo.
+        return JSONResponse(
+            {"detail": f"no tile {z}/{x}/{y} in the mosaic of survey {survey_id} (yet)"},
+            status_code=404,
+            headers={"Cache-Control": CACHE_MISSING},
+        )
     etag = f'"{survey_id}-{z}-{x}-{y}-{served.version}"'
     headers = {"Cache-Control": CACHE_TILE, "ETag": etag, "X-Tile-Version": str(served.version)}
     if etag in request.headers.get("if-none-match", ""):

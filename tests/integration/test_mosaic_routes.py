@@ -92,7 +92,10 @@ def test_progress_and_a_versioned_tile(built: Built) -> None:
 def test_outside_the_mosaic_is_a_404_and_bad_paths_a_422(built: Built) -> None:
     api = built.api
     z, x, y = built.inner
-    assert api.get(f"/api/v1/mosaics/{SURVEY}/tiles/{z}/{x + 50}/{y}").status_code == 404
+    outside = api.get(f"/api/v1/mosaics/{SURVEY}/tiles/{z}/{x + 50}/{y}")
+    assert outside.status_code == 404
+    assert "no tile" in outside.json()["detail"]
+    assert outside.headers["cache-control"] == "private, max-age=5"
     assert api.get(f"/api/v1/mosaics/{SURVEY}/tiles/3/1/1").status_code == 404
     unknown = api.get(f"/api/v1/mosaics/abc123/tiles/{z}/{x}/{y}")
     assert unknown.status_code == 404

@@ -20,12 +20,12 @@ import os
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
-import cv2
 import numpy as np
 import numpy.typing as npt
 
 from backend.mosaic.georef import TILE_PX, Footprint
 from backend.mosaic.store import Rgba, TileKey, TileStore
+from common.opencv import cv2
 
 FEATHER_PX = 6.0
 EDGE_RAMP_PX = 8

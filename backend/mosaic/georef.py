@@ -18,7 +18,6 @@ import math
 from dataclasses import dataclass
 from typing import Final
 
-import cv2
 import morecantile
 import numpy as np
 import numpy.typing as npt
@@ -26,6 +25,7 @@ from pymap3d.enu import enu2geodetic
 
 from common.camera_geometry import camera_to_enu, gsd_m, image_to_ground
 from common.geodesy import EARTH_MEAN_RADIUS_M, WGS84
+from common.opencv import cv2
 from protocol.photos import CameraIntrinsics, PhotoPose
 
 Homography = npt.NDArray[np.float64]

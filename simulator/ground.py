@@ -23,11 +23,11 @@ import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
-import cv2
 import numpy as np
 import numpy.typing as npt
 
 from common.geodesy import LocalFrame
+from common.opencv import cv2
 
 Image = npt.NDArray[np.uint8]
 Floats = npt.NDArray[np.float64]

@@ -137,8 +137,7 @@ JPEG_QUALITY = 90
 def nadir_renderer(origin: GeoPoint, seed: int = 1) -> Renderer:
     """Photos of the synthetic ground laid around ``origin`` (its elevation the ground's):
     every simulator given the same origin and seed sees the same ground and targets."""
-    import cv2  # the simulator extra's; imported only by a simulator with a camera
-
+    from common.opencv import cv2  # the simulator extra's; only a simulator with a camera
     from simulator.camera_view import render_nadir
     from simulator.ground import Ground
 

@@ -14,12 +14,13 @@ import asyncio
 from typing import Annotated, Literal
 
 from fastapi import Path, Request, Response
-from fastapi.responses import FileResponse
+from fastapi.responses import FileResponse, JSONResponse
 from pydantic import Field
 
 from backend.api.deps import HubDep
 from backend.api.responses import ErrorMessage
 from backend.api.security import SecuredRouter, requires
+from backend.api.tiles import TileSet, tile_sets
 from backend.auth.policy import Permission
 from backend.errors import Conflict, InvalidRequest, NotFound
 from backend.mapping.tiles import MAX_ZOOM
@@ -91,6 +92,34 @@ async def export_mosaic(
     return FileResponse(path, media_type=FORMATS[kind], filename=f"mosaic-{survey_id}.{kind}")
 
 
+@router.post(
+    "/mosaics/{survey_id}/basemap",
+    response_model=TileSet,
+    openapi_extra=requires(Permission.COMMAND),
+    responses={
+        404: {"description": "No photo of this survey has reached the mosaic"},
+        409: {"description": "The mosaic has no tiles yet", "model": ErrorMessage},
+    },
+)
+async def install_basemap(survey_id: SurveyIdPath, hub: HubDep) -> TileSet:
+    """Put the mosaic in the hub's offline tiles folder as `mosaic-<survey_id>.pmtiles`:
+    the dashboard then offers it as a base map, with no internet (done again, it is
+    replaced by the mosaic as it is now)."""
+    try:
+        name = await asyncio.to_thread(
+            hub.mosaic.install_basemap, survey_id, hub.settings.tiles_folder
+        )
+    except UnknownMosaic:
+        raise NotFound(f"no photo of survey {survey_id} has reached the mosaic") from None
+    except ExportError as error:
+        raise Conflict(str(error)) from None
+    sets = await tile_sets(hub)
+    installed = next((s for s in sets if s.name == name), None)
+    if installed is None:
+        raise Conflict(f"the tiles folder did not take {name}.pmtiles; see the hub's log")
+    return installed
+
+
 @router.get(
     "/mosaics/{survey_id}/tiles/{z}/{x}/{y}",
     openapi_extra=requires(Permission.READ),
@@ -119,7 +148,12 @@ async def get_mosaic_tile(
     except UnknownMosaic:
         raise NotFound(f"no photo of survey {survey_id} has reached the mosaic") from None
     if served is None:
-        return Response(status_code=404, headers={"Cache-Control": CACHE_MISSING})
+        # The documented error body, and a short cache: the tile may come with a photo.
+        return JSONResponse(
+            {"detail": f"no tile {z}/{x}/{y} in the mosaic of survey {survey_id} (yet)"},
+            status_code=404,
+            headers={"Cache-Control": CACHE_MISSING},
+        )
     etag = f'"{survey_id}-{z}-{x}-{y}-{served.version}"'
     headers = {"Cache-Control": CACHE_TILE, "ETag": etag, "X-Tile-Version": str(served.version)}
     if etag in request.headers.get("if-none-match", ""):

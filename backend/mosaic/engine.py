@@ -16,14 +16,16 @@ canvas aligned with the tile grid, then cut into tiles and blended into what the
 from __future__ import annotations
 
 import math
+import os
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
-import cv2
 import numpy as np
 import numpy.typing as npt
 
 from backend.mosaic.georef import TILE_PX, Footprint
 from backend.mosaic.store import Rgba, TileKey, TileStore
+from common.opencv import cv2
 
 FEATHER_PX = 6.0
 EDGE_RAMP_PX = 8
@@ -31,6 +33,7 @@ EDGE_RAMP_PX = 8
 # nearest-nadir rule; in the faded edge it stays open to the next photo.
 OWNED_ALPHA = 250
 MAX_CANVAS_PX = 64_000_000  # a sanity bound: a 12 MP photo's canvas is about 20 MP
+TILE_WORKERS = ThreadPoolExecutor(min(4, os.cpu_count() or 1), thread_name_prefix="mosaic-tile")
 
 
 class PhotoError(ValueError):
@@ -120,22 +123,27 @@ def _apply_zoom(
     )
     nadir_x, nadir_y = place.nadir_px(zoom)
     cols = np.arange(TILE_PX, dtype=np.float32)
-    written = []
-    for ty in range(ty0, ty1 + 1):
-        for tx in range(tx0, tx1 + 1):
-            top, left = (ty - ty0) * TILE_PX, (tx - tx0) * TILE_PX
-            piece = canvas[top : top + TILE_PX, left : left + TILE_PX]
-            if not piece[:, :, 3].any():
-                continue
-            dx = (tx * TILE_PX + cols + 0.5 - nadir_x)[None, :]
-            dy = (ty * TILE_PX + cols + 0.5 - nadir_y)[:, None]
-            distances = np.sqrt(dx * dx + dy * dy)
-            key = (zoom, tx, ty)
-            blended = _blend(store.read(key), piece, distances)
-            if blended is not None:
-                store.write(key, *blended)
-                written.append(key)
-    return written
+
+    def tile(tx: int, ty: int) -> TileKey | None:
+        top, left = (ty - ty0) * TILE_PX, (tx - tx0) * TILE_PX
+        piece = canvas[top : top + TILE_PX, left : left + TILE_PX]
+        if not piece[:, :, 3].any():
+            return None
+        dx = (tx * TILE_PX + cols + 0.5 - nadir_x)[None, :]
+        dy = (ty * TILE_PX + cols + 0.5 - nadir_y)[:, None]
+        distances = np.sqrt(dx * dx + dy * dy)
+        key = (zoom, tx, ty)
+        blended = _blend(store.read(key), piece, distances)
+        if blended is None:
+            return None
+        store.write(key, *blended)
+        return key
+
+    # Each tile is its own: they are blended on all cores (numpy and OpenCV let go of the
+    # GIL on whole arrays), which only ever touch different keys of the store.
+    spots = [(tx, ty) for ty in range(ty0, ty1 + 1) for tx in range(tx0, tx1 + 1)]
+    done = TILE_WORKERS.map(lambda spot: tile(*spot), spots)
+    return [key for key in done if key is not None]
 
 
 def _blend(

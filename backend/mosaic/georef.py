@@ -15,17 +15,19 @@ cv2.warpPerspective per zoom puts the photo into the tile grid.
 from __future__ import annotations
 
 import math
+import threading
 from dataclasses import dataclass
 from typing import Final
 
-import cv2
 import morecantile
 import numpy as np
 import numpy.typing as npt
 from pymap3d.enu import enu2geodetic
+from pyproj import Proj, Transformer
 
 from common.camera_geometry import camera_to_enu, gsd_m, image_to_ground
 from common.geodesy import EARTH_MEAN_RADIUS_M, WGS84
+from common.opencv import cv2
 from protocol.photos import CameraIntrinsics, PhotoPose
 
 Homography = npt.NDArray[np.float64]
@@ -39,15 +41,28 @@ MIN_HEIGHT_M: Final = 1.0
 UPSAMPLE: Final = 1.1  # a zoom whose pixels are 10 % finer than the photo's still counts
 MAX_ZOOM: Final = 26  # 2 mm pixels at the equator
 GRID: Final = 5  # image points a side that the mercator homography is fitted to
-MERCATOR_R: Final = WORLD_M / (2 * math.pi)  # EPSG:3857's sphere: WGS84's semi-major axis
+
+
+# pyproj's objects are not to be shared between threads; the mosaic's worker and its
+# blending pool each get their own.
+_PROJ = threading.local()
+
+
+def _projections() -> tuple[Transformer, Proj]:
+    if not hasattr(_PROJ, "pair"):
+        _PROJ.pair = (
+            Transformer.from_crs("EPSG:4326", "EPSG:3857", always_xy=True),
+            Proj("EPSG:3857"),
+        )
+    pair: tuple[Transformer, Proj] = _PROJ.pair
+    return pair
 
 
 def to_mercator(lon: Floats, lat: Floats) -> tuple[Floats, Floats]:
-    """EPSG:3857 metres of longitudes and latitudes in degrees (vectorised; morecantile's
-    TMS.xy gives the same one point at a time, a hundred times slower)."""
-    x = MERCATOR_R * np.radians(lon)
-    y = MERCATOR_R * np.log(np.tan(np.pi / 4 + np.radians(lat) / 2))
-    return x, y
+    """EPSG:3857 metres of longitudes and latitudes in degrees (pyproj, vectorised;
+    morecantile's TMS.xy gives the same one point at a time, far slower)."""
+    x, y = _projections()[0].transform(lon, lat)
+    return np.asarray(x, np.float64), np.asarray(y, np.float64)
 
 
 class GeorefError(ValueError):
@@ -104,7 +119,9 @@ def native_zoom(gsd: float, lat: float) -> int:
     """The finest zoom whose tile pixels are no finer on the ground than the photo's GSD
     (within UPSAMPLE): a finer one would only interpolate, at up to four times the pixels
     to warp, blend and store."""
-    metres_per_px_z0 = WORLD_M * math.cos(math.radians(lat)) / TILE_PX
+    # A mercator pixel covers less ground away from the equator, by the projection's scale.
+    scale = _projections()[1].get_factors(0.0, lat).parallel_scale
+    metres_per_px_z0 = WORLD_M / scale / TILE_PX
     return max(0, min(MAX_ZOOM, math.floor(math.log2(UPSAMPLE * metres_per_px_z0 / gsd))))
 
 

@@ -22,7 +22,7 @@ from pathlib import Path
 from typing import Any
 
 from backend.mosaic.engine import Applied, PhotoError, apply_photo, decode
-from backend.mosaic.export import export
+from backend.mosaic.export import ExportError, export
 from backend.mosaic.georef import GeorefError, footprint, native_zoom, pixel_to_lonlat
 from backend.mosaic.photo import StoredPhoto
 from backend.mosaic.progress import (
@@ -43,6 +43,7 @@ OVERVIEW_LEVELS = 6  # zooms below the native one: 64 times coarser covers a sur
 MAX_DISTANCE_M = 2000.0  # a photo's nadir this far outside its survey's area is refused
 
 
+BASEMAP_NAME_MAX = 64  # backend/mapping/tiles.py NAME_PATTERN
 ENCODED_CACHE = 2048  # tiles, about 60 MB of JPEG
 
 
@@ -166,6 +167,16 @@ class MosaicService:
         survey = self._known(survey_id)
         with survey.lock:
             return export(survey.store, kind, survey.store.folder / "exports", survey_id)
+
+    def install_basemap(self, survey_id: str, tiles_folder: Path) -> str:
+        """The mosaic as ``mosaic-<survey id>.pmtiles`` in the offline tiles folder, where
+        the dashboard lists it among the base maps; its set name (blocking: a thread)."""
+        name = f"mosaic-{survey_id}"
+        if len(name) > BASEMAP_NAME_MAX:
+            raise ExportError(f"survey id {survey_id!r} is too long for a tile set name")
+        made = self.export(survey_id, "pmtiles")
+        atomic_write(tiles_folder / f"{name}.pmtiles", made.read_bytes())
+        return name
 
     def survey(self, survey_id: str) -> SurveyMosaic:
         return self._known(survey_id)

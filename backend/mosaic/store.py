@@ -33,11 +33,11 @@ from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 
-import cv2
 import numpy as np
 import numpy.typing as npt
 
 from backend.mosaic.georef import TILE_PX
+from common.opencv import cv2
 
 Rgba = npt.NDArray[np.uint8]
 Distances = npt.NDArray[np.float32]

@@ -59,6 +59,10 @@ def _concrete(path: str) -> str:
         "formation_id": "0123456789abcdef",
         "viewer_id": "999999",
         "photo_id": "ghost-1-00001",
+        "kind": "tif",  # a mosaic's export
+        "z": "1",  # a mosaic's tile
+        "x": "0",
+        "y": "0",
     }
     return re.sub(r"\{(\w+)\}", lambda match: values[match.group(1)], path)
 

@@ -45,7 +45,7 @@ class Built:
 
 @pytest.fixture(scope="module")
 def built(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Built]:
-    """One hub for the module: the tests only read."""
+    """One hub for the module: the tests read, and the last adds a base map."""
     tmp_path = tmp_path_factory.mktemp("mosaic_hub")
     ground = Ground(*HOME, seed=4)
     shots = [(-6.0, -6.0, 0.0), (-6.0, 6.0, 0.0), (6.0, 6.0, 180.0), (6.0, -6.0, 180.0)]
@@ -92,7 +92,10 @@ def test_progress_and_a_versioned_tile(built: Built) -> None:
 def test_outside_the_mosaic_is_a_404_and_bad_paths_a_422(built: Built) -> None:
     api = built.api
     z, x, y = built.inner
-    assert api.get(f"/api/v1/mosaics/{SURVEY}/tiles/{z}/{x + 50}/{y}").status_code == 404
+    outside = api.get(f"/api/v1/mosaics/{SURVEY}/tiles/{z}/{x + 50}/{y}")
+    assert outside.status_code == 404
+    assert "no tile" in outside.json()["detail"]
+    assert outside.headers["cache-control"] == "private, max-age=5"
     assert api.get(f"/api/v1/mosaics/{SURVEY}/tiles/3/1/1").status_code == 404
     unknown = api.get(f"/api/v1/mosaics/abc123/tiles/{z}/{x}/{y}")
     assert unknown.status_code == 404
@@ -149,3 +152,20 @@ def test_the_exports_open_with_rasterio_sqlite_and_pmtiles(built: Built, tmp_pat
         assert (header["min_zoom"], header["max_zoom"]) == (min_zoom, max_zoom)
         assert reader.get(*built.inner).startswith(PNG_SIGNATURE)
         assert reader.get(*built.inner) == bytes(row[0])
+
+
+def test_the_mosaic_becomes_an_offline_base_map(built: Built) -> None:
+    api = built.api
+    installed = api.post(f"/api/v1/mosaics/{SURVEY}/basemap")
+    assert installed.status_code == 200, installed.text
+    tile_set = installed.json()
+    assert tile_set["name"] == f"mosaic-{SURVEY}"
+    assert (tile_set["kind"], tile_set["media_type"]) == ("pmtiles", "image/png")
+    assert tile_set["max_zoom"] == built.zoom[1]
+    listed = {s["name"]: s for s in api.get("/api/v1/tiles").json()}
+    assert f"mosaic-{SURVEY}" in listed
+    z, x, y = built.inner
+    tile = api.get(tile_set["url"].format(z=z, x=x, y=y))
+    assert tile.status_code == 200
+    assert tile.content.startswith(PNG_SIGNATURE)
+    assert api.post("/api/v1/mosaics/abc123/basemap").status_code == 404

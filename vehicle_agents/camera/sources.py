@@ -114,7 +114,7 @@ class OpenCvCamera:
         if self._capture is not None:
             return self._capture
         try:
-            import cv2  # type: ignore[import-not-found, unused-ignore]  # the `camera` extra
+            from common.opencv import cv2  # the `camera` extra; without its side effect
         except ImportError:
             raise CaptureError(
                 "the OpenCV camera needs OpenCV: pip install opencv-python-headless "

@@ -165,8 +165,9 @@ def test_tile_sets_are_listed_by_name_in_the_switcher(
     switcher.hover()
     names = page.locator(".leaflet-control-layers-base label")
     expect(names).to_have_text(["field", "Grid (no tiles)"])
-    trails = page.locator(".leaflet-control-layers-overlays label")
-    expect(trails).to_have_text(["Trails"])
+    overlays = page.locator(".leaflet-control-layers-overlays label")
+    expect(overlays).to_have_text(["Trails", "Geofence"])
+    trails = overlays.filter(has_text="Trails")
     # Trails are on by default; the check box takes their canvas off the map and back.
     expect(page.locator("#map .trail-layer")).to_have_count(1)
     trails.locator("input").uncheck()

@@ -364,10 +364,18 @@ def test_a_drawn_mission_is_refused_on_its_leg_fixed_by_dragging_and_flown(
         page.locator('[data-action="mission-add-22"]').click()
         expect(page.locator(".mission-row")).to_have_count(1)
         if _small(size):  # touch targets of at least 44 px
-            for target in page.locator(".mission-panel button:visible").all():
-                box = target.bounding_box()
-                assert box is not None
-                assert min(box["height"], box["width"]) >= 44, (target.inner_text(), box)
+            # Measured in one go in the page: the panel re-renders its buttons as vehicle
+            # updates arrive, so a handle taken a moment earlier may be gone.
+            shown = page.evaluate(
+                """() => [...document.querySelectorAll('.mission-panel button')]
+                    .map((b) => [b.innerText, b.getBoundingClientRect(), getComputedStyle(b)])
+                    .filter(([, r, style]) => r.width > 0 && r.height > 0
+                        && style.visibility !== 'hidden')
+                    .map(([text, r]) => [text, r.width, r.height])"""
+            )
+            assert shown
+            for text, width, height in shown:
+                assert min(width, height) >= 44, (text, width, height)
         pixels = _frame_the_fence(page, frame)
 
         def at(east: float, north: float) -> tuple[float, float]:

@@ -35,6 +35,7 @@ export class BaseMaps {
   private readonly noticeControl: L.Control;
   private bases: Base[] = [];
   private control: L.Control.Layers | null = null;
+  private destroyed = false;
   private current: Base | null = null;
 
   constructor(
@@ -69,6 +70,8 @@ export class BaseMaps {
     } catch {
       sets = []; // the list is a convenience: the online maps and the grid still work
     }
+    // The session may have ended while the list was on its way: the map is gone then.
+    if (this.destroyed) return;
     const offline = sets.map((set) => this.offline(set));
     const grid: Base = { name: GRID_NAME, layer: L.layerGroup(), online: false };
     this.bases = [...online, ...offline, grid];
@@ -164,6 +167,7 @@ export class BaseMaps {
   }
 
   destroy(): void {
+    this.destroyed = true;
     this.control?.remove();
     this.noticeControl.remove();
   }

@@ -173,7 +173,9 @@ def test_stick_input_while_the_flight_controller_is_away_is_dropped_not_raised()
         pilot = ManualPilot(link, executor, lambda *_: None)
         pilot.active = True
         first = pilot.on_frame(ManualFrame.model_validate_json(_manual(1, x=300)))
-        fcu.__exit__(None, None, None)  # the flight controller goes
+        # Flown: the flight controller has it (its reader is a thread of its own)...
+        await poll_until_async(lambda: "MANUAL_CONTROL" in fcu.kinds(), 10, "the first frame")
+        fcu.__exit__(None, None, None)  # ...then it goes
         await poll_until_async(lambda: not link.connected, 10, "the link to go down")
         return [first] + [
             pilot.on_frame(ManualFrame.model_validate_json(_manual(seq, x=300)))

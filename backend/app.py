@@ -22,6 +22,7 @@ from backend.api import (
     fleet_commands,
     formations,
     logs,
+    metrics,
     missions,
     mosaics,
     params,
@@ -118,6 +119,7 @@ def create_app(settings: HubSettings | None = None) -> FastAPI:
     for router in routers:
         app.include_router(router, prefix=API_PREFIX)
     app.include_router(websockets.router)
+    app.include_router(metrics.router)  # /metrics, where Prometheus looks by default
     app.include_router(viz.router)
     app.include_router(tiles.tile_router)  # /tiles/<name>/{z}/{x}/{y}, beside the API
     install_method_not_allowed(app, routers, API_PREFIX)

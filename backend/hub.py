@@ -33,6 +33,7 @@ from backend.realtime import manual_control
 from backend.realtime.bus import InProcessBus, ReliableSubscription, Topic
 from backend.realtime.collaborators import AgentConnection, ClientConnection
 from backend.realtime.live_events import live_event
+from backend.realtime.vehicle_fanout import VehicleFanout
 from backend.scans.obstacles import describe as describe_obstacle
 from backend.scans.pointmap import MapObstacle
 from backend.scans.points import in_frame
@@ -120,6 +121,8 @@ class Hub:
     scene: FleetScene | None = None
     replays: ReplayPanels | None = None
     viewers: Viewers | None = None
+    # Vehicle states to the client feeds, batched and encoded once per tick.
+    fanout: VehicleFanout = field(init=False)
     # Area surveys: created in start(), as they send commands through the hub itself.
     surveys: SurveyService = field(init=False)
     # The live orthomosaic of each survey's photos (backend/mosaic/).
@@ -188,6 +191,9 @@ class Hub:
             ),
         )
         writer.on_sequences = hub.deliver_sequence_news
+        hub.fanout = VehicleFanout(
+            bus, settings.ui_vehicle_interval_s, settings.ui_batch_interval_s
+        )
         hub.formations.scan_source = hub.leader_scan
         hub.surveys = SurveyService(hub, bus, SurveyRepository(engine), settings)
         await hub.surveys.load()
@@ -219,6 +225,7 @@ class Hub:
         try:
             async with asyncio.TaskGroup() as tasks:
                 tasks.create_task(self.writer.run())
+                tasks.create_task(self.fanout.run())
                 tasks.create_task(self.scans.run())
                 tasks.create_task(self._watch_obstacles())
                 tasks.create_task(self._publish_point_map())

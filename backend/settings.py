@@ -122,7 +122,22 @@ class HubSettings(BaseSettings):
     telemetry_batch_size: int = Field(default=500, ge=1)
     telemetry_flush_interval_s: float = Field(default=0.25, gt=0)
     telemetry_queue_limit: int = Field(default=20_000, ge=100)
-    ui_update_interval_s: float = Field(default=0.1, gt=0, description="per-client coalescing")
+    ui_update_interval_s: float = Field(
+        default=0.1, gt=0, description="per-client pacing of live event batches"
+    )
+    ui_vehicle_interval_s: float = Field(
+        default=0.05,
+        gt=0,
+        description="the least time between two updates of one vehicle to the client feeds",
+    )
+    ui_batch_interval_s: float = Field(
+        default=0.01, gt=0, description="the least time between two vehicle batches to a feed"
+    )
+    slow_client_timeout_s: float = Field(
+        default=10.0,
+        gt=0,
+        description="a client feed that takes no vehicle batch for this long is closed (4408)",
+    )
     max_frame_bytes: int = Field(default=MAX_FRAME_BYTES, ge=1024)
     viz_enabled: bool = Field(default=True, description="serve the 3D view (viser) at /viz/")
     viz_origin: str | None = Field(

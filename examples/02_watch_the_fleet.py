@@ -32,15 +32,16 @@ try:
                 print("pong:", message["nonce"])
             elif message["type"] == "error":
                 raise SystemExit(f"error: {message['code']}: {message['message']}")
-            elif message["type"] == "vehicle":
-                vehicle = message["vehicle"]
-                state = vehicle["state"] or {}
-                print(
-                    f"{vehicle['id']:12} {state.get('mode', '?'):10} armed={state.get('armed')}"
-                    f" alt={state.get('alt_rel')} battery={state.get('battery_remaining')}%"
-                )
-                updates += 1
-                if updates == args.updates:
+            elif message["type"] == "vehicles":  # the vehicles that changed, batched
+                for vehicle in message["vehicles"]:
+                    state = vehicle["state"] or {}
+                    print(
+                        f"{vehicle['id']:12} {state.get('mode', '?'):10} "
+                        f"armed={state.get('armed')} alt={state.get('alt_rel')} "
+                        f"battery={state.get('battery_remaining')}%"
+                    )
+                    updates += 1
+                if updates >= args.updates:
                     break
 except ConnectionClosed as closed:
     raise SystemExit(f"error: the hub closed the live feed: {closed_reason(closed)}") from None

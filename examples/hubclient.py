@@ -130,10 +130,11 @@ class LiveFeed:
             if message["type"] == "fleet":  # the first message: every known vehicle
                 self.vehicles = {vehicle["id"]: vehicle for vehicle in message["vehicles"]}
                 self._snapshot = True
-            elif message["type"] == "vehicle":  # then one vehicle at a time, as it changes
+            elif message["type"] == "vehicles":  # then the vehicles that changed, batched
                 # An update leaves out what it sent before (modes, ...): keep it.
-                vehicle = message["vehicle"]
-                self.vehicles[vehicle["id"]] = {**self.vehicles.get(vehicle["id"], {}), **vehicle}
+                for vehicle in message["vehicles"]:
+                    known = self.vehicles.get(vehicle["id"], {})
+                    self.vehicles[vehicle["id"]] = {**known, **vehicle}
             elif message["type"] == "error":
                 raise SystemExit(f"error: the hub said {message['code']}: {message['message']}")
 

@@ -133,6 +133,7 @@ class CloseCode(IntEnum):
     # one vehicle id, so the agent gives up on 4409 and reconnects on 4410.
     VEHICLE_ID_IN_USE = 4409  # another agent, still answering, holds this vehicle id
     SUPERSEDED = 4410  # replaced by the same agent run reconnecting, or this one fell silent
+    TOO_SLOW = 4408  # a client feed that stopped reading for longer than the hub waits
 
 
 # Sequence numbers and times are stored in 64-bit columns; NaN compares false against
@@ -679,9 +680,14 @@ class FleetSnapshot(Message):
     vehicles: list[VehicleSummary] = Field(max_length=MAX_FLEET)
 
 
-class VehicleUpdate(Message):
-    type: Literal["vehicle"] = "vehicle"
-    vehicle: VehicleChange
+class VehicleBatch(Message):
+    """The vehicles that changed since this connection's last batch, each once (its newest
+    state): one frame per tick for the whole fleet, not one per vehicle. A vehicle's state
+    goes out at most once per the hub's ``ui_update_interval_s``; a client that reads too
+    slowly gets the newest state of each vehicle when it catches up, never a backlog."""
+
+    type: Literal["vehicles"] = "vehicles"
+    vehicles: list[VehicleChange] = Field(max_length=MAX_FLEET)
 
 
 # A batch of live events stays well inside a frame: an event is at most about 800 bytes.
@@ -1123,7 +1129,7 @@ ClientToHub: TypeAlias = Annotated[
 ]
 HubToClient: TypeAlias = Annotated[
     FleetSnapshot
-    | VehicleUpdate
+    | VehicleBatch
     | EventBatch
     | ScanSubscriptions
     | Pong

@@ -218,6 +218,9 @@ def render() -> str:
     defaults = HubSettings.model_fields
     max_bad_frames = defaults["max_bad_frames"].default
     ui_interval_s = defaults["ui_update_interval_s"].default
+    vehicle_interval_s = defaults["ui_vehicle_interval_s"].default
+    batch_interval_s = defaults["ui_batch_interval_s"].default
+    slow_client_s = defaults["slow_client_timeout_s"].default
     client_to_hub = union_members(messages.ClientToHub)
     hub_to_client = union_members(messages.HubToClient)
     agent_to_hub = union_members(messages.AgentToHub)
@@ -284,9 +287,13 @@ def render() -> str:
         "### The conversation",
         "",
         "1. The hub sends [`fleet`](#fleetsnapshot): every vehicle it knows, connected or not.",
-        "2. Then [`vehicle`](#vehicleupdate) for each vehicle that changes, coalesced: at most "
-        f"one per vehicle every {ui_interval_s:g} s (`GCS_UI_UPDATE_INTERVAL_S`), always the "
-        "newest state; an update not yet sent is replaced, never queued.",
+        "2. Then [`vehicles`](#vehiclebatch): the vehicles that changed, batched, each at its "
+        f"newest state: at most one update per vehicle every {vehicle_interval_s:g} s "
+        f"(`GCS_UI_VEHICLE_INTERVAL_S`) and one batch every {batch_interval_s:g} s "
+        "(`GCS_UI_BATCH_INTERVAL_S`), a change going out at once when neither holds it back. "
+        "An update not yet sent is replaced, never queued. A client that reads nothing for "
+        f"{slow_client_s:g} s (`GCS_SLOW_CLIENT_TIMEOUT_S`) is closed with "
+        f"{CloseCode.TOO_SLOW:d}.",
         "3. Meanwhile [`events`](#eventbatch): what the vehicles and the hub report from the "
         "moment of connecting (STATUSTEXTs with their severity, mode changes, failsafes, "
         "links going up and down, each command's result), in batches at most every "

@@ -113,10 +113,11 @@ class FleetWatcher:
             message = json.loads(frame)
             if message["type"] == "fleet":
                 self.vehicles = {vehicle["id"]: vehicle for vehicle in message["vehicles"]}
-            elif message["type"] == "vehicle":
+            elif message["type"] == "vehicles":
                 # An update leaves out what it sent before (modes, ...): keep it.
-                vehicle = message["vehicle"]
-                self.vehicles[vehicle["id"]] = {**self.vehicles.get(vehicle["id"], {}), **vehicle}
+                for vehicle in message["vehicles"]:
+                    known = self.vehicles.get(vehicle["id"], {})
+                    self.vehicles[vehicle["id"]] = {**known, **vehicle}
             elif message["type"] == "events":
                 self.events += message["events"]
                 self.dropped_events += message["dropped"]

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import asyncio
 import logging
+import time
 import uuid
 from collections.abc import Awaitable, Callable
 
@@ -12,6 +13,7 @@ from starlette.websockets import WebSocketDisconnect
 
 from backend.errors import CommandTimedOut, InvalidRequest, VehicleOffline
 from backend.fleet.registry import FleetRegistry
+from backend.observability.metrics import COMMAND_SECONDS
 from protocol.messages import (
     Command,
     CommandOutcome,
@@ -43,6 +45,8 @@ class AgentChannel:
         request_id = uuid.uuid4().hex
         future: asyncio.Future[CommandOutcome] = asyncio.get_running_loop().create_future()
         self._pending[request_id] = future
+        started = time.monotonic()
+        outcome = "offline"
         try:
             try:
                 await self._send(
@@ -50,13 +54,17 @@ class AgentChannel:
                 )
             except (RuntimeError, OSError, WebSocketDisconnect) as error:
                 raise VehicleOffline(f"the agent's connection closed: {error}") from None
-            return await asyncio.wait_for(future, timeout_s + AGENT_REPLY_GRACE_S)
+            result = await asyncio.wait_for(future, timeout_s + AGENT_REPLY_GRACE_S)
+            outcome = result.status
+            return result
         except TimeoutError:
+            outcome = "no_answer"
             raise CommandTimedOut(
                 f"{command.name}: the agent did not answer within {timeout_s:.0f} s"
             ) from None
         finally:
             self._pending.pop(request_id, None)
+            COMMAND_SECONDS.labels(outcome=outcome).observe(time.monotonic() - started)
 
     async def send_frame(self, frame: Message) -> None:
         """A frame that expects no answer (manual input)."""

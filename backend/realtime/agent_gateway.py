@@ -14,6 +14,8 @@ from backend.auth.credentials import bearer_token
 from backend.auth.policy import AGENT_MESSAGE_PERMISSIONS, Principal, authorize_message
 from backend.errors import Forbidden
 from backend.fleet.commands import AgentChannel
+from backend.observability import metrics
+from backend.observability.metrics import Surface
 from backend.realtime import manual_control
 from backend.realtime.agent_admission import Clash, judge
 from backend.realtime.bus import Topic
@@ -54,6 +56,8 @@ MANUAL_ENDED_SEVERITY = 4
 
 
 class AgentSession(PeerConnection):
+    surface = Surface.AGENT
+
     def __init__(self, websocket: WebSocket, hub: GatewayServices) -> None:
         super().__init__(websocket, hub.settings.max_frame_bytes, hub.settings.max_bad_frames)
         self.hub = hub
@@ -145,7 +149,12 @@ class AgentSession(PeerConnection):
                 log.warning("refused agent from %s: %s", self.peer, refusal.message)
                 await self.close(CloseCode.FORBIDDEN, refusal.message)
                 return
-            await self._serve_vehicle(hello)
+            connected = metrics.CONNECTIONS.labels(kind="agent")
+            connected.inc()
+            try:
+                await self._serve_vehicle(hello)
+            finally:
+                connected.dec()
         except FrameTooLarge as error:
             log.warning("closing agent %s: %s", self.peer, error)
             await self.close(CloseCode.MESSAGE_TOO_BIG, str(error))
@@ -180,14 +189,17 @@ class AgentSession(PeerConnection):
         try:
             message = decode(agent_to_hub, frame)
         except ProtocolError as error:
+            metrics.rejected(self.surface)
             await self.close(CloseCode.BAD_HELLO, f"first frame must be a hello: {error.message}")
             return None
         if not isinstance(message, Hello):
+            metrics.rejected(self.surface)
             await self.close(
                 CloseCode.BAD_HELLO, f"first frame must be a hello, not {message.type}"
             )
             return None
         if message.protocol != PROTOCOL_VERSION:
+            metrics.rejected(self.surface)
             await self.close(
                 CloseCode.BAD_HELLO,
                 f"protocol {message.protocol} is not supported; this hub speaks {PROTOCOL_VERSION}",

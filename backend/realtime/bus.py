@@ -82,6 +82,17 @@ class LatestSubscription:
     async def put(self, key: Hashable, message: Any) -> None:
         self.offer(key, message)
 
+    async def wait(self) -> None:
+        """Until something is pending (``take`` then takes it)."""
+        await self._ready.wait()
+
+    def take(self) -> list[Any]:
+        """Everything pending, newest per key, without waiting (perhaps nothing)."""
+        self._ready.clear()
+        messages = list(self._pending.values())
+        self._pending.clear()
+        return messages
+
     async def drain(self) -> list[Any]:
         """Everything pending, newest per key, waiting until there is something."""
         await self._ready.wait()

@@ -20,6 +20,8 @@ from backend.auth.policy import (
 )
 from backend.control.lease import Lease, LeaseRefused
 from backend.errors import Forbidden, VehicleNotFound
+from backend.observability import metrics
+from backend.observability.metrics import Surface
 from backend.realtime import manual_control
 from backend.realtime.bus import LatestSubscription, Topic
 from backend.realtime.collaborators import FeedServices
@@ -27,6 +29,13 @@ from backend.realtime.frames import FrameTooLarge, PeerConnection
 from backend.realtime.live_events import EventSubscription
 from backend.realtime.manual_relay import ManualRelay
 from backend.realtime.scan_feed import ScanSubscription
+from backend.realtime.vehicle_fanout import (
+    Broadcast,
+    VehicleInfo,
+    encode_batch,
+    vehicle_change,
+    vehicle_info,
+)
 from protocol.messages import (
     MAX_SCAN_SUBSCRIPTIONS,
     CloseCode,
@@ -46,9 +55,7 @@ from protocol.messages import (
     SubscribeScans,
     UnsubscribeMap,
     UnsubscribeScans,
-    VehicleChange,
     VehicleSummary,
-    VehicleUpdate,
     client_to_hub,
     decode,
 )
@@ -72,30 +79,76 @@ def origin_allowed(connection: HTTPConnection, allowed_origins: list[str]) -> bo
     return origin.lower() == own.lower()
 
 
-# A vehicle's autopilot, vehicle type and modes: what its hello said.
-VehicleInfo = tuple[str, str, tuple[str, ...]]
+class SlowClient(Exception):
+    """A feed that took no vehicle update for longer than the hub waits."""
 
 
-def _info(summary: VehicleSummary) -> VehicleInfo:
-    return (summary.autopilot, summary.vehicle_type, tuple(summary.modes))
+class VehicleFeed:
+    """One feed's side of the fanout (backend/realtime/vehicle_fanout.py), with the policy
+    for a client that reads slowly: while a frame is on its way, one more batch waits as
+    it is; past that, batches fold into the newest state per vehicle (counted as
+    coalesced). So a feed holds at most one encoded batch and one state per vehicle,
+    however far behind it is; its sender closes it once one frame takes longer than the
+    hub waits (``GCS_SLOW_CLIENT_TIMEOUT_S``)."""
 
+    def __init__(self, sent: dict[str, VehicleInfo]) -> None:
+        # What this feed has sent of each vehicle's hello (its snapshot, then updates).
+        self._sent = sent
+        self._shared: Broadcast | None = None
+        self._pending: dict[str, VehicleSummary] = {}
+        self._ready = asyncio.Event()
 
-def vehicle_change(summary: VehicleSummary, sent: dict[str, VehicleInfo]) -> VehicleChange:
-    """The update for `summary`, with its hello's info only if this feed has not sent
-    it yet (`sent`, what it has sent per vehicle, is brought up to date)."""
-    info = _info(summary)
-    changed = sent.get(summary.id) != info
-    sent[summary.id] = info
-    # The summary's fields are validated already; this runs per client per update.
-    return VehicleChange.model_construct(
-        id=summary.id,
-        autopilot=summary.autopilot if changed else None,
-        vehicle_type=summary.vehicle_type if changed else None,
-        modes=list(summary.modes) if changed else None,
-        connected=summary.connected,
-        last_seen=summary.last_seen,
-        state=summary.state,
-    )
+    @property
+    def pending(self) -> int:
+        shared = len(self._shared.summaries) if self._shared is not None else 0
+        return shared + len(self._pending)
+
+    def deliver(self, broadcast: Broadcast) -> None:
+        if self._shared is None and not self._pending:
+            self._shared = broadcast
+        else:
+            if self._shared is not None:
+                self._fold(self._shared.summaries)
+                self._shared = None
+            self._fold(broadcast.summaries)
+        self._ready.set()
+
+    def _fold(self, summaries: tuple[VehicleSummary, ...]) -> None:
+        replaced = 0
+        for summary in summaries:
+            replaced += summary.id in self._pending
+            self._pending[summary.id] = summary
+        if replaced:
+            metrics.DROPPED.labels(reason="coalesced").inc(replaced)
+
+    async def next_frame(self) -> str:
+        """The next ``vehicles`` frame for this feed: the shared one when this feed has
+        seen what it leaves out, else one of its own."""
+        await self._ready.wait()
+        self._ready.clear()
+        if (shared := self._shared) is not None:
+            self._shared = None
+            if all(
+                summary.id in shared.with_info
+                or self._sent.get(summary.id) == vehicle_info(summary)
+                for summary in shared.summaries
+            ):
+                for summary in shared.summaries:
+                    if summary.id in shared.with_info:
+                        self._sent[summary.id] = vehicle_info(summary)
+                return shared.text
+            return self._own(shared.summaries)
+        summaries, self._pending = tuple(self._pending.values()), {}
+        return self._own(summaries)
+
+    def _own(self, summaries: tuple[VehicleSummary, ...]) -> str:
+        changes = []
+        for summary in summaries:
+            info = vehicle_info(summary)
+            changed = self._sent.get(summary.id) != info
+            self._sent[summary.id] = info
+            changes.append(vehicle_change(summary, changed))
+        return encode_batch(changes)
 
 
 class ClientFeed(PeerConnection):
@@ -110,6 +163,7 @@ class ClientFeed(PeerConnection):
         self.scans = ScanSubscription()
         self.map = LatestSubscription()  # newest per layer, never a queue
         self.map_layers: set[MapLayer] = set()
+        self.vehicles = VehicleFeed({})
 
     async def serve(self) -> None:
         await self.websocket.accept()
@@ -139,11 +193,13 @@ class ClientFeed(PeerConnection):
         self.user = principal.name
         self.token_id = principal.token_id
         self.hub.client_feeds.add(self)
-        updates = LatestSubscription()
+        metrics.CONNECTIONS.labels(kind="dashboard").inc()
+        sent: dict[str, VehicleInfo] = {}
+        self.vehicles = VehicleFeed(sent)
         events = EventSubscription()
         surveys = LatestSubscription()
-        # Subscribe before the snapshot, so no change falls between the two.
-        self.hub.bus.subscribe(Topic.VEHICLE_STATE, updates)
+        # Joined before the snapshot, so no change falls between the two.
+        self.hub.fanout.join(self.vehicles)
         self.hub.bus.subscribe(Topic.VEHICLE_EVENT, events)
         self.hub.bus.subscribe(Topic.SURVEYS, surveys)
         try:
@@ -153,9 +209,9 @@ class ClientFeed(PeerConnection):
             # revocations among them).
             for state in list(self.hub.leases.last_states.values()):
                 await self.send(state)
-            sent = {summary.id: _info(summary) for summary in fleet}
+            sent.update({summary.id: vehicle_info(summary) for summary in fleet})
             async with asyncio.TaskGroup() as tasks:
-                pusher = tasks.create_task(self._push(updates, sent))
+                pusher = tasks.create_task(self._push(self.vehicles))
                 event_pusher = tasks.create_task(self._push_events(events))
                 scan_pusher = tasks.create_task(self._push_scans())
                 survey_pusher = tasks.create_task(self._push_surveys(surveys))
@@ -183,10 +239,18 @@ class ClientFeed(PeerConnection):
             log.warning("closing client %s: %s", self.peer, group.exceptions[0])
             with contextlib.suppress(RuntimeError):
                 await self.close(CloseCode.MESSAGE_TOO_BIG, str(group.exceptions[0]))
+        except* SlowClient:
+            metrics.DROPPED.labels(reason="slow_client").inc()
+            wait_s = self.hub.settings.slow_client_timeout_s
+            log.warning("closing client %s: it read nothing for %.0f s", self.peer, wait_s)
+            # Its socket may take nothing more, not even the close frame: do not wait long.
+            with contextlib.suppress(Exception):
+                async with asyncio.timeout(1.0):
+                    await self.close(CloseCode.TOO_SLOW, f"too slow: read nothing for {wait_s:g} s")
         except* WebSocketDisconnect:
             pass
         finally:
-            self.hub.bus.unsubscribe(Topic.VEHICLE_STATE, updates)
+            self.hub.fanout.leave(self.vehicles)
             self.hub.bus.unsubscribe(Topic.VEHICLE_EVENT, events)
             self.hub.bus.unsubscribe(Topic.SURVEYS, surveys)
             if self.scans.vehicles:
@@ -194,6 +258,7 @@ class ClientFeed(PeerConnection):
             if self.map_layers:
                 self.hub.bus.unsubscribe(Topic.MAP, self.map)
             self.hub.client_feeds.discard(self)
+            metrics.CONNECTIONS.labels(kind="dashboard").dec()
 
     async def _end_at_expiry(self, expires_at: float | None, *pushers: asyncio.Task[None]) -> None:
         """A token's lifetime bounds the feed it opened, as a revocation does."""
@@ -205,13 +270,20 @@ class ClientFeed(PeerConnection):
         log.info("closing client %s: the token of %s expired", self.peer, self.user)
         await self.close(CloseCode.UNAUTHORIZED, "token expired: log in again")
 
-    async def _push(self, updates: LatestSubscription, sent: dict[str, VehicleInfo]) -> None:
-        interval = self.hub.settings.ui_update_interval_s
+    @property
+    def pending(self) -> int:
+        """Vehicle updates waiting for this client (the metrics' queue depth)."""
+        return self.vehicles.pending
+
+    async def _push(self, vehicles: VehicleFeed) -> None:
+        limit_s = self.hub.settings.slow_client_timeout_s
         while True:
-            for summary in await updates.drain():
-                await self.send(VehicleUpdate(vehicle=vehicle_change(summary, sent)))
-            # Pacing, not synchronisation: updates arriving meanwhile coalesce per vehicle.
-            await asyncio.sleep(interval)
+            frame = await vehicles.next_frame()
+            try:
+                async with asyncio.timeout(limit_s):
+                    await self.send_text(frame)
+            except TimeoutError:
+                raise SlowClient from None
 
     async def _push_events(self, events: EventSubscription) -> None:
         interval = self.hub.settings.ui_update_interval_s
@@ -310,6 +382,7 @@ class ClientFeed(PeerConnection):
         try:
             self.hub.leases.admit(message.vehicle_id, self.user, message.seq)
         except LeaseRefused as refusal:
+            metrics.rejected(Surface.MANUAL)
             # Never forwarded. Old or too-fast frames are a client's jitter: counted
             # silently; input without the lease is said, since the pilot must know.
             if "lease" in refusal.message:

@@ -18,6 +18,7 @@ from backend.control.lease import LeaseBook
 from backend.fleet.commands import CommandDispatcher
 from backend.fleet.registry import FleetRegistry, VehicleRecord
 from backend.realtime.bus import Bus
+from backend.realtime.vehicle_fanout import VehicleFanout
 from backend.settings import HubSettings
 from backend.storage.records import StoredEvent
 from backend.storage.repository import Repository
@@ -77,6 +78,9 @@ class FeedServices(Protocol):
 
     @property
     def bus(self) -> Bus: ...
+
+    @property
+    def fanout(self) -> VehicleFanout: ...
 
     @property
     def accounts(self) -> Accounts: ...

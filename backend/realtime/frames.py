@@ -8,6 +8,8 @@ import logging
 
 from starlette.websockets import WebSocket, WebSocketDisconnect
 
+from backend.observability import metrics
+from backend.observability.metrics import Surface
 from protocol.messages import CloseCode, ErrorReply, Message, encode
 
 log = logging.getLogger(__name__)
@@ -32,6 +34,9 @@ def close_reason(reason: str) -> str:
 
 
 class PeerConnection:
+    # Which counters its frames go to (backend/observability/metrics.py).
+    surface = Surface.CLIENT
+
     def __init__(self, websocket: WebSocket, max_frame_bytes: int, max_bad_frames: int) -> None:
         self.websocket = websocket
         self.peer = f"{websocket.client.host}:{websocket.client.port}" if websocket.client else "?"
@@ -40,14 +45,22 @@ class PeerConnection:
         # Command requests, replies and pushes come from different tasks.
         self._send_lock = asyncio.Lock()
         self.bad_frames = 0
+        self._sent = metrics.MESSAGES_OUT.labels(surface=self.surface.value)
+        self._received = metrics.MESSAGES_IN.labels(surface=self.surface.value)
 
     async def send(self, message: Message) -> None:
+        await self.send_text(encode(message))
+
+    async def send_text(self, text: str) -> None:
+        """A frame encoded already: an update encoded once goes to every feed as is."""
         async with self._send_lock:
-            await self.websocket.send_text(encode(message))
+            await self.websocket.send_text(text)
+        self._sent.inc()
 
     async def send_bytes(self, data: bytes) -> None:
         async with self._send_lock:
             await self.websocket.send_bytes(data)
+        self._sent.inc()
 
     async def close(self, code: int, reason: str) -> None:
         async with self._send_lock:
@@ -59,14 +72,19 @@ class PeerConnection:
         if message["type"] == "websocket.disconnect":
             return None
         data: str | bytes = message.get("text") or message.get("bytes") or b""
-        size = len(data.encode() if isinstance(data, str) else data)
+        self._received.inc()
+        size = len(data)
+        if isinstance(data, str) and size * 4 > self._max_frame_bytes:
+            size = len(data.encode())  # only near the limit: UTF-8 is 4 bytes a character at most
         if size > self._max_frame_bytes:
+            metrics.rejected(self.surface)
             raise FrameTooLarge(size, self._max_frame_bytes)
         return data
 
     async def reject(self, reply: ErrorReply) -> None:
         """Answer a bad frame; past the limit, close the connection (raises disconnect)."""
         self.bad_frames += 1
+        metrics.rejected(self.surface)
         log.info("bad frame from %s: %s", self.peer, reply.message)
         await self.send(reply)
         if self.bad_frames >= self._max_bad_frames:

@@ -19,6 +19,7 @@ from typing import Protocol
 from sqlalchemy.exc import OperationalError, SQLAlchemyError
 from sqlalchemy.exc import TimeoutError as PoolTimeout
 
+from backend.observability import metrics
 from backend.storage.flights import FlightClosed, FlightOpened, FlightTracker
 from backend.storage.logbook import Logbook
 from backend.storage.records import LostFrames, StoredEvent, StoredRecord, TelemetryEnvelope
@@ -158,6 +159,8 @@ class StorageWriter:
             self.stats.database_available = True
             self.stats.last_batch_s = time.monotonic() - started
             self.stats.batches += 1
+            metrics.STORAGE_BATCH_SECONDS.observe(self.stats.last_batch_s)
+            metrics.QUEUE_DEPTH.labels(queue="storage").set(self.backlog)
             return
 
     def _write(self) -> None:
@@ -211,6 +214,10 @@ class StorageWriter:
         acks = {key: self.sequences.contiguous(key) for key in touched}
         self._merge_news(acks, gaps)
         self.stats.written += len(new_telemetry)
+        metrics.STORAGE_ROWS.inc(len(new_telemetry))
+        if new_telemetry:
+            oldest = min(envelope.telemetry.time for envelope in new_telemetry)
+            metrics.STORAGE_WRITE_LAG.set(max(0.0, time.time() - oldest))
         self.stats.duplicates += len(sequenced) - len(stored)
         self.stats.events_written += events_written
         self.stats.lost += sum(loss.last_seq - loss.first_seq + 1 for loss in losses)

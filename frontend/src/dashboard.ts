@@ -149,8 +149,8 @@ export class Dashboard {
         case "fleet":
           store.replaceAll(message.vehicles);
           break;
-        case "vehicle":
-          store.upsert(message.vehicle);
+        case "vehicles":
+          for (const vehicle of message.vehicles) store.upsert(vehicle);
           break;
         case "events":
           ops.onEvents(message);

@@ -12,10 +12,10 @@ export type {
   HubToClient,
   Ping,
   Pong,
+  VehicleBatch,
   VehicleChange,
   VehicleState,
   VehicleSummary,
-  VehicleUpdate,
 } from "./generated/protocol";
 
 type Schemas = components["schemas"];

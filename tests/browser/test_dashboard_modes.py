@@ -26,8 +26,10 @@ def test_rows_keep_the_modes_through_updates_that_leave_them_out(
     def enough_updates(frame: str | bytes) -> bool:
         nonlocal updates_without_modes
         message = json.loads(frame)
-        if message["type"] == "vehicle" and message["vehicle"]["id"] == VEHICLE:
-            updates_without_modes += "modes" not in message["vehicle"]
+        if message["type"] == "vehicles":
+            for vehicle in message["vehicles"]:
+                if vehicle["id"] == VEHICLE:
+                    updates_without_modes += "modes" not in vehicle
         return updates_without_modes >= UPDATES_WITHOUT_MODES
 
     with page.expect_websocket(lambda socket: socket.url.endswith(CLIENT_WS_PATH)) as opened:

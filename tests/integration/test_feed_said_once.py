@@ -55,8 +55,8 @@ def _vehicle_frames(
         remaining = deadline - time.monotonic()
         assert remaining > 0, f"no final update in {timeout_s} s; got {frames}"
         message = json.loads(client.recv(timeout=remaining))
-        if message["type"] == "vehicle":
-            frames.append(message["vehicle"])
+        if message["type"] == "vehicles":
+            frames += message["vehicles"]
     return frames
 
 

@@ -248,8 +248,8 @@ def test_client_bad_frame_gets_error_reply_and_feed_continues(
             update = json.loads(client.recv(timeout=5))
             while update["type"] == "events":  # the live event feed (link up) may come first
                 update = json.loads(client.recv(timeout=5))
-            assert update["type"] == "vehicle"
-            assert update["vehicle"]["id"] == "late"
+            assert update["type"] == "vehicles"
+            assert [vehicle["id"] for vehicle in update["vehicles"]] == ["late"]
 
 
 def test_revoked_agent_token_drops_the_live_agent(

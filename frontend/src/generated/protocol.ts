@@ -38,7 +38,7 @@ export type ClientToHub =
   | UnsubscribeMap;
 export type HubToClient =
   | FleetSnapshot
-  | VehicleUpdate
+  | VehicleBatch
   | EventBatch
   | ScanSubscriptions
   | Pong
@@ -791,9 +791,18 @@ export interface VehicleSummary {
   last_seen: number | null;
   state: VehicleState | null;
 }
-export interface VehicleUpdate {
-  type: "vehicle";
-  vehicle: VehicleChange;
+/**
+ * The vehicles that changed since this connection's last batch, each once (its newest
+ * state): one frame per tick for the whole fleet, not one per vehicle. A vehicle's state
+ * goes out at most once per the hub's ``ui_update_interval_s``; a client that reads too
+ * slowly gets the newest state of each vehicle when it catches up, never a backlog.
+ */
+export interface VehicleBatch {
+  type: "vehicles";
+  /**
+   * @maxItems 10000
+   */
+  vehicles: VehicleChange[];
 }
 /**
  * One vehicle's live update. It carries ``autopilot``, ``vehicle_type`` and ``modes``

@@ -1,0 +1,83 @@
+"""The hub's Prometheus metrics, served at ``/metrics`` (backend/api/metrics.py).
+
+One module holds every metric so that any layer can count without importing the layers
+above it: realtime, storage and control all import from here, and this imports nothing of
+the hub. The metrics live in prometheus-client's default registry, which also carries the
+process's own CPU, memory and file descriptors (``process_*``). Several hubs in one
+process (the tests) share these figures; a deployment runs one hub per process.
+"""
+
+from __future__ import annotations
+
+from enum import StrEnum
+
+from prometheus_client import Counter, Gauge, Histogram
+
+
+class Surface(StrEnum):
+    """Where a frame came in: the label of the per-surface counters."""
+
+    AGENT = "agent"  # /api/v1/agent/ws
+    CLIENT = "client"  # /api/v1/ws (dashboards, integrations)
+    MANUAL = "manual"  # manual-control input on the client feed
+
+
+CONNECTIONS = Gauge(
+    "gcs_connections", "Open WebSocket connections, by kind (agent, dashboard).", ["kind"]
+)
+MESSAGES_IN = Counter(
+    "gcs_messages_in_total", "Frames received on a WebSocket, by surface.", ["surface"]
+)
+MESSAGES_OUT = Counter(
+    "gcs_messages_out_total", "Frames sent on a WebSocket, by surface.", ["surface"]
+)
+REJECTED_FRAMES = Counter(
+    "gcs_rejected_frames_total",
+    "Frames the hub refused (not JSON, invalid, unexpected, oversized, forbidden), by surface.",
+    ["surface"],
+)
+DROPPED = Counter(
+    "gcs_dropped_total",
+    "Live updates a client never got, by reason: 'coalesced' (a newer state replaced an "
+    "unsent one, the slow-client policy), 'slow_client' (a feed closed for falling behind).",
+    ["reason"],
+)
+QUEUE_DEPTH = Gauge(
+    "gcs_queue_depth",
+    "Records waiting, by queue: 'storage' (the writer's inbox), 'dashboard_max' (the most "
+    "vehicle updates pending for any one client feed).",
+    ["queue"],
+)
+STORAGE_ROWS = Counter("gcs_storage_rows_total", "Telemetry samples committed to the database.")
+STORAGE_BATCH_SECONDS = Histogram(
+    "gcs_storage_batch_seconds",
+    "Time to commit one writer batch.",
+    buckets=(0.001, 0.0025, 0.005, 0.01, 0.025, 0.05, 0.1, 0.25, 0.5, 1.0, 2.5, 5.0, 10.0),
+)
+STORAGE_WRITE_LAG = Gauge(
+    "gcs_storage_write_lag_seconds",
+    "Age of the oldest sample in the last committed batch when it committed: how far the "
+    "store is behind the fleet.",
+)
+COMMAND_SECONDS = Histogram(
+    "gcs_command_seconds",
+    "Time from a command sent to an agent to its result, by outcome.",
+    ["outcome"],
+    buckets=(0.01, 0.025, 0.05, 0.1, 0.25, 0.5, 1.0, 2.5, 5.0, 10.0, 30.0, 60.0),
+)
+
+
+def rejected(surface: Surface) -> None:
+    """Count one refused frame of ``surface``."""
+    REJECTED_FRAMES.labels(surface=surface.value).inc()
+
+
+# Every labelled series exists from the start, so a scrape shows zeros, not absences.
+for _surface in Surface:
+    REJECTED_FRAMES.labels(surface=_surface.value)
+    MESSAGES_IN.labels(surface=_surface.value)
+    MESSAGES_OUT.labels(surface=_surface.value)
+for _kind in ("agent", "dashboard"):
+    CONNECTIONS.labels(kind=_kind)
+for _reason in ("coalesced", "slow_client"):
+    DROPPED.labels(reason=_reason)

@@ -24,7 +24,9 @@ router = SecuredRouter(tags=["system"])
     "/metrics",
     openapi_extra=requires(Permission.ADMIN),
     response_class=Response,
-    responses={200: {"content": {CONTENT_TYPE_LATEST: {}}, "description": "Prometheus text"}},
+    # For Prometheus, not for API clients: outside the API document (and the dashboard's
+    # types generated from it).
+    include_in_schema=False,
 )
 async def prometheus_metrics(hub: HubDep) -> Response:
     """The hub's counters and gauges in Prometheus's text format."""

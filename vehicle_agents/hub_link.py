@@ -159,6 +159,9 @@ class HubLink:
             self.url,
             additional_headers={"Authorization": f"Bearer {self._token}"},
             max_size=MAX_FRAME_BYTES,
+            # No permessage-deflate on the agent link: its frames are small and many, and
+            # compressing them cost the hub more CPU than the link saves (README, Scale).
+            compression=None,
             ping_interval=self.timeouts.ping_interval_s,
             open_timeout=self.timeouts.welcome_s,
         ) as websocket:

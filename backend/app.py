@@ -50,6 +50,7 @@ from backend.errors import (
     Unauthenticated,
 )
 from backend.hub import Hub
+from backend.observability.logs import use_json_logs
 from backend.settings import REPO_ROOT, HubSettings
 from common.log_escaping import escape_control_characters_in_logs
 from protocol.messages import AGENT_WS_PATH, CLIENT_WS_PATH
@@ -93,6 +94,8 @@ def create_app(settings: HubSettings | None = None) -> FastAPI:
     async def lifespan(app: FastAPI) -> AsyncIterator[None]:
         # By now the server has configured logging (its handlers and ours).
         escape_control_characters_in_logs()
+        if settings.log_format == "json":
+            use_json_logs()
         hub = await Hub.start(settings)
         app.state.hub = hub
         runner = asyncio.create_task(hub.run(), name="hub")

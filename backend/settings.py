@@ -133,6 +133,9 @@ class HubSettings(BaseSettings):
     ui_batch_interval_s: float = Field(
         default=0.01, gt=0, description="the least time between two vehicle batches to a feed"
     )
+    log_format: Literal["text", "json"] = Field(
+        default="text", description="json: one JSON object a line (time, level, logger, message)"
+    )
     slow_client_timeout_s: float = Field(
         default=10.0,
         gt=0,

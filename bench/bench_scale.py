@@ -470,6 +470,9 @@ class ProcessWatch:
         self._ticks = os.sysconf("SC_CLK_TCK")
         self._last = (time.monotonic(), self._cpu_s())
 
+    def cpu_seconds(self) -> float:
+        return self._cpu_s()
+
     def _cpu_s(self) -> float:
         fields = Path(f"/proc/{self.pid}/stat").read_text().rsplit(")", 1)[1].split()
         return (int(fields[11]) + int(fields[12])) / self._ticks  # utime + stime
@@ -585,6 +588,7 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
         samples_cpu: list[float] = []
         peak_rss = 0
         run_end = start_box.value + args.duration
+        cpu_at_start = hub.cpu_seconds() if hub is not None else 0.0
         while time.time() < run_end:
             time.sleep(1.0)
             if hub is not None:
@@ -595,6 +599,8 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
         agent_results = []
         for _ in workers:
             agent_results.append(results.get(timeout=DRAIN_TIMEOUT_S + 120))
+        # Everything sent is stored and acked by now: the hub's work for the run is done.
+        cpu_used = hub.cpu_seconds() - cpu_at_start if hub is not None else None
         for worker in workers:
             worker.join(30)
         stop_dashboards.set()
@@ -669,6 +675,11 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
         "delay_max_ms": round(max(delays, default=math.nan), 1),
         "hub_cpu_mean_pct": round(statistics.fmean(samples_cpu), 1) if samples_cpu else None,
         "hub_cpu_max_pct": round(max(samples_cpu), 1) if samples_cpu else None,
+        # The hub's CPU time per frame sent (ingest, storage, fan-out to every dashboard),
+        # from the start of sending until the last ack: what a busy machine cannot hide.
+        "hub_cpu_us_per_frame": round(cpu_used / total_sent * 1e6, 1)
+        if cpu_used is not None and total_sent
+        else None,
         "hub_rss_peak_mib": round(peak_rss / 2**20, 1) if peak_rss else None,
         "load_average_1m": round(os.getloadavg()[0], 2),
         "refused": refused[:10],

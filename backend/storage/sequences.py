@@ -14,12 +14,14 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field, replace
+from typing import NamedTuple
 
 from protocol.messages import SequencedKind
 
 
-@dataclass(frozen=True)
-class StreamKey:
+class StreamKey(NamedTuple):
+    # A tuple, not a dataclass: the writer hashes and compares these several times per
+    # stored frame, and a tuple does both in C.
     vehicle_id: str
     stream_id: str
     kind: SequencedKind

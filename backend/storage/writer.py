@@ -301,13 +301,11 @@ class StorageWriter:
 
 
 def _key(record: TelemetryEnvelope | StoredEvent | LostFrames) -> StreamKey:
-    match record:
-        case TelemetryEnvelope():
-            return StreamKey(record.vehicle_id, record.stream_id, "telemetry")
-        case StoredEvent():
-            return StreamKey(record.vehicle_id, record.stream_id, "event")
-        case LostFrames():
-            return StreamKey(record.vehicle_id, record.stream_id, record.kind)
+    if isinstance(record, TelemetryEnvelope):  # most records: checked first
+        return StreamKey(record.vehicle_id, record.stream_id, "telemetry")
+    if isinstance(record, StoredEvent):
+        return StreamKey(record.vehicle_id, record.stream_id, "event")
+    return StreamKey(record.vehicle_id, record.stream_id, record.kind)
 
 
 def _loss_event(loss: LostFrames) -> StoredEvent:

@@ -491,6 +491,22 @@ class ProcessWatch:
         return 0
 
 
+def stored_after_drain(
+    database_url: str, agent_results: list[dict[str, Any]]
+) -> dict[str, tuple[int, int]]:
+    """The store's counts once the hub has written what it holds: an agent that gave up
+    waiting for its acks left frames in the hub's queue, which are stored, not lost."""
+    sent = sum(sum(part["sent"].values()) for part in agent_results)
+    counts = stored_counts(database_url)
+    last_progress, stored = time.monotonic(), sum(c[1] for c in counts.values())
+    while stored < sent and time.monotonic() - last_progress < 10:
+        time.sleep(1)  # polling: the store announces nothing
+        counts = stored_counts(database_url)
+        if (now_stored := sum(c[1] for c in counts.values())) > stored:
+            last_progress, stored = time.monotonic(), now_stored
+    return counts
+
+
 def percentile(values: list[float], fraction: float) -> float:
     if not values:
         return math.nan
@@ -608,7 +624,7 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
         dashboards.join(30)
         if hub is not None:
             peak_rss = max(peak_rss, hub.rss())
-        counts = stored_counts(data_url) if data_url else {}
+        counts = stored_after_drain(data_url, agent_results) if data_url else {}
 
     sent: dict[str, int] = {}
     acked: dict[str, int] = {}

@@ -49,6 +49,7 @@ log = logging.getLogger(__name__)
 
 HELLO_TIMEOUT_S = 10.0
 SCAN_ERROR_INTERVAL_S = 1.0  # refused scans are answered at most this often
+ACK_INTERVAL_S = 0.2  # an agent is told what is stored at most this often
 
 
 # An agent's "manual" event at WARNING or worse: browser control has ended on the vehicle.
@@ -132,6 +133,10 @@ class AgentSession(PeerConnection):
                 )
             for resend in resends:
                 await self.send(resend)
+            # Pacing: acks arriving meanwhile fold into one per stream. Without it a fleet
+            # larger than the writer's batch gets an ack for nearly every frame it sends,
+            # as many frames out as in; the agent keeps its frames until acked either way.
+            await asyncio.sleep(ACK_INTERVAL_S)
 
     async def serve(self) -> None:
         await self.websocket.accept()

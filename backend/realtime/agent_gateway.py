@@ -49,7 +49,7 @@ log = logging.getLogger(__name__)
 
 HELLO_TIMEOUT_S = 10.0
 SCAN_ERROR_INTERVAL_S = 1.0  # refused scans are answered at most this often
-ACK_INTERVAL_S = 0.2  # an agent is told what is stored at most this often
+ACK_INTERVAL_S = 0.5  # an agent is told what is stored at most this often
 
 
 # An agent's "manual" event at WARNING or worse: browser control has ended on the vehicle.

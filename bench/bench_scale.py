@@ -64,7 +64,7 @@ from gcs.launcher import free_port
 from protocol.messages import AGENT_WS_PATH, CLIENT_WS_PATH, PROTOCOL_VERSION
 
 ADMIN_PASSWORD = "bench-admin-password"
-DRAIN_TIMEOUT_S = 60.0  # after the run, how long the agents wait for their last acks
+DRAIN_TIMEOUT_S = 180.0  # after the run, how long the agents wait for their last acks
 REPO = Path(__file__).resolve().parent.parent
 
 

@@ -14,6 +14,7 @@ from backend.auth.credentials import bearer_token
 from backend.auth.policy import AGENT_MESSAGE_PERMISSIONS, Principal, authorize_message
 from backend.errors import Forbidden
 from backend.fleet.commands import AgentChannel
+from backend.observability.metrics import Surface, count_rejected
 from backend.realtime import manual_control
 from backend.realtime.agent_admission import Clash, judge
 from backend.realtime.bus import Topic
@@ -54,6 +55,8 @@ MANUAL_ENDED_SEVERITY = 4
 
 
 class AgentSession(PeerConnection):
+    surface: Surface = "agent_ws"
+
     def __init__(self, websocket: WebSocket, hub: GatewayServices) -> None:
         super().__init__(websocket, hub.settings.max_frame_bytes, hub.settings.max_bad_frames)
         self.hub = hub
@@ -180,6 +183,7 @@ class AgentSession(PeerConnection):
         try:
             message = decode(agent_to_hub, frame)
         except ProtocolError as error:
+            count_rejected(self.surface)
             await self.close(CloseCode.BAD_HELLO, f"first frame must be a hello: {error.message}")
             return None
         if not isinstance(message, Hello):
@@ -269,7 +273,8 @@ class AgentSession(PeerConnection):
             news = asyncio.create_task(self._send_sequence_news())
             await self._ask_for_open_gaps(vehicle_id)
             try:
-                while frame := await self.receive():
+                # An empty frame is a frame (refused as such), not the end of the session.
+                while (frame := await self.receive()) is not None:
                     self._frame_arrived.set()
                     self._handling = True
                     try:
@@ -365,6 +370,7 @@ class AgentSession(PeerConnection):
         try:
             await self.hub.scans.ingest(hello.vehicle_id, hello.stream_id, data)
         except ValueError as refusal:
+            count_rejected("agent_scan")
             message = getattr(refusal, "message", str(refusal))
             now = time.monotonic()
             if now - self._scan_error_at >= SCAN_ERROR_INTERVAL_S:

@@ -20,6 +20,7 @@ from backend.auth.policy import (
 )
 from backend.control.lease import Lease, LeaseRefused
 from backend.errors import Forbidden, VehicleNotFound
+from backend.observability.metrics import Surface
 from backend.realtime import manual_control
 from backend.realtime.bus import LatestSubscription, Topic
 from backend.realtime.collaborators import FeedServices
@@ -99,6 +100,8 @@ def vehicle_change(summary: VehicleSummary, sent: dict[str, VehicleInfo]) -> Veh
 
 
 class ClientFeed(PeerConnection):
+    surface: Surface = "client_ws"
+
     def __init__(self, websocket: WebSocket, hub: FeedServices) -> None:
         super().__init__(websocket, hub.settings.max_frame_bytes, hub.settings.max_bad_frames)
         self.hub = hub

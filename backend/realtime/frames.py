@@ -8,6 +8,7 @@ import logging
 
 from starlette.websockets import WebSocket, WebSocketDisconnect
 
+from backend.observability.metrics import Surface, count_rejected
 from protocol.messages import CloseCode, ErrorReply, Message, encode
 
 log = logging.getLogger(__name__)
@@ -32,6 +33,8 @@ def close_reason(reason: str) -> str:
 
 
 class PeerConnection:
+    surface: Surface  # where its refused frames are counted
+
     def __init__(self, websocket: WebSocket, max_frame_bytes: int, max_bad_frames: int) -> None:
         self.websocket = websocket
         self.peer = f"{websocket.client.host}:{websocket.client.port}" if websocket.client else "?"
@@ -61,12 +64,14 @@ class PeerConnection:
         data: str | bytes = message.get("text") or message.get("bytes") or b""
         size = len(data.encode() if isinstance(data, str) else data)
         if size > self._max_frame_bytes:
+            count_rejected(self.surface)
             raise FrameTooLarge(size, self._max_frame_bytes)
         return data
 
     async def reject(self, reply: ErrorReply) -> None:
         """Answer a bad frame; past the limit, close the connection (raises disconnect)."""
         self.bad_frames += 1
+        count_rejected(self.surface)
         log.info("bad frame from %s: %s", self.peer, reply.message)
         await self.send(reply)
         if self.bad_frames >= self._max_bad_frames:

@@ -61,7 +61,9 @@ class PeerConnection:
         message = await self.websocket.receive()
         if message["type"] == "websocket.disconnect":
             return None
-        data: str | bytes = message.get("text") or message.get("bytes") or b""
+        # An empty text frame stays text (a bad JSON frame), not an empty binary one.
+        text = message.get("text")
+        data: str | bytes = text if text is not None else (message.get("bytes") or b"")
         size = len(data.encode() if isinstance(data, str) else data)
         if size > self._max_frame_bytes:
             count_rejected(self.surface)

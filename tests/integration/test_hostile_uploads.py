@@ -26,6 +26,7 @@ from tests.conftest import ADMIN_PASSWORD, hub_settings
 from tests.helpers import access_token, api_client, running_hub
 from tests.integration.test_agent_resource_bounds import tlog_of
 from tests.integration.test_hub_bad_input import scripted_agent
+from tests.map_tiles import png_tile, write_mbtiles
 
 Enrol = Callable[[str], str]
 
@@ -170,3 +171,27 @@ def test_a_tlog_name_with_dot_dot_slashes_stays_in_its_folder(
     downloaded = admin_api.get(f"/api/v1/tlogs/{response.json()['id']}")
     assert downloaded.status_code == 200
     assert "/" not in downloaded.headers["content-disposition"].split("filename=")[1]
+
+
+def test_corrupt_and_hostile_tile_files_are_skipped_not_served(tmp_path: Path) -> None:
+    """Tile sets are files an operator drops in the tiles folder: a truncated, garbage or
+    renamed file, or a symlink out of the folder, is left out of the list, and asking
+    for it is a 404, never a 500."""
+    tiles = tmp_path / "tiles"
+    tiles.mkdir()
+    write_mbtiles(tiles / "good.mbtiles", {(0, 0, 0): png_tile((0, 128, 0), 16)})
+    (tiles / "garbage.mbtiles").write_bytes(b"\x00" * 4096)
+    (tiles / "garbage.pmtiles").write_bytes(b"PMTiles\x03" + b"\xff" * 200)
+    (tiles / "empty.pmtiles").write_bytes(b"")
+    (tiles / "text.mbtiles").write_text("SQLite format 3\x00 but not really")
+    (tiles / "outside.mbtiles").symlink_to(tmp_path / "elsewhere.mbtiles")
+    with running_hub(hub_settings(tmp_path)) as hub:
+        admin = access_token(hub, "admin", ADMIN_PASSWORD)
+        with api_client(hub, admin) as api:
+            listed = api.get("/api/v1/tiles")
+            assert listed.status_code == 200, listed.text
+            assert [s["name"] for s in listed.json()] == ["good"]
+            for name in ("garbage", "empty", "text", "outside"):
+                response = api.get(f"/tiles/{name}/0/0/0")
+                assert response.status_code == 404, (name, response.text)
+            assert api.get("/tiles/good/0/0/0").status_code == 200

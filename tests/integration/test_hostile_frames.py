@@ -19,6 +19,7 @@ from websockets.exceptions import ConnectionClosed
 
 from backend.observability.metrics import Surface
 from protocol.messages import (
+    AGENT_WS_PATH,
     CLIENT_WS_PATH,
     CloseCode,
     ProtocolError,
@@ -212,3 +213,15 @@ def test_100k_nested_json_over_a_websocket_closes_it_too_big(
     with pytest.raises(ConnectionClosed):
         agent.socket.send("{}")
     assert httpx.get(f"{hub}/api/v1/health").status_code == 200
+
+
+def test_a_bad_first_frame_is_closed_as_a_bad_hello_and_counted(hub: str, enrol: Enrol) -> None:
+    headers = {"Authorization": f"Bearer {enrol('hi')}"}
+    for frame in ("", "[" * 30_000, '{"type": "hello", "protocol": "x"}'):
+        before = rejected("agent_ws")
+        with websocket(_ws(hub, AGENT_WS_PATH), headers) as socket:
+            socket.send(frame)
+            code, reason = _close_code(socket)
+        assert code == CloseCode.BAD_HELLO, (frame[:40], code, reason)
+        assert "first frame must be a hello" in reason
+        assert rejected("agent_ws") - before == 1

@@ -1,0 +1,85 @@
+"""One hub's link to the others (several hubs, README "Several hubs"): one NATS
+connection that carries the shared bus (backend/realtime/nats_bus.py) and the routes to
+agents connected elsewhere (backend/realtime/routing.py), and mirrors the other hubs'
+vehicles into this hub's registry so that its dashboards, commands and leases reach them.
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+import socket
+import uuid
+from typing import Any
+
+import nats
+from nats.aio.client import Client as Nats
+
+from backend.fleet.registry import FleetRegistry
+from backend.realtime.bus import Topic
+from backend.realtime.nats_bus import NatsBus
+from backend.realtime.routing import AgentRoutes, RemoteChannel
+from backend.settings import HubSettings
+from protocol.messages import VehicleSummary
+
+log = logging.getLogger(__name__)
+
+# A lease claim outlives its last renewal by this much beyond the lease's own expiry, so
+# a renewal late by a busy database does not hand the vehicle to someone else.
+LEASE_CLAIM_MARGIN_S = 2.0
+LEASE_EXPIRY_S = 2.0  # backend.control.lease.LeaseLimits' default
+
+
+class FleetLink:
+    def __init__(self, connection: Nats, prefix: str, registry: FleetRegistry, margin_s: float):
+        self.nats = connection
+        self.hub_id = f"{socket.gethostname()}-{os.getpid()}-{uuid.uuid4().hex[:6]}"
+        self.bus = NatsBus(connection, prefix)
+        self.routes = AgentRoutes(connection, prefix, registry, margin_s)
+        self.lease_ttl_s = LEASE_EXPIRY_S + LEASE_CLAIM_MARGIN_S
+        self._registry = registry
+        self.bus.on_remote = self._mirror
+
+    @classmethod
+    async def connect(cls, settings: HubSettings, registry: FleetRegistry) -> FleetLink:
+        assert settings.bus_url is not None
+
+        async def disconnected() -> None:
+            log.warning("NATS link lost: other hubs' vehicles are out of reach meanwhile")
+
+        async def reconnected() -> None:
+            log.info("NATS link back")
+
+        async def error(problem: Exception) -> None:
+            log.warning("NATS: %r", problem)
+
+        options: dict[str, Any] = {
+            "servers": [settings.bus_url],
+            "name": f"gcs-hub-{settings.port}",
+            # A hub hears only the others: what it publishes it has delivered itself.
+            "no_echo": True,
+            "max_reconnect_attempts": -1,
+            "disconnected_cb": disconnected,
+            "reconnected_cb": reconnected,
+            "error_cb": error,
+        }
+        connection = await nats.connect(**options)
+        link = cls(connection, settings.bus_prefix, registry, settings.bus_request_timeout_s)
+        log.info("joined the hubs on %s as %s", settings.bus_url, link.hub_id)
+        return link
+
+    async def run(self) -> None:
+        await self.bus.run()
+
+    async def close(self) -> None:
+        await self.routes.close()
+        try:
+            await self.nats.drain()
+        except Exception as error:
+            # Closing with the hub: a link already gone has nothing to flush.
+            log.info("NATS drain: %r", error)
+
+    def _mirror(self, topic: Topic, message: Any) -> None:
+        if topic is Topic.VEHICLE_STATE and isinstance(message, VehicleSummary):
+            routes = self.routes
+            self._registry.mirror(message, lambda: RemoteChannel(routes, message.id))

@@ -282,7 +282,7 @@ def test_a_lease_taken_on_hub_a_is_honoured_on_hub_b(hubs: TwoHubs) -> None:
     admin_on_b = Dashboard(hubs.b, hubs.admin_token(hubs.b))
     try:
         granted = pilot_on_a.control("acquire")
-        assert granted["type"] == "lease" and granted["holder"] == "pilot", granted
+        assert (granted["type"], granted["holder"]) == ("lease", "pilot"), granted
         # A second operator, on the other hub, is refused while the pilot flies...
         refused = admin_on_b.control("acquire")
         assert refused["type"] == "error", refused
@@ -295,7 +295,7 @@ def test_a_lease_taken_on_hub_a_is_honoured_on_hub_b(hubs: TwoHubs) -> None:
         # Given up on A, the lease is free on B at once.
         pilot_on_a.control("release")
         taken = admin_on_b.control("acquire")
-        assert taken["type"] == "lease" and taken["holder"] == "admin", taken
+        assert (taken["type"], taken["holder"]) == ("lease", "admin"), taken
     finally:
         pilot_on_a.close()
         admin_on_b.close()

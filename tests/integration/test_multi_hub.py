@@ -215,12 +215,18 @@ def test_an_agent_on_hub_a_obeys_a_command_sent_through_hub_b(hubs: TwoHubs) -> 
         # Audited and logged in the shared database, as any command.
         commands = api_b.get("/api/v1/commands", params={"vehicle_id": VEHICLE}).json()
     assert any(c["name"] == "set_mode" and c["status"] == "accepted" for c in commands["commands"])
+    # Hub A passed it on: the agent never left A for B.
+    hub_a_log = (hubs.fleet.log_dir / "hub.log").read_text()
+    assert f"{VEHICLE} set_mode (for another hub) -> " in hub_a_log
+    assert "agent sim_1 connected" not in (hubs.fleet.log_dir / "hub_b.log").read_text()
 
 
 def test_a_dashboard_on_hub_b_sees_telemetry_from_an_agent_on_hub_a(hubs: TwoHubs) -> None:
-    with FleetWatcher(hubs.a, hubs.admin_token(hubs.a)) as on_a:
+    token_from_a = hubs.admin_token(hubs.a)
+    with FleetWatcher(hubs.a, token_from_a) as on_a:
         on_a.wait_until(connected(VEHICLE), 60, f"{VEHICLE} on hub A")
-    with FleetWatcher(hubs.b, hubs.admin_token(hubs.b)) as on_b:
+    # A token issued by hub A opens hub B's feed too: tokens live in the shared database.
+    with FleetWatcher(hubs.b, token_from_a) as on_b:
 
         def fresh(vehicles: dict[str, dict[str, Any]]) -> bool:
             state = (vehicles.get(VEHICLE) or {}).get("state") or {}

@@ -202,6 +202,7 @@ class Hub:
         if fleet_link is not None:
             claims = LeaseClaims(LeaseClaimStore(engine), fleet_link.hub_id, fleet_link.lease_ttl_s)
             hub.leases.claims = claims
+            fleet_link.on_manual_ended = hub.manual_ended_elsewhere
         writer.on_sequences = hub.deliver_sequence_news
         hub.formations.scan_source = hub.leader_scan
         hub.surveys = SurveyService(hub, bus, SurveyRepository(engine), settings)
@@ -291,6 +292,10 @@ class Hub:
             return None
         area: dict[str, Any] = run.request.area.model_dump()
         return area
+
+    async def manual_ended_elsewhere(self, vehicle_id: str, why: str) -> None:
+        """Browser control ended on a vehicle whose agent another hub holds."""
+        await manual_control.end_on_vehicle(self, vehicle_id, why)
 
     @property
     def routes(self) -> AgentRoutes | None:

@@ -10,6 +10,7 @@ import logging
 import os
 import socket
 import uuid
+from collections.abc import Awaitable, Callable
 from typing import Any
 
 import nats
@@ -20,7 +21,7 @@ from backend.realtime.bus import Topic
 from backend.realtime.nats_bus import NatsBus
 from backend.realtime.routing import AgentRoutes, RemoteChannel
 from backend.settings import HubSettings
-from protocol.messages import VehicleSummary
+from protocol.messages import LiveEvent, VehicleSummary
 
 log = logging.getLogger(__name__)
 
@@ -28,6 +29,9 @@ log = logging.getLogger(__name__)
 # a renewal late by a busy database does not hand the vehicle to someone else.
 LEASE_CLAIM_MARGIN_S = 2.0
 LEASE_EXPIRY_S = 2.0  # backend.control.lease.LeaseLimits' default
+# An agent's "manual" event this severe (WARNING) or worse: browser control has ended on
+# the vehicle (backend/realtime/agent_gateway.py says the same of its own agents).
+MANUAL_ENDED_SEVERITY = 4
 
 
 class FleetLink:
@@ -39,6 +43,9 @@ class FleetLink:
         self.lease_ttl_s = LEASE_EXPIRY_S + LEASE_CLAIM_MARGIN_S
         self._registry = registry
         self.bus.on_remote = self._mirror
+        # Browser control ended on a vehicle connected to another hub (its deadman, the
+        # RC pilot's mode change): a lease granted here must end with it.
+        self.on_manual_ended: Callable[[str, str], Awaitable[None]] | None = None
 
     @classmethod
     async def connect(cls, settings: HubSettings, registry: FleetRegistry) -> FleetLink:
@@ -79,7 +86,14 @@ class FleetLink:
             # Closing with the hub: a link already gone has nothing to flush.
             log.info("NATS drain: %r", error)
 
-    def _mirror(self, topic: Topic, message: Any) -> None:
+    async def _mirror(self, topic: Topic, message: Any) -> None:
         if topic is Topic.VEHICLE_STATE and isinstance(message, VehicleSummary):
             routes = self.routes
             self._registry.mirror(message, lambda: RemoteChannel(routes, message.id))
+        elif (
+            isinstance(message, LiveEvent)
+            and message.kind == "manual"
+            and (message.severity or 7) <= MANUAL_ENDED_SEVERITY
+            and self.on_manual_ended is not None
+        ):
+            await self.on_manual_ended(message.vehicle_id, message.text)

@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import asyncio
 import logging
-from collections.abc import Callable, Hashable
+from collections.abc import Awaitable, Callable, Hashable
 from dataclasses import dataclass
 from typing import Any
 
@@ -61,7 +61,7 @@ SHARED: dict[Topic, SharedTopic] = {
     Topic.VEHICLE_EVENT: _model(LiveEvent, lambda event: event.vehicle_id),
 }
 
-RemoteListener = Callable[[Topic, Any], None]
+RemoteListener = Callable[[Topic, Any], Awaitable[None]]
 
 
 class NatsBus:
@@ -128,7 +128,7 @@ class NatsBus:
                 return
             self.received += 1
             if self.on_remote is not None:
-                self.on_remote(topic, message)
+                await self.on_remote(topic, message)
             await self._local.publish(topic, key, message)
 
         return receive

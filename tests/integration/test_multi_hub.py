@@ -193,6 +193,21 @@ class Dashboard:
 
         return poll_until(answer, 30, f"the answer to {action}")[0]
 
+    def stick(self, seq: int, vehicle: str = VEHICLE) -> None:
+        """A centred stick frame (the vehicle holds where it is)."""
+        axes = {"x": 0, "y": 0, "z": 500, "r": 0, "buttons": 0}
+        frame = {"type": "manual", "vehicle_id": vehicle, "seq": seq, "axes": axes}
+        self.socket.send(json.dumps({**frame, "source": "keyboard"}))
+
+    def events(self, text: str) -> list[dict[str, Any]]:
+        return [
+            event
+            for message in list(self.received)
+            if message["type"] == "events"
+            for event in message["events"]
+            if text in event["text"]
+        ]
+
     def close(self) -> None:
         self.socket.close()
         self._reader.join(5)
@@ -269,7 +284,9 @@ def test_killing_hub_a_moves_its_agent_to_hub_b_with_no_telemetry_lost(hubs: Two
     assert len(seqs) > 30
 
 
-def test_a_lease_taken_on_hub_a_is_honoured_on_hub_b(hubs: TwoHubs) -> None:
+def _ready_for_a_pilot(hubs: TwoHubs) -> None:
+    """The vehicle on hub A, with a GPS fix, taking the agent's stick input; a pilot
+    (an operator) known to both hubs."""
     admin_a = hubs.admin_token(hubs.a)
     with FleetWatcher(hubs.a, admin_a) as on_a, api_client(hubs.a, admin_a) as api_a:
         on_a.wait_until(connected(VEHICLE), 60, f"{VEHICLE} on hub A")
@@ -284,6 +301,10 @@ def test_a_lease_taken_on_hub_a_is_honoured_on_hub_b(hubs: TwoHubs) -> None:
             json={"username": "pilot", "password": OPERATOR_PASSWORD, "role": "operator"},
         )
         assert created.status_code in (200, 201), created.text
+
+
+def test_a_lease_taken_on_hub_a_is_honoured_on_hub_b(hubs: TwoHubs) -> None:
+    _ready_for_a_pilot(hubs)
     pilot_on_a = Dashboard(hubs.a, access_token(hubs.a, "pilot", OPERATOR_PASSWORD))
     admin_on_b = Dashboard(hubs.b, hubs.admin_token(hubs.b))
     try:
@@ -305,3 +326,32 @@ def test_a_lease_taken_on_hub_a_is_honoured_on_hub_b(hubs: TwoHubs) -> None:
     finally:
         pilot_on_a.close()
         admin_on_b.close()
+
+
+def test_a_pilot_on_hub_b_flies_the_vehicle_on_hub_a(hubs: TwoHubs) -> None:
+    """The lease and the stick frames go through hub B, the agent is on hub A. The
+    agent's deadman (0.5 s without a frame: hold) is the witness: it stays quiet while
+    the frames cross from B to A, and speaks once they stop; the lease on B ends with it."""
+    _ready_for_a_pilot(hubs)
+    pilot = Dashboard(hubs.b, access_token(hubs.b, "pilot", OPERATOR_PASSWORD))
+    try:
+        granted = pilot.control("acquire")
+        assert (granted["type"], granted["holder"]) == ("lease", "pilot"), granted
+        period = 1.0 / 25
+        until = time.monotonic() + 5.0  # past the agent's 3 s grace for the first frame
+        seq = 0
+        while time.monotonic() < until:
+            seq += 1
+            pilot.stick(seq)
+            time.sleep(period)  # the pilot's 25 Hz: the test's input, not a wait
+        assert not pilot.events("manual input stopped"), "frames did not reach the agent"
+        poll_until(lambda: pilot.events("manual input stopped"), 10, "the deadman, on B")
+
+        def ended() -> list[dict[str, Any]]:
+            return [m for m in list(pilot.received) if m["type"] == "lease" and not m["holder"]]
+
+        # Ended by the agent's word from hub A (not by the lease's own expiry on B).
+        [end] = poll_until(ended, 10, "the lease on hub B to end with browser control")
+        assert "manual input stopped" in end["reason"], end
+    finally:
+        pilot.close()

@@ -6,9 +6,11 @@ vehicles into this hub's registry so that its dashboards, commands and leases re
 
 from __future__ import annotations
 
+import asyncio
 import logging
 import os
 import socket
+import time
 import uuid
 from collections.abc import Awaitable, Callable
 from typing import Any
@@ -32,6 +34,11 @@ LEASE_EXPIRY_S = 2.0  # backend.control.lease.LeaseLimits' default
 # An agent's "manual" event this severe (WARNING) or worse: browser control has ended on
 # the vehicle (backend/realtime/agent_gateway.py says the same of its own agents).
 MANUAL_ENDED_SEVERITY = 4
+# A vehicle of another hub not heard of for this long is asked after; if no hub answers
+# for it (its hub died, and its agent has not reconnected elsewhere yet), it is shown
+# offline here rather than connected for ever.
+REMOTE_SILENCE_S = 3.0
+PRESENCE_TIMEOUT_S = 1.0
 
 
 class FleetLink:
@@ -46,6 +53,7 @@ class FleetLink:
         # Browser control ended on a vehicle connected to another hub (its deadman, the
         # RC pilot's mode change): a lease granted here must end with it.
         self.on_manual_ended: Callable[[str, str], Awaitable[None]] | None = None
+        self._heard_at: dict[str, float] = {}  # remote vehicles, monotonic
 
     @classmethod
     async def connect(cls, settings: HubSettings, registry: FleetRegistry) -> FleetLink:
@@ -76,7 +84,30 @@ class FleetLink:
         return link
 
     async def run(self) -> None:
-        await self.bus.run()
+        async with asyncio.TaskGroup() as tasks:
+            tasks.create_task(self.bus.run())
+            tasks.create_task(self._watch_silent_vehicles())
+
+    async def _watch_silent_vehicles(self) -> None:
+        while True:
+            await asyncio.sleep(REMOTE_SILENCE_S)  # polling: silence announces nothing
+            now = time.monotonic()
+            for vehicle_id, heard_at in list(self._heard_at.items()):
+                if now - heard_at < REMOTE_SILENCE_S:
+                    continue
+                record = self._registry.get(vehicle_id)
+                channel = record.channel
+                if channel is None or not channel.remote:
+                    self._heard_at.pop(vehicle_id, None)
+                    continue
+                if await self.routes.is_held(vehicle_id, PRESENCE_TIMEOUT_S):
+                    self._heard_at[vehicle_id] = time.monotonic()
+                    continue
+                if record.channel is channel:  # unchanged while we asked
+                    log.warning("%s: no hub holds its agent any more; shown offline", vehicle_id)
+                    record.channel = None
+                    self._heard_at.pop(vehicle_id, None)
+                    await self.bus.publish_here(Topic.VEHICLE_STATE, vehicle_id, record.summary())
 
     async def close(self) -> None:
         await self.routes.close()
@@ -89,7 +120,9 @@ class FleetLink:
     async def _mirror(self, topic: Topic, message: Any) -> None:
         if topic is Topic.VEHICLE_STATE and isinstance(message, VehicleSummary):
             routes = self.routes
-            self._registry.mirror(message, lambda: RemoteChannel(routes, message.id))
+            record = self._registry.mirror(message, lambda: RemoteChannel(routes, message.id))
+            if record is not None and record.channel is not None:
+                self._heard_at[message.id] = time.monotonic()
         elif (
             isinstance(message, LiveEvent)
             and message.kind == "manual"

@@ -99,6 +99,11 @@ class NatsBus:
             # replaces; nothing stored depends on it.
             await self._nats.publish(self.subject(topic), shared.encode(key, message))
 
+    async def publish_here(self, topic: Topic, key: Hashable, message: Any) -> None:
+        """To this hub's own subscribers only: what this hub concluded of another's
+        vehicle is not that hub's word to repeat."""
+        await self._local.publish(topic, key, message)
+
     async def run(self) -> None:
         """Take the other hubs' messages until cancelled."""
         subscriptions = []

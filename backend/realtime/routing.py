@@ -1,20 +1,22 @@
 """Commands and stick input for an agent connected to another hub, over NATS.
 
-Each hub answers, for every agent connected to it, two subjects:
+Each hub answers, for every agent connected to it, three subjects:
 ``<prefix>.agent.<vehicle>.command`` (request/reply: a command in, the flight
-controller's answer out) and ``<prefix>.agent.<vehicle>.manual`` (stick frames, newest
-wins, no answer). A hub that has no connection for a vehicle asks the subject; NATS
-itself finds the hub that serves it, so there is no directory of who holds what to keep
-right while hubs come and go. No hub serving it is NATS's "no responders", at once: the
-vehicle is offline. An agent that moves to another hub moves its subjects with it, and
-after a takeover (hub killed, agent reconnected elsewhere) only the live hub answers.
+controller's answer out), ``<prefix>.agent.<vehicle>.manual`` (stick frames, newest
+wins, no answer) and ``<prefix>.agent.<vehicle>.here`` (an empty answer: the vehicle
+is held here, for hubs that stopped hearing of it). A hub that has no connection for a
+vehicle asks the subject; NATS itself finds the hub that serves it, so there is no
+directory of who holds what to keep right while hubs come and go. No hub serving it
+is NATS's "no responders", at once: the vehicle is offline. An agent that moves to
+another hub moves its subjects with it, and after a takeover (hub killed, agent
+reconnected elsewhere) only the live hub answers.
 
 On the asking hub, such a vehicle's record (mirrored from the other hub's state on the
 bus, ``FleetRegistry.mirror``) has a ``RemoteChannel``: everything that sends to an
 agent (commands, leases, the stick relay, formations) reaches it as it reaches a local
-one. The hub that asks does the checks (roles, safety rails, audit, command log) against its
-mirror of the vehicle, as it would for its own; the hub that answers only passes the
-command to the agent and the answer back, within the asker's deadline.
+one. The hub that asks does the checks (roles, safety rails, audit, command log)
+against its mirror of the vehicle, as it would for its own; the hub that answers only
+passes the command to the agent and the answer back, within the asker's deadline.
 """
 
 from __future__ import annotations
@@ -145,7 +147,20 @@ class AgentRoutes:
             await self._nats.subscribe(
                 self.subject(vehicle_id, "manual"), cb=self._frame_forwarder(vehicle_id)
             ),
+            await self._nats.subscribe(self.subject(vehicle_id, "here"), cb=self._present),
         ]
+
+    async def is_held(self, vehicle_id: str, timeout_s: float) -> bool:
+        """Whether some hub holds the vehicle's agent now (it answers for it)."""
+        try:
+            await self._nats.request(self.subject(vehicle_id, "here"), b"", timeout=timeout_s)
+        except (NoRespondersError, NatsTimeout):
+            return False
+        return True
+
+    @staticmethod
+    async def _present(msg: Msg) -> None:
+        await msg.respond(b"")
 
     async def withdraw(self, vehicle_id: str) -> None:
         """The agent left this hub: another hub (or none) answers for it now."""

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import json
 import os
+import signal
 import socket
 import threading
 import time
@@ -355,3 +356,23 @@ def test_a_pilot_on_hub_b_flies_the_vehicle_on_hub_a(hubs: TwoHubs) -> None:
         assert "manual input stopped" in end["reason"], end
     finally:
         pilot.close()
+
+
+def test_a_vehicle_whose_hub_died_is_shown_offline_until_its_agent_comes_back(
+    hubs: TwoHubs,
+) -> None:
+    """Hub A dies while its agent is frozen (SIGSTOP: it cannot reconnect yet): hub B
+    stops showing the vehicle connected once no hub answers for it, and shows it
+    connected again when the agent, thawed, reconnects to B."""
+    with FleetWatcher(hubs.a, hubs.admin_token(hubs.a)) as on_a:
+        on_a.wait_until(connected(VEHICLE), 60, f"{VEHICLE} on hub A")
+    [agent] = [m.process for m in hubs.fleet.processes if m.name == "agent_1"]
+    with FleetWatcher(hubs.b, hubs.admin_token(hubs.b)) as on_b:
+        on_b.wait_until(lambda v: VEHICLE in v and v[VEHICLE]["connected"], 30, "hub B sees it")
+        agent.send_signal(signal.SIGSTOP)
+        try:
+            hubs.fleet.kill("hub")
+            on_b.wait_until(lambda v: not v[VEHICLE]["connected"], 20, "shown offline on B")
+        finally:
+            agent.send_signal(signal.SIGCONT)
+        on_b.wait_until(lambda v: v[VEHICLE]["connected"], 60, "back, through hub B")

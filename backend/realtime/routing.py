@@ -2,13 +2,13 @@
 
 Each hub answers, for every agent connected to it, three subjects:
 ``<prefix>.agent.<vehicle>.command`` (request/reply: a command in, the flight
-controller's answer out), ``<prefix>.agent.<vehicle>.manual`` (stick frames, newest
-wins, no answer) and ``<prefix>.agent.<vehicle>.here`` (an empty answer: the vehicle
-is held here, for hubs that stopped hearing of it). A hub that has no connection for a
-vehicle asks the subject; NATS itself finds the hub that serves it, so there is no
-directory of who holds what to keep right while hubs come and go. No hub serving it
-is NATS's "no responders", at once: the vehicle is offline. An agent that moves to
-another hub moves its subjects with it, and after a takeover (hub killed, agent
+controller's answer out), ``<prefix>.agent.<vehicle>.frame`` (stick frames and a
+formation's updates, newest wins, no answer) and ``<prefix>.agent.<vehicle>.here`` (an
+empty answer: the vehicle is held here, for hubs that stopped hearing of it). A hub that
+has no connection for a vehicle asks the subject; NATS itself finds the hub that serves
+it, so there is no directory of who holds what to keep right while hubs come and go. No
+hub serving it is NATS's "no responders", at once: the vehicle is offline. An agent that
+moves to another hub moves its subjects with it, and after a takeover (hub killed, agent
 reconnected elsewhere) only the live hub answers.
 
 On the asking hub, such a vehicle's record (mirrored from the other hub's state on the
@@ -38,9 +38,26 @@ from starlette.websockets import WebSocketDisconnect
 from backend.errors import CommandTimedOut, GcsError, VehicleOffline
 from backend.fleet.commands import AGENT_REPLY_GRACE_S, AgentChannel
 from backend.fleet.registry import FleetRegistry
-from protocol.messages import Command, CommandOutcome, ManualFrame, Message
+from protocol.messages import (
+    Command,
+    CommandOutcome,
+    FormationEnd,
+    FormationSlot,
+    LeaderScan,
+    LeaderUpdate,
+    ManualFrame,
+    Message,
+    ProtocolError,
+    decode,
+    encode,
+    hub_to_agent,
+)
 
 log = logging.getLogger(__name__)
+
+
+# The hub-to-agent frames that expect no answer: each crosses to the agent's hub as it is.
+ONE_WAY_FRAMES = (ManualFrame, FormationSlot, FormationEnd, LeaderUpdate, LeaderScan)
 
 
 class RoutedCommand(BaseModel):
@@ -77,7 +94,7 @@ class RemoteChannel(AgentChannel):
         return await self._routes.request(self._vehicle_id, command, timeout_s)
 
     async def send_frame(self, frame: Message) -> None:
-        if isinstance(frame, ManualFrame):
+        if isinstance(frame, ONE_WAY_FRAMES):
             await self._routes.send_frame(self._vehicle_id, frame)
         else:
             await self._unsendable(frame)
@@ -129,11 +146,9 @@ class AgentRoutes:
             raise CommandTimedOut(answer.message)
         raise VehicleOffline(answer.message)
 
-    async def send_frame(self, vehicle_id: str, frame: ManualFrame) -> None:
+    async def send_frame(self, vehicle_id: str, frame: Message) -> None:
         if self._nats.is_connected:
-            await self._nats.publish(
-                self.subject(vehicle_id, "manual"), frame.model_dump_json().encode()
-            )
+            await self._nats.publish(self.subject(vehicle_id, "frame"), encode(frame).encode())
 
     # -- the serving side --------------------------------------------------------------
 
@@ -145,7 +160,7 @@ class AgentRoutes:
                 self.subject(vehicle_id, "command"), cb=self._command_answerer(vehicle_id)
             ),
             await self._nats.subscribe(
-                self.subject(vehicle_id, "manual"), cb=self._frame_forwarder(vehicle_id)
+                self.subject(vehicle_id, "frame"), cb=self._frame_forwarder(vehicle_id)
             ),
             await self._nats.subscribe(self.subject(vehicle_id, "here"), cb=self._present),
         ]
@@ -217,10 +232,13 @@ class AgentRoutes:
     def _frame_forwarder(self, vehicle_id: str) -> Callable[[Msg], Awaitable[None]]:
         async def forward(msg: Msg) -> None:
             try:
-                frame = ManualFrame.model_validate_json(msg.data)
+                frame = decode(hub_to_agent, msg.data)
                 channel = self._registry.get(vehicle_id).channel
-            except (ValidationError, GcsError) as error:
-                log.info("stick frame for %s not forwarded: %s", vehicle_id, error)
+            except (ProtocolError, GcsError) as error:
+                log.info("frame for %s not forwarded: %s", vehicle_id, error)
+                return
+            if not isinstance(frame, ONE_WAY_FRAMES):
+                log.warning("%s for %s refused: only one-way frames cross", frame.type, vehicle_id)
                 return
             if channel is None or channel.remote:
                 return  # gone: the agent's deadman holds the vehicle
@@ -228,6 +246,6 @@ class AgentRoutes:
                 await channel.send_frame(frame)
                 self.forwarded_frames += 1
             except (RuntimeError, OSError, WebSocketDisconnect) as error:
-                log.info("stick frame for %s not sent: %s", vehicle_id, error)
+                log.info("frame for %s not sent: %s", vehicle_id, error)
 
         return forward

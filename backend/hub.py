@@ -58,6 +58,7 @@ from backend.storage.sequences import Gap, StreamKey
 from backend.storage.spool import RowSpool
 from backend.storage.surveys import SurveyRepository
 from backend.storage.writer import StorageWriter
+from backend.surveys.ownership import SurveyOwnership
 from backend.surveys.service import SurveyService
 from backend.viz3d.frame import SceneFrame, parse_origin
 from backend.viz3d.mirror import SceneMirror
@@ -206,6 +207,8 @@ class Hub:
         writer.on_sequences = hub.deliver_sequence_news
         hub.formations.scan_source = hub.leader_scan
         hub.surveys = SurveyService(hub, bus, SurveyRepository(engine), settings)
+        if fleet_link is not None:
+            hub.surveys.ownership = SurveyOwnership(LeaseClaimStore(engine), fleet_link.hub_id)
         await hub.surveys.load()
         hub.mosaic = MosaicService(settings.data_dir / "mosaics", hub.survey_area)
         await hub.mosaic.load()

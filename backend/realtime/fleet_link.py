@@ -44,7 +44,8 @@ PRESENCE_TIMEOUT_S = 1.0
 class FleetLink:
     def __init__(self, connection: Nats, prefix: str, registry: FleetRegistry, margin_s: float):
         self.nats = connection
-        self.hub_id = f"{socket.gethostname()}-{os.getpid()}-{uuid.uuid4().hex[:6]}"
+        # At most 64 characters, the width of a claim's holder column.
+        self.hub_id = f"{socket.gethostname()[:48]}-{os.getpid()}-{uuid.uuid4().hex[:6]}"
         self.bus = NatsBus(connection, prefix)
         self.routes = AgentRoutes(connection, prefix, registry, margin_s)
         self.lease_ttl_s = LEASE_EXPIRY_S + LEASE_CLAIM_MARGIN_S

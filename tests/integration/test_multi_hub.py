@@ -14,7 +14,7 @@ import socket
 import threading
 import time
 import uuid
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -24,6 +24,7 @@ import psycopg
 import pytest
 from websockets.sync.client import ClientConnection, connect
 
+from common.geodesy import LocalFrame
 from gcs.launcher import FleetPlan, LocalFleet, free_port
 from protocol.messages import CLIENT_WS_PATH
 from tests.conftest import scratch_postgres
@@ -32,6 +33,7 @@ from tests.helpers import (
     access_token,
     api_client,
     connected,
+    on_the_ground,
     poll_until,
     send_command,
 )
@@ -80,6 +82,7 @@ class TwoHubs:
     a: str  # hub A's base URL
     b: str
     database_url: str
+    start_b: Callable[[], None]  # hub B again, as the fixture started it
 
     def admin_token(self, base: str) -> str:
         return access_token(base, "admin", self.fleet.plan.admin_password)
@@ -128,20 +131,24 @@ def hubs(tmp_path: Path) -> Iterator[TwoHubs]:
             fleet.start_hub(shared)
             _wait_ready(fleet, plan.hub_http)
             tokens = f"{VEHICLE}={plan.agent_token(0)}"
-            fleet.spawn(
-                "hub_b",
-                ["hub", "--port", str(port_b), "--data-dir", str(tmp_path / "b")],
-                {
-                    **shared,
-                    "GCS_ENVIRONMENT": "development",
-                    "GCS_ADMIN_PASSWORD": plan.admin_password,
-                    "GCS_AGENT_TOKENS": tokens,
-                },
-            )
             hub_b = f"http://127.0.0.1:{port_b}"
-            _wait_ready(fleet, hub_b)
+
+            def start_b() -> None:
+                fleet.spawn(
+                    "hub_b",
+                    ["hub", "--port", str(port_b), "--data-dir", str(tmp_path / "b")],
+                    {
+                        **shared,
+                        "GCS_ENVIRONMENT": "development",
+                        "GCS_ADMIN_PASSWORD": plan.admin_password,
+                        "GCS_AGENT_TOKENS": tokens,
+                    },
+                )
+                _wait_ready(fleet, hub_b)
+
+            start_b()
             fleet.start_vehicle(0)
-            yield TwoHubs(fleet, plan.hub_http, hub_b, database_url)
+            yield TwoHubs(fleet, plan.hub_http, hub_b, database_url, start_b)
 
 
 def _psycopg_url(database_url: str) -> str:
@@ -376,3 +383,51 @@ def test_a_vehicle_whose_hub_died_is_shown_offline_until_its_agent_comes_back(
         finally:
             agent.send_signal(signal.SIGCONT)
         on_b.wait_until(lambda v: v[VEHICLE]["connected"], 60, "back, through hub B")
+
+
+def _survey_over_home(hubs: TwoHubs) -> dict[str, Any]:
+    """A small survey south-east of the vehicle's home, for it alone."""
+    lat, lon, _ = hubs.fleet.plan.vehicle_home(0)
+    frame = LocalFrame(lat, lon)
+    corners = [(30.0, 30.0), (90.0, 30.0), (90.0, 80.0), (30.0, 80.0), (30.0, 30.0)]
+    ring = [list(reversed(frame.to_geo(east, north))) for east, north in corners]
+    return {
+        "area": {"type": "Polygon", "coordinates": [ring]},
+        "camera": "sony_a6000_16mm",
+        "altitude_m": 30,
+        "side_overlap_pct": 60,
+        "front_overlap_pct": 70,
+        "angle_deg": 0,
+        "speed_ms": 8,
+        "vehicle_ids": [VEHICLE],
+    }
+
+
+def test_one_hub_drives_a_survey_and_another_takes_it_over_when_it_dies(hubs: TwoHubs) -> None:
+    admin_a = hubs.admin_token(hubs.a)
+    with FleetWatcher(hubs.a, admin_a) as on_a, api_client(hubs.a, admin_a) as api_a:
+        on_a.wait_until(on_the_ground(VEHICLE), 90, f"{VEHICLE} ready on hub A")
+        created = api_a.post("/api/v1/surveys", json=_survey_over_home(hubs))
+        assert created.status_code == 201, created.text
+    survey_id = created.json()["survey"]["id"]
+    # Hub B restarts: it finds the survey among the active ones in the shared store.
+    hubs.fleet.kill("hub_b")
+    hubs.start_b()
+    with api_client(hubs.b, hubs.admin_token(hubs.b)) as api_b:
+        # Hub B reads it, but hub A drives it: B does not act on it.
+        progress = api_b.get(f"/api/v1/surveys/{survey_id}/progress")
+        assert progress.status_code == 200, progress.text
+        assert progress.json()["state"] == "planned"
+        refused = api_b.post(f"/api/v1/surveys/{survey_id}/abort")
+        assert refused.status_code == 404, refused.text
+
+        hubs.fleet.kill("hub")
+
+        # Once hub A's claim has lapsed, hub B takes the survey over from its stored state.
+        def aborted_on_b() -> bool:
+            answer = api_b.post(f"/api/v1/surveys/{survey_id}/abort")
+            return answer.status_code == 200
+
+        poll_until(aborted_on_b, 60, "hub B to take the survey over", every_s=1.0)
+        after = api_b.get(f"/api/v1/surveys/{survey_id}/progress").json()
+    assert after["state"] == "aborted"

@@ -18,6 +18,7 @@ from backend.auth.accounts import PROVISIONING, Accounts
 from backend.auth.password_work import PasswordWork
 from backend.auth.principal_cache import PrincipalCache
 from backend.auth.rate_limit import Limit, RateLimiter
+from backend.control.claims import LeaseClaims
 from backend.control.lease import LeaseBook
 from backend.errors import NotFound
 from backend.fleet.commands import CommandDispatcher
@@ -32,7 +33,10 @@ from backend.photos.stored import StoredPhoto
 from backend.realtime import manual_control
 from backend.realtime.bus import InProcessBus, ReliableSubscription, Topic
 from backend.realtime.collaborators import AgentConnection, ClientConnection
+from backend.realtime.fleet_link import FleetLink
 from backend.realtime.live_events import live_event
+from backend.realtime.nats_bus import NatsBus
+from backend.realtime.routing import AgentRoutes
 from backend.scans.obstacles import describe as describe_obstacle
 from backend.scans.pointmap import MapObstacle
 from backend.scans.points import in_frame
@@ -41,6 +45,7 @@ from backend.scans.views import obstacle_views, point_map_view, site_origin
 from backend.settings import HubSettings
 from backend.storage.database import make_engine, migrate
 from backend.storage.formations import FormationRepository
+from backend.storage.lease_claims import LeaseClaimStore
 from backend.storage.logbook import Logbook
 from backend.storage.models import AuditRow, CommandRow
 from backend.storage.photos import PhotoRepository
@@ -53,6 +58,7 @@ from backend.storage.sequences import Gap, StreamKey
 from backend.storage.spool import RowSpool
 from backend.storage.surveys import SurveyRepository
 from backend.storage.writer import StorageWriter
+from backend.surveys.ownership import SurveyOwnership
 from backend.surveys.service import SurveyService
 from backend.viz3d.frame import SceneFrame, parse_origin
 from backend.viz3d.mirror import SceneMirror
@@ -87,7 +93,7 @@ class Hub:
     engine: Engine
     repository: Repository
     registry: FleetRegistry
-    bus: InProcessBus
+    bus: InProcessBus | NatsBus
     dispatcher: CommandDispatcher
     writer: StorageWriter
     logbook: Logbook
@@ -120,6 +126,8 @@ class Hub:
     scene: FleetScene | None = None
     replays: ReplayPanels | None = None
     viewers: Viewers | None = None
+    # Several hubs (GCS_BUS_URL): the NATS link, and the routes to agents on other hubs.
+    fleet_link: FleetLink | None = None
     # Area surveys: created in start(), as they send commands through the hub itself.
     surveys: SurveyService = field(init=False)
     # The live orthomosaic of each survey's photos (backend/mosaic/).
@@ -136,7 +144,11 @@ class Hub:
         repository = Repository(engine)
         registry = FleetRegistry()
         registry.load(await asyncio.to_thread(repository.vehicles))
-        bus = InProcessBus()
+        fleet_link = None
+        bus: InProcessBus | NatsBus = InProcessBus()
+        if settings.bus_url is not None:
+            fleet_link = await FleetLink.connect(settings, registry)
+            bus = fleet_link.bus
         stored = ReliableSubscription(settings.telemetry_queue_limit)
         bus.subscribe(Topic.STORAGE, stored)
         logbook = Logbook(engine)
@@ -186,10 +198,17 @@ class Hub:
                 max_rate_hz=settings.scan_max_rate_hz,
                 queue_limit=settings.scan_queue_limit,
             ),
+            fleet_link=fleet_link,
         )
+        if fleet_link is not None:
+            claims = LeaseClaims(LeaseClaimStore(engine), fleet_link.hub_id, fleet_link.lease_ttl_s)
+            hub.leases.claims = claims
+            fleet_link.on_manual_ended = hub.manual_ended_elsewhere
         writer.on_sequences = hub.deliver_sequence_news
         hub.formations.scan_source = hub.leader_scan
         hub.surveys = SurveyService(hub, bus, SurveyRepository(engine), settings)
+        if fleet_link is not None:
+            hub.surveys.ownership = SurveyOwnership(LeaseClaimStore(engine), fleet_link.hub_id)
         await hub.surveys.load()
         hub.mosaic = MosaicService(settings.data_dir / "mosaics", hub.survey_area)
         await hub.mosaic.load()
@@ -228,6 +247,8 @@ class Hub:
                 tasks.create_task(self.surveys.run())
                 tasks.create_task(self.mosaic.run())
                 tasks.create_task(manual_control.watch_expiry(self))
+                if self.fleet_link is not None:
+                    tasks.create_task(self.fleet_link.run())
                 if self.scene is not None:
                     mirror = SceneMirror(
                         self.scene,
@@ -238,6 +259,8 @@ class Hub:
                     )
                     tasks.create_task(mirror.run())
         finally:
+            if self.fleet_link is not None:
+                await self.fleet_link.close()
             await asyncio.to_thread(self.mosaic.close)  # the tiles in memory to disk
             if self.viz_http is not None:
                 await self.viz_http.aclose()
@@ -272,6 +295,14 @@ class Hub:
             return None
         area: dict[str, Any] = run.request.area.model_dump()
         return area
+
+    async def manual_ended_elsewhere(self, vehicle_id: str, why: str) -> None:
+        """Browser control ended on a vehicle whose agent another hub holds."""
+        await manual_control.end_on_vehicle(self, vehicle_id, why)
+
+    @property
+    def routes(self) -> AgentRoutes | None:
+        return None if self.fleet_link is None else self.fleet_link.routes
 
     def deliver_sequence_news(self, acks: dict[StreamKey, int], gaps: list[Gap]) -> None:
         """Tell each agent what is now stored and which of its frames never arrived."""

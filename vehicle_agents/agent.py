@@ -117,6 +117,7 @@ async def _run(settings: AgentSettings) -> None:
             on_manual=pilot.on_frame,
             on_formation=formation.on_hub,
             scans=scans,
+            fallback_urls=settings.hub_fallback,
         )
         tasks.create_task(TelemetryPublisher(link, outbox).run(settings.telemetry_rate_hz))
         tasks.create_task(hub.run())

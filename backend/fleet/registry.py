@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Protocol
 
@@ -114,6 +114,35 @@ class FleetRegistry:
             record.modes = list(hello.modes)
             record.system_id = hello.system_id
         record.channel = channel
+        return record
+
+    def mirror(
+        self, summary: VehicleSummary, remote: Callable[[], AgentChannel]
+    ) -> VehicleRecord | None:
+        """Another hub's word on a vehicle whose agent it holds (several hubs): the
+        vehicle as it is there, reached through ``remote()`` (a channel made once per
+        vehicle) while that hub says it is connected. None, and nothing changes, when
+        this hub holds the vehicle's agent itself: its own link is the truth."""
+        record = self._vehicles.get(summary.id)
+        if record is not None and record.channel is not None and not record.channel.remote:
+            return None
+        if record is None:
+            record = VehicleRecord(
+                id=summary.id,
+                autopilot=summary.autopilot,
+                vehicle_type=summary.vehicle_type,
+                modes=list(summary.modes),
+            )
+            self._vehicles[summary.id] = record
+        record.autopilot = summary.autopilot
+        record.vehicle_type = summary.vehicle_type
+        record.modes = list(summary.modes)
+        record.last_seen = summary.last_seen
+        record.state = summary.state
+        if not summary.connected:
+            record.channel = None
+        elif record.channel is None:
+            record.channel = remote()
         return record
 
     def disconnect(self, vehicle_id: str, channel: AgentChannel) -> VehicleRecord | None:

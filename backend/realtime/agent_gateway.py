@@ -248,6 +248,8 @@ class AgentSession(PeerConnection):
             record = hub.registry.connect(hello, channel)
             # Ours before the old one closes, so that its ending leaves the vehicle online.
             hub.agent_sessions[vehicle_id] = self
+            if hub.routes is not None:
+                await hub.routes.serve(vehicle_id)
         if previous is not None and verdict is not None:
             log.warning(
                 "agent %s: its old connection %s: %s", vehicle_id, previous.peer, verdict.reason
@@ -291,6 +293,8 @@ class AgentSession(PeerConnection):
             # A superseded session leaves the vehicle to its successor, still online.
             if hub.agent_sessions.get(vehicle_id) is self:
                 del hub.agent_sessions[vehicle_id]
+                if hub.routes is not None:
+                    await hub.routes.withdraw(vehicle_id)
             if (offline := hub.registry.disconnect(vehicle_id, channel)) is not None:
                 await hub.publish_state(offline)
                 await hub.store_event(vehicle_id, "link_down", "agent disconnected")

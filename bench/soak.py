@@ -74,7 +74,9 @@ def _rss_kb(pid: int) -> int | None:
     return None
 
 
-def sample_memory(fleet: LocalFleet, samples: Samples, every_s: float, stop: threading.Event) -> None:
+def sample_memory(
+    fleet: LocalFleet, samples: Samples, every_s: float, stop: threading.Event
+) -> None:
     while not stop.is_set():
         now = time.monotonic()
         for managed in list(fleet.processes):
@@ -270,9 +272,7 @@ def print_report(report: dict[str, Any], args: argparse.Namespace) -> None:
     latency = report["latency"]
     print("\n| latency agent->hub->dashboard | median (ms) | p99 (ms) |")
     print("|---|---:|---:|")
-    print(
-        f"| first 10 % | {latency['first_10pct_median_ms']} | {latency['first_10pct_p99_ms']} |"
-    )
+    print(f"| first 10 % | {latency['first_10pct_median_ms']} | {latency['first_10pct_p99_ms']} |")
     print(f"| last 10 % | {latency['last_10pct_median_ms']} | {latency['last_10pct_p99_ms']} |")
     print(f"| whole run ({latency['updates']} updates) | | {latency['p99_ms']} |")
     loss = report["loss"]

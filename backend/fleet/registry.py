@@ -56,6 +56,15 @@ class VehicleRecord:
     def connected(self) -> bool:
         return self.channel is not None
 
+    def earlier_run(self, stream_id: str) -> tuple[str, int] | None:
+        """The agent run this vehicle's live state came from last, and its last sample's
+        number, when that run is not ``stream_id``: the agent restarted (a crash, a power
+        cycle). None for the same run reconnecting, or nothing seen since the hub started."""
+        if not self.last_seq:
+            return None
+        run = next(reversed(self.last_seq))  # runs are added in the order they connected
+        return None if run == stream_id else (run, self.last_seq[run])
+
     def summary(self) -> VehicleSummary:
         return VehicleSummary(
             id=self.id,

@@ -12,8 +12,9 @@ from starlette.websockets import WebSocket, WebSocketDisconnect
 
 from backend.auth.credentials import bearer_token
 from backend.auth.policy import AGENT_MESSAGE_PERMISSIONS, Principal, authorize_message
-from backend.errors import Forbidden
+from backend.errors import Forbidden, VehicleNotFound
 from backend.fleet.commands import AgentChannel
+from backend.fleet.registry import FleetRegistry
 from backend.realtime import manual_control
 from backend.realtime.agent_admission import Clash, judge
 from backend.realtime.bus import Topic
@@ -240,6 +241,7 @@ class AgentSession(PeerConnection):
                     raise
                 log.warning("could not refresh %s in the store (%s); serving it", vehicle_id, error)
             self.stream_id = hello.stream_id
+            restart = _restart_gap(hub.registry, hello, time.time())
             channel = AgentChannel(self.send)
             record = hub.registry.connect(hello, channel)
             # Ours before the old one closes, so that its ending leaves the vehicle online.
@@ -263,6 +265,8 @@ class AgentSession(PeerConnection):
         try:
             await self.send(Welcome(vehicle_id=vehicle_id))
             await hub.store_event(vehicle_id, "link_up", f"agent connected from {self.peer}")
+            if restart is not None:
+                await hub.store_event(vehicle_id, "agent_restart", restart, severity=4)
             await hub.publish_state(record)
             # Not a TaskGroup: the receive loop's own exceptions (disconnect, oversized
             # frame) must reach serve() as they are, not wrapped in a group.
@@ -383,3 +387,24 @@ class AgentSession(PeerConnection):
             hello.vehicle_id, stream_id, telemetry
         ):
             await hub.publish_state(hub.registry.get(hello.vehicle_id))
+
+
+def _restart_gap(registry: FleetRegistry, hello: Hello, now: float) -> str | None:
+    """What an agent that comes back as a new run (it restarted) left unrecorded: nothing
+    was sampled between its earlier run's last sample the hub saw and this hello, and
+    what that run had not yet had acknowledged, it kept only in memory. None when the
+    same run reconnects (its outbox replays what is missing) or the hub knows no earlier
+    run (it restarted too)."""
+    try:
+        record = registry.get(hello.vehicle_id)
+    except VehicleNotFound:
+        return None
+    earlier = record.earlier_run(hello.stream_id)
+    if earlier is None:
+        return None
+    run, last_seq = earlier
+    since = "" if record.last_seen is None else f" ({now - record.last_seen:.1f} s ago)"
+    return (
+        f"agent restarted: run {run} ended with sample {last_seq}{since}; no telemetry "
+        f"between it and run {hello.stream_id}, which starts now"
+    )

@@ -48,6 +48,12 @@ class VehicleRecord:
     # Highest telemetry number seen per agent stream: older samples do not move the
     # live state backwards (storage has its own, gap-aware bookkeeping).
     last_seq: dict[str, int] = field(default_factory=dict)
+    # The stamp of a `LiveState` the live view shows ahead of a replaying backlog: until a
+    # sample at least that recent arrives, samples are the backlog's and are only stored.
+    # Samples are otherwise ordered by their numbers, never their stamps: the agent's
+    # clock may step back (time sync after boot) and the view must not freeze until
+    # the clock catches up.
+    live_ahead_at: float | None = None
     # The connected agent's command channel, None while no agent is connected: the one
     # record of whether the vehicle is online (commands go down this channel).
     channel: AgentChannel | None = field(default=None, repr=False, compare=False)
@@ -138,8 +144,7 @@ class FleetRegistry:
         """The agent's state now, sent ahead of a replayed backlog; older samples that
         arrive after it are stored but no longer move the live state."""
         record = self.get(vehicle_id)
-        if record.last_seen is not None and time < record.last_seen:
-            return False
+        record.live_ahead_at = time
         record.state = state
         record.last_seen = time
         return True
@@ -151,4 +156,10 @@ class FleetRegistry:
         if telemetry.seq <= record.last_seq.get(stream_id, -1):
             return False
         record.last_seq[stream_id] = telemetry.seq
-        return self.apply_live(vehicle_id, telemetry.time, telemetry.state)
+        if record.live_ahead_at is not None:
+            if telemetry.time < record.live_ahead_at:
+                return False
+            record.live_ahead_at = None  # caught up: numbers order the samples again
+        record.state = telemetry.state
+        record.last_seen = telemetry.time
+        return True

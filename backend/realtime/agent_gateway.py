@@ -200,7 +200,14 @@ class AgentSession(PeerConnection):
         """Gaps stored as still open (perhaps by a hub that died since) are asked for at
         once: an agent with nothing more to send on that stream must still answer, so
         that a loss is recorded as one."""
-        rows = await asyncio.to_thread(self.hub.repository.open_gaps_of, vehicle_id)
+        try:
+            rows = await asyncio.to_thread(self.hub.repository.open_gaps_of, vehicle_id)
+        except SQLAlchemyError as error:
+            # The database is away: the session goes on (its operators may need to land
+            # the vehicle). Gaps this hub saw open itself are asked for as they are found;
+            # those stored by an earlier run wait for the agent's next connection.
+            log.warning("could not read %s's open gaps (%s); serving it", vehicle_id, error)
+            return
         kinds: dict[str, SequencedKind] = {"telemetry": "telemetry", "event": "event"}
         for stream_id, kind, first, last in rows:
             if kind in kinds:

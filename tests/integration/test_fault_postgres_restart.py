@@ -161,3 +161,29 @@ def test_postgres_restarted_under_load_loses_nothing_accepted_and_safety_goes_on
                 assert _stored(api) == list(range(sent)), "a sample is missing or twice"
                 commands = api.get("/api/v1/commands", params={"vehicle_id": "v1"}).json()
                 assert sorted(c["name"] for c in commands["commands"]) == ["hold", "land", "rtl"]
+
+
+def test_an_agent_reconnecting_while_postgres_is_down_is_served_and_commanded(
+    tmp_path: Path,
+) -> None:
+    """A vehicle the store knows may reconnect during the outage (its operators may need
+    to land it): it is welcomed and stays connected, and a landing reaches it."""
+    with private_cluster() as cluster:
+        settings = hub_settings(tmp_path, database_url=cluster.url, spool_retry_s=0.2)
+        with (
+            running_hub(settings) as base,
+            api_client(base, access_token(base, "admin", ADMIN_PASSWORD)) as api,
+        ):
+            agent_token = api.post("/api/v1/vehicles/v1/agent-tokens").json()["token"]
+            with scripted_agent(base, "v1", agent_token) as agent:
+                agent.send(_telemetry(0))
+                poll_until(lambda: _stored(api) == [0], 30, "the vehicle known to the store")
+            cluster.ctl("-m", "immediate", "stop")
+            with scripted_agent(base, "v1", agent_token) as agent:
+                for name in ("land", "rtl"):
+                    with answering(agent) as received:
+                        answer = api.post("/api/v1/vehicles/v1/commands", json={"name": name})
+                        assert answer.status_code == 200, answer.text
+                        assert answer.json()["outcome"]["status"] == "accepted"
+                    assert [command["name"] for command in received] == [name]
+                assert api.get("/api/v1/vehicles").json()[0]["connected"] is True

@@ -12,6 +12,8 @@ it is back, each once; so are the audit and command-log rows of the commands.
 from __future__ import annotations
 
 import glob
+import os
+import pwd
 import shutil
 import subprocess
 import tempfile
@@ -62,7 +64,15 @@ class PrivateCluster:
 
 @contextmanager
 def private_cluster() -> Iterator[PrivateCluster]:
-    """A PostgreSQL cluster of this test's own; stopped and deleted after."""
+    """A PostgreSQL cluster of this test's own; stopped and deleted after. Needs root
+    (to run the server as the postgres user); skipped without, except in CI."""
+    try:
+        pwd.getpwnam("postgres")
+        usable = os.geteuid() == 0
+    except KeyError:
+        usable = False
+    if not usable and os.environ.get("CI", "").lower() != "true":
+        pytest.skip("a private PostgreSQL cluster needs root and a postgres user")
     # Not under pytest's tmp_path: its parents are closed to the postgres user.
     root = Path(tempfile.mkdtemp(prefix="gcs-pg-"))
     data = root / "data"

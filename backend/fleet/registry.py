@@ -129,6 +129,8 @@ class FleetRegistry:
             record.modes = list(hello.modes)
             record.system_id = hello.system_id
         record.channel = channel
+        # A new connection sends its own live state if it is behind again.
+        record.live_ahead_at = None
         return record
 
     def disconnect(self, vehicle_id: str, channel: AgentChannel) -> VehicleRecord | None:

@@ -222,6 +222,7 @@ class Hub:
             sink=MosaicSink(hub.mosaic),
         )
         await manual_control.revoke_left_open(hub, engine)
+        await hub.formations.close_left_open()
         if settings.viz_enabled:
             hub.viz = await asyncio.to_thread(VizServer.start)
             hub.viz_http = httpx.AsyncClient(timeout=httpx.Timeout(10.0))

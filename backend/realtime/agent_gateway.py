@@ -12,8 +12,9 @@ from starlette.websockets import WebSocket, WebSocketDisconnect
 
 from backend.auth.credentials import bearer_token
 from backend.auth.policy import AGENT_MESSAGE_PERMISSIONS, Principal, authorize_message
-from backend.errors import Forbidden
+from backend.errors import Forbidden, VehicleNotFound
 from backend.fleet.commands import AgentChannel
+from backend.fleet.registry import FleetRegistry
 from backend.observability.metrics import Surface, count_rejected
 from backend.realtime import manual_control
 from backend.realtime.agent_admission import Clash, judge
@@ -203,7 +204,14 @@ class AgentSession(PeerConnection):
         """Gaps stored as still open (perhaps by a hub that died since) are asked for at
         once: an agent with nothing more to send on that stream must still answer, so
         that a loss is recorded as one."""
-        rows = await asyncio.to_thread(self.hub.repository.open_gaps_of, vehicle_id)
+        try:
+            rows = await asyncio.to_thread(self.hub.repository.open_gaps_of, vehicle_id)
+        except SQLAlchemyError as error:
+            # The database is away: the session goes on (its operators may need to land
+            # the vehicle). Gaps this hub saw open itself are asked for as they are found;
+            # those stored by an earlier run wait for the agent's next connection.
+            log.warning("could not read %s's open gaps (%s); serving it", vehicle_id, error)
+            return
         kinds: dict[str, SequencedKind] = {"telemetry": "telemetry", "event": "event"}
         for stream_id, kind, first, last in rows:
             if kind in kinds:
@@ -244,6 +252,7 @@ class AgentSession(PeerConnection):
                     raise
                 log.warning("could not refresh %s in the store (%s); serving it", vehicle_id, error)
             self.stream_id = hello.stream_id
+            restart = _restart_gap(hub.registry, hello, time.time())
             channel = AgentChannel(self.send)
             record = hub.registry.connect(hello, channel)
             # Ours before the old one closes, so that its ending leaves the vehicle online.
@@ -269,6 +278,8 @@ class AgentSession(PeerConnection):
         try:
             await self.send(Welcome(vehicle_id=vehicle_id))
             await hub.store_event(vehicle_id, "link_up", f"agent connected from {self.peer}")
+            if restart is not None:
+                await hub.store_event(vehicle_id, "agent_restart", restart, severity=4)
             await hub.publish_state(record)
             # Not a TaskGroup: the receive loop's own exceptions (disconnect, oversized
             # frame) must reach serve() as they are, not wrapped in a group.
@@ -393,3 +404,24 @@ class AgentSession(PeerConnection):
             hello.vehicle_id, stream_id, telemetry
         ):
             await hub.publish_state(hub.registry.get(hello.vehicle_id))
+
+
+def _restart_gap(registry: FleetRegistry, hello: Hello, now: float) -> str | None:
+    """What an agent that comes back as a new run (it restarted) left unrecorded: nothing
+    was sampled between its earlier run's last sample the hub saw and this hello, and
+    what that run had not yet had acknowledged, it kept only in memory. None when the
+    same run reconnects (its outbox replays what is missing) or the hub knows no earlier
+    run (it restarted too)."""
+    try:
+        record = registry.get(hello.vehicle_id)
+    except VehicleNotFound:
+        return None
+    earlier = record.earlier_run(hello.stream_id)
+    if earlier is None:
+        return None
+    run, last_seq = earlier
+    since = "" if record.last_seen is None else f" ({now - record.last_seen:.1f} s ago)"
+    return (
+        f"agent restarted: run {run} ended with sample {last_seq}{since}; no telemetry "
+        f"between it and run {hello.stream_id}, which starts now"
+    )

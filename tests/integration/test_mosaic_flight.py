@@ -10,7 +10,9 @@ One flight makes both checks of the mosaic:
 - the ground targets (ArUco markers at known places) are found in the tiles the hub
   serves, at the median within one ground sample distance of where they lie, with the
   autopilots' exact poses. The same photos are then mosaicked again with GPS and attitude
-  noise added to their poses (a drone without RTK), and that error is reported.
+  noise added to their poses (a drone without RTK), and that error is reported: printed,
+  recorded as the test's properties (JUnit XML) and written to
+  test-output/mosaic/flight-accuracy.txt.
 
 Small photos (640 x 480) and a small area keep it short.
 """
@@ -60,6 +62,7 @@ GSD_M = ALTITUDE_M * (CAMERA.sensor_width_mm / CAMERA.image_width_px) / CAMERA.f
 # 15 m in from the edges; Ground.around has none north-east of home).
 WEST_M, SOUTH_M, WIDE_M, DEEP_M = -45.0, -95.0, 90.0, 90.0
 SURVEY_S = 240  # the whole flight at ten times speed, on a shared machine
+OUTPUT = Path(__file__).resolve().parents[2] / "test-output" / "mosaic"
 QUEUED_WHILE_CUT = 2  # photos the cut drone must keep on its disk before the link returns
 
 
@@ -302,6 +305,9 @@ def test_a_three_drone_survey_becomes_a_mosaic_true_to_its_targets_through_a_cut
         f"{statistics.median(noisy.values()) * 100 if noisy else float('nan'):.2f} cm"
     )
     print(report)
+    # Kept where the browser tests keep their screenshots, as the run's record.
+    OUTPUT.mkdir(parents=True, exist_ok=True)
+    (OUTPUT / "flight-accuracy.txt").write_text(report + "\n")
     record_property("mosaic_exact_median_error_m", statistics.median(exact.values()))
     record_property(
         "mosaic_noisy_median_error_m", statistics.median(noisy.values()) if noisy else None

@@ -232,22 +232,24 @@ def test_a_three_drone_survey_becomes_a_mosaic_true_to_its_targets_through_a_cut
         )
         fleet.proxy.cut()
         try:
+
+            def waiting_for_the_hub() -> list[str] | None:
+                # On the drone's disk and not at the hub. (A photo whose last chunk got in
+                # just before the cut, its answer lost, is still on the disk but stored:
+                # the agent learns so, and drops it, once the link returns.)
+                on_disk = {p.stem for p in queue_dir.glob("*.jpg")}
+                listed = _get(api, f"/api/v1/surveys/{survey_id}/photos")["photos"]
+                missing = sorted(on_disk - {p["photo_id"] for p in listed})
+                return missing if len(missing) >= QUEUED_WHILE_CUT else None
+
             queued = poll_until(
-                lambda: (
-                    len(names := sorted(p.stem for p in queue_dir.glob("*.jpg")))
-                    >= QUEUED_WHILE_CUT
-                    and names
-                ),
+                waiting_for_the_hub,
                 60,
                 f"{QUEUED_WHILE_CUT} photos queued on {cut_vid}'s disk while cut off",
-                every_s=0.05,
+                every_s=0.1,
             )
             drone = _get(api, f"/api/v1/surveys/{survey_id}/progress")["drones"][CUT]
             assert drone["state"] == "flying", drone  # still surveying: mid-survey
-            stored_ids = {
-                p["photo_id"] for p in _get(api, f"/api/v1/surveys/{survey_id}/photos")["photos"]
-            }
-            assert not stored_ids & set(queued), "a queued photo reached the hub through the cut"
         finally:
             fleet.proxy.start()
 

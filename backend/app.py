@@ -170,9 +170,9 @@ async def _gcs_error_response(request: Request, error: GcsError) -> JSONResponse
 
 
 async def _database_unavailable(request: Request, error: OperationalError) -> JSONResponse:
-    log.warning(
-        "database unavailable during %s %s: %s", request.method, request.url.path, error.orig
-    )
+    # A WebSocket's scope has no method: say so rather than fail in the handler itself.
+    method = request.scope.get("method", "WEBSOCKET")
+    log.warning("database unavailable during %s %s: %s", method, request.url.path, error.orig)
     return JSONResponse(
         {"detail": "the database is unavailable; try again shortly"},
         status_code=503,

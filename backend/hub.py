@@ -18,6 +18,7 @@ from backend.auth.accounts import PROVISIONING, Accounts
 from backend.auth.password_work import PasswordWork
 from backend.auth.principal_cache import PrincipalCache
 from backend.auth.rate_limit import Limit, RateLimiter
+from backend.control.claims import LeaseClaims
 from backend.control.lease import LeaseBook
 from backend.errors import NotFound
 from backend.fleet.commands import CommandDispatcher
@@ -32,7 +33,10 @@ from backend.photos.stored import StoredPhoto
 from backend.realtime import manual_control
 from backend.realtime.bus import InProcessBus, ReliableSubscription, Topic
 from backend.realtime.collaborators import AgentConnection, ClientConnection
+from backend.realtime.fleet_link import FleetLink
 from backend.realtime.live_events import live_event
+from backend.realtime.nats_bus import NatsBus
+from backend.realtime.routing import AgentRoutes
 from backend.realtime.vehicle_fanout import VehicleFanout
 from backend.scans.obstacles import describe as describe_obstacle
 from backend.scans.pointmap import MapObstacle
@@ -42,6 +46,7 @@ from backend.scans.views import obstacle_views, point_map_view, site_origin
 from backend.settings import HubSettings
 from backend.storage.database import make_engine, migrate
 from backend.storage.formations import FormationRepository
+from backend.storage.lease_claims import LeaseClaimStore
 from backend.storage.logbook import Logbook
 from backend.storage.models import AuditRow, CommandRow
 from backend.storage.photos import PhotoRepository
@@ -54,6 +59,7 @@ from backend.storage.sequences import Gap, StreamKey
 from backend.storage.spool import RowSpool
 from backend.storage.surveys import SurveyRepository
 from backend.storage.writer import StorageWriter
+from backend.surveys.ownership import SurveyOwnership
 from backend.surveys.service import SurveyService
 from backend.viz3d.frame import SceneFrame, parse_origin
 from backend.viz3d.mirror import SceneMirror
@@ -88,7 +94,7 @@ class Hub:
     engine: Engine
     repository: Repository
     registry: FleetRegistry
-    bus: InProcessBus
+    bus: InProcessBus | NatsBus
     dispatcher: CommandDispatcher
     writer: StorageWriter
     logbook: Logbook
@@ -123,6 +129,8 @@ class Hub:
     viewers: Viewers | None = None
     # Vehicle states to the client feeds, batched and encoded once per tick.
     fanout: VehicleFanout = field(init=False)
+    # Several hubs (GCS_BUS_URL): the NATS link, and the routes to agents on other hubs.
+    fleet_link: FleetLink | None = None
     # Area surveys: created in start(), as they send commands through the hub itself.
     surveys: SurveyService = field(init=False)
     # The live orthomosaic of each survey's photos (backend/mosaic/).
@@ -139,7 +147,11 @@ class Hub:
         repository = Repository(engine)
         registry = FleetRegistry()
         registry.load(await asyncio.to_thread(repository.vehicles))
-        bus = InProcessBus()
+        fleet_link = None
+        bus: InProcessBus | NatsBus = InProcessBus()
+        if settings.bus_url is not None:
+            fleet_link = await FleetLink.connect(settings, registry)
+            bus = fleet_link.bus
         stored = ReliableSubscription(settings.telemetry_queue_limit)
         bus.subscribe(Topic.STORAGE, stored)
         logbook = Logbook(engine)
@@ -189,13 +201,20 @@ class Hub:
                 max_rate_hz=settings.scan_max_rate_hz,
                 queue_limit=settings.scan_queue_limit,
             ),
+            fleet_link=fleet_link,
         )
+        if fleet_link is not None:
+            claims = LeaseClaims(LeaseClaimStore(engine), fleet_link.hub_id, fleet_link.lease_ttl_s)
+            hub.leases.claims = claims
+            fleet_link.on_manual_ended = hub.manual_ended_elsewhere
         writer.on_sequences = hub.deliver_sequence_news
         hub.fanout = VehicleFanout(
             bus, settings.ui_vehicle_interval_s, settings.ui_batch_interval_s
         )
         hub.formations.scan_source = hub.leader_scan
         hub.surveys = SurveyService(hub, bus, SurveyRepository(engine), settings)
+        if fleet_link is not None:
+            hub.surveys.ownership = SurveyOwnership(LeaseClaimStore(engine), fleet_link.hub_id)
         await hub.surveys.load()
         hub.mosaic = MosaicService(settings.data_dir / "mosaics", hub.survey_area)
         await hub.mosaic.load()
@@ -209,6 +228,7 @@ class Hub:
             sink=MosaicSink(hub.mosaic),
         )
         await manual_control.revoke_left_open(hub, engine)
+        await hub.formations.close_left_open()
         if settings.viz_enabled:
             hub.viz = await asyncio.to_thread(VizServer.start)
             hub.viz_http = httpx.AsyncClient(timeout=httpx.Timeout(10.0))
@@ -235,6 +255,8 @@ class Hub:
                 tasks.create_task(self.surveys.run())
                 tasks.create_task(self.mosaic.run())
                 tasks.create_task(manual_control.watch_expiry(self))
+                if self.fleet_link is not None:
+                    tasks.create_task(self.fleet_link.run())
                 if self.scene is not None:
                     mirror = SceneMirror(
                         self.scene,
@@ -245,6 +267,8 @@ class Hub:
                     )
                     tasks.create_task(mirror.run())
         finally:
+            if self.fleet_link is not None:
+                await self.fleet_link.close()
             await asyncio.to_thread(self.mosaic.close)  # the tiles in memory to disk
             if self.viz_http is not None:
                 await self.viz_http.aclose()
@@ -279,6 +303,14 @@ class Hub:
             return None
         area: dict[str, Any] = run.request.area.model_dump()
         return area
+
+    async def manual_ended_elsewhere(self, vehicle_id: str, why: str) -> None:
+        """Browser control ended on a vehicle whose agent another hub holds."""
+        await manual_control.end_on_vehicle(self, vehicle_id, why)
+
+    @property
+    def routes(self) -> AgentRoutes | None:
+        return None if self.fleet_link is None else self.fleet_link.routes
 
     def deliver_sequence_news(self, acks: dict[StreamKey, int], gaps: list[Gap]) -> None:
         """Tell each agent what is now stored and which of its frames never arrived."""

@@ -222,6 +222,22 @@ class HubSettings(BaseSettings):
         "sends nothing for this long after a ping; otherwise it is refused (close 4409)",
     )
 
+    # Several hubs (README "Several hubs"): a NATS server joins them; unset, the hub is
+    # alone and its bus is in-process (the embedded default).
+    bus_url: str | None = Field(
+        default=None,
+        description="NATS URL (nats://host:4222) shared by several hubs; unset: one hub, "
+        "in-process bus",
+    )
+    bus_prefix: str = Field(
+        default="gcs",
+        pattern=r"^[A-Za-z0-9_-]{1,64}$",
+        description="first token of every NATS subject, so deployments can share a server",
+    )
+    bus_request_timeout_s: float = Field(
+        default=2.0, gt=0, le=30, description="a routed command's extra time on the bus"
+    )
+
     retention_telemetry_days: float | None = Field(default=None, gt=0)
     retention_events_days: float | None = Field(default=None, gt=0)
     retention_commands_days: float | None = Field(default=None, gt=0)

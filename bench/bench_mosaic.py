@@ -1,7 +1,7 @@
 """The live orthomosaic with 12 MP photos: photos per second into tiles, and the delay from
 a stored photo to its tiles being servable.
 
-    .venv/bin/python bench/bench_mosaic.py              # about five minutes on 2 cores
+    .venv/bin/python bench/bench_mosaic.py              # a minute or two on 2 cores
     options: --photos 24 --unique 4 --rate 1.0 --altitude 60
 
 Figures and their bars (issue 21):

@@ -162,6 +162,9 @@ class LocalFleet:
         self.sim_ports: dict[int, int] = {}  # by vehicle index, to restart an agent
         self.lidar_ports: dict[int, int] = {}
         self.camera_ports: dict[int, int] = {}
+        # The hub address an agent dials instead of the plan's, by vehicle index: a test
+        # puts a proxy it can cut between one agent and the hub.
+        self.agent_hubs: dict[int, str] = {}
 
     def vehicle_id(self, index: int) -> str:
         return self.plan.vehicle_id(index)
@@ -257,7 +260,7 @@ class LocalFleet:
                 "--fcu",
                 f"tcp:127.0.0.1:{sim_port}",
                 "--hub",
-                self.plan.hub_ws,
+                self.agent_hubs.get(index, self.plan.hub_ws),
                 "--vehicle-id",
                 self.vehicle_id(index),
                 "--telemetry-rate-hz",

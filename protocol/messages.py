@@ -515,13 +515,14 @@ EventKind = Literal[
     "id_clash",  # the hub refused a second agent for this vehicle id (never sent by agents)
     "manual",  # browser manual control started, ended or held by the deadman
     "upload",  # the agent's onboard .tlog could not be handed over (or was, after failing)
-    "camera",  # the camera fired (CAMERA_FEEDBACK); the event's photo says where
+    "camera",  # the camera fired (CAMERA_FEEDBACK; PX4: CAMERA_TRIGGER); its photo says where
     "formation",  # a follower joined, held, backed off or left its formation
 ]
 
 
 class Photo(Message):
-    """Where and when a photo was taken, as the autopilot reports it (CAMERA_FEEDBACK)."""
+    """Where and when a photo was taken, as the autopilot reports it (ArduPilot's
+    CAMERA_FEEDBACK; PX4's CAMERA_TRIGGER, posed from the streams at its arrival)."""
 
     index: int = Field(ge=0, le=2**32 - 1, description="the camera's image number (img_idx)")
     lat: float = Field(ge=-90, le=90)

@@ -307,7 +307,11 @@ def split_client_scan_frame(data: bytes) -> tuple[str, ScanFrame]:
     if data[:4] != CLIENT_SCAN_MAGIC or len(data) < 5:
         raise ScanFrameError("magic: not a subscriber's scan frame (expected b'GSCV')")
     size = data[4]
-    return data[5 : 5 + size].decode(), decode_scan(data[5 + size :])
+    try:
+        vehicle_id = data[5 : 5 + size].decode()
+    except UnicodeDecodeError:
+        raise ScanFrameError("vehicle_id: not UTF-8") from None
+    return vehicle_id, decode_scan(data[5 + size :])
 
 
 _FIELD_BYTES = {"4s": 4, "u8": 1, "u16": 2, "u64": 8, "f32": 4, "f64": 8}

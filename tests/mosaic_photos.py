@@ -148,6 +148,15 @@ def target_errors_m(service: MosaicService, survey_id: str, ground: Ground) -> d
     zoom = service.survey(survey_id).store.max_zoom
     assert zoom is not None
     image, left, top = stitched(service, survey_id, zoom)
+    return marker_errors_m(image, left, top, zoom, ground)
+
+
+def marker_errors_m(
+    image: npt.NDArray[np.uint8], left: int, top: int, zoom: int, ground: Ground
+) -> dict[int, float]:
+    """The ground targets found in ``image`` (tiles of ``zoom`` laid side by side, its
+    top-left corner at global pixel ``left``, ``top``): each one's distance in metres from
+    where it truly lies."""
     detector = cv2.aruco.ArucoDetector(
         cv2.aruco.getPredefinedDictionary(ARUCO_DICTIONARY), cv2.aruco.DetectorParameters()
     )
@@ -159,7 +168,9 @@ def target_errors_m(service: MosaicService, survey_id: str, ground: Ground) -> d
         u, v = (float(c) for c in found.reshape(4, 2).mean(axis=0))
         # Tile pixel (i, j) covers [i, i + 1) of the global grid: its centre is i + 0.5.
         lon, lat = pixel_to_lonlat(zoom, left + u + 0.5, top + v + 0.5)
-        target = truth[int(marker_id)]
+        target = truth.get(int(marker_id))
+        if target is None:  # a false detection in the texture: no such target
+            continue
         errors[int(marker_id)] = math.dist(
             frame.to_local(lat, lon), frame.to_local(target.lat, target.lon)
         )

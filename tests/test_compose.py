@@ -102,3 +102,125 @@ def test_compose_hub_refuses_weak_secrets(
     monkeypatch.chdir(tmp_path)
     with pytest.raises(ValidationError, match="refusing default secrets in production"):
         _hub_settings_from_compose({**COMPOSE_SECRETS, **weak}, monkeypatch)
+
+
+# -- the scaled profile: two hubs behind a proxy, on PostgreSQL and NATS ---------------
+
+SCALED_SECRETS = {
+    "SCALED_ADMIN_PASSWORD": "scaled-admin-password",
+    "SCALED_DB_PASSWORD": "scaled-db-password",
+    "FLEET_1_TOKEN": "f1" * 16,
+    "FLEET_2_TOKEN": "f2" * 16,
+}
+SCALED_HUBS = ("hub-a", "hub-b")
+
+
+def _scaled_services() -> dict[str, Any]:
+    result = _config({**COMPOSE_SECRETS, **SCALED_SECRETS})
+    assert result.returncode == 0, result.stderr
+    services: dict[str, Any] = yaml.safe_load(result.stdout)["services"]
+    return services
+
+
+def _nginx_directives(text: str) -> list[list[str]]:
+    """Each directive of an nginx file as its words, comments left out."""
+    lines = (line.split("#", 1)[0] for line in text.splitlines())
+    return [
+        part.split()
+        for part in " ".join(lines).replace("{", ";").replace("}", ";").split(";")
+        if part.split()
+    ]
+
+
+def test_the_scaled_profile_has_two_hubs_behind_a_proxy_on_postgres_and_nats() -> None:
+    services = _scaled_services()
+    scaled = {name for name, service in services.items() if "scaled" in service.get("profiles", [])}
+    assert scaled == {
+        "scaled-db",
+        "nats",
+        *SCALED_HUBS,
+        "proxy",
+        "fleet-sim-1",
+        "fleet-agent-1",
+        "fleet-sim-2",
+        "fleet-agent-2",
+    }
+    # The default stack stays as it was: `docker compose up` starts no scaled service.
+    assert {"db", "hub", "sim-1", "agent-1"} <= set(services) - scaled
+    hubs = [services[name]["environment"] for name in SCALED_HUBS]
+    assert hubs[0] == hubs[1], "the two hubs must be one deployment"
+    assert hubs[0]["GCS_BUS_URL"] == "nats://nats:4222"
+    assert "@scaled-db:5432/" in hubs[0]["DATABASE_URL"]
+    # The single hub stays alone, with its in-process bus.
+    assert "GCS_BUS_URL" not in services["hub"]["environment"]
+
+
+def test_the_scaled_hubs_start_in_production_mode(
+    monkeypatch: pytest.MonkeyPatch, tmp_path: Path
+) -> None:
+    from backend.settings import HubSettings
+
+    monkeypatch.chdir(tmp_path)
+    services = _scaled_services()
+    for name in SCALED_HUBS:
+        for variable in list(os.environ):
+            if variable.startswith("GCS_") or variable == "DATABASE_URL":
+                monkeypatch.delenv(variable)
+        for variable, value in services[name]["environment"].items():
+            monkeypatch.setenv(variable, str(value))
+        settings = HubSettings()
+        assert settings.environment == "production"
+        assert settings.bus_url == "nats://nats:4222"
+        assert set(settings.enrolment_tokens()) == {"fleet_1", "fleet_2"}
+
+
+def test_the_scaled_hubs_refuse_to_start_without_their_secrets(
+    monkeypatch: pytest.MonkeyPatch, tmp_path: Path
+) -> None:
+    """The scaled secrets are optional to compose (the default stack must not need
+    them), so the hub itself refuses the empty ones in production."""
+    from backend.settings import HubSettings
+
+    monkeypatch.chdir(tmp_path)
+    result = _config(COMPOSE_SECRETS)
+    assert result.returncode == 0, result.stderr
+    hub = yaml.safe_load(result.stdout)["services"]["hub-a"]
+    for variable in list(os.environ):
+        if variable.startswith("GCS_") or variable == "DATABASE_URL":
+            monkeypatch.delenv(variable)
+    for variable, value in hub["environment"].items():
+        monkeypatch.setenv(variable, str(value))
+    # Empty tokens are refused first; with tokens, the empty admin password is.
+    with pytest.raises(ValidationError, match="GCS_AGENT_TOKENS must be vehicle=token pairs"):
+        HubSettings()
+    monkeypatch.setenv("GCS_AGENT_TOKENS", f"fleet_1={'f1' * 16}")
+    with pytest.raises(ValidationError, match="refusing default secrets in production"):
+        HubSettings()
+
+
+def test_the_scaled_proxy_sends_every_connection_to_the_two_hubs_with_websocket_upgrades() -> None:
+    services = _scaled_services()
+    proxy = services["proxy"]
+    [mount] = [volume for volume in proxy["volumes"] if "nginx-scaled.conf" in str(volume)]
+    source = mount["source"] if isinstance(mount, dict) else str(mount).split(":")[0]
+    directives = _nginx_directives(Path(source).read_text())
+
+    upstream_servers = {words[1] for words in directives if words[0] == "server" and len(words) > 1}
+    hub_addresses = set()
+    for name in SCALED_HUBS:
+        command = services[name]["command"]
+        hub_addresses.add(f"{name}:{command[command.index('--port') + 1]}")
+    assert upstream_servers == hub_addresses
+    assert ["proxy_pass", "http://gcs_hubs"] in directives
+    assert ["proxy_http_version", "1.1"] in directives
+    assert ["proxy_set_header", "Upgrade", "$http_upgrade"] in directives
+    assert ["proxy_set_header", "Connection", "$connection_upgrade"] in directives
+    # ...and the map that makes $connection_upgrade "upgrade" for an Upgrade request.
+    assert ["map", "$http_upgrade", "$connection_upgrade"] in directives
+    assert ["default", "upgrade"] in directives
+    # The agents and the dashboards reach the hubs only through the proxy.
+    [listen] = [words[1] for words in directives if words[0] == "listen"]
+    for name in ("fleet-agent-1", "fleet-agent-2"):
+        assert services[name]["environment"]["GCS_AGENT_HUB"] == f"ws://proxy:{listen}"
+    for name in SCALED_HUBS:
+        assert "ports" not in services[name]

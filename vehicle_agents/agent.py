@@ -117,6 +117,7 @@ async def _run(settings: AgentSettings) -> None:
             on_manual=pilot.on_frame,
             on_formation=formation.on_hub,
             scans=scans,
+            fallback_urls=settings.hub_fallback,
         )
         tasks.create_task(TelemetryPublisher(link, outbox).run(settings.telemetry_rate_hz))
         tasks.create_task(hub.run())
@@ -268,6 +269,9 @@ class EventSource:
         self._clock = clock
         self._texts = StatusTextJoiner()
         self._reached = ReachedItems()
+        # The latest GLOBAL_POSITION_INT (lat, lon, metres above home): where PX4's
+        # CAMERA_TRIGGER, which carries no position, was taken.
+        self._position: tuple[float, float, float] | None = None
 
     def on_message(self, message: MavMessage) -> None:
         kind = message.get_type()
@@ -282,22 +286,33 @@ class EventSource:
         elif kind == "MISSION_ITEM_REACHED" and self._reached.reached(int(message.seq)):
             number = mission_number(int(message.seq), self._autopilot)
             self.emit("mission", f"reached mission item {number}", None, mission_item=number)
+        elif kind == "GLOBAL_POSITION_INT" and (message.lat or message.lon):
+            self._position = (message.lat / 1e7, message.lon / 1e7, message.relative_alt / 1000.0)
         elif kind == "CAMERA_FEEDBACK" and int(message.flags) == CAMERA_FEEDBACK_PHOTO:
             # ArduPilot sends one per shutter release (AP_Camera), to every GCS link: the
             # photo's place for the survey's progress and the flight log.
-            photo = Photo(
-                index=int(message.img_idx),
-                lat=message.lat / 1e7,
-                lon=message.lng / 1e7,
-                alt_rel=float(message.alt_rel),
+            self._photo(
+                Photo(
+                    index=int(message.img_idx),
+                    lat=message.lat / 1e7,
+                    lon=message.lng / 1e7,
+                    alt_rel=float(message.alt_rel),
+                )
             )
-            self.emit(
-                "camera",
-                f"photo {photo.index} at {photo.lat:.7f}, {photo.lon:.7f}, "
-                f"{photo.alt_rel:.1f} m above home",
-                None,
-                photo=photo,
-            )
+        elif kind == "CAMERA_TRIGGER" and self._position is not None:
+            # PX4's camera_trigger sends one per shutter release, without a position: the
+            # latest one the autopilot streamed (a tenth of a second old at 10 Hz).
+            lat, lon, alt_rel = self._position
+            self._photo(Photo(index=int(message.seq), lat=lat, lon=lon, alt_rel=alt_rel))
+
+    def _photo(self, photo: Photo) -> None:
+        self.emit(
+            "camera",
+            f"photo {photo.index} at {photo.lat:.7f}, {photo.lon:.7f}, "
+            f"{photo.alt_rel:.1f} m above home",
+            None,
+            photo=photo,
+        )
 
     def emit(
         self,

@@ -41,6 +41,7 @@ EXIT_VEHICLE_ID_IN_USE = 78
 _FLAG_KINDS: dict[str, dict[str, Any]] = {
     "fcu": {"metavar": "URL"},
     "hub": {"metavar": "URL"},
+    "hub_fallback": {"action": "append", "metavar": "URL"},
     "token": {"metavar": "TOKEN"},
     "vehicle_id": {"metavar": "ID"},
     "telemetry_rate_hz": {"type": float, "metavar": "HZ"},

@@ -31,6 +31,11 @@ class AgentSettings(BaseSettings):
         description="pymavlink connection URL of the flight controller",
     )
     hub: str = Field(default="ws://127.0.0.1:8000", description="hub WebSocket URL")
+    hub_fallback: list[str] = Field(
+        default_factory=list,
+        description="more hubs of the same deployment (several hubs), tried in turn after "
+        "'hub' when a link fails; photos and .tlogs still go to 'hub'",
+    )
     # Optional here so that `--print-id` runs before enrolment; `load_agent_settings`
     # requires it for a running agent, naming the three ways to give it.
     token: SecretStr | None = Field(
@@ -213,6 +218,11 @@ class AgentSettings(BaseSettings):
         raise SettingsError(
             "a camera needs a folder for its photos: give it as " + ways_to_give("photo_dir")
         )
+
+    @field_validator("hub_fallback")
+    @classmethod
+    def _agent_endpoints(cls, urls: list[str]) -> list[str]:
+        return [cls._agent_endpoint(url) for url in urls]
 
     @field_validator("hub")
     @classmethod

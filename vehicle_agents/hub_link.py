@@ -6,7 +6,7 @@ import asyncio
 import json
 import logging
 import time
-from collections.abc import Awaitable, Callable
+from collections.abc import Awaitable, Callable, Sequence
 from dataclasses import dataclass
 
 from pydantic import TypeAdapter, ValidationError
@@ -99,7 +99,12 @@ class HubLink:
         scans: ScanOutbox | None = None,
         on_formation: Callable[[FormationSlot | FormationEnd | LeaderUpdate | LeaderScan], None]
         | None = None,
+        fallback_urls: Sequence[str] = (),
     ) -> None:
+        # Several hubs (README "Several hubs"): after a failed or ended session the next
+        # attempt goes to the next URL, round the list, still after a jittered wait, so
+        # the agents of a hub that died spread over the others.
+        self.urls = [url, *fallback_urls]
         self.url = url
         self._token = token
         self._hello = hello
@@ -119,7 +124,10 @@ class HubLink:
         # Jittered, so a fleet that lost its hub does not knock again all at once.
         unreachable = Retries(self.timeouts.reconnect)
         refused = Retries(self.timeouts.unauthorized)
+        attempt = 0
         while True:
+            self.url = self.urls[attempt % len(self.urls)]
+            attempt += 1
             retries = unreachable
             try:
                 await self._session()

@@ -21,7 +21,7 @@ from typing import Annotated, Any
 
 from fastapi import Header, Path, Query, Request, status
 from fastapi.responses import FileResponse, JSONResponse
-from pydantic import BaseModel, Field
+from pydantic import AfterValidator, BaseModel, Field
 from starlette.background import BackgroundTask
 from starlette.responses import Response
 
@@ -38,7 +38,15 @@ from backend.storage.photos import PhotoCount
 from protocol.messages import VehicleId
 from protocol.photos import MAX_PHOTO_BYTES, PhotoId
 
-PhotoIdPath = Annotated[PhotoId, Path()]
+
+def _not_a_dot_name(photo_id: str) -> str:
+    # The id's pattern allows dots; "." and ".." would name a folder, not a file.
+    if photo_id in (".", ".."):
+        raise ValueError("a photo id cannot be '.' or '..'")
+    return photo_id
+
+
+PhotoIdPath = Annotated[PhotoId, AfterValidator(_not_a_dot_name), Path()]
 
 
 class _CountsOtherVehicleTokens(FiniteJsonRoute):

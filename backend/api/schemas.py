@@ -18,6 +18,11 @@ class Health(BaseModel):
     rows_spooled: int = Field(
         default=0, description="audit and command-log rows waiting for the database"
     )
+    rows_lost: int = Field(
+        default=0,
+        description="audit and command-log rows dropped since the hub started: the database, "
+        "the spool file's disk and the memory held for them were all full",
+    )
 
 
 class ClientConfig(BaseModel):

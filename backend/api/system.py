@@ -24,6 +24,7 @@ async def health(hub: HubDep) -> Health:
         telemetry_written=stats.written,
         write_retries=stats.retries,
         rows_spooled=hub.spool.pending,
+        rows_lost=hub.spool.lost,
     )
 
 

@@ -13,10 +13,14 @@ from __future__ import annotations
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 from backend.auth.policy import Permission, Principal, authorize
 from backend.errors import Forbidden
 from protocol.messages import LeaseState
+
+if TYPE_CHECKING:
+    from backend.control.claims import LeaseClaims
 
 
 @dataclass(frozen=True)
@@ -65,6 +69,9 @@ class LeaseBook:
     refused: RefusalCounts = field(default_factory=RefusalCounts)
     # The last lease state said of each vehicle, for dashboards that connect later.
     last_states: dict[str, LeaseState] = field(default_factory=dict)
+    # Several hubs: the claims in the shared database that make a lease exclusive
+    # across them (backend/control/claims.py); None for a hub alone.
+    claims: LeaseClaims | None = None
     _leases: dict[str, Lease] = field(default_factory=dict)
 
     def holder(self, vehicle_id: str) -> Lease | None:

@@ -37,6 +37,9 @@ AGENT_REPLY_GRACE_S = 2.0
 class AgentChannel:
     """The hub's end of one connected agent, as far as commands are concerned."""
 
+    # True for an agent connected to another hub (backend/realtime/routing.py).
+    remote = False
+
     def __init__(self, send: SendFrame) -> None:
         self._send = send
         self._pending: dict[str, asyncio.Future[CommandOutcome]] = {}

@@ -218,6 +218,23 @@ class FormationService:
         except SQLAlchemyError as error:
             log.warning("formation %s not stored: %s", formation.id, error)
 
+    async def close_left_open(self) -> None:
+        """At the hub's start: formations the last run left flying are over (the followers'
+        agents held them once the leader's relay stopped); say so in the store and the
+        hub's log, rather than list them as running for ever."""
+        if self._repository is None:
+            return
+        reason = "stopped: the hub restarted while it flew"
+        try:
+            closed = await asyncio.to_thread(
+                self._repository.close_left_open, self._clock(), reason
+            )
+        except SQLAlchemyError as error:
+            log.error("could not close the formations left open: %s", error)
+            return
+        for formation_id in closed:
+            log.warning("formation %s %s", formation_id, reason)
+
     def stored(self, limit: int) -> list[StoredFormation]:
         return [] if self._repository is None else self._repository.recent(limit)
 

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Protocol
 
@@ -48,6 +48,12 @@ class VehicleRecord:
     # Highest telemetry number seen per agent stream: older samples do not move the
     # live state backwards (storage has its own, gap-aware bookkeeping).
     last_seq: dict[str, int] = field(default_factory=dict)
+    # The stamp of a `LiveState` the live view shows ahead of a replaying backlog: until a
+    # sample at least that recent arrives, samples are the backlog's and are only stored.
+    # Samples are otherwise ordered by their numbers, never their stamps: the agent's
+    # clock may step back (time sync after boot) and the view must not freeze until
+    # the clock catches up.
+    live_ahead_at: float | None = None
     # The connected agent's command channel, None while no agent is connected: the one
     # record of whether the vehicle is online (commands go down this channel).
     channel: AgentChannel | None = field(default=None, repr=False, compare=False)
@@ -55,6 +61,15 @@ class VehicleRecord:
     @property
     def connected(self) -> bool:
         return self.channel is not None
+
+    def earlier_run(self, stream_id: str) -> tuple[str, int] | None:
+        """The agent run this vehicle's live state came from last, and its last sample's
+        number, when that run is not ``stream_id``: the agent restarted (a crash, a power
+        cycle). None for the same run reconnecting, or nothing seen since the hub started."""
+        if not self.last_seq:
+            return None
+        run = next(reversed(self.last_seq))  # runs are added in the order they connected
+        return None if run == stream_id else (run, self.last_seq[run])
 
     def summary(self) -> VehicleSummary:
         return VehicleSummary(
@@ -114,6 +129,37 @@ class FleetRegistry:
             record.modes = list(hello.modes)
             record.system_id = hello.system_id
         record.channel = channel
+        # A new connection sends its own live state if it is behind again.
+        record.live_ahead_at = None
+        return record
+
+    def mirror(
+        self, summary: VehicleSummary, remote: Callable[[], AgentChannel]
+    ) -> VehicleRecord | None:
+        """Another hub's word on a vehicle whose agent it holds (several hubs): the
+        vehicle as it is there, reached through ``remote()`` (a channel made once per
+        vehicle) while that hub says it is connected. None, and nothing changes, when
+        this hub holds the vehicle's agent itself: its own link is the truth."""
+        record = self._vehicles.get(summary.id)
+        if record is not None and record.channel is not None and not record.channel.remote:
+            return None
+        if record is None:
+            record = VehicleRecord(
+                id=summary.id,
+                autopilot=summary.autopilot,
+                vehicle_type=summary.vehicle_type,
+                modes=list(summary.modes),
+            )
+            self._vehicles[summary.id] = record
+        record.autopilot = summary.autopilot
+        record.vehicle_type = summary.vehicle_type
+        record.modes = list(summary.modes)
+        record.last_seen = summary.last_seen
+        record.state = summary.state
+        if not summary.connected:
+            record.channel = None
+        elif record.channel is None:
+            record.channel = remote()
         return record
 
     def disconnect(self, vehicle_id: str, channel: AgentChannel) -> VehicleRecord | None:
@@ -129,8 +175,7 @@ class FleetRegistry:
         """The agent's state now, sent ahead of a replayed backlog; older samples that
         arrive after it are stored but no longer move the live state."""
         record = self.get(vehicle_id)
-        if record.last_seen is not None and time < record.last_seen:
-            return False
+        record.live_ahead_at = time
         record.state = state
         record.last_seen = time
         return True
@@ -142,4 +187,10 @@ class FleetRegistry:
         if telemetry.seq <= record.last_seq.get(stream_id, -1):
             return False
         record.last_seq[stream_id] = telemetry.seq
-        return self.apply_live(vehicle_id, telemetry.time, telemetry.state)
+        if record.live_ahead_at is not None:
+            if telemetry.time < record.live_ahead_at:
+                return False
+            record.live_ahead_at = None  # caught up: numbers order the samples again
+        record.state = telemetry.state
+        record.last_seen = telemetry.time
+        return True

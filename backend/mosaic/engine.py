@@ -176,12 +176,15 @@ def _blend(
     if not weight.any():
         return None
     old_alpha = old_rgba[:, :, 3]
-    rgba = np.empty_like(old_rgba)
     if bool((old_alpha == 255).all()):
-        # The common case inside the mosaic: opaque under opaque, one vectorised blend.
-        rgba[:, :, :3] = cv2.blendLinear(new[:, :, :3], old_rgba[:, :, :3], weight, 1.0 - weight)
-        rgba[:, :, 3] = 255
-        return rgba, nearest
+        # The common case inside the mosaic: opaque under opaque, one vectorised blend of
+        # all four channels (the alpha is set to 255 after: opaque under anything stays
+        # opaque; the new alpha is in the weight already): three times faster than
+        # blending the colour channels' strided views, which OpenCV copies first.
+        blended: Rgba = cv2.blendLinear(new, old_rgba, weight, 1.0 - weight)  # type: ignore[assignment]
+        blended[:, :, 3] = 255  # whatever the rounding of w + (1 - w)
+        return blended, nearest
+    rgba = np.empty_like(old_rgba)
     # "Over" with the old tile's transparency (non-premultiplied colours).
     w = weight[:, :, None]
     below = (1.0 - w) * (old_alpha[:, :, None].astype(np.float32) * np.float32(1 / 255))

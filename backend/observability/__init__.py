@@ -1,0 +1,1 @@
+"""What the hub counts for its operators (Prometheus)."""

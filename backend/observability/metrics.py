@@ -5,23 +5,28 @@ above it: realtime, storage and control all import from here, and this imports n
 the hub. The metrics live in prometheus-client's default registry, which also carries the
 process's own CPU, memory and file descriptors (``process_*``). Several hubs in one
 process (the tests) share these figures; a deployment runs one hub per process.
+
+``gcs_rejected_frames_total`` counts every frame or body a surface refused as malformed or
+against its rules (undecodable JSON, an invalid message, a bad scan, a frame over the
+size limit, a bad first frame, manual input without the lease), by surface: a probe or a
+broken peer shows up as a rising rate here rather than only in the log.
 """
 
 from __future__ import annotations
 
-from enum import StrEnum
+from typing import Literal, get_args
 
 from prometheus_client import Counter, Gauge, Histogram
 
+# agent_ws: /api/v1/agent/ws; client_ws: /api/v1/ws (dashboards, integrations);
+# agent_scan: an agent's binary LIDAR frames; client_manual: manual-control input.
+Surface = Literal["agent_ws", "client_ws", "agent_scan", "client_manual"]
 
-class Surface(StrEnum):
-    """Where a frame came in: the label of the per-surface counters."""
-
-    AGENT = "agent"  # /api/v1/agent/ws
-    CLIENT = "client"  # /api/v1/ws (dashboards, integrations)
-    MANUAL = "manual"  # manual-control input on the client feed
-
-
+REJECTED_FRAMES = Counter(
+    "gcs_rejected_frames",
+    "Frames refused as malformed or invalid, by the surface that refused them",
+    ["surface"],
+)
 CONNECTIONS = Gauge(
     "gcs_connections", "Open WebSocket connections, by kind (agent, dashboard).", ["kind"]
 )
@@ -30,11 +35,6 @@ MESSAGES_IN = Counter(
 )
 MESSAGES_OUT = Counter(
     "gcs_messages_out_total", "Frames sent on a WebSocket, by surface.", ["surface"]
-)
-REJECTED_FRAMES = Counter(
-    "gcs_rejected_frames_total",
-    "Frames the hub refused (not JSON, invalid, unexpected, oversized, forbidden), by surface.",
-    ["surface"],
 )
 DROPPED = Counter(
     "gcs_dropped_total",
@@ -67,16 +67,15 @@ COMMAND_SECONDS = Histogram(
 )
 
 
-def rejected(surface: Surface) -> None:
-    """Count one refused frame of ``surface``."""
-    REJECTED_FRAMES.labels(surface=surface.value).inc()
+def count_rejected(surface: Surface) -> None:
+    REJECTED_FRAMES.labels(surface=surface).inc()
 
 
 # Every labelled series exists from the start, so a scrape shows zeros, not absences.
-for _surface in Surface:
-    REJECTED_FRAMES.labels(surface=_surface.value)
-    MESSAGES_IN.labels(surface=_surface.value)
-    MESSAGES_OUT.labels(surface=_surface.value)
+for _surface in get_args(Surface):
+    REJECTED_FRAMES.labels(surface=_surface)
+    MESSAGES_IN.labels(surface=_surface)
+    MESSAGES_OUT.labels(surface=_surface)
 for _kind in ("agent", "dashboard"):
     CONNECTIONS.labels(kind=_kind)
 for _reason in ("coalesced", "slow_client"):

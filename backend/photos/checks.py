@@ -91,5 +91,9 @@ def check_image(path: Path, camera: CameraIntrinsics) -> None:
             image.load()
     except Refused:
         raise
+    except Image.DecompressionBombError as error:
+        # A header claiming more pixels than any camera has: refused from the header,
+        # never decoded (a few KB could otherwise ask for gigabytes).
+        raise Refused(Refusal.CORRUPT_IMAGE, f"the photo is not a real image: {error}") from None
     except (UnidentifiedImageError, OSError, SyntaxError, ValueError) as error:
         raise Refused(Refusal.CORRUPT_IMAGE, f"the photo is not a whole JPEG: {error}") from None

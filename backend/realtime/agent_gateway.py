@@ -12,10 +12,11 @@ from starlette.websockets import WebSocket, WebSocketDisconnect
 
 from backend.auth.credentials import bearer_token
 from backend.auth.policy import AGENT_MESSAGE_PERMISSIONS, Principal, authorize_message
-from backend.errors import Forbidden
+from backend.errors import Forbidden, VehicleNotFound
 from backend.fleet.commands import AgentChannel
+from backend.fleet.registry import FleetRegistry
 from backend.observability import metrics
-from backend.observability.metrics import Surface
+from backend.observability.metrics import Surface, count_rejected
 from backend.realtime import manual_control
 from backend.realtime.agent_admission import Clash, judge
 from backend.realtime.bus import Topic
@@ -57,7 +58,7 @@ MANUAL_ENDED_SEVERITY = 4
 
 
 class AgentSession(PeerConnection):
-    surface = Surface.AGENT
+    surface: Surface = "agent_ws"
 
     def __init__(self, websocket: WebSocket, hub: GatewayServices) -> None:
         super().__init__(websocket, hub.settings.max_frame_bytes, hub.settings.max_bad_frames)
@@ -194,17 +195,17 @@ class AgentSession(PeerConnection):
         try:
             message = decode(agent_to_hub, frame)
         except ProtocolError as error:
-            metrics.rejected(self.surface)
+            count_rejected(self.surface)
             await self.close(CloseCode.BAD_HELLO, f"first frame must be a hello: {error.message}")
             return None
         if not isinstance(message, Hello):
-            metrics.rejected(self.surface)
+            count_rejected(self.surface)
             await self.close(
                 CloseCode.BAD_HELLO, f"first frame must be a hello, not {message.type}"
             )
             return None
         if message.protocol != PROTOCOL_VERSION:
-            metrics.rejected(self.surface)
+            count_rejected(self.surface)
             await self.close(
                 CloseCode.BAD_HELLO,
                 f"protocol {message.protocol} is not supported; this hub speaks {PROTOCOL_VERSION}",
@@ -216,7 +217,14 @@ class AgentSession(PeerConnection):
         """Gaps stored as still open (perhaps by a hub that died since) are asked for at
         once: an agent with nothing more to send on that stream must still answer, so
         that a loss is recorded as one."""
-        rows = await asyncio.to_thread(self.hub.repository.open_gaps_of, vehicle_id)
+        try:
+            rows = await asyncio.to_thread(self.hub.repository.open_gaps_of, vehicle_id)
+        except SQLAlchemyError as error:
+            # The database is away: the session goes on (its operators may need to land
+            # the vehicle). Gaps this hub saw open itself are asked for as they are found;
+            # those stored by an earlier run wait for the agent's next connection.
+            log.warning("could not read %s's open gaps (%s); serving it", vehicle_id, error)
+            return
         kinds: dict[str, SequencedKind] = {"telemetry": "telemetry", "event": "event"}
         for stream_id, kind, first, last in rows:
             if kind in kinds:
@@ -257,10 +265,13 @@ class AgentSession(PeerConnection):
                     raise
                 log.warning("could not refresh %s in the store (%s); serving it", vehicle_id, error)
             self.stream_id = hello.stream_id
+            restart = _restart_gap(hub.registry, hello, time.time())
             channel = AgentChannel(self.send)
             record = hub.registry.connect(hello, channel)
             # Ours before the old one closes, so that its ending leaves the vehicle online.
             hub.agent_sessions[vehicle_id] = self
+            if hub.routes is not None:
+                await hub.routes.serve(vehicle_id)
         if previous is not None and verdict is not None:
             log.warning(
                 "agent %s: its old connection %s: %s", vehicle_id, previous.peer, verdict.reason
@@ -280,13 +291,16 @@ class AgentSession(PeerConnection):
         try:
             await self.send(Welcome(vehicle_id=vehicle_id))
             await hub.store_event(vehicle_id, "link_up", f"agent connected from {self.peer}")
+            if restart is not None:
+                await hub.store_event(vehicle_id, "agent_restart", restart, severity=4)
             await hub.publish_state(record)
             # Not a TaskGroup: the receive loop's own exceptions (disconnect, oversized
             # frame) must reach serve() as they are, not wrapped in a group.
             news = asyncio.create_task(self._send_sequence_news())
             await self._ask_for_open_gaps(vehicle_id)
             try:
-                while frame := await self.receive():
+                # An empty frame is a frame (refused as such), not the end of the session.
+                while (frame := await self.receive()) is not None:
                     self._frame_arrived.set()
                     self._handling = True
                     try:
@@ -303,6 +317,8 @@ class AgentSession(PeerConnection):
             # A superseded session leaves the vehicle to its successor, still online.
             if hub.agent_sessions.get(vehicle_id) is self:
                 del hub.agent_sessions[vehicle_id]
+                if hub.routes is not None:
+                    await hub.routes.withdraw(vehicle_id)
             if (offline := hub.registry.disconnect(vehicle_id, channel)) is not None:
                 await hub.publish_state(offline)
                 await hub.store_event(vehicle_id, "link_down", "agent disconnected")
@@ -382,6 +398,7 @@ class AgentSession(PeerConnection):
         try:
             await self.hub.scans.ingest(hello.vehicle_id, hello.stream_id, data)
         except ValueError as refusal:
+            count_rejected("agent_scan")
             message = getattr(refusal, "message", str(refusal))
             now = time.monotonic()
             if now - self._scan_error_at >= SCAN_ERROR_INTERVAL_S:
@@ -400,3 +417,24 @@ class AgentSession(PeerConnection):
             hello.vehicle_id, stream_id, telemetry
         ):
             await hub.publish_state(hub.registry.get(hello.vehicle_id))
+
+
+def _restart_gap(registry: FleetRegistry, hello: Hello, now: float) -> str | None:
+    """What an agent that comes back as a new run (it restarted) left unrecorded: nothing
+    was sampled between its earlier run's last sample the hub saw and this hello, and
+    what that run had not yet had acknowledged, it kept only in memory. None when the
+    same run reconnects (its outbox replays what is missing) or the hub knows no earlier
+    run (it restarted too)."""
+    try:
+        record = registry.get(hello.vehicle_id)
+    except VehicleNotFound:
+        return None
+    earlier = record.earlier_run(hello.stream_id)
+    if earlier is None:
+        return None
+    run, last_seq = earlier
+    since = "" if record.last_seen is None else f" ({now - record.last_seen:.1f} s ago)"
+    return (
+        f"agent restarted: run {run} ended with sample {last_seq}{since}; no telemetry "
+        f"between it and run {hello.stream_id}, which starts now"
+    )

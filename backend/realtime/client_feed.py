@@ -21,7 +21,7 @@ from backend.auth.policy import (
 from backend.control.lease import Lease, LeaseRefused
 from backend.errors import Forbidden, VehicleNotFound
 from backend.observability import metrics
-from backend.observability.metrics import Surface
+from backend.observability.metrics import Surface, count_rejected
 from backend.realtime import manual_control
 from backend.realtime.bus import LatestSubscription, Topic
 from backend.realtime.collaborators import FeedServices
@@ -152,6 +152,8 @@ class VehicleFeed:
 
 
 class ClientFeed(PeerConnection):
+    surface: Surface = "client_ws"
+
     def __init__(self, websocket: WebSocket, hub: FeedServices) -> None:
         super().__init__(websocket, hub.settings.max_frame_bytes, hub.settings.max_bad_frames)
         self.hub = hub
@@ -382,7 +384,7 @@ class ClientFeed(PeerConnection):
         try:
             self.hub.leases.admit(message.vehicle_id, self.user, message.seq)
         except LeaseRefused as refusal:
-            metrics.rejected(Surface.MANUAL)
+            count_rejected("client_manual")
             # Never forwarded. Old or too-fast frames are a client's jitter: counted
             # silently; input without the lease is said, since the pilot must know.
             if "lease" in refusal.message:

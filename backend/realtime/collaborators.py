@@ -18,6 +18,7 @@ from backend.control.lease import LeaseBook
 from backend.fleet.commands import CommandDispatcher
 from backend.fleet.registry import FleetRegistry, VehicleRecord
 from backend.realtime.bus import Bus
+from backend.realtime.routing import AgentRoutes
 from backend.realtime.vehicle_fanout import VehicleFanout
 from backend.settings import HubSettings
 from backend.storage.records import StoredEvent
@@ -136,6 +137,11 @@ class GatewayServices(Protocol):
 
     @property
     def scans(self) -> ScanIngest: ...
+
+    @property
+    def routes(self) -> AgentRoutes | None:
+        """Several hubs: this hub answers for the agents connected to it."""
+        ...
 
     async def record(self, entry: AuditEntry) -> None: ...
 

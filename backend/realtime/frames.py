@@ -9,7 +9,7 @@ import logging
 from starlette.websockets import WebSocket, WebSocketDisconnect
 
 from backend.observability import metrics
-from backend.observability.metrics import Surface
+from backend.observability.metrics import Surface, count_rejected
 from protocol.messages import CloseCode, ErrorReply, Message, encode
 
 log = logging.getLogger(__name__)
@@ -34,8 +34,7 @@ def close_reason(reason: str) -> str:
 
 
 class PeerConnection:
-    # Which counters its frames go to (backend/observability/metrics.py).
-    surface = Surface.CLIENT
+    surface: Surface  # where its frames are counted (backend/observability/metrics.py)
 
     def __init__(self, websocket: WebSocket, max_frame_bytes: int, max_bad_frames: int) -> None:
         self.websocket = websocket
@@ -45,8 +44,8 @@ class PeerConnection:
         # Command requests, replies and pushes come from different tasks.
         self._send_lock = asyncio.Lock()
         self.bad_frames = 0
-        self._sent = metrics.MESSAGES_OUT.labels(surface=self.surface.value)
-        self._received = metrics.MESSAGES_IN.labels(surface=self.surface.value)
+        self._sent = metrics.MESSAGES_OUT.labels(surface=self.surface)
+        self._received = metrics.MESSAGES_IN.labels(surface=self.surface)
 
     async def send(self, message: Message) -> None:
         await self.send_text(encode(message))
@@ -71,20 +70,22 @@ class PeerConnection:
         message = await self.websocket.receive()
         if message["type"] == "websocket.disconnect":
             return None
-        data: str | bytes = message.get("text") or message.get("bytes") or b""
+        # An empty text frame stays text (a bad JSON frame), not an empty binary one.
+        text = message.get("text")
+        data: str | bytes = text if text is not None else (message.get("bytes") or b"")
         self._received.inc()
         size = len(data)
         if isinstance(data, str) and size * 4 > self._max_frame_bytes:
             size = len(data.encode())  # only near the limit: UTF-8 is 4 bytes a character at most
         if size > self._max_frame_bytes:
-            metrics.rejected(self.surface)
+            count_rejected(self.surface)
             raise FrameTooLarge(size, self._max_frame_bytes)
         return data
 
     async def reject(self, reply: ErrorReply) -> None:
         """Answer a bad frame; past the limit, close the connection (raises disconnect)."""
         self.bad_frames += 1
-        metrics.rejected(self.surface)
+        count_rejected(self.surface)
         log.info("bad frame from %s: %s", self.peer, reply.message)
         await self.send(reply)
         if self.bad_frames >= self._max_bad_frames:

@@ -95,15 +95,21 @@ async def acquire(hub: LeaseServices, vehicle_id: str, principal: Principal) -> 
     lease = leases.acquire(vehicle_id, principal)
     if renewing is not None:
         return lease  # the holder asking again: already open on the vehicle
+    if leases.claims is not None:
+        try:
+            await leases.claims.claim(vehicle_id, principal.name)
+        except LeaseRefused:
+            leases.cancel(lease)
+            raise
     record = hub.registry.get(vehicle_id)
     mode = record.state.mode if record.state is not None else None
     try:
         outcome = await hub.dispatcher.execute(vehicle_id, ManualStartCommand())
     except GcsError as error:
-        leases.cancel(lease)
+        await _cancel(hub, lease)
         raise LeaseRefused(f"{vehicle_id}: {error.message}") from None
     if outcome.status != "accepted":
-        leases.cancel(lease)
+        await _cancel(hub, lease)
         raise LeaseRefused(f"{vehicle_id}: {outcome.message}")
     if outcome.values and outcome.values.get("mission_paused") and mode in MISSION_MODES:
         lease.resume_mode = mode
@@ -111,8 +117,16 @@ async def acquire(hub: LeaseServices, vehicle_id: str, principal: Principal) -> 
     return lease
 
 
+async def _cancel(hub: LeaseServices, lease: Lease) -> None:
+    hub.leases.cancel(lease)
+    if hub.leases.claims is not None:
+        await hub.leases.claims.release(lease.vehicle_id, lease.holder)
+
+
 async def end(hub: LeaseServices, lease: Lease, reason: str, *, stop_vehicle: bool) -> None:
     """A lease is over: the vehicle holds (if the hub ended it), everyone is told."""
+    if hub.leases.claims is not None:
+        await hub.leases.claims.release(lease.vehicle_id, lease.holder)
     if stop_vehicle:
         try:
             outcome = await hub.dispatcher.execute(lease.vehicle_id, ManualStopCommand())
@@ -145,6 +159,8 @@ async def watch_expiry(hub: LeaseServices) -> None:
             reason = f"expired: no input from {lease.holder} for {hub.leases.limits.expiry_s:g} s"
             await hub.record(_hub_entry(lease.vehicle_id, "end", reason, lease.holder))
             await end(hub, lease, reason, stop_vehicle=True)
+        if hub.leases.claims is not None:
+            await hub.leases.claims.renew_due(hub.leases.current())
         # Polling: an expiry is the absence of an event.
         await asyncio.sleep(EXPIRY_CHECK_S)
 

@@ -45,6 +45,15 @@ class FormationRepository:
                 )
             )
 
+    def close_left_open(self, now: float, reason: str) -> list[str]:
+        """Mark the formations a hub that died left running as stopped, for ``reason``;
+        their ids. A formation lives in the hub's memory only: none resumes."""
+        with Session(self.engine) as session, session.begin():
+            rows = list(session.scalars(select(FormationRow).where(FormationRow.stopped.is_(None))))
+            for row in rows:
+                row.stopped, row.stop_reason = now, reason
+            return [row.id for row in rows]
+
     def get(self, formation_id: str) -> StoredFormation | None:
         with Session(self.engine) as session:
             row = session.get(FormationRow, formation_id)

@@ -341,3 +341,16 @@ class PhotoRow(Base):
     # What the agent said of the photo (protocol.photos.PhotoMeta), as JSON; null when
     # the refusal came before it could be read.
     meta_json: Mapped[str | None] = mapped_column(Text, nullable=True)
+
+
+class LeaseClaimRow(Base):
+    """Who flies a vehicle by hand, for every hub to see (several hubs): a claim holds
+    until ``expires_at`` unless its hub renews it, so a hub that dies releases its
+    pilots' vehicles within seconds (backend/storage/lease_claims.py)."""
+
+    __tablename__ = "lease_claims"
+
+    vehicle_id: Mapped[str] = mapped_column(String(64), primary_key=True)
+    holder: Mapped[str] = mapped_column(String(64))
+    hub_id: Mapped[str] = mapped_column(String(64))
+    expires_at: Mapped[float] = mapped_column(Double)

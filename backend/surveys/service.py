@@ -58,6 +58,7 @@ from backend.realtime.bus import Bus, LatestSubscription, ReliableSubscription, 
 from backend.safety.snapshot import home, position
 from backend.settings import HubSettings
 from backend.storage.surveys import StoredSurvey, SurveyRepository
+from backend.surveys.ownership import SurveyOwnership
 from protocol.messages import (
     Command,
     LiveEvent,
@@ -98,6 +99,9 @@ class SurveyService:
         self._gone_since: dict[str, float] = {}
         self._landed_since: dict[tuple[str, str], float] = {}
         self._lock = asyncio.Lock()  # one change to the surveys at a time
+        # Several hubs: the claims that make one hub drive each survey (None: this hub
+        # is alone and drives them all).
+        self.ownership: SurveyOwnership | None = None
 
     # -- life cycle ----------------------------------------------------------------------
 
@@ -105,29 +109,42 @@ class SurveyService:
         """The surveys that were going on when the hub stopped."""
         states = [state.value for state in ACTIVE_STATES]
         for stored in await asyncio.to_thread(self._repository.in_states, states):
-            try:
-                run = SurveyRun.model_validate_json(stored.run_json)
-            except ValueError as error:
-                log.error("stored survey %s unreadable, left as it is: %s", stored.id, error)
-                continue
-            self._runs[run.id] = run
-            self._owners[run.id] = stored.created_by
-            if run.started is not None:
-                # Photos the flight log stored after this survey's last save (the hub
-                # acknowledged them, so the agents will not send them again).
-                vehicles = [d.vehicle_id for d in run.drones]
-                found = await asyncio.to_thread(self._repository.photos, vehicles, run.started)
-                added = sum(
-                    run.photo(
-                        p.vehicle_id,
-                        Photo(index=p.index, lat=p.lat, lon=p.lon, alt_rel=p.alt_rel),
-                        p.time,
-                    )
-                    for p in found
+            if await self._drives(stored.id):
+                await self._resume(stored)
+
+    async def _drives(self, survey_id: str) -> bool:
+        """Whether this hub drives the survey (claimed or renewed just now)."""
+        if self.ownership is None:
+            return True
+        other = await self.ownership.take(survey_id)
+        if other is not None:
+            log.info("survey %s is driven by hub %s", survey_id, other)
+        return other is None
+
+    async def _resume(self, stored: StoredSurvey) -> None:
+        try:
+            run = SurveyRun.model_validate_json(stored.run_json)
+        except ValueError as error:
+            log.error("stored survey %s unreadable, left as it is: %s", stored.id, error)
+            return
+        self._runs[run.id] = run
+        self._owners[run.id] = stored.created_by
+        if run.started is not None:
+            # Photos the flight log stored after this survey's last save (the hub
+            # acknowledged them, so the agents will not send them again).
+            vehicles = [d.vehicle_id for d in run.drones]
+            found = await asyncio.to_thread(self._repository.photos, vehicles, run.started)
+            added = sum(
+                run.photo(
+                    p.vehicle_id,
+                    Photo(index=p.index, lat=p.lat, lon=p.lon, alt_rel=p.alt_rel),
+                    p.time,
                 )
-                log.info("survey %s resumed (%s), %d photos from the log", run.id, run.state, added)
-            else:
-                log.info("survey %s resumed (%s)", run.id, run.state)
+                for p in found
+            )
+            log.info("survey %s resumed (%s), %d photos from the log", run.id, run.state, added)
+        else:
+            log.info("survey %s resumed (%s)", run.id, run.state)
 
     async def run(self) -> None:
         events = ReliableSubscription(EVENT_QUEUE)
@@ -187,6 +204,7 @@ class SurveyService:
             # No drone gets a mission unless every part passes.
             raise SafetyViolation(violations)
         run = new_run(request, survey)
+        await self._drives(run.id)  # a new id: nobody else can hold it
         async with self._lock:
             self._runs[run.id] = run
             self._owners[run.id] = principal.name
@@ -436,7 +454,32 @@ class SurveyService:
             except SQLAlchemyError as error:
                 # Kept in memory and marked dirty again: the next tick tries once more.
                 log.warning("surveys not stored: %s", error)
+            if self.ownership is not None:
+                await self._keep_and_adopt(self.ownership)
             await asyncio.sleep(interval)  # pacing, not synchronisation
+
+    async def _keep_and_adopt(self, ownership: SurveyOwnership) -> None:
+        """Renew this hub's surveys, let go of any another hub took over, and take over
+        those whose hub stopped renewing them."""
+        for run in self.active():
+            if not await self._drives(run.id):
+                log.warning("survey %s: driven by another hub now; no longer here", run.id)
+                async with self._lock:
+                    self._runs.pop(run.id, None)
+                    self._dirty.discard(run.id)
+        if not ownership.time_to_adopt():
+            return
+        states = [state.value for state in ACTIVE_STATES]
+        try:
+            stored = await asyncio.to_thread(self._repository.in_states, states)
+        except SQLAlchemyError as error:
+            log.warning("surveys of other hubs not checked: %s", error)
+            return
+        for found in stored:
+            if found.id not in self._runs and await self._drives(found.id):
+                log.warning("survey %s: its hub stopped driving it; taken over here", found.id)
+                async with self._lock:
+                    await self._resume(found)
 
     def _drop(self, run: SurveyRun, drone: DroneRun, reason: str) -> None:
         log.warning("survey %s: %s drops out: %s", run.id, drone.vehicle_id, reason)

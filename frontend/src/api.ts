@@ -19,6 +19,7 @@ import type {
   FlightQuery,
   FlightTelemetry,
   HubConfig,
+  HubHealth,
   SafetyViolation,
 } from "./types";
 
@@ -175,6 +176,10 @@ export function checkSession(): Promise<CurrentUser> {
 
 export function fetchConfig(): Promise<HubConfig> {
   return request<HubConfig>("config");
+}
+
+export function fetchHealth(): Promise<HubHealth> {
+  return request<HubHealth>("health");
 }
 
 export function sendCommand(vehicleId: string, command: Command): Promise<CommandResponse> {

@@ -1,7 +1,7 @@
 // One logged-in session of the dashboard: config -> map, WebSocket -> store ->
 // views. Built at login and torn down at logout or when the session ends, so the
 // next user starts clean (and gets the controls their role allows).
-import { checkSession, fetchConfig } from "./api";
+import { checkSession, fetchConfig, fetchHealth } from "./api";
 import { AuditPanel } from "./auditPanel";
 import { runCommand } from "./commands";
 import { FleetSocket } from "./connection";
@@ -17,6 +17,7 @@ import { MissionTools } from "./missions";
 import { ReplayPanel } from "./replayPanel";
 import { type CurrentUser, type HubConfig, type HubToClient, can } from "./types";
 import { ScanLayer } from "./scans/scanLayer";
+import { StoreHealth } from "./storeHealth";
 import { SurveyPanel } from "./survey";
 import { Viz3dPane } from "./viz3d/pane";
 
@@ -53,6 +54,7 @@ export class Dashboard {
   private survey: SurveyPanel | null = null;
   private pilot: PilotPanel | null = null;
   private expiryTimer: number | undefined;
+  private storeHealth: StoreHealth | null = null;
   private stopped = false;
 
   constructor(
@@ -71,6 +73,8 @@ export class Dashboard {
     header.setCounts(0, 0);
     header.setConnection("connecting");
     this.watchExpiry();
+    this.storeHealth = new StoreHealth(document.getElementById("store-status")!, fetchHealth);
+    this.storeHealth.start();
 
     const config = await fetchConfig().catch((error: Error) => {
       if (!this.stopped) {
@@ -218,6 +222,8 @@ export class Dashboard {
     this.scans = null;
     this.map?.destroy();
     this.map = null;
+    this.storeHealth?.stop();
+    this.storeHealth = null;
     this.header.setConnection("stopped");
     this.header.setCounts(0, 0);
     this.header.setUser(null);

@@ -32,6 +32,9 @@ export type CommandResponse = Schemas["CommandResponse"];
 /** `GET /api/v1/config`. */
 export type HubConfig = Schemas["ClientConfig"];
 
+/** `GET /api/v1/health`: the hub's store, as the dashboard's header reports it. */
+export type HubHealth = Schemas["Health"];
+
 /** What the hub's permissions are called (`backend/auth/policy.py`). */
 export type Permission = Schemas["Permission"];
 export type Role = Schemas["Role"];

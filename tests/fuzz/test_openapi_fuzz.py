@@ -1,6 +1,7 @@
-"""schemathesis, with all its checks, against a running demo fleet, as an admin and as a
-viewer: no 5xx, no status the OpenAPI document does not list, bodies that match their
-models, and 405s whose Allow header names the path's methods.
+"""schemathesis, with all its checks, against a running demo fleet, as an admin, an
+operator, a viewer and an agent (each refused what its role may not do): no 5xx, no
+status the OpenAPI document does not list, bodies that match their models, and 405s whose
+Allow header names the path's methods.
 
 It runs the `schemathesis` CLI (every phase: examples, coverage, fuzzing, stateful) with a
 fixed seed and a bounded number of examples per operation, so it stays near a minute or
@@ -24,6 +25,7 @@ from tests.conftest import _environment
 from tests.helpers import access_token, api_client, running_fleet
 
 EXAMPLES_PER_OPERATION = 6
+LOWER_ROLES = ["operator", "viewer"]
 SEED = 20261125
 # A role's run takes one to three minutes on a busy 2-core machine (the coverage phase is
 # most of it, whatever the examples per operation); the suite's 180 s would cut it short.
@@ -55,12 +57,19 @@ def tokens(demo_fleet: LocalFleet) -> dict[str, str]:
     login rate limit of this address."""
     base = demo_fleet.plan.hub_http
     admin = access_token(base, "admin", demo_fleet.plan.admin_password)
-    password = secrets.token_urlsafe(18)
+    tokens = {"admin": admin}
     with api_client(base, admin) as api:
-        user = {"username": "fuzz-viewer", "password": password, "role": "viewer"}
-        created = api.post("/api/v1/users", json=user)
-        assert created.status_code == 201, created.text
-    return {"admin": admin, "viewer": access_token(base, "fuzz-viewer", password)}
+        for role in LOWER_ROLES:
+            password = secrets.token_urlsafe(18)
+            user = {"username": f"fuzz-{role}", "password": password, "role": role}
+            created = api.post("/api/v1/users", json=user)
+            assert created.status_code == 201, created.text
+            tokens[role] = access_token(base, f"fuzz-{role}", password)
+        # An agent's token (a third one for sim_1; the fleet's own are left alone).
+        enrolled = api.post("/api/v1/vehicles/sim_1/agent-tokens")
+        assert enrolled.status_code == 201, enrolled.text
+        tokens["agent"] = enrolled.json()["token"]
+    return tokens
 
 
 def _schemathesis(base: str, token: str, report: Path) -> subprocess.CompletedProcess[str]:
@@ -92,13 +101,14 @@ def _schemathesis(base: str, token: str, report: Path) -> subprocess.CompletedPr
 
 
 @pytest.mark.timeout(RUN_LIMIT_S + 60)
-@pytest.mark.parametrize("role", ["admin", "viewer"])
+@pytest.mark.parametrize("role", ["admin", *LOWER_ROLES, "agent"])
 def test_api_answers_what_its_document_says(
     demo_fleet: LocalFleet, tokens: dict[str, str], role: str, tmp_path: Path
 ) -> None:
     base = demo_fleet.plan.hub_http
     result = _schemathesis(base, tokens[role], tmp_path / "junit.xml")
     summary = result.stdout[result.stdout.rfind("SUMMARY") :]
+    print(f"\nschemathesis as {role}:\n{summary}")  # the cases run, for the record (-s)
     assert "Test cases:" in summary, result.stdout[-3000:] + result.stderr[-3000:]
     assert result.returncode == 0, result.stdout[-12000:]
     # The fleet is still there and answering after the run.

@@ -304,3 +304,30 @@ def test_camera_feedback_becomes_a_camera_event_with_the_photo() -> None:
         assert events[0]["text"].startswith("photo 1 at -35.3632620, 149.1652370")
 
     asyncio.run(run())
+
+
+def test_px4s_camera_trigger_becomes_a_camera_event_where_the_drone_was() -> None:
+    """PX4's CAMERA_TRIGGER carries no position: the photo is placed at the latest
+    GLOBAL_POSITION_INT; none is reported before the autopilot has a position."""
+
+    async def run() -> None:
+        with ScriptedFlightController(autopilot=PX4) as fcu:
+            async with agent_on(fcu) as agent:
+                fcu.push(mavlink2.MAVLink_camera_trigger_message(0, 0))  # no position yet
+                await agent.no_more_events()
+                fcu.push(
+                    mavlink2.MAVLink_global_position_int_message(
+                        1000, LAT, LON, 614_500, 30_250, 0, 0, 0, 0
+                    ),
+                    mavlink2.MAVLink_camera_trigger_message(1_764_288_000_000_000, 1),
+                )
+                events = await agent.events(1)
+        assert events[0]["kind"] == "camera"
+        assert events[0]["photo"] == {
+            "index": 1,
+            "lat": LAT / 1e7,
+            "lon": LON / 1e7,
+            "alt_rel": 30.25,
+        }
+
+    asyncio.run(run())

@@ -40,8 +40,8 @@ def test_metrics_need_an_admin(hub: str, admin_api: httpx.Client) -> None:
 
 def test_refused_frames_are_counted_by_surface(hub: str, admin_token: str) -> None:
     before = _metrics(hub, admin_token)
-    client_series = 'gcs_rejected_frames_total{surface="client"}'
-    agent_series = 'gcs_rejected_frames_total{surface="agent"}'
+    client_series = 'gcs_rejected_frames_total{surface="client_ws"}'
+    agent_series = 'gcs_rejected_frames_total{surface="agent_ws"}'
     headers = {"Authorization": f"Bearer {admin_token}"}
     with connect(
         hub.replace("http://", "ws://") + CLIENT_WS_PATH, additional_headers=headers
@@ -67,4 +67,4 @@ def test_refused_frames_are_counted_by_surface(hub: str, admin_token: str) -> No
         agent.recv(timeout=5)
     final = _metrics(hub, admin_token)
     assert _value(final, agent_series) == _value(before, agent_series) + 1
-    assert _value(final, 'gcs_messages_in_total{surface="client"}') >= 2
+    assert _value(final, 'gcs_messages_in_total{surface="client_ws"}') >= 2

@@ -68,3 +68,20 @@ async def _the_channel_is_the_one_record_of_connected() -> None:
     assert not offline.summary().connected
     with pytest.raises(VehicleOffline, match="not connected"):
         await dispatcher.execute("v", ArmCommand())
+
+
+def test_samples_are_ordered_by_number_not_by_the_agent_s_clock() -> None:
+    registry = FleetRegistry()
+    registry.connect(agent_hello("v", stream_id="s1"), _channel([]))
+    assert registry.apply("v", "s1", _sample(0, 5000.0, 1.0))
+    # The agent's clock steps back an hour: the next sample is still the newest.
+    assert registry.apply("v", "s1", _sample(1, 1400.0, 2.0))
+    # A live state ahead of a replaying backlog: the backlog is only stored...
+    assert registry.apply_live("v", 1500.0, VehicleState(alt_rel=9.0))
+    assert not registry.apply("v", "s1", _sample(2, 1401.0, 3.0))
+    # ...until a sample as recent arrives; from then on numbers order them again.
+    assert registry.apply("v", "s1", _sample(3, 1500.5, 4.0))
+    assert registry.apply("v", "s1", _sample(4, 1000.0, 5.0))
+    state = registry.get("v").state
+    assert state is not None
+    assert state.alt_rel == 5.0

@@ -2,7 +2,8 @@
 
 - `sources`: where the image comes from, behind one interface (the simulator's rendered
   view, or a USB/CSI camera through OpenCV);
-- `trigger`: when: the autopilot's CAMERA_FEEDBACK, and the pose at the exposure instant;
+- `trigger`: when: the autopilot's CAMERA_FEEDBACK (ArduPilot) or CAMERA_TRIGGER (PX4),
+  and the pose at the exposure instant;
 - `geotag`: EXIF and XMP in the JPEG, as OpenDroneMap reads them;
 - `queue`: the photos waiting on the onboard disk, within a budget;
 - `upload`: resumable HTTP uploads to the hub, bounded so telemetry keeps its bandwidth.

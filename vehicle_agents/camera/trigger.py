@@ -1,10 +1,17 @@
 """From the autopilot's camera trigger to a posed, geotagged photo in the onboard queue.
 
 The mission's camera commands (DO_SET_CAM_TRIGG_DIST, DO_DIGICAM_CONTROL) make the
-autopilot fire the camera; ArduPilot's AP_Camera then sends CAMERA_FEEDBACK, with its
-shot counter and the vehicle's position and attitude at that instant. Each feedback is
-one photo: the source takes (or fetches) it, the pose at its exposure is found, and the
-JPEG is geotagged and queued for upload.
+autopilot fire the camera, and it says so at the shutter, in its own way:
+
+- ArduPilot's AP_Camera sends CAMERA_FEEDBACK, with its shot counter (``img_idx``, from 1)
+  and the vehicle's position and attitude at that instant;
+- PX4's camera_trigger module sends CAMERA_TRIGGER, with its sequence number (``seq``,
+  from 0) and the exposure's UTC (``time_usec``, 0 without a GPS time), but no pose: the
+  pose is interpolated from the streams to the instant the trigger reached the agent.
+
+Each is one photo: the source takes (or fetches) it, the pose at its exposure is found,
+and the JPEG is geotagged and queued for upload. An autopilot sends one or the other,
+never both, so a shot is never counted twice.
 """
 
 from __future__ import annotations
@@ -75,12 +82,26 @@ class CameraTrigger:
         if kind == "GLOBAL_POSITION_INT" and (message.lat or message.lon):
             self._home_msl = message.alt / 1000.0 - message.relative_alt / 1000.0
         elif kind == "CAMERA_FEEDBACK" and int(message.flags) == CAMERA_FEEDBACK_PHOTO:
-            self.stats.triggers += 1
-            try:
-                self._shots.put_nowait(self.shot_of(message))
-            except asyncio.QueueFull:
-                self.stats.dropped_triggers += 1
-                log.warning("camera: shot %d dropped, %d waiting", message.img_idx, SHOT_QUEUE)
+            self._triggered(self.shot_of(message))
+        elif kind == "CAMERA_TRIGGER":
+            self._triggered(self.shot_of_trigger(message))
+
+    def _triggered(self, shot: Shot) -> None:
+        self.stats.triggers += 1
+        try:
+            self._shots.put_nowait(shot)
+        except asyncio.QueueFull:
+            self.stats.dropped_triggers += 1
+            log.warning("camera: shot %d dropped, %d waiting", shot.index, SHOT_QUEUE)
+
+    def shot_of_trigger(self, message: Any) -> Shot:
+        """PX4's CAMERA_TRIGGER: no pose in it, so the photo is posed from the streams at
+        the trigger's arrival (a serial link brings it within milliseconds of the shutter,
+        and the streams' own latency is the same, so the two line up on the flight
+        controller's clock)."""
+        time_usec = int(message.time_usec)
+        utc = time_usec / 1e6 if time_usec / 1e6 > PLAUSIBLE_EPOCH_S else self._wall()
+        return Shot(int(message.seq), self._monotonic(), utc, None)
 
     def shot_of(self, message: Any) -> Shot:
         arrived = self._monotonic()

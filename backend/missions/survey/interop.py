@@ -13,6 +13,7 @@ import math
 import xml.etree.ElementTree as ElementTree
 from collections.abc import Sequence
 from typing import Any
+from xml.parsers import expat
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
@@ -118,7 +119,7 @@ def _plan_document(text: str | bytes) -> dict[str, Any]:
         raise InteropError(f"the file is larger than {MAX_FILE_BYTES // 1_000_000} MB")
     try:
         document = json.loads(text)
-    except ValueError as error:
+    except (ValueError, RecursionError) as error:  # nesting past the parser's depth too
         raise InteropError(f"not a .plan file: invalid JSON ({error})") from None
     if not isinstance(document, dict) or document.get("fileType") != "Plan":
         raise InteropError('not a .plan file: its "fileType" must be "Plan"')
@@ -286,7 +287,7 @@ def read_geojson_polygon(text: str | bytes) -> dict[str, Any]:
     """A Polygon from a GeoJSON geometry, Feature or FeatureCollection (its first)."""
     try:
         document = json.loads(text)
-    except ValueError as error:
+    except (ValueError, RecursionError) as error:
         raise InteropError(f"not GeoJSON: {error}") from None
     while isinstance(document, dict):
         kind = document.get("type")
@@ -306,10 +307,8 @@ def read_kml_polygon(data: str | bytes) -> dict[str, Any]:
     raw = data.encode() if isinstance(data, str) else data
     if len(raw) > MAX_FILE_BYTES:
         raise InteropError(f"the file is larger than {MAX_FILE_BYTES // 1_000_000} MB")
-    # The standard library's parser fetches no external entities or DTDs, and its expat
-    # refuses entity expansion bombs (expat >= 2.4): a KML file stays data.
     try:
-        root = ElementTree.fromstring(raw)
+        root = _parse_xml_without_entities(raw)
     except ElementTree.ParseError as error:
         raise InteropError(f"not a KML file: {error}") from None
     polygon = _first(root, "Polygon")
@@ -340,6 +339,26 @@ def read_kml_polygon(data: str | bytes) -> dict[str, Any]:
     for k, inner in enumerate(inners):
         rings.append(ring(inner, f"hole {k + 1}"))
     return {"type": "Polygon", "coordinates": rings}
+
+
+def _refuse_entities(*_: object) -> None:
+    raise InteropError("the KML file declares entities; a KML file has none (refused unread)")
+
+
+def _parse_xml_without_entities(raw: bytes) -> ElementTree.Element:
+    """The document's root. The standard library's parser fetches no external entities,
+    and expat (>= 2.4) stops a billion laughs, but it still expands what stays under its
+    100x amplification limit: 5 MB of KML could become 500 MB. KML has no use for
+    entities, so a first pass refuses any declaration as it is read (what defusedxml
+    does), before the tree is built."""
+    scan = expat.ParserCreate()
+    scan.EntityDeclHandler = _refuse_entities
+    scan.UnparsedEntityDeclHandler = _refuse_entities
+    try:
+        scan.Parse(raw, True)
+    except expat.ExpatError as error:
+        raise InteropError(f"not a KML file: {error}") from None
+    return ElementTree.fromstring(raw)
 
 
 def _first(node: ElementTree.Element, tag: str) -> ElementTree.Element | None:

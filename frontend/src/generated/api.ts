@@ -2243,6 +2243,12 @@ export interface components {
              * @default 0
              */
             rows_spooled: number;
+            /**
+             * Rows Lost
+             * @description audit and command-log rows dropped since the hub started: the database, the spool file's disk and the memory held for them were all full
+             * @default 0
+             */
+            rows_lost: number;
         };
         /**
          * HoldCommand

@@ -246,7 +246,8 @@ export interface Event {
   photo: Photo | null;
 }
 /**
- * Where and when a photo was taken, as the autopilot reports it (CAMERA_FEEDBACK).
+ * Where and when a photo was taken, as the autopilot reports it (ArduPilot's
+ * CAMERA_FEEDBACK; PX4's CAMERA_TRIGGER, posed from the streams at its arrival).
  */
 export interface Photo {
   /**

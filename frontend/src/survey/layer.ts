@@ -107,11 +107,14 @@ export class SurveyLayer {
     const url = `${base}?v=${mosaic.revision ?? 0}`;
     if (url === this.mosaicUrl) return;
     this.mosaicUrl = url;
+    const b = mosaic.bounds;
     if (this.mosaic) {
+      // The mosaic grows: Leaflet reads `bounds` for every tile it considers, so the new
+      // outline's box lets it ask for the tiles the latest photos added.
+      if (b) this.mosaic.options.bounds = L.latLngBounds([b[1], b[0]], [b[3], b[2]]);
       this.mosaic.setUrl(url);
       return;
     }
-    const b = mosaic.bounds;
     this.mosaic = L.tileLayer(url, {
       className: "survey-mosaic",
       maxZoom: Math.max(this.map.getMaxZoom(), mosaic.max_zoom),

@@ -100,6 +100,9 @@ class VehicleFanout:
         self._feeds.discard(feed)
         if not self._feeds:
             self._bus.unsubscribe(Topic.VEHICLE_STATE, self._updates)
+            # Off the bus, what is pending only grows stale: a feed that joins later
+            # starts from its snapshot, and must not get an older state after it.
+            self._updates.take()
             self._held.clear()
 
     async def run(self) -> None:

@@ -105,14 +105,15 @@ class Dashboard:
                 message = json.loads(frame)
                 if message["type"] == "fleet":
                     self.vehicles = {v["id"]: v for v in message["vehicles"]}
-                elif message["type"] == "vehicle":
-                    vehicle = message["vehicle"]
-                    merged = {**self.vehicles.get(vehicle["id"], {}), **vehicle}
-                    self.vehicles[vehicle["id"]] = merged
-                    if vehicle.get("state") is not None and vehicle.get("last_seen"):
-                        self._samples.latency.append(
-                            (time.monotonic(), arrived - vehicle["last_seen"])
-                        )
+                elif message["type"] == "vehicles":
+                    # a batch of the vehicles that changed, each with what changed
+                    for vehicle in message["vehicles"]:
+                        merged = {**self.vehicles.get(vehicle["id"], {}), **vehicle}
+                        self.vehicles[vehicle["id"]] = merged
+                        if vehicle.get("state") is not None and vehicle.get("last_seen"):
+                            self._samples.latency.append(
+                                (time.monotonic(), arrived - vehicle["last_seen"])
+                            )
 
     def state(self, vehicle_id: str) -> dict[str, Any]:
         return (self.vehicles.get(vehicle_id) or {}).get("state") or {}

@@ -134,13 +134,8 @@ def test_a_poor_field_link_keeps_telemetry_whole_commands_answered_and_delay_fla
                 except TimeoutError:
                     return
                 message = json.loads(frame)
-                vehicles = (
-                    message["vehicles"]
-                    if message["type"] == "fleet"
-                    else [message["vehicle"]]
-                    if message["type"] == "vehicle"
-                    else []
-                )
+                # the snapshot, then batches of the vehicles that changed
+                vehicles = message["vehicles"] if message["type"] in ("fleet", "vehicles") else []
                 for vehicle in vehicles:
                     if vehicle["id"] == VEHICLE and vehicle.get("state"):
                         state.update(vehicle["state"])

@@ -17,13 +17,11 @@ import pwd
 import shutil
 import subprocess
 import tempfile
-import threading
 import time
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
 
-import httpx
 import pytest
 
 from gcs.launcher import free_port
@@ -31,6 +29,13 @@ from tests.conftest import ADMIN_PASSWORD, hub_settings
 from tests.helpers import access_token, api_client, poll_until, running_hub
 from tests.integration.test_database_outage import answering
 from tests.integration.test_hub_bad_input import _telemetry, scripted_agent
+from tests.store_outage import (
+    degraded,
+    everything_stored,
+    safety_commands_go_through,
+    stored,
+    streaming,
+)
 
 pytestmark = pytest.mark.integration
 
@@ -91,14 +96,6 @@ def private_cluster() -> Iterator[PrivateCluster]:
         shutil.rmtree(root, ignore_errors=True)
 
 
-def _stored(api: httpx.Client) -> list[int]:
-    page = api.get("/api/v1/vehicles/v1/telemetry", params={"start": 0, "limit": 10000})
-    if page.status_code == 503:  # the database is away: nothing can be read
-        return []
-    page.raise_for_status()
-    return sorted(sample["seq"] for sample in page.json()["samples"])
-
-
 def test_postgres_restarted_under_load_loses_nothing_accepted_and_safety_goes_on(
     tmp_path: Path,
 ) -> None:
@@ -112,38 +109,13 @@ def test_postgres_restarted_under_load_loses_nothing_accepted_and_safety_goes_on
         ):
             agent_token = api.post("/api/v1/vehicles/v1/agent-tokens").json()["token"]
             with scripted_agent(base, "v1", agent_token) as agent:
-                sent = 0
-                stop = threading.Event()
-
-                def stream() -> None:
-                    nonlocal sent
-                    while not stop.is_set():
-                        agent.send(_telemetry(sent))
-                        sent += 1
-                        stop.wait(1 / RATE_HZ)  # the agent's sampling rate
-
-                streamer = threading.Thread(target=stream, daemon=True)
-                streamer.start()
-                try:
-                    poll_until(lambda: len(_stored(api)) > 50, 30, "samples stored")
+                with streaming(agent, RATE_HZ) as stream:
+                    poll_until(lambda: len(stored(api)) > 50, 30, "samples stored")
 
                     cluster.ctl("-m", "immediate", "stop")  # a crash
-                    health = poll_until(
-                        lambda: (
-                            (h := api.get("/api/v1/health").json())["status"] == "degraded" and h
-                        ),
-                        30,
-                        "/health to report the database away",
-                    )
-                    assert health["database_available"] is False
+                    degraded(api, "the database away")
                     # The live fleet and the safety commands need no database.
-                    assert api.get("/api/v1/vehicles").status_code == 200
-                    for name in ("land", "rtl", "hold"):
-                        with answering(agent) as received:
-                            answer = api.post("/api/v1/vehicles/v1/commands", json={"name": name})
-                            assert answer.status_code == 200, answer.text
-                            assert answer.json()["outcome"]["status"] == "accepted"
-                        assert [command["name"] for command in received] == [name]
+                    safety_commands_go_through(api, agent)
                     assert api.get("/api/v1/health").json()["telemetry_backlog"] > 0
 
                     options = f"-p {cluster.port} -k {cluster.directory.parent}"
@@ -156,21 +128,7 @@ def test_postgres_restarted_under_load_loses_nothing_accepted_and_safety_goes_on
                     # A fast restart under the same load (a minor-version upgrade, say).
                     cluster.ctl("-m", "fast", "restart")
                     time.sleep(1)  # a second of load after the restart, not a sync
-                finally:
-                    stop.set()
-                    streamer.join(10)
-
-                poll_until(
-                    lambda: (
-                        api.get("/api/v1/health").json()["rows_spooled"] == 0
-                        and len(_stored(api)) >= sent
-                    ),
-                    60,
-                    f"all {sent} samples and the spooled rows stored",
-                )
-                assert _stored(api) == list(range(sent)), "a sample is missing or twice"
-                commands = api.get("/api/v1/commands", params={"vehicle_id": "v1"}).json()
-                assert sorted(c["name"] for c in commands["commands"]) == ["hold", "land", "rtl"]
+                everything_stored(api, stream.sent)
 
 
 def test_an_agent_reconnecting_while_postgres_is_down_is_served_and_commanded(
@@ -187,7 +145,7 @@ def test_an_agent_reconnecting_while_postgres_is_down_is_served_and_commanded(
             agent_token = api.post("/api/v1/vehicles/v1/agent-tokens").json()["token"]
             with scripted_agent(base, "v1", agent_token) as agent:
                 agent.send(_telemetry(0))
-                poll_until(lambda: _stored(api) == [0], 30, "the vehicle known to the store")
+                poll_until(lambda: stored(api) == [0], 30, "the vehicle known to the store")
             cluster.ctl("-m", "immediate", "stop")
             with scripted_agent(base, "v1", agent_token) as agent:
                 for name in ("land", "rtl"):

@@ -26,7 +26,14 @@ from websockets.sync.client import ClientConnection, connect
 from gcs.launcher import LocalFleet
 from protocol.messages import CLIENT_WS_PATH, Command, ManualAxes, MissionItem
 from tests.conftest import FLEET_SPEEDUP
-from tests.helpers import FleetWatcher, access_token, api_client, connected, running_fleet
+from tests.helpers import (
+    FleetWatcher,
+    access_token,
+    api_client,
+    connected,
+    poll_until,
+    running_fleet,
+)
 
 pytestmark = pytest.mark.integration
 
@@ -147,7 +154,15 @@ def operator(one_vehicle: LocalFleet) -> str:
 
 
 def _wpnav_speed(api: httpx.Client) -> float:
-    read = api.get(f"/api/v1/vehicles/{VEHICLE}/params/WPNAV_SPEED")
+    # The routes before spent this second's vehicle budget: a 429 says when to ask again.
+    read = poll_until(
+        lambda: (
+            (r := api.get(f"/api/v1/vehicles/{VEHICLE}/params/WPNAV_SPEED")).status_code != 429
+            and r
+        ),
+        10,
+        "the vehicle budget to allow a read",
+    )
     assert read.status_code == 200, read.text
     value: float = read.json()["values"]["WPNAV_SPEED"]
     return value

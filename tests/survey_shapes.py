@@ -3,9 +3,12 @@ bench/bench_survey.py, so the benchmark's path ratios are the tested shapes'."""
 
 from __future__ import annotations
 
+from typing import Any
+
 from shapely.geometry import Polygon, box
 
 from backend.missions.survey.geo import polygon_from_geojson
+from common.geodesy import LocalFrame
 
 SHAPES = {
     "convex": Polygon([(0, 0), (900, -100), (1000, 700), (200, 900)]),
@@ -29,3 +32,10 @@ def zone_straddling() -> Polygon:
 
 def shape(name: str) -> Polygon:
     return zone_straddling() if name == "zone-straddling" else SHAPES[name]
+
+
+def geojson_area(frame: LocalFrame, corners: list[tuple[float, float]]) -> dict[str, Any]:
+    """A survey area as the API takes it: a closed GeoJSON polygon (longitude first) through
+    ``corners``, each (east, north) in metres from ``frame``'s origin."""
+    ring = [list(reversed(frame.to_geo(x, y))) for x, y in [*corners, corners[0]]]
+    return {"type": "Polygon", "coordinates": [ring]}

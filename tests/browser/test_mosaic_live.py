@@ -16,6 +16,7 @@ from common.geodesy import LocalFrame
 from gcs.launcher import FleetPlan, LocalFleet, free_port
 from tests.browser.conftest import log_in
 from tests.helpers import access_token, api_client, poll_until
+from tests.survey_shapes import geojson_area
 
 pytestmark = [pytest.mark.browser, pytest.mark.integration]
 
@@ -75,9 +76,8 @@ def _request(plan: FleetPlan) -> dict[str, object]:
         (WEST_M + WIDE_M, SOUTH_M + DEEP_M),
         (WEST_M, SOUTH_M + DEEP_M),
     ]
-    ring = [list(reversed(frame.to_geo(x, y))) for x, y in [*corners, corners[0]]]
     return {
-        "area": {"type": "Polygon", "coordinates": [ring]},
+        "area": geojson_area(frame, corners),
         "camera": CAMERA,
         "altitude_m": 30,
         "side_overlap_pct": 60,

@@ -41,6 +41,7 @@ from protocol.photos import CameraIntrinsics, PhotoPose
 from simulator.ground import Ground
 from tests.helpers import FleetWatcher, access_token, api_client, on_the_ground, poll_until
 from tests.mosaic_photos import NO_RTK, Noise, marker_errors_m, mosaic_of, target_errors_m
+from tests.survey_shapes import geojson_area
 from tests.tcp_proxy import CuttableProxy
 
 pytestmark = pytest.mark.integration
@@ -107,9 +108,8 @@ def _request(plan: FleetPlan) -> dict[str, Any]:
         (WEST_M + WIDE_M, SOUTH_M + DEEP_M),
         (WEST_M, SOUTH_M + DEEP_M),
     ]
-    ring = [list(reversed(frame.to_geo(x, y))) for x, y in [*corners, corners[0]]]
     return {
-        "area": {"type": "Polygon", "coordinates": [ring]},
+        "area": geojson_area(frame, corners),
         "camera": CAMERA.model_dump(),
         "altitude_m": ALTITUDE_M,
         "side_overlap_pct": 60,

@@ -25,6 +25,7 @@ from tests.helpers import (
     on_the_ground,
     poll_until,
 )
+from tests.survey_shapes import geojson_area
 
 pytestmark = pytest.mark.integration
 
@@ -98,8 +99,7 @@ def _area(fleet: LocalFleet) -> tuple[dict[str, Any], LocalFrame]:
         (EAST_M + WIDE_M, NORTH_M + DEEP_M),
         (EAST_M, NORTH_M + DEEP_M - 10),
     ]
-    ring = [list(reversed(frame.to_geo(x, y))) for x, y in [*corners, corners[0]]]
-    return {"type": "Polygon", "coordinates": [ring]}, frame
+    return geojson_area(frame, corners), frame
 
 
 def _request(fleet: LocalFleet) -> dict[str, Any]:

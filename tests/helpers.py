@@ -207,6 +207,18 @@ def send_command(api: httpx.Client, vehicle: str, **command: Any) -> dict[str, A
     return outcome
 
 
+def take_off(
+    api: httpx.Client, watcher: FleetWatcher, vehicle: str, altitude: float, *, above: float
+) -> None:
+    """GUIDED, armed and climbing to ``altitude``; back once it is higher than ``above``."""
+    for command in ({"name": "set_mode", "mode": "GUIDED"}, {"name": "arm"}):
+        assert send_command(api, vehicle, **command)["status"] == "accepted"
+    assert send_command(api, vehicle, name="takeoff", altitude=altitude)["status"] == "accepted"
+    watcher.wait_until(
+        lambda v: (v[vehicle]["state"]["alt_rel"] or 0) > above, 60, f"{vehicle} climbing"
+    )
+
+
 # -- a shared fleet as a test may assume it -------------------------------------------
 
 # Surveys that hold their drones: planned (checked, nothing uploaded) or flying.

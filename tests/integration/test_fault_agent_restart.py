@@ -26,6 +26,7 @@ from tests.helpers import (
     ready,
     running_fleet,
     send_command,
+    take_off,
 )
 
 pytestmark = pytest.mark.integration
@@ -60,10 +61,7 @@ def test_an_agent_killed_mid_flight_reattaches_and_the_hub_records_the_gap(
     token = access_token(base, "admin", fleet.plan.admin_password)
     with FleetWatcher(base, token) as watcher, api_client(base, token) as api:
         watcher.wait_until(ready(VEHICLE), 60, f"{VEHICLE} ready")
-        for command in ({"name": "set_mode", "mode": "GUIDED"}, {"name": "arm"}):
-            assert send_command(api, VEHICLE, **command)["status"] == "accepted"
-        assert send_command(api, VEHICLE, name="takeoff", altitude=15)["status"] == "accepted"
-        watcher.wait_until(lambda v: (v[VEHICLE]["state"]["alt_rel"] or 0) > 12, 60, "climb")
+        take_off(api, watcher, VEHICLE, 15, above=12)
 
         fleet.kill("agent_1")
         watcher.wait_until(lambda v: not v[VEHICLE]["connected"], 30, "the hub to see it go")

@@ -25,8 +25,8 @@ from tests.helpers import (
     connected,
     poll_until,
     ready,
-    send_command,
     spilled_frames,
+    take_off,
 )
 from tests.tcp_proxy import CuttableProxy
 
@@ -73,10 +73,7 @@ def test_a_flapping_link_then_a_30_s_cut_runs_the_failsafe_and_replays_in_order_
     token = access_token(base, "admin", fleet.plan.admin_password)
     with FleetWatcher(base, token) as watcher, api_client(base, token) as api:
         watcher.wait_until(ready(VEHICLE), 60, f"{VEHICLE} ready")
-        for command in ({"name": "set_mode", "mode": "GUIDED"}, {"name": "arm"}):
-            assert send_command(api, VEHICLE, **command)["status"] == "accepted"
-        assert send_command(api, VEHICLE, name="takeoff", altitude=15)["status"] == "accepted"
-        watcher.wait_until(lambda v: (v[VEHICLE]["state"]["alt_rel"] or 0) > 12, 60, "climb")
+        take_off(api, watcher, VEHICLE, 15, above=12)
 
         # Flapping: short drops, each shorter than the failsafe's timeout.
         for _ in range(FLAPS):

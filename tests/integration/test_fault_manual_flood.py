@@ -17,7 +17,14 @@ from typing import Any
 import pytest
 
 from gcs.launcher import FleetPlan, LocalFleet, free_port
-from tests.helpers import FleetWatcher, access_token, api_client, poll_until, ready, send_command
+from tests.helpers import (
+    FleetWatcher,
+    access_token,
+    api_client,
+    poll_until,
+    ready,
+    take_off,
+)
 from tests.integration.test_fcu_link import FcuTap
 from tests.integration.test_manual_control import Pilot, set_param
 
@@ -56,10 +63,7 @@ def test_a_flood_of_stick_frames_reaches_the_vehicle_at_100_hz_newest_first(
     with FleetWatcher(base, token) as watcher, api_client(base, token) as api:
         watcher.wait_until(ready(VEHICLE), 60, f"{VEHICLE} ready")
         set_param(api, VEHICLE, "SYSID_MYGCS", 254)  # the agent's id, see the README
-        for command in ({"name": "set_mode", "mode": "GUIDED"}, {"name": "arm"}):
-            assert send_command(api, VEHICLE, **command)["status"] == "accepted"
-        assert send_command(api, VEHICLE, name="takeoff", altitude=10)["status"] == "accepted"
-        watcher.wait_until(lambda v: (v[VEHICLE]["state"]["alt_rel"] or 0) > 8, 60, "climb")
+        take_off(api, watcher, VEHICLE, 10, above=8)
 
         pilot = Pilot(base, token)
         try:

@@ -30,6 +30,7 @@ from tests.helpers import (
     running_fleet,
     send_command,
     speed_of,
+    take_off,
 )
 
 pytestmark = pytest.mark.integration
@@ -140,7 +141,7 @@ def flying(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[LocalFlee
             watcher.wait_until(ready(VEHICLE), 60, f"{VEHICLE} ready")
             watcher.wait_until(ready(PX4_VEHICLE), 60, f"{PX4_VEHICLE} ready")
             set_param(api, VEHICLE, "SYSID_MYGCS", 254)  # the agent's id, see the README
-            take_off(api, watcher)
+            take_off(api, watcher, VEHICLE, 10.0, above=9.0)
             created = api.post(
                 "/api/v1/users",
                 json={"username": "pilot", "password": OPERATOR_PASSWORD, "role": "operator"},
@@ -200,15 +201,6 @@ def test_the_agent_refuses_a_lease_the_autopilot_would_ignore(
         finally:
             pilot.close()
             px4.close()
-
-
-def take_off(api: httpx.Client, watcher: FleetWatcher) -> None:
-    assert send_command(api, VEHICLE, name="set_mode", mode="GUIDED")["status"] == "accepted"
-    assert send_command(api, VEHICLE, name="arm")["status"] == "accepted"
-    assert send_command(api, VEHICLE, name="takeoff", altitude=10.0)["status"] == "accepted"
-    watcher.wait_until(
-        lambda v: (v[VEHICLE]["state"]["alt_rel"] or 0) >= 9.0, 60, f"{VEHICLE} at 10 m"
-    )
 
 
 def metres_moved(before: dict[str, Any], after: dict[str, Any]) -> tuple[float, float]:

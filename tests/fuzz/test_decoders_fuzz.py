@@ -21,7 +21,6 @@ The number of examples each decoder took is printed at the end of the module.
 from __future__ import annotations
 
 import json
-import math
 import socket
 import struct
 from collections import Counter
@@ -64,17 +63,14 @@ from protocol.messages import (
 )
 from protocol.messages import CommandOutcome as Outcome
 from protocol.scans import (
-    Mount,
-    ScanFrame,
     ScanFrameError,
-    ScanPose,
     client_scan_frame,
     decode_scan,
     encode_scan,
-    quantise,
     split_client_scan_frame,
 )
 from tests.helpers import agent_hello
+from tests.unit.test_scan_frame import _frame
 from vehicle_agents.fcu_link import FcuLink, _read_available
 from vehicle_agents.forwarding import Endpoint, EndpointAddress
 from vehicle_agents.telemetry import link_snapshot
@@ -275,22 +271,8 @@ def test_the_agents_hub_socket_decoder(frame: str | bytes) -> None:
 
 
 def _scan(beams: int) -> bytes:
-    ranges, _ = quantise([1.0 + i * 0.01 for i in range(beams)], 0.001, 12.0)
-    return encode_scan(
-        ScanFrame(
-            seq=41,
-            sensor_time_us=123_456_789,
-            utc_time=1_760_000_000.25,
-            duration_s=0.1,
-            angle_min=0.0,
-            angle_increment=-math.radians(0.5),
-            range_max_m=12.0,
-            pose_start=ScanPose(-35.363262, 149.165237, 589.0, 0.01, -0.02, 1.5),
-            pose_end=ScanPose(-35.3632621, 149.1652371, 589.1, 0.01, -0.02, 1.6),
-            ranges=ranges,
-            mount=Mount(0.05, 0.0, -0.1, 0.0, 0.0, math.pi),
-        )
-    )
+    """The scan-frame tests' own frame, as the seed the mutations start from."""
+    return encode_scan(_frame(beams))
 
 
 SCANS = [_scan(1), _scan(16), _scan(360)]

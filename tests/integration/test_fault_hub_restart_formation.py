@@ -98,7 +98,13 @@ def test_a_hub_killed_mid_formation_leaves_followers_holding_and_records_it_stop
         stored = {f["id"]: f for f in api.get("/api/v1/formations").json()["formations"]}
         assert stored[formation_id]["stop_reason"] == "stopped: the hub restarted while it flew"
         assert stored[formation_id]["stopped"] is not None
-        # Its members are free for the next one.
+        # Its members are free for the next one (the leader's first state since the
+        # restart may come after the followers'; the feed sends each vehicle's own).
+        watcher.wait_until(
+            lambda v: ready(LEADER)(v) and v[LEADER]["state"].get("lat") is not None,
+            30,
+            "the leader's position since the restart",
+        )
         here = watcher.state(LEADER)
         again = api.post("/api/v1/formations", json=_request(LocalFrame(here["lat"], here["lon"])))
         assert again.status_code == 200, again.text

@@ -264,6 +264,10 @@ class Hub:
                         self.registry,
                         self.settings.viz_update_interval_s,
                         scans=self.scans,
+                        surveys=self.surveys,
+                        formations=self.formations,
+                        mosaics=self.mosaic,
+                        mosaic_surveys=lambda: [run.id for run in self.surveys.known()],
                     )
                     tasks.create_task(mirror.run())
         finally:

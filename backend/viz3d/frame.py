@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 from collections import Counter
+from collections.abc import Callable
 
 import numpy as np
 import numpy.typing as npt
@@ -24,6 +25,9 @@ MIN_ALT_M = -1_000.0
 MAX_ALT_M = 20_000.0
 
 Vector = npt.NDArray[np.float64]
+# A vehicle's home altitude (metres above sea level), None while unknown: surveys and
+# formations give heights above each vehicle's home.
+HomeAltitude = Callable[[str], float | None]
 
 
 def parse_origin(text: str | None) -> GeoPoint | None:
@@ -82,6 +86,13 @@ class SceneFrame:
         if state.home_lat is None or state.home_lon is None or state.home_alt_msl is None:
             return None
         return self.place(state.home_lat, state.home_lon, state.home_alt_msl)
+
+    def ground(self, home_alt_msl: float | None) -> float | None:
+        """The height a vehicle's "above home" counts from: its home's, or while that is
+        unknown the origin's (the first home the fleet reported); None without an origin."""
+        if home_alt_msl is not None and math.isfinite(home_alt_msl):
+            return home_alt_msl
+        return None if self.local is None else self.local.origin.alt
 
     def place(self, lat: float, lon: float, alt: float) -> Vector | None:
         if not all(math.isfinite(value) for value in (lat, lon, alt)):

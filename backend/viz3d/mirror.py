@@ -5,7 +5,9 @@ The mirror takes them newest-wins per vehicle, and at most once per period appli
 has changed as one atomic scene update: the browser gets a bounded number of updates a
 second whatever the fleet's size and rate, and never a stale state before a newer one.
 Scans are taken the same way (each vehicle's newest, at most once per period), and the
-accumulated point map, which only grows slowly, less often.
+accumulated point map, which only grows slowly, less often. Surveys' lanes, formations
+and mosaics have a layer module each (survey_layer, formation_layer, mosaic_layer),
+which the mirror runs beside its own work.
 """
 
 from __future__ import annotations
@@ -13,12 +15,20 @@ from __future__ import annotations
 import asyncio
 import logging
 import time
+from collections.abc import Callable, Iterable
 
+from backend.errors import VehicleNotFound
+from backend.fleet.formations import FormationService
 from backend.fleet.registry import FleetRegistry
+from backend.mosaic.service import MosaicService
 from backend.realtime.bus import Bus, LatestSubscription, Topic
 from backend.scans.pointmap import Array, find_obstacles
 from backend.scans.service import ScanDelivery, ScanService
+from backend.surveys.service import SurveyService
+from backend.viz3d.formation_layer import FormationLayer
+from backend.viz3d.mosaic_layer import MosaicLayer
 from backend.viz3d.scene import FleetScene
+from backend.viz3d.survey_layer import SurveyLanes
 from common.geodesy import LocalFrame
 
 log = logging.getLogger(__name__)
@@ -38,12 +48,22 @@ class SceneMirror:
         registry: FleetRegistry,
         interval_s: float,
         scans: ScanService | None = None,
+        surveys: SurveyService | None = None,
+        formations: FormationService | None = None,
+        mosaics: MosaicService | None = None,
+        mosaic_surveys: Callable[[], Iterable[str]] | None = None,
     ) -> None:
+        """``mosaic_surveys``: the surveys whose mosaics are drawn (the hub gives those it
+        has followed since it started, flying or ended)."""
         self.scene = scene
         self.bus = bus
         self.registry = registry
         self.interval_s = interval_s
         self.scans = scans
+        self.surveys = surveys
+        self.formations = formations
+        self.mosaics = mosaics
+        self.mosaic_surveys = mosaic_surveys
 
     async def run(self) -> None:
         async with asyncio.TaskGroup() as tasks:
@@ -51,6 +71,21 @@ class SceneMirror:
             if self.scans is not None:
                 tasks.create_task(self._scans(self.scans))
                 tasks.create_task(self._point_map(self.scans))
+            if self.surveys is not None:
+                lanes = SurveyLanes(self.scene, self.home_alt)
+                tasks.create_task(lanes.follow(self.bus, self.surveys, self.interval_s))
+            if self.formations is not None:
+                formation = FormationLayer(self.scene)
+                tasks.create_task(formation.follow(self.formations, self.home_alt, self.interval_s))
+            if self.mosaics is not None and self.mosaic_surveys is not None:
+                tasks.create_task(MosaicLayer(self.scene).follow(self.mosaics, self.mosaic_surveys))
+
+    def home_alt(self, vehicle_id: str) -> float | None:
+        try:
+            state = self.registry.get(vehicle_id).state
+        except VehicleNotFound:
+            return None
+        return None if state is None else state.home_alt_msl
 
     async def _vehicles(self) -> None:
         updates = LatestSubscription()

@@ -58,13 +58,29 @@ VEHICLES = Layer("vehicles", "Vehicles")
 TRAILS = Layer("trails", "Trails")
 HOMES = Layer("homes", "Homes")
 MISSIONS = Layer("missions", "Missions")
-# Layers of the sensors' data: each appears in the panel when its first data is drawn
-# (a vehicle's latest scan, the accumulated point map, the obstacles found in it), never
-# before. Survey lanes, the mosaic plane and formation slots will join them the same way
-# when their features exist.
+# Layers of the sensors' and the operations' data: each appears in the panel when its
+# first data is drawn (a vehicle's latest scan, the accumulated point map, the obstacles
+# found in it, a survey's lanes, a formation, a mosaic), never before. The last three are
+# drawn by their own modules (survey_layer, formation_layer, mosaic_layer).
 SCANS = Layer("scans", "LIDAR scans")
 POINT_MAP = Layer("point_map", "Point map")
 OBSTACLES = Layer("obstacles", "Obstacles")
+SURVEY_LANES = Layer("survey_lanes", "Survey lanes")
+FORMATIONS = Layer("formations", "Formations")
+MOSAIC = Layer("mosaic", "Mosaic")
+ALL_LAYERS = (
+    GRID,
+    VEHICLES,
+    TRAILS,
+    HOMES,
+    MISSIONS,
+    SCANS,
+    POINT_MAP,
+    OBSTACLES,
+    SURVEY_LANES,
+    FORMATIONS,
+    MOSAIC,
+)
 POINT_MAP_COLOUR = (150, 150, 150)
 OBSTACLE_COLOUR = (255, 80, 0)
 MAX_OBSTACLES = 200
@@ -97,7 +113,7 @@ class FleetScene:
         # One group node per layer, made first, so the panel's checkbox hides the group.
         self._groups = {
             layer.key: server.scene.add_frame(f"/{layer.key}", show_axes=False)
-            for layer in (GRID, VEHICLES, TRAILS, HOMES, MISSIONS, SCANS, POINT_MAP, OBSTACLES)
+            for layer in ALL_LAYERS
         }
         self._mission_paths: dict[str, viser.LineSegmentsHandle] = {}
         self._next_waypoints: dict[str, viser.IcosphereHandle] = {}
@@ -120,7 +136,7 @@ class FleetScene:
         self.server.scene.add_grid(
             f"/{GRID.key}/plane", width=1000, height=1000, cell_size=10, section_size=100
         )
-        self._show_layer(GRID)
+        self.show_layer(GRID)
 
     # -- the fleet ---------------------------------------------------------------
 
@@ -179,7 +195,7 @@ class FleetScene:
         )
         body.on_click(lambda event: self._clicked(vehicle_id, event.client))
         label = self.server.scene.add_label(f"{root}/label", vehicle_id, position=(0, 0, 1.5))
-        self._show_layer(VEHICLES)
+        self.show_layer(VEHICLES)
         self._follow_choice.options = ("(none)", *sorted([*self._vehicles, vehicle_id]))
         vehicle = _Vehicle(frame=frame, label=label, colour=colour)
         self._vehicles[vehicle_id] = vehicle
@@ -223,7 +239,7 @@ class FleetScene:
                 thickness=2.0,
                 thickness_units="screen",
             )
-            self._show_layer(TRAILS)
+            self.show_layer(TRAILS)
         else:
             vehicle.trail_handle.points = segments  # one colour for all: (3,) stays valid
 
@@ -232,7 +248,7 @@ class FleetScene:
             vehicle.home = self.server.scene.add_icosphere(
                 f"/{HOMES.key}/{vehicle_id}", radius=0.6, color=vehicle.colour, position=home
             )
-            self._show_layer(HOMES)
+            self.show_layer(HOMES)
         elif not np.allclose(vehicle.home.position, home, atol=0.01):
             vehicle.home.position = home
 
@@ -275,7 +291,7 @@ class FleetScene:
                 thickness=1.0,
                 thickness_units="screen",
             )
-            self._show_layer(MISSIONS)
+            self.show_layer(MISSIONS)
 
     def mission_path(self, vehicle_id: str) -> list[Vector]:
         return list(self._missions.get(vehicle_id, []))
@@ -314,7 +330,7 @@ class FleetScene:
             self.server.scene.add_point_cloud(
                 f"/{layer.key}/{key}", points, colors=colour, point_size=point_size
             )
-            self._show_layer(layer)
+            self.show_layer(layer)
 
     def show_scan(
         self, vehicle_id: str, points: npt.NDArray[np.floating], site: LocalFrame
@@ -358,12 +374,13 @@ class FleetScene:
                     )
                 )
             if obstacles:
-                self._show_layer(OBSTACLES)
+                self.show_layer(OBSTACLES)
         return True
 
     # -- the panel ---------------------------------------------------------------
 
-    def _show_layer(self, layer: Layer) -> None:
+    def show_layer(self, layer: Layer) -> None:
+        """The layer's checkbox in the panel (once: call it whenever the layer draws)."""
         if layer.key in self._layers:
             return
         with self._layer_folder:

@@ -1,0 +1,295 @@
+"""The 3D view's survey, formation and mosaic layers, driven with real surveys, formation
+plans and tile stores and read back through the viser server's own scene API."""
+
+from __future__ import annotations
+
+import asyncio
+import math
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+import viser
+
+from backend.fleet.formations import ActiveFormation
+from backend.missions.formation.planner import FormationPlan
+from backend.missions.formation.route import LeaderRoute
+from backend.missions.formation.schemas import FormationRequest
+from backend.missions.survey.run import DroneState, SurveyRun, SurveyState
+from backend.missions.survey.schemas import SurveyRequest
+from backend.missions.survey.service import Fleet, plan_survey
+from backend.mosaic.georef import TILE_PX, pixel_to_lonlat
+from backend.mosaic.service import MosaicService
+from backend.mosaic.store import TileStore
+from backend.surveys.service import new_run
+from backend.viz3d.colours import rgb, vehicle_colour
+from backend.viz3d.formation_layer import SPHERE_OPACITY, FormationLayer, formation_view
+from backend.viz3d.frame import SceneFrame
+from backend.viz3d.mosaic_layer import GROUND_LIFT_M, MAX_TEXTURE_PX, MosaicLayer
+from backend.viz3d.scene import FleetScene
+from backend.viz3d.server import VizServer
+from backend.viz3d.survey_layer import PlannedLanes, SurveyLanes
+from common.formation import LeaderState, Offset, OffsetFrame
+from common.geodesy import GeoPoint, LocalFrame
+from tests.survey_shapes import geojson_area
+
+HOME = (47.397742, 8.545594, 488.0)
+TRUTH = LocalFrame(*HOME)
+
+
+def _node(server: viser.ViserServer, name: str) -> Any:
+    return server.scene._handle_from_node_name.get(name)
+
+
+@pytest.fixture
+def viz() -> Iterator[VizServer]:
+    started = VizServer.start()
+    yield started
+    started.stop()
+
+
+@pytest.fixture
+def scene(viz: VizServer) -> FleetScene:
+    return FleetScene(viz.viser, SceneFrame(GeoPoint(*HOME)), trail_s=30.0)
+
+
+# -- survey lanes -----------------------------------------------------------------------
+
+
+def _survey() -> SurveyRun:
+    """A real plan over 300 x 200 m north-east of home, split between two drones."""
+    request = SurveyRequest.model_validate(
+        {
+            "area": geojson_area(TRUTH, [(40, 30), (340, 30), (340, 230), (40, 230)]),
+            "camera": "dji_phantom4_pro",
+            "gsd_cm": 2.0,
+            "angle_deg": 0,
+            "vehicle_ids": ["a", "b"],
+        }
+    )
+    spots = {v: GeoPoint(*TRUTH.to_geo(east, 0.0), HOME[2]) for v, east in (("a", 0), ("b", 8))}
+    fleet = [Fleet(v, spot, spot) for v, spot in spots.items()]
+    run = new_run(request, plan_survey(request, fleet))
+    run.state = SurveyState.FLYING
+    for drone in run.drones:
+        drone.state = DroneState.FLYING
+    return run
+
+
+def test_a_flown_surveys_lanes_are_drawn_at_altitude_per_drone_and_go_on_abort(
+    viz: VizServer, scene: FleetScene
+) -> None:
+    homes = {"a": HOME[2], "b": HOME[2] + 3.0}  # b's home 3 m higher: its lanes too
+    layer = SurveyLanes(scene, homes.get)
+    run = _survey()
+    assert {len(d.lanes) for d in run.drones} != {0}
+    layer.show(PlannedLanes.of(run))
+    for drone in run.drones:
+        node = _node(viz.viser, f"/survey_lanes/{run.id}/{drone.vehicle_id}")
+        assert node is not None
+        alt = homes[drone.vehicle_id] + run.altitude_m
+        expected = [
+            [TRUTH.to_enu(*lane.start, alt), TRUTH.to_enu(*lane.end, alt)] for lane in drone.lanes
+        ]
+        np.testing.assert_allclose(node.points, expected, atol=0.01)
+        assert tuple(np.asarray(node.colors).reshape(-1, 3)[0]) == rgb(
+            vehicle_colour(drone.vehicle_id)
+        )
+    assert "survey_lanes" in scene.layers_shown
+
+    run.state = SurveyState.ABORTED
+    layer.show(PlannedLanes.of(run))
+    for drone in run.drones:
+        assert _node(viz.viser, f"/survey_lanes/{run.id}/{drone.vehicle_id}") is None
+    assert layer.surveys == []
+
+
+def test_a_planned_survey_is_not_drawn(viz: VizServer, scene: FleetScene) -> None:
+    run = _survey()
+    run.state = SurveyState.PLANNED
+    SurveyLanes(scene, lambda _: HOME[2]).show(PlannedLanes.of(run))
+    assert _node(viz.viser, f"/survey_lanes/{run.id}/a") is None
+    assert "survey_lanes" not in scene.layers_shown
+
+
+# -- formations --------------------------------------------------------------------------
+
+
+def _formation(leader_id: str | None) -> ActiveFormation:
+    # The formation's own frame 50 m east and 30 m north of the scene's origin.
+    plan_frame = LocalFrame(*TRUTH.to_geo(50.0, 30.0))
+    plan = FormationPlan(
+        leader_id=leader_id,
+        frame=plan_frame,
+        route=LeaderRoute([(0, 0, 15), (40, 0, 15)], speed_ms=2.0, pause_s=0.0),
+        offsets={
+            "f1": Offset(-3.0, 3.0, -1.0),  # behind and right of the leader's heading
+            "f2": Offset(5.0, 0.0, 0.0, OffsetFrame.NORTH_EAST),  # 5 m north whatever
+        },
+        min_separation_m=2.0,
+    )
+    request = FormationRequest.model_construct()  # only stored; the layer reads the plan
+    return ActiveFormation("formation-1", request, plan, 0.0, offsets=plan.offsets)
+
+
+def test_a_formations_slot_lines_and_separation_spheres_follow_it_and_go_on_stop(
+    viz: VizServer, scene: FleetScene
+) -> None:
+    homes = {"lead": HOME[2], "f1": HOME[2], "f2": HOME[2] + 2.0}
+    positions = {
+        "lead": np.array([70.0, 40.0, 15.0]),
+        "f1": np.array([66.0, 38.0, 14.0]),
+        "f2": np.array([70.0, 44.0, 17.0]),
+    }
+    formation = _formation("lead")
+    # Leader 10 m north and 20 m east of the formation's origin, 15 m up, heading east.
+    leader = LeaderState(10.0, 20.0, 15.0, 0.0, 2.0, 0.0, math.pi / 2, 0.0)
+    view = formation_view(formation, leader, scene.frame, homes.get, positions.get)
+    assert view is not None
+    layer = FormationLayer(scene)
+    layer.sync([view], [formation.id])
+
+    links = _node(viz.viser, "/formations/formation-1/links")
+    assert links is not None
+    # Heading east, "behind and right" is west and south: 3 m each, 1 m down.
+    np.testing.assert_allclose(
+        links.points,
+        [[(70.0, 40.0, 15.0), (67.0, 37.0, 14.0)], [(70.0, 40.0, 15.0), (70.0, 45.0, 17.0)]],
+        atol=0.01,
+    )
+    colours = np.asarray(links.colors).reshape(2, 2, 3)
+    assert [tuple(c) for c in colours[:, 0]] == [rgb(vehicle_colour(v)) for v in ("f1", "f2")]
+    for member, here in positions.items():
+        sphere = _node(viz.viser, f"/formations/formation-1/separation/{member}")
+        assert sphere is not None
+        np.testing.assert_allclose(sphere.position, here, atol=1e-6)
+        assert sphere.radius == pytest.approx(1.0)  # min_separation_m / 2
+        assert sphere.opacity == pytest.approx(SPHERE_OPACITY)
+    assert "formations" in scene.layers_shown
+
+    # The leader moves 4 m east; f1 moves too: the lines and its sphere follow.
+    moved = LeaderState(10.0, 24.0, 15.0, 0.0, 2.0, 0.0, math.pi / 2, 1.0)
+    positions["f1"] = np.array([69.0, 38.0, 14.0])
+    view = formation_view(formation, moved, scene.frame, homes.get, positions.get)
+    assert view is not None
+    layer.sync([view], [formation.id])
+    np.testing.assert_allclose(links.points[0], [(74.0, 40.0, 15.0), (71.0, 37.0, 14.0)], atol=0.01)
+    np.testing.assert_allclose(
+        _node(viz.viser, "/formations/formation-1/separation/f1").position, positions["f1"]
+    )
+
+    layer.sync([], [])  # stopped: no longer among the running
+    assert _node(viz.viser, "/formations/formation-1/links") is None
+    for member in positions:
+        assert _node(viz.viser, f"/formations/formation-1/separation/{member}") is None
+    assert layer.formations == []
+
+
+def test_a_virtual_leader_is_placed_above_the_first_followers_home(
+    viz: VizServer, scene: FleetScene
+) -> None:
+    formation = _formation(None)
+    leader = LeaderState(0.0, 0.0, 15.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+    homes = {"f1": HOME[2] + 1.0, "f2": HOME[2]}
+    view = formation_view(formation, leader, scene.frame, homes.get, {}.get)
+    assert view is not None
+    np.testing.assert_allclose(view.leader, (50.0, 30.0, 16.0), atol=0.01)
+    assert view.members == {}  # no positions yet: no spheres
+    assert set(view.targets) == {"f1", "f2"}
+
+
+# -- the mosaic --------------------------------------------------------------------------
+
+# The tile under home at a survey's zoom, and so the mosaic's extent in tiles.
+ZOOM = 19
+_HOME_X = int((HOME[1] + 180) / 360 * 2**ZOOM)
+_HOME_Y = int((1 - math.asinh(math.tan(math.radians(HOME[0]))) / math.pi) / 2 * 2**ZOOM)
+BLUE_BGRA = np.array([255, 0, 0, 255], dtype=np.uint8)
+GREY_BGRA = np.array([90, 90, 90, 255], dtype=np.uint8)
+
+
+def _fill(store: TileStore, tiles: dict[int, tuple[int, int]]) -> None:
+    """Per zoom, every tile of a ``columns`` x ``rows`` block from home's tile: grey but
+    for the block's north-west tile, which is blue. One revision more, as a photo adds."""
+    distances = np.zeros((TILE_PX, TILE_PX), dtype=np.float32)
+    for zoom, (columns, rows) in tiles.items():
+        shift = ZOOM - zoom
+        x0, y0 = _HOME_X >> shift, _HOME_Y >> shift
+        for x in range(x0, x0 + columns):
+            for y in range(y0, y0 + rows):
+                colour = BLUE_BGRA if (x, y) == (x0, y0) else GREY_BGRA
+                store.write((zoom, x, y), np.tile(colour, (TILE_PX, TILE_PX, 1)), distances)
+    store.revision += 1
+
+
+def _mosaics(folder: Path, tiles: dict[int, tuple[int, int]], min_zoom: int) -> MosaicService:
+    """The mosaic service over one survey's tiles on disk (``folder``/s1), as after a
+    restart."""
+    store = TileStore.open(folder / "s1")
+    store.max_zoom, store.min_zoom = max(tiles), min_zoom
+    _fill(store, tiles)
+    store.flush()
+    mosaics = MosaicService(folder, lambda _: asyncio.sleep(0, None))
+    asyncio.run(mosaics.load())
+    return mosaics
+
+
+def _extent(zoom: int, columns: int, rows: int) -> tuple[np.ndarray, np.ndarray]:
+    shift = ZOOM - zoom
+    x0, y0 = (_HOME_X >> shift) * TILE_PX, (_HOME_Y >> shift) * TILE_PX
+    west, north = pixel_to_lonlat(zoom, x0, y0)
+    east, south = pixel_to_lonlat(zoom, x0 + columns * TILE_PX, y0 + rows * TILE_PX)
+    south_west = np.array(TRUTH.to_enu(south, west, HOME[2]))
+    north_east = np.array(TRUTH.to_enu(north, east, HOME[2]))
+    return south_west, north_east
+
+
+def test_a_mosaic_is_a_ground_plane_over_its_extent_redrawn_as_it_grows(
+    viz: VizServer, scene: FleetScene, tmp_path: Path
+) -> None:
+    mosaics = _mosaics(tmp_path, {ZOOM: (2, 1), ZOOM - 1: (1, 1)}, min_zoom=ZOOM - 1)
+    layer = MosaicLayer(scene)
+    layer.refresh(mosaics, ["s1", "not-flown"])
+
+    plane = _node(viz.viser, "/mosaic/s1")
+    assert plane is not None
+    south_west, north_east = _extent(ZOOM, 2, 1)  # the finest zoom: 2 x 1 tiles fit
+    assert plane.render_width == pytest.approx(north_east[0] - south_west[0], abs=0.01)
+    assert plane.render_height == pytest.approx(north_east[1] - south_west[1], abs=0.01)
+    assert 2 * TILE_PX * 0.2 < plane.render_width < 2 * TILE_PX * 0.3  # ~0.23 m a pixel
+    centre = (south_west + north_east) / 2 + (0, 0, GROUND_LIFT_M)
+    np.testing.assert_allclose(plane.position, centre, atol=0.01)
+    np.testing.assert_allclose(plane.wxyz, (0, 1, 0, 0))  # north up, west left
+    assert plane.image.shape == (TILE_PX, 2 * TILE_PX, 4)
+    assert tuple(plane.image[0, 0]) == (0, 0, 255, 255)  # the NW tile, BGRA made RGBA
+    assert tuple(plane.image[-1, -1]) == (90, 90, 90, 255)
+    assert "mosaic" in scene.layers_shown
+    assert layer.mosaics == ["s1"]
+
+    # Photos arrive: now 6 x 5 tiles at the finest zoom, too many for one texture; the
+    # zoom below's 3 x 3 fit.
+    survey = mosaics.survey("s1")
+    with survey.lock:
+        _fill(survey.store, {ZOOM: (6, 5), ZOOM - 1: (3, 3)})
+    layer.refresh(mosaics, ["s1"])
+    plane = _node(viz.viser, "/mosaic/s1")
+    assert plane.image.shape == (3 * TILE_PX, 3 * TILE_PX, 4)
+    south_west, north_east = _extent(ZOOM - 1, 3, 3)
+    assert plane.render_width == pytest.approx(north_east[0] - south_west[0], abs=0.01)
+    assert plane.render_height == pytest.approx(north_east[1] - south_west[1], abs=0.01)
+
+    layer.refresh(mosaics, [])  # no longer among the surveys shown
+    assert _node(viz.viser, "/mosaic/s1") is None
+
+
+def test_a_mosaic_wider_than_every_zoom_allows_is_scaled_down(
+    viz: VizServer, scene: FleetScene, tmp_path: Path
+) -> None:
+    mosaics = _mosaics(tmp_path, {ZOOM: (6, 1)}, min_zoom=ZOOM)
+    MosaicLayer(scene).refresh(mosaics, ["s1"])
+    plane = _node(viz.viser, "/mosaic/s1")
+    assert plane.image.shape == (TILE_PX * MAX_TEXTURE_PX // (6 * TILE_PX), MAX_TEXTURE_PX, 4)
+    south_west, north_east = _extent(ZOOM, 6, 1)
+    assert plane.render_width == pytest.approx(north_east[0] - south_west[0], abs=0.01)

@@ -4,15 +4,17 @@ plans and tile stores and read back through the viser server's own scene API."""
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import math
 from collections.abc import Iterator
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 import pytest
 import viser
 
+from backend.auth.policy import Principal
 from backend.fleet.formations import ActiveFormation
 from backend.missions.formation.planner import FormationPlan
 from backend.missions.formation.route import LeaderRoute
@@ -23,7 +25,11 @@ from backend.missions.survey.service import Fleet, plan_survey
 from backend.mosaic.georef import TILE_PX, pixel_to_lonlat
 from backend.mosaic.service import MosaicService
 from backend.mosaic.store import TileStore
-from backend.surveys.service import new_run
+from backend.realtime.bus import InProcessBus
+from backend.settings import HubSettings
+from backend.storage.database import make_engine, migrate
+from backend.storage.surveys import StoredSurvey, SurveyRepository
+from backend.surveys.service import SurveyService, new_run
 from backend.viz3d.colours import rgb, vehicle_colour
 from backend.viz3d.formation_layer import SPHERE_OPACITY, FormationLayer, formation_view
 from backend.viz3d.frame import SceneFrame
@@ -33,6 +39,7 @@ from backend.viz3d.server import VizServer
 from backend.viz3d.survey_layer import PlannedLanes, SurveyLanes
 from common.formation import LeaderState, Offset, OffsetFrame
 from common.geodesy import GeoPoint, LocalFrame
+from tests.helpers import poll_until_async
 from tests.survey_shapes import geojson_area
 
 HOME = (47.397742, 8.545594, 488.0)
@@ -58,8 +65,8 @@ def scene(viz: VizServer) -> FleetScene:
 # -- survey lanes -----------------------------------------------------------------------
 
 
-def _survey() -> SurveyRun:
-    """A real plan over 300 x 200 m north-east of home, split between two drones."""
+def _survey(drones: DroneState = DroneState.FLYING) -> SurveyRun:
+    """A real plan over 300 x 200 m north-east of home, split between two drones, flown."""
     request = SurveyRequest.model_validate(
         {
             "area": geojson_area(TRUTH, [(40, 30), (340, 30), (340, 230), (40, 230)]),
@@ -74,7 +81,7 @@ def _survey() -> SurveyRun:
     run = new_run(request, plan_survey(request, fleet))
     run.state = SurveyState.FLYING
     for drone in run.drones:
-        drone.state = DroneState.FLYING
+        drone.state = drones
     return run
 
 
@@ -112,6 +119,44 @@ def test_a_planned_survey_is_not_drawn(viz: VizServer, scene: FleetScene) -> Non
     SurveyLanes(scene, lambda _: HOME[2]).show(PlannedLanes.of(run))
     assert _node(viz.viser, f"/survey_lanes/{run.id}/a") is None
     assert "survey_lanes" not in scene.layers_shown
+
+
+def test_the_lanes_follow_the_survey_service_from_a_resumed_survey_to_its_abort(
+    viz: VizServer, scene: FleetScene, tmp_path: Path
+) -> None:
+    """The layer's own feed: the surveys a restarted hub resumes from its store, then the
+    survey's messages on the bus (an abort)."""
+    engine = make_engine(f"sqlite:///{tmp_path / 'hub.sqlite'}")
+    migrate(engine)
+    repository = SurveyRepository(engine)
+    # Its drones still on the ground: the abort has nobody to send home, so the service
+    # needs none of the hub's command path (hence no hub).
+    run = _survey(drones=DroneState.ASSIGNED)
+    repository.save(StoredSurvey(run.id, run.created, run.state, "op", run.model_dump_json()))
+    settings = HubSettings(environment="development", admin_password="x" * 12)
+    bus = InProcessBus()
+
+    def lanes_of(vehicle_id: str) -> Any:
+        return _node(viz.viser, f"/survey_lanes/{run.id}/{vehicle_id}")
+
+    async def flight() -> None:
+        surveys = SurveyService(cast(Any, None), bus, repository, settings)
+        await surveys.load()
+        layer = SurveyLanes(scene, lambda _: HOME[2])
+        feed = asyncio.create_task(layer.follow(bus, surveys, interval_s=0.05))
+        try:
+            await poll_until_async(lambda: lanes_of("a") and lanes_of("b"), 5, "the lanes")
+            await surveys.abort(run.id, Principal("op", "operator", frozenset()))
+            await poll_until_async(lambda: not (lanes_of("a") or lanes_of("b")), 5, "no lanes")
+        finally:
+            feed.cancel()
+            with contextlib.suppress(asyncio.CancelledError):
+                await feed
+
+    try:
+        asyncio.run(flight())
+    finally:
+        engine.dispose()
 
 
 # -- formations --------------------------------------------------------------------------

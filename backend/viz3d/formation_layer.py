@@ -76,6 +76,7 @@ def formation_view(
 
 @dataclass
 class _Drawn:
+    root: viser.FrameHandle  # removing it removes everything under it
     links: viser.LineSegmentsHandle | None = None
     spheres: dict[str, viser.IcosphereHandle] = field(default_factory=dict)
 
@@ -92,7 +93,10 @@ class FormationLayer:
     def show(self, view: FormationView) -> None:
         with self.scene.batch():
             root = f"/{FORMATIONS.key}/{view.formation_id}"
-            drawn = self._drawn.setdefault(view.formation_id, _Drawn())
+            drawn = self._drawn.get(view.formation_id)
+            if drawn is None:
+                frame = self.scene.server.scene.add_frame(root, show_axes=False)
+                drawn = self._drawn[view.formation_id] = _Drawn(frame)
             followers = sorted(view.targets)
             segments = np.array(
                 [[view.leader, view.targets[f]] for f in followers], dtype=np.float32
@@ -137,11 +141,7 @@ class FormationLayer:
         running = set(formation_ids)
         with self.scene.batch():
             for formation_id in [f for f in self._drawn if f not in running]:
-                drawn = self._drawn.pop(formation_id)
-                if drawn.links is not None:
-                    drawn.links.remove()
-                for sphere in drawn.spheres.values():
-                    sphere.remove()
+                self._drawn.pop(formation_id).root.remove()
 
     def sync(self, views: list[FormationView], running: list[str]) -> None:
         with self.scene.batch():

@@ -57,6 +57,8 @@ class SurveyLanes:
         self.home_alt = home_alt
         # survey id -> vehicle id -> its drawn lanes (n, 2, 3) and their node
         self._drawn: dict[str, dict[str, _Drawn]] = {}
+        # survey id -> the frame its lanes hang under: removing it removes them all
+        self._roots: dict[str, viser.FrameHandle] = {}
 
     def show(self, planned: PlannedLanes) -> None:
         """Draw the survey's lanes, or take them out once it is no longer flown. Lanes
@@ -65,6 +67,11 @@ class SurveyLanes:
             if not planned.flown:
                 self._remove(planned.survey_id)
                 return
+            root = f"/{SURVEY_LANES.key}/{planned.survey_id}"
+            if planned.survey_id not in self._roots:
+                self._roots[planned.survey_id] = self.scene.server.scene.add_frame(
+                    root, show_axes=False
+                )
             drawn = self._drawn.setdefault(planned.survey_id, {})
             for vehicle_id, lanes in planned.lanes.items():
                 segments = self._segments(vehicle_id, lanes, planned.altitude_m)
@@ -79,7 +86,7 @@ class SurveyLanes:
                 drawn[vehicle_id] = (
                     segments,
                     self.scene.server.scene.add_line_segments(
-                        f"/{SURVEY_LANES.key}/{planned.survey_id}/{vehicle_id}",
+                        f"{root}/{vehicle_id}",
                         segments,
                         colors=rgb(vehicle_colour(vehicle_id)),
                         thickness=3.0,
@@ -97,8 +104,9 @@ class SurveyLanes:
         return list(self._drawn)
 
     def _remove(self, survey_id: str) -> None:
-        for _, handle in self._drawn.pop(survey_id, {}).values():
-            handle.remove()
+        self._drawn.pop(survey_id, None)
+        if (root := self._roots.pop(survey_id, None)) is not None:
+            root.remove()
 
     def _segments(
         self, vehicle_id: str, lanes: list[tuple[LatLon, LatLon]], altitude_m: float

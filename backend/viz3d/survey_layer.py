@@ -95,10 +95,6 @@ class SurveyLanes:
                 )
                 self.scene.show_layer(SURVEY_LANES)
 
-    def remove(self, survey_id: str) -> None:
-        with self.scene.batch():
-            self._remove(survey_id)
-
     @property
     def surveys(self) -> list[str]:
         return list(self._drawn)

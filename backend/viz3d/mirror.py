@@ -15,7 +15,7 @@ from __future__ import annotations
 import asyncio
 import logging
 import time
-from collections.abc import Callable, Iterable
+from collections.abc import Awaitable, Callable, Iterable, Iterator
 
 from backend.errors import VehicleNotFound
 from backend.fleet.formations import FormationService
@@ -32,6 +32,8 @@ from backend.viz3d.survey_layer import SurveyLanes
 from common.geodesy import LocalFrame
 
 log = logging.getLogger(__name__)
+
+RESTART_S = 5.0  # before a failed layer's loop is started again
 
 # The point map is redrawn at most this often, and only its newest voxels: it is the
 # scene's heaviest message, and it changes little from one second to the next.
@@ -67,18 +69,25 @@ class SceneMirror:
 
     async def run(self) -> None:
         async with asyncio.TaskGroup() as tasks:
-            tasks.create_task(self._vehicles())
-            if self.scans is not None:
-                tasks.create_task(self._scans(self.scans))
-                tasks.create_task(self._point_map(self.scans))
-            if self.surveys is not None:
-                lanes = SurveyLanes(self.scene, self.home_alt)
-                tasks.create_task(lanes.follow(self.bus, self.surveys, self.interval_s))
-            if self.formations is not None:
-                formation = FormationLayer(self.scene)
-                tasks.create_task(formation.follow(self.formations, self.home_alt, self.interval_s))
-            if self.mosaics is not None and self.mosaic_surveys is not None:
-                tasks.create_task(MosaicLayer(self.scene).follow(self.mosaics, self.mosaic_surveys))
+            for name, work in self._work():
+                tasks.create_task(contained(name, work))
+
+    def _work(self) -> Iterator[tuple[str, Callable[[], Awaitable[None]]]]:
+        """Each loop that draws part of the scene, by name."""
+        yield "vehicles", self._vehicles
+        if self.scans is not None:
+            scans = self.scans
+            yield "scans", lambda: self._scans(scans)
+            yield "point map", lambda: self._point_map(scans)
+        if self.surveys is not None:
+            surveys, lanes = self.surveys, SurveyLanes(self.scene, self.home_alt)
+            yield "survey lanes", lambda: lanes.follow(self.bus, surveys, self.interval_s)
+        if self.formations is not None:
+            formations, formation = self.formations, FormationLayer(self.scene)
+            yield "formations", lambda: formation.follow(formations, self.home_alt, self.interval_s)
+        if self.mosaics is not None and self.mosaic_surveys is not None:
+            mosaics, shown = self.mosaics, self.mosaic_surveys
+            yield "mosaic", lambda: MosaicLayer(self.scene).follow(mosaics, shown)
 
     def home_alt(self, vehicle_id: str) -> float | None:
         try:
@@ -144,3 +153,18 @@ class SceneMirror:
             # The obstacle search is pure Python (seconds over a large map): waiting ten
             # times as long as it took keeps it to a tenth of a core, GIL included.
             await asyncio.sleep(max(POINT_MAP_INTERVAL_S, POINT_MAP_SHARE * took))
+
+
+async def contained(
+    name: str, work: Callable[[], Awaitable[None]], restart_s: float = RESTART_S
+) -> None:
+    """Runs one drawing loop; should it fail, the 3D view loses that layer for a moment,
+    never the hub: the mirror runs in the hub's task group, where an escaped exception
+    would end the hub's other work with it."""
+    while True:
+        try:
+            await work()
+            return
+        except Exception:
+            log.exception("3D view: the %s layer failed; restarting it in %.0f s", name, restart_s)
+            await asyncio.sleep(restart_s)  # a back-off, so a fault that repeats cannot spin

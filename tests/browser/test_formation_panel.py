@@ -154,6 +154,10 @@ def test_an_operator_flies_a_formation_from_the_panel(
                 "m from its slot"
             )
         expect(page.locator("path.formation-slot")).to_have_count(len(FOLLOWERS))
+        # closer, around the formation, for the screenshot (the view waits for the zoom)
+        page.mouse.move(*pixels.pixel(*frame.to_geo(0.0, 0.0)))
+        page.mouse.wheel(0, -120)
+        PixelMap(page)
         OUTPUT.mkdir(parents=True, exist_ok=True)
         page.screenshot(path=str(OUTPUT / "formed.png"))
         _a_viewer_follows_it_read_only(browser, plan, api, formation_id)

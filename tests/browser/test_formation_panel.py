@@ -7,6 +7,7 @@ goes to test-output/formation/."""
 
 from __future__ import annotations
 
+import math
 import re
 from collections.abc import Iterator
 from pathlib import Path
@@ -92,6 +93,28 @@ def _a_viewer_follows_it_read_only(
         context.close()
 
 
+# Each drawn slot's centre on the page, read at once: they move with every telemetry update.
+SLOTS_JS = """() => Object.fromEntries([...document.querySelectorAll("path.formation-slot")]
+    .map((path) => {
+        const box = path.getBoundingClientRect();
+        return [path.dataset.vehicleId, [box.x + box.width / 2, box.y + box.height / 2]];
+    }))"""
+
+
+def _assert_slots_on_followers(page: Page, pixels: PixelMap, api: httpx.Client) -> None:
+    """Formed, each follower is within FORM_UP_M (0.5 m) of its slot: so the slot the
+    panel draws round the leader (its position and heading) lies on the follower. A wrong
+    frame or heading would put it metres away (the slots are 8 m apart behind the leader)."""
+    slots: dict[str, list[float]] = page.evaluate(SLOTS_JS)
+    states = {v["id"]: v["state"] for v in api.get("/api/v1/vehicles").json()}
+    assert set(slots) == set(FOLLOWERS)
+    tolerance_px = 2.0 / pixels.metres_per_px()  # they move on between the two looks
+    for follower, (x, y) in slots.items():
+        at = pixels.pixel(states[follower]["lat"], states[follower]["lon"])
+        off_m = math.dist((x, y), at) * pixels.metres_per_px()
+        assert math.dist((x, y), at) < tolerance_px, f"{follower}'s slot drawn {off_m:.1f} m off"
+
+
 def test_an_operator_flies_a_formation_from_the_panel(
     browser: Browser, formation_page: Page, airborne: tuple[LocalFleet, str]
 ) -> None:
@@ -154,6 +177,7 @@ def test_an_operator_flies_a_formation_from_the_panel(
                 "m from its slot"
             )
         expect(page.locator("path.formation-slot")).to_have_count(len(FOLLOWERS))
+        _assert_slots_on_followers(page, pixels, api)
         # closer, around the formation, for the screenshot (the view waits for the zoom)
         page.mouse.move(*pixels.pixel(*frame.to_geo(0.0, 0.0)))
         page.mouse.wheel(0, -120)
@@ -176,11 +200,8 @@ def test_an_operator_flies_a_formation_from_the_panel(
         panel.locator('[data-action="formation-stop"]').click()
         expect(progress).to_have_attribute("data-state", "stopped")
         expect(status).to_contain_text("stopped")
-        stored = poll_until(
-            lambda: (f := _stored(api, formation_id))["stopped"] is not None and f,
-            10,
-            "the stop stored",
-        )
+        poll_until(lambda: _stored(api, formation_id)["stopped"] is not None, 10, "the stop stored")
+        stored = _stored(api, formation_id)
         assert stored["stop_reason"] == "stopped by the operator"
         assert stored["stopped_by"] == "admin"
     # the panel plans again once it stopped

@@ -14,6 +14,7 @@ export interface SlotDrawing {
 export class FormationLayer {
   private readonly route = L.layerGroup();
   private readonly slots = L.layerGroup();
+  private readonly drawn = new Map<string, { slot: L.CircleMarker; line: L.Polyline }>();
 
   constructor(map: L.Map) {
     this.route.addTo(map);
@@ -41,31 +42,35 @@ export class FormationLayer {
     }
   }
 
+  /** Moves the slots' markers (made once per follower: this runs at the telemetry's rate). */
   drawSlots(slots: readonly SlotDrawing[]): void {
-    this.slots.clearLayers();
+    const wanted = new Set(slots.map((slot) => slot.vehicleId));
+    for (const [vehicleId, drawn] of this.drawn) {
+      if (wanted.has(vehicleId)) continue;
+      this.slots.removeLayer(drawn.slot).removeLayer(drawn.line);
+      this.drawn.delete(vehicleId);
+    }
     for (const slot of slots) {
-      if (slot.at) {
-        L.polyline([slot.at, slot.slot], {
-          className: "formation-slot-error",
-          color: slot.colour,
-          weight: 1,
-          dashArray: "2 3",
-          interactive: false,
-        }).addTo(this.slots);
+      let drawn = this.drawn.get(slot.vehicleId);
+      if (!drawn) {
+        const style = { color: slot.colour, interactive: false };
+        drawn = {
+          line: L.polyline([], { ...style, className: "formation-slot-error", weight: 1, dashArray: "2 3" }),
+          slot: L.circleMarker(slot.slot, { ...style, className: "formation-slot", radius: 6, fill: false, weight: 2 }),
+        };
+        drawn.line.addTo(this.slots);
+        drawn.slot.addTo(this.slots);
+        drawn.slot.getElement()?.setAttribute("data-vehicle-id", slot.vehicleId);
+        this.drawn.set(slot.vehicleId, drawn);
       }
-      L.circleMarker(slot.slot, {
-        className: "formation-slot",
-        radius: 6,
-        color: slot.colour,
-        fill: false,
-        weight: 2,
-        interactive: false,
-      }).addTo(this.slots);
+      drawn.slot.setLatLng(slot.slot);
+      drawn.line.setLatLngs(slot.at ? [slot.at, slot.slot] : []);
     }
   }
 
   clearSlots(): void {
     this.slots.clearLayers();
+    this.drawn.clear();
   }
 
   destroy(): void {

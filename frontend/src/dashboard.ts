@@ -7,6 +7,7 @@ import { runCommand } from "./commands";
 import { FleetSocket } from "./connection";
 import { FleetStore } from "./fleet";
 import { FleetTable } from "./fleetTable";
+import { FormationPanel } from "./formation";
 import { linkState } from "./format";
 import { PROTOCOL_VERSION } from "./generated/protocol";
 import type { Header } from "./header";
@@ -52,6 +53,7 @@ export class Dashboard {
   private viz3d: Viz3dPane | null = null;
   private missions: MissionTools | null = null;
   private survey: SurveyPanel | null = null;
+  private formation: FormationPanel | null = null;
   private pilot: PilotPanel | null = null;
   private expiryTimer: number | undefined;
   private storeHealth: StoreHealth | null = null;
@@ -124,6 +126,8 @@ export class Dashboard {
     this.missions = missions;
     const survey = new SurveyPanel(map.leaflet, can(user, "command"));
     this.survey = survey;
+    const formation = new FormationPanel(map.leaflet, can(user, "command"));
+    this.formation = formation;
     const scans = new ScanLayer(map.leaflet, (message) => this.socket?.send(message));
     this.scans = scans;
 
@@ -134,6 +138,7 @@ export class Dashboard {
         map.remove(id);
         missions.remove(id);
         survey.remove(id);
+        formation.remove(id);
       }
       table.update(changed);
       map.update(changed);
@@ -141,6 +146,7 @@ export class Dashboard {
       pilot.update(changed);
       missions.update(changed);
       survey.update(changed);
+      formation.update(changed);
       let online = 0;
       for (const vehicle of all.values()) if (linkState(vehicle) !== "offline") online++;
       header.setCounts(all.size, online);
@@ -216,6 +222,8 @@ export class Dashboard {
     this.missions = null;
     this.survey?.destroy();
     this.survey = null;
+    this.formation?.destroy();
+    this.formation = null;
     this.table?.destroy();
     this.table = null;
     this.scans?.destroy();

@@ -9,3 +9,9 @@ export function distanceM(lat1: number, lon1: number, lat2: number, lon2: number
   const a = Math.sin(dLat / 2) ** 2 + Math.cos(lat1 * rad) * Math.cos(lat2 * rad) * Math.sin(dLon / 2) ** 2;
   return 2 * EARTH_RADIUS_M * Math.asin(Math.min(1, Math.sqrt(a)));
 }
+
+/** The point `north` and `east` metres from (lat, lon), on the local tangent plane. */
+export function offsetLatLon(lat: number, lon: number, north: number, east: number): [number, number] {
+  const degrees = 180 / Math.PI / EARTH_RADIUS_M;
+  return [lat + north * degrees, lon + (east * degrees) / Math.cos((lat * Math.PI) / 180)];
+}

@@ -5,7 +5,9 @@
 // the live feed's `survey` messages, the flown lanes fade, the photos appear as dots, and a
 // hand-over offer is one button.
 import * as L from "leaflet";
-import { ApiError, describeErrorBody } from "../api";
+import { droneColour } from "../map/droneColours";
+import { FoldingPanel, MapClicks } from "../map/foldingPanel";
+import { button, el, errorText, numberField, say } from "../map/panelDom";
 import type { SurveyUpdate } from "../generated/protocol";
 import type { VehicleSummary } from "../types";
 import {
@@ -24,39 +26,12 @@ import {
   previewSurvey,
   startSurvey,
 } from "./api";
-import { type LaneDrawing, SurveyLayer, droneColour } from "./layer";
+import { type LaneDrawing, SurveyLayer } from "./layer";
 
 const PREVIEW_DELAY_MS = 400;
 /** The flown lanes, photos and mosaic are re-read at most this often while a survey flies. */
 const DETAIL_EVERY_MS = 1000;
 const ENDED = new Set(["done", "aborted", "failed"]);
-
-function el<K extends keyof HTMLElementTagNameMap>(tag: K, className: string, field?: string): HTMLElementTagNameMap[K] {
-  const made = document.createElement(tag);
-  made.className = className;
-  if (field) made.dataset.field = field;
-  return made;
-}
-
-function button(action: string, text: string, title: string): HTMLButtonElement {
-  const made = el("button", "mission-button");
-  made.type = "button";
-  made.dataset.action = action;
-  made.textContent = text;
-  made.title = title;
-  return made;
-}
-
-function numberField(field: string, label: string, value: string, title: string): [HTMLLabelElement, HTMLInputElement] {
-  const wrap = el("label", "survey-field");
-  const input = el("input", "mission-number", field);
-  input.type = "number";
-  input.step = "any";
-  input.value = value;
-  input.title = title;
-  wrap.append(label, input);
-  return [wrap, input];
-}
 
 export function formatDuration(seconds: number): string {
   const s = Math.round(seconds);
@@ -74,7 +49,8 @@ function ringToGeo(ring: readonly L.LatLng[]): number[][] {
 
 export class SurveyPanel {
   readonly element: HTMLElement;
-  private readonly control: L.Control;
+  private readonly panel: FoldingPanel;
+  private readonly clicks: MapClicks;
   private readonly layer: SurveyLayer;
   private readonly vehicles = new Map<string, VehicleSummary>();
   private readonly chosen = new Set<string>();
@@ -118,13 +94,12 @@ export class SurveyPanel {
     private readonly canCommand: boolean,
   ) {
     this.layer = new SurveyLayer(map);
-    this.element = el("div", "survey-panel");
-    const toggle = button("survey-toggle", "Survey", "Plan and fly an area survey");
-    this.body = el("div", "survey-body");
-    this.body.hidden = true;
-    toggle.addEventListener("click", () => {
-      this.body.hidden = !this.body.hidden;
-      toggle.setAttribute("aria-expanded", String(!this.body.hidden));
+    this.panel = new FoldingPanel(map, "survey", "Survey", "Plan and fly an area survey");
+    this.element = this.panel.element;
+    this.body = this.panel.body;
+    this.clicks = new MapClicks(map, (at) => {
+      this.drawing?.push(at);
+      this.renderArea();
     });
 
     // -- the area
@@ -149,7 +124,7 @@ export class SurveyPanel {
     // -- the camera and the flight
     this.camera = el("select", "survey-select", "survey-camera");
     void this.loadCameras();
-    const cameraLabel = el("label", "survey-field");
+    const cameraLabel = el("label", "map-panel-field");
     cameraLabel.append("Camera ", this.camera);
     this.heightKind = el("select", "survey-select", "survey-height-kind");
     this.heightKind.append(new Option("Altitude (m)", "altitude"), new Option("GSD (cm/px)", "gsd"));
@@ -160,10 +135,10 @@ export class SurveyPanel {
     this.heightKind.addEventListener("change", () => {
       this.height.value = this.heightKind.value === "gsd" ? "1.0" : "40";
     });
-    const heightLabel = el("label", "survey-field");
+    const heightLabel = el("label", "map-panel-field");
     heightLabel.append(this.heightKind, this.height);
     let wrap: HTMLLabelElement;
-    const fields = el("div", "survey-fields");
+    const fields = el("div", "map-panel-fields");
     fields.append(cameraLabel, heightLabel);
     [wrap, this.side] = numberField("survey-side", "Side overlap %", "70", "Between neighbouring lanes");
     fields.append(wrap);
@@ -208,13 +183,6 @@ export class SurveyPanel {
     // The flight's progress on top: while a survey flies the planning form folds away,
     // so the hand-over prompt is never scrolled out of sight.
     this.body.append(this.progressBox, this.status, this.planning, this.fileInput);
-    this.element.append(toggle, this.body);
-    L.DomEvent.disableClickPropagation(this.element);
-    L.DomEvent.disableScrollPropagation(this.element);
-    const Panel = L.Control.extend({ onAdd: () => this.element });
-    this.control = new Panel({ position: "topright" });
-    this.control.addTo(map);
-    map.on("click", this.onMapClick);
     this.renderArea();
   }
 
@@ -248,8 +216,8 @@ export class SurveyPanel {
     this.destroyed = true;
     window.clearTimeout(this.previewTimer);
     this.previewAbort?.abort();
-    this.map.off("click", this.onMapClick);
-    this.control.remove();
+    this.clicks.destroy();
+    this.panel.remove();
     this.layer.destroy();
   }
 
@@ -265,15 +233,9 @@ export class SurveyPanel {
       return;
     }
     this.drawing = [];
-    this.map.getContainer().classList.add("survey-drawing-mode");
+    this.clicks.start();
     this.renderArea();
   }
-
-  private readonly onMapClick = (event: L.LeafletMouseEvent): void => {
-    if (!this.drawing) return;
-    this.drawing.push(event.latlng);
-    this.renderArea();
-  };
 
   private closeRing(): void {
     if (!this.drawing) return;
@@ -283,7 +245,7 @@ export class SurveyPanel {
     }
     this.rings.push(this.drawing);
     this.drawing = null;
-    this.map.getContainer().classList.remove("survey-drawing-mode");
+    this.clicks.stop();
     this.renderArea();
     this.schedulePreview();
   }
@@ -292,7 +254,7 @@ export class SurveyPanel {
     this.rings = [];
     this.drawing = null;
     this.preview = null;
-    this.map.getContainer().classList.remove("survey-drawing-mode");
+    this.clicks.stop();
     this.layer.clearPlan();
     this.renderArea();
     this.renderPreview();
@@ -419,7 +381,7 @@ export class SurveyPanel {
       }
       if (this.rings.length > 0) this.schedulePreview(); // an area drawn meanwhile
     } catch (error) {
-      this.say(`Camera presets: ${this.errorText(error)}`, true);
+      this.say(`Camera presets: ${errorText(error)}`, true);
     }
   }
 
@@ -434,7 +396,7 @@ export class SurveyPanel {
     } catch (error) {
       if (abort.signal.aborted || this.destroyed) return;
       this.preview = null;
-      this.say(this.errorText(error), true);
+      this.say(errorText(error), true);
     }
     this.renderPreview();
   }
@@ -487,7 +449,7 @@ export class SurveyPanel {
         const cell = row.insertCell();
         cell.textContent = text;
         if (column === 0) {
-          const swatch = el("span", "survey-swatch");
+          const swatch = el("span", "map-panel-swatch");
           swatch.style.background = colour;
           cell.prepend(swatch);
         }
@@ -526,7 +488,7 @@ export class SurveyPanel {
       this.showDetail(started);
       this.say(`Survey ${started.survey.id} started.`);
     } catch (error) {
-      this.say(this.errorText(error), true);
+      this.say(errorText(error), true);
       if (this.progress === null || this.progress.state === "planned") {
         this.surveyId = null;
         this.progress = null;
@@ -597,7 +559,7 @@ export class SurveyPanel {
       item.dataset.vehicleId = drone.vehicle_id;
       item.dataset.state = drone.state;
       item.dataset.lanesDone = String(drone.lanes_done);
-      const swatch = el("span", "survey-swatch");
+      const swatch = el("span", "map-panel-swatch");
       swatch.style.background = droneColour(index);
       const reason = drone.reason ? ` (${drone.reason})` : "";
       item.append(
@@ -633,17 +595,11 @@ export class SurveyPanel {
       this.showDetail(await action(this.surveyId));
       this.say(done);
     } catch (error) {
-      this.say(this.errorText(error), true);
+      this.say(errorText(error), true);
     }
   }
 
-  private errorText(error: unknown): string {
-    if (error instanceof ApiError) return describeErrorBody(error.body, error.status) || error.message;
-    return (error as Error).message;
-  }
-
   private say(text: string, bad = false): void {
-    this.status.textContent = text;
-    this.status.classList.toggle("error", bad);
+    say(this.status, text, bad);
   }
 }

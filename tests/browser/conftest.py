@@ -2,6 +2,8 @@ from __future__ import annotations
 
 import shutil
 from collections.abc import Iterator
+from contextlib import contextmanager
+from typing import Any
 
 import pytest
 from playwright.sync_api import Browser, Page, sync_playwright
@@ -18,6 +20,9 @@ CHROMIUM_ARGS = [
     "--disable-sync",
 ]
 
+# The screens operators use: a laptop, a 1024x768 tablet, a phone.
+SIZES = {"desktop": (1920, 1080), "tablet": (1024, 768), "phone": (390, 844)}
+
 
 # Module scope: Playwright's sync API keeps an event loop running in this thread while
 # it is open, which would stop other tests from using asyncio.run().
@@ -32,15 +37,30 @@ def browser() -> Iterator[Browser]:
         launched.close()
 
 
-@pytest.fixture
-def page(browser: Browser) -> Iterator[Page]:
-    context = browser.new_context(viewport={"width": 1400, "height": 900})
+@contextmanager
+def checked_page(browser: Browser, width: int, height: int, **options: Any) -> Iterator[Page]:
+    """A page in a fresh context of that size (and Playwright's context ``options``); any
+    JavaScript error on it fails the test."""
+    context = browser.new_context(viewport={"width": width, "height": height}, **options)
     opened = context.new_page()
     errors: list[str] = []
     opened.on("pageerror", lambda error: errors.append(str(error)))
     yield opened
     context.close()
     assert errors == [], f"JavaScript errors on the page: {errors}"
+
+
+@pytest.fixture
+def page(browser: Browser) -> Iterator[Page]:
+    with checked_page(browser, 1400, 900) as opened:
+        yield opened
+
+
+@pytest.fixture
+def wide_page(browser: Browser) -> Iterator[Page]:
+    """Room for a planning panel beside the fleet list and the map."""
+    with checked_page(browser, 1600, 1000) as opened:
+        yield opened
 
 
 def log_in(page: Page, base_url: str, username: str, password: str) -> None:

@@ -17,12 +17,11 @@ import pytest
 from playwright.sync_api import Browser, Page, expect
 
 from gcs.launcher import DEFAULT_HOME, FleetPlan, LocalFleet, free_port
-from tests.browser.conftest import log_in
+from tests.browser.conftest import SIZES, checked_page, log_in
 from tests.map_tiles import png_tile, write_mbtiles
 
 pytestmark = [pytest.mark.browser, pytest.mark.integration]
 
-SIZES = {"desktop": (1920, 1080), "tablet": (1024, 768), "phone": (390, 844)}
 TILE_ZOOMS = range(12, 18)
 TILE_RADIUS = 8  # tiles each way around home, per zoom
 # Two colours in a checkerboard, so each tile is told apart from its neighbours.
@@ -62,14 +61,8 @@ def tiled_fleet(tmp_path_factory: pytest.TempPathFactory) -> Iterator[LocalFleet
 
 @pytest.fixture
 def sized_page(browser: Browser, request: pytest.FixtureRequest) -> Iterator[Page]:
-    width, height = SIZES[request.param]
-    context = browser.new_context(viewport={"width": width, "height": height})
-    page = context.new_page()
-    errors: list[str] = []
-    page.on("pageerror", lambda error: errors.append(str(error)))
-    yield page
-    context.close()
-    assert errors == [], f"JavaScript errors on the page: {errors}"
+    with checked_page(browser, *SIZES[request.param]) as page:
+        yield page
 
 
 @pytest.mark.parametrize("sized_page", list(SIZES), indirect=True)

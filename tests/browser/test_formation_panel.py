@@ -56,17 +56,6 @@ def airborne(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[LocalFl
         yield fleet, token
 
 
-@pytest.fixture
-def formation_page(browser: Browser) -> Iterator[Page]:
-    context = browser.new_context(viewport={"width": 1600, "height": 1000})
-    opened = context.new_page()
-    errors: list[str] = []
-    opened.on("pageerror", lambda error: errors.append(str(error)))
-    yield opened
-    context.close()
-    assert errors == [], f"JavaScript errors on the page: {errors}"
-
-
 def _stored(api: httpx.Client, formation_id: str) -> dict[str, Any]:
     stored = api.get("/api/v1/formations").json()["formations"]
     return next(f for f in stored if f["id"] == formation_id)
@@ -116,9 +105,9 @@ def _assert_slots_on_followers(page: Page, pixels: PixelMap, api: httpx.Client) 
 
 
 def test_an_operator_flies_a_formation_from_the_panel(
-    browser: Browser, formation_page: Page, airborne: tuple[LocalFleet, str]
+    browser: Browser, wide_page: Page, airborne: tuple[LocalFleet, str]
 ) -> None:
-    page, (fleet, token) = formation_page, airborne
+    page, (fleet, token) = wide_page, airborne
     plan = fleet.plan
     frame = LocalFrame(*plan.vehicle_home(0)[:2])
     log_in(page, plan.hub_http, "admin", plan.admin_password)

@@ -20,7 +20,7 @@ from playwright.sync_api import Browser, FloatRect, Page, expect
 
 from common.geodesy import LocalFrame, haversine_m
 from gcs.launcher import DEFAULT_HOME, FleetPlan, LocalFleet, free_port
-from tests.browser.conftest import log_in
+from tests.browser.conftest import SIZES, checked_page, log_in
 from tests.conftest import FLEET_SPEEDUP
 from tests.helpers import access_token, api_client, poll_until
 from tests.map_tiles import farmland_tiles, write_mbtiles
@@ -31,7 +31,6 @@ DATA = Path(__file__).parent.parent / "data" / "qgc"
 ROOT = Path(__file__).resolve().parents[2]
 OUTPUT = ROOT / "test-output" / "missions"
 README_IMAGE = ROOT / "docs" / "img" / "dashboard-map.png"
-SIZES = {"desktop": (1920, 1080), "tablet": (1024, 768), "phone": (390, 844)}
 MISSION_VEHICLE = "sim_3"
 GOTO_VEHICLE = "sim_1"
 CHECK_S = 15  # the editor checks 0.4 s after an edit; the hub answers at once
@@ -66,20 +65,12 @@ def api(mission_fleet: LocalFleet) -> Iterator[httpx.Client]:
 
 
 def _context_page(browser: Browser, size: str) -> Iterator[Page]:
-    width, height = SIZES[size]
     # The tablet and the phone have touch screens (a long press opens "fly here") and a
     # mouse as well, which draws the mission as it would on a desktop.
-    context = browser.new_context(
-        viewport={"width": width, "height": height},
-        accept_downloads=True,
-        has_touch=size != "desktop",
-    )
-    opened = context.new_page()
-    errors: list[str] = []
-    opened.on("pageerror", lambda error: errors.append(str(error)))
-    yield opened
-    context.close()
-    assert errors == [], f"JavaScript errors on the page: {errors}"
+    with checked_page(
+        browser, *SIZES[size], accept_downloads=True, has_touch=size != "desktop"
+    ) as opened:
+        yield opened
 
 
 @pytest.fixture

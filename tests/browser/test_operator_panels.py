@@ -13,13 +13,12 @@ import pytest
 from playwright.sync_api import Browser, Page, expect
 
 from gcs.launcher import LocalFleet
-from tests.browser.conftest import log_in
+from tests.browser.conftest import SIZES, checked_page, log_in
 from tests.conftest import FLEET_SPEEDUP
 from tests.helpers import access_token, api_client, running_fleet
 
 pytestmark = [pytest.mark.browser, pytest.mark.integration]
 
-SIZES = {"desktop": (1920, 1080), "tablet": (1024, 768), "phone": (390, 844)}
 OUTPUT = Path(__file__).resolve().parents[2] / "test-output" / "panels"
 WARN_COLOUR = "rgb(245, 185, 66)"  # --warn in style.css
 
@@ -42,16 +41,10 @@ def api(panels_fleet: LocalFleet) -> Iterator[httpx.Client]:
 
 @pytest.fixture(params=list(SIZES))
 def sized_page(request: pytest.FixtureRequest, browser: Browser) -> Iterator[tuple[Page, str]]:
-    width, height = SIZES[request.param]
-    context = browser.new_context(viewport={"width": width, "height": height})
-    page = context.new_page()
-    errors: list[str] = []
-    page.on("pageerror", lambda error: errors.append(str(error)))
-    yield page, request.param
-    OUTPUT.mkdir(parents=True, exist_ok=True)
-    page.screenshot(path=OUTPUT / f"{request.node.originalname}-{request.param}.png")
-    context.close()
-    assert errors == [], f"JavaScript errors on the page: {errors}"
+    with checked_page(browser, *SIZES[request.param]) as page:
+        yield page, request.param
+        OUTPUT.mkdir(parents=True, exist_ok=True)
+        page.screenshot(path=OUTPUT / f"{request.node.originalname}-{request.param}.png")
 
 
 def _small(size: str) -> bool:

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import httpx
 import pytest
-from playwright.sync_api import Browser, Page, expect
+from playwright.sync_api import Page, expect
 
 from common.geodesy import LocalFrame
 from gcs.launcher import FleetPlan, LocalFleet, free_port
@@ -49,17 +49,6 @@ def survey_fleet(tmp_path_factory: pytest.TempPathFactory) -> Iterator[LocalFlee
         )
         fleet.wait_until_ready()
         yield fleet
-
-
-@pytest.fixture
-def survey_page(browser: Browser) -> Iterator[Page]:
-    context = browser.new_context(viewport={"width": 1600, "height": 1000})
-    opened = context.new_page()
-    errors: list[str] = []
-    opened.on("pageerror", lambda error: errors.append(str(error)))
-    yield opened
-    context.close()
-    assert errors == [], f"JavaScript errors on the page: {errors}"
 
 
 def _ready_on_ground(api: httpx.Client) -> bool:
@@ -117,9 +106,9 @@ def _area_m2(page: Page) -> float:
 
 
 def test_a_hole_drawn_in_the_area_and_a_qgc_survey_opened(
-    survey_page: Page, survey_fleet: LocalFleet
+    wide_page: Page, survey_fleet: LocalFleet
 ) -> None:
-    page, plan = survey_page, survey_fleet.plan
+    page, plan = wide_page, survey_fleet.plan
     lat, lon, _ = plan.vehicle_home(0)
     frame = LocalFrame(lat, lon)
     log_in(page, plan.hub_http, "admin", plan.admin_password)
@@ -168,9 +157,9 @@ def _rectangle(west: float, south: float, wide: float, deep: float) -> list[tupl
 
 
 def test_a_drawn_area_is_previewed_launched_and_its_progress_shown(
-    survey_page: Page, survey_fleet: LocalFleet
+    wide_page: Page, survey_fleet: LocalFleet
 ) -> None:
-    page, plan = survey_page, survey_fleet.plan
+    page, plan = wide_page, survey_fleet.plan
     token = access_token(plan.hub_http, "admin", plan.admin_password)
     with api_client(plan.hub_http, token) as api:
         poll_until(lambda: _ready_on_ground(api), 60, "both drones ready with a home")

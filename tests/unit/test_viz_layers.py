@@ -6,7 +6,6 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import math
-from collections.abc import Iterator
 from pathlib import Path
 from typing import Any, cast
 
@@ -54,13 +53,6 @@ def _under(server: viser.ViserServer, root: str) -> list[str]:
     """The nodes at or under ``root``: viser's own parent frames included."""
     names = server.scene._handle_from_node_name
     return [name for name in names if name == root or name.startswith(root + "/")]
-
-
-@pytest.fixture
-def viz() -> Iterator[VizServer]:
-    started = VizServer.start()
-    yield started
-    started.stop()
 
 
 @pytest.fixture

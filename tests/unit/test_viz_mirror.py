@@ -9,7 +9,7 @@ import contextlib
 import math
 import time
 from array import array
-from collections.abc import AsyncIterator, Iterator
+from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
 from typing import Any
 
@@ -38,13 +38,6 @@ WORLD = default_scene()
 # from the scans' site frame into the scene's, not merely passed through.
 SITE = LocalFrame(*HOME)
 SCENE_ORIGIN = SITE.from_enu(18.0, -12.0, 0.0)
-
-
-@pytest.fixture
-def viz() -> Iterator[VizServer]:
-    started = VizServer.start()
-    yield started
-    started.stop()
 
 
 @pytest.fixture

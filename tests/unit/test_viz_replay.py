@@ -64,13 +64,6 @@ def engine(tmp_path: Path) -> Iterator[Engine]:
     created.dispose()
 
 
-@pytest.fixture
-def viz() -> Iterator[VizServer]:
-    started = VizServer.start()
-    yield started
-    started.stop()
-
-
 def _viewer(
     viz: VizServer, panels: ReplayPanels, seen: int
 ) -> tuple[ClientConnection, FlightReplay]:

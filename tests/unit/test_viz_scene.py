@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import math
-from collections.abc import Iterator
 from typing import Any
 
 import numpy as np
@@ -45,13 +44,6 @@ def _summary(vehicle: str, t: float, connected: bool = True, **state: Any) -> Ve
 
 def _node(server: viser.ViserServer, name: str) -> Any:
     return server.scene._handle_from_node_name.get(name)
-
-
-@pytest.fixture
-def viz() -> Iterator[VizServer]:
-    started = VizServer.start()
-    yield started
-    started.stop()
 
 
 @pytest.fixture

@@ -6,7 +6,6 @@ from __future__ import annotations
 import json
 import re
 import threading
-from collections.abc import Iterator
 
 import numpy as np
 import pytest
@@ -46,13 +45,6 @@ class Viewer:
         return poll_until(
             lambda: next((m for m in self.posted if m["type"] == kind), None), 10, kind
         )
-
-
-@pytest.fixture
-def viz() -> Iterator[VizServer]:
-    started = VizServer.start()
-    yield started
-    started.stop()
 
 
 def test_each_viewer_learns_its_id_and_secret_and_turns_to_the_maps_selection(

@@ -30,8 +30,8 @@ from vehicle_agents.fcu_events import FcuLinkEvents
 from vehicle_agents.fcu_link import FcuLink, MavMessage
 from vehicle_agents.formation import FormationRunner
 from vehicle_agents.forwarding import MavlinkForwarder
-from vehicle_agents.hub_failsafe import HubLinkFailsafe
-from vehicle_agents.hub_link import HubLink, VehicleIdInUse
+from vehicle_agents.hub_failsafe import HubLinkFailsafe, reconnect_backoff
+from vehicle_agents.hub_link import HubLink, HubTimeouts, VehicleIdInUse
 from vehicle_agents.manual import ManualPilot
 from vehicle_agents.mission_progress import ReachedItems
 from vehicle_agents.missions import mission_number
@@ -118,6 +118,13 @@ async def _run(settings: AgentSettings) -> None:
             on_formation=formation.on_hub,
             scans=scans,
             fallback_urls=settings.hub_fallback,
+            timeouts=HubTimeouts(
+                reconnect=reconnect_backoff(
+                    settings.hub_failsafe_action,
+                    settings.hub_failsafe_timeout_s,
+                    HubTimeouts().reconnect,
+                )
+            ),
         )
         tasks.create_task(TelemetryPublisher(link, outbox).run(settings.telemetry_rate_hz))
         tasks.create_task(hub.run())

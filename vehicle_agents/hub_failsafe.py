@@ -16,6 +16,7 @@ from typing import Literal
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
+from common.retry import Backoff
 from protocol.messages import EventKind, HoldCommand, ReturnToLaunchCommand
 from vehicle_agents.commands import CommandExecutor
 from vehicle_agents.fcu_link import FcuLink
@@ -55,6 +56,22 @@ PILOTED_MODES = frozenset(
     }
 )
 EmitEvent = Callable[[EventKind, str, int | None], None]
+
+# Reconnect attempts that fit in the failsafe's timeout, at the least. The hub link's
+# jittered backoff grows to 10 s, so after a few drops in a row it could sleep through
+# the whole up-time of a flapping field link, and the failsafe would fire on a hub that
+# had been back for seconds. Capped at a quarter of the timeout, no up-time longer than
+# that cap is missed.
+ATTEMPTS_PER_TIMEOUT = 4
+
+
+def reconnect_backoff(action: FailsafeAction, timeout_s: float, usual: Backoff) -> Backoff:
+    """The hub link's reconnect policy under this failsafe: ``usual`` when the failsafe
+    does nothing, else capped so that a hub back before the timeout is found in time."""
+    if action == "continue":
+        return usual
+    cap = min(usual.max_s, timeout_s / ATTEMPTS_PER_TIMEOUT)
+    return Backoff(initial_s=min(usual.initial_s, cap), max_s=cap)
 
 
 class HubLinkFailsafe:

@@ -8,10 +8,11 @@ import asyncio
 import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
+from common.retry import Backoff
 from protocol.messages import EventKind
 from vehicle_agents.commands import CommandExecutor
 from vehicle_agents.fcu_link import FcuLink
-from vehicle_agents.hub_failsafe import HubLinkFailsafe
+from vehicle_agents.hub_failsafe import HubLinkFailsafe, reconnect_backoff
 
 COPTER_MODES = {"STABILIZE": 0, "GUIDED": 4, "RTL": 6, "LAND": 9}
 
@@ -62,3 +63,18 @@ def test_a_disarmed_vehicle_is_left_alone() -> None:
 def test_a_guided_vehicle_is_commanded_home() -> None:
     done, _ = _decide("GUIDED")
     assert done.startswith("could not command RTL")  # this link is down: the attempt shows
+
+
+def test_an_armed_failsafe_caps_the_reconnect_wait_below_a_flaps_up_time() -> None:
+    usual = Backoff(initial_s=0.5, max_s=10.0)
+    capped = reconnect_backoff("rtl", 5.0, usual)
+    assert capped.max_s == 1.25
+    # However long the run of failures, no wait can sleep through a 2 s up-time.
+    assert max(capped.delay(failures) for failures in range(1, 40) for _ in range(50)) <= 1.25
+    assert reconnect_backoff("hold", 60.0, usual) == usual  # 15 s would be looser: kept
+    assert reconnect_backoff("hold", 1.0, usual) == Backoff(initial_s=0.25, max_s=0.25)
+
+
+def test_a_failsafe_that_does_nothing_keeps_the_fleet_wide_backoff() -> None:
+    usual = Backoff(initial_s=0.5, max_s=10.0)
+    assert reconnect_backoff("continue", 5.0, usual) == usual

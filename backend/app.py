@@ -42,6 +42,7 @@ from backend.api.hardening import SecurityMiddleware, content_security_policy
 from backend.api.responses import document_errors
 from backend.api.routing import DashboardMount, install_method_not_allowed
 from backend.api.slow_clients import SlowBodyTimeout
+from backend.auth.rate_limit import whole_seconds
 from backend.errors import (
     GcsError,
     InvalidRequest,
@@ -163,7 +164,7 @@ async def _gcs_error_response(request: Request, error: GcsError) -> JSONResponse
     if isinstance(error, Unauthenticated):
         headers["WWW-Authenticate"] = "Bearer"
     elif isinstance(error, RateLimited):
-        headers["Retry-After"] = str(max(1, round(error.retry_after_s)))
+        headers["Retry-After"] = str(whole_seconds(error.retry_after_s))
     elif isinstance(error, SafetyViolation):
         body["violations"] = error.violations
     return JSONResponse(body, status_code=error.status_code, headers=headers)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import collections
+import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -14,6 +15,11 @@ from backend.errors import RateLimited
 class Limit:
     events: int
     per_s: float
+
+
+def whole_seconds(wait_s: float) -> int:
+    """A wait as Retry-After gives it: whole seconds, rounded up, at least 1."""
+    return max(1, math.ceil(wait_s))
 
 
 class RateLimiter:
@@ -36,7 +42,11 @@ class RateLimiter:
         events = self._window(key)
         if len(events) >= self.limit.events:
             retry_after = events[0] + self.limit.per_s - self._clock()
-            raise RateLimited(f"too many {what}; try again in {retry_after:.0f} s", retry_after)
+            # In whole seconds, rounded up as the Retry-After header is: "try again in
+            # 0 s" read as "now", and now was still refused.
+            raise RateLimited(
+                f"too many {what}; try again in {whole_seconds(retry_after)} s", retry_after
+            )
 
     def hit(self, key: str, count: int = 1) -> None:
         """Count ``count`` events now (a group command counts each vehicle it reaches)."""

@@ -153,15 +153,23 @@ def operator(one_vehicle: LocalFleet) -> str:
     return access_token(base, "op", password)
 
 
+def _past_the_budget(call: Callable[[], httpx.Response], what: str) -> httpx.Response:
+    """``call``'s answer once the vehicle's budget allows it: the routes before spent
+    this second's (each bad value is still a request that counts), and a 429 says when
+    to ask again."""
+
+    def allowed() -> httpx.Response | None:
+        answer = call()
+        return None if answer.status_code == 429 else answer
+
+    answer = poll_until(allowed, 10, f"the vehicle budget to allow {what}")
+    assert answer is not None
+    return answer
+
+
 def _wpnav_speed(api: httpx.Client) -> float:
-    # The routes before spent this second's vehicle budget: a 429 says when to ask again.
-    read = poll_until(
-        lambda: (
-            (r := api.get(f"/api/v1/vehicles/{VEHICLE}/params/WPNAV_SPEED")).status_code != 429
-            and r
-        ),
-        10,
-        "the vehicle budget to allow a read",
+    read = _past_the_budget(
+        lambda: api.get(f"/api/v1/vehicles/{VEHICLE}/params/WPNAV_SPEED"), "a read"
     )
     assert read.status_code == 200, read.text
     value: float = read.json()["values"]["WPNAV_SPEED"]
@@ -174,7 +182,12 @@ def _still_answering(fleet: LocalFleet, api: httpx.Client, wpnav_speed: float) -
         watcher.wait_until(connected(VEHICLE), 30, f"{VEHICLE} connected")
     assert _wpnav_speed(api) == wpnav_speed, "nothing reached the vehicle"
     # a write the vehicle echoes: the agent still carries a command there and back
-    good = api.put(f"/api/v1/vehicles/{VEHICLE}/params/WPNAV_SPEED", json={"value": wpnav_speed})
+    good = _past_the_budget(
+        lambda: api.put(
+            f"/api/v1/vehicles/{VEHICLE}/params/WPNAV_SPEED", json={"value": wpnav_speed}
+        ),
+        "a write",
+    )
     assert good.status_code == 200, good.text
 
 
@@ -225,7 +238,10 @@ def test_stick_input_refuses_the_number_naming_the_axis(
         # The lease opens only once the agent has checked that the autopilot takes
         # MANUAL_CONTROL from it: ArduPilot from its GCS's id, which must be the agent's
         # 254 (the README's setup), not the default 255.
-        gcs_id = api.put(f"/api/v1/vehicles/{VEHICLE}/params/SYSID_MYGCS", json={"value": 254})
+        gcs_id = _past_the_budget(
+            lambda: api.put(f"/api/v1/vehicles/{VEHICLE}/params/SYSID_MYGCS", json={"value": 254}),
+            "a write",
+        )
         assert gcs_id.status_code == 200, gcs_id.text
         wpnav_speed = _wpnav_speed(api)
         pilot.send(json.dumps({"type": "control", "vehicle_id": VEHICLE, "action": "acquire"}))

@@ -28,8 +28,8 @@ from pmtiles.writer import Writer
 from rasterio import Affine
 from rasterio.windows import Window
 
-from backend.mosaic.georef import TILE_PX, WORLD_M, pixel_to_lonlat
-from backend.mosaic.store import TileKey, TileStore
+from backend.mosaic.georef import TILE_PX, WORLD_M
+from backend.mosaic.store import TileKey, TileSpan, TileStore
 
 FORMATS = {
     "tif": "image/tiff",
@@ -57,25 +57,17 @@ def _png(store: TileStore, key: TileKey) -> bytes:
     return encoded[0]
 
 
-def _bounds(store: TileStore) -> tuple[float, float, float, float]:
-    """west, south, east, north (degrees) of the native zoom's tiles."""
+def _span(store: TileStore) -> tuple[TileSpan, list[TileKey]]:
+    """The native zoom's tiles, and the block they cover."""
     _, zoom = _zooms(store)
     keys = list(store.keys(zoom))
-    west, north = pixel_to_lonlat(
-        zoom, min(k[1] for k in keys) * TILE_PX, min(k[2] for k in keys) * TILE_PX
-    )
-    east, south = pixel_to_lonlat(
-        zoom, (max(k[1] for k in keys) + 1) * TILE_PX, (max(k[2] for k in keys) + 1) * TILE_PX
-    )
-    return west, south, east, north
+    return TileSpan.of(zoom, keys), keys
 
 
 def write_cog(store: TileStore, path: Path) -> Path:
-    _, zoom = _zooms(store)
-    keys = list(store.keys(zoom))
-    x0, y0 = min(k[1] for k in keys), min(k[2] for k in keys)
-    width = (max(k[1] for k in keys) - x0 + 1) * TILE_PX
-    height = (max(k[2] for k in keys) - y0 + 1) * TILE_PX
+    span, keys = _span(store)
+    zoom, x0, y0 = span.zoom, span.x0, span.y0
+    width, height = span.width_px, span.height_px
     if max(width, height) > MAX_COG_PX:
         raise ExportError(
             f"the mosaic is {width} x {height} px; a GeoTIFF export takes {MAX_COG_PX} a side"
@@ -107,7 +99,7 @@ def write_cog(store: TileStore, path: Path) -> Path:
                 if rgba is None:
                     continue
                 bands = np.transpose(rgba[:, :, [2, 1, 0, 3]], (2, 0, 1))  # BGRA -> RGBA
-                window = Window((key[1] - x0) * TILE_PX, (key[2] - y0) * TILE_PX, TILE_PX, TILE_PX)
+                window = Window(*span.offset_px(key), TILE_PX, TILE_PX)
                 raster.write(bands, window=window)
         rasterio.shutil.copy(
             plain, path, driver="COG", compress="DEFLATE", overview_resampling="average"
@@ -117,7 +109,7 @@ def write_cog(store: TileStore, path: Path) -> Path:
 
 def write_mbtiles(store: TileStore, path: Path, name: str) -> Path:
     min_zoom, max_zoom = _zooms(store)
-    west, south, east, north = _bounds(store)
+    west, south, east, north = _span(store)[0].bounds()
     metadata = {
         "name": name,
         "format": "png",
@@ -149,7 +141,7 @@ def write_mbtiles(store: TileStore, path: Path, name: str) -> Path:
 
 def write_pmtiles(store: TileStore, path: Path, name: str) -> Path:
     min_zoom, max_zoom = _zooms(store)
-    west, south, east, north = _bounds(store)
+    west, south, east, north = _span(store)[0].bounds()
     keys = sorted(store.versions, key=lambda key: zxy_to_tileid(*key))
     with path.open("wb") as file:
         writer = PMTilesWriter(file)

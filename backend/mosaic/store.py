@@ -36,12 +36,49 @@ from pathlib import Path
 import numpy as np
 import numpy.typing as npt
 
-from backend.mosaic.georef import TILE_PX
+from backend.mosaic.georef import TILE_PX, pixel_to_lonlat
 from common.opencv import cv2
 
 Rgba = npt.NDArray[np.uint8]
 Distances = npt.NDArray[np.float32]
 TileKey = tuple[int, int, int]  # z, x, y
+
+
+@dataclass(frozen=True)
+class TileSpan:
+    """The block of one zoom's tiles that some keys cover: columns ``x0`` to ``x1 - 1``,
+    rows ``y0`` to ``y1 - 1`` (what an export or an overview lays out as one image)."""
+
+    zoom: int
+    x0: int
+    y0: int
+    x1: int
+    y1: int
+
+    @classmethod
+    def of(cls, zoom: int, keys: list[TileKey]) -> TileSpan:
+        xs, ys = [k[1] for k in keys], [k[2] for k in keys]
+        return cls(zoom, min(xs), min(ys), max(xs) + 1, max(ys) + 1)
+
+    @property
+    def width_px(self) -> int:
+        return (self.x1 - self.x0) * TILE_PX
+
+    @property
+    def height_px(self) -> int:
+        return (self.y1 - self.y0) * TILE_PX
+
+    def offset_px(self, key: TileKey) -> tuple[int, int]:
+        """Where ``key``'s tile starts in the span's image: left, top."""
+        return (key[1] - self.x0) * TILE_PX, (key[2] - self.y0) * TILE_PX
+
+    def bounds(self) -> tuple[float, float, float, float]:
+        """west, south, east, north in degrees."""
+        west, north = pixel_to_lonlat(self.zoom, self.x0 * TILE_PX, self.y0 * TILE_PX)
+        east, south = pixel_to_lonlat(self.zoom, self.x1 * TILE_PX, self.y1 * TILE_PX)
+        return west, south, east, north
+
+
 PNG_LEVEL = 1  # photos barely shrink at higher levels, which take twice as long
 JPEG_QUALITY = 90
 PIXELS_BYTES = TILE_PX * TILE_PX * 4

@@ -21,9 +21,9 @@ import numpy as np
 import numpy.typing as npt
 import viser
 
-from backend.mosaic.georef import TILE_PX, pixel_to_lonlat
+from backend.mosaic.georef import TILE_PX
 from backend.mosaic.service import MosaicService, UnknownMosaic
-from backend.mosaic.store import TileStore
+from backend.mosaic.store import TileSpan, TileStore
 from backend.viz3d.scene import MOSAIC, FleetScene
 
 MAX_TEXTURE_PX = 1024
@@ -63,20 +63,17 @@ def overview(store: TileStore, max_px: int = MAX_TEXTURE_PX) -> Overview | None:
     if chosen is None:
         return None
     zoom, keys = chosen
-    x0, y0 = min(k[1] for k in keys), min(k[2] for k in keys)
-    x1, y1 = max(k[1] for k in keys) + 1, max(k[2] for k in keys) + 1
-    image = np.zeros(((y1 - y0) * TILE_PX, (x1 - x0) * TILE_PX, 4), dtype=np.uint8)
+    span = TileSpan.of(zoom, keys)
+    image = np.zeros((span.height_px, span.width_px, 4), dtype=np.uint8)
     for key in keys:
         if (bgra := store.pixels(key)) is None:
             continue
-        top, left = (key[2] - y0) * TILE_PX, (key[1] - x0) * TILE_PX
+        left, top = span.offset_px(key)
         image[top : top + TILE_PX, left : left + TILE_PX] = bgra[:, :, [2, 1, 0, 3]]
     if (side := max(image.shape[:2])) > max_px:
         size = (max(1, image.shape[1] * max_px // side), max(1, image.shape[0] * max_px // side))
         image = np.asarray(cv2.resize(image, size, interpolation=cv2.INTER_AREA), dtype=np.uint8)
-    west, north = pixel_to_lonlat(zoom, x0 * TILE_PX, y0 * TILE_PX)
-    east, south = pixel_to_lonlat(zoom, x1 * TILE_PX, y1 * TILE_PX)
-    return Overview(image, west, south, east, north, zoom)
+    return Overview(image, *span.bounds(), zoom)
 
 
 class MosaicLayer:

@@ -86,8 +86,10 @@ class SceneMirror:
             formations, formation = self.formations, FormationLayer(self.scene)
             yield "formations", lambda: formation.follow(formations, self.home_alt, self.interval_s)
         if self.mosaics is not None and self.mosaic_surveys is not None:
-            mosaics, shown = self.mosaics, self.mosaic_surveys
-            yield "mosaic", lambda: MosaicLayer(self.scene).follow(mosaics, shown)
+            # Made once, as the other layers are: a restarted loop still knows what its
+            # layer drew, so it can take those pictures away again.
+            mosaics, shown, mosaic = self.mosaics, self.mosaic_surveys, MosaicLayer(self.scene)
+            yield "mosaic", lambda: mosaic.follow(mosaics, shown)
 
     def home_alt(self, vehicle_id: str) -> float | None:
         try:

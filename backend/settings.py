@@ -108,6 +108,9 @@ class HubSettings(BaseSettings):
     max_distance_from_home_m: float | None = Field(default=2000.0)
     min_launch_battery_pct: float | None = Field(default=30.0)
     battery_reserve_pct: float = Field(default=20.0, ge=0, le=100)
+    min_height_above_home_m: float | None = Field(
+        default=2.0, ge=0, description="lowest a mission's navigation items go but landings"
+    )
 
     command_timeout_s: float = Field(default=15.0, gt=0, le=120)
     principal_cache_s: float = Field(

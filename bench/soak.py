@@ -121,7 +121,8 @@ class Dashboard:
 
 def _mission(lat: float, lon: float) -> list[dict[str, Any]]:
     return [
-        {"command": mavlink2.MAV_CMD_NAV_TAKEOFF, "alt": 15},
+        # where it stands: PX4 flies to a take-off's position, ArduPilot climbs in place
+        {"command": mavlink2.MAV_CMD_NAV_TAKEOFF, "lat": lat, "lon": lon, "alt": 15},
         {
             "command": mavlink2.MAV_CMD_NAV_WAYPOINT,
             "lat": lat + 60 * NORTH_DEG_PER_M,

@@ -50,7 +50,9 @@ _AIRBORNE_ONLY = _TAKEOFFS | frozenset(
         _CMD.MAV_CMD_NAV_PAYLOAD_PLACE,
     }
 )
-_GROUND_VEHICLES = frozenset({"rover", "boat", "submarine"})
+# Vehicles that go along the ground or water (or under it): no take-off, no landing, and
+# an altitude that is not a height to keep.
+GROUND_VEHICLES = frozenset({"rover", "boat", "submarine"})
 GLOBAL_FRAMES = frozenset(
     {
         _CMD.MAV_FRAME_GLOBAL,
@@ -86,7 +88,7 @@ def item_problems(
     if not known_command(command):
         return [f"unknown MAV_CMD {command}"]
     problems: list[str] = []
-    if vehicle_type in _GROUND_VEHICLES and command in _AIRBORNE_ONLY:
+    if vehicle_type in GROUND_VEHICLES and command in _AIRBORNE_ONLY:
         problems.append(f"a {vehicle_type} cannot do this")
     if command in _POSITIONED and item.frame not in GLOBAL_FRAMES:
         problems.append(
@@ -95,7 +97,14 @@ def item_problems(
             "_TERRAIN_ALT, or their _INT forms)"
         )
     at_zero = item.lat == 0.0 and item.lon == 0.0
-    if at_zero and (command in _WAYPOINTS or (command in _HERE_AT_ZERO and autopilot == "px4")):
+    px4 = autopilot == "px4"
+    if at_zero and command in _TAKEOFFS and px4:
+        # PX4 climbs, then flies to the take-off's position (ArduPilot's copters ignore it).
+        problems.append(
+            "latitude and longitude are 0, 0: PX4 flies to a take-off's position once it has "
+            "climbed (give where the vehicle takes off)"
+        )
+    elif at_zero and (command in _WAYPOINTS or (command in _HERE_AT_ZERO and px4)):
         problems.append("latitude and longitude are 0, 0: not a place to go (give its position)")
     if command in _TAKEOFFS and item.frame in _RELATIVE_FRAMES and item.alt <= 0.0:
         problems.append(f"take-off altitude {item.alt:g} m is not above home")

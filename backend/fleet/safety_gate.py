@@ -69,6 +69,7 @@ class SafetyGate:
             max_distance_from_home_m=settings.max_distance_from_home_m,
             min_launch_battery_pct=settings.min_launch_battery_pct,
             battery_reserve_pct=settings.battery_reserve_pct,
+            min_height_above_home_m=settings.min_height_above_home_m,
         )
 
     def vehicle_rails(self, vehicle_id: str) -> SafetyRails | None:

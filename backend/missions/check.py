@@ -4,6 +4,7 @@ estimate when it can be made."""
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable, Sequence
 
 from backend.missions.rails import PlanCheck, evaluate_plan
@@ -12,7 +13,7 @@ from backend.safety.rails import SafetyRails
 from backend.safety.snapshot import VehicleSnapshot
 from backend.safety.violations import MISSION_ITEM, Violation
 from protocol.messages import MissionItem
-from protocol.mission_rules import mission_problems_by_item
+from protocol.mission_rules import GROUND_VEHICLES, mission_problems_by_item
 
 
 def check_mission(
@@ -29,8 +30,13 @@ def check_mission(
         Violation(MISSION_ITEM, problem, items=(number,))
         for number, problem in mission_problems_by_item(items, vehicle_type, autopilot)
     )
-    waypoints = mission_waypoints(items, vehicle)
+    waypoints = mission_waypoints(items, vehicle, autopilot)
     if not waypoints:
         return PlanCheck(problems, None)  # no place to go: nothing for the rails
-    plan = evaluate_plan(rails(), vehicle, waypoints)
+    limits = rails()
+    if vehicle_type in GROUND_VEHICLES:
+        # A rover's or a boat's altitude is where the ground or water is, a submarine's
+        # below it: no height above home to keep.
+        limits = dataclasses.replace(limits, min_height_above_home_m=None)
+    plan = evaluate_plan(limits, vehicle, waypoints)
     return PlanCheck(problems + plan.violations, plan.estimate)

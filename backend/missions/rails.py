@@ -29,10 +29,12 @@ from backend.safety.violations import (
     BATTERY_SUFFICIENCY,
     GEOFENCE,
     MAX_DISTANCE_FROM_HOME,
+    MIN_HEIGHT_ABOVE_HOME,
     Report,
     Violation,
     count,
     others,
+    pair,
 )
 from common.geodesy import GeoPoint, haversine_m
 
@@ -88,6 +90,49 @@ def _plan_geofence(
             None,
             at_fault,
         )
+
+
+def _height_words(wp: Waypoint, index: int, decimals: int) -> str:
+    """Where ``wp`` is, in height above home, in the terms its item was written in."""
+    below = wp.alt_rel < 0
+    height = f"{abs(wp.alt_rel):.{decimals}f} m {'below' if below else 'above'} home"
+    if wp.datum == "terrain":
+        return (
+            f"{wp.name(index)}: {wp.alt_rel:.{decimals}f} m above terrain, taken as {height} "
+            "(the hub has no terrain model)"
+        )
+    if wp.datum == "sea level" and wp.alt_written is not None:
+        home_alt = wp.alt_written - wp.alt_rel
+        return (
+            f"{wp.name(index)}: {height} ({wp.alt_written:.1f} m above sea level; home is at "
+            f"{home_alt:.1f} m)"
+        )
+    return f"{wp.name(index)}: {height}" + (f" ({wp.alt_rel:.{decimals}f} m)" if below else "")
+
+
+def _plan_height_above_home(
+    rails: SafetyRails, waypoints: Sequence[Waypoint], report: Report
+) -> None:
+    """Every navigation place but a landing at least the minimum above home: one
+    violation naming the lowest, with every item below the minimum."""
+    limit = rails.min_height_above_home_m
+    if limit is None:
+        return
+    low = [(wp.alt_rel, i) for i, wp in enumerate(waypoints) if wp.held_above_home]
+    low = [(alt, i) for alt, i in low if alt < limit]
+    if not low:
+        return
+    alt, worst = min(low)
+    _, bound = pair(alt, limit, 1)
+    words = _height_words(waypoints[worst], worst + 1, len(bound.partition(".")[2]))
+    report.add(
+        MIN_HEIGHT_ABOVE_HOME,
+        f"{words}; the rails need at least {bound} m "
+        f"above home (min_height_above_home_m){others(len(low), 'waypoints are below it')}",
+        limit,
+        alt,
+        [waypoints[i].item for _, i in sorted(low, key=lambda o: o[1])],
+    )
 
 
 def _plan_distance(
@@ -155,6 +200,7 @@ def evaluate_plan(
         report,
         [wp.item for wp in waypoints],
     )
+    _plan_height_above_home(rails, waypoints, report)
     if rails.geofence is not None:
         _plan_geofence(rails.geofence, vehicle, waypoints, report)
     _plan_distance(rails, vehicle, waypoints, report)

@@ -16,6 +16,10 @@ from typing import Final, TypeVar
 from backend.safety.geofence import Geofence
 
 DEFAULT_BATTERY_RESERVE_PCT: Final = 20.0
+# A mission's navigation items (but its landings) stay at least this far above home: a
+# waypoint below home is a typing slip (a negative relative altitude, a sea-level altitude
+# written as if above home) that flies the vehicle into the ground.
+DEFAULT_MIN_HEIGHT_ABOVE_HOME_M: Final = 2.0
 
 _T = TypeVar("_T")
 
@@ -28,6 +32,9 @@ class SafetyRails:
     max_altitude_m: float | None = None
     min_launch_battery_pct: float | None = None
     battery_reserve_pct: float = DEFAULT_BATTERY_RESERVE_PCT
+    # None: no such rule (a site's choice); a vehicle's own value counts as set when it
+    # differs from the default, as the reserve does.
+    min_height_above_home_m: float | None = DEFAULT_MIN_HEIGHT_ABOVE_HOME_M
 
     def __post_init__(self) -> None:
         # A NaN limit would let everything through, so bad limits are a hard error.
@@ -43,13 +50,15 @@ class SafetyRails:
     def merged_with(self, override: SafetyRails | None) -> SafetyRails:
         """Site rails with a vehicle's own values laid over them wherever it sets one.
 
-        The reserve has no "unset" value, so a vehicle's reserve counts as set when it
-        differs from the default; a vehicle cannot override a site's reserve back to
-        exactly the default.
+        The reserve and the minimum height above home have no "unset" value of their own
+        (a vehicle's rails body that leaves them out carries the defaults), so a vehicle's
+        counts as set when it differs from the default; a vehicle cannot override a site's
+        back to exactly the default, nor switch the minimum height off (only a site can).
         """
         if override is None:
             return self
         reserve = override.battery_reserve_pct
+        height = override.min_height_above_home_m
         return SafetyRails(
             geofence=_prefer(override.geofence, self.geofence),
             max_distance_from_home_m=_prefer(
@@ -62,6 +71,11 @@ class SafetyRails:
             ),
             battery_reserve_pct=(
                 self.battery_reserve_pct if reserve == DEFAULT_BATTERY_RESERVE_PCT else reserve
+            ),
+            min_height_above_home_m=(
+                self.min_height_above_home_m
+                if height in (None, DEFAULT_MIN_HEIGHT_ABOVE_HOME_M)
+                else height
             ),
         )
 

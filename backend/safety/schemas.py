@@ -14,7 +14,11 @@ from pydantic import BaseModel, ConfigDict, Field, field_validator, model_valida
 
 from backend.safety.geofence import Geofence
 from backend.safety.geometry import MAX_POLYGON_VERTICES, validate_polygon
-from backend.safety.rails import DEFAULT_BATTERY_RESERVE_PCT, SafetyRails
+from backend.safety.rails import (
+    DEFAULT_BATTERY_RESERVE_PCT,
+    DEFAULT_MIN_HEIGHT_ABOVE_HOME_M,
+    SafetyRails,
+)
 from backend.safety.violations import RuleName, Violation
 from common.geodesy import GeoPoint
 from protocol.messages import Number
@@ -93,6 +97,14 @@ class SafetyRailsModel(_Strict):
         le=100,
         description="Battery that must remain after a planned mission and its return home",
     )
+    min_height_above_home_m: Number | None = Field(
+        default=DEFAULT_MIN_HEIGHT_ABOVE_HOME_M,
+        ge=0,
+        le=MAX_ALTITUDE_M,
+        description="Lowest a mission's navigation items (but its landings) may go, metres "
+        "above home; an item above terrain counts its height above terrain as above home. "
+        "Null: no such rule (a site's rails only; a vehicle's null keeps the site's)",
+    )
 
     @model_validator(mode="after")
     def _floor_below_ceiling(self) -> Self:
@@ -112,6 +124,7 @@ class SafetyRailsModel(_Strict):
             max_altitude_m=self.max_altitude_m,
             min_launch_battery_pct=self.min_launch_battery_pct,
             battery_reserve_pct=self.battery_reserve_pct,
+            min_height_above_home_m=self.min_height_above_home_m,
         )
 
     @classmethod
@@ -123,6 +136,7 @@ class SafetyRailsModel(_Strict):
             max_altitude_m=rails.max_altitude_m,
             min_launch_battery_pct=rails.min_launch_battery_pct,
             battery_reserve_pct=rails.battery_reserve_pct,
+            min_height_above_home_m=rails.min_height_above_home_m,
         )
 
 

@@ -18,6 +18,7 @@ RuleName = Literal[
     "geofence_max_altitude",
     "max_altitude",
     "min_altitude",
+    "min_height_above_home",
     "max_distance_from_home",
     "min_launch_battery",
     "battery_sufficiency",
@@ -30,6 +31,8 @@ GEOFENCE: Final = "geofence"
 GEOFENCE_MAX_ALTITUDE: Final = "geofence_max_altitude"
 MAX_ALTITUDE: Final = "max_altitude"
 MIN_ALTITUDE: Final = "min_altitude"
+# A mission's navigation item (not a landing) too low above home, or below it.
+MIN_HEIGHT_ABOVE_HOME: Final = "min_height_above_home"
 MAX_DISTANCE_FROM_HOME: Final = "max_distance_from_home"
 MIN_LAUNCH_BATTERY: Final = "min_launch_battery"
 BATTERY_SUFFICIENCY: Final = "battery_sufficiency"
@@ -44,6 +47,7 @@ RULES: Final[tuple[RuleName, ...]] = (
     GEOFENCE_MAX_ALTITUDE,
     MAX_ALTITUDE,
     MIN_ALTITUDE,
+    MIN_HEIGHT_ABOVE_HOME,
     MAX_DISTANCE_FROM_HOME,
     MIN_LAUNCH_BATTERY,
     BATTERY_SUFFICIENCY,

@@ -102,6 +102,46 @@ def test_a_rail_names_the_mission_item_not_the_nth_place(
     assert "item 2 altitude" in violation["message"]
 
 
+def test_the_default_rails_refuse_waypoints_below_home(
+    api: httpx.Client, watcher: FleetWatcher
+) -> None:
+    """A relative altitude typed negative, and a sea-level altitude of 0 written for a
+    home at 584 m, each fly into the ground: the default rails' minimum height above home
+    refuses both in the check and the upload, naming the item and the rule."""
+    vehicle = "sim_2"
+    watcher.wait_until(ready(vehicle), 60, f"{vehicle} ready")
+    rails = api.get(f"/api/v1/vehicles/{vehicle}/safety-rails").json()
+    assert rails["min_height_above_home_m"] == 2.0
+    state = watcher.state(vehicle)
+    lat, lon, home_msl = state["lat"], state["lon"], state["home_alt_msl"]
+    assert home_msl == pytest.approx(584.0, abs=1.0)
+    need = "the rails need at least 2.0 m above home (min_height_above_home_m)"
+    for frame, alt, said in (
+        (mavlink2.MAV_FRAME_GLOBAL_RELATIVE_ALT, -50.0, "item 2: 50.0 m below home (-50.0 m)"),
+        (
+            mavlink2.MAV_FRAME_GLOBAL,
+            0.0,
+            f"item 2: {home_msl:.1f} m below home (0.0 m above sea level; home is at "
+            f"{home_msl:.1f} m)",
+        ),
+    ):
+        items = [
+            {"command": TAKEOFF, "alt": 10},
+            {"command": WAYPOINT, "frame": frame, "lat": lat + 20 * NORTH, "lon": lon, "alt": alt},
+            {"command": RTL},
+        ]
+        checked = api.post(f"/api/v1/vehicles/{vehicle}/mission-check", json={"items": items})
+        assert checked.status_code == 200, checked.text
+        assert checked.json()["ok"] is False
+        [violation] = checked.json()["violations"]
+        assert violation["rule"] == "min_height_above_home"
+        assert violation["message"] == f"{said}; {need}"
+        assert violation["items"] == [2]
+        refused = api.post(f"/api/v1/vehicles/{vehicle}/mission", json={"items": items})
+        assert refused.status_code == 422, refused.text
+        assert [v["rule"] for v in refused.json()["violations"]] == ["min_height_above_home"]
+
+
 def test_a_mission_without_a_place_is_checked_not_a_crash(
     api: httpx.Client, watcher: FleetWatcher
 ) -> None:

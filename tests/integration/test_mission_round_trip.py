@@ -59,7 +59,8 @@ def test_a_round_trip_gives_back_the_frames_that_were_sent(autopilot: Autopilot)
     """Frame 6 comes back from ArduPilot as 3 (AP_Mission keeps "relative", not the message
     form) and 3 from PX4 as 6: the hub's one form is the plain frame, both ways."""
     sent = [
-        MissionItem(command=TAKEOFF, frame=RELATIVE_INT, alt=10),
+        # where it stands: PX4 flies to a take-off's position (0, 0 is refused)
+        MissionItem(command=TAKEOFF, frame=RELATIVE_INT, lat=HOME_LAT, lon=HOME_LON, alt=10),
         MissionItem(
             command=WAYPOINT, frame=RELATIVE_INT, lat=HOME_LAT + 3e-4, lon=HOME_LON, alt=12
         ),

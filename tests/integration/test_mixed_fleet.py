@@ -195,3 +195,47 @@ def test_px4s_mission_mode_flies_only_a_checked_mission(
     finally:
         send_command(api, PX4, name="hold")
         api.delete(url)
+
+
+def test_px4_s_survey_takes_off_where_it_stands_and_a_take_off_at_zero_is_refused(
+    clients: tuple[httpx.Client, FleetWatcher],
+) -> None:
+    """PX4 climbs, then flies to a take-off item's position: a survey's take-off carries
+    the drone's own position, and the check refuses a take-off at 0, 0 naming it."""
+    api, _ = clients
+    state = listed_once_ready(clients, PX4, "the PX4 copter")["state"]
+    lat, lon = state["lat"], state["lon"]
+    east = NORTH / 0.8  # about a metre east at the simulator's home latitude
+    ring = [
+        [lon, lat + 40 * NORTH],
+        [lon + 120 * east, lat + 40 * NORTH],
+        [lon + 120 * east, lat + 120 * NORTH],
+        [lon, lat + 120 * NORTH],
+        [lon, lat + 40 * NORTH],
+    ]
+    survey = {
+        "area": {"type": "Polygon", "coordinates": [ring]},
+        "camera": "sony_a6000_16mm",
+        "altitude_m": 40,
+        "angle_deg": 0,
+        "vehicle_ids": [PX4],
+    }
+    preview = api.post("/api/v1/surveys/preview", json=survey)
+    assert preview.status_code == 200, preview.text
+    [part] = preview.json()["parts"]
+    takeoff = part["mission"]["items"][0]
+    assert takeoff["command"] == mavlink2.MAV_CMD_NAV_TAKEOFF
+    assert takeoff["lat"] == pytest.approx(lat, abs=2 * NORTH)
+    assert takeoff["lon"] == pytest.approx(lon, abs=2 * NORTH)
+    assert part["check"]["ok"] is True, part["check"]
+
+    at_zero = [{**takeoff, "lat": 0, "lon": 0}, *part["mission"]["items"][1:]]
+    checked = api.post(f"/api/v1/vehicles/{PX4}/mission-check", json={"items": at_zero})
+    assert checked.status_code == 200, checked.text
+    assert checked.json()["ok"] is False
+    rules = {v["rule"]: v for v in checked.json()["violations"]}
+    assert rules["mission_item"]["items"] == [1]
+    assert rules["mission_item"]["message"].startswith(
+        "item 1 (NAV_TAKEOFF): latitude and longitude are 0, 0: PX4 flies to a take-off's position"
+    )
+    assert rules["max_distance_from_home"]["items"] == [1]

@@ -76,6 +76,10 @@ def test_preview_gives_each_drone_a_checked_mission(
         assert part["check"]["ok"] is True, part["check"]
         commands = [item["command"] for item in part["mission"]["items"]]
         assert commands[0] == mavlink2.MAV_CMD_NAV_TAKEOFF
+        # the take-off carries where the drone stands (never 0, 0)
+        takeoff, here = part["mission"]["items"][0], watcher.state(part["vehicle_id"])
+        assert takeoff["lat"] == pytest.approx(here["lat"], abs=2 * NORTH)
+        assert takeoff["lon"] == pytest.approx(here["lon"], abs=2 * NORTH)
         assert commands[-1] == mavlink2.MAV_CMD_NAV_RETURN_TO_LAUNCH
         assert mavlink2.MAV_CMD_DO_SET_CAM_TRIGG_DIST in commands
     assert preview["ok"] is True

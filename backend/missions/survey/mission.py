@@ -11,6 +11,11 @@ waypoint at each photo (held for a moment when hovering) followed by DO_DIGICAM_
 "shoot once", which every ArduPilot since 3.x runs in a mission. The mission starts with a
 take-off and DO_CHANGE_SPEED to the survey's speed, and ends with RTL. Altitudes are
 relative to home (MAV_FRAME_GLOBAL_RELATIVE_ALT).
+
+The take-off carries where the vehicle takes off, as QGC writes it for PX4 (its launch
+position): PX4 climbs, then flies to a take-off item's position, so a take-off at 0, 0
+sends it towards 0°N 0°E. ArduPilot's copters ignore the position and climb in place, so
+the same item is right for both.
 """
 
 from __future__ import annotations
@@ -20,7 +25,7 @@ from dataclasses import dataclass
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from backend.missions.survey.planner import LanePlan
-from common.geodesy import LocalFrame
+from common.geodesy import GeoPoint, LocalFrame
 from protocol.messages import MissionItem
 
 HOVER_HOLD_S = 1.0  # time to settle before each photo when hovering
@@ -88,24 +93,28 @@ def survey_mission(
     frame: LocalFrame,
     altitude_m: float,
     *,
+    takeoff: GeoPoint | None,
     speed_ms: float | None = None,
     per_photo: bool = False,
     hover: bool = False,
-    takeoff: bool = True,
     rtl: bool = True,
     start: tuple[float, float] | None = None,
     lead_in: bool = True,
 ) -> SurveyMission:
-    """``start``: a first waypoint where the vehicle is (a mission resumed in the air).
+    """``takeoff``: where the vehicle takes off (its position on the ground), or None
+    for no take-off (a mission for a vehicle in the air).
+    ``start``: a first waypoint where the vehicle is (a mission resumed in the air).
     ``lead_in=False``: the first lane has no turnaround before it (it starts where the
     vehicle is, part way along a lane)."""
     items: list[MissionItem] = []
     lanes: list[tuple[int, int]] = []
-    if takeoff:
+    if takeoff is not None:
         items.append(
             MissionItem(
                 command=mavlink2.MAV_CMD_NAV_TAKEOFF,
                 frame=mavlink2.MAV_FRAME_GLOBAL_RELATIVE_ALT,
+                lat=takeoff.lat,
+                lon=takeoff.lon,
                 alt=altitude_m,
             )
         )
@@ -146,9 +155,9 @@ def mission_items(
     frame: LocalFrame,
     altitude_m: float,
     *,
+    takeoff: GeoPoint | None,
     per_photo: bool = False,
     hover: bool = False,
-    takeoff: bool = True,
     rtl: bool = True,
     speed_ms: float | None = None,
 ) -> list[MissionItem]:
@@ -156,9 +165,9 @@ def mission_items(
         plan,
         frame,
         altitude_m,
+        takeoff=takeoff,
         speed_ms=speed_ms,
         per_photo=per_photo,
         hover=hover,
-        takeoff=takeoff,
         rtl=rtl,
     ).items

@@ -371,7 +371,7 @@ def handover_missions(
             speed_ms=request.speed_ms,
             per_photo=not _distance_trigger(request),
             hover=request.hover_and_capture,
-            takeoff=False,
+            takeoff=None,  # in the air already
             lead_in=not flyer.mid_lane,
         )
         missions[flyer.vehicle_id] = mission.items

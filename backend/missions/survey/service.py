@@ -88,12 +88,15 @@ def plan_survey(request: SurveyRequest, fleet: list[Fleet]) -> Survey:
         for p in parts
         for f in swaths(p.plan, calc.lane_spacing_m * 1.0001, calc.trigger_distance_m * 1.0001)
     ]
+    positions = {vehicle.vehicle_id: vehicle.position for vehicle in fleet}
     planned = []
     for p in parts:
         mission = survey_mission(
             p.plan,
             frame,
             calc.altitude_m,
+            # The drone takes off where it stands.
+            takeoff=positions[p.drone.name],
             speed_ms=request.speed_ms,
             per_photo=not calc.camera.distance_trigger,
             hover=request.hover_and_capture,

@@ -2831,6 +2831,12 @@ export interface components {
              * @default 20
              */
             battery_reserve_pct: number;
+            /**
+             * Min Height Above Home M
+             * @description Lowest a mission's navigation items (but its landings) may go, metres above home; an item above terrain counts its height above terrain as above home. Null: no such rule (a site's rails only; a vehicle's null keeps the site's)
+             * @default 2
+             */
+            min_height_above_home_m: number | null;
         };
         /**
          * Sample
@@ -3805,7 +3811,7 @@ export interface components {
              * @description Stable name of the rule that was broken
              * @enum {string}
              */
-            rule: "geofence" | "geofence_max_altitude" | "max_altitude" | "min_altitude" | "max_distance_from_home" | "min_launch_battery" | "battery_sufficiency" | "home_altitude" | "position_unknown" | "mission_item" | "mission_unchecked";
+            rule: "geofence" | "geofence_max_altitude" | "max_altitude" | "min_altitude" | "min_height_above_home" | "max_distance_from_home" | "min_launch_battery" | "battery_sufficiency" | "home_altitude" | "position_unknown" | "mission_item" | "mission_unchecked";
             /**
              * Message
              * @description What is wrong, with the numbers and units

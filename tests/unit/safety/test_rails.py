@@ -407,6 +407,7 @@ def test_rule_names_are_stable() -> None:
         "geofence_max_altitude",
         "max_altitude",
         "min_altitude",
+        "min_height_above_home",
         "max_distance_from_home",
         "min_launch_battery",
         "battery_sufficiency",

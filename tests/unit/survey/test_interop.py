@@ -106,9 +106,12 @@ def test_geojson_polygon_and_path() -> None:
     assert read_geojson_polygon(json.dumps(feature)) == polygon
     items = _survey_items()
     path = mission_path_geojson(items)["geometry"]
-    waypoints = [i for i in items if i.command == mavlink2.MAV_CMD_NAV_WAYPOINT]
-    # the take-off has no position of its own: the path is the waypoints
-    assert path["coordinates"] == [[w.lon, w.lat, w.alt] for w in waypoints]
+    flown = (mavlink2.MAV_CMD_NAV_TAKEOFF, mavlink2.MAV_CMD_NAV_WAYPOINT)
+    places = [i for i in items if i.command in flown]
+    # the take-off is where the drone climbs (its own position), then the waypoints
+    assert places[0].command == mavlink2.MAV_CMD_NAV_TAKEOFF
+    assert (places[0].lat, places[0].lon) == (HOME[0], HOME[1])
+    assert path["coordinates"] == [[w.lon, w.lat, w.alt] for w in places]
     with pytest.raises(InteropError, match="no Polygon"):
         read_geojson_polygon('{"type": "Point", "coordinates": [0, 0]}')
 

@@ -27,6 +27,7 @@ from backend.missions.survey.planner import (
     swaths,
 )
 from backend.missions.survey.report import best_angle, flight_time_s
+from common.geodesy import GeoPoint
 from tests.survey_shapes import SHAPES, shape
 
 CALC = calculate(
@@ -187,7 +188,7 @@ def test_mission_items_trigger_on_distance_along_each_lane() -> None:
         }
     )
     plan = plan_lanes(polygon, CALC)
-    items = mission_items(plan, frame, CALC.altitude_m)
+    items = mission_items(plan, frame, CALC.altitude_m, takeoff=GeoPoint(46.999, 8.0))
     commands = [item.command for item in items]
     assert commands[0] == mavlink2.MAV_CMD_NAV_TAKEOFF
     assert commands[-1] == mavlink2.MAV_CMD_NAV_RETURN_TO_LAUNCH
@@ -217,7 +218,7 @@ def test_hover_and_capture_takes_one_image_at_each_photo_point() -> None:
         }
     )
     plan = plan_lanes(polygon, CALC)
-    items = mission_items(plan, frame, CALC.altitude_m, hover=True)
+    items = mission_items(plan, frame, CALC.altitude_m, takeoff=None, hover=True)
     captures = [i for i in items if i.command == mavlink2.MAV_CMD_DO_DIGICAM_CONTROL]
     assert len(captures) == plan.photo_count
     # param5 "shoot" is 1: MISSION_ITEM_INT's x, unscaled, which our items hold as lat * 1e7

@@ -64,7 +64,9 @@ def test_lane_items_point_at_the_lanes_entry_and_exit_waypoints() -> None:
     run = _run(1)
     geo = geometry(run)
     plan = plan_lanes(geo.area, _calc(run), angle_deg=0)
-    mission = survey_mission(plan, geo.frame, 40.0, speed_ms=10.0)
+    mission = survey_mission(
+        plan, geo.frame, 40.0, takeoff=GeoPoint(*geo.frame.to_geo(-20.0, -30.0)), speed_ms=10.0
+    )
     for lane, (entry, exit_) in zip(plan.lanes, mission.lanes, strict=True):
         first, last = mission.items[entry - 1], mission.items[exit_ - 1]
         assert first.command == last.command == mavlink2.MAV_CMD_NAV_WAYPOINT

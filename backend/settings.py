@@ -116,6 +116,13 @@ class HubSettings(BaseSettings):
     principal_cache_outage_s: float = Field(
         default=3600.0, ge=0, description="a resolved token answers while the database is down"
     )
+    audit_denial_interval_s: float = Field(
+        default=60.0,
+        gt=0,
+        le=3600,
+        description="refused requests of one principal, route and reason within this are "
+        "one audit row and then one more with their count",
+    )
     spool_retry_s: float = Field(
         default=2.0, gt=0, description="retry storing spooled audit and command rows"
     )

@@ -30,6 +30,7 @@ from backend.mapping.tiles import TileLibrary
 from backend.mosaic.photo import StoredPhoto as MosaicPhoto
 from backend.mosaic.service import MosaicService
 from backend.photos.ingest import PhotoIngest
+from backend.photos.partials import PartialLimits
 from backend.photos.stored import StoredPhoto
 from backend.realtime import manual_control
 from backend.realtime.bus import InProcessBus, ReliableSubscription, Topic
@@ -229,6 +230,9 @@ class Hub:
             hub.surveys.find,
             margin_m=settings.photo_survey_margin_m,
             quota_bytes=settings.max_photo_bytes_per_vehicle,
+            partials=PartialLimits(
+                settings.photo_uploads_per_vehicle, settings.photo_upload_expiry_s
+            ),
             sink=MosaicSink(hub.mosaic),
         )
         await manual_control.revoke_left_open(hub, engine)
@@ -259,6 +263,7 @@ class Hub:
                 tasks.create_task(self._flush_denials())
                 tasks.create_task(self.surveys.run())
                 tasks.create_task(self.mosaic.run())
+                tasks.create_task(self.photos.run())
                 tasks.create_task(manual_control.watch_expiry(self))
                 if self.fleet_link is not None:
                     tasks.create_task(self.fleet_link.run())

@@ -14,6 +14,7 @@ from sqlalchemy import Engine
 from sqlalchemy.exc import SQLAlchemyError
 
 from backend.audit import AuditAction, AuditEntry, AuditLog
+from backend.audit_denials import DenialCoalescer
 from backend.auth.accounts import PROVISIONING, Accounts
 from backend.auth.password_work import PasswordWork
 from backend.auth.principal_cache import PrincipalCache
@@ -29,6 +30,7 @@ from backend.mapping.tiles import TileLibrary
 from backend.mosaic.photo import StoredPhoto as MosaicPhoto
 from backend.mosaic.service import MosaicService
 from backend.photos.ingest import PhotoIngest
+from backend.photos.partials import PartialLimits
 from backend.photos.stored import StoredPhoto
 from backend.realtime import manual_control
 from backend.realtime.bus import InProcessBus, ReliableSubscription, Topic
@@ -112,6 +114,8 @@ class Hub:
     spool: RowSpool
     # The offline tile sets in the tiles folder.
     tiles: TileLibrary
+    # Refused requests, one audit row per principal, route and reason per interval.
+    denials: DenialCoalescer
     # Live agent connections by vehicle, so revoking a token can drop its connection.
     agent_sessions: dict[str, AgentConnection] = field(default_factory=dict)
     # Held while an agent's hello is judged against the one holding its vehicle id.
@@ -182,6 +186,7 @@ class Hub:
             audit=audit,
             spool=spool,
             tiles=TileLibrary(settings.tiles_folder),
+            denials=DenialCoalescer(settings.audit_denial_interval_s),
             login_limiter=RateLimiter(Limit(settings.login_attempts_per_minute, 60.0)),
             login_address_limiter=RateLimiter(
                 Limit(settings.login_attempts_per_address_per_minute, 60.0)
@@ -225,6 +230,9 @@ class Hub:
             hub.surveys.find,
             margin_m=settings.photo_survey_margin_m,
             quota_bytes=settings.max_photo_bytes_per_vehicle,
+            partials=PartialLimits(
+                settings.photo_uploads_per_vehicle, settings.photo_upload_expiry_s
+            ),
             sink=MosaicSink(hub.mosaic),
         )
         await manual_control.revoke_left_open(hub, engine)
@@ -252,8 +260,10 @@ class Hub:
                 tasks.create_task(self.formations.run())
                 tasks.create_task(self._apply_retention())
                 tasks.create_task(self._drain_spool())
+                tasks.create_task(self._flush_denials())
                 tasks.create_task(self.surveys.run())
                 tasks.create_task(self.mosaic.run())
+                tasks.create_task(self.photos.run())
                 tasks.create_task(manual_control.watch_expiry(self))
                 if self.fleet_link is not None:
                     tasks.create_task(self.fleet_link.run())
@@ -271,6 +281,8 @@ class Hub:
                     )
                     tasks.create_task(mirror.run())
         finally:
+            # The counts of refusals not yet written, before the store closes.
+            await self._record_all(self.denials.closed(everything=True))
             if self.fleet_link is not None:
                 await self.fleet_link.close()
             await asyncio.to_thread(self.mosaic.close)  # the tiles in memory to disk
@@ -432,6 +444,21 @@ class Hub:
 
     async def record(self, entry: AuditEntry) -> None:
         await asyncio.to_thread(self.audit.record, entry)
+
+    async def record_denial(self, entry: AuditEntry, route: str, reason: str) -> None:
+        """A refused request, coalesced with the same principal's same refusals
+        (backend/audit_denials.py): a flood leaves a bounded trace."""
+        await self._record_all(self.denials.admit(entry, route, reason))
+
+    async def _record_all(self, entries: list[AuditEntry]) -> None:
+        for entry in entries:
+            await self.record(entry)
+
+    async def _flush_denials(self) -> None:
+        """Write the counts of refusal windows that have closed."""
+        while True:
+            await asyncio.sleep(self.denials.interval_s)
+            await self._record_all(self.denials.closed())
 
     async def drop_user_feeds(self, token_id: int | None = None, user: str | None = None) -> None:
         """Close the live feeds of a revoked token, or of every session of a user."""

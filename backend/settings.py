@@ -119,6 +119,13 @@ class HubSettings(BaseSettings):
     principal_cache_outage_s: float = Field(
         default=3600.0, ge=0, description="a resolved token answers while the database is down"
     )
+    audit_denial_interval_s: float = Field(
+        default=60.0,
+        gt=0,
+        le=3600,
+        description="refused requests of one principal, route and reason within this are "
+        "one audit row and then one more with their count",
+    )
     spool_retry_s: float = Field(
         default=2.0, gt=0, description="retry storing spooled audit and command rows"
     )
@@ -198,7 +205,19 @@ class HubSettings(BaseSettings):
     max_photo_bytes_per_vehicle: int = Field(
         default=20 * 1024 * 1024 * 1024,
         ge=1024,
-        description="all of one vehicle's stored photos together; an upload beyond is a 413",
+        description="all of one vehicle's stored photos and the declared sizes of its "
+        "uploads in progress together; an upload beyond is a 413",
+    )
+    photo_uploads_per_vehicle: int = Field(
+        default=8,
+        ge=1,
+        le=64,
+        description="photo uploads one vehicle may have in progress at once; beyond, 429",
+    )
+    photo_upload_expiry_s: float = Field(
+        default=6 * 3600.0,
+        ge=60,
+        description="an unfinished photo upload untouched this long is removed",
     )
     survey_update_interval_s: float = Field(
         default=1.0, gt=0, le=60, description="a survey's progress goes out at most this often"

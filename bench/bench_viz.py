@@ -82,9 +82,13 @@ class Counter:
         self.counting = False
         self.frames = self.messages = self.bytes = 0
 
-    async def run(self, url: str) -> None:
+    async def run(self, url: str, headers: dict[str, str]) -> None:
         async with connect(
-            url, subprotocols=[Subprotocol(SUBPROTOCOL)], max_size=None, compression=None
+            url,
+            additional_headers=headers,
+            subprotocols=[Subprotocol(SUBPROTOCOL)],
+            max_size=None,
+            compression=None,
         ) as ws:
             async for frame in ws:
                 if not self.counting or not isinstance(frame, bytes):
@@ -209,7 +213,7 @@ def run_case(vehicles: int, rate_hz: float, seconds: float, lidar: bool) -> None
         async with asyncio.TaskGroup() as tasks:
             work = [
                 tasks.create_task(mirror.run()),
-                tasks.create_task(counter.run(viz.ws_url)),
+                tasks.create_task(counter.run(viz.ws_url, viz.relay_headers)),
                 tasks.create_task(_load(bus, scans, site, vehicles, rate_hz, lidar, stop)),
             ]
             await stop.wait()

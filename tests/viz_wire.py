@@ -7,8 +7,22 @@ from typing import Any
 import msgspec
 import viser
 import zstandard
+from websockets.sync.client import ClientConnection, connect
+from websockets.typing import Subprotocol
+
+from backend.viz3d.server import VizServer
 
 SUBPROTOCOL = f"viser-v{viser.__version__}"
+
+
+def scene_socket(viz: VizServer, headers: dict[str, str] | None = None) -> ClientConnection:
+    """A socket to viser's own port, as the hub's relay opens it: with this start's key
+    unless ``headers`` says otherwise."""
+    return connect(
+        viz.ws_url,
+        subprotocols=[Subprotocol(SUBPROTOCOL)],
+        additional_headers=viz.relay_headers if headers is None else headers,
+    )
 
 
 def scene_messages(frame: bytes) -> list[dict[str, Any]]:

@@ -69,8 +69,14 @@ def _authorizer(permission: Permission) -> Callable[..., Any]:
             if permission != Permission.READ:
                 # A refused attempt to act is itself worth a line in the audit log.
                 action = f"{request.method} {request.url.path}"
-                entry = audit_entry(request, principal, AuditAction.DENIED, action, "denied")
-                await get_hub(request).record(entry)
+                entry = audit_entry(
+                    request, principal, AuditAction.DENIED, action, "denied", reason=str(refusal)
+                )
+                # Grouped by the route's template, so a loop over vehicle ids or paths
+                # is one principal's one refusal, not a row per request.
+                route = getattr(request.scope.get("route"), "path", request.url.path)
+                key = f"{request.method} {route}"
+                await get_hub(request).record_denial(entry, key, str(refusal))
             raise refusal
 
     return check

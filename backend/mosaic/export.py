@@ -15,8 +15,10 @@ are for the wire). The caller holds the survey's lock, so no photo lands mid-exp
 
 from __future__ import annotations
 
+import os
 import sqlite3
 import tempfile
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -170,14 +172,32 @@ def write_pmtiles(store: TileStore, path: Path, name: str) -> Path:
     return path
 
 
+WRITERS: dict[str, Callable[[TileStore, Path, str], Path]] = {
+    "tif": lambda store, path, _name: write_cog(store, path),
+    "mbtiles": write_mbtiles,
+    "pmtiles": write_pmtiles,
+}
+
+
 def export(store: TileStore, kind: str, folder: Path, name: str) -> Path:
-    """The mosaic as a ``kind`` file (tif, mbtiles or pmtiles) in ``folder``."""
+    """The mosaic as a ``kind`` file (tif, mbtiles or pmtiles) in ``folder``, made once
+    per revision of the mosaic: asked again before another photo lands, the same file.
+
+    A file being served is never written over: each is built under a temporary name and
+    renamed into place, and one of an older revision is only unlinked (a response still
+    streaming it keeps reading it). Two viewers exporting at once each got a file the
+    other was rewriting: 500s and cut-off files."""
+    writer = WRITERS.get(kind)
+    if writer is None:
+        raise ExportError(f"no export as {kind!r}; one of {', '.join(FORMATS)}")
     folder.mkdir(parents=True, exist_ok=True)
-    path = folder / f"{name}.{kind}"
-    if kind == "tif":
-        return write_cog(store, path)
-    if kind == "mbtiles":
-        return write_mbtiles(store, path, name)
-    if kind == "pmtiles":
-        return write_pmtiles(store, path, name)
-    raise ExportError(f"no export as {kind!r}; one of {', '.join(FORMATS)}")
+    path = folder / f"{name}-r{store.revision}.{kind}"
+    if path.exists():
+        return path
+    with tempfile.TemporaryDirectory(dir=folder) as work:
+        made = writer(store, Path(work) / path.name, name)
+        os.replace(made, path)
+    for older in folder.glob(f"{name}-r*.{kind}"):
+        if older != path:
+            older.unlink(missing_ok=True)
+    return path

@@ -23,6 +23,7 @@ class Refusal(StrEnum):
     BAD_METADATA = "bad_metadata"
     TOO_LARGE = "too_large"
     QUOTA = "quota"
+    UPLOADS_IN_PROGRESS = "uploads_in_progress"  # a vehicle's uploads at once
     UNKNOWN_SURVEY = "unknown_survey"
     FAR_FROM_SURVEY = "far_from_survey"
     CORRUPT_IMAGE = "corrupt_image"

@@ -28,6 +28,7 @@ from pydantic import ValidationError
 from backend.errors import NotFound
 from backend.missions.survey.run import CLOCK_SLACK_S, SurveyRun
 from backend.photos.checks import Refusal, Refused, check_against_survey, check_image
+from backend.photos.partials import PartialLimits, in_progress, stale
 from backend.photos.stored import PhotoSink, StoredPhoto
 from backend.storage.photos import PhotoRecord, PhotoRepository
 from protocol.photos import MAX_PHOTO_BYTES, PhotoMeta
@@ -78,6 +79,7 @@ class PhotoIngest:
         *,
         margin_m: float,
         quota_bytes: int,
+        partials: PartialLimits | None = None,
         sink: PhotoSink | None = None,
     ) -> None:
         self.repository = repository
@@ -86,8 +88,12 @@ class PhotoIngest:
         self._find_survey = find_survey
         self.margin_m = margin_m
         self.quota_bytes = quota_bytes
+        self.partials = partials or PartialLimits()
         self.sink = sink
         self._locks: dict[tuple[str, str], asyncio.Lock] = {}
+        # Held while a vehicle's new upload is admitted: two first chunks at once must
+        # not both fit in the room that only one of them has.
+        self._admissions: dict[str, asyncio.Lock] = {}
         # Refusals with no row of their own (another vehicle's token: no row is written
         # for a caller who may not speak for that vehicle), by (vehicle, code).
         self.unrecorded: Counter[tuple[str, str]] = Counter()
@@ -180,20 +186,10 @@ class PhotoIngest:
         run: SurveyRun | None = None
         try:
             meta = self._meta(photo_id, meta_json)
-            stored = await asyncio.to_thread(self.repository.stored_bytes, vehicle_id)
-            if stored + meta.size_bytes > self.quota_bytes:
-                raise Refused(
-                    Refusal.QUOTA,
-                    f"{vehicle_id}'s stored photos would pass their quota of "
-                    f"{self.quota_bytes} bytes ({stored} stored)",
-                    status=413,
-                )
             run = await self.survey_of(vehicle_id, meta)
             if run is not None:
                 check_against_survey(meta.pose, meta.camera, run, self.margin_m)
         except Refused as refusal:
-            if refusal.code is Refusal.QUOTA:
-                raise
             await self._refuse(
                 vehicle_id,
                 photo_id,
@@ -206,10 +202,69 @@ class PhotoIngest:
         assert meta is not None
         if run is not None and meta.survey_id is None:
             meta = meta.model_copy(update={"survey_id": run.id})
-        await asyncio.to_thread(part.parent.mkdir, parents=True, exist_ok=True)
-        await asyncio.to_thread(part.write_bytes, b"")  # a new start discards what was there
-        await asyncio.to_thread(meta_path.write_text, meta.model_dump_json())
+        async with self._admissions.setdefault(vehicle_id, asyncio.Lock()):
+            await self._admit(vehicle_id, meta, part.parent)
+            await asyncio.to_thread(part.parent.mkdir, parents=True, exist_ok=True)
+            await asyncio.to_thread(part.write_bytes, b"")  # a new start discards the old
+            await asyncio.to_thread(meta_path.write_text, meta.model_dump_json())
         return meta
+
+    async def _admit(self, vehicle_id: str, meta: PhotoMeta, folder: Path) -> None:
+        """Room for one more upload of this vehicle: under its count of uploads at once,
+        and its stored photos, the sizes its other uploads in progress declared and this
+        one's within the quota. Neither refusal is recorded: both pass as uploads end
+        (or expire), or as an admin frees the quota."""
+        cutoff = time.time() - self.partials.expiry_s
+        others = []
+        for upload in await asyncio.to_thread(in_progress, folder):
+            if upload.photo_id == meta.photo_id:
+                continue
+            # Its own stale ones go now, not at the next sweep: they hold its room.
+            if upload.touched < cutoff and await self._expire(vehicle_id, upload.photo_id):
+                continue
+            others.append(upload)
+        limit = self.partials.max_per_vehicle
+        if len(others) >= limit:
+            raise Refused(
+                Refusal.UPLOADS_IN_PROGRESS,
+                f"{vehicle_id} has {len(others)} photo uploads in progress, the most a "
+                f"vehicle may have at once ({limit}); finish one first",
+                status=429,
+            )
+        stored = await asyncio.to_thread(self.repository.stored_bytes, vehicle_id)
+        reserved = sum(upload.reserved_bytes for upload in others)
+        if stored + reserved + meta.size_bytes > self.quota_bytes:
+            raise Refused(
+                Refusal.QUOTA,
+                f"{vehicle_id}'s photos would pass their quota of {self.quota_bytes} bytes "
+                f"({stored} stored, {reserved} reserved by {len(others)} uploads in progress)",
+                status=413,
+            )
+
+    async def run(self) -> None:
+        """Give up uploads left untouched for ``partials.expiry_s`` (an agent that never
+        came back for them); until then a vehicle's quota holds their room."""
+        expiry_s = self.partials.expiry_s
+        while True:
+            await self.expire_stale()
+            await asyncio.sleep(min(expiry_s / 4, 600.0))
+
+    async def expire_stale(self, now: float | None = None) -> int:
+        """Remove the uploads untouched for ``partials.expiry_s``; how many went."""
+        found = await asyncio.to_thread(stale, self.root / PARTIAL_DIR, self.partials.expiry_s, now)
+        return sum([await self._expire(vehicle, photo) for vehicle, photo in found])
+
+    async def _expire(self, vehicle_id: str, photo_id: str) -> bool:
+        """Remove one stale upload, unless a chunk of it is arriving right now."""
+        lock = self._lock(vehicle_id, photo_id)
+        if lock.locked():
+            return False
+        async with lock:
+            part, meta_path = self._partial(vehicle_id, photo_id)
+            await asyncio.to_thread(_discard, part, meta_path)
+        self._locks.pop((vehicle_id, photo_id), None)
+        log.info("photo upload %s from %s expired unfinished", photo_id, vehicle_id)
+        return True
 
     @staticmethod
     def _meta(photo_id: str, meta_json: str | None) -> PhotoMeta:

@@ -239,7 +239,7 @@ class ClientFeed(PeerConnection):
                 expiry.cancel()
         except* FrameTooLarge as group:
             log.warning("closing client %s: %s", self.peer, group.exceptions[0])
-            with contextlib.suppress(RuntimeError):
+            with contextlib.suppress(WebSocketDisconnect):
                 await self.close(CloseCode.MESSAGE_TOO_BIG, str(group.exceptions[0]))
         except* SlowClient:
             metrics.DROPPED.labels(reason="slow_client").inc()

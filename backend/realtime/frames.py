@@ -4,7 +4,9 @@ rule for bad frames (answer each with an error; close after too many)."""
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import logging
+from collections.abc import AsyncIterator
 
 from starlette.websockets import WebSocket, WebSocketDisconnect
 
@@ -33,6 +35,23 @@ def close_reason(reason: str) -> str:
     return reason.encode()[:room].decode(errors="ignore") + "…"
 
 
+# A connection that ended without a close frame (RFC 6455 7.1.5).
+ABNORMAL_CLOSURE = 1006
+
+
+@contextlib.asynccontextmanager
+async def _peer_gone_is_a_disconnect() -> AsyncIterator[None]:
+    """A send on a connection that has already closed ends the connection's tasks as a
+    disconnect does. uvicorn answers it with a RuntimeError ("Unexpected ASGI message
+    'websocket.send', after sending 'websocket.close'"): a dashboard that went away while
+    a push was due, which the feed's ``except* WebSocketDisconnect`` did not catch, so
+    every such client left a traceback in the log (233 from 200 non-reading dashboards)."""
+    try:
+        yield
+    except RuntimeError as error:
+        raise WebSocketDisconnect(ABNORMAL_CLOSURE, str(error)) from error
+
+
 class PeerConnection:
     surface: Surface  # where its frames are counted (backend/observability/metrics.py)
 
@@ -52,17 +71,17 @@ class PeerConnection:
 
     async def send_text(self, text: str) -> None:
         """A frame encoded already: an update encoded once goes to every feed as is."""
-        async with self._send_lock:
+        async with self._send_lock, _peer_gone_is_a_disconnect():
             await self.websocket.send_text(text)
         self._sent.inc()
 
     async def send_bytes(self, data: bytes) -> None:
-        async with self._send_lock:
+        async with self._send_lock, _peer_gone_is_a_disconnect():
             await self.websocket.send_bytes(data)
         self._sent.inc()
 
     async def close(self, code: int, reason: str) -> None:
-        async with self._send_lock:
+        async with self._send_lock, _peer_gone_is_a_disconnect():
             await self.websocket.close(code, close_reason(reason))
 
     async def receive(self) -> str | bytes | None:

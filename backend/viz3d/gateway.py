@@ -181,6 +181,7 @@ class VizRelay:
         try:
             upstream = await connect(
                 viz.ws_url,
+                additional_headers=viz.relay_headers,
                 subprotocols=[Subprotocol(p) for p in offered] or None,
                 max_size=MAX_SCENE_FRAME_BYTES,
                 compression=None,

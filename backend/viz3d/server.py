@@ -10,27 +10,36 @@ from __future__ import annotations
 import base64
 import contextlib
 import hashlib
+import hmac
 import io
 import logging
 import re
+import secrets
 from pathlib import Path
+from typing import Any
 
 import viser
 from viser import _messages as viser_messages
 
+from protocol.messages import CloseCode
+
 log = logging.getLogger(__name__)
 
 LOOPBACK = "127.0.0.1"
+# The header the hub's relay sends viser's socket, carrying VizServer.key.
+VIZ_KEY_HEADER = "X-Gcs-Viz-Key"
 _INLINE_SCRIPT = re.compile(rb"<script(?![^>]*\bsrc=)[^>]*>(.*?)</script>", re.DOTALL)
 
 
 class VizServer:
     """A started viser server; ``stop()`` ends it (its thread and its clients)."""
 
-    def __init__(self, server: viser.ViserServer) -> None:
+    def __init__(self, server: viser.ViserServer, key: str) -> None:
         self.viser = server
         self.port = server.get_port()
         self.page_policy = page_policy(client_page())
+        # What the hub's relay presents in VIZ_KEY_HEADER (require_relay_key).
+        self.key = key
 
     @classmethod
     def start(cls, label: str = "Fleet GCS") -> VizServer:
@@ -42,7 +51,9 @@ class VizServer:
             server = viser.ViserServer(host=LOOPBACK, port=0, label=label, verbose=False)
         log.debug("viser: %s", banner.getvalue())
         close_share_links(server)
-        started = cls(server)
+        key = secrets.token_urlsafe(32)
+        require_relay_key(server, key)
+        started = cls(server, key)
         log.info("3D view (viser %s) on %s:%d", viser.__version__, LOOPBACK, started.port)
         return started
 
@@ -54,9 +65,40 @@ class VizServer:
     def ws_url(self) -> str:
         return f"ws://{LOOPBACK}:{self.port}"
 
+    @property
+    def relay_headers(self) -> dict[str, str]:
+        """What a scene socket to ``ws_url`` must send: the hub's relay, and tests."""
+        return {VIZ_KEY_HEADER: self.key}
+
     def stop(self) -> None:
         with contextlib.redirect_stdout(io.StringIO()):  # viser prints "Server stopped"
             self.viser.stop()
+
+
+def require_relay_key(server: viser.ViserServer, key: str) -> None:
+    """viser's port is on loopback, but any local process (another user's, a browser
+    page's fetch to 127.0.0.1) could open its WebSocket and read the fleet's scene past
+    the hub's login. So a scene socket must present this start's random key, which only
+    the hub's relay knows; any other is closed before viser sends it anything (its
+    senders start after the connect callbacks). viser's HTTP side serves only its own
+    client's static page. (viser is pinned: this reaches into its connection object.)"""
+    sockets = server._websock_server
+    expected = key.encode()
+
+    async def admit(client: Any) -> None:
+        connection = sockets._live_connections.get(client.client_id)
+        if connection is None:
+            return
+        request = connection.request
+        presented = ((request and request.headers.get(VIZ_KEY_HEADER)) or "").encode()
+        if not hmac.compare_digest(presented, expected):
+            log.warning("3D view: a scene socket without the hub's key was refused")
+            await connection.close(
+                CloseCode.FORBIDDEN, "the 3D view is reached through the hub's /viz/"
+            )
+
+    # First, so that no other callback works for a socket that is being refused.
+    sockets._client_connect_cb.insert(0, admit)
 
 
 def close_share_links(server: viser.ViserServer) -> None:

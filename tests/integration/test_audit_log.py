@@ -6,10 +6,13 @@ from __future__ import annotations
 import re
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import httpx
 
 from backend.audit import AuditAction
+from tests.conftest import ADMIN_PASSWORD, hub_settings
+from tests.helpers import access_token, api_client, poll_until, running_hub
 from tests.integration.test_hub_bad_input import scripted_agent
 
 
@@ -91,3 +94,39 @@ def test_the_security_page_documents_every_action() -> None:
     page = (Path(__file__).parents[2] / "docs" / "security.md").read_text()
     documented = set(re.findall(r"^\| `([a-z_.]+)` \|", page, flags=re.MULTILINE))
     assert {action.value for action in AuditAction} <= documented
+
+
+def test_a_flood_of_refusals_leaves_one_row_and_then_its_count(tmp_path: Path) -> None:
+    """A viewer refused in a loop, across many vehicle ids, writes one row per route and
+    reason per interval, and one more with the count: a bounded trace naming who and what."""
+    settings = hub_settings(tmp_path, audit_denial_interval_s=1.0)
+    with (
+        running_hub(settings) as hub,
+        api_client(hub, access_token(hub, "admin", ADMIN_PASSWORD)) as admin,
+    ):
+        created = admin.post(
+            "/api/v1/users",
+            json={"username": "victor", "password": "correct horse battery", "role": "viewer"},
+        )
+        assert created.status_code == 201, created.text
+        with api_client(hub, access_token(hub, "victor", "correct horse battery")) as viewer:
+            for index in range(60):
+                refused = viewer.post(f"/api/v1/vehicles/v{index}/commands", json={"name": "arm"})
+                assert refused.status_code == 403
+
+        def denials() -> list[dict[str, Any]]:
+            entries = admin.get("/api/v1/audit", params={"actor": "victor"}).json()["entries"]
+            return [entry for entry in entries if entry["outcome"] == "denied"]
+
+        counted = poll_until(
+            lambda: [entry for entry in denials() if "repeated" in entry["detail"]],
+            10,
+            "the count of the refusals after the first",
+        )
+        rows = denials()
+        assert len(rows) == 2, rows
+        (count,) = counted
+        assert count["detail"]["repeated"] == 59
+        first = next(entry for entry in rows if "repeated" not in entry["detail"])
+        assert first["target"] == "POST /api/v1/vehicles/v0/commands"
+        assert "command" in first["detail"]["reason"]

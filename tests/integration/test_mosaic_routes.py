@@ -9,6 +9,7 @@ import asyncio
 import mmap
 import sqlite3
 from collections.abc import Iterator
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -169,3 +170,22 @@ def test_the_mosaic_becomes_an_offline_base_map(built: Built) -> None:
     assert tile.status_code == 200
     assert tile.content.startswith(PNG_SIGNATURE)
     assert api.post("/api/v1/mosaics/abc123/basemap").status_code == 404
+
+
+def test_exports_asked_at_once_are_one_whole_file_for_everyone(built: Built) -> None:
+    """Six viewers asking for the same export at once each get the whole file, the same
+    one: it is built once, under a temporary name renamed into place (each rewrote the
+    file the others were reading: 500s and cut-off files)."""
+    base_url = str(built.api.base_url)
+    headers = dict(built.api.headers)
+
+    def fetch(kind: str) -> tuple[int, bytes]:
+        with httpx.Client(base_url=base_url, headers=headers, timeout=60) as client:
+            got = client.get(f"/api/v1/mosaics/{SURVEY}/export.{kind}")
+            return got.status_code, got.content
+
+    for kind in ("pmtiles", "mbtiles", "tif"):
+        with ThreadPoolExecutor(6) as pool:
+            answers = list(pool.map(fetch, [kind] * 6))
+        assert [status for status, _ in answers] == [200] * 6, kind
+        assert len({content for _, content in answers}) == 1, f"{kind}: different files"

@@ -6,6 +6,7 @@ from __future__ import annotations
 import asyncio
 import io
 import json
+import os
 from collections.abc import Callable
 from pathlib import Path
 
@@ -167,3 +168,60 @@ def test_refusals_say_why_and_are_counted_per_vehicle(
     # the hub still serves: a good photo after all that
     meta_h, data_h = photo("h")
     assert put("h", data_h, meta=meta_h.model_dump_json()).status_code == 201
+
+
+def test_a_vehicles_uploads_at_once_are_capped_and_its_agent_waits_its_turn(
+    tmp_path: Path,
+) -> None:
+    """Over real HTTP: a first chunk beyond the vehicle's uploads at once is a 429 with
+    the code ``uploads_in_progress``, which the agent's uploader keeps the photo for and
+    tries again (a refusal for good would have dropped it); once the stale upload
+    expires, the photo goes through."""
+    from tests.conftest import ADMIN_PASSWORD, hub_settings
+    from tests.helpers import access_token, api_client, running_hub
+
+    settings = hub_settings(tmp_path, photo_uploads_per_vehicle=1)
+    with running_hub(settings) as hub:
+        with api_client(hub, access_token(hub, "admin", ADMIN_PASSWORD)) as admin:
+            token = admin.post("/api/v1/vehicles/ph_2/agent-tokens").json()["token"]
+        with scripted_agent(hub, "ph_2", token):
+            pass
+        auth = {"Authorization": f"Bearer {token}"}
+        left_meta, left = photo("ph_2-1-00001")
+        started = httpx.put(
+            f"{hub}/api/v1/vehicles/ph_2/photos/{left_meta.photo_id}",
+            params={"offset": 0},
+            content=left[:1000],
+            headers=auth | {"X-Photo-Meta": left_meta.model_dump_json()},
+        )
+        assert started.status_code == 200, started.text
+        meta, data = photo("ph_2-2-00002")
+        busy = httpx.put(
+            f"{hub}/api/v1/vehicles/ph_2/photos/{meta.photo_id}",
+            params={"offset": 0},
+            content=data[:1000],
+            headers=auth | {"X-Photo-Meta": meta.model_dump_json()},
+        )
+        assert busy.status_code == 429, busy.text
+        assert busy.json()["code"] == "uploads_in_progress"
+
+        queue = PhotoQueue(tmp_path / "onboard", budget_bytes=10**8)
+        queue.put(meta, data)
+        told: list[str] = []
+        uploader = PhotoUploader(queue, hub, "ph_2", token, lambda t, s: told.append(t))
+
+        async def wait_then_expire() -> None:
+            task = asyncio.create_task(uploader.run())
+            try:
+                await poll_until_async(
+                    lambda: uploader.stats.failures > 0, 30, "a try refused for now"
+                )
+                assert len(queue) == 1, told  # kept, not dropped for good
+                # The left upload goes stale (as if hours passed): the room frees.
+                for path in (tmp_path / "photos" / ".partial" / "ph_2").iterdir():
+                    os.utime(path, (0, 0))
+                await poll_until_async(lambda: not len(queue), 60, "the photo uploaded")
+            finally:
+                task.cancel()
+
+        asyncio.run(wait_then_expire())

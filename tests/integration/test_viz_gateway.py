@@ -12,7 +12,7 @@ from websockets.sync.client import connect
 from protocol.messages import CloseCode
 from tests.conftest import ADMIN_PASSWORD
 from tests.helpers import access_token
-from tests.viz_wire import SUBPROTOCOL, scene_messages
+from tests.viz_wire import SUBPROTOCOL, scene_messages, scene_socket
 
 PASSWORD = "correct horse battery staple"
 
@@ -121,5 +121,24 @@ def test_viser_listens_on_loopback_only() -> None:
         # The share button's public tunnel: the server does not act on its request.
         handlers = viz.viser._websock_server._incoming_handlers
         assert not any("ShareUrl" in kind.__name__ for kind in handlers)
+    finally:
+        viz.stop()
+
+
+def test_vipers_own_port_refuses_a_scene_socket_without_the_hubs_key() -> None:
+    """A local process that finds viser's loopback port gets no scene: the socket is
+    closed 4403 before anything is sent. The hub's relay, with this start's key, gets in."""
+    from backend.viz3d.server import VIZ_KEY_HEADER, VizServer
+
+    viz = VizServer.start()
+    try:
+        for headers in ({}, {VIZ_KEY_HEADER: "guessed"}):
+            with scene_socket(viz, headers) as ws, pytest.raises(ConnectionClosed) as closed:
+                ws.recv(timeout=10)  # closed before viser sends anything
+            assert closed.value.rcvd is not None
+            assert closed.value.rcvd.code == CloseCode.FORBIDDEN
+        with scene_socket(viz) as ws:
+            kinds = {message["type"] for message in scene_messages(ws.recv(timeout=10))}  # type: ignore[arg-type]
+            assert "ThemeConfigurationMessage" in kinds, kinds
     finally:
         viz.stop()

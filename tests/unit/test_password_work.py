@@ -41,3 +41,22 @@ def test_work_beyond_the_bound_is_refused_at_once_and_runs_on_its_own_threads() 
     asyncio.run(scenario())
     assert names
     assert all(name.startswith(THREAD_NAME_PREFIX) for name in names)
+
+
+def test_hashing_runs_below_the_event_loops_cpu_priority() -> None:
+    """The password threads are niced below the thread that runs the event loop, so a
+    login flood's hashes yield the cores to the live service (Linux: per-thread nice)."""
+    import os
+
+    def own_niceness() -> int:
+        return os.getpriority(os.PRIO_PROCESS, threading.get_native_id())
+
+    async def compare() -> tuple[int, int]:
+        work = PasswordWork(threads=1, max_pending=2)
+        try:
+            return own_niceness(), await work.run(own_niceness)
+        finally:
+            work.close()
+
+    loop_nice, hash_nice = asyncio.run(compare())
+    assert hash_nice >= min(19, loop_nice + 10)

@@ -7,6 +7,7 @@ from __future__ import annotations
 import asyncio
 import io
 import shutil
+import time
 import zipfile
 from collections.abc import Callable
 from pathlib import Path
@@ -23,6 +24,7 @@ from backend.mosaic.service import MosaicService
 from backend.photos.checks import Refusal, Refused
 from backend.photos.export import write_zip
 from backend.photos.ingest import OffsetMismatch, PhotoIngest
+from backend.photos.partials import PartialLimits
 from backend.photos.stored import PhotoSink, StoredPhoto
 from backend.storage.database import make_engine, migrate
 from backend.storage.photos import PhotoRepository
@@ -342,3 +344,43 @@ def test_a_photo_is_of_the_survey_flown_when_taken_or_else_when_it_arrives(
         asyncio.run(ingest.survey_of("other", PhotoMeta.model_validate_json(meta_for("y", data))))
         is None
     )
+
+
+def test_uploads_in_progress_count_in_the_quota_are_capped_and_expire(
+    tmp_path: Path, migrated: Path
+) -> None:
+    """One agent token wrote 2.5 GB of unfinished uploads in 20 s, outside its quota,
+    and nothing removed them: an upload now reserves its declared size from its first
+    chunk, a vehicle has at most so many at once, and an untouched one expires."""
+    shutil.copy(migrated, tmp_path / "hub.sqlite")
+    ingest = _ingest(tmp_path, survey(), None)
+    data = jpeg()
+    ingest.quota_bytes = 3 * len(data)
+    ingest.partials = PartialLimits(max_per_vehicle=2, expiry_s=3600.0)
+
+    async def scenario() -> None:
+        for photo in ("a", "b"):  # each sends its first chunk only, and stops
+            await ingest.put_chunk("d0", photo, 0, data[:100], meta_for(photo, data))
+        with pytest.raises(Refused) as busy:
+            await ingest.put_chunk("d0", "c", 0, data[:100], meta_for("c", data))
+        assert busy.value.code is Refusal.UPLOADS_IN_PROGRESS
+        assert busy.value.status == 429
+        assert "2 photo uploads in progress" in busy.value.reason
+        # The first chunk of one in progress again is not one more.
+        await ingest.put_chunk("d0", "a", 0, data[:100], meta_for("a", data))
+
+        ingest.partials = PartialLimits(max_per_vehicle=8, expiry_s=3600.0)
+        big = meta_for("c", data, size_bytes=len(data) + 1)
+        with pytest.raises(Refused) as over:
+            await ingest.put_chunk("d0", "c", 0, data[:100], big)
+        assert over.value.code is Refusal.QUOTA
+        assert over.value.status == 413
+        assert f"{2 * len(data)} reserved by 2 uploads in progress" in over.value.reason
+        assert ingest.repository.get("d0", "c") is None  # not recorded: it may pass later
+
+        # Untouched past the expiry, both are removed, and their room is free again.
+        assert await ingest.expire_stale(now=time.time() + 3601) == 2
+        assert list((tmp_path / "photos" / ".partial" / "d0").iterdir()) == []
+        assert await send(ingest, "c", data, meta_for("c", data)) == "stored"
+
+    asyncio.run(scenario())

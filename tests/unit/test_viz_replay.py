@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 from sqlalchemy import Engine
 from sqlalchemy.orm import Session
-from websockets.sync.client import ClientConnection, connect
+from websockets.sync.client import ClientConnection
 
 from backend.storage.database import make_engine, migrate
 from backend.storage.logbook import Logbook
@@ -21,7 +21,7 @@ from backend.viz3d.replay import NONE, FlightReplay, ReplayPanels, flight_label
 from backend.viz3d.server import VizServer
 from common.geodesy import GeoPoint, LocalFrame
 from tests.helpers import poll_until
-from tests.viz_wire import SUBPROTOCOL, viewer_camera
+from tests.viz_wire import scene_socket, viewer_camera
 
 HOME = (47.397742, 8.545594, 488.0)
 START = 1_800_000_000.0
@@ -68,7 +68,7 @@ def _viewer(
     viz: VizServer, panels: ReplayPanels, seen: int
 ) -> tuple[ClientConnection, FlightReplay]:
     """A viewer connected over viser's WebSocket, and the replay panel it was given."""
-    ws = connect(viz.ws_url, subprotocols=[SUBPROTOCOL])  # type: ignore[list-item]
+    ws = scene_socket(viz)
     ws.send(viewer_camera())
     # It reads what it is sent, as a browser does (an unread socket makes close() wait).
     threading.Thread(target=lambda: [None for _ in ws], daemon=True).start()

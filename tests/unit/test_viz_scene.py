@@ -8,7 +8,6 @@ from typing import Any
 import numpy as np
 import pytest
 import viser
-from websockets.sync.client import connect
 
 from backend.viz3d.colours import rgb, vehicle_colour
 from backend.viz3d.frame import SceneFrame, attitude_wxyz, reframe
@@ -16,7 +15,7 @@ from backend.viz3d.scene import SCANS, FleetScene
 from backend.viz3d.server import VizServer
 from common.geodesy import LocalFrame
 from protocol.messages import MissionItem, VehicleState, VehicleSummary
-from tests.viz_wire import SUBPROTOCOL, scene_messages
+from tests.viz_wire import scene_messages, scene_socket
 
 HOME = (47.397742, 8.545594, 488.0)
 
@@ -163,7 +162,7 @@ def test_a_browser_joining_mid_flight_gets_the_current_scene_at_once(
         lat = HOME[0] + second * 1e-4
         scene.apply([_summary("alpha", float(second), lat=lat, lon=HOME[1], alt_msl=500.0)])
     latest = _node(viz.viser, "/vehicles/alpha").position
-    with connect(f"{viz.ws_url}", subprotocols=[SUBPROTOCOL]) as ws:  # type: ignore[list-item]
+    with scene_socket(viz) as ws:
         messages = scene_messages(ws.recv(timeout=10))  # type: ignore[arg-type]
     names = {message.get("name") for message in messages}
     assert {"/vehicles/alpha", "/vehicles/alpha/body", "/trails/alpha"} <= names

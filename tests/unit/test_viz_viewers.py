@@ -9,7 +9,7 @@ import threading
 
 import numpy as np
 import pytest
-from websockets.sync.client import ClientConnection, connect
+from websockets.sync.client import ClientConnection
 
 from backend.errors import Conflict, NotFound
 from backend.viz3d.frame import SceneFrame
@@ -18,7 +18,7 @@ from backend.viz3d.server import VizServer
 from backend.viz3d.viewers import MAX_VIEW_DISTANCE_M, Viewers
 from tests.helpers import poll_until
 from tests.unit.test_viz_scene import HOME, _summary
-from tests.viz_wire import SUBPROTOCOL, scene_messages, viewer_camera
+from tests.viz_wire import scene_messages, scene_socket, viewer_camera
 
 POSTED = re.compile(r"window\.parent\.postMessage\((\{.*?\}), window\.location\.origin\)")
 
@@ -27,7 +27,7 @@ class Viewer:
     """A browser's viewer: it sends its camera, then reads everything it is sent."""
 
     def __init__(self, viz: VizServer) -> None:
-        self.ws: ClientConnection = connect(viz.ws_url, subprotocols=[SUBPROTOCOL])  # type: ignore[list-item]
+        self.ws: ClientConnection = scene_socket(viz)
         self.ws.send(viewer_camera())
         self.posted: list[dict[str, object]] = []
         threading.Thread(target=self._read, daemon=True).start()

@@ -43,7 +43,9 @@ REQUEST_TIMEOUT_S = 30.0
 UPLOAD_BACKOFF = Backoff(initial_s=1.0, max_s=15.0)
 IDLE_POLL_S = 1.0  # how often an idle uploader looks for new photos (put() also wakes it)
 MIN_CHUNK_BYTES = 16 * 1024
-QUOTA = "quota"  # the one refusal code that is not for good
+# The refusals that are not for good: the vehicle's share of the hub's disk (an admin
+# may free it), and its uploads at once (a stale one expires).
+RETRIED_REFUSALS = frozenset({"quota", "uploads_in_progress"})
 MAX_OFFSET_CORRECTIONS = 3  # 409s in a row for one photo before it is tried again later
 EVENT_TEXT_ROOM = 400
 
@@ -189,7 +191,7 @@ class PhotoUploader:
                     offset = _received(error.body)
                     continue
                 code = _code(error.body)
-                if code == QUOTA:  # the vehicle's share of the hub's disk: may be freed
+                if code in RETRIED_REFUSALS:
                     raise
                 if code is not None:  # the hub refused the photo itself, with its reason
                     raise Refused(_detail(error.body)) from None

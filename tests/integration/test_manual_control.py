@@ -140,7 +140,6 @@ def flying(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[LocalFlee
         with FleetWatcher(base, token) as watcher, api_client(base, token) as api:
             watcher.wait_until(ready(VEHICLE), 60, f"{VEHICLE} ready")
             watcher.wait_until(ready(PX4_VEHICLE), 60, f"{PX4_VEHICLE} ready")
-            set_param(api, VEHICLE, "SYSID_MYGCS", 254)  # the agent's id, see the README
             take_off(api, watcher, VEHICLE, 10.0, above=9.0)
             created = api.post(
                 "/api/v1/users",

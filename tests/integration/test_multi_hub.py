@@ -308,9 +308,8 @@ def _ready_for_a_pilot(hubs: TwoHubs) -> None:
         on_a.wait_until(
             lambda v: (v[VEHICLE].get("state") or {}).get("gps_fix", 0) >= 3, 60, "a GPS fix"
         )
-        # The agent opens browser control only where the autopilot takes its input.
-        answer = api_a.put(f"/api/v1/vehicles/{VEHICLE}/params/SYSID_MYGCS", json={"value": 254})
-        assert answer.status_code == 200, answer.text
+        # The agent opens browser control only where the autopilot takes its input: the
+        # launcher set SYSID_MYGCS to the agent's id, as `gcs demo` does.
         created = api_a.post(
             "/api/v1/users",
             json={"username": "pilot", "password": OPERATOR_PASSWORD, "role": "operator"},

@@ -240,7 +240,7 @@ def test_stick_input_refuses_the_number_naming_the_axis(
         # the agent's 254 (the README's setup), as `gcs demo` does.
         wpnav_speed = _wpnav_speed(api)
         pilot.send(json.dumps({"type": "control", "vehicle_id": VEHICLE, "action": "acquire"}))
-        granted = _said(pilot, "lease", "error")  # a refusal is an error: say which
+        granted = _said(pilot, "lease", "lease_refused")  # a refusal: say which
         assert granted["type"] == "lease", granted
         assert granted["holder"] == "op", granted
         seq = 0

@@ -418,8 +418,9 @@ def test_one_pilot_at_a_time_and_an_admin_revokes(flying: tuple[LocalFleet, str]
             # Every dashboard is told who flies it, the second operator among them.
             poll_until(lambda: admin.leases("pilot"), 5, "the admin's dashboard to see it")
             refused = admin.take()
-            assert refused["type"] == "error"
-            assert f"{VEHICLE} is flown by hand by pilot" in refused["message"]
+            assert refused["type"] == "lease_refused", refused
+            assert f"{VEHICLE} is flown by hand by pilot" in refused["reason"]
+            assert refused["fix"] is None  # no parameter lifts this one
 
             admin.control("revoke")
             ended = poll_until(lambda: operator.leases(None, "revoked by admin"), 5, "revoked")

@@ -417,7 +417,7 @@ export class PilotPanel {
       state = "refused";
     } else if (refusal) {
       status = `control refused: ${refusal.reason}`;
-      if (refusal.fix && !this.isAdmin) status += ` (an admin can set ${refusal.fix.param} to ${refusal.fix.value} from this panel)`;
+      if (refusal.fix && !this.isAdmin) status += " — an admin can make this change from this panel";
       state = "refused";
     } else if (this.stoppedWhy) {
       status = `stopped: ${this.stoppedWhy} — the vehicle holds`;

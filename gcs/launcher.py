@@ -34,6 +34,9 @@ PR_SET_PDEATHSIG = 1  # linux/prctl.h
 # ArduPilot's SITL home (CMAC, Canberra): a place every ArduPilot developer knows.
 DEFAULT_HOME = (-35.363262, 149.165237, 584.0)
 VEHICLE_SPACING_M = 15.0
+# The agents' MAVLink system id (the agent's own default, given explicitly so that the
+# vehicles' setup below names the same one).
+AGENT_SYSTEM_ID = 254
 
 
 def free_port() -> int:
@@ -64,6 +67,13 @@ class FleetPlan:
     # the same for all) and each agent uploads them; the value is the agents'
     # --camera-model (sensor mm, image px, focal mm), None for no cameras.
     camera_model: str | None = None
+    # Each ArduPilot vehicle is set up for this GCS as its owner would set up a real
+    # aircraft (README, "Flying by hand"): SYSID_MYGCS = the agent's id, so that the
+    # autopilot takes the agent's stick input and counts its heartbeats for the GCS
+    # failsafe. The simulator keeps ArduPilot's default, 255, which is what a vehicle not
+    # yet set up has; False leaves it there. (PX4 checks no sender id: its
+    # COM_RC_IN_MODE default already lets MAVLink stick input in.)
+    gcs_configured: bool = True
 
     @property
     def local_host(self) -> str:
@@ -118,6 +128,9 @@ class FleetPlan:
             args += ["--frame", self.frames[index]]
         if index < len(self.autopilots):
             args += ["--autopilot", self.autopilots[index]]
+        autopilot = self.autopilots[index] if index < len(self.autopilots) else "ardupilot"
+        if self.gcs_configured and autopilot == "ardupilot":
+            args += ["--param", f"SYSID_MYGCS={AGENT_SYSTEM_ID}"]
         return args
 
     def vehicle_home(self, index: int) -> tuple[float, float, float]:
@@ -263,6 +276,8 @@ class LocalFleet:
                 self.agent_hubs.get(index, self.plan.hub_ws),
                 "--vehicle-id",
                 self.vehicle_id(index),
+                "--source-system",
+                str(AGENT_SYSTEM_ID),
                 "--telemetry-rate-hz",
                 str(self.plan.telemetry_rate_hz),
                 # Each simulated vehicle keeps an onboard .tlog, as a real one would.

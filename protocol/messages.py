@@ -351,6 +351,15 @@ Command = Annotated[
 CommandStatus = Literal["accepted", "refused", "timeout", "failed"]
 
 
+class ParamFix(Message):
+    """The parameter change that would let a refused request through, as the refusal's
+    words say it: for a client to offer to whoever may make it (an admin, where the
+    parameter is safety-critical), never to apply by itself."""
+
+    param: ParamName
+    value: Float32
+
+
 class CommandOutcome(Message):
     """What the flight controller answered, in words an operator can act on."""
 
@@ -370,6 +379,11 @@ class CommandOutcome(Message):
         default=None,
         max_length=MAX_MISSION_ITEMS + 1,
         description="The vehicle's mission, for a mission download (home first).",
+    )
+    fix: ParamFix | None = Field(
+        default=None,
+        description="A refusal the vehicle's setup causes: the parameter change that "
+        "would lift it (e.g. SYSID_MYGCS for manual control)",
     )
 
 
@@ -859,8 +873,9 @@ class ControlRequest(Message):
     'command' permission; one pilot per vehicle. An acquire is granted (a `lease` naming
     the holder, to every client) only once the vehicle's agent has checked that the
     autopilot takes MANUAL_CONTROL from it and switched to its pilot mode; otherwise
-    an `error` gives the reason (e.g. SYSID_MYGCS or COM_RC_IN_MODE). Release and
-    revoke put the vehicle in its hold mode."""
+    a `lease_refused` gives the reason (e.g. SYSID_MYGCS or COM_RC_IN_MODE) and, where
+    a parameter is the reason, the change that would lift it. Release and revoke put
+    the vehicle in its hold mode."""
 
     type: Literal["control"] = "control"
     vehicle_id: VehicleId
@@ -917,6 +932,19 @@ class LeaseState(Message):
         description="a mission was in progress when the lease began and is paused: "
         "set this mode to resume it (ArduPilot AUTO, PX4 AUTO.MISSION)",
     )
+
+
+class LeaseRefusal(Message):
+    """A `control` request refused, to the client that sent it: the reason in words (the
+    autopilot's setup, another pilot, the vehicle offline, ...), and where the vehicle's
+    setup is the reason, the parameter change that would lift it. Every dashboard also
+    sees the refusal in its event feed (a hub event of kind "control")."""
+
+    type: Literal["lease_refused"] = "lease_refused"
+    vehicle_id: VehicleId
+    action: Literal["acquire", "release", "revoke"]
+    reason: MessageText
+    fix: ParamFix | None = None
 
 
 class ManualFrame(Message):
@@ -1136,6 +1164,7 @@ HubToClient: TypeAlias = Annotated[
     | Pong
     | ErrorReply
     | LeaseState
+    | LeaseRefusal
     | SurveyUpdate
     | ManualEcho
     | MapSubscriptions

@@ -305,8 +305,10 @@ def render() -> str:
         "[`pong`](#pong) with the same `nonce`.",
         "5. Flying by hand: [`control`](#controlrequest) asks for a vehicle's manual-control "
         "lease (or gives it back); every feed then gets [`lease`](#leasestate), naming who "
-        "holds it, and a refusal is an [`error`](#errorreply) (`forbidden`) with the reason. "
-        "The holder streams [`manual`](#manualinput) frames; one without the lease is "
+        "holds it. A refusal goes to the asking client as [`lease_refused`](#leaserefusal) "
+        "with the reason (and, where the vehicle's setup is the reason, the parameter change "
+        "that would lift it), and to every feed as a `manual` event. The holder streams "
+        "[`manual`](#manualinput) frames; one without the lease is "
         "answered with `forbidden` too.",
         "6. LIDAR scans: after [`subscribe_scans`](#subscribescans) for a vehicle (answered "
         "with [`scan_subscriptions`](#scansubscriptions)) and until "

@@ -9,6 +9,7 @@ import signal
 
 from simulator.config import SimulatorConfig, parse_args
 from simulator.server import SimulatorServer
+from simulator.vehicles import build_vehicle
 
 log = logging.getLogger("simulator")
 
@@ -24,6 +25,11 @@ def main(argv: list[str] | None = None) -> int:
         return code if isinstance(code, int) else (0 if code is None else 2)
     logging.basicConfig(level=config.log_level, format=LOG_FORMAT)
     log.setLevel(config.log_level)
+    try:
+        build_vehicle(config)  # a bad --param is said now, not after the server starts
+    except ValueError as error:
+        log.error("%s", error)
+        return 2
     try:
         asyncio.run(run(config))
     except OSError as error:

@@ -76,6 +76,9 @@ class SimulatorConfig:
     # Where the camera's synthetic ground is laid (its origin and elevation); None: home.
     # Simulators of one fleet share it, so that their photos show one world.
     ground: GeoPoint | None = None
+    # Parameters set at boot (MAVLink names and units), as SITL's --defaults file sets
+    # them: the vehicle as its owner configured it, e.g. SYSID_MYGCS for the GCS in use.
+    params: tuple[tuple[str, float], ...] = ()
 
     def __post_init__(self) -> None:
         if not 1 <= self.system_id <= 255:
@@ -114,6 +117,17 @@ def _home(text: str) -> GeoPoint:
         raise argparse.ArgumentTypeError(
             f"expected LAT,LON,ALT_MSL in degrees and metres, got {text!r}"
         ) from None
+
+
+def _param(text: str) -> tuple[str, float]:
+    name, sep, value_text = text.partition("=")
+    try:
+        if not sep or not name:
+            raise ValueError
+        value = float(value_text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected NAME=VALUE, got {text!r}") from None
+    return name.strip().upper(), value
 
 
 def _system_id(text: str) -> int:
@@ -246,6 +260,16 @@ def build_parser() -> argparse.ArgumentParser:
         help="the camera's synthetic ground: its origin and elevation (default: home); give "
         "a fleet's simulators the same one, so that their photos show the same ground",
     )
+    parser.add_argument(
+        "--param",
+        type=_param,
+        action="append",
+        default=[],
+        metavar="NAME=VALUE",
+        help="set a parameter at boot, in the autopilot's own names and units, as SITL's "
+        "--defaults does (repeatable), e.g. SYSID_MYGCS=254; a name the vehicle does not "
+        "have or a value out of its range is refused (default: the autopilot's defaults)",
+    )
     return parser
 
 
@@ -283,6 +307,7 @@ def parse_args(argv: Sequence[str] | None = None) -> SimulatorConfig:
             scene=args.scene,
             camera=args.camera,
             ground=args.ground,
+            params=tuple(args.param),
         )
     except ValueError as error:  # a combination the options cannot express
         parser.error(str(error))

@@ -61,6 +61,8 @@ ROVER_PARAM_DEFS: tuple[ParamDef, ...] = (
     ParamDef("BATT_LOW_VOLT", ParamType.REAL32, 0, 100, "batt_low_volt"),
     ParamDef("SIM_BATT_DRAIN", ParamType.REAL32, 0.0, 1000.0, "sim_batt_drain"),
     ParamDef("SIM_GPS_NOISE", ParamType.REAL32, 0.0, 100.0, "sim_gps_noise"),
+    # ArduRover takes MANUAL_CONTROL only from its GCS too (handle_manual_control)
+    ParamDef("SYSID_MYGCS", ParamType.INT16, 1, 255, "sysid_mygcs"),
     ParamDef("SYSID_THISMAV", ParamType.INT16, 1, 255),
     ParamDef("WP_RADIUS", ParamType.REAL32, 0, 1000, "wpnav_radius"),
     ParamDef("WP_SPEED", ParamType.REAL32, 0, 100, "wpnav_speed"),

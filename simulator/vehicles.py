@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from simulator.config import SimulatorConfig
 from simulator.copter import Copter
+from simulator.param_table import SetOutcome
 from simulator.personality import personality_for
 from simulator.rover import Rover
 from simulator.vehicle import Vehicle
@@ -14,12 +15,24 @@ REBOOT_SILENCE_S = 4.0
 
 
 def build_vehicle(config: SimulatorConfig) -> Vehicle:
-    """The vehicle ``config`` describes, at its home, seeded by its system id."""
+    """The vehicle ``config`` describes, at its home, seeded by its system id, with its
+    boot parameters set; raises ValueError for one it cannot take."""
+    vehicle: Vehicle
     if config.frame == "rover":
-        return Rover(config.home, system_id=config.system_id, seed=config.system_id)
-    return Copter(
-        config.home,
-        system_id=config.system_id,
-        seed=config.system_id,
-        personality=personality_for(config.autopilot),
-    )
+        vehicle = Rover(config.home, system_id=config.system_id, seed=config.system_id)
+    else:
+        vehicle = Copter(
+            config.home,
+            system_id=config.system_id,
+            seed=config.system_id,
+            personality=personality_for(config.autopilot),
+        )
+    for name, value in config.params:
+        # Through the same check as a GCS's PARAM_SET: a typo must not start a vehicle
+        # that quietly lacks the setting it was given.
+        outcome = vehicle.set_param(name, value)
+        if outcome is SetOutcome.UNKNOWN:
+            raise ValueError(f"--param {name}: this vehicle has no such parameter")
+        if outcome is not SetOutcome.STORED:
+            raise ValueError(f"--param {name}={value:g}: out of its range")
+    return vehicle

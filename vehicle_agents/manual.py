@@ -59,6 +59,7 @@ from protocol.messages import (
     LandCommand,
     ManualApplied,
     ManualFrame,
+    ParamFix,
     SetModeCommand,
 )
 from vehicle_agents.commands import CommandExecutor
@@ -76,6 +77,10 @@ PILOT_MODES = {"ardupilot": ("LOITER", "MANUAL"), "px4": ("POSCTL",)}
 MISSION_MODES = ("AUTO", "AUTO.MISSION")
 # PX4 COM_RC_IN_MODE values that let MAVLink manual input through.
 PX4_MAVLINK_INPUT = {1: "MAVLink only", 2: "RC and MAVLink", 3: "RC or MAVLink, keep first"}
+# What a refusal offers to set instead: each autopilot's own default, which lets our input
+# in and keeps the RC transmitter's (ArduPilot RC_OVERRIDE_TIME 3 s, PX4 COM_RC_IN_MODE 3).
+RC_OVERRIDE_TIME_DEFAULT = 3.0
+PX4_RC_IN_MODE_DEFAULT = 3
 BUTTON_SELECT = 1 << 0
 BUTTON_HOLD = 1 << 1
 SELECT_BELOW_M = 3.0  # the seed's select button acts only this close to the ground
@@ -136,7 +141,8 @@ class ManualPilot:
         """Open browser control: check the autopilot will take it, enter the pilot mode."""
         refusal = await self._refusal()
         if refusal is not None:
-            return CommandOutcome(status="refused", message=f"manual control: {refusal}")
+            why, fix = refusal
+            return CommandOutcome(status="refused", message=f"manual control: {why}", fix=fix)
         modes = self._link.modes
         candidates = PILOT_MODES.get(modes.autopilot, ()) if modes is not None else ()
         pilot_mode = next((m for m in candidates if modes and m in modes.settings), None)
@@ -192,17 +198,18 @@ class ManualPilot:
         self._emit("manual", "manual control from the browser released: holding", 5)
         return await self._executor.execute(HoldCommand())
 
-    async def _refusal(self) -> str | None:
-        """Why the autopilot would drop our MANUAL_CONTROL, or None if it will take it."""
+    async def _refusal(self) -> tuple[str, ParamFix | None] | None:
+        """Why the autopilot would drop our MANUAL_CONTROL, and the parameter change
+        that would lift it if one would; None if it will take it."""
         modes = self._link.modes
         if modes is None or self._link.target_system is None:
-            return "the flight controller is not identified yet"
+            return "the flight controller is not identified yet", None
         if modes.autopilot == "ardupilot":
             low = await self._param("MAV_GCS_SYSID")
             high = await self._param("MAV_GCS_SYSID_HI") if low is not None else None
             gcs_id = low or await self._param("SYSID_MYGCS")
             if gcs_id is None:
-                return "could not read MAV_GCS_SYSID or SYSID_MYGCS"
+                return "could not read MAV_GCS_SYSID or SYSID_MYGCS", None
             name, value = gcs_id
             # 4.7 accepts the range MAV_GCS_SYSID..MAV_GCS_SYSID_HI when HI is greater.
             top = high[1] if high is not None and high[1] > value else value
@@ -210,19 +217,24 @@ class ManualPilot:
                 accepted = f"{value:g}" if top == value else f"{value:g}..{top:g}"
                 return (
                     f"ArduPilot takes MANUAL_CONTROL only from its GCS ({name} = "
-                    f"{accepted}); set {name} to {self._source_system}, the agent's id"
+                    f"{accepted}); set {name} to {self._source_system}, the agent's id",
+                    ParamFix(param=name, value=self._source_system),
                 )
             override = await self._param("RC_OVERRIDE_TIME")
             if override is not None and override[1] == 0:
-                return "RC_OVERRIDE_TIME is 0, which turns RC overrides off"
+                return (
+                    "RC_OVERRIDE_TIME is 0, which turns RC overrides off",
+                    ParamFix(param="RC_OVERRIDE_TIME", value=RC_OVERRIDE_TIME_DEFAULT),
+                )
         elif modes.autopilot == "px4":
             rc_in = await self._param("COM_RC_IN_MODE")
             if rc_in is None:
-                return "could not read COM_RC_IN_MODE"
+                return "could not read COM_RC_IN_MODE", None
             if round(rc_in[1]) not in PX4_MAVLINK_INPUT:
                 return (
                     f"COM_RC_IN_MODE = {rc_in[1]:g} lets no MAVLink manual input in; "
-                    "set it to 1, 2 or 3"
+                    f"set it to 1, 2 or 3 ({PX4_RC_IN_MODE_DEFAULT}, PX4's default, keeps RC too)",
+                    ParamFix(param="COM_RC_IN_MODE", value=PX4_RC_IN_MODE_DEFAULT),
                 )
         return None
 

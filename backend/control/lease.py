@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING
 
 from backend.auth.policy import Permission, Principal, authorize
 from backend.errors import Forbidden
-from protocol.messages import LeaseState
+from protocol.messages import LeaseState, ParamFix
 
 if TYPE_CHECKING:
     from backend.control.claims import LeaseClaims
@@ -32,7 +32,12 @@ class LeaseLimits:
 
 
 class LeaseRefused(Forbidden):
-    """The lease (or a frame under it) was refused; the message says why."""
+    """The lease (or a frame under it) was refused; the message says why, and ``fix``
+    the parameter change that would lift a refusal the vehicle's setup causes."""
+
+    def __init__(self, message: str, fix: ParamFix | None = None) -> None:
+        super().__init__(message)
+        self.fix = fix
 
 
 @dataclass

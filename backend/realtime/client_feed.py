@@ -42,10 +42,12 @@ from protocol.messages import (
     ControlRequest,
     ErrorReply,
     FleetSnapshot,
+    LeaseRefusal,
     ManualFrame,
     ManualInput,
     MapLayer,
     MapSubscriptions,
+    ParamFix,
     Ping,
     PointMapUpdate,
     Pong,
@@ -61,6 +63,9 @@ from protocol.messages import (
 )
 
 log = logging.getLogger(__name__)
+
+REFUSAL_SEVERITY = 4  # MAV_SEVERITY_WARNING: a lease refused, in every event feed
+CONTROL_VERBS = {"acquire": "take", "release": "give back", "revoke": "revoke"}
 
 
 def origin_allowed(connection: HTTPConnection, allowed_origins: list[str]) -> bool:
@@ -403,6 +408,26 @@ class ClientFeed(PeerConnection):
             ),
         )
 
+    async def _refused(
+        self, message: ControlRequest, reason: str, fix: ParamFix | None, *, known: bool
+    ) -> None:
+        """Tell the pilot at once (the pilot view shows it, and offers ``fix`` to whoever
+        may make it), and every dashboard in its event feed: a lease that silently never
+        comes looks like a hub that hangs."""
+        vehicle_id = message.vehicle_id
+        # Said beside the vehicle's name, about manual control: those need no repeating.
+        text = reason.removeprefix(f"{vehicle_id}: ").removeprefix("manual control: ")
+        await self.send(
+            LeaseRefusal(vehicle_id=vehicle_id, action=message.action, reason=text, fix=fix)
+        )
+        if known:  # an unknown vehicle gets no event row of its own
+            await self.hub.store_event(
+                vehicle_id,
+                "manual",
+                f"{self.user} may not {CONTROL_VERBS[message.action]} manual control: {text}",
+                REFUSAL_SEVERITY,
+            )
+
     def _count_collapse(self) -> None:
         self.hub.leases.refused.too_fast += 1
 
@@ -425,7 +450,10 @@ class ClientFeed(PeerConnection):
         except (Forbidden, VehicleNotFound) as refusal:
             outcome = "refused"
             reason = refusal.message
-            await self.send(ErrorReply(code="forbidden", message=reason))
+            fix = refusal.fix if isinstance(refusal, LeaseRefused) else None
+            await self._refused(
+                message, reason, fix, known=not isinstance(refusal, VehicleNotFound)
+            )
         await self.hub.record(
             principal_audit_entry(
                 self.principal,

@@ -97,6 +97,10 @@ class FeedServices(Protocol):
 
     async def record(self, entry: AuditEntry) -> None: ...
 
+    async def store_event(
+        self, vehicle_id: str, kind: str, text: str, severity: int | None = None
+    ) -> None: ...
+
     async def map_now(self, layers: Collection[MapLayer]) -> list[PointMapUpdate | ObstaclesUpdate]:
         """The site map's layers as they are now, for a feed that has just subscribed."""
         ...

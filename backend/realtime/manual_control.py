@@ -110,7 +110,7 @@ async def acquire(hub: LeaseServices, vehicle_id: str, principal: Principal) -> 
         raise LeaseRefused(f"{vehicle_id}: {error.message}") from None
     if outcome.status != "accepted":
         await _cancel(hub, lease)
-        raise LeaseRefused(f"{vehicle_id}: {outcome.message}")
+        raise LeaseRefused(f"{vehicle_id}: {outcome.message}", outcome.fix)
     if outcome.values and outcome.values.get("mission_paused") and mode in MISSION_MODES:
         lease.resume_mode = mode
     leases.started(lease)

@@ -27,6 +27,13 @@ ARDUPILOT: tuple[CriticalGroup, ...] = (
     ),
     CriticalGroup("battery failsafe", ("BATT*_FS_*", "BATT*_LOW_*", "BATT*_CRT_*")),
     CriticalGroup("geofence", ("FENCE_*",)),
+    # Whose heartbeats feed the GCS failsafe and who may send stick input (RC overrides,
+    # MANUAL_CONTROL): SYSID_MYGCS, renamed MAV_GCS_SYSID in 4.7 with an upper bound
+    # MAV_GCS_SYSID_HI. A wrong value lets another system fly it, or starves the failsafe.
+    CriticalGroup(
+        "the GCS's system id: whose heartbeats feed the GCS failsafe and who may fly it by hand",
+        ("SYSID_MYGCS", "MAV_GCS_SYSID", "MAV_GCS_SYSID_HI"),
+    ),
 )
 
 PX4: tuple[CriticalGroup, ...] = (
@@ -46,6 +53,12 @@ PX4: tuple[CriticalGroup, ...] = (
     CriticalGroup("battery failsafe", ("BAT_LOW_THR", "BAT_CRIT_THR", "BAT_EMERGEN_THR")),
     CriticalGroup("geofence", ("GF_*",)),
     CriticalGroup("failure detector", ("FD_*",)),
+    # Which manual input PX4 takes: RC only (0), MAVLink only (1: the RC transmitter no
+    # longer flies it), either (2, 3), or none (4: no manual input, so no RC-loss failsafe).
+    CriticalGroup(
+        "manual input source: the RC transmitter, MAVLink, or none",
+        ("COM_RC_IN_MODE",),
+    ),
 )
 
 BY_AUTOPILOT: dict[str, tuple[CriticalGroup, ...]] = {"ardupilot": ARDUPILOT, "px4": PX4}

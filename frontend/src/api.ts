@@ -20,6 +20,7 @@ import type {
   FlightTelemetry,
   HubConfig,
   HubHealth,
+  ParamValues,
   SafetyViolation,
 } from "./types";
 
@@ -184,6 +185,16 @@ export function fetchHealth(): Promise<HubHealth> {
 
 export function sendCommand(vehicleId: string, command: Command): Promise<CommandResponse> {
   return postJson<CommandResponse>(`vehicles/${encodeURIComponent(vehicleId)}/commands`, command);
+}
+
+/** Writes one flight-controller parameter (PUT, audited by the hub; a safety-critical
+ * one is an admin's to change); resolves once the vehicle echoed the new value. */
+export function setParam(vehicleId: string, param: string, value: number): Promise<ParamValues> {
+  return request<ParamValues>(`vehicles/${encodeURIComponent(vehicleId)}/params/${encodeURIComponent(param)}`, {
+    method: "PUT",
+    headers: { "Content-Type": "application/json" },
+    body: JSON.stringify({ value }),
+  });
 }
 
 export function fetchAudit(query: AuditQuery): Promise<AuditPage> {

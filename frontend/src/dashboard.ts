@@ -177,6 +177,9 @@ export class Dashboard {
         case "lease":
           pilot.onLease(message);
           break;
+        case "lease_refused":
+          pilot.onRefusal(message);
+          break;
         case "manual_echo":
           pilot.onEcho(message);
           break;

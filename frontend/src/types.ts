@@ -31,6 +31,7 @@ export type CommandResponse = Schemas["CommandResponse"];
 
 /** `GET /api/v1/config`. */
 export type HubConfig = Schemas["ClientConfig"];
+export type ParamValues = Schemas["ParamValues"];
 
 /** `GET /api/v1/health`: the hub's store, as the dashboard's header reports it. */
 export type HubHealth = Schemas["Health"];

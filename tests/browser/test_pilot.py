@@ -9,7 +9,7 @@ from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
-from playwright.sync_api import Page, expect
+from playwright.sync_api import Dialog, Page, expect
 
 from gcs.launcher import LocalFleet
 from tests.browser.conftest import log_in
@@ -22,15 +22,14 @@ VEHICLE = "sim_1"
 
 @pytest.fixture(scope="module")
 def hovering(tmp_path_factory: pytest.TempPathFactory) -> Iterator[LocalFleet]:
-    """One copter hovering at 10 m, its SYSID_MYGCS set to the agent's id."""
+    """One copter hovering at 10 m, set up as `gcs demo` sets it up (its SYSID_MYGCS the
+    agent's id, by the launcher: nothing here makes manual control work)."""
     data_dir: Path = tmp_path_factory.mktemp("pilot")
     with running_fleet(data_dir, vehicles=1, speedup=1.0) as fleet:
         base = fleet.plan.hub_http
         token = access_token(base, "admin", fleet.plan.admin_password)
         with FleetWatcher(base, token) as watcher, api_client(base, token) as api:
             watcher.wait_until(ready(VEHICLE), 60, f"{VEHICLE} ready")
-            answer = api.put(f"/api/v1/vehicles/{VEHICLE}/params/SYSID_MYGCS", json={"value": 254})
-            assert answer.status_code == 200, answer.text
             assert send_command(api, VEHICLE, name="takeoff", altitude=10.0)["status"] == "accepted"
             watcher.wait_until(
                 lambda v: (v[VEHICLE]["state"]["alt_rel"] or 0) >= 9.0, 60, f"{VEHICLE} at 10 m"
@@ -175,3 +174,72 @@ def test_a_frozen_gamepad_stops_the_stream_and_the_vehicle_holds(
     expect(pilot.locator('[data-field="lease-holder"]')).to_contain_text(
         "manual input stopped for", timeout=5_000
     )
+
+
+def test_a_refusal_says_why_and_an_admin_fixes_it_from_the_panel(
+    page: Page, hovering: LocalFleet
+) -> None:
+    """A vehicle whose autopilot would ignore the agent's sticks (SYSID_MYGCS left at
+    ArduPilot's 255): the pilot view and the event feed say why within a second; an
+    admin sets the parameter the refusal names from the panel, confirms, and flies."""
+    base = hovering.plan.hub_http
+    token = access_token(base, "admin", hovering.plan.admin_password)
+    with api_client(base, token) as api:
+        unset = api.put(f"/api/v1/vehicles/{VEHICLE}/params/SYSID_MYGCS", json={"value": 255})
+        assert unset.status_code == 200, unset.text
+        try:
+            log_in(page, base, "admin", hovering.plan.admin_password)
+            page.locator(f'tr[data-vehicle-id="{VEHICLE}"]').click()
+            pilot = page.locator('[data-panel="pilot"]')
+            status = pilot.locator('[data-field="pilot-status"]')
+            expect(pilot.locator('[data-field="lease-holder"]')).to_contain_text(
+                "Nobody flies it by hand", timeout=30_000
+            )
+            pilot.locator('button[data-action="take-control"]').click()
+            expect(status).to_contain_text(
+                "control refused: ArduPilot takes MANUAL_CONTROL only from its GCS "
+                "(SYSID_MYGCS = 255); set SYSID_MYGCS to 254",
+                timeout=1_000,
+            )
+            expect(status).to_have_attribute("data-state", "refused")
+            live = page.locator('[data-feed="live"] .event-text')
+            expect(live.filter(has_text="admin may not take manual control")).to_contain_text(
+                "set SYSID_MYGCS to 254", timeout=1_000
+            )
+
+            fix = pilot.locator('button[data-action="apply-fix"]')
+            expect(fix).to_have_text("Set SYSID_MYGCS to 254")
+            # Dismissed: nothing is written, nothing is asked for.
+            page.once("dialog", lambda dialog: dialog.dismiss())
+            fix.click()
+            expect(status).to_contain_text("control refused")
+            questions: list[str] = []
+
+            def accept(dialog: Dialog) -> None:
+                questions.append(dialog.message)
+                dialog.accept()
+
+            page.once("dialog", accept)
+            fix.click()
+            expect(pilot.locator('[data-field="lease-holder"]')).to_have_text(
+                "Flown by hand by admin", timeout=30_000
+            )
+            expect(status).to_contain_text("flying with")
+            expect(fix).to_be_hidden()
+            assert "Set SYSID_MYGCS to 254 on sim_1?" in questions[0], questions
+            pilot.locator('button[data-action="release-control"]').click()
+            expect(pilot.locator('[data-field="lease-holder"]')).to_contain_text(
+                "released by admin", timeout=10_000
+            )
+            # The write went through the hub's audited parameter route, once, as admin.
+            entries = api.get("/api/v1/audit", params={"action": "command"}).json()["entries"]
+            [write] = [
+                entry
+                for entry in entries
+                if entry["detail"]["command"].get("param") == "SYSID_MYGCS"
+                and entry["detail"]["command"].get("value") == 254
+            ]
+            assert (write["actor"], write["outcome"]) == ("admin", "ok"), write
+            assert "GCS's system id" in write["detail"]["safety_critical"]
+        finally:
+            api.put(f"/api/v1/vehicles/{VEHICLE}/params/SYSID_MYGCS", json={"value": 254})

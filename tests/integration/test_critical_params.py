@@ -70,10 +70,14 @@ def answering_param_set(agent: ScriptedAgent, value: float) -> Iterator[dict[str
         ("ardupilot", "FENCE_ENABLE"),
         ("ardupilot", "ARMING_CHECK"),
         ("ardupilot", "FS_GCS_ENABLE"),
+        ("ardupilot", "SYSID_MYGCS"),
+        ("ardupilot", "MAV_GCS_SYSID"),
+        ("ardupilot", "MAV_GCS_SYSID_HI"),
         ("px4", "NAV_DLL_ACT"),
         ("px4", "COM_LOW_BAT_ACT"),
         ("px4", "GF_ACTION"),
         ("px4", "CBRK_SUPPLY_CHK"),
+        ("px4", "COM_RC_IN_MODE"),
     ],
 )
 def test_an_operator_cannot_change_a_safety_critical_parameter(

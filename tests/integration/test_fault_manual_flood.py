@@ -26,7 +26,7 @@ from tests.helpers import (
     take_off,
 )
 from tests.integration.test_fcu_link import FcuTap
-from tests.integration.test_manual_control import Pilot, set_param
+from tests.integration.test_manual_control import Pilot
 
 pytestmark = pytest.mark.integration
 
@@ -62,7 +62,6 @@ def test_a_flood_of_stick_frames_reaches_the_vehicle_at_100_hz_newest_first(
     token = access_token(base, "admin", fleet.plan.admin_password)
     with FleetWatcher(base, token) as watcher, api_client(base, token) as api:
         watcher.wait_until(ready(VEHICLE), 60, f"{VEHICLE} ready")
-        set_param(api, VEHICLE, "SYSID_MYGCS", 254)  # the agent's id, see the README
         take_off(api, watcher, VEHICLE, 10, above=8)
 
         pilot = Pilot(base, token)

@@ -100,6 +100,15 @@ class Pilot:
     def refusals(self, text: str) -> list[dict[str, Any]]:
         return [m for m in self.said("error") if text in m["message"]]
 
+    def events(self, text: str) -> list[dict[str, Any]]:
+        """The live feed's events so far whose text contains ``text``."""
+        return [
+            event
+            for message in self.said("events")
+            for event in message["events"]
+            if text in event["text"]
+        ]
+
     def take(self) -> dict[str, Any]:
         """Ask for the lease; the hub's answer (the new lease state, or the refusal)."""
         asked_at = len(self.received)
@@ -109,7 +118,7 @@ class Pilot:
             return [
                 m
                 for m in list(self.received)[asked_at:]
-                if m["type"] == "error" or (m["type"] == "lease" and m["holder"])
+                if m["type"] == "lease_refused" or (m["type"] == "lease" and m["holder"])
             ]
 
         return poll_until(answer, 30, "the lease or its refusal")[0]
@@ -140,7 +149,6 @@ def flying(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[LocalFlee
         with FleetWatcher(base, token) as watcher, api_client(base, token) as api:
             watcher.wait_until(ready(VEHICLE), 60, f"{VEHICLE} ready")
             watcher.wait_until(ready(PX4_VEHICLE), 60, f"{PX4_VEHICLE} ready")
-            set_param(api, VEHICLE, "SYSID_MYGCS", 254)  # the agent's id, see the README
             take_off(api, watcher, VEHICLE, 10.0, above=9.0)
             created = api.post(
                 "/api/v1/users",
@@ -172,15 +180,28 @@ def test_the_agent_refuses_a_lease_the_autopilot_would_ignore(
             assert bare.status_code == 422, bare.text
             assert "comes with the manual-control lease" in bare.text
             set_param(api, VEHICLE, "SYSID_MYGCS", 255)  # ArduPilot's default
+            asked_at = time.monotonic()
             refused = pilot.take()
-            assert refused["type"] == "error", refused
-            assert "SYSID_MYGCS = 255" in refused["message"]
-            assert "set SYSID_MYGCS to 254" in refused["message"]
+            # The pilot hears it at once, in words, with the change that lifts it...
+            assert time.monotonic() - asked_at < 1.0, "the refusal took over a second"
+            assert refused["type"] == "lease_refused", refused
+            assert refused["action"] == "acquire"
+            assert "SYSID_MYGCS = 255" in refused["reason"]
+            assert "set SYSID_MYGCS to 254" in refused["reason"]
+            assert refused["fix"] == {"param": "SYSID_MYGCS", "value": 254}
+            # ...and every dashboard's event feed says it too, within a second.
+            poll_until(lambda: pilot.events("admin may not take manual control"), 1, "the event")
+            [event] = pilot.events("admin may not take manual control")
+            assert event["vehicle_id"] == VEHICLE
+            assert event["kind"] == "manual"
+            assert event["severity"] == 4
+            assert "set SYSID_MYGCS to 254" in event["text"]
             set_param(api, VEHICLE, "SYSID_MYGCS", 254)
             set_param(api, VEHICLE, "RC_OVERRIDE_TIME", 0)
             pilot.received.clear()
             refused = pilot.take()
-            assert "RC_OVERRIDE_TIME is 0" in refused["message"], refused
+            assert "RC_OVERRIDE_TIME is 0" in refused["reason"], refused
+            assert refused["fix"] == {"param": "RC_OVERRIDE_TIME", "value": 3}
             set_param(api, VEHICLE, "RC_OVERRIDE_TIME", 3)
             # Nothing was granted, nothing changed on the vehicle: it still hovers in GUIDED.
             assert pilot.leases("admin") == []
@@ -190,7 +211,8 @@ def test_the_agent_refuses_a_lease_the_autopilot_would_ignore(
 
             set_param(api, PX4_VEHICLE, "COM_RC_IN_MODE", 0)
             refused = px4.take()
-            assert "COM_RC_IN_MODE = 0" in refused["message"], refused
+            assert "COM_RC_IN_MODE = 0" in refused["reason"], refused
+            assert refused["fix"] == {"param": "COM_RC_IN_MODE", "value": 3}
             set_param(api, PX4_VEHICLE, "COM_RC_IN_MODE", 3)
             px4.received.clear()
             granted = px4.take()
@@ -396,8 +418,9 @@ def test_one_pilot_at_a_time_and_an_admin_revokes(flying: tuple[LocalFleet, str]
             # Every dashboard is told who flies it, the second operator among them.
             poll_until(lambda: admin.leases("pilot"), 5, "the admin's dashboard to see it")
             refused = admin.take()
-            assert refused["type"] == "error"
-            assert f"{VEHICLE} is flown by hand by pilot" in refused["message"]
+            assert refused["type"] == "lease_refused", refused
+            assert f"{VEHICLE} is flown by hand by pilot" in refused["reason"]
+            assert refused["fix"] is None  # no parameter lifts this one
 
             admin.control("revoke")
             ended = poll_until(lambda: operator.leases(None, "revoked by admin"), 5, "revoked")

@@ -196,7 +196,8 @@ class Dashboard:
             return [
                 m
                 for m in list(self.received)[asked_at:]
-                if m["type"] == "error" or (m["type"] == "lease" and m["vehicle_id"] == vehicle)
+                if m["type"] == "lease_refused"
+                or (m["type"] == "lease" and m["vehicle_id"] == vehicle)
             ]
 
         return poll_until(answer, 30, f"the answer to {action}")[0]
@@ -308,9 +309,8 @@ def _ready_for_a_pilot(hubs: TwoHubs) -> None:
         on_a.wait_until(
             lambda v: (v[VEHICLE].get("state") or {}).get("gps_fix", 0) >= 3, 60, "a GPS fix"
         )
-        # The agent opens browser control only where the autopilot takes its input.
-        answer = api_a.put(f"/api/v1/vehicles/{VEHICLE}/params/SYSID_MYGCS", json={"value": 254})
-        assert answer.status_code == 200, answer.text
+        # The agent opens browser control only where the autopilot takes its input: the
+        # launcher set SYSID_MYGCS to the agent's id, as `gcs demo` does.
         created = api_a.post(
             "/api/v1/users",
             json={"username": "pilot", "password": OPERATOR_PASSWORD, "role": "operator"},
@@ -327,8 +327,8 @@ def test_a_lease_taken_on_hub_a_is_honoured_on_hub_b(hubs: TwoHubs) -> None:
         assert (granted["type"], granted["holder"]) == ("lease", "pilot"), granted
         # A second operator, on the other hub, is refused while the pilot flies...
         refused = admin_on_b.control("acquire")
-        assert refused["type"] == "error", refused
-        assert f"{VEHICLE} is flown by hand by pilot" in refused["message"]
+        assert refused["type"] == "lease_refused", refused
+        assert f"{VEHICLE} is flown by hand by pilot" in refused["reason"]
         # ...and the pilot's commands through hub B go through to the vehicle on hub A.
         pilot_b = access_token(hubs.b, "pilot", OPERATOR_PASSWORD)
         with api_client(hubs.b, pilot_b) as api_b:

@@ -5,11 +5,16 @@ from __future__ import annotations
 
 import math
 
+import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
-from simulator import Copter, CopterMode, MavResult
+from gcs.launcher import AGENT_SYSTEM_ID, FleetPlan
+from simulator import Copter, CopterMode, MavResult, main
 from simulator.commands.handler import MessageHandler
+from simulator.config import parse_args
 from simulator.telemetry import TelemetryBuilder
+from simulator.vehicle import Vehicle
+from simulator.vehicles import build_vehicle
 from tests.simulator.test_sim_copter import airborne, run_until
 
 
@@ -53,3 +58,50 @@ def test_only_the_configured_gcs_is_obeyed() -> None:
     copter.params = type(copter.params)(**{**vars(copter.params), "sysid_mygcs": 254})
     handler.handle(message, streams=None, now=0.0)  # type: ignore[arg-type]
     assert copter.overridden_sticks() == (1000, 0, 500, 0)
+
+
+def _stick_input_from_the_agent(copter: Vehicle) -> bool:
+    """Whether ``copter`` takes a MANUAL_CONTROL the agent (system 254) sends."""
+    handler = MessageHandler(copter, TelemetryBuilder(copter, boot_epoch_s=0.0), 1)
+    sender = mavlink2.MAVLink(None, srcSystem=254, srcComponent=191)
+    frame = sender.manual_control_encode(1, 1000, 0, 500, 0, 0).pack(sender)
+    handler.handle(mavlink2.MAVLink(None).parse_char(frame), streams=None, now=0.0)  # type: ignore[arg-type]
+    return copter.overridden_sticks() is not None
+
+
+@pytest.mark.parametrize("frame", ["quad", "rover"])
+def test_the_demo_sets_its_vehicles_up_for_the_agent(frame: str) -> None:
+    """`gcs demo` sets SYSID_MYGCS to the agent's id on the simulator's command line, as
+    an owner sets it on a real aircraft; a simulator started without it keeps
+    ArduPilot's 255 and ignores the agent, as the real one would."""
+    plan = FleetPlan(frames=(frame,))
+    assert plan.vehicle_sim_args(0)[-2:] == ["--param", f"SYSID_MYGCS={AGENT_SYSTEM_ID}"]
+    demo = build_vehicle(parse_args(plan.vehicle_sim_args(0)))
+    assert demo.param_table.get("SYSID_MYGCS") == 254
+    assert _stick_input_from_the_agent(demo)
+    unset = build_vehicle(parse_args(["--frame", frame]))
+    assert unset.param_table.get("SYSID_MYGCS") == 255
+    assert not _stick_input_from_the_agent(unset)
+    # PX4 checks no sender id: nothing to set, and no SYSID_MYGCS to set it in.
+    assert "--param" not in FleetPlan(autopilots=("px4",)).vehicle_sim_args(0)
+    assert "--param" not in FleetPlan(gcs_configured=False).vehicle_sim_args(0)
+
+
+@pytest.mark.parametrize(
+    ("argv", "error"),
+    [
+        (["--param", "NO_SUCH_PARAM=1"], "no such parameter"),
+        (["--param", "SYSID_MYGCS=300"], "out of its range"),
+        (["--autopilot", "px4", "--param", "SYSID_MYGCS=254"], "no such parameter"),
+    ],
+)
+def test_a_boot_parameter_the_vehicle_cannot_take_stops_the_simulator(
+    argv: list[str], error: str, caplog: pytest.LogCaptureFixture
+) -> None:
+    assert main(argv) == 2
+    assert error in caplog.text
+
+
+def test_a_boot_parameter_must_be_name_equals_value(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["--param", "SYSID_MYGCS"]) == 2
+    assert "expected NAME=VALUE" in capsys.readouterr().err

@@ -1753,6 +1753,8 @@ export interface components {
              * @description The vehicle's mission, for a mission download (home first).
              */
             items?: components["schemas"]["MissionItem"][] | null;
+            /** @description A refusal the vehicle's setup causes: the parameter change that would lift it (e.g. SYSID_MYGCS for manual control) */
+            fix?: components["schemas"]["ParamFix"] | null;
         };
         /** CommandPage */
         CommandPage: {
@@ -2663,6 +2665,21 @@ export interface components {
             up: number;
             /** @default heading */
             frame: components["schemas"]["OffsetFrame"];
+        };
+        /**
+         * ParamFix
+         * @description The parameter change that would let a refused request through, as the refusal's
+         *     words say it: for a client to offer to whoever may make it (an admin, where the
+         *     parameter is safety-critical), never to apply by itself.
+         */
+        ParamFix: {
+            /**
+             * Param
+             * @description e.g. WPNAV_SPEED
+             */
+            param: string;
+            /** Value */
+            value: number;
         };
         /** ParamGetCommand */
         ParamGetCommand: {

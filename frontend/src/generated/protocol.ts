@@ -44,6 +44,7 @@ export type HubToClient =
   | Pong
   | ErrorReply
   | LeaseState
+  | LeaseRefusal
   | SurveyUpdate
   | ManualEcho
   | MapSubscriptions
@@ -286,6 +287,10 @@ export interface CommandOutcome {
    * The vehicle's mission, for a mission download (home first).
    */
   items: MissionItem[] | null;
+  /**
+   * A refusal the vehicle's setup causes: the parameter change that would lift it (e.g. SYSID_MYGCS for manual control)
+   */
+  fix: ParamFix | null;
 }
 /**
  * One mission item, as MISSION_ITEM_INT carries it (positions in degrees).
@@ -310,6 +315,18 @@ export interface MissionItem {
    */
   alt: number;
   autocontinue: boolean;
+}
+/**
+ * The parameter change that would let a refused request through, as the refusal's
+ * words say it: for a client to offer to whoever may make it (an admin, where the
+ * parameter is safety-critical), never to apply by itself.
+ */
+export interface ParamFix {
+  /**
+   * e.g. WPNAV_SPEED
+   */
+  param: string;
+  value: number;
 }
 /**
  * The agent's answer to a resend it cannot serve: those frames were dropped when its
@@ -708,8 +725,9 @@ export interface LeaderScan {
  * 'command' permission; one pilot per vehicle. An acquire is granted (a `lease` naming
  * the holder, to every client) only once the vehicle's agent has checked that the
  * autopilot takes MANUAL_CONTROL from it and switched to its pilot mode; otherwise
- * an `error` gives the reason (e.g. SYSID_MYGCS or COM_RC_IN_MODE). Release and
- * revoke put the vehicle in its hold mode.
+ * a `lease_refused` gives the reason (e.g. SYSID_MYGCS or COM_RC_IN_MODE) and, where
+ * a parameter is the reason, the change that would lift it. Release and revoke put
+ * the vehicle in its hold mode.
  */
 export interface ControlRequest {
   type: "control";
@@ -905,6 +923,19 @@ export interface LeaseState {
    * a mission was in progress when the lease began and is paused: set this mode to resume it (ArduPilot AUTO, PX4 AUTO.MISSION)
    */
   resume_mode: string | null;
+}
+/**
+ * A `control` request refused, to the client that sent it: the reason in words (the
+ * autopilot's setup, another pilot, the vehicle offline, ...), and where the vehicle's
+ * setup is the reason, the parameter change that would lift it. Every dashboard also
+ * sees the refusal in its event feed (a hub event of kind "control").
+ */
+export interface LeaseRefusal {
+  type: "lease_refused";
+  vehicle_id: string;
+  action: "acquire" | "release" | "revoke";
+  reason: string;
+  fix: ParamFix | null;
 }
 /**
  * An area survey's progress, at most one a second per survey (newest wins): lanes

@@ -3,12 +3,16 @@
 // this browser holds the lease and can vouch for its input: the page hidden, the window
 // blurred, the gamepad gone or frozen, or the hub's link down stop them, and the panel
 // says why; the agent's 0.5 s deadman then holds the vehicle and the lease ends. It
-// never starts again by itself: the pilot takes control again.
+// never starts again by itself: the pilot takes control again. A refused request says
+// why in words; where the vehicle's setup is why (ArduPilot's SYSID_MYGCS, PX4's
+// COM_RC_IN_MODE), an admin may make the change the refusal names, after confirming it,
+// through the hub's audited parameter write, and control is asked for again.
 import type { Runner } from "../panels/selectedVehicle";
 import { AttitudeIndicator } from "../panels/attitude";
+import { ApiError, setParam } from "../api";
 import { actionButton, element, field, setText } from "../dom";
 import { MISSING, formatAltitude, formatBattery, formatSpeed } from "../format";
-import type { LeaseState, ManualEcho, ManualInput } from "../generated/protocol";
+import type { LeaseRefusal, LeaseState, ManualEcho, ManualInput } from "../generated/protocol";
 import type { ClientToHub, CurrentUser, VehicleSummary } from "../types";
 import {
   BUTTON_HOLD,
@@ -32,6 +36,12 @@ export type Send = (message: ClientToHub) => boolean;
 export class PilotPanel {
   readonly element: HTMLElement;
   private readonly leases = new Map<string, LeaseState>();
+  /** The last refusal of each vehicle, until control is asked for again or granted. */
+  private readonly refusals = new Map<string, LeaseRefusal>();
+  /** Control asked for, no answer yet. */
+  private asking = false;
+  /** What the fix button is doing or why it failed; shown in the status line. */
+  private fixNote: string | null = null;
   private vehicleId: string | null = null;
   private vehicle: VehicleSummary | null = null;
   private source: InputSource | null = null;
@@ -58,6 +68,8 @@ export class PilotPanel {
   private readonly release: HTMLButtonElement;
   private readonly revoke: HTMLButtonElement;
   private readonly resume: HTMLButtonElement;
+  private readonly fix: HTMLButtonElement;
+  private readonly isAdmin: boolean;
   private readonly sourcePicker: HTMLSelectElement;
   private readonly sticks: HTMLElement;
   private readonly stickZones: [HTMLElement, HTMLElement];
@@ -91,6 +103,9 @@ export class PilotPanel {
     this.release = actionButton("release-control", "Release", () => this.control("release"));
     this.revoke = actionButton("revoke-control", "Revoke", () => this.control("revoke"));
     this.resume = actionButton("resume-mission", "Resume mission", () => void this.resumeMission());
+    this.isAdmin = user.permissions.includes("admin");
+    this.fix = actionButton("apply-fix", "", () => void this.applyFix());
+    this.fix.hidden = true;
     this.sourcePicker = field("select", "pilot-source", { className: "pilot-source" });
     for (const [name, label] of [["touch", "On-screen sticks"], ["keyboard", "Keyboard (WASD, arrows)"], ["gamepad", "Gamepad"]]) {
       this.sourcePicker.append(element("option", { value: name, textContent: label }));
@@ -124,8 +139,9 @@ export class PilotPanel {
       canFly
         ? element("div", { className: "pilot-controls" }, this.sourcePicker, this.take, this.release, this.resume)
         : element("span"),
-      user.permissions.includes("admin") ? this.revoke : element("span"),
+      this.isAdmin ? this.revoke : element("span"),
       this.ui.status,
+      canFly && this.isAdmin ? element("div", { className: "pilot-fix" }, this.fix) : element("span"),
       this.sticks,
       this.buttons,
       element(
@@ -165,6 +181,8 @@ export class PilotPanel {
     if (this.sending) this.stop("another vehicle selected"); // its lease ends by the deadman
     this.vehicleId = vehicleId;
     this.vehicle = null;
+    this.asking = false; // an answer about the other vehicle is no answer about this one
+    this.fixNote = null;
     this.settings = loadSettings(this.user.username, vehicleId);
     this.renderSettings();
     this.render();
@@ -179,11 +197,24 @@ export class PilotPanel {
     this.leases.set(state.vehicle_id, state);
     if (state.vehicle_id !== this.vehicleId) return;
     const mine = state.holder === this.user.username;
+    if (mine) {
+      this.asking = false;
+      this.refusals.delete(state.vehicle_id);
+    }
     if (mine && !this.sending && this.stoppedWhy === null) this.startSending();
     if (!mine && this.sending) this.stop(`lease ended: ${state.reason || "no reason given"}`);
     if (!mine && state.holder === null && this.stoppedWhy !== null) {
       this.stoppedWhy = `${this.stoppedWhy}; lease ended: ${state.reason}`;
     }
+    this.render();
+  }
+
+  /** The hub refused a `control` request of ours, with the reason (and maybe a fix). */
+  onRefusal(refusal: LeaseRefusal): void {
+    this.refusals.set(refusal.vehicle_id, refusal);
+    if (refusal.vehicle_id !== this.vehicleId) return;
+    this.asking = false;
+    this.fixNote = null;
     this.render();
   }
 
@@ -212,8 +243,41 @@ export class PilotPanel {
   private requestLease(): void {
     if (!this.vehicleId) return;
     this.stoppedWhy = null;
+    this.fixNote = null;
+    this.refusals.delete(this.vehicleId);
+    this.asking = true;
     this.control("acquire");
-    setText(this.ui.status, "asking for control…");
+    this.render();
+  }
+
+  /** An admin makes the change a refusal names (confirmed first; the hub audits the
+   * write and checks the vehicle echoes it), then asks for control again. */
+  private async applyFix(): Promise<void> {
+    const vehicleId = this.vehicleId;
+    const refusal = vehicleId ? this.refusals.get(vehicleId) : undefined;
+    const fix = refusal?.fix;
+    if (!vehicleId || !refusal || !fix) return;
+    const question =
+      `Set ${fix.param} to ${fix.value} on ${vehicleId}?\n\n` +
+      `Manual control was refused: ${refusal.reason}.\n\n` +
+      "This changes a parameter on the flight controller (recorded in the audit log); control is then asked for again.";
+    if (!window.confirm(question)) return;
+    this.fix.disabled = true;
+    this.fixNote = `setting ${fix.param} to ${fix.value}…`;
+    this.render();
+    try {
+      await setParam(vehicleId, fix.param, fix.value);
+    } catch (error) {
+      const why = error instanceof ApiError ? error.message : String(error);
+      if (this.vehicleId === vehicleId) {
+        this.fixNote = `could not set ${fix.param}: ${why}`;
+        this.render();
+      }
+      return;
+    } finally {
+      this.fix.disabled = false;
+    }
+    if (this.vehicleId === vehicleId) this.requestLease();
   }
 
   private control(action: "acquire" | "release" | "revoke"): void {
@@ -339,11 +403,31 @@ export class PilotPanel {
     this.revoke.disabled = !holder || mine;
     this.resume.hidden = !(lease?.resume_mode && !holder);
     if (lease?.resume_mode) this.resume.textContent = `Resume mission (${lease.resume_mode})`;
+    const refusal = this.vehicleId ? this.refusals.get(this.vehicleId) : undefined;
     let status = "not flying";
-    if (this.sending) status = `flying with ${this.sourcePicker.selectedOptions[0]?.textContent ?? this.sourceName}, 25 Hz`;
-    else if (this.stoppedWhy) status = `stopped: ${this.stoppedWhy} — the vehicle holds`;
+    let state = "idle";
+    if (this.sending) {
+      status = `flying with ${this.sourcePicker.selectedOptions[0]?.textContent ?? this.sourceName}, 25 Hz`;
+      state = "sending";
+    } else if (this.asking) {
+      status = "asking for control…";
+      state = "asking";
+    } else if (this.fixNote) {
+      status = this.fixNote;
+      state = "refused";
+    } else if (refusal) {
+      status = `control refused: ${refusal.reason}`;
+      if (refusal.fix && !this.isAdmin) status += " — an admin can make this change from this panel";
+      state = "refused";
+    } else if (this.stoppedWhy) {
+      status = `stopped: ${this.stoppedWhy} — the vehicle holds`;
+      state = "stopped";
+    }
     setText(this.ui.status, status);
-    this.ui.status.dataset.state = this.sending ? "sending" : this.stoppedWhy ? "stopped" : "idle";
+    this.ui.status.dataset.state = state;
+    const fix = !this.sending && !this.asking ? refusal?.fix : undefined;
+    this.fix.hidden = !fix || !this.isAdmin;
+    if (fix) setText(this.fix, `Set ${fix.param} to ${fix.value}`);
     this.renderVehicle();
   }
 

@@ -13,6 +13,8 @@ got back (status codes). Loopback only; every loop is bounded in time and count.
 - logins: 32 clients with wrong passwords, each from its own loopback address
   (127.0.0.2-33), so the per-address limit alone does not stop them;
 - dashboards: 200 live feeds that never read (4 KB receive buffers), then vanish;
+- photos: one agent token, 16 clients each starting photo uploads of a declared 40 MB and
+  sending 256 KiB chunks, never finishing one;
 Prints figures; asserts nothing.
 """
 
@@ -38,10 +40,23 @@ from typing import Any
 import httpx
 
 from gcs.launcher import FleetPlan, LocalFleet, free_port
+from protocol.photos import MAX_PHOTO_BYTES, CameraIntrinsics, PhotoMeta, PhotoPose
 from tests.helpers import access_token
+from tests.integration.test_hub_bad_input import scripted_agent
 
 PROBE_EVERY_S = 0.05
 MAX_REQUESTS = 200_000  # a bound on any flood's loop, whatever its duration
+
+CAMERA = CameraIntrinsics(
+    sensor_width_mm=6.3,
+    sensor_height_mm=4.7,
+    image_width_px=4000,
+    image_height_px=3000,
+    focal_length_mm=4.5,
+)
+POSE = PhotoPose(
+    lat=-35.36, lon=149.16, alt_msl=620, alt_rel=36, roll=0, pitch=0, yaw=0, time=1.7e9
+)
 
 PROBE = """
 import sys, time, httpx
@@ -122,10 +137,60 @@ async def idle(flood: Flood) -> None:
     await asyncio.sleep(flood.seconds)
 
 
+async def photos(flood: Flood) -> None:
+    vehicle = "flood_1"
+    created = httpx.post(
+        f"{flood.base}/api/v1/vehicles/{vehicle}/agent-tokens",
+        headers={"Authorization": f"Bearer {flood.admin_token}"},
+    )
+    created.raise_for_status()
+    token = created.json()["token"]
+    with scripted_agent(flood.base, vehicle, token):
+        pass  # the hub now knows the vehicle
+    chunk = os.urandom(256 * 1024)
+    end = flood.until()
+    started = 0
+
+    async def client(http: httpx.AsyncClient) -> None:
+        nonlocal started
+        while time.monotonic() < end and started < MAX_REQUESTS:
+            started += 1
+            photo_id = f"{vehicle}-1-{started:05d}"
+            meta = PhotoMeta(
+                photo_id=photo_id,
+                index=started,
+                size_bytes=MAX_PHOTO_BYTES,
+                pose=POSE,
+                camera=CAMERA,
+            )
+            offset = 0
+            headers = {"X-Photo-Meta": meta.model_dump_json()}
+            while time.monotonic() < end:
+                got = await http.put(
+                    f"/api/v1/vehicles/{vehicle}/photos/{photo_id}",
+                    params={"offset": offset},
+                    content=chunk,
+                    headers=headers if offset == 0 else {},
+                )
+                flood.statuses[str(got.status_code)] += 1
+                if got.status_code != 200:
+                    break  # refused: start another photo
+                offset += len(chunk)
+
+    auth = {"Authorization": f"Bearer {token}"}
+    async with (
+        httpx.AsyncClient(base_url=flood.base, headers=auth, timeout=30) as http,
+        asyncio.TaskGroup() as tasks,
+    ):
+        for _ in range(16):
+            tasks.create_task(client(http))
+
+
 FLOODS: dict[str, Callable[[Flood], Coroutine[Any, Any, None]]] = {
     "idle": idle,
     "logins": logins,
     "dashboards": dashboards,
+    "photos": photos,
 }
 
 

@@ -9,6 +9,7 @@ returns one mission per drone, each with the same mission check an upload runs.
 from __future__ import annotations
 
 import asyncio
+import json
 from typing import Annotated, Any, Literal
 
 from fastapi import Path, Query, Request
@@ -306,7 +307,7 @@ class SurveyFile(BaseModel):
 )
 async def import_survey_area(
     body: SurveyFile, principal: CurrentPrincipal, hub: HubDep
-) -> dict[str, Any]:
+) -> Response:
     """A survey request's fields from another tool's file (no side effects): at least the
     `area`, and from a QGC Survey also its camera and settings. Add `vehicle_ids` (and
     anything to change) and send it to `POST /surveys` or the preview. It needs the
@@ -323,9 +324,14 @@ async def import_survey_area(
             "(survey_import_max_bytes)"
         )
     try:
-        # Parsing a large file takes a while: in a thread, never on the event loop.
-        return await asyncio.to_thread(
-            read_area_file, body.format, body.content, settings.survey_import_max_vertices
+        # Parsing a large file, and writing its thousands of points out, take a while: in
+        # a thread, never on the event loop.
+        content = await asyncio.get_running_loop().run_in_executor(
+            hub.surveys.import_executor,
+            _area_file_json,
+            body.format,
+            body.content,
+            settings.survey_import_max_vertices,
         )
     except TooManyVertices as error:
         raise InvalidRequest(
@@ -335,6 +341,16 @@ async def import_survey_area(
         ) from error
     except InteropError as error:
         raise InvalidRequest("content", str(error)) from error
+    except ValueError as error:  # a NaN (QGC writes null for one) cannot be JSON
+        raise InvalidRequest(
+            "content", f"the file holds a value that is not a number: {error}"
+        ) from error
+    return Response(content, media_type="application/json")
+
+
+def _area_file_json(kind: str, text: str, max_vertices: int) -> bytes:
+    fields = read_area_file(kind, text, max_vertices)
+    return json.dumps(fields, allow_nan=False, separators=(",", ":")).encode()
 
 
 @router.get(

@@ -26,6 +26,7 @@ import logging
 import time
 import uuid
 from collections.abc import Awaitable, Callable, Sequence
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import asdict
 
 from sqlalchemy.exc import SQLAlchemyError
@@ -104,8 +105,11 @@ class SurveyService:
         self.ownership: SurveyOwnership | None = None
         # Plans off the event loop, bounded (planning.py); the preview plans here too.
         self.planner = SurveyPlanner(settings)
-        # Area files (KML, GeoJSON, .plan) each user may import (api/surveys.py).
+        # Area files (KML, GeoJSON, .plan) each user may import (api/surveys.py), parsed
+        # one at a time: XML parsing holds the GIL, so parallel parses would starve the
+        # event loop, where one at a time leaves it a turn between files.
         self.import_limiter = RateLimiter(Limit(settings.survey_imports_per_minute, 60.0))
+        self.import_executor = ThreadPoolExecutor(1, thread_name_prefix="survey-import")
 
     # -- life cycle ----------------------------------------------------------------------
 
@@ -164,6 +168,7 @@ class SurveyService:
             self._bus.unsubscribe(Topic.VEHICLE_EVENT, events)
             self._bus.unsubscribe(Topic.VEHICLE_STATE, states)
             self.planner.close()
+            self.import_executor.shutdown(wait=False, cancel_futures=True)
             with contextlib.suppress(SQLAlchemyError):
                 await self._save_dirty()
 

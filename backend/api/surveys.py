@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import asyncio
 import json
+from functools import partial
 from typing import Annotated, Any, Literal
 
 from fastapi import Path, Query, Request
@@ -101,7 +102,7 @@ async def preview_survey(body: SurveyRequest, request: Request, hub: HubDep) -> 
                 "vehicle_ids", f"vehicle {vid} has no position or home yet; wait for its GPS"
             )
         fleet.append(Fleet(vid, here, base))
-    survey = await hub.surveys.planner.plan(body, fleet, client_gone(request))
+    survey = await hub.surveys.planner.plan(body, fleet, partial(client_gone, request))
     parts = []
     for planned in survey.parts:
         p = planned.part
@@ -190,7 +191,7 @@ async def create_survey(
     on the ground and in no other survey (422 naming it otherwise); a part that breaks a
     rail refuses the whole survey (422, each violation naming its vehicle); a plan over
     the hub's limits is refused as the preview's is."""
-    return _detail(hub, await hub.surveys.create(body, principal, client_gone(request)))
+    return _detail(hub, await hub.surveys.create(body, principal, partial(client_gone, request)))
 
 
 async def client_gone(request: Request) -> None:

@@ -22,7 +22,7 @@ import asyncio
 import contextlib
 import logging
 import time
-from collections.abc import Awaitable
+from collections.abc import Awaitable, Callable
 from concurrent.futures import ThreadPoolExecutor
 from typing import Any
 
@@ -38,12 +38,19 @@ from backend.settings import HubSettings
 
 log = logging.getLogger(__name__)
 
+# Made only once the plan starts: a request refused before it never watches its client.
+ClientWatch = Callable[[], Awaitable[object]]
+
 
 class ClientGone(GcsError):
     """The client closed the connection before its plan was ready (nginx's 499: nobody
     reads it)."""
 
     status_code = 499
+
+
+class HubStopping(GcsError):
+    status_code = 503
 
 
 class SurveyPlanner:
@@ -60,10 +67,10 @@ class SurveyPlanner:
         self._budgets: set[PlanBudget] = set()  # plans running or waiting for a worker
 
     async def plan(
-        self, request: SurveyRequest, fleet: list[Fleet], gone: Awaitable[object] | None = None
+        self, request: SurveyRequest, fleet: list[Fleet], gone: ClientWatch | None = None
     ) -> Survey:
-        """The survey's plan, its errors as 422s naming the field or limit; `gone`
-        finishes when the client has gone away, which stops the plan."""
+        """The survey's plan, its errors as 422s naming the field or limit; what `gone`
+        returns finishes when the client has gone away, which stops the plan."""
         if len(self._budgets) >= self._settings.survey_plan_max_pending:
             raise RateLimited(
                 f"{len(self._budgets)} survey plans are running or waiting, the most "
@@ -85,7 +92,7 @@ class SurveyPlanner:
 
         work.add_done_callback(finished)
         waiting: set[asyncio.Future[Any]] = {work}
-        watcher = None if gone is None else asyncio.ensure_future(gone)
+        watcher = None if gone is None else asyncio.ensure_future(gone())
         if watcher is not None:
             waiting.add(watcher)
         try:
@@ -105,8 +112,10 @@ class SurveyPlanner:
             raise _timed_out(timeout)
         try:
             return work.result()
-        except PlanStopped:
-            raise _timed_out(timeout) from None
+        except PlanStopped as stopped:
+            if stopped.reason == "timeout":
+                raise _timed_out(timeout) from None
+            raise HubStopping("the hub is stopping; the plan was stopped") from None
         except CameraError as exc:
             raise InvalidRequest("camera", str(exc)) from exc
         except PlanError as exc:

@@ -25,7 +25,7 @@ import contextlib
 import logging
 import time
 import uuid
-from collections.abc import Awaitable, Callable, Sequence
+from collections.abc import Callable, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import asdict
 
@@ -59,7 +59,7 @@ from backend.safety.snapshot import home, position
 from backend.settings import HubSettings
 from backend.storage.surveys import StoredSurvey, SurveyRepository
 from backend.surveys.ownership import SurveyOwnership
-from backend.surveys.planning import SurveyPlanner
+from backend.surveys.planning import ClientWatch, SurveyPlanner
 from protocol.messages import (
     Command,
     LiveEvent,
@@ -178,7 +178,7 @@ class SurveyService:
         self,
         request: SurveyRequest,
         principal: Principal,
-        gone: Awaitable[object] | None = None,
+        gone: ClientWatch | None = None,
     ) -> SurveyRun:
         """Plan, split and check; nothing is uploaded. Every drone must be known,
         connected, ready, on the ground and in no other survey, and every part's mission

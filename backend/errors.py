@@ -54,6 +54,12 @@ class QuotaExceeded(GcsError):
     status_code = 413
 
 
+class RequestTooLarge(GcsError):
+    """A request whose content is over a size limit (413); the message names it."""
+
+    status_code = 413
+
+
 class VehicleOffline(GcsError):
     status_code = 409
 

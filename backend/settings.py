@@ -14,7 +14,7 @@ from backend.auth.password_policy import password_problem
 from backend.storage.retention import AUDIT_MIN_RETENTION_DAYS, RetentionPolicy
 from common.addresses import is_loopback
 from common.geodesy import LocalFrame
-from protocol.messages import MAX_FRAME_BYTES
+from protocol.messages import MAX_FRAME_BYTES, MAX_MISSION_ITEMS
 
 REPO_ROOT = Path(__file__).resolve().parent.parent
 OSM_TILE_URL = "https://tile.openstreetmap.org/{z}/{x}/{y}.png"
@@ -221,6 +221,39 @@ class HubSettings(BaseSettings):
     )
     survey_update_interval_s: float = Field(
         default=1.0, gt=0, le=60, description="a survey's progress goes out at most this often"
+    )
+    # Survey planning's bounds (docs/security.md "Survey planning"): a plan is estimated
+    # from the area and the camera before it is planned, and refused (422) past these.
+    survey_max_lanes: int = Field(
+        default=1000, ge=1, description="lanes a survey plan may have (estimated first)"
+    )
+    survey_max_photos: int = Field(
+        default=20_000, ge=1, description="photos a survey plan may take (estimated first)"
+    )
+    survey_max_mission_items: int = Field(
+        default=700,
+        ge=10,
+        le=MAX_MISSION_ITEMS,
+        description="items one drone's survey mission may have: the smallest mission store "
+        "in the fleet (ArduPilot on a 16 KB FRAM board holds about 700; an SD card far more)",
+    )
+    survey_plan_timeout_s: float = Field(
+        default=30.0, gt=0, le=600, description="a survey plan still running after this stops"
+    )
+    survey_plan_workers: int = Field(
+        default=2, ge=1, le=32, description="survey plans computed at once (worker threads)"
+    )
+    survey_plan_max_pending: int = Field(
+        default=8, ge=1, description="survey plans running or waiting for a worker; beyond, 429"
+    )
+    survey_import_max_bytes: int = Field(
+        default=1_000_000, ge=1024, description="a survey area file's size (KML, GeoJSON, .plan)"
+    )
+    survey_import_max_vertices: int = Field(
+        default=10_000, ge=4, description="the vertices of a survey area file's polygon"
+    )
+    survey_imports_per_minute: int = Field(
+        default=10, ge=1, description="survey area files one user may import per minute"
     )
     scan_obstacle_interval_s: float = Field(
         default=5.0,

@@ -99,6 +99,8 @@ ROUTE_STATUSES: list[tuple[str, frozenset[str] | None, frozenset[int]]] = [
     # A member that is unknown (404) or not connected (409); a formation that stopped (409).
     (r"/formations", frozenset({"POST"}), frozenset({404, 409})),
     (r"/formations/\{formation_id\}(/stop)?", frozenset({"PATCH", "POST"}), frozenset({409})),
+    # Survey plans: too many at once (429); area files: too many per user (429).
+    (r"/surveys(/preview|/import)?", frozenset({"POST"}), frozenset({429})),
 ]
 
 

@@ -9,9 +9,11 @@ returns one mission per drone, each with the same mission check an upload runs.
 from __future__ import annotations
 
 import asyncio
+import json
+from functools import partial
 from typing import Annotated, Any, Literal
 
-from fastapi import Path, Query
+from fastapi import Path, Query, Request
 from fastapi.responses import JSONResponse, PlainTextResponse, Response
 from pydantic import BaseModel, Field
 from starlette.convertors import Convertor, register_url_convertor
@@ -19,24 +21,22 @@ from starlette.convertors import Convertor, register_url_convertor
 from backend.api.deps import HubDep
 from backend.api.security import CurrentPrincipal, SecuredRouter, requires
 from backend.auth.policy import Permission
-from backend.errors import InvalidRequest
+from backend.errors import InvalidRequest, RequestTooLarge
 from backend.fleet.safety_gate import snapshot_of
 from backend.missions.schemas import Mission, MissionCheckResponse
-from backend.missions.survey.camera import PRESETS, CameraError
+from backend.missions.survey.camera import PRESETS
 from backend.missions.survey.interop import (
     MAX_FILE_BYTES,
     InteropError,
+    TooManyVertices,
     mission_path_geojson,
-    read_geojson_polygon,
-    read_kml_polygon,
-    read_qgc_survey,
+    read_area_file,
     to_qgc_plan,
     to_wpl,
 )
-from backend.missions.survey.planner import PlanError
 from backend.missions.survey.run import HandoverOffer, SurveyRun
 from backend.missions.survey.schemas import SurveyPart, SurveyPreview, SurveyRequest
-from backend.missions.survey.service import Fleet, percent, plan_survey
+from backend.missions.survey.service import Fleet, percent
 from backend.safety.snapshot import home, position
 from protocol.messages import SurveyUpdate, VehicleId
 
@@ -79,10 +79,12 @@ async def camera_presets() -> list[CameraPreset]:
 @router.post(
     "/surveys/preview", response_model=SurveyPreview, openapi_extra=requires(Permission.COMMAND)
 )
-async def preview_survey(body: SurveyRequest, hub: HubDep) -> SurveyPreview:
+async def preview_survey(body: SurveyRequest, request: Request, hub: HubDep) -> SurveyPreview:
     """Plan a survey and split it across the chosen drones, without uploading anything:
     the camera's numbers, the coverage of the photos' footprints, and per drone its
-    mission, its times and the safety rails' check of that mission."""
+    mission, its times and the safety rails' check of that mission. A plan over the hub's
+    limits (lanes, photos, a drone's mission items, planning time) is refused with a 422
+    naming the estimate and the limit's setting (docs/security.md)."""
     if len(set(body.vehicle_ids)) != len(body.vehicle_ids):
         raise InvalidRequest("vehicle_ids", "each vehicle may be chosen once")
     known = {record.id for record in hub.registry.all()}
@@ -100,12 +102,7 @@ async def preview_survey(body: SurveyRequest, hub: HubDep) -> SurveyPreview:
                 "vehicle_ids", f"vehicle {vid} has no position or home yet; wait for its GPS"
             )
         fleet.append(Fleet(vid, here, base))
-    try:
-        survey = await asyncio.to_thread(plan_survey, body, fleet)
-    except CameraError as exc:
-        raise InvalidRequest("camera", str(exc)) from exc
-    except PlanError as exc:
-        raise InvalidRequest("area", str(exc)) from exc
+    survey = await hub.surveys.planner.plan(body, fleet, partial(client_gone, request))
     parts = []
     for planned in survey.parts:
         p = planned.part
@@ -187,13 +184,21 @@ def _detail(hub: HubDep, run: SurveyRun) -> SurveyDetail:
     openapi_extra=requires(Permission.COMMAND),
 )
 async def create_survey(
-    body: SurveyRequest, principal: CurrentPrincipal, hub: HubDep
+    body: SurveyRequest, request: Request, principal: CurrentPrincipal, hub: HubDep
 ) -> SurveyDetail:
     """Plan and split a survey and check every drone's mission against the safety rails;
     nothing is uploaded until it is started. Each chosen drone must be connected, ready,
     on the ground and in no other survey (422 naming it otherwise); a part that breaks a
-    rail refuses the whole survey (422, each violation naming its vehicle)."""
-    return _detail(hub, await hub.surveys.create(body, principal))
+    rail refuses the whole survey (422, each violation naming its vehicle); a plan over
+    the hub's limits is refused as the preview's is."""
+    return _detail(hub, await hub.surveys.create(body, principal, partial(client_gone, request)))
+
+
+async def client_gone(request: Request) -> None:
+    """Finishes when the client closes the connection (the body has been read, so the
+    next message from the server is the disconnect)."""
+    while (await request.receive())["type"] != "http.disconnect":
+        pass
 
 
 @router.get("/surveys", response_model=SurveyList, openapi_extra=requires(Permission.READ))
@@ -299,20 +304,54 @@ class SurveyFile(BaseModel):
 @router.post(
     "/surveys/import",
     response_model=dict[str, Any],
-    openapi_extra=requires(Permission.READ),
+    openapi_extra=requires(Permission.COMMAND),
 )
-async def import_survey_area(body: SurveyFile) -> dict[str, Any]:
+async def import_survey_area(
+    body: SurveyFile, principal: CurrentPrincipal, hub: HubDep
+) -> Response:
     """A survey request's fields from another tool's file (no side effects): at least the
     `area`, and from a QGC Survey also its camera and settings. Add `vehicle_ids` (and
-    anything to change) and send it to `POST /surveys` or the preview."""
+    anything to change) and send it to `POST /surveys` or the preview. It needs the
+    planning permission (as the preview does), and is bounded: the file's size (413) and
+    its polygon's vertices (422), and `survey_imports_per_minute` per user (429)."""
+    settings = hub.settings
+    limiter = hub.surveys.import_limiter
+    limiter.check(principal.name, "survey imports")
+    limiter.hit(principal.name)  # every attempt counts: a bad file is parsed too
+    size = len(body.content.encode())
+    if size > settings.survey_import_max_bytes:
+        raise RequestTooLarge(
+            f"the file is {size:,} bytes; the limit is {settings.survey_import_max_bytes:,} "
+            "(survey_import_max_bytes)"
+        )
     try:
-        if body.format == "plan":
-            return read_qgc_survey(body.content)
-        if body.format == "kml":
-            return {"area": read_kml_polygon(body.content)}
-        return {"area": read_geojson_polygon(body.content)}
+        # Parsing a large file, and writing its thousands of points out, take a while: in
+        # a thread, never on the event loop.
+        content = await asyncio.get_running_loop().run_in_executor(
+            hub.surveys.import_executor,
+            _area_file_json,
+            body.format,
+            body.content,
+            settings.survey_import_max_vertices,
+        )
+    except TooManyVertices as error:
+        raise InvalidRequest(
+            "content",
+            f"the file's area has {error.count:,} vertices; the limit is {error.limit:,} "
+            "(survey_import_max_vertices)",
+        ) from error
     except InteropError as error:
         raise InvalidRequest("content", str(error)) from error
+    except ValueError as error:  # a NaN (QGC writes null for one) cannot be JSON
+        raise InvalidRequest(
+            "content", f"the file holds a value that is not a number: {error}"
+        ) from error
+    return Response(content, media_type="application/json")
+
+
+def _area_file_json(kind: str, text: str, max_vertices: int) -> bytes:
+    fields = read_area_file(kind, text, max_vertices)
+    return json.dumps(fields, allow_nan=False, separators=(",", ":")).encode()
 
 
 @router.get(

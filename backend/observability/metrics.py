@@ -66,6 +66,16 @@ COMMAND_SECONDS = Histogram(
     buckets=(0.01, 0.025, 0.05, 0.1, 0.25, 0.5, 1.0, 2.5, 5.0, 10.0, 30.0, 60.0),
 )
 
+SURVEY_PLANS_RUNNING = Gauge(
+    "gcs_survey_plans_running", "Survey plans being computed in worker threads now."
+)
+SURVEY_PLANS_STOPPED = Counter(
+    "gcs_survey_plans_stopped",
+    "Survey plans stopped before they finished, by reason (disconnect: the client went "
+    "away; timeout: past survey_plan_timeout_s; shutdown: the hub stopped).",
+    ["reason"],
+)
+
 
 def count_rejected(surface: Surface) -> None:
     REJECTED_FRAMES.labels(surface=surface).inc()
@@ -80,3 +90,5 @@ for _kind in ("agent", "dashboard"):
     CONNECTIONS.labels(kind=_kind)
 for _reason in ("coalesced", "slow_client"):
     DROPPED.labels(reason=_reason)
+for _reason in ("disconnect", "timeout", "shutdown"):
+    SURVEY_PLANS_STOPPED.labels(reason=_reason)

@@ -26,18 +26,18 @@ import logging
 import time
 import uuid
 from collections.abc import Callable, Sequence
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import asdict
 
 from sqlalchemy.exc import SQLAlchemyError
 
 from backend.auth.policy import Principal
+from backend.auth.rate_limit import Limit, RateLimiter
 from backend.errors import Conflict, GcsError, InvalidRequest, NotFound, SafetyViolation
 from backend.fleet.collaborators import CommandServices
 from backend.fleet.command_service import execute_command
 from backend.fleet.registry import VehicleRecord
 from backend.fleet.safety_gate import snapshot_of
-from backend.missions.survey.camera import CameraError
-from backend.missions.survey.planner import PlanError
 from backend.missions.survey.run import (
     ACTIVE_STATES,
     LEAVING_MODES,
@@ -53,12 +53,13 @@ from backend.missions.survey.run import (
     handover_missions,
 )
 from backend.missions.survey.schemas import SurveyRequest
-from backend.missions.survey.service import Fleet, Survey, plan_survey
+from backend.missions.survey.service import Fleet, Survey
 from backend.realtime.bus import Bus, LatestSubscription, ReliableSubscription, Topic
 from backend.safety.snapshot import home, position
 from backend.settings import HubSettings
 from backend.storage.surveys import StoredSurvey, SurveyRepository
 from backend.surveys.ownership import SurveyOwnership
+from backend.surveys.planning import ClientWatch, SurveyPlanner
 from protocol.messages import (
     Command,
     LiveEvent,
@@ -102,6 +103,13 @@ class SurveyService:
         # Several hubs: the claims that make one hub drive each survey (None: this hub
         # is alone and drives them all).
         self.ownership: SurveyOwnership | None = None
+        # Plans off the event loop, bounded (planning.py); the preview plans here too.
+        self.planner = SurveyPlanner(settings)
+        # Area files (KML, GeoJSON, .plan) each user may import (api/surveys.py), parsed
+        # one at a time: XML parsing holds the GIL, so parallel parses would starve the
+        # event loop, where one at a time leaves it a turn between files.
+        self.import_limiter = RateLimiter(Limit(settings.survey_imports_per_minute, 60.0))
+        self.import_executor = ThreadPoolExecutor(1, thread_name_prefix="survey-import")
 
     # -- life cycle ----------------------------------------------------------------------
 
@@ -159,15 +167,23 @@ class SurveyService:
         finally:
             self._bus.unsubscribe(Topic.VEHICLE_EVENT, events)
             self._bus.unsubscribe(Topic.VEHICLE_STATE, states)
+            self.planner.close()
+            self.import_executor.shutdown(wait=False, cancel_futures=True)
             with contextlib.suppress(SQLAlchemyError):
                 await self._save_dirty()
 
     # -- operator actions ----------------------------------------------------------------
 
-    async def create(self, request: SurveyRequest, principal: Principal) -> SurveyRun:
+    async def create(
+        self,
+        request: SurveyRequest,
+        principal: Principal,
+        gone: ClientWatch | None = None,
+    ) -> SurveyRun:
         """Plan, split and check; nothing is uploaded. Every drone must be known,
         connected, ready, on the ground and in no other survey, and every part's mission
-        must pass the safety rails."""
+        must pass the safety rails. `gone` finishes if the client goes away: the plan
+        stops."""
         records = self._chosen(request.vehicle_ids)
         busy = self._busy_vehicles()
         fleet = []
@@ -193,7 +209,7 @@ class SurveyService:
                     "vehicle_ids", f"vehicle {vid} has no position or home yet; wait for its GPS"
                 )
             fleet.append(Fleet(vid, here, base))
-        survey = await plan(request, fleet)
+        survey = await self.planner.plan(request, fleet, gone)
         violations: list[dict[str, object]] = []
         for planned in survey.parts:
             record = records[planned.part.drone.name]
@@ -609,17 +625,6 @@ class SurveyService:
             for d in run.drones
             if d.state in (DroneState.ASSIGNED, DroneState.FLYING)
         }
-
-
-async def plan(request: SurveyRequest, fleet: list[Fleet]) -> Survey:
-    """The survey's plan (in a worker thread: a large area takes a second), its errors as
-    422s naming the field to change."""
-    try:
-        return await asyncio.to_thread(plan_survey, request, fleet)
-    except CameraError as exc:
-        raise InvalidRequest("camera", str(exc)) from exc
-    except PlanError as exc:
-        raise InvalidRequest("area", str(exc)) from exc
 
 
 def new_run(request: SurveyRequest, survey: Survey) -> SurveyRun:

@@ -30,6 +30,33 @@ class InteropError(ValueError):
     """A file that cannot be read; the message says what to change."""
 
 
+class TooManyVertices(InteropError):
+    """An area file whose polygon has more vertices than the caller takes: counted
+    before the coordinates are parsed."""
+
+    def __init__(self, count: int, limit: int) -> None:
+        super().__init__(f"the area has {count} vertices; at most {limit} are allowed")
+        self.count = count
+        self.limit = limit
+
+
+def _check_vertices(count: int, limit: int | None) -> None:
+    if limit is not None and count > limit:
+        raise TooManyVertices(count, limit)
+
+
+def read_area_file(kind: str, text: str, max_vertices: int | None = None) -> dict[str, Any]:
+    """A survey request's fields from an area file: "plan" (a QGC Survey: its area,
+    camera and settings), "kml" or "geojson" (the area)."""
+    if kind == "plan":
+        return read_qgc_survey(text, max_vertices)
+    if kind == "kml":
+        return {"area": read_kml_polygon(text, max_vertices)}
+    if kind == "geojson":
+        return {"area": read_geojson_polygon(text, max_vertices)}
+    raise InteropError(f"unknown area file format {kind!r}; plan, kml or geojson")
+
+
 def _number(value: Any, where: str) -> float:
     if value is None:
         return math.nan  # QGC writes NaN as null
@@ -159,13 +186,15 @@ def read_qgc_plan_items(text: str | bytes) -> list[MissionItem]:
     return items
 
 
-def read_qgc_survey(text: str | bytes) -> dict[str, Any]:
+def read_qgc_survey(text: str | bytes, max_vertices: int | None = None) -> dict[str, Any]:
     """The first Survey complex item of a plan as our survey request's fields: the area
     (GeoJSON), the camera's figures, altitude or GSD, overlaps, angle, turnaround and
     hover-and-capture (QGC's CameraCalc and TransectStyleComplexItem keys)."""
     document = _plan_document(text)
     for i, raw in enumerate(document["mission"]["items"]):
         if isinstance(raw, dict) and raw.get("complexItemType") == "survey":
+            polygon = raw.get("polygon")
+            _check_vertices(len(polygon) if isinstance(polygon, list) else 0, max_vertices)
             return _survey_fields(raw, f"mission item {i + 1}")
     raise InteropError("the plan has no Survey complex item")
 
@@ -283,7 +312,7 @@ def mission_path_geojson(items: Sequence[MissionItem]) -> dict[str, Any]:
     }
 
 
-def read_geojson_polygon(text: str | bytes) -> dict[str, Any]:
+def read_geojson_polygon(text: str | bytes, max_vertices: int | None = None) -> dict[str, Any]:
     """A Polygon from a GeoJSON geometry, Feature or FeatureCollection (its first)."""
     try:
         document = json.loads(text)
@@ -292,7 +321,10 @@ def read_geojson_polygon(text: str | bytes) -> dict[str, Any]:
     while isinstance(document, dict):
         kind = document.get("type")
         if kind == "Polygon":
-            return {"type": "Polygon", "coordinates": document.get("coordinates")}
+            rings = document.get("coordinates")
+            if isinstance(rings, list):
+                _check_vertices(sum(len(r) for r in rings if isinstance(r, list)), max_vertices)
+            return {"type": "Polygon", "coordinates": rings}
         if kind == "Feature":
             document = document.get("geometry")
         elif kind == "FeatureCollection" and document.get("features"):
@@ -302,7 +334,7 @@ def read_geojson_polygon(text: str | bytes) -> dict[str, Any]:
     raise InteropError("the GeoJSON holds no Polygon")
 
 
-def read_kml_polygon(data: str | bytes) -> dict[str, Any]:
+def read_kml_polygon(data: str | bytes, max_vertices: int | None = None) -> dict[str, Any]:
     """The first Polygon of a KML file (Google Earth), holes included, as GeoJSON."""
     raw = data.encode() if isinstance(data, str) else data
     if len(raw) > MAX_FILE_BYTES:
@@ -315,13 +347,15 @@ def read_kml_polygon(data: str | bytes) -> dict[str, Any]:
     if polygon is None:
         raise InteropError("the KML file holds no Polygon")
 
-    def ring(boundary: ElementTree.Element, what: str) -> list[list[float]]:
+    def triples(boundary: ElementTree.Element) -> list[str]:
         node = _first(boundary, "coordinates")
-        text = "" if node is None else (node.text or "")
-        if not text.strip():
+        return ("" if node is None else (node.text or "")).split()
+
+    def ring(found: list[str], what: str) -> list[list[float]]:
+        if not found:
             raise InteropError(f"the KML polygon's {what} has no coordinates")
         points = []
-        for k, triple in enumerate(text.split()):
+        for k, triple in enumerate(found):
             try:
                 values = [float(v) for v in triple.split(",")]
             except ValueError:
@@ -334,10 +368,13 @@ def read_kml_polygon(data: str | bytes) -> dict[str, Any]:
     outer = _first(polygon, "outerBoundaryIs")
     if outer is None:
         raise InteropError("the KML polygon has no outerBoundaryIs")
-    rings = [ring(outer, "outline")]
     inners = [e for e in polygon.iter() if e.tag in (f"{_KML}innerBoundaryIs", "innerBoundaryIs")]
-    for k, inner in enumerate(inners):
-        rings.append(ring(inner, f"hole {k + 1}"))
+    found = [triples(outer), *(triples(inner) for inner in inners)]
+    # Counted before any coordinate is parsed: a huge ring is refused at its size.
+    _check_vertices(sum(len(points) for points in found), max_vertices)
+    rings = [ring(found[0], "outline")]
+    for k, points in enumerate(found[1:]):
+        rings.append(ring(points, f"hole {k + 1}"))
     return {"type": "Polygon", "coordinates": rings}
 
 

@@ -10,7 +10,9 @@ from dataclasses import dataclass
 import shapely
 
 from backend.missions.survey.camera import Camera, CameraCalc, calculate, preset
+from backend.missions.survey.cancel import checkpoint
 from backend.missions.survey.geo import polygon_from_geojson
+from backend.missions.survey.limits import SurveyLimits, check_estimate, check_missions, estimate
 from backend.missions.survey.mission import survey_mission
 from backend.missions.survey.planner import PlanError, covered_fraction, swaths
 from backend.missions.survey.report import best_angle
@@ -55,7 +57,11 @@ def _camera(request: SurveyRequest) -> Camera:
     return Camera(name="custom", **request.camera.model_dump())
 
 
-def plan_survey(request: SurveyRequest, fleet: list[Fleet]) -> Survey:
+def plan_survey(
+    request: SurveyRequest, fleet: list[Fleet], limits: SurveyLimits | None = None
+) -> Survey:
+    """With `limits`, the plan is estimated first and refused (PlanTooLarge) past them,
+    and so is a drone's planned mission longer than its store."""
     calc = calculate(
         _camera(request),
         altitude_m=request.altitude_m,
@@ -64,6 +70,12 @@ def plan_survey(request: SurveyRequest, fleet: list[Fleet]) -> Survey:
         front_overlap_pct=request.front_overlap_pct,
     )
     area, frame = polygon_from_geojson(request.area.model_dump())
+    per_photo = not calc.camera.distance_trigger or request.hover_and_capture
+    if limits is not None:
+        found = estimate(
+            area, calc, drones=len(fleet), angle_deg=request.angle_deg, per_photo=per_photo
+        )
+        check_estimate(found, limits)
     drones = []
     for vehicle in fleet:
         where = frame.to_local(vehicle.position.lat, vehicle.position.lon)
@@ -79,6 +91,7 @@ def plan_survey(request: SurveyRequest, fleet: list[Fleet]) -> Survey:
     if angle is None:
         angle = best_angle(area, calc, request.speed_ms, turnaround_m=request.turnaround_m)
     parts = split(area, calc, drones, angle_deg=angle, turnaround_m=request.turnaround_m)
+    checkpoint()
     # The photos' footprints united lane by lane (the same union, a few shapes per lane).
     shots = [
         f for p in parts for f in swaths(p.plan, calc.footprint_side_m, calc.footprint_frontal_m)
@@ -88,9 +101,14 @@ def plan_survey(request: SurveyRequest, fleet: list[Fleet]) -> Survey:
         for p in parts
         for f in swaths(p.plan, calc.lane_spacing_m * 1.0001, calc.trigger_distance_m * 1.0001)
     ]
+<<<<<<< HEAD
     positions = {vehicle.vehicle_id: vehicle.position for vehicle in fleet}
+=======
+    checkpoint()
+>>>>>>> fix-bounds
     planned = []
     for p in parts:
+        checkpoint()
         mission = survey_mission(
             p.plan,
             frame,
@@ -109,6 +127,9 @@ def plan_survey(request: SurveyRequest, fleet: list[Fleet]) -> Survey:
                 lane_items=mission.lanes,
             )
         )
+    if limits is not None:
+        check_missions({p.part.drone.name: len(p.items) for p in planned}, limits)
+    checkpoint()
     return Survey(
         calc=calc,
         frame=frame,

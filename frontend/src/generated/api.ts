@@ -491,7 +491,9 @@ export interface paths {
          * Preview Survey
          * @description Plan a survey and split it across the chosen drones, without uploading anything:
          *     the camera's numbers, the coverage of the photos' footprints, and per drone its
-         *     mission, its times and the safety rails' check of that mission.
+         *     mission, its times and the safety rails' check of that mission. A plan over the hub's
+         *     limits (lanes, photos, a drone's mission items, planning time) is refused with a 422
+         *     naming the estimate and the limit's setting (docs/security.md).
          */
         post: operations["preview_survey_api_v1_surveys_preview_post"];
         delete?: never;
@@ -518,7 +520,8 @@ export interface paths {
          * @description Plan and split a survey and check every drone's mission against the safety rails;
          *     nothing is uploaded until it is started. Each chosen drone must be connected, ready,
          *     on the ground and in no other survey (422 naming it otherwise); a part that breaks a
-         *     rail refuses the whole survey (422, each violation naming its vehicle).
+         *     rail refuses the whole survey (422, each violation naming its vehicle); a plan over
+         *     the hub's limits is refused as the preview's is.
          */
         post: operations["create_survey_api_v1_surveys_post"];
         delete?: never;
@@ -682,7 +685,9 @@ export interface paths {
          * Import Survey Area
          * @description A survey request's fields from another tool's file (no side effects): at least the
          *     `area`, and from a QGC Survey also its camera and settings. Add `vehicle_ids` (and
-         *     anything to change) and send it to `POST /surveys` or the preview.
+         *     anything to change) and send it to `POST /surveys` or the preview. It needs the
+         *     planning permission (as the preview does), and is bounded: the file's size (413) and
+         *     its polygon's vertices (422), and `survey_imports_per_minute` per user (429).
          */
         post: operations["import_survey_area_api_v1_surveys_import_post"];
         delete?: never;
@@ -6102,6 +6107,17 @@ export interface operations {
                     "application/json": components["schemas"]["Unprocessable"];
                 };
             };
+            /** @description Too many attempts, or too many requests to vehicles (commands, parameters, missions share one budget per user); try again after Retry-After seconds */
+            429: {
+                headers: {
+                    /** @description Seconds to wait */
+                    "Retry-After"?: number;
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
+            };
             /** @description The database is unavailable; try again after Retry-After seconds */
             503: {
                 headers: {
@@ -6220,6 +6236,17 @@ export interface operations {
                 };
                 content: {
                     "application/json": components["schemas"]["Unprocessable"];
+                };
+            };
+            /** @description Too many attempts, or too many requests to vehicles (commands, parameters, missions share one budget per user); try again after Retry-After seconds */
+            429: {
+                headers: {
+                    /** @description Seconds to wait */
+                    "Retry-After"?: number;
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
                 };
             };
             /** @description The database is unavailable; try again after Retry-After seconds */
@@ -6752,7 +6779,7 @@ export interface operations {
                     "application/json": components["schemas"]["ErrorMessage"];
                 };
             };
-            /** @description Needs the 'read' permission */
+            /** @description Needs the 'command' permission */
             403: {
                 headers: {
                     [name: string]: unknown;
@@ -6777,6 +6804,17 @@ export interface operations {
                 };
                 content: {
                     "application/json": components["schemas"]["Unprocessable"];
+                };
+            };
+            /** @description Too many attempts, or too many requests to vehicles (commands, parameters, missions share one budget per user); try again after Retry-After seconds */
+            429: {
+                headers: {
+                    /** @description Seconds to wait */
+                    "Retry-After"?: number;
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
                 };
             };
             /** @description The database is unavailable; try again after Retry-After seconds */

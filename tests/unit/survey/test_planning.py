@@ -1,0 +1,95 @@
+"""The hub's survey planner (backend/surveys/planning.py): a plan past its time limit is a
+422 naming the setting and its worker ends; a client that goes away stops its plan; past
+the plans allowed at once, a 429."""
+
+from __future__ import annotations
+
+import asyncio
+import time
+from pathlib import Path
+
+import pytest
+
+from backend.errors import InvalidRequest, RateLimited
+from backend.missions.survey.schemas import SurveyRequest
+from backend.missions.survey.service import Fleet
+from backend.observability import metrics
+from backend.surveys.planning import ClientGone, SurveyPlanner
+from common.geodesy import GeoPoint, LocalFrame
+from tests.conftest import hub_settings
+from tests.helpers import poll_until_async
+
+FRAME = LocalFrame(47.0, 8.0, 0.0)
+
+
+def _slow_plan() -> tuple[SurveyRequest, list[Fleet]]:
+    """Within every limit, but seconds of work: three drones over a 200 m square at 5 m."""
+    ring = [list(reversed(FRAME.to_geo(x, y))) for x, y in [(0, 0), (200, 0), (200, 200), (0, 200)]]
+    request = SurveyRequest.model_validate(
+        {
+            "area": {"type": "Polygon", "coordinates": [[*ring, ring[0]]]},
+            "camera": "sony_a6000_16mm",
+            "altitude_m": 5,
+            "vehicle_ids": ["a", "b", "c"],
+        }
+    )
+    lat, lon = FRAME.to_geo(-20, -20)
+    here = GeoPoint(lat, lon)
+    return request, [Fleet(vid, here, here) for vid in request.vehicle_ids]
+
+
+async def _workers_done() -> None:
+    await poll_until_async(
+        lambda: metrics.SURVEY_PLANS_RUNNING._value.get() == 0, 5, "the workers done", every_s=0.01
+    )
+
+
+def test_a_plan_past_its_time_limit_is_refused_and_stops(tmp_path: Path) -> None:
+    planner = SurveyPlanner(hub_settings(tmp_path, survey_plan_timeout_s=0.3))
+
+    async def run() -> float:
+        started = time.monotonic()
+        with pytest.raises(InvalidRequest, match=r"longer than 0.3 s.*survey_plan_timeout_s"):
+            await planner.plan(*_slow_plan())
+        await _workers_done()
+        return time.monotonic() - started
+
+    try:
+        assert asyncio.run(run()) < 2.5
+    finally:
+        planner.close()
+
+
+def test_a_client_gone_stops_its_plan(tmp_path: Path) -> None:
+    planner = SurveyPlanner(hub_settings(tmp_path))
+    stopped = metrics.SURVEY_PLANS_STOPPED.labels(reason="disconnect")
+
+    async def run() -> None:
+        before = stopped._value.get()
+        with pytest.raises(ClientGone):
+            await planner.plan(*_slow_plan(), gone=lambda: asyncio.sleep(0.3))
+        await _workers_done()
+        assert stopped._value.get() == before + 1
+
+    try:
+        asyncio.run(run())
+    finally:
+        planner.close()
+
+
+def test_plans_past_the_pending_bound_are_a_429(tmp_path: Path) -> None:
+    planner = SurveyPlanner(hub_settings(tmp_path, survey_plan_max_pending=1))
+
+    async def run() -> None:
+        first = asyncio.ensure_future(planner.plan(*_slow_plan(), gone=lambda: asyncio.sleep(0.5)))
+        await asyncio.sleep(0.1)
+        with pytest.raises(RateLimited, match="survey_plan_max_pending"):
+            await planner.plan(*_slow_plan())
+        with pytest.raises(ClientGone):
+            await first
+        await _workers_done()
+
+    try:
+        asyncio.run(run())
+    finally:
+        planner.close()

@@ -137,16 +137,22 @@ async def idle(flood: Flood) -> None:
     await asyncio.sleep(flood.seconds)
 
 
-async def photos(flood: Flood) -> None:
-    vehicle = "flood_1"
+def _enrolled(base: str, admin_token: str, vehicle: str) -> str:
+    """An agent token for ``vehicle``, which the hub then knows (it connected once)."""
     created = httpx.post(
-        f"{flood.base}/api/v1/vehicles/{vehicle}/agent-tokens",
-        headers={"Authorization": f"Bearer {flood.admin_token}"},
+        f"{base}/api/v1/vehicles/{vehicle}/agent-tokens",
+        headers={"Authorization": f"Bearer {admin_token}"},
     )
     created.raise_for_status()
-    token = created.json()["token"]
-    with scripted_agent(flood.base, vehicle, token):
-        pass  # the hub now knows the vehicle
+    token: str = created.json()["token"]
+    with scripted_agent(base, vehicle, token):
+        pass
+    return token
+
+
+async def photos(flood: Flood) -> None:
+    vehicle = "flood_1"
+    token = await asyncio.to_thread(_enrolled, flood.base, flood.admin_token, vehicle)
     chunk = os.urandom(256 * 1024)
     end = flood.until()
     started = 0

@@ -101,11 +101,8 @@ def plan_survey(
         for p in parts
         for f in swaths(p.plan, calc.lane_spacing_m * 1.0001, calc.trigger_distance_m * 1.0001)
     ]
-<<<<<<< HEAD
-    positions = {vehicle.vehicle_id: vehicle.position for vehicle in fleet}
-=======
     checkpoint()
->>>>>>> fix-bounds
+    positions = {vehicle.vehicle_id: vehicle.position for vehicle in fleet}
     planned = []
     for p in parts:
         checkpoint()

@@ -22,7 +22,7 @@ from backend.missions.survey.limits import (
 from backend.missions.survey.mission import survey_mission
 from backend.missions.survey.planner import plan_lanes
 from backend.missions.survey.report import best_angle
-from common.geodesy import LocalFrame
+from common.geodesy import GeoPoint, LocalFrame
 from tests.survey_shapes import SHAPES
 
 LIMITS = SurveyLimits(survey_max_lanes=1000, survey_max_photos=20_000, survey_max_mission_items=700)
@@ -35,7 +35,9 @@ def test_the_estimate_is_never_above_the_plan(name: str, altitude_m: float) -> N
     calc = calculate(preset("sony_a6000_16mm"), altitude_m=altitude_m)
     angle = best_angle(area, calc, 10.0, turnaround_m=10.0)
     plan = plan_lanes(area, calc, angle_deg=angle, turnaround_m=10.0)
-    items = survey_mission(plan, LocalFrame(47.0, 8.0, 0.0), altitude_m, speed_ms=10.0).items
+    site = LocalFrame(47.0, 8.0, 0.0)
+    takeoff = GeoPoint(47.0, 8.0, 0.0)
+    items = survey_mission(plan, site, altitude_m, takeoff=takeoff, speed_ms=10.0).items
     for requested in (None, angle):  # the fewest rows over the angles, or the given one
         found = estimate(area, calc, drones=1, angle_deg=requested, per_photo=False)
         assert found.lanes <= len(plan.lanes)

@@ -234,14 +234,17 @@ def test_a_qgc_plan_opens_and_a_saved_plan_is_qgcs_format(
     schema = json.loads((DATA / "plan.schema.json").read_text())
     errors = [e.message for e in jsonschema_rs.validator_for(schema).iter_errors(saved)]
     assert errors == []
-    # The same MAVLink items, NaN (null) parameters sent as 0 as MAVLink does.
+    # The same MAVLink items, NaN (null, "unset": QGC's yaws) kept as null.
     for mine, theirs in zip(saved["mission"]["items"], source["mission"]["items"], strict=True):
         assert (mine["command"], mine["frame"], mine["autoContinue"]) == (
             theirs["command"],
             theirs["frame"],
             theirs["autoContinue"],
         )
-        assert mine["params"] == pytest.approx([p or 0 for p in theirs["params"]])
+        assert [p is None for p in mine["params"]] == [p is None for p in theirs["params"]]
+        assert [p for p in mine["params"] if p is not None] == pytest.approx(
+            [p for p in theirs["params"] if p is not None]
+        )
 
     # Uploaded to a group (another vehicle ticked on purpose): each vehicle is checked and
     # answers for itself, the plan's own vehicle first.
@@ -329,6 +332,44 @@ def test_a_plan_goes_to_the_vehicle_it_was_edited_for(
         assert _on_board(api, other) == other_before
     finally:
         assert api.delete(rails).status_code in (200, 204)
+
+
+def test_a_qgc_null_stays_unset_or_is_refused_never_zero(
+    wide_page: Page, mission_fleet: LocalFleet, api: httpx.Client
+) -> None:
+    """QGroundControl writes null for what it leaves unset. A null yaw (param4) stays
+    unset: sent as MAVLink's NaN ("keep the heading"), read back as null, not 0 (north on
+    PX4). A null altitude has no "unset" on the wire: the file is refused naming the item
+    and the field (it used to become 0 m above sea level), and the plan open stays."""
+    page, vehicle = wide_page, "sim_2"
+    log_in(page, mission_fleet.plan.hub_http, "admin", mission_fleet.plan.admin_password)
+    expect(page.locator(".vehicle-marker")).to_have_count(3, timeout=30_000)
+    _open_panel(page, "desktop", vehicle)
+    status = page.locator('[data-field="mission-status"]')
+    rows = page.locator(".mission-row")
+
+    page.locator('[data-field="mission-file"]').set_input_files(DATA / "unset_yaw.plan")
+    expect(status).to_have_text("unset_yaw.plan: 5 items opened.")
+    expect(rows).to_have_count(5)
+    expect(page.locator('[data-field="mission-verdict"]')).to_contain_text(
+        "Rails: OK", timeout=CHECK_S * 1000
+    )
+    page.locator('[data-action="mission-upload"]').click()
+    expect(status).to_have_text(f"{vehicle}: uploaded (5 items)", timeout=30_000)
+    on_board = _on_board(api, vehicle)
+    assert [item["command"] for item in on_board] == [22, 16, 16, 16, 20]
+    assert [item["param4"] for item in on_board[:4]] == [None] * 4
+    assert on_board[2]["alt"] == 20
+
+    page.locator('[data-action="mission-edit"]').click()
+    page.locator('[data-field="mission-file"]').set_input_files(DATA / "null_altitude.plan")
+    expect(status).to_have_text(
+        "null_altitude.plan could not be opened: item 3: altitude is empty (null) in the "
+        ".plan (mission.items[2].params[6])"
+    )
+    expect(rows).to_have_count(5)
+    expect(rows.nth(2).locator('[data-field="alt"]')).to_have_value("20")
+    assert _on_board(api, vehicle) == on_board
 
 
 def _u_fence(frame: LocalFrame) -> list[dict[str, float]]:

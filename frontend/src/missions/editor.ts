@@ -283,7 +283,7 @@ export class MissionEditor {
       item.command = command;
       if (command === CMD.TAKEOFF || command === CMD.RTL) Object.assign(item, { lat: 0, lon: 0 });
       if (command === CMD.RTL) item.alt = 0;
-      if (command === CMD.LOITER_TIME && item.param1 <= 0) item.param1 = 30;
+      if (command === CMD.LOITER_TIME && !((item.param1 ?? 0) > 0)) item.param1 = 30;
       if ((command === CMD.WAYPOINT || command === CMD.LOITER_TIME) && !place) {
         const here = this.selected()?.state;
         Object.assign(item, { lat: here?.lat ?? 0, lon: here?.lon ?? 0 });

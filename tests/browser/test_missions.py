@@ -304,7 +304,10 @@ def test_a_plan_goes_to_the_vehicle_it_was_edited_for(
     page.locator('[data-action="mission-upload"]').click()
     status = page.locator('[data-field="mission-status"]')
     expect(status).to_have_text(f"{edited}: uploaded (6 items)", timeout=30_000)
-    assert [item["command"] for item in _on_board(api, edited)] == [22, 16, 16, 16, 16, 20]
+    on_board = _on_board(api, edited)
+    assert [item["command"] for item in on_board] == [22, 16, 16, 16, 16, 20]
+    # A drawn take-off and waypoints leave the yaw unset (keep the heading), as QGC does.
+    assert [item["param4"] for item in on_board[:5]] == [None] * 5
     assert _on_board(api, first) == first_before  # nothing went to the first vehicle
 
     # The list says where an upload goes: the edited vehicle, ticked; the others not.

@@ -261,6 +261,12 @@ _PLAIN_FRAME: dict[int, int] = {
 }
 
 
+_UNSET_PARAM = (
+    "null for unset (NaN in MAVLink), where the command's spec allows NaN or calls the "
+    "parameter empty (e.g. a waypoint's param4 yaw: keep the heading mode)"
+)
+
+
 class MissionItem(Message):
     """One mission item, as MISSION_ITEM_INT carries it (positions in degrees)."""
 
@@ -273,10 +279,13 @@ class MissionItem(Message):
         "forms 5, 6 and 11 are accepted and become 0, 3 and 10, in uploads and downloads "
         "alike. A command without a position ignores its frame (ArduPilot gives back 0).",
     )
-    param1: Float32 = 0.0
-    param2: Float32 = 0.0
-    param3: Float32 = 0.0
-    param4: Float32 = 0.0
+    # null is MAVLink's NaN, "unset" (a yaw of NaN keeps the heading mode): sent as NaN and
+    # read back as null. The mission rules take it only where the command's spec gives NaN
+    # a meaning or calls the parameter empty; never 0, which would be a value (north).
+    param1: Float32 | None = Field(default=0.0, description=_UNSET_PARAM)
+    param2: Float32 | None = Field(default=0.0, description=_UNSET_PARAM)
+    param3: Float32 | None = Field(default=0.0, description=_UNSET_PARAM)
+    param4: Float32 | None = Field(default=0.0, description=_UNSET_PARAM)
     lat: Number = Field(default=0.0, ge=-90, le=90)
     lon: Number = Field(default=0.0, ge=-180, le=180)
     alt: Number = Field(default=0.0, ge=-1000, le=10000, description="metres (a float32)")

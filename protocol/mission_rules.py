@@ -9,6 +9,7 @@ check, the upload and the AUTO gate), so it lives in the protocol's leaf package
 from __future__ import annotations
 
 import math
+import re
 from collections.abc import Sequence
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
@@ -70,6 +71,36 @@ _RELATIVE_FRAMES = frozenset(
 _SPEED_SENTINELS = (-1.0, -2.0)
 
 
+def _param_spec(command: int, index: int) -> str:
+    """The MAVLink spec's text for a command's param ``index`` (1..4), "" if it has none."""
+    entry = mavlink2.enums["MAV_CMD"].get(command)
+    return (entry.param.get(index, "") if entry is not None else "").strip()
+
+
+def _takes_unset(command: int, index: int) -> bool:
+    """Whether param ``index`` may be NaN ("unset", null in our JSON): where the spec
+    gives NaN a meaning (a yaw of NaN keeps the heading mode) or calls it empty, so the
+    autopilot does not read it. Elsewhere NaN has no defined meaning (a hold time, a
+    speed) and an autopilot may read it as anything."""
+    text = _param_spec(command, index)
+    return "NaN" in text or text.rstrip(".") == "Empty"
+
+
+def _param_label(command: int, index: int) -> str:
+    """The spec text's first words ("Hold time", "Speed"), to name the parameter."""
+    return re.split(r"[.(,]", _param_spec(command, index))[0].strip() or "unused"
+
+
+def _unset_problems(item: MissionItem) -> list[str]:
+    params = (item.param1, item.param2, item.param3, item.param4)
+    return [
+        f"param{index} ({_param_label(item.command, index)}) is "
+        "empty (null), and this command gives it no unset value: give a number"
+        for index, value in enumerate(params, start=1)
+        if value is None and not _takes_unset(item.command, index)
+    ]
+
+
 def _command_label(command: int) -> str:
     entry = mavlink2.enums["MAV_CMD"].get(command)
     return entry.name.removeprefix("MAV_CMD_") if entry is not None else f"MAV_CMD {command}"
@@ -108,13 +139,16 @@ def item_problems(
         problems.append("latitude and longitude are 0, 0: not a place to go (give its position)")
     if command in _TAKEOFFS and item.frame in _RELATIVE_FRAMES and item.alt <= 0.0:
         problems.append(f"take-off altitude {item.alt:g} m is not above home")
-    problems += _parameter_problems(item, count)
+    unset = _unset_problems(item)
+    problems += unset or _parameter_problems(item, count)
     return problems
 
 
 def _parameter_problems(item: MissionItem, count: int) -> list[str]:
     command, p1, p2 = item.command, item.param1, item.param2
     problems: list[str] = []
+    if p1 is None or p2 is None:
+        return problems  # unset where the spec allows it: no value to check
     if command == _CMD.MAV_CMD_NAV_WAYPOINT:
         if p1 < 0.0:
             problems.append(f"hold time {p1:g} s is negative")

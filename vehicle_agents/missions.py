@@ -52,10 +52,10 @@ class MissionClient:
             item.command,
             0,
             int(item.autocontinue),
-            item.param1,
-            item.param2,
-            item.param3,
-            item.param4,
+            _wire(item.param1),
+            _wire(item.param2),
+            _wire(item.param3),
+            _wire(item.param4),
             round(item.lat * 1e7),
             round(item.lon * 1e7),
             item.alt,
@@ -226,19 +226,24 @@ def _item_number(seq: int) -> MessagePredicate:
     return matches
 
 
-def _finite(value: float) -> float:
-    """Autopilots put NaN in unused parameters (e.g. 'keep yaw'); the wire has no NaN."""
-    return value if math.isfinite(value) else 0.0
+def _wire(value: float | None) -> float:
+    """An unset parameter (null) is MAVLink's NaN (e.g. a yaw that keeps the heading mode)."""
+    return math.nan if value is None else value
+
+
+def _unset(value: float) -> float | None:
+    """Autopilots put NaN in unset parameters (e.g. 'keep yaw'): null, never 0 (north)."""
+    return value if math.isfinite(value) else None
 
 
 def _item_of(message: MavMessage) -> MissionItem:
     return MissionItem(
         command=message.command,
         frame=message.frame,
-        param1=_finite(message.param1),
-        param2=_finite(message.param2),
-        param3=_finite(message.param3),
-        param4=_finite(message.param4),
+        param1=_unset(message.param1),
+        param2=_unset(message.param2),
+        param3=_unset(message.param3),
+        param4=_unset(message.param4),
         lat=message.x / 1e7,
         lon=message.y / 1e7,
         alt=message.z,

@@ -234,20 +234,24 @@ def test_a_qgc_plan_opens_and_a_saved_plan_is_qgcs_format(
     schema = json.loads((DATA / "plan.schema.json").read_text())
     errors = [e.message for e in jsonschema_rs.validator_for(schema).iter_errors(saved)]
     assert errors == []
-    # The same MAVLink items, NaN (null) parameters sent as 0 as MAVLink does.
+    # The same MAVLink items, NaN (null, "unset": QGC's yaws) kept as null.
     for mine, theirs in zip(saved["mission"]["items"], source["mission"]["items"], strict=True):
         assert (mine["command"], mine["frame"], mine["autoContinue"]) == (
             theirs["command"],
             theirs["frame"],
             theirs["autoContinue"],
         )
-        assert mine["params"] == pytest.approx([p or 0 for p in theirs["params"]])
+        assert [p is None for p in mine["params"]] == [p is None for p in theirs["params"]]
+        assert [p for p in mine["params"] if p is not None] == pytest.approx(
+            [p for p in theirs["params"] if p is not None]
+        )
 
-    # Uploaded to a group: each vehicle is checked and answers for itself.
-    page.locator('[data-field="mission-targets"]').select_option(["sim_2", MISSION_VEHICLE])
+    # Uploaded to a group (another vehicle ticked on purpose): each vehicle is checked and
+    # answers for itself, the plan's own vehicle first.
+    page.locator('[data-field="mission-targets"] input[value="sim_2"]').check()
     page.locator('[data-action="mission-upload"]').click()
     status = page.locator('[data-field="mission-status"]')
-    expect(status).to_contain_text(re.compile(r"^sim_2: .+\nsim_3: .+$"), timeout=30_000)
+    expect(status).to_contain_text(re.compile(r"^sim_3: .+\nsim_2: .+$"), timeout=30_000)
 
     # A file that is not a plan is refused with the field named, and the plan stays.
     # Handed over as bytes: a file on disk removed right after set_input_files could be
@@ -258,6 +262,117 @@ def test_a_qgc_plan_opens_and_a_saved_plan_is_qgcs_format(
     )
     expect(page.locator('[data-field="mission-status"]')).to_contain_text("mission.items")
     expect(rows).to_have_count(5)
+
+
+def _on_board(api: httpx.Client, vehicle: str) -> list[dict[str, Any]]:
+    """The vehicle's mission as it reads back from the vehicle, home (item 0) left out."""
+    answer = api.get(f"/api/v1/vehicles/{vehicle}/mission")
+    assert answer.status_code == 200, answer.text
+    items: list[dict[str, Any]] = answer.json()["items"][1:]
+    return items
+
+
+def test_a_plan_goes_to_the_vehicle_it_was_edited_for(
+    wide_page: Page, mission_fleet: LocalFleet, api: httpx.Client
+) -> None:
+    """Select sim_1, then sim_2, edit and upload: the plan is sim_2's and only sim_2 gets
+    it (the upload list once kept the first vehicle selected on the page). Another
+    vehicle ticked on purpose is checked against its own rails first and, refused, is
+    not uploaded, with the reason."""
+    page, first, edited, other = wide_page, "sim_1", "sim_2", "sim_3"
+    first_before, other_before = _on_board(api, first), _on_board(api, other)
+    log_in(page, mission_fleet.plan.hub_http, "admin", mission_fleet.plan.admin_password)
+    expect(page.locator(".vehicle-marker")).to_have_count(3, timeout=30_000)
+    _open_panel(page, "desktop", first)
+    _select(page, "desktop", edited)  # the map pans to it
+    page.locator('[data-action="mission-edit"]').click()
+    expect(page.locator('[data-field="mission-vehicle"]')).to_have_text(
+        f"Editing a plan for {edited}"
+    )
+    page.locator('[data-action="mission-clear"]').click()
+    page.locator('[data-action="mission-add-22"]').click()
+    here = _states(api)[edited]
+    frame = LocalFrame(here["lat"], here["lon"], 0.0)
+    pixels = PixelMap(page)
+    for east, north in ((-8, 25), (8, 25), (8, -25), (-8, -25)):
+        x, y = pixels.pixel(*frame.to_geo(east, north))
+        _assert_on_open_map(page, x, y)
+        page.mouse.click(x, y)
+    page.locator('[data-action="mission-add-20"]').click()
+    expect(page.locator(".mission-row")).to_have_count(6)
+
+    page.locator('[data-action="mission-upload"]').click()
+    status = page.locator('[data-field="mission-status"]')
+    expect(status).to_have_text(f"{edited}: uploaded (6 items)", timeout=30_000)
+    on_board = _on_board(api, edited)
+    assert [item["command"] for item in on_board] == [22, 16, 16, 16, 16, 20]
+    # A drawn take-off and waypoints leave the yaw unset (keep the heading), as QGC does.
+    assert [item["param4"] for item in on_board[:5]] == [None] * 5
+    assert _on_board(api, first) == first_before  # nothing went to the first vehicle
+
+    # The list says where an upload goes: the edited vehicle, ticked; the others not.
+    targets = page.locator('[data-field="mission-targets"]')
+    expect(targets.locator("input:checked")).to_have_count(1)
+    expect(targets.locator(f'input[value="{edited}"]')).to_be_checked()
+    expect(targets.locator(".mission-target.edited")).to_have_text(f"{edited} (this plan's)")
+    _shot(page, "mission-targets", "desktop")
+
+    # Another vehicle ticked on purpose is checked against its own rails: with a 10 m
+    # ceiling of its own it refuses the 20 m plan, and is not sent it.
+    rails = f"/api/v1/vehicles/{other}/safety-rails"
+    assert api.put(rails, json={"max_altitude_m": 10}).status_code == 200
+    try:
+        page.locator('[data-action="mission-edit"]').click()
+        targets.locator(f'input[value="{other}"]').check()
+        page.locator('[data-action="mission-upload"]').click()
+        expect(status).to_contain_text(
+            re.compile(
+                rf"^{edited}: uploaded \(6 items\)\n{other}: not uploaded — refused by its "
+                r"rails: max_altitude: .+$"
+            ),
+            timeout=30_000,
+        )
+        assert _on_board(api, other) == other_before
+    finally:
+        assert api.delete(rails).status_code in (200, 204)
+
+
+def test_a_qgc_null_stays_unset_or_is_refused_never_zero(
+    wide_page: Page, mission_fleet: LocalFleet, api: httpx.Client
+) -> None:
+    """QGroundControl writes null for what it leaves unset. A null yaw (param4) stays
+    unset: sent as MAVLink's NaN ("keep the heading"), read back as null, not 0 (north on
+    PX4). A null altitude has no "unset" on the wire: the file is refused naming the item
+    and the field (it used to become 0 m above sea level), and the plan open stays."""
+    page, vehicle = wide_page, "sim_2"
+    log_in(page, mission_fleet.plan.hub_http, "admin", mission_fleet.plan.admin_password)
+    expect(page.locator(".vehicle-marker")).to_have_count(3, timeout=30_000)
+    _open_panel(page, "desktop", vehicle)
+    status = page.locator('[data-field="mission-status"]')
+    rows = page.locator(".mission-row")
+
+    page.locator('[data-field="mission-file"]').set_input_files(DATA / "unset_yaw.plan")
+    expect(status).to_have_text("unset_yaw.plan: 5 items opened.")
+    expect(rows).to_have_count(5)
+    expect(page.locator('[data-field="mission-verdict"]')).to_contain_text(
+        "Rails: OK", timeout=CHECK_S * 1000
+    )
+    page.locator('[data-action="mission-upload"]').click()
+    expect(status).to_have_text(f"{vehicle}: uploaded (5 items)", timeout=30_000)
+    on_board = _on_board(api, vehicle)
+    assert [item["command"] for item in on_board] == [22, 16, 16, 16, 20]
+    assert [item["param4"] for item in on_board[:4]] == [None] * 4
+    assert on_board[2]["alt"] == 20
+
+    page.locator('[data-action="mission-edit"]').click()
+    page.locator('[data-field="mission-file"]').set_input_files(DATA / "null_altitude.plan")
+    expect(status).to_have_text(
+        "null_altitude.plan could not be opened: item 3: altitude is empty (null) in the "
+        ".plan (mission.items[2].params[6])"
+    )
+    expect(rows).to_have_count(5)
+    expect(rows.nth(2).locator('[data-field="alt"]')).to_have_value("20")
+    assert _on_board(api, vehicle) == on_board
 
 
 def _u_fence(frame: LocalFrame) -> list[dict[str, float]]:

@@ -85,6 +85,28 @@ def test_a_round_trip_gives_back_the_frames_that_were_sent(autopilot: Autopilot)
 
 
 @pytest.mark.parametrize("autopilot", ["ardupilot", "px4"])
+def test_an_unset_yaw_goes_as_nan_and_comes_back_unset(autopilot: Autopilot) -> None:
+    """null is MAVLink's NaN ("keep the heading" for a yaw): sent as NaN, read back as
+    null, never 0 (on PX4 a yaw of 0 turns the vehicle north at every waypoint)."""
+    sent = [
+        MissionItem(command=TAKEOFF, alt=10, param4=None),
+        MissionItem(command=WAYPOINT, lat=HOME_LAT + 3e-4, lon=HOME_LON, alt=12, param4=None),
+        MissionItem(command=WAYPOINT, lat=HOME_LAT, lon=HOME_LON + 3e-4, alt=12, param4=90),
+    ]
+
+    async def body(client: MissionClient) -> list[MissionItem]:
+        uploaded = await client.upload(sent)
+        assert uploaded.status == "accepted", uploaded
+        downloaded = await client.download()
+        assert downloaded.status == "accepted", downloaded
+        assert downloaded.items is not None
+        return downloaded.items[1:]
+
+    back = with_missions(autopilot, body)
+    assert [item.param4 for item in back] == [None, None, 90]
+
+
+@pytest.mark.parametrize("autopilot", ["ardupilot", "px4"])
 def test_a_vehicle_without_a_mission_downloads_as_home_alone(autopilot: Autopilot) -> None:
     async def body(client: MissionClient) -> tuple[str, list[MissionItem]]:
         cleared = await client.clear()

@@ -94,3 +94,28 @@ def test_a_rover_cannot_take_off_or_land() -> None:
         "item 1 (NAV_TAKEOFF): a rover cannot do this",
         "item 3 (NAV_LAND): a rover cannot do this",
     ]
+
+
+def test_an_unset_parameter_is_taken_where_the_spec_gives_nan_a_meaning() -> None:
+    """null is MAVLink's NaN: a yaw of NaN keeps the heading mode (common.xml), and an
+    empty parameter is not read; a hold time, a loiter time or a speed has no "unset"."""
+    keep_heading = [
+        item(TAKEOFF, alt=10, param4=None),  # type: ignore[arg-type]
+        item(WAYPOINT, param4=None, **HERE),  # type: ignore[arg-type]
+        item(LOITER_TIME, param1=5, param4=None, **HERE),  # type: ignore[arg-type]
+        item(LAND, param3=None, param4=None),  # type: ignore[arg-type]
+        item(RTL, param1=None, param2=None, param3=None, param4=None),  # type: ignore[arg-type]
+    ]
+    assert mission_problems(keep_heading) == []
+    problems = mission_problems(
+        [
+            item(WAYPOINT, param1=None, **HERE),  # type: ignore[arg-type]
+            item(CHANGE_SPEED, param1=1, param2=None),  # type: ignore[arg-type]
+        ]
+    )
+    assert problems == [
+        "item 1 (NAV_WAYPOINT): param1 (Hold time) is empty (null), and this command gives "
+        "it no unset value: give a number",
+        "item 2 (DO_CHANGE_SPEED): param2 (Speed) is empty (null), and this command gives "
+        "it no unset value: give a number",
+    ]

@@ -68,7 +68,12 @@ def _number(value: Any, where: str) -> float:
 def _params_to_item(
     command: int, frame: int, params: Sequence[float], autocontinue: bool
 ) -> MissionItem:
-    p = [0.0 if math.isnan(v) else v for v in params]
+    # QGC's null (NaN) is "unset": kept as null for params 1-4 (the mission rules say where
+    # a command allows it), refused for a position, never read as 0 (a yaw north, 0 m AMSL).
+    for index, name in ((4, "latitude"), (5, "longitude"), (6, "altitude")):
+        if math.isnan(params[index]):
+            raise ValueError(f"param {index + 1} ({name}) is empty (null)")
+    p = list(params)
     if frame == _POSITIONLESS_FRAME:
         lat, lon = p[4] / 1e7, p[5] / 1e7  # unscaled param5/param6 as MISSION_ITEM_INT x/y
     else:
@@ -76,10 +81,10 @@ def _params_to_item(
     return MissionItem(
         command=command,
         frame=frame,
-        param1=p[0],
-        param2=p[1],
-        param3=p[2],
-        param4=p[3],
+        param1=_unset(p[0]),
+        param2=_unset(p[1]),
+        param3=_unset(p[2]),
+        param4=_unset(p[3]),
         lat=lat,
         lon=lon,
         alt=p[6],
@@ -87,7 +92,11 @@ def _params_to_item(
     )
 
 
-def _item_params(item: MissionItem) -> list[float]:
+def _unset(value: float) -> float | None:
+    return None if math.isnan(value) else value
+
+
+def _item_params(item: MissionItem) -> list[float | None]:
     if item.frame == _POSITIONLESS_FRAME:
         five, six = float(round(item.lat * 1e7)), float(round(item.lon * 1e7))
     else:
@@ -263,7 +272,9 @@ def to_wpl(items: Sequence[MissionItem], home: tuple[float, float, float]) -> st
     return "\n".join(lines) + "\n"
 
 
-def _wpl_number(value: float | int) -> str:
+def _wpl_number(value: float | int | None) -> str:
+    if value is None:
+        return "nan"  # unset, as QGC and MAVProxy write NaN
     if isinstance(value, int):
         return str(value)
     return f"{value:.8f}".rstrip("0").rstrip(".") or "0"

@@ -2473,24 +2473,28 @@ export interface components {
             frame: number;
             /**
              * Param1
+             * @description null for unset (NaN in MAVLink), where the command's spec allows NaN or calls the parameter empty (e.g. a waypoint's param4 yaw: keep the heading mode)
              * @default 0
              */
-            param1: number;
+            param1: number | null;
             /**
              * Param2
+             * @description null for unset (NaN in MAVLink), where the command's spec allows NaN or calls the parameter empty (e.g. a waypoint's param4 yaw: keep the heading mode)
              * @default 0
              */
-            param2: number;
+            param2: number | null;
             /**
              * Param3
+             * @description null for unset (NaN in MAVLink), where the command's spec allows NaN or calls the parameter empty (e.g. a waypoint's param4 yaw: keep the heading mode)
              * @default 0
              */
-            param3: number;
+            param3: number | null;
             /**
              * Param4
+             * @description null for unset (NaN in MAVLink), where the command's spec allows NaN or calls the parameter empty (e.g. a waypoint's param4 yaw: keep the heading mode)
              * @default 0
              */
-            param4: number;
+            param4: number | null;
             /**
              * Lat
              * @default 0

@@ -304,10 +304,22 @@ export interface MissionItem {
    * MAV_FRAME: 0 above sea level, 3 above home, 10 above terrain. The _INT forms 5, 6 and 11 are accepted and become 0, 3 and 10, in uploads and downloads alike. A command without a position ignores its frame (ArduPilot gives back 0).
    */
   frame: number;
-  param1: number;
-  param2: number;
-  param3: number;
-  param4: number;
+  /**
+   * null for unset (NaN in MAVLink), where the command's spec allows NaN or calls the parameter empty (e.g. a waypoint's param4 yaw: keep the heading mode)
+   */
+  param1: number | null;
+  /**
+   * null for unset (NaN in MAVLink), where the command's spec allows NaN or calls the parameter empty (e.g. a waypoint's param4 yaw: keep the heading mode)
+   */
+  param2: number | null;
+  /**
+   * null for unset (NaN in MAVLink), where the command's spec allows NaN or calls the parameter empty (e.g. a waypoint's param4 yaw: keep the heading mode)
+   */
+  param3: number | null;
+  /**
+   * null for unset (NaN in MAVLink), where the command's spec allows NaN or calls the parameter empty (e.g. a waypoint's param4 yaw: keep the heading mode)
+   */
+  param4: number | null;
   lat: number;
   lon: number;
   /**

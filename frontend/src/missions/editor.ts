@@ -3,8 +3,9 @@
 // Click the map to add a waypoint, drag a marker to move it, click a leg to insert one,
 // delete from the list; altitude (with its frame) and speed per item; take-off, loiter
 // time, land and RTL items. Every edit is checked by the hub's rails (`mission-check`,
-// debounced) and each refusal shows on the items it names. Upload to one vehicle or
-// several, download from the vehicle, and open or save a QGroundControl `.plan` file.
+// debounced) and each refusal shows on the items it names. Upload to the vehicle being
+// edited (or to others the operator ticks on purpose, each checked against its own rails
+// first), download from the vehicle, and open or save a QGroundControl `.plan` file.
 //
 // A speed is MAVLink's own: a DO_CHANGE_SPEED item before the item it applies to, shown
 // folded into that item's row, so the list is always the mission that is sent.
@@ -90,7 +91,9 @@ export class MissionEditor {
   private readonly list: HTMLOListElement;
   private readonly verdict: HTMLElement;
   private readonly status: HTMLElement;
-  private readonly targets: HTMLSelectElement;
+  private readonly targets: HTMLElement;
+  /** Vehicles other than the edited one that the operator ticked for this upload. */
+  private readonly extraTargets = new Set<string>();
   private readonly editButton: HTMLButtonElement;
   private readonly fileInput: HTMLInputElement;
 
@@ -118,11 +121,11 @@ export class MissionEditor {
     this.editButton.addEventListener("click", () => (this.draft ? this.stopEditing() : this.startEditing()));
     const download = button("mission-download", "Download", "Read the mission on the vehicle");
     download.addEventListener("click", () => void this.download());
-    const upload = button("mission-upload", "Upload", "Send this mission to the vehicles chosen below");
+    const upload = button("mission-upload", "Upload", "Send this mission to the vehicles ticked below");
     upload.addEventListener("click", () => void this.upload());
-    this.targets = element("select", "mission-targets", "mission-targets");
-    this.targets.multiple = true;
-    this.targets.title = "Upload to these vehicles (Ctrl/⌘-click for several)";
+    this.targets = element("div", "mission-targets", "mission-targets");
+    this.targets.setAttribute("role", "group");
+    this.targets.setAttribute("aria-label", "Upload to");
     const open = button("mission-open", "Open .plan", "Open a QGroundControl .plan file");
     this.fileInput = element("input", "mission-file", "mission-file");
     this.fileInput.type = "file";
@@ -151,8 +154,10 @@ export class MissionEditor {
     const tools = element("div", "mission-toolbar");
     tools.append(this.editButton, download, open, save);
     if (canCommand) tools.append(upload);
-    const uploadTo = element("label", "mission-upload-to");
-    uploadTo.append("Upload to ", this.targets);
+    const uploadTo = element("div", "mission-upload-to");
+    const uploadLabel = element("span", "mission-upload-label");
+    uploadLabel.textContent = "Upload to";
+    uploadTo.append(uploadLabel, this.targets);
     uploadTo.hidden = !canCommand;
     this.list = element("ol", "mission-items", "mission-items");
     this.verdict = element("div", "mission-check", "mission-check");
@@ -192,6 +197,9 @@ export class MissionEditor {
   select(id: string | null): void {
     if (id === this.selectedId) return;
     this.selectedId = id;
+    // A plan is checked against one vehicle's rails: a newly selected vehicle is the only
+    // target until the operator ticks others again (a tick for the last one never carries over).
+    this.extraTargets.clear();
     this.renderTargets();
     this.maybeReadMission();
     if (this.draft) this.scheduleCheck();
@@ -275,7 +283,7 @@ export class MissionEditor {
       item.command = command;
       if (command === CMD.TAKEOFF || command === CMD.RTL) Object.assign(item, { lat: 0, lon: 0 });
       if (command === CMD.RTL) item.alt = 0;
-      if (command === CMD.LOITER_TIME && item.param1 <= 0) item.param1 = 30;
+      if (command === CMD.LOITER_TIME && !((item.param1 ?? 0) > 0)) item.param1 = 30;
       if ((command === CMD.WAYPOINT || command === CMD.LOITER_TIME) && !place) {
         const here = this.selected()?.state;
         Object.assign(item, { lat: here?.lat ?? 0, lon: here?.lon ?? 0 });
@@ -396,41 +404,54 @@ export class MissionEditor {
     this.render();
   }
 
+  /** The vehicles an upload goes to: the edited one, then any others ticked on purpose. */
+  private uploadTargets(): string[] {
+    const others = [...this.extraTargets].filter((id) => id !== this.selectedId && this.vehicles.has(id)).sort();
+    return this.selectedId ? [this.selectedId, ...others] : others;
+  }
+
   private async upload(): Promise<void> {
     const items = this.draft ?? (this.selectedId ? this.known.get(this.selectedId) : undefined);
     if (!items || items.length === 0) return this.say("Nothing to upload: add items first.");
-    let targets = [...this.targets.selectedOptions].map((option) => option.value);
-    if (targets.length === 0 && this.selectedId) targets = [this.selectedId];
+    const targets = this.uploadTargets();
     if (targets.length === 0) return this.say("Select a vehicle to upload to.");
-    this.say(`Uploading to ${targets.join(", ")}…`);
-    const lines = await Promise.all(
-      targets.map(async (id) => {
-        try {
-          const result = await uploadMission(id, items);
-          if (result.outcome.status !== "accepted") {
-            return `${id}: ${result.outcome.status}${result.outcome.message ? ` — ${result.outcome.message}` : ""}`;
-          }
-          this.known.set(
-            id,
-            items.map((item) => ({ ...item })),
-          );
-          return `${id}: uploaded (${items.length} items)`;
-        } catch (error) {
-          const violations = error instanceof ApiError ? violationsOf(error.body) : [];
-          const why = violations.length
-            ? violations.map((v) => `${v.rule}: ${v.message}`).join("; ")
-            : error instanceof Error
-              ? error.message
-              : String(error);
-          return `${id}: refused — ${why}`;
-        }
-      }),
-    );
+    this.say(`Checking and uploading to ${targets.join(", ")}…`);
+    const lines = await Promise.all(targets.map((id) => this.uploadTo(id, items)));
     this.say(lines.join("\n"));
     if (this.draft && this.selectedId && this.known.get(this.selectedId) === undefined) return;
     // Uploaded: the map shows the vehicle's mission (and its progress) again.
     if (this.draft && lines.every((line) => line.includes(": uploaded"))) this.stopEditing();
     else this.render();
+  }
+
+  /** One target: checked against its own rails and home first, uploaded only if they pass. */
+  private async uploadTo(id: string, items: MissionItem[]): Promise<string> {
+    const why = (error: unknown): string => {
+      const violations = error instanceof ApiError ? violationsOf(error.body) : [];
+      if (violations.length) return violations.map((v) => `${v.rule}: ${v.message}`).join("; ");
+      return error instanceof Error ? error.message : String(error);
+    };
+    try {
+      const check = await checkMission(id, items);
+      if (!check.ok) {
+        return `${id}: not uploaded — refused by its rails: ${check.violations.map((v) => `${v.rule}: ${v.message}`).join("; ")}`;
+      }
+    } catch (error) {
+      return `${id}: not uploaded — could not check it (${why(error)})`;
+    }
+    try {
+      const result = await uploadMission(id, items);
+      if (result.outcome.status !== "accepted") {
+        return `${id}: ${result.outcome.status}${result.outcome.message ? ` — ${result.outcome.message}` : ""}`;
+      }
+      this.known.set(
+        id,
+        items.map((item) => ({ ...item })),
+      );
+      return `${id}: uploaded (${items.length} items)`;
+    } catch (error) {
+      return `${id}: refused — ${why(error)}`;
+    }
   }
 
   private async openFile(): Promise<void> {
@@ -604,13 +625,33 @@ export class MissionEditor {
     row?.querySelector<HTMLInputElement>('input[data-field="alt"]')?.focus();
   }
 
+  /** One tick box per vehicle: the edited one ticked and fixed, the others off unless ticked. */
   private renderTargets(): void {
-    const chosen = new Set([...this.targets.selectedOptions].map((option) => option.value));
-    if (chosen.size === 0 && this.selectedId) chosen.add(this.selectedId);
-    this.targets.replaceChildren(
-      ...[...this.vehicles.keys()].sort().map((id) => new Option(id, id, false, chosen.has(id))),
-    );
-    this.targets.size = Math.min(4, Math.max(2, this.vehicles.size));
+    // The plan's own vehicle first, then the others by name.
+    const ids = [...this.vehicles.keys()].sort().sort((a, b) => +(b === this.selectedId) - +(a === this.selectedId));
+    const boxes: HTMLElement[] = ids.map((id) => {
+      const edited = id === this.selectedId;
+      const label = element("label", edited ? "mission-target edited" : "mission-target");
+      const box = element("input", "mission-target-box");
+      box.type = "checkbox";
+      box.value = id;
+      box.checked = edited || this.extraTargets.has(id);
+      box.disabled = edited; // the plan's own vehicle is always a target
+      box.addEventListener("change", () => {
+        if (box.checked) this.extraTargets.add(id);
+        else this.extraTargets.delete(id);
+      });
+      const name = element("span", "mission-target-name");
+      name.textContent = edited ? `${id} (this plan's)` : id;
+      label.append(box, name);
+      return label;
+    });
+    if (boxes.length === 0) {
+      const none = element("span", "mission-target-none");
+      none.textContent = "no vehicle";
+      boxes.push(none);
+    }
+    this.targets.replaceChildren(...boxes);
   }
 
   private drawMap(): void {

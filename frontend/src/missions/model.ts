@@ -79,6 +79,9 @@ export function placeOf(item: MissionItem): [number, number] | null {
   return [item.lat, item.lon];
 }
 
+/** Commands whose param4 is a yaw, NaN (null) "keep the heading mode" (MAVLink common.xml). */
+const YAW_PARAM4 = new Set<number>([CMD.WAYPOINT, CMD.LOITER_TIME, CMD.LAND, CMD.TAKEOFF]);
+
 export function makeItem(command: number, lat = 0, lon = 0, alt = 0): MissionItem {
   return {
     command,
@@ -86,7 +89,8 @@ export function makeItem(command: number, lat = 0, lon = 0, alt = 0): MissionIte
     param1: 0,
     param2: 0,
     param3: 0,
-    param4: 0,
+    // Unset, as QGC writes it: a yaw of 0 would turn a PX4 vehicle north at every item.
+    param4: YAW_PARAM4.has(command) ? null : 0,
     lat,
     lon,
     alt,

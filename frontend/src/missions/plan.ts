@@ -5,7 +5,10 @@
 // rallyPoints}; `mission` is {version: 2, firmwareType, vehicleType, cruiseSpeed, hoverSpeed,
 // plannedHomePosition: [lat, lon, alt], items}; a "SimpleItem" carries one MAVLink item as
 // {command, frame, params: [p1..p4, lat, lon, alt] (NaN written as null), autoContinue,
-// doJumpId}. Complex items (surveys, corridor scans) are QGC's own patterns, expanded into
+// doJumpId}. A null is QGC's NaN, MAVLink's "unset" (a yaw that keeps the heading): in
+// params 1-4 it stays null (NaN on the wire; the hub's mission rules refuse it where the
+// command gives NaN no meaning), in the position it is refused, naming the item. Never 0:
+// a null altitude read as 0 is a waypoint at sea level, a null yaw read as 0 faces north. Complex items (surveys, corridor scans) are QGC's own patterns, expanded into
 // simple items only by QGC: a file with one is refused, naming it, rather than flown partly.
 import { fullItem, type MissionItem } from "./model";
 
@@ -13,6 +16,13 @@ import { fullItem, type MissionItem } from "./model";
 const MAV_AUTOPILOT_ARDUPILOTMEGA = 3;
 const MAV_AUTOPILOT_PX4 = 12;
 const MAV_TYPE_QUADROTOR = 2;
+
+/** A SimpleItem's params 5-7, by name: MISSION_ITEM_INT's x, y and z, with no "unset". */
+const POSITION = [
+  [4, "latitude"],
+  [5, "longitude"],
+  [6, "altitude"],
+] as const;
 
 export interface PlanFile {
   items: MissionItem[];
@@ -111,10 +121,16 @@ export function readPlan(text: string): PlanFile {
       `${where}.params`,
       "must be a list of 7 numbers (null for none)",
     );
-    // QGC writes NaN (a "leave as is" parameter, e.g. a yaw) as null; MAVLink sends 0 here.
-    const [p1, p2, p3, p4, lat, lon, alt] = params.map((value, i) =>
-      value === null ? 0 : number(value, `${where}.params[${i}]`),
+    // QGC writes NaN (an unset parameter, e.g. a yaw that keeps the heading) as null.
+    const [p1, p2, p3, p4] = params.slice(0, 4).map((value, i) =>
+      value === null ? null : number(value, `${where}.params[${i}]`),
     );
+    const [lat, lon, alt] = POSITION.map(([i, name]) => {
+      if (params[i] === null) {
+        throw new PlanError(`item ${index + 1}: ${name} is empty (null) in the .plan (${where}.params[${i}])`);
+      }
+      return number(params[i], `${where}.params[${i}]`);
+    });
     const autoContinue = raw.autoContinue ?? true;
     if (typeof autoContinue !== "boolean") throw new PlanError(`${where}.autoContinue: must be true or false`);
     items.push(

@@ -63,6 +63,14 @@ def test_qgcs_own_plan_imports() -> None:
     assert items[0].command == mavlink2.MAV_CMD_NAV_TAKEOFF
     assert items[1].lat == pytest.approx(47.398742)
     assert items[1].frame == mavlink2.MAV_FRAME_GLOBAL_RELATIVE_ALT
+    # QGC's null yaw is MAVLink's NaN, "keep the heading": unset, not 0 (north on PX4).
+    assert [item.param4 for item in items] == [None] * len(items)
+
+
+def test_a_qgc_null_altitude_is_refused_naming_the_item_not_read_as_0() -> None:
+    refusal = r"mission item 3 .*param 7 \(altitude\) is empty \(null\)"
+    with pytest.raises(InteropError, match=refusal):
+        read_qgc_plan_items((DATA / "null_altitude.plan").read_text())
 
 
 def test_a_qgc_survey_imports_with_its_polygon_and_camera_giving_qgcs_numbers() -> None:

@@ -308,6 +308,11 @@ def test_a_plan_goes_to_the_vehicle_it_was_edited_for(
     assert [item["command"] for item in on_board] == [22, 16, 16, 16, 16, 20]
     # A drawn take-off and waypoints leave the yaw unset (keep the heading), as QGC does.
     assert [item["param4"] for item in on_board[:5]] == [None] * 5
+    # The take-off stands where the vehicle launches (home), as QGC writes it: PX4 flies
+    # to a take-off's position, and at 0, 0 it flew towards 0°N 0°E.
+    takeoff = on_board[0]
+    home = (here["home_lat"], here["home_lon"])
+    assert (takeoff["lat"], takeoff["lon"]) == pytest.approx(home, abs=1e-7)
     assert _on_board(api, first) == first_before  # nothing went to the first vehicle
 
     # The list says where an upload goes: the edited vehicle, ticked; the others not.

@@ -222,7 +222,8 @@ export class MissionEditor {
     const base = this.selectedId ? this.known.get(this.selectedId) : undefined;
     this.draft = base ? base.map((item) => ({ ...item })) : [];
     if (this.draft.length === 0 && vehicle && !GROUND_TYPES.has(vehicle.vehicle_type)) {
-      this.draft.push(makeItem(CMD.TAKEOFF, 0, 0, DEFAULT_ALT_M));
+      const launch = this.launchPoint();
+      this.draft.push(makeItem(CMD.TAKEOFF, launch.lat, launch.lon, DEFAULT_ALT_M));
     }
     this.body.hidden = false;
     this.changed();
@@ -267,6 +268,7 @@ export class MissionEditor {
   private newItem(command: number, items: readonly MissionItem[]): MissionItem {
     const alt = command === CMD.RTL || command === CMD.LAND ? 0 : this.lastAltitude(items, items.length);
     const item = makeItem(command, 0, 0, alt);
+    if (command === CMD.TAKEOFF) Object.assign(item, this.launchPoint());
     if (command === CMD.LOITER_TIME) {
       // Loiter where the previous place was (a loiter at 0, 0 would be "here").
       const last = [...items].reverse().find((i) => i.lat !== 0 || i.lon !== 0);
@@ -281,7 +283,8 @@ export class MissionEditor {
       const item = items[index];
       const place = item.lat !== 0 || item.lon !== 0;
       item.command = command;
-      if (command === CMD.TAKEOFF || command === CMD.RTL) Object.assign(item, { lat: 0, lon: 0 });
+      if (command === CMD.TAKEOFF) Object.assign(item, this.launchPoint());
+      if (command === CMD.RTL) Object.assign(item, { lat: 0, lon: 0 });
       if (command === CMD.RTL) item.alt = 0;
       if (command === CMD.LOITER_TIME && !((item.param1 ?? 0) > 0)) item.param1 = 30;
       if ((command === CMD.WAYPOINT || command === CMD.LOITER_TIME) && !place) {
@@ -487,6 +490,18 @@ export class MissionEditor {
   }
 
   // ------------------------------------------------------------------ drawing
+
+  /** Where a take-off item stands: the vehicle's home, else where it is now, as
+   * QGroundControl writes a take-off at the launch point. PX4 flies to a take-off's
+   * position once it has climbed (ArduPilot climbs where it stands), so 0, 0 would send
+   * it towards 0°N 0°E; with no position known yet it stays 0, 0, which the hub's check
+   * refuses on PX4 with the reason. */
+  private launchPoint(): { lat: number; lon: number } {
+    const state = this.selected()?.state;
+    if (state?.home_lat != null && state.home_lon != null) return { lat: state.home_lat, lon: state.home_lon };
+    if (state?.lat != null && state.lon != null) return { lat: state.lat, lon: state.lon };
+    return { lat: 0, lon: 0 };
+  }
 
   private selected(): VehicleSummary | undefined {
     return this.selectedId ? this.vehicles.get(this.selectedId) : undefined;

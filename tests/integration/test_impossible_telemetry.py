@@ -23,7 +23,7 @@ from backend.storage.models import FlightRow
 from backend.storage.records import StoredRecord, TelemetryEnvelope
 from backend.storage.repository import Repository
 from backend.storage.writer import StorageWriter
-from protocol.messages import STATE_BOUNDS, Telemetry, VehicleState, encode
+from protocol.messages import STATE_BOUNDS, LiveState, Telemetry, VehicleState, encode
 from tests.conftest import ADMIN_PASSWORD, hub_settings
 from tests.helpers import access_token, agent_hello, api_client, poll_until, running_hub
 from tests.integration.test_hub_bad_input import ScriptedAgent, scripted_agent
@@ -110,6 +110,16 @@ def test_impossible_samples_are_refused_counted_and_the_link_goes_on(
         _send(agent, 6, _state(alt_rel=13.0))
         _acked_up_to(agent, 6)
         poll_until(lambda: len(_stored(api)) == 3, 10, "the next good sample stored")
+        # a live state (shown, never stored) is held to the same bounds
+        lat = series["lat"]
+        agent.send(encode(LiveState(time=time.time(), state=_state(lat=-91.0, alt_rel=20.0))))
+        agent.send(encode(LiveState(time=time.time(), state=_state(alt_rel=21.0))))
+        poll_until(
+            lambda: api.get("/api/v1/vehicles/v1").json()["state"]["alt_rel"] == 21.0,
+            10,
+            "the good live state shown",
+        )
+        assert _value(_metrics(hub, admin_token), lat) == _value(before, lat) + 2
 
 
 def test_every_bound_is_a_number_of_the_vehicle_state() -> None:

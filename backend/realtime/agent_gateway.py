@@ -76,7 +76,7 @@ class AgentSession(PeerConnection):
         self._resends: list[Resend] = []
         self._news = asyncio.Event()
         self._scan_error_at = -SCAN_ERROR_INTERVAL_S
-        self._refusals: SampleRefusals | None = None  # made at the hello
+        self._refusals: SampleRefusals | None = None  # made at the first sample
 
     def acknowledge(self, key: StreamKey, seq: int) -> None:
         if seq >= 0:

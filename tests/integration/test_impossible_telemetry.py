@@ -8,7 +8,7 @@ from __future__ import annotations
 import asyncio
 import json
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
@@ -16,6 +16,7 @@ import httpx
 import pytest
 from sqlalchemy import Engine, insert
 
+from backend.api.logs import exports
 from backend.realtime.bus import ReliableSubscription
 from backend.storage.database import make_engine, migrate
 from backend.storage.logbook import Logbook
@@ -186,6 +187,17 @@ def test_a_flight_holding_impossible_samples_exports_them_and_an_empty_one_says_
             empty = api.get(f"/api/v1/flights/{empty_id}/export.{format}")
             assert empty.status_code == 409, empty.text
             assert empty.json()["detail"] == f"flight {empty_id} has no telemetry stored to export"
+
+        def failing(*_: object) -> Iterator[bytes]:
+            raise OverflowError("float too large to pack with f format")
+            yield b""  # a generator, as the exporters are
+
+        monkeypatch.setattr(exports, "tlog_chunks", failing)
+        failed = api.get(f"/api/v1/flights/{flight_id}/export.tlog")
+        assert failed.status_code == 500, failed.text
+        assert failed.json()["detail"].startswith(
+            f"flight {flight_id}'s .tlog could not be written"
+        )
     messages = read_tlog(mavutil_in_mavlink2(monkeypatch), path)
     kinds = [m.get_type() for m in messages]
     # the samples of the flight (armed), each written; the one at latitude 91 without a place

@@ -196,7 +196,12 @@ class Hub:
                 settings.password_hash_threads, settings.password_hash_max_pending
             ),
             safety=(safety := SafetyGate(RailsRepository(engine), settings)),
-            formations=FormationService(registry, safety, repository=FormationRepository(engine)),
+            formations=FormationService(
+                registry,
+                safety,
+                repository=FormationRepository(engine),
+                join_timeout_s=settings.formation_join_timeout_s,
+            ),
             scans=ScanService(
                 ScanRepository(engine),
                 bus,

@@ -113,6 +113,13 @@ class HubSettings(BaseSettings):
     )
 
     command_timeout_s: float = Field(default=15.0, gt=0, le=120)
+    formation_join_timeout_s: float = Field(
+        default=60.0,
+        gt=0,
+        le=3600,
+        description="a formation whose followers are not all in their slots this long "
+        "after its start ends, and every member holds",
+    )
     principal_cache_s: float = Field(
         default=10.0, ge=0, le=300, description="a resolved token answers without the database"
     )

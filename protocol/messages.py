@@ -407,7 +407,9 @@ LandedState = Literal["on_ground", "takeoff", "in_air", "landing"]
 
 
 class VehicleState(Message):
-    """One telemetry snapshot, assembled by the agent from the latest MAVLink messages."""
+    """One telemetry snapshot, assembled by the agent from the latest MAVLink messages.
+    The hub refuses a snapshot holding a physically impossible value (STATE_BOUNDS:
+    latitude beyond ±90, an altitude of 1e308 ...): not stored, not shown, counted."""
 
     fcu_connected: bool = True
     mode: str = Field(default="UNKNOWN", max_length=MAX_NAME_CHARS)
@@ -471,6 +473,47 @@ class VehicleState(Message):
     outbox_dropped: int = Field(
         default=0, ge=0, description="frames the agent dropped because its outbox was full"
     )
+
+
+# Where a reported value is physically possible, inclusive, per VehicleState field. An
+# agent's sample with a value outside (a latitude of 91, an altitude of 1e308: a broken
+# sensor, a decoding bug, a hostile peer) is refused whole by the hub, counted, and never
+# stored or shown; the agent's link goes on. Not field constraints of VehicleState: the
+# agent builds one from whatever the flight controller says, and must not fail doing so.
+STATE_BOUNDS: dict[str, tuple[float, float]] = {
+    "lat": (-90.0, 90.0),
+    "lon": (-180.0, 180.0),
+    "home_lat": (-90.0, 90.0),
+    "home_lon": (-180.0, 180.0),
+    # metres above mean sea level: the Dead Sea shore is at -430, 100 km is space
+    "alt_msl": (-1_000.0, 100_000.0),
+    "home_alt_msl": (-1_000.0, 100_000.0),
+    # metres above home: a vehicle homed on a summit may fly far below it
+    "alt_rel": (-10_000.0, 100_000.0),
+    "heading_deg": (-360.0, 360.0),
+    "roll_deg": (-180.0, 180.0),
+    "pitch_deg": (-180.0, 180.0),
+    # m/s: 500 is beyond any vehicle this station flies (about Mach 1.5)
+    "groundspeed": (0.0, 500.0),
+    "climb_rate": (-500.0, 500.0),
+    "vn": (-500.0, 500.0),
+    "ve": (-500.0, 500.0),
+    "battery_voltage": (0.0, 1_000.0),  # V
+    "battery_current": (-1_000.0, 1_000.0),  # A; negative while charging
+    "battery_remaining": (0.0, 100.0),  # percent
+}
+
+
+def state_out_of_range(state: VehicleState) -> list[tuple[str, str]]:
+    """Each field of ``state`` outside STATE_BOUNDS, with the problem said ("lat 91 is
+    outside -90..90"); empty for a possible state. None is unknown, not out of range;
+    non-finite numbers never get this far (the frame's parse refuses them)."""
+    problems = []
+    for name, (low, high) in STATE_BOUNDS.items():
+        value = getattr(state, name)
+        if value is not None and not low <= value <= high:
+            problems.append((name, f"{name} {value:g} is outside {low:g}..{high:g}"))
+    return problems
 
 
 # ---------------------------------------------------------------------------

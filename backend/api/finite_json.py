@@ -1,14 +1,16 @@
 """JSON request bodies hold finite numbers only.
 
 Python's parser accepts ``NaN``, ``Infinity`` and ``-Infinity``, which JSON (RFC 8259) does
-not have. Let through, they pass any float field without bounds, reach the vehicle, and
-break the answer itself (a 422 echoing the input cannot be serialised). So a body that
-holds one is refused at parse time with a 422 that names where it is.
+not have, and reads a number too large for a double (``1e309``, ``-1E400``) as an infinity.
+Let through, they pass any float field without bounds, reach the vehicle, and break the
+answer itself (a 422 echoing the input cannot be serialised). So a body that holds one,
+however it is spelled, is refused at parse time with a 422 that names where it is.
 """
 
 from __future__ import annotations
 
 import json
+import math
 from collections.abc import Callable, Coroutine, Iterator
 from typing import Any
 
@@ -19,15 +21,16 @@ from starlette.responses import Response
 
 
 class _NonFinite:
-    """Stands in for a non-finite constant while the body is parsed."""
+    """Stands in for a non-finite number while the body is parsed."""
 
-    def __init__(self, text: str) -> None:
+    def __init__(self, text: str, why: str) -> None:
         self.text = text
+        self.why = why
 
 
 def _non_finite_at(value: object, path: tuple[str | int, ...]) -> Iterator[tuple[Any, ...]]:
     if isinstance(value, _NonFinite):
-        yield (*path, value.text)
+        yield (*path, value)
     elif isinstance(value, dict):
         for key, item in value.items():
             yield from _non_finite_at(item, (*path, key))
@@ -37,16 +40,27 @@ def _non_finite_at(value: object, path: tuple[str | int, ...]) -> Iterator[tuple
 
 
 def parse_finite_json(body: bytes) -> Any:
-    """The parsed body; raises a 422 listing every NaN or Infinity, by location."""
+    """The parsed body; raises a 422 listing every NaN, Infinity or number too large for a
+    double, by location."""
     found = False
 
     def constant(text: str) -> _NonFinite:
         nonlocal found
         found = True
-        return _NonFinite(text)
+        return _NonFinite(text, "is not a JSON number")
+
+    def number(text: str) -> float | _NonFinite:
+        # Only numbers with a fraction or an exponent come here (integers stay exact, and
+        # pydantic refuses one too large for a float field by name).
+        value = float(text)
+        if math.isfinite(value):
+            return value
+        nonlocal found
+        found = True
+        return _NonFinite(text, "is too large for a number (a 64-bit float)")
 
     try:
-        parsed = json.loads(body, parse_constant=constant)
+        parsed = json.loads(body, parse_constant=constant, parse_float=number)
     except json.JSONDecodeError:
         raise  # FastAPI answers these with its own 422, naming the position
     except (ValueError, RecursionError) as error:
@@ -61,9 +75,9 @@ def parse_finite_json(body: bytes) -> Any:
     detail = [
         {
             "loc": ["body", *where[:-1]],
-            "msg": f"{where[-1]} is not a JSON number; send a finite number",
+            "msg": f"{where[-1].text} {where[-1].why}; send a finite number",
             "type": "finite_number",
-            "input": where[-1],
+            "input": where[-1].text,
         }
         for where in _non_finite_at(parsed, ())
     ]

@@ -107,7 +107,14 @@ async def start_formation(
     """Check the formation (separation of every slot, roles, readiness, speed, and the
     route with every slot around it against the rails) and start it: each member gets its
     slot, and the leader's state is relayed to the followers at 10 Hz. Audited, refused
-    or not."""
+    or not.
+
+    Every member must already fly (armed, and in the air by its autopilot's landed state):
+    the hub does not take members off. One that is on the ground, landing, disarmed or
+    whose landed state is unknown is refused (422, each named: "sim_3 is on the ground:
+    take off first") before any member is told anything. A formation whose followers are
+    not all in their slots within the hub's join time limit (GCS_FORMATION_JOIN_TIMEOUT_S,
+    60 s) ends with the reason in `stopped`, and every member holds."""
     target = body.leader_id or "virtual leader"
     async with _audited(request, principal, hub, AuditAction.FORMATION_START, target) as note:
         formation = await hub.formations.start(body, by=principal.name)

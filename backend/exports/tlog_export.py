@@ -32,6 +32,7 @@ from backend.exports.samples import (
     finite,
     sample_position,
 )
+from protocol.mavlink_wire import FLOAT32_MAX
 
 CHUNK_BYTES = 64 * 1024
 HEARTBEAT_PERIOD_S = 1.0
@@ -45,14 +46,18 @@ _NAN = math.nan
 
 
 def _scaled(value: float | None, scale: float, low: int, high: int, unknown: int) -> int:
-    """``round(value * scale)`` clamped into the field's range, ``unknown`` for None."""
-    if value is None:
+    """``round(value * scale)`` clamped into the field's range, ``unknown`` for None or NaN.
+
+    Clamped before rounding: a stored value far out of range (an altitude of 1e308, from
+    a hub that took such samples) overflows to infinity when scaled, and rounding that
+    raised, ending the export with nothing written."""
+    if value is None or math.isnan(value):
         return unknown
-    return max(low, min(high, round(value * scale)))
+    return round(max(low, min(high, value * scale)))
 
 
 def _int16(value: float) -> int:
-    return max(-32768, min(32767, round(value)))
+    return _scaled(value, 1, -32768, 32767, 0)
 
 
 def _int32(value: float | None, scale: float) -> int:
@@ -60,7 +65,11 @@ def _int32(value: float | None, scale: float) -> int:
 
 
 def _float(value: float | None) -> float:
-    return _NAN if value is None else value
+    """A float32 field's value; NaN (MAVLink's unknown) for None and for what no float32
+    holds (packing 1e308 raised)."""
+    if value is None or not -FLOAT32_MAX <= value <= FLOAT32_MAX:
+        return _NAN
+    return value
 
 
 class _TlogWriter:
@@ -137,7 +146,7 @@ class _SampleEncoder:
             vx=vx,
             vy=vy,
             vz=0 if climb is None else _int16(-climb * 100),  # MAVLink's z points down
-            hdg=_UINT16_UNKNOWN if heading is None else round(heading * 100) % 36000,
+            hdg=_UINT16_UNKNOWN if heading is None else round(heading % 360 * 100) % 36000,
         )
 
     def _gps_raw_int(self, sample: ExportSample, position: tuple[float, float] | None) -> Any:

@@ -26,6 +26,7 @@ from sqlalchemy.exc import SQLAlchemyError
 from starlette.websockets import WebSocketDisconnect
 
 from backend.errors import Conflict, NotFound
+from backend.fleet.airborne import not_airborne
 from backend.fleet.formation_metrics import TrackingMetrics, tracking_summary
 from backend.fleet.registry import FleetRegistry
 from backend.fleet.safety_gate import SafetyGate, snapshot_of
@@ -53,6 +54,9 @@ MAX_RELAY_AGE_S = 1.0
 # The route's clock starts once every follower is this close to its slot (horizontally
 # and vertically): a leg flown while followers are still joining measures nothing.
 FORM_UP_M = 0.5
+# A formation whose followers have not all reached their slots this long after it started
+# ends (its members hold) with the reason, rather than sit "joining" for ever.
+JOIN_TIMEOUT_S = 60.0
 # The leader's scans go to the followers at most this often (the newest, never a queue):
 # an obstacle moves with the scene, not the sensor's 10 Hz, and each scan is kilobytes.
 SCAN_RELAY_HZ = 2.0
@@ -108,8 +112,10 @@ class FormationService:
         rate_hz: float = 10.0,
         clock: Callable[[], float] = time.time,
         repository: FormationRepository | None = None,
+        join_timeout_s: float = JOIN_TIMEOUT_S,
     ) -> None:
         self._registry = registry
+        self._join_timeout_s = join_timeout_s
         self._safety = safety
         self._repository = repository
         self._period = 1.0 / rate_hz
@@ -137,7 +143,7 @@ class FormationService:
         members = [f.vehicle_id for f in request.followers]
         if request.leader_id:
             members.append(request.leader_id)
-        vehicles, not_ready = {}, {}
+        vehicles, not_ready, grounded = {}, {}, {}
         for vehicle_id in members:
             record = self._registry.get(vehicle_id)  # VehicleNotFound for an unknown id
             if record.channel is None:
@@ -146,12 +152,15 @@ class FormationService:
             state = record.state
             if state is not None and state.ready_to_fly is False:
                 not_ready[vehicle_id] = state.not_ready_reason or "not ready"
+            if (why := not_airborne(vehicle_id, state)) is not None:
+                grounded[vehicle_id] = why
         rails = self._safety.site_rails()
         plan = plan_formation(
             request,
             rails=rails,
             vehicles=vehicles,
             not_ready=not_ready,
+            not_airborne=grounded,
             busy=self.busy(),
             max_speed_ms=max_speed_ms,
         )
@@ -333,18 +342,40 @@ class FormationService:
 
     def _formed(self, formation: ActiveFormation, leader: LeaderState) -> bool:
         """Every follower within FORM_UP_M of its slot around the leader."""
+        return not self._joining(formation, leader)
+
+    def _joining(self, formation: ActiveFormation, leader: LeaderState | None) -> list[str]:
+        """Each follower not yet within FORM_UP_M of its slot around the leader, and why."""
+        if leader is None:
+            return [f"the leader {formation.plan.leader_id}'s state is not known"]
+        out = []
         for follower, offset in formation.offsets.items():
             here = self._local(formation, follower)
             if here is None:
-                return False
+                out.append(f"{follower}'s position is not known")
+                continue
             (north, east, up), _ = slot_target(leader, offset)
-            if math.dist((north, east, up), (here.north, here.east, here.up)) > FORM_UP_M:
-                return False
+            distance = math.dist((north, east, up), (here.north, here.east, here.up))
+            if distance > FORM_UP_M:
+                out.append(f"{follower} is {distance:.1f} m from its slot")
+        return out
+
+    async def _end_if_not_formed(self, formation: ActiveFormation, now: float) -> bool:
+        """Stop (every member holds) a formation still joining past the time limit, naming
+        who is not in its slot; whether it did."""
+        if formation.formed_at is not None or now - formation.started_at < self._join_timeout_s:
+            return False
+        why = "; ".join(self._joining(formation, self.leader_state(formation, now)))
+        reason = f"did not form within {self._join_timeout_s:g} s: {why or 'not in place'}"
+        log.warning("%s %s", formation.id, reason)
+        await self.stop(formation.id, reason)
         return True
 
     async def relay_once(self) -> None:
         now = self._clock()
         for formation in self.active():
+            if await self._end_if_not_formed(formation, now):
+                continue
             route = formation.plan.route.state_at(self._route_time(formation, now))
             if formation.plan.leader_id is not None:
                 # the leader vehicle flies the route itself, at a zero offset

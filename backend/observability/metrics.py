@@ -18,6 +18,8 @@ from typing import Literal, get_args
 
 from prometheus_client import Counter, Gauge, Histogram
 
+from protocol.messages import STATE_BOUNDS
+
 # agent_ws: /api/v1/agent/ws; client_ws: /api/v1/ws (dashboards, integrations);
 # agent_scan: an agent's binary LIDAR frames; client_manual: manual-control input.
 Surface = Literal["agent_ws", "client_ws", "agent_scan", "client_manual"]
@@ -47,6 +49,12 @@ QUEUE_DEPTH = Gauge(
     "Records waiting, by queue: 'storage' (the writer's inbox), 'dashboard_max' (the most "
     "vehicle updates pending for any one client feed).",
     ["queue"],
+)
+TELEMETRY_REFUSED = Counter(
+    "gcs_telemetry_refused",
+    "Agents' telemetry samples refused and not stored because a value is physically "
+    "impossible (protocol.messages.STATE_BOUNDS), by reason: the first field out of range.",
+    ["reason"],
 )
 STORAGE_ROWS = Counter("gcs_storage_rows_total", "Telemetry samples committed to the database.")
 STORAGE_BATCH_SECONDS = Histogram(
@@ -92,3 +100,5 @@ for _reason in ("coalesced", "slow_client"):
     DROPPED.labels(reason=_reason)
 for _reason in ("disconnect", "timeout", "shutdown"):
     SURVEY_PLANS_STOPPED.labels(reason=_reason)
+for _field in STATE_BOUNDS:
+    TELEMETRY_REFUSED.labels(reason=f"{_field}_out_of_range")

@@ -22,6 +22,7 @@ from backend.realtime.agent_admission import Clash, judge
 from backend.realtime.bus import Topic
 from backend.realtime.collaborators import GatewayServices
 from backend.realtime.frames import FrameTooLarge, PeerConnection
+from backend.realtime.sample_refusals import SampleRefusals
 from backend.storage.records import LostFrames, StoredEvent, TelemetryEnvelope
 from backend.storage.sequences import Gap, StreamKey
 from protocol.messages import (
@@ -44,6 +45,7 @@ from protocol.messages import (
     Welcome,
     agent_to_hub,
     decode,
+    state_out_of_range,
 )
 
 log = logging.getLogger(__name__)
@@ -74,6 +76,7 @@ class AgentSession(PeerConnection):
         self._resends: list[Resend] = []
         self._news = asyncio.Event()
         self._scan_error_at = -SCAN_ERROR_INTERVAL_S
+        self._refusals: SampleRefusals | None = None  # made at the first sample
 
     def acknowledge(self, key: StreamKey, seq: int) -> None:
         if seq >= 0:
@@ -337,6 +340,10 @@ class AgentSession(PeerConnection):
             case Telemetry():
                 await self._ingest(hello, message)
             case LiveState(time=at, state=state):
+                if problems := state_out_of_range(state):
+                    # for the live view only, never stored: dropped and counted
+                    self._sample_refusals(hello).count(problems, "a live state")
+                    return
                 if self.hub.registry.apply_live(hello.vehicle_id, at, state):
                     await self.hub.publish_state(self.hub.registry.get(hello.vehicle_id))
             case Event():
@@ -406,9 +413,24 @@ class AgentSession(PeerConnection):
                 log.info("scan from %s refused: %s", hello.vehicle_id, message)
                 await self.send(ErrorReply(code="invalid_message", message=f"scan: {message}"))
 
+    def _sample_refusals(self, hello: Hello) -> SampleRefusals:
+        if self._refusals is None:
+            self._refusals = SampleRefusals(hello.vehicle_id)
+        return self._refusals
+
     async def _ingest(self, hello: Hello, telemetry: Telemetry) -> None:
         hub = self.hub
         stream_id = telemetry.stream_id or hello.stream_id
+        refusals = self._sample_refusals(hello)
+        if problems := state_out_of_range(telemetry.state):
+            # An impossible value (latitude 91, altitude 1e308): the sample is neither
+            # stored nor shown, the link goes on. Its number is recorded as refused.
+            if (run := refusals.refuse(stream_id, telemetry.seq, problems)) is not None:
+                await hub.bus.publish(Topic.STORAGE, hello.vehicle_id, run)
+            return
+        if (run := refusals.flush()) is not None:
+            # before this sample, so that the store never takes the refused ones for a hole
+            await hub.bus.publish(Topic.STORAGE, hello.vehicle_id, run)
         envelope = TelemetryEnvelope(hello.vehicle_id, stream_id, telemetry)
         # Storage is reliable: if the writer is behind, this waits, and so does the agent.
         # Replays go there too; the writer knows what it has stored.

@@ -33,7 +33,8 @@ class StoredEvent:
 
 @dataclass(frozen=True)
 class LostFrames:
-    """Frames an agent said it no longer has (its bounded outbox dropped them)."""
+    """Frames an agent said it no longer has (its bounded outbox dropped them), or that the
+    hub refused (``refused``: a telemetry sample with an impossible value)."""
 
     vehicle_id: str
     stream_id: str
@@ -41,6 +42,7 @@ class LostFrames:
     first_seq: int
     last_seq: int
     reason: str
+    refused: bool = False
 
 
 StoredRecord = TelemetryEnvelope | StoredEvent | LostFrames

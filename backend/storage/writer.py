@@ -178,11 +178,29 @@ class StorageWriter:
         new_telemetry = [e for e in telemetry if next(fresh)]
         new_events = [e for e in events if e.seq is None or next(fresh)]
         forward = self._moving_forward(new_telemetry)
-        loss_events = [_loss_event(loss) for loss in losses]
-        stored = [(_key(e), e.telemetry.seq) for e in new_telemetry]
+        # Samples the hub refused are handled as far as acks and gaps go (never asked for
+        # again), and said once: a replay of them is refused again, not recorded again.
+        # Each number keeps its place in the batch, so that a refused run (sent just
+        # before the good sample after it) does not look like a gap that sample opened.
+        place = {id(record): index for index, record in enumerate(self._batch)}
+        handled = [
+            (place[id(loss)], loss, (_key(loss), seq))
+            for loss in losses
+            if loss.refused
+            for seq in range(loss.first_seq, loss.last_seq + 1)
+        ]
+        fresh_handled = self.sequences.fresh([number for _, _, number in handled])
+        new_handled = [h for h, new in zip(handled, fresh_handled, strict=True) if new]
+        said = {id(loss) for _, loss, _ in new_handled}
+        loss_events = [_loss_event(x) for x in losses if not x.refused or id(x) in said]
+        in_order = [(index, number) for index, _, number in new_handled]
+        in_order += [(place[id(e)], (_key(e), e.telemetry.seq)) for e in new_telemetry]
+        in_order.sort(key=lambda placed: placed[0])
+        stored = [number for _, number in in_order]
         stored += [(_key(e), e.seq) for e in new_events if e.seq is not None]
         change = self.sequences.preview(
-            stored, [(_key(loss), loss.first_seq, loss.last_seq) for loss in losses]
+            stored,
+            [(_key(loss), loss.first_seq, loss.last_seq) for loss in losses if not loss.refused],
         )
         tracker = self.tracker.copy()
         with self._repository.engine.begin() as connection:
@@ -220,9 +238,11 @@ class StorageWriter:
         if new_telemetry:
             oldest = min(envelope.telemetry.time for envelope in new_telemetry)
             metrics.STORAGE_WRITE_LAG.set(max(0.0, time.time() - oldest))
-        self.stats.duplicates += len(sequenced) - len(stored)
+        self.stats.duplicates += len(sequenced) - (len(stored) - len(new_handled))
         self.stats.events_written += events_written
-        self.stats.lost += sum(loss.last_seq - loss.first_seq + 1 for loss in losses)
+        self.stats.lost += sum(
+            loss.last_seq - loss.first_seq + 1 for loss in losses if not loss.refused
+        )
         self._batch = []
 
     def _gaps_to_ask(self, opened: list[Gap], touched: set[StreamKey]) -> list[Gap]:
@@ -317,6 +337,6 @@ def _loss_event(loss: LostFrames) -> StoredEvent:
         time.time(),
         "data_lost",
         4,  # MAV_SEVERITY_WARNING
-        f"{what} {loss.first_seq}-{loss.last_seq} of stream {loss.stream_id} never "
-        f"arrived: {loss.reason}",
+        f"{what} {loss.first_seq}-{loss.last_seq} of stream {loss.stream_id} "
+        f"{'were refused, not stored' if loss.refused else 'never arrived'}: {loss.reason}",
     )

@@ -84,6 +84,12 @@ def test_a_formation_is_drawn_in_3d_while_it_runs(
         for vehicle, altitude in ALTITUDES.items():
             watcher.wait_until(ready(vehicle), 60, f"{vehicle} ready")
             take_off(api, watcher, vehicle, altitude, above=altitude / 2)
+        for vehicle in ALTITUDES:  # a formation takes members that fly, by their autopilot
+            watcher.wait_until(
+                lambda v, n=vehicle: v[n]["state"]["landed_state"] in ("takeoff", "in_air"),
+                10,
+                f"{vehicle} in the air by its autopilot",
+            )
         here = watcher.state(LEADER)
         answer = api.post("/api/v1/formations", json=_request(LocalFrame(here["lat"], here["lon"])))
         assert answer.status_code == 200, answer.text

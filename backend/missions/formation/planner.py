@@ -103,13 +103,15 @@ def plan_formation(
     rails: SafetyRails,
     vehicles: Mapping[str, VehicleSnapshot],
     not_ready: Mapping[str, str] | None = None,
+    not_airborne: Mapping[str, str] | None = None,
     busy: Collection[str] = (),
     max_speed_ms: float = 5.0,
 ) -> FormationPlan:
     """Check ``request`` and return its plan, or raise FormationRefused with the reason.
 
     ``vehicles`` is the hub's last report of each member; ``not_ready`` the reason each
-    member that is not ready to fly gave; ``busy`` the vehicles in another formation;
+    member that is not ready to fly gave; ``not_airborne`` why each member that is not
+    known to fly is not (all are named in one refusal); ``busy`` the vehicles in another formation;
     ``max_speed_ms`` the slowest member's speed limit (WPNAV_SPEED or MPC_XY_VEL_MAX)."""
     followers = [f.vehicle_id for f in request.followers]
     if request.leader_id is not None and request.leader_id in followers:
@@ -126,6 +128,11 @@ def plan_formation(
         reason = (not_ready or {}).get(vehicle)
         if reason is not None:
             raise FormationRefused("followers", f"{vehicle} is not ready to fly: {reason}")
+    # Members join from where they fly; one on the ground would sit in GUIDED and the
+    # formation never form. Refused before any member is told anything.
+    grounded = [reason for v in members if (reason := (not_airborne or {}).get(v))]
+    if grounded:
+        raise FormationRefused("followers", "; ".join(grounded))
     # The followers fly faster than the leader on the outside of its turns and while
     # they close on their slots; the leader's speed itself must be within every limit.
     if request.speed_ms > max_speed_ms:

@@ -822,6 +822,13 @@ export interface paths {
          *     route with every slot around it against the rails) and start it: each member gets its
          *     slot, and the leader's state is relayed to the followers at 10 Hz. Audited, refused
          *     or not.
+         *
+         *     Every member must already fly (armed, and in the air by its autopilot's landed state):
+         *     the hub does not take members off. One that is on the ground, landing, disarmed or
+         *     whose landed state is unknown is refused (422, each named: "sim_3 is on the ground:
+         *     take off first") before any member is told anything. A formation whose followers are
+         *     not all in their slots within the hub's join time limit (GCS_FORMATION_JOIN_TIMEOUT_S,
+         *     60 s) ends with the reason in `stopped`, and every member holds.
          */
         post: operations["start_formation_api_v1_formations_post"];
         delete?: never;
@@ -3648,6 +3655,8 @@ export interface components {
         /**
          * VehicleState
          * @description One telemetry snapshot, assembled by the agent from the latest MAVLink messages.
+         *     The hub refuses a snapshot holding a physically impossible value (STATE_BOUNDS:
+         *     latitude beyond ±90, an altitude of 1e308 ...): not stored, not shown, counted.
          */
         VehicleState: {
             /**

@@ -98,6 +98,8 @@ export interface Telemetry {
 }
 /**
  * One telemetry snapshot, assembled by the agent from the latest MAVLink messages.
+ * The hub refuses a snapshot holding a physically impossible value (STATE_BOUNDS:
+ * latitude beyond ±90, an altitude of 1e308 ...): not stored, not shown, counted.
  */
 export interface VehicleState {
   fcu_connected: boolean;

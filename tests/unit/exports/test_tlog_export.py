@@ -1,5 +1,6 @@
 from __future__ import annotations
 
+import dataclasses
 import subprocess
 import sys
 from pathlib import Path
@@ -9,6 +10,7 @@ import pytest
 
 from backend.exports import ExportSample, sample_position, tlog_chunks
 from tests.mavutil_state import mavutil_in_mavlink2, read_tlog
+from tests.unit.exports import flight_data
 from tests.unit.exports.flight_data import T0, events, flight, samples
 
 
@@ -150,3 +152,26 @@ def test_chunks_hold_many_records() -> None:
 
 def test_empty_flight_gives_an_empty_log() -> None:
     assert b"".join(tlog_chunks(flight(), [], [])) == b""
+
+
+@pytest.mark.parametrize("extreme", [1e308, -1e308, 3.5e38, 1e19, -1e19])
+def test_any_stored_value_is_written_never_an_exception(
+    tmp_path: Path, mavutil: ModuleType, extreme: float
+) -> None:
+    """A hub that took impossible samples stored them (an altitude of 1e308); packing
+    one raised (OverflowError) and the export ended with nothing written. Each is written
+    clamped to its field, or as MAVLink's unknown where a float32 cannot hold it."""
+    base = flight_data.sample(10)
+    wild = dataclasses.replace(
+        base,
+        alt_msl=extreme,
+        alt_rel=extreme,
+        heading_deg=extreme,
+        groundspeed=extreme,
+        climb_rate=extreme,
+        battery_voltage=extreme,
+        battery_remaining=extreme,
+    )
+    path = _write(tmp_path / "wild.tlog", list(tlog_chunks(flight(), [base, wild], [])))
+    messages = read_tlog(mavutil, path)
+    assert [m.get_type() for m in messages].count("VFR_HUD") == 2

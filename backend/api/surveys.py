@@ -21,7 +21,7 @@ from starlette.convertors import Convertor, register_url_convertor
 from backend.api.deps import HubDep
 from backend.api.security import CurrentPrincipal, SecuredRouter, requires
 from backend.auth.policy import Permission
-from backend.errors import InvalidRequest, RequestTooLarge
+from backend.errors import Conflict, InvalidRequest, RequestTooLarge
 from backend.fleet.safety_gate import snapshot_of
 from backend.missions.schemas import Mission, MissionCheckResponse
 from backend.missions.survey.camera import PRESETS
@@ -357,7 +357,13 @@ def _area_file_json(kind: str, text: str, max_vertices: int) -> bytes:
 @router.get(
     "/surveys/{survey_id}/vehicles/{vehicle_id}/mission",
     openapi_extra=requires(Permission.READ),
-    responses={200: {"content": {"application/json": {}, "text/plain": {}}}},
+    responses={
+        200: {"content": {"application/json": {}, "text/plain": {}}},
+        409: {
+            "description": "A `.plan` or `.waypoints` file for a vehicle that has not "
+            "reported its home yet (both files carry it)",
+        },
+    },
 )
 async def export_survey_mission(
     survey_id: SurveyIdPath,
@@ -371,23 +377,32 @@ async def export_survey_mission(
     drone = run.drone(vehicle_id)
     if drone is None:
         raise InvalidRequest("vehicle_id", f"vehicle {vehicle_id} is not in survey {survey_id}")
+    name = f"survey-{survey_id}-{vehicle_id}"
+    if format == "geojson":
+        return JSONResponse(
+            mission_path_geojson(drone.items),
+            headers={"Content-Disposition": f'attachment; filename="{name}.geojson"'},
+        )
     record = {r.id: r for r in hub.registry.all()}.get(vehicle_id)
     state = record.state if record is not None else None
-    home = (
-        (state.home_lat or 0.0, state.home_lon or 0.0, state.home_alt_msl or 0.0)
-        if state is not None
-        else (0.0, 0.0, 0.0)
-    )
-    name = f"survey-{survey_id}-{vehicle_id}"
+    if (
+        state is None
+        or state.home_lat is None
+        or state.home_lon is None
+        or state.home_alt_msl is None
+    ):
+        # Never 0, 0, 0: a tool that takes the file's home would put it at 0°N 0°E.
+        raise Conflict(
+            f"{vehicle_id} has not reported its home yet, which a .plan or .waypoints file "
+            "carries; the GeoJSON path does not need it"
+        )
+    home = (state.home_lat, state.home_lon, state.home_alt_msl)
     if format == "wpl":
         return PlainTextResponse(
             to_wpl(drone.items, home),
             headers={"Content-Disposition": f'attachment; filename="{name}.waypoints"'},
         )
-    document = (
-        to_qgc_plan(drone.items, home) if format == "plan" else mission_path_geojson(drone.items)
-    )
-    suffix = "plan" if format == "plan" else "geojson"
     return JSONResponse(
-        document, headers={"Content-Disposition": f'attachment; filename="{name}.{suffix}"'}
+        to_qgc_plan(drone.items, home),
+        headers={"Content-Disposition": f'attachment; filename="{name}.plan"'},
     )

@@ -15,6 +15,10 @@ got back (status codes). Loopback only; every loop is bounded in time and count.
 - dashboards: 200 live feeds that never read (4 KB receive buffers), then vanish;
 - photos: one agent token, 16 clients each starting photo uploads of a declared 40 MB and
   sending 256 KiB chunks, never finishing one;
+- previews: 8 operators' clients post survey previews in turn: a 4.4 km square at 1 m and
+  a 200 m one at 1 m (both refused from their estimates) and a 200 m one at 5 m (planned);
+- imports: 20 operators each post area files: KML of 45,000 vertices (refused once
+  counted) and of 9,000 (parsed), until each user's imports a minute are spent (429);
 Prints figures; asserts nothing.
 """
 
@@ -31,20 +35,23 @@ import subprocess
 import sys
 import tempfile
 import time
+import uuid
 from collections import Counter
 from collections.abc import Callable, Coroutine
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import httpx
 
+from common.geodesy import LocalFrame
 from gcs.launcher import FleetPlan, LocalFleet, free_port
 from protocol.photos import MAX_PHOTO_BYTES, CameraIntrinsics, PhotoMeta, PhotoPose
 from tests.helpers import access_token
 from tests.integration.test_hub_bad_input import scripted_agent
 
 PROBE_EVERY_S = 0.05
+PASSWORD = "correct horse battery"
 MAX_REQUESTS = 200_000  # a bound on any flood's loop, whatever its duration
 
 CAMERA = CameraIntrinsics(
@@ -79,9 +86,17 @@ class Flood:
     base: str
     admin_token: str
     seconds: float
-    statuses: Counter[str]
+    statuses: Counter[str] = field(default_factory=Counter)
+    prober: subprocess.Popen[str] | None = None
 
     def until(self) -> float:
+        """Starts the /health prober (a flood's set-up, before this, is not measured);
+        when the flood ends."""
+        self.prober = subprocess.Popen(
+            [sys.executable, "-c", PROBE, self.base, str(self.seconds), str(PROBE_EVERY_S)],
+            stdout=subprocess.PIPE,
+            text=True,
+        )
         return time.monotonic() + self.seconds
 
 
@@ -126,7 +141,7 @@ async def dashboards(flood: Flood) -> None:
     host, port = flood.base.removeprefix("http://").split(":")
     sockets = [_feed_socket((host, int(port)), flood.admin_token) for _ in range(200)]
     flood.statuses["opened"] += len(sockets)
-    await asyncio.sleep(flood.seconds)  # the flood is their not reading
+    await asyncio.sleep(flood.until() - time.monotonic())  # the flood is their not reading
     for sock in sockets:  # gone without a close frame: a reset
         sock.setsockopt(socket.SOL_SOCKET, socket.SO_LINGER, struct.pack("ii", 1, 0))
         sock.close()
@@ -134,7 +149,7 @@ async def dashboards(flood: Flood) -> None:
 
 async def idle(flood: Flood) -> None:
     """No flood: the figures to read the others against."""
-    await asyncio.sleep(flood.seconds)
+    await asyncio.sleep(flood.until() - time.monotonic())
 
 
 def _enrolled(base: str, admin_token: str, vehicle: str) -> str:
@@ -192,11 +207,82 @@ async def photos(flood: Flood) -> None:
             tasks.create_task(client(http))
 
 
+def _square(vehicle: dict[str, Any], side_m: float, altitude_m: float) -> dict[str, Any]:
+    frame = LocalFrame(vehicle["lat"], vehicle["lon"], 0.0)
+    corners = [(50, 50), (50 + side_m, 50), (50 + side_m, 50 + side_m), (50, 50 + side_m)]
+    ring = [[lon, lat] for lat, lon in (frame.to_geo(x, y) for x, y in corners)]
+    return {
+        "area": {"type": "Polygon", "coordinates": [[*ring, ring[0]]]},
+        "camera": "sony_a6000_16mm",
+        "altitude_m": altitude_m,
+        "vehicle_ids": [vehicle["id"]],
+    }
+
+
+def _kml(vertices: int) -> str:
+    points = " ".join(f"{8 + k * 1e-6:.6f},47.000000" for k in range(vertices - 1))
+    return (
+        '<kml xmlns="http://www.opengis.net/kml/2.2"><Placemark><Polygon><outerBoundaryIs>'
+        f"<LinearRing><coordinates>{points} 8.5,47.5</coordinates></LinearRing>"
+        "</outerBoundaryIs></Polygon></Placemark></kml>"
+    )
+
+
+def _operators(base: str, admin_token: str, count: int) -> list[str]:
+    """``count`` new operators' tokens (the imports' rate is per user)."""
+    tokens = []
+    with httpx.Client(base_url=base, headers={"Authorization": f"Bearer {admin_token}"}) as admin:
+        for _ in range(count):
+            name = f"flood-{uuid.uuid4().hex[:8]}"
+            admin.post(
+                "/api/v1/users", json={"username": name, "password": PASSWORD, "role": "operator"}
+            ).raise_for_status()
+            tokens.append(access_token(base, name, PASSWORD))
+    return tokens
+
+
+async def _posting(flood: Flood, tokens: list[str], path: str, bodies: list[Any]) -> None:
+    """Each token's client posts ``bodies`` in turn to ``path`` until the flood ends."""
+    end = flood.until()
+    sent = 0
+
+    async def client(token: str) -> None:
+        nonlocal sent
+        auth = {"Authorization": f"Bearer {token}"}
+        async with httpx.AsyncClient(base_url=flood.base, headers=auth, timeout=120) as http:
+            while time.monotonic() < end and sent < MAX_REQUESTS:
+                sent += 1
+                got = await http.post(path, json=bodies[sent % len(bodies)])
+                flood.statuses[str(got.status_code)] += 1
+
+    async with asyncio.TaskGroup() as tasks:
+        for token in tokens:
+            tasks.create_task(client(token))
+
+
+async def previews(flood: Flood) -> None:
+    auth = {"Authorization": f"Bearer {flood.admin_token}"}
+    async with httpx.AsyncClient(base_url=flood.base, headers=auth) as http:
+        vehicle = (await http.get("/api/v1/vehicles")).json()[0]
+    here = {"id": vehicle["id"], **vehicle["state"]}
+    bodies = [_square(here, 4400, 1), _square(here, 200, 1), _square(here, 200, 5)]
+    tokens = await asyncio.to_thread(_operators, flood.base, flood.admin_token, 8)
+    await _posting(flood, tokens, "/api/v1/surveys/preview", bodies)
+
+
+async def imports(flood: Flood) -> None:
+    files = [{"format": "kml", "content": _kml(45_000)}, {"format": "kml", "content": _kml(9_000)}]
+    tokens = await asyncio.to_thread(_operators, flood.base, flood.admin_token, 20)
+    await _posting(flood, tokens, "/api/v1/surveys/import", files)
+
+
 FLOODS: dict[str, Callable[[Flood], Coroutine[Any, Any, None]]] = {
     "idle": idle,
     "logins": logins,
     "dashboards": dashboards,
     "photos": photos,
+    "previews": previews,
+    "imports": imports,
 }
 
 
@@ -206,15 +292,11 @@ def percentile(values: list[float], share: float) -> float:
 
 
 def run_flood(name: str, base: str, token: str, seconds: float) -> None:
-    prober = subprocess.Popen(
-        [sys.executable, "-c", PROBE, base, str(seconds), str(PROBE_EVERY_S)],
-        stdout=subprocess.PIPE,
-        text=True,
-    )
-    flood = Flood(base, token, seconds, Counter())
+    flood = Flood(base, token, seconds)
     started = time.monotonic()
     asyncio.run(FLOODS[name](flood))
-    output, _ = prober.communicate(timeout=seconds + 60)
+    assert flood.prober is not None, f"{name} never started its clock"
+    output, _ = flood.prober.communicate(timeout=seconds + 60)
     lines = output.split()
     times = [float(line) for line in lines if line != "timeout"]
     lost = len(lines) - len(times)

@@ -89,7 +89,7 @@ def test_an_unset_yaw_goes_as_nan_and_comes_back_unset(autopilot: Autopilot) -> 
     """null is MAVLink's NaN ("keep the heading" for a yaw): sent as NaN, read back as
     null, never 0 (on PX4 a yaw of 0 turns the vehicle north at every waypoint)."""
     sent = [
-        MissionItem(command=TAKEOFF, alt=10, param4=None),
+        MissionItem(command=TAKEOFF, lat=HOME_LAT, lon=HOME_LON, alt=10, param4=None),
         MissionItem(command=WAYPOINT, lat=HOME_LAT + 3e-4, lon=HOME_LON, alt=12, param4=None),
         MissionItem(command=WAYPOINT, lat=HOME_LAT, lon=HOME_LON + 3e-4, alt=12, param4=90),
     ]

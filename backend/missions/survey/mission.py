@@ -10,7 +10,10 @@ For "hover and capture", or a camera that cannot trigger on distance, the lane g
 waypoint at each photo (held for a moment when hovering) followed by DO_DIGICAM_CONTROL
 "shoot once", which every ArduPilot since 3.x runs in a mission. The mission starts with a
 take-off and DO_CHANGE_SPEED to the survey's speed, and ends with RTL. Altitudes are
-relative to home (MAV_FRAME_GLOBAL_RELATIVE_ALT).
+relative to home (MAV_FRAME_GLOBAL_RELATIVE_ALT). Every waypoint's yaw (param4) is unset
+(NaN on the wire), as QGC writes a survey's: PX4 then faces along the lane (a yaw of 0 held
+it facing north on east-west lanes, turning the camera's footprint 90° from the plan);
+ArduPilot's copters take the yaw from WP_YAW_BEHAVIOR either way.
 
 The take-off carries where the vehicle takes off, as QGC writes it for PX4 (its launch
 position): PX4 climbs, then flies to a take-off item's position, so a take-off at 0, 0
@@ -51,6 +54,7 @@ def _wp(
         command=mavlink2.MAV_CMD_NAV_WAYPOINT,
         frame=mavlink2.MAV_FRAME_GLOBAL_RELATIVE_ALT,
         param1=hold,
+        param4=None,  # yaw unset (NaN): the autopilot faces along the lane
         lat=lat,
         lon=lon,
         alt=alt,
@@ -113,6 +117,7 @@ def survey_mission(
             MissionItem(
                 command=mavlink2.MAV_CMD_NAV_TAKEOFF,
                 frame=mavlink2.MAV_FRAME_GLOBAL_RELATIVE_ALT,
+                param4=None,  # yaw unset: keep the heading
                 lat=takeoff.lat,
                 lon=takeoff.lon,
                 alt=altitude_m,

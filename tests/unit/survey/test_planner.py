@@ -208,6 +208,9 @@ def test_mission_items_trigger_on_distance_along_each_lane() -> None:
             assert item.alt == pytest.approx(CALC.altitude_m)
             assert 46.99 < item.lat < 47.01
             assert 7.99 < item.lon < 8.01
+            # Yaw unset, as QGC writes it: PX4 faces along the lane (0 held it north).
+            assert item.param4 is None
+    assert items[0].param4 is None  # the take-off keeps its heading
 
 
 def test_hover_and_capture_takes_one_image_at_each_photo_point() -> None:

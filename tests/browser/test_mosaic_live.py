@@ -133,9 +133,14 @@ def test_mosaic_tiles_appear_on_the_map_while_the_drones_fly(page: Page, fleet: 
         assert progress["state"] == "flying", progress
         assert tiles, "no tile image was fetched from the hub"
         assert all(f"/api/v1/mosaics/{survey_id}/tiles/" in url for url in tiles)
-        # The tiles are pictures of the ground, not blank: decoded by the browser.
-        width = loaded.first.evaluate("img => img.naturalWidth")
-        assert width == 256
+        # The tiles are pictures of the ground, not blank: decoded by the browser. Any
+        # loaded one: as a new revision arrives Leaflet swaps the layer's tiles, and one it
+        # is dropping holds its 1x1 placeholder for a moment (what the first read found).
+        page.wait_for_function(
+            """() => [...document.querySelectorAll(".survey-mosaic img.leaflet-tile-loaded")]
+                .some(image => image.naturalWidth === 256 && image.naturalHeight === 256)""",
+            timeout=10_000,
+        )
 
         # More photos, newer tiles: the layer is asked again at each revision, tile by tile.
         first = loaded.evaluate_all("images => images.map(image => image.src)")

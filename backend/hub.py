@@ -334,7 +334,11 @@ class Hub:
         """The user a command routed from another hub names, per the shared database."""
         try:
             return await asyncio.to_thread(
-                self.accounts.principal_of_token, sender.token_id, sender.name, sender.role
+                self.accounts.principal_of_token,
+                sender.token_id,
+                sender.name,
+                sender.role,
+                sender.token_kind,
             )
         except SQLAlchemyError as error:
             # Unverifiable is unknown: refused (the agent's own failsafes stand meanwhile).

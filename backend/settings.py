@@ -373,8 +373,10 @@ class HubSettings(BaseSettings):
                 "GCS_BUS_CREDS_FILE, or nats://user:password@host in GCS_BUS_URL; without "
                 "them any client that reaches the NATS server can command the fleet"
             ]
-        password = self.bus_password.get_secret_value() if self.bus_password else None
-        password = password or urlsplit(self.bus_url or "").password
+        if self.bus_password is not None:
+            password: str | None = self.bus_password.get_secret_value()
+        else:
+            password = urlsplit(self.bus_url or "").password
         if password is not None and password.lower() in WEAK_SECRETS:
             return ["GCS_BUS_PASSWORD is a default"]
         return []

@@ -39,7 +39,7 @@ class RoutedCommand(BaseModel):
     sender: RoutedSender
     # The asking hub's source ("api", "ws", "survey"...), its id, and what its checks
     # found (safety rails, an override): copied into the carrying hub's audit row.
-    source: str = Field(default="api", max_length=32)
+    source: str = Field(default="api", max_length=64)
     asked_by: str = Field(default="", max_length=64)
     checks: dict[str, Any] = Field(default_factory=dict)
 

@@ -190,10 +190,12 @@ class Accounts:
             token_name=token_row.name,
         )
 
-    def principal_of_token(self, token_id: int, name: str, role: str) -> Principal | None:
+    def principal_of_token(
+        self, token_id: int, name: str, role: str, kind: str
+    ) -> Principal | None:
         """The user behind a user token named by id (a command routed from another hub,
         protocol/routing.py), rebuilt from the database: None unless the token is live,
-        its user enabled, and both match the name and role the message gave."""
+        its user enabled, and both match the name, role and token kind the message gave."""
         query = (
             select(UserTokenRow, UserRow)
             .join(UserRow, UserRow.id == UserTokenRow.user_id)
@@ -208,7 +210,7 @@ class Accounts:
             return None
         if token_row.expires_at is not None and token_row.expires_at <= time.time():
             return None
-        if user.username != name or user.role != role:
+        if user.username != name or user.role != role or token_row.kind != kind:
             return None  # a forged or stale identity: the database has the last word
         return user_principal(
             user.username,

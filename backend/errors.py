@@ -19,6 +19,9 @@ from __future__ import annotations
 
 class GcsError(Exception):
     status_code = 500
+    # Set on a command's failure that the hub carrying it out (an agent on another hub)
+    # has audited and logged already: the asking hub must not record it twice.
+    recorded_elsewhere = False
 
     def __init__(self, message: str) -> None:
         super().__init__(message)

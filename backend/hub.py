@@ -17,11 +17,13 @@ from backend.audit import AuditAction, AuditEntry, AuditLog
 from backend.audit_denials import DenialCoalescer
 from backend.auth.accounts import PROVISIONING, Accounts
 from backend.auth.password_work import PasswordWork
+from backend.auth.policy import Principal
 from backend.auth.principal_cache import PrincipalCache
 from backend.auth.rate_limit import Limit, RateLimiter
 from backend.control.claims import LeaseClaims
 from backend.control.lease import LeaseBook
 from backend.errors import NotFound
+from backend.fleet.command_service import carry_out_routed
 from backend.fleet.commands import CommandDispatcher
 from backend.fleet.formations import FormationService, ScanPoints
 from backend.fleet.registry import FleetRegistry, VehicleRecord
@@ -74,11 +76,13 @@ from protocol.messages import (
     MAX_MAP_POINTS_SENT,
     MAX_SCAN_POINTS,
     CloseCode,
+    CommandOutcome,
     MapLayer,
     MissionItem,
     ObstaclesUpdate,
     PointMapUpdate,
 )
+from protocol.routing import RoutedCommand, RoutedSender
 
 SEVERITY_INFO = 6  # MAV_SEVERITY_INFO: an obstacle found or gone
 POINT_MAP_PUBLISH_S = 2.0
@@ -217,6 +221,8 @@ class Hub:
             claims = LeaseClaims(LeaseClaimStore(engine), fleet_link.hub_id, fleet_link.lease_ttl_s)
             hub.leases.claims = claims
             fleet_link.on_manual_ended = hub.manual_ended_elsewhere
+            fleet_link.routes.check_sender = hub.routed_sender
+            fleet_link.routes.carry_out = hub.carry_out_routed
         writer.on_sequences = hub.deliver_sequence_news
         hub.fanout = VehicleFanout(
             bus, settings.ui_vehicle_interval_s, settings.ui_batch_interval_s
@@ -328,6 +334,26 @@ class Hub:
     async def manual_ended_elsewhere(self, vehicle_id: str, why: str) -> None:
         """Browser control ended on a vehicle whose agent another hub holds."""
         await manual_control.end_on_vehicle(self, vehicle_id, why)
+
+    async def routed_sender(self, sender: RoutedSender) -> Principal | None:
+        """The user a command routed from another hub names, per the shared database."""
+        try:
+            return await asyncio.to_thread(
+                self.accounts.principal_of_token,
+                sender.token_id,
+                sender.name,
+                sender.role,
+                sender.token_kind,
+            )
+        except SQLAlchemyError as error:
+            # Unverifiable is unknown: refused (the agent's own failsafes stand meanwhile).
+            log.warning("routed command's sender %s not checked: %s", sender.name, error)
+            return None
+
+    async def carry_out_routed(
+        self, principal: Principal, vehicle_id: str, routed: RoutedCommand
+    ) -> CommandOutcome:
+        return await carry_out_routed(self, principal, vehicle_id, routed)
 
     @property
     def routes(self) -> AgentRoutes | None:

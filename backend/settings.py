@@ -30,6 +30,7 @@ SECRET_FILE_VARIABLES = {
     "GCS_ADMIN_PASSWORD_FILE": "admin_password",
     "DATABASE_URL_FILE": "database_url",
     "GCS_AGENT_TOKENS_FILE": "agent_tokens",
+    "GCS_BUS_PASSWORD_FILE": "bus_password",
 }
 
 
@@ -299,6 +300,19 @@ class HubSettings(BaseSettings):
     bus_request_timeout_s: float = Field(
         default=2.0, gt=0, le=30, description="a routed command's extra time on the bus"
     )
+    # The hubs' NATS credentials: a user and password (or nats://user:password@host in
+    # bus_url), or an NKey/JWT credentials file. Outside development a bus without
+    # credentials is refused at start: any client on the bus could command the fleet.
+    bus_user: str | None = Field(default=None, max_length=256, description="NATS user")
+    bus_password: SecretStr | None = Field(
+        default=None, description="NATS password (or GCS_BUS_PASSWORD_FILE)"
+    )
+    bus_creds_file: Path | None = Field(
+        default=None, description="NATS credentials file (NKey seed and user JWT)"
+    )
+    bus_tls_ca_file: Path | None = Field(
+        default=None, description="CA that signed the NATS server's certificate: TLS to the bus"
+    )
 
     retention_telemetry_days: float | None = Field(default=None, gt=0)
     retention_events_days: float | None = Field(default=None, gt=0)
@@ -382,12 +396,42 @@ class HubSettings(BaseSettings):
         for vehicle, token in self.enrolment_tokens().items():
             if len(token) < 24:
                 problems.append(f"the agent token for {vehicle} is shorter than 24 characters")
+        if self.bus_url is not None:
+            problems += self._bus_credential_problems()
         if problems:
             raise ValueError(
                 "refusing default secrets in production (set GCS_ENVIRONMENT=development "
                 "for a local trial): " + "; ".join(problems)
             )
         return self
+
+    def _bus_credential_problems(self) -> list[str]:
+        if not self.bus_has_credentials:
+            return [
+                f"GCS_BUS_URL {redacted_url(self.bus_url or '')} carries no credentials: set "
+                "GCS_BUS_USER and GCS_BUS_PASSWORD (or GCS_BUS_PASSWORD_FILE), "
+                "GCS_BUS_CREDS_FILE, or nats://user:password@host in GCS_BUS_URL; without "
+                "them any client that reaches the NATS server can command the fleet"
+            ]
+        if self.bus_password is not None:
+            password: str | None = self.bus_password.get_secret_value()
+        else:
+            password = urlsplit(self.bus_url or "").password
+        if password is not None and password.lower() in WEAK_SECRETS:
+            return ["GCS_BUS_PASSWORD is a default"]
+        return []
+
+    @model_validator(mode="after")
+    def _bus_user_with_password(self) -> HubSettings:
+        if (self.bus_user is None) != (self.bus_password is None):
+            raise ValueError("GCS_BUS_USER and GCS_BUS_PASSWORD go together: set both or neither")
+        return self
+
+    @property
+    def bus_has_credentials(self) -> bool:
+        """The hub presents credentials to NATS (a user or token in the URL counts)."""
+        in_url = self.bus_url is not None and urlsplit(self.bus_url).username
+        return bool(self.bus_user or self.bus_creds_file or in_url)
 
     def enrolment_tokens(self) -> dict[str, str]:
         """The provisioned ``vehicle=token`` pairs."""
@@ -437,6 +481,18 @@ class HubSettings(BaseSettings):
         if self.database_url:
             return self.database_url
         return f"sqlite:///{(self.data_dir / 'gcs.sqlite3').resolve()}"
+
+
+def redacted_url(url: str) -> str:
+    """A URL as the logs may show it: its password (or token) replaced by ***."""
+    parts = urlsplit(url)
+    if parts.username is None and parts.password is None:
+        return url
+    host = parts.hostname or ""
+    if parts.port is not None:
+        host = f"{host}:{parts.port}"
+    who = "***" if parts.password is None else f"{parts.username}:***"
+    return parts._replace(netloc=f"{who}@{host}").geturl()
 
 
 def tile_url_problem(url: str) -> str:

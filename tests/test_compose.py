@@ -111,6 +111,7 @@ SCALED_SECRETS = {
     "SCALED_DB_PASSWORD": "scaled-db-password",
     "FLEET_1_TOKEN": "f1" * 16,
     "FLEET_2_TOKEN": "f2" * 16,
+    "SCALED_BUS_PASSWORD": "12e3" + "b1" * 16,  # unquoted, NATS could not parse it
 }
 SCALED_HUBS = ("hub-a", "hub-b")
 
@@ -171,7 +172,36 @@ def test_the_scaled_hubs_start_in_production_mode(
         settings = HubSettings()
         assert settings.environment == "production"
         assert settings.bus_url == "nats://nats:4222"
+        assert settings.bus_has_credentials
+        assert settings.bus_user == "gcs-hub"
         assert set(settings.enrolment_tokens()) == {"fleet_1", "fleet_2"}
+
+
+def test_the_scaled_nats_server_admits_only_the_hubs_login() -> None:
+    """The nats service runs deploy/nats-server.conf with the password the hubs present:
+    that very file, run here, refuses a client without the login and admits the hubs."""
+    from tests.nats_server import login_refused, nats_server
+
+    services = _scaled_services()
+    bus = services["nats"]
+    [mount] = [volume for volume in bus["volumes"] if "nats-server.conf" in str(volume)]
+    source, target = (
+        (mount["source"], mount["target"]) if isinstance(mount, dict) else str(mount).split(":")[:2]
+    )
+    command = bus["command"]
+    assert command[command.index("--config") + 1] == target
+    assert "ports" not in bus  # only the hubs, on the compose network, reach it
+    password = SCALED_SECRETS["SCALED_BUS_PASSWORD"]
+    # Quoted for the server's config parser, which would read 1234 as a number.
+    assert bus["environment"]["GCS_BUS_PASSWORD"] == f'"{password}"'
+    for name in SCALED_HUBS:
+        hub = services[name]["environment"]
+        assert hub["GCS_BUS_PASSWORD"] == password
+    with nats_server(password, config=Path(source)) as address:
+        assert "Authorization Violation" in (login_refused(address) or "")
+        wrong = login_refused(address, user=hub["GCS_BUS_USER"], password="not-the-password")
+        assert "Authorization Violation" in (wrong or "")
+        assert login_refused(address, user=hub["GCS_BUS_USER"], password=password) is None
 
 
 def test_the_scaled_hubs_refuse_to_start_without_their_secrets(
@@ -195,6 +225,10 @@ def test_the_scaled_hubs_refuse_to_start_without_their_secrets(
         HubSettings()
     monkeypatch.setenv("GCS_AGENT_TOKENS", f"fleet_1={'f1' * 16}")
     with pytest.raises(ValidationError, match="refusing default secrets in production"):
+        HubSettings()
+    # ...and with a good admin password, the empty bus password is refused too.
+    monkeypatch.setenv("GCS_ADMIN_PASSWORD", SCALED_SECRETS["SCALED_ADMIN_PASSWORD"])
+    with pytest.raises(ValidationError, match="GCS_BUS_PASSWORD is a default"):
         HubSettings()
 
 

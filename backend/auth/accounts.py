@@ -190,6 +190,38 @@ class Accounts:
             token_name=token_row.name,
         )
 
+    def principal_of_token(
+        self, token_id: int, name: str, role: str, kind: str
+    ) -> Principal | None:
+        """The user behind a user token named by id (a command routed from another hub,
+        protocol/routing.py), rebuilt from the database: None unless the token is live,
+        its user enabled, and both match the name, role and token kind the message gave."""
+        query = (
+            select(UserTokenRow, UserRow)
+            .join(UserRow, UserRow.id == UserTokenRow.user_id)
+            .where(UserTokenRow.id == token_id)
+        )
+        with Session(self.engine) as session:
+            found = session.execute(query).first()
+        if found is None:
+            return None
+        token_row, user = found
+        if token_row.revoked_at is not None or user.disabled:
+            return None
+        if token_row.expires_at is not None and token_row.expires_at <= time.time():
+            return None
+        if user.username != name or user.role != role or token_row.kind != kind:
+            return None  # a forged or stale identity: the database has the last word
+        return user_principal(
+            user.username,
+            Role(user.role),
+            _parse_scopes(token_row.scopes),
+            token_row.id,
+            token_row.expires_at,
+            token_kind=token_row.kind,
+            token_name=token_row.name,
+        )
+
     def revoke_user_token(self, token_id: int, owner: str | None) -> None:
         """Revoke one token; ``owner`` limits it to that user's tokens (None: any, for admins)."""
         self.cache.revoke(lambda who: not who.is_agent and who.token_id == token_id)

@@ -53,6 +53,9 @@ class Lease:
     starting: bool = False
     # A mission was flying when the lease began: this mode resumes it.
     resume_mode: str | None = None
+    # Whom the lease was granted to: the hub's own stop at its end is sent in their name
+    # (an agent on another hub takes only commands that name a user).
+    principal: Principal | None = field(default=None, compare=False, repr=False)
 
 
 @dataclass
@@ -119,7 +122,14 @@ class LeaseBook:
         if lease is not None and lease.holder != principal.name:
             raise LeaseRefused(f"{vehicle_id} is flown by hand by {lease.holder}")
         if lease is None:
-            lease = Lease(vehicle_id, principal.name, principal.token_id, 0.0, starting=True)
+            lease = Lease(
+                vehicle_id,
+                principal.name,
+                principal.token_id,
+                0.0,
+                starting=True,
+                principal=principal,
+            )
             self._leases[vehicle_id] = lease
         lease.expires_at = self.clock() + self.limits.expiry_s
         return lease

@@ -11,7 +11,7 @@ from dataclasses import asdict
 from sqlalchemy.exc import SQLAlchemyError
 
 from backend.audit import AuditAction, principal_audit_entry
-from backend.auth.policy import Permission, Principal
+from backend.auth.policy import Permission, Principal, authorize
 from backend.errors import (
     CommandTimedOut,
     Forbidden,
@@ -22,11 +22,13 @@ from backend.errors import (
     VehicleRefused,
 )
 from backend.fleet.collaborators import CommandServices
+from backend.fleet.commands import Sender
 from backend.fleet.mission_gate import check_current_item, unchecked_mission
 from backend.missions.gate import starts_mission
 from backend.storage.logbook import command_row
 from backend.storage.models import CommandRow
 from protocol.messages import Command, CommandOutcome, ManualStartCommand, ManualStopCommand
+from protocol.routing import RoutedCommand
 
 log = logging.getLogger(__name__)
 
@@ -43,11 +45,7 @@ async def execute_command(
     details: dict[str, object] = {"command": command.model_dump()}
 
     async def audit(outcome: str) -> None:
-        await hub.record(
-            principal_audit_entry(
-                principal, source, AuditAction.COMMAND, vehicle_id, outcome, details
-            )
-        )
+        await _audit(hub, principal, source, vehicle_id, outcome, details)
 
     try:
         if isinstance(command, ManualStartCommand | ManualStopCommand):
@@ -74,7 +72,7 @@ async def execute_command(
         if starts_mission(command):
             # AUTO flies whatever is on board, perhaps loaded by another GCS: it flies
             # only after the same check as an upload (or an admin's audited override).
-            found, count = await unchecked_mission(hub, record)
+            found, count = await unchecked_mission(hub, record, principal)
             details["mission_checked"] = {"items": count, "ok": not found}
             violations += found
         if violations:
@@ -86,15 +84,23 @@ async def execute_command(
                 "reason": override_reason,
                 "violations": [violation.rule for violation in violations],
             }
-        await check_current_item(hub, record, command)
-        outcome = await hub.dispatcher.execute(vehicle_id, command)
+        await check_current_item(hub, record, command, principal)
+        # An agent on another hub: that hub checks the principal again and records the
+        # command itself (carry_out_routed); this one records only what never got there.
+        elsewhere = record.channel is not None and record.channel.remote
+        sender = Sender(principal, source, {k: v for k, v in details.items() if k != "command"})
+        outcome = await hub.dispatcher.execute(vehicle_id, command, sender)
     except GcsError as error:
+        if error.recorded_elsewhere:
+            raise
         details["error"] = error.message
         await audit("refused")
         if isinstance(error, CommandTimedOut | SafetyViolation | VehicleOffline):
             status = "timeout" if isinstance(error, CommandTimedOut) else "refused"
             await _log(hub, principal, vehicle_id, command, status, None, error.message)
         raise
+    if elsewhere:
+        return outcome
     details["answer"] = outcome.model_dump()
     try:
         await audit("ok" if outcome.status == "accepted" else "failed")
@@ -104,6 +110,47 @@ async def execute_command(
     except (SQLAlchemyError, OSError) as error:
         # The vehicle has acted: the operator must see its answer, not an error that
         # invites a second takeoff. The lost record goes to the hub's log instead.
+        log.error(
+            "could not record %s to %s (%s): %s", command.name, vehicle_id, outcome.message, error
+        )
+    return outcome
+
+
+async def carry_out_routed(
+    hub: CommandServices, principal: Principal, vehicle_id: str, routed: RoutedCommand
+) -> CommandOutcome:
+    """A command another hub routed here for an agent this hub holds, from ``principal``
+    (checked against the database by the caller): the permission is checked again, and
+    the audit row and command log are written here, where the vehicle is commanded. The
+    asking hub ran the safety checks; what they found comes in ``routed.checks``."""
+    command = routed.command
+    details: dict[str, object] = {
+        "command": command.model_dump(),
+        **routed.checks,
+        "routed_from": routed.asked_by,
+    }
+    try:
+        authorize(principal, Permission.COMMAND, vehicle_id)
+        channel = hub.registry.get(vehicle_id).channel
+        if channel is None or channel.remote:
+            # Never passed on again: two hubs must not bounce a command between them.
+            raise VehicleOffline(f"{vehicle_id} just left this hub")
+        outcome = await channel.request(command, routed.timeout_s)
+    except GcsError as error:
+        details["error"] = error.message
+        await _audit(hub, principal, routed.source, vehicle_id, "refused", details)
+        if isinstance(error, CommandTimedOut | VehicleOffline):
+            status = "timeout" if isinstance(error, CommandTimedOut) else "refused"
+            await _log(hub, principal, vehicle_id, command, status, None, error.message)
+        raise
+    details["answer"] = outcome.model_dump()
+    try:
+        result = "ok" if outcome.status == "accepted" else "failed"
+        await _audit(hub, principal, routed.source, vehicle_id, result, details)
+        await _log(
+            hub, principal, vehicle_id, command, outcome.status, outcome.result, outcome.message
+        )
+    except (SQLAlchemyError, OSError) as error:
         log.error(
             "could not record %s to %s (%s): %s", command.name, vehicle_id, outcome.message, error
         )
@@ -124,6 +171,19 @@ async def execute_expecting_acceptance(
     if outcome.status != "accepted":
         raise VehicleRefused(outcome.message)
     return outcome
+
+
+async def _audit(
+    hub: CommandServices,
+    principal: Principal,
+    source: str,
+    vehicle_id: str,
+    outcome: str,
+    details: dict[str, object],
+) -> None:
+    await hub.record(
+        principal_audit_entry(principal, source, AuditAction.COMMAND, vehicle_id, outcome, details)
+    )
 
 
 async def _log(

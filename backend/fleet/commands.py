@@ -8,9 +8,11 @@ import logging
 import time
 import uuid
 from collections.abc import Awaitable, Callable
+from dataclasses import dataclass, field
 
 from starlette.websockets import WebSocketDisconnect
 
+from backend.auth.policy import Principal
 from backend.errors import CommandTimedOut, InvalidRequest, VehicleOffline
 from backend.fleet.registry import FleetRegistry
 from backend.observability.metrics import COMMAND_SECONDS
@@ -34,6 +36,17 @@ SendFrame = Callable[[Message], Awaitable[None]]
 AGENT_REPLY_GRACE_S = 2.0
 
 
+@dataclass(frozen=True)
+class Sender:
+    """Who a command comes from, for an agent on another hub: that hub checks the
+    principal again and records the command in its name (protocol/routing.py)."""
+
+    principal: Principal
+    source: str = "api"
+    # What this hub's checks found (safety rails, an override), for that audit row.
+    checks: dict[str, object] = field(default_factory=dict)
+
+
 class AgentChannel:
     """The hub's end of one connected agent, as far as commands are concerned."""
 
@@ -44,7 +57,10 @@ class AgentChannel:
         self._send = send
         self._pending: dict[str, asyncio.Future[CommandOutcome]] = {}
 
-    async def request(self, command: Command, timeout_s: float) -> CommandOutcome:
+    async def request(
+        self, command: Command, timeout_s: float, sender: Sender | None = None
+    ) -> CommandOutcome:
+        """The agent's answer. ``sender`` matters only to an agent on another hub."""
         request_id = uuid.uuid4().hex
         future: asyncio.Future[CommandOutcome] = asyncio.get_running_loop().create_future()
         self._pending[request_id] = future
@@ -112,7 +128,9 @@ class CommandDispatcher:
         """The agent behind `channel` is gone: its unanswered commands fail now."""
         channel.fail_all(f"vehicle {vehicle_id!r} disconnected before answering")
 
-    async def execute(self, vehicle_id: str, command: Command) -> CommandOutcome:
+    async def execute(
+        self, vehicle_id: str, command: Command, sender: Sender | None = None
+    ) -> CommandOutcome:
         record = self._registry.get(vehicle_id)
         if isinstance(command, SetModeCommand) and command.mode not in record.modes:
             raise InvalidRequest(
@@ -123,7 +141,7 @@ class CommandDispatcher:
         channel = record.channel
         if channel is None:
             raise VehicleOffline(f"vehicle {vehicle_id!r} is not connected")
-        outcome = await channel.request(command, allowed_time(command, self._timeout_s))
+        outcome = await channel.request(command, allowed_time(command, self._timeout_s), sender)
         log.info("%s %s -> %s", vehicle_id, command.name, outcome.message)
         if outcome.status == "timeout":
             raise CommandTimedOut(outcome.message)

@@ -10,8 +10,10 @@ from __future__ import annotations
 
 import asyncio
 
+from backend.auth.policy import Principal
 from backend.errors import CommandTimedOut, InvalidRequest, VehicleRefused
 from backend.fleet.collaborators import MissionServices
+from backend.fleet.commands import Sender
 from backend.fleet.registry import VehicleRecord
 from backend.missions.gate import (
     current_item_problem,
@@ -28,22 +30,26 @@ from protocol.messages import (
 )
 
 
-async def on_board_mission(hub: MissionServices, vehicle_id: str) -> list[MissionItem]:
-    """The vehicle's mission now, without home (item 1 first). Raises GcsError when it
-    cannot be read (VehicleRefused, or the dispatcher's own errors)."""
-    outcome = await hub.dispatcher.execute(vehicle_id, MissionDownloadCommand())
+async def on_board_mission(
+    hub: MissionServices, vehicle_id: str, principal: Principal
+) -> list[MissionItem]:
+    """The vehicle's mission now, without home (item 1 first), read for ``principal``.
+    Raises GcsError when it cannot be read (VehicleRefused, or the dispatcher's own
+    errors)."""
+    sender = Sender(principal, "mission_check")
+    outcome = await hub.dispatcher.execute(vehicle_id, MissionDownloadCommand(), sender)
     if outcome.status != "accepted" or outcome.items is None:
         raise VehicleRefused(f"mission download: {outcome.message}")
     return list(outcome.items[1:])
 
 
 async def unchecked_mission(
-    hub: MissionServices, record: VehicleRecord
+    hub: MissionServices, record: VehicleRecord, principal: Principal
 ) -> tuple[list[Violation], int]:
     """Every problem of the mission on board (the mission check, as for an upload), and
     its number of items; a mission that cannot be read or is empty is a violation too."""
     try:
-        items = await on_board_mission(hub, record.id)
+        items = await on_board_mission(hub, record.id, principal)
     except (VehicleRefused, CommandTimedOut) as error:  # offline: the switch fails anyway
         return [unreadable(error.message)], 0
     if (empty := nothing_to_fly(items)) is not None:
@@ -52,7 +58,9 @@ async def unchecked_mission(
     return list(check.violations), len(items)
 
 
-async def check_current_item(hub: MissionServices, record: VehicleRecord, command: Command) -> None:
+async def check_current_item(
+    hub: MissionServices, record: VehicleRecord, command: Command, principal: Principal
+) -> None:
     """Refuse at once a current item beyond the mission, naming its length.
 
     The vehicle's MISSION_CURRENT.total is trusted to let an item through; an item beyond
@@ -63,6 +71,7 @@ async def check_current_item(hub: MissionServices, record: VehicleRecord, comman
     total = record.state.mission_total if record.state else None
     if current_item_trusted(command.seq, total):
         return
-    problem = current_item_problem(command.seq, len(await on_board_mission(hub, record.id)))
+    items = await on_board_mission(hub, record.id, principal)
+    problem = current_item_problem(command.seq, len(items))
     if problem is not None:
         raise InvalidRequest("seq", problem)

@@ -21,8 +21,9 @@ from prometheus_client import Counter, Gauge, Histogram
 from protocol.messages import STATE_BOUNDS
 
 # agent_ws: /api/v1/agent/ws; client_ws: /api/v1/ws (dashboards, integrations);
-# agent_scan: an agent's binary LIDAR frames; client_manual: manual-control input.
-Surface = Literal["agent_ws", "client_ws", "agent_scan", "client_manual"]
+# agent_scan: an agent's binary LIDAR frames; client_manual: manual-control input;
+# bus_command: a command routed over NATS that names no sender the database knows.
+Surface = Literal["agent_ws", "client_ws", "agent_scan", "client_manual", "bus_command"]
 
 REJECTED_FRAMES = Counter(
     "gcs_rejected_frames",

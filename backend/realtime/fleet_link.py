@@ -10,6 +10,7 @@ import asyncio
 import logging
 import os
 import socket
+import ssl
 import time
 import uuid
 from collections.abc import Awaitable, Callable
@@ -22,7 +23,7 @@ from backend.fleet.registry import FleetRegistry
 from backend.realtime.bus import Topic
 from backend.realtime.nats_bus import NatsBus
 from backend.realtime.routing import AgentRoutes, RemoteChannel
-from backend.settings import HubSettings
+from backend.settings import HubSettings, redacted_url
 from protocol.messages import LiveEvent, VehicleSummary
 
 log = logging.getLogger(__name__)
@@ -41,6 +42,20 @@ REMOTE_SILENCE_S = 3.0
 PRESENCE_TIMEOUT_S = 1.0
 
 
+def bus_credentials(settings: HubSettings) -> dict[str, Any]:
+    """nats-py's options for the credentials and TLS the settings give (a user and
+    password in the URL nats-py takes from the URL itself)."""
+    options: dict[str, Any] = {}
+    if settings.bus_user is not None and settings.bus_password is not None:
+        options["user"] = settings.bus_user
+        options["password"] = settings.bus_password.get_secret_value()
+    if settings.bus_creds_file is not None:
+        options["user_credentials"] = str(settings.bus_creds_file)
+    if settings.bus_tls_ca_file is not None:
+        options["tls"] = ssl.create_default_context(cafile=str(settings.bus_tls_ca_file))
+    return options
+
+
 class FleetLink:
     def __init__(self, connection: Nats, prefix: str, registry: FleetRegistry, margin_s: float):
         self.nats = connection
@@ -48,6 +63,7 @@ class FleetLink:
         self.hub_id = f"{socket.gethostname()[:48]}-{os.getpid()}-{uuid.uuid4().hex[:6]}"
         self.bus = NatsBus(connection, prefix)
         self.routes = AgentRoutes(connection, prefix, registry, margin_s)
+        self.routes.hub_id = self.hub_id
         self.lease_ttl_s = LEASE_EXPIRY_S + LEASE_CLAIM_MARGIN_S
         self._registry = registry
         self.bus.on_remote = self._mirror
@@ -79,9 +95,10 @@ class FleetLink:
             "reconnected_cb": reconnected,
             "error_cb": error,
         }
+        options.update(bus_credentials(settings))
         connection = await nats.connect(**options)
         link = cls(connection, settings.bus_prefix, registry, settings.bus_request_timeout_s)
-        log.info("joined the hubs on %s as %s", settings.bus_url, link.hub_id)
+        log.info("joined the hubs on %s as %s", redacted_url(settings.bus_url), link.hub_id)
         return link
 
     async def run(self) -> None:

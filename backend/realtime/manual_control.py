@@ -28,7 +28,7 @@ from backend.audit import AuditAction, AuditEntry
 from backend.auth.policy import Principal
 from backend.control.lease import Lease, LeaseBook, LeaseRefused
 from backend.errors import GcsError
-from backend.fleet.commands import CommandDispatcher
+from backend.fleet.commands import CommandDispatcher, Sender
 from backend.fleet.registry import FleetRegistry
 from backend.realtime.collaborators import ClientConnection, LeaseListener
 from backend.storage.models import AuditRow
@@ -104,7 +104,9 @@ async def acquire(hub: LeaseServices, vehicle_id: str, principal: Principal) -> 
     record = hub.registry.get(vehicle_id)
     mode = record.state.mode if record.state is not None else None
     try:
-        outcome = await hub.dispatcher.execute(vehicle_id, ManualStartCommand())
+        outcome = await hub.dispatcher.execute(
+            vehicle_id, ManualStartCommand(), Sender(principal, "ws")
+        )
     except GcsError as error:
         await _cancel(hub, lease)
         raise LeaseRefused(f"{vehicle_id}: {error.message}") from None
@@ -129,7 +131,8 @@ async def end(hub: LeaseServices, lease: Lease, reason: str, *, stop_vehicle: bo
         await hub.leases.claims.release(lease.vehicle_id, lease.holder)
     if stop_vehicle:
         try:
-            outcome = await hub.dispatcher.execute(lease.vehicle_id, ManualStopCommand())
+            sender = None if lease.principal is None else Sender(lease.principal, "ws")
+            outcome = await hub.dispatcher.execute(lease.vehicle_id, ManualStopCommand(), sender)
             if outcome.status != "accepted":
                 log.warning("%s: hold after the lease refused: %s", lease.vehicle_id, outcome)
         except GcsError as error:

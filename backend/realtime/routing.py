@@ -14,30 +14,38 @@ reconnected elsewhere) only the live hub answers.
 On the asking hub, such a vehicle's record (mirrored from the other hub's state on the
 bus, ``FleetRegistry.mirror``) has a ``RemoteChannel``: everything that sends to an
 agent (commands, leases, the stick relay, formations) reaches it as it reaches a local
-one. The hub that asks does the checks (roles, safety rails, audit, command log)
-against its mirror of the vehicle, as it would for its own; the hub that answers only
-passes the command to the agent and the answer back, within the asker's deadline.
+one. The hub that asks does the checks (roles, safety rails) against its mirror of the
+vehicle, as it would for its own, and sends the command with the user it comes from
+(protocol/routing.py). The hub that answers looks that user's token up in the shared
+database, checks the permission again, passes the command to the agent, and writes the
+audit row and the command log (``carry_out_routed``), within the asker's deadline.
+
+A command without a sender the database knows (a forged message, a client on the bus
+that is not a hub) is refused before the agent: counted in
+``gcs_rejected_frames_total{surface="bus_command"}`` and logged. NATS's own
+authentication (GCS_BUS_USER and GCS_BUS_PASSWORD) keeps such clients off the bus in
+the first place; this check holds if it does not.
 """
 
 from __future__ import annotations
 
 import asyncio
-import contextlib
 import logging
 from collections.abc import Awaitable, Callable
-from typing import Literal
 
 from nats.aio.client import Client as Nats
 from nats.aio.msg import Msg
 from nats.aio.subscription import Subscription
 from nats.errors import NoRespondersError
 from nats.errors import TimeoutError as NatsTimeout
-from pydantic import BaseModel, ValidationError
+from pydantic import ValidationError
 from starlette.websockets import WebSocketDisconnect
 
-from backend.errors import CommandTimedOut, GcsError, VehicleOffline
-from backend.fleet.commands import AGENT_REPLY_GRACE_S, AgentChannel
+from backend.auth.policy import Principal
+from backend.errors import CommandTimedOut, Forbidden, GcsError, VehicleOffline
+from backend.fleet.commands import AGENT_REPLY_GRACE_S, AgentChannel, Sender
 from backend.fleet.registry import FleetRegistry
+from backend.observability.metrics import REJECTED_FRAMES
 from protocol.messages import (
     Command,
     CommandOutcome,
@@ -52,6 +60,7 @@ from protocol.messages import (
     encode,
     hub_to_agent,
 )
+from protocol.routing import RoutedAnswer, RoutedCommand, RoutedSender
 
 log = logging.getLogger(__name__)
 
@@ -60,15 +69,26 @@ log = logging.getLogger(__name__)
 ONE_WAY_FRAMES = (ManualFrame, FormationSlot, FormationEnd, LeaderUpdate, LeaderScan)
 
 
-class RoutedCommand(BaseModel):
-    command: Command
-    timeout_s: float
+# The hub's side of a routed command (wired by backend/hub.py): who the sender is, per
+# the database (None: unknown, revoked, or not as the message says), and carrying the
+# command out for them (backend/fleet/command_service.py's carry_out_routed).
+SenderCheck = Callable[[RoutedSender], Awaitable[Principal | None]]
+Carrier = Callable[[Principal, str, RoutedCommand], Awaitable[CommandOutcome]]
 
 
-class RoutedAnswer(BaseModel):
-    outcome: CommandOutcome | None = None
-    error: Literal["offline", "timeout", "failed"] | None = None
-    message: str = ""
+def routed_sender(principal: Principal) -> RoutedSender:
+    """The wire form of a command's sender; only a user's token crosses to another hub."""
+    if principal.is_agent or principal.token_id is None:
+        raise Forbidden(f"{principal.name}: only a user's command crosses to another hub")
+    try:
+        return RoutedSender(
+            name=principal.name,
+            role=principal.role,
+            token_id=principal.token_id,
+            token_kind=principal.token_kind,  # checked by the model
+        )
+    except ValidationError as error:
+        raise Forbidden(f"{principal.name}'s token cannot name them to another hub") from error
 
 
 def vehicle_token(vehicle_id: str) -> str:
@@ -90,8 +110,16 @@ class RemoteChannel(AgentChannel):
         kind = type(message).__name__
         raise RuntimeError(f"{kind}: {self._vehicle_id} is connected to another hub")
 
-    async def request(self, command: Command, timeout_s: float) -> CommandOutcome:
-        return await self._routes.request(self._vehicle_id, command, timeout_s)
+    async def request(
+        self, command: Command, timeout_s: float, sender: Sender | None = None
+    ) -> CommandOutcome:
+        if sender is None:
+            # Every routed command names a user, whom the other hub checks and records.
+            raise Forbidden(
+                f"{command.name}: {self._vehicle_id} is on another hub, which "
+                "takes only commands that name their sender"
+            )
+        return await self._routes.request(self._vehicle_id, command, timeout_s, sender)
 
     async def send_frame(self, frame: Message) -> None:
         if isinstance(frame, ONE_WAY_FRAMES):
@@ -116,14 +144,27 @@ class AgentRoutes:
         # callbacks one after the other; a 15 s take-off must not hold up a land).
         self._answering: set[asyncio.Task[None]] = set()
         self.forwarded_frames = 0
+        self.refused_commands = 0  # routed commands without a sender the database knows
+        self.hub_id = ""  # this hub's id, named in the commands it routes
+        self.check_sender: SenderCheck | None = None
+        self.carry_out: Carrier | None = None
 
     def subject(self, vehicle_id: str, kind: str) -> str:
         return f"{self._prefix}.agent.{vehicle_token(vehicle_id)}.{kind}"
 
     # -- the asking side ---------------------------------------------------------------
 
-    async def request(self, vehicle_id: str, command: Command, timeout_s: float) -> CommandOutcome:
-        payload = RoutedCommand(command=command, timeout_s=timeout_s).model_dump_json()
+    async def request(
+        self, vehicle_id: str, command: Command, timeout_s: float, sender: Sender
+    ) -> CommandOutcome:
+        payload = RoutedCommand(
+            command=command,
+            timeout_s=timeout_s,
+            sender=routed_sender(sender.principal),
+            source=sender.source,
+            asked_by=self.hub_id,
+            checks=sender.checks,
+        ).model_dump_json()
         deadline_s = timeout_s + AGENT_REPLY_GRACE_S + self._bus_margin_s
         try:
             reply = await self._nats.request(
@@ -142,9 +183,15 @@ class AgentRoutes:
             raise VehicleOffline(f"unusable answer from the hub holding {vehicle_id}") from error
         if answer.outcome is not None:
             return answer.outcome
+        failure: GcsError
         if answer.error == "timeout":
-            raise CommandTimedOut(answer.message)
-        raise VehicleOffline(answer.message)
+            failure = CommandTimedOut(answer.message)
+        elif answer.error == "refused":
+            failure = Forbidden(answer.message)
+        else:
+            failure = VehicleOffline(answer.message)
+        failure.recorded_elsewhere = answer.recorded
+        raise failure
 
     async def send_frame(self, vehicle_id: str, frame: Message) -> None:
         if self._nats.is_connected:
@@ -204,7 +251,7 @@ class AgentRoutes:
         try:
             routed = RoutedCommand.model_validate_json(msg.data)
         except ValidationError as error:
-            answer = RoutedAnswer(error="failed", message=f"unusable routed command: {error}")
+            answer = self._refuse(vehicle_id, f"unusable routed command: {error}")
         else:
             answer = await self._pass_on(vehicle_id, routed)
         try:
@@ -213,21 +260,42 @@ class AgentRoutes:
             # The asker gave up or NATS went away: its own deadline answers the operator.
             log.info("answer for %s not sent: %r", vehicle_id, error)
 
+    def _refuse(self, vehicle_id: str, reason: str) -> RoutedAnswer:
+        """A command on the subject that names no sender the database knows: nothing
+        reaches the agent, and nothing was recorded (the asker, if a hub, records it)."""
+        self.refused_commands += 1
+        REJECTED_FRAMES.labels(surface="bus_command").inc()
+        log.warning("routed command for %s refused: %s", vehicle_id, reason[:300])
+        return RoutedAnswer(error="refused", message=f"refused by the hub holding {vehicle_id}")
+
     async def _pass_on(self, vehicle_id: str, routed: RoutedCommand) -> RoutedAnswer:
-        channel = None
-        with contextlib.suppress(GcsError):
-            channel = self._registry.get(vehicle_id).channel
-        if channel is None or channel.remote:
-            # Never passed on again: two hubs must not bounce a command between them.
-            return RoutedAnswer(error="offline", message=f"{vehicle_id} just left this hub")
+        sender = routed.sender
+        principal = None
+        if self.check_sender is not None and self.carry_out is not None:
+            principal = await self.check_sender(sender)
+        if principal is None or self.carry_out is None:
+            return self._refuse(
+                vehicle_id,
+                f"{routed.command.name} from {sender.name!r} ({sender.role}, "
+                f"{sender.token_kind} token {sender.token_id}, asked by "
+                f"{routed.asked_by or 'an unnamed client'}): no such live token and user",
+            )
         try:
-            outcome = await channel.request(routed.command, routed.timeout_s)
+            outcome = await self.carry_out(principal, vehicle_id, routed)
         except CommandTimedOut as error:
-            return RoutedAnswer(error="timeout", message=error.message)
+            return RoutedAnswer(error="timeout", message=error.message, recorded=True)
+        except Forbidden as error:
+            return RoutedAnswer(error="refused", message=error.message, recorded=True)
         except GcsError as error:
-            return RoutedAnswer(error="offline", message=error.message)
-        log.info("%s %s (for another hub) -> %s", vehicle_id, routed.command.name, outcome.message)
-        return RoutedAnswer(outcome=outcome)
+            return RoutedAnswer(error="offline", message=error.message, recorded=True)
+        log.info(
+            "%s %s (for another hub) -> %s (by %s)",
+            vehicle_id,
+            routed.command.name,
+            outcome.message,
+            principal.name,
+        )
+        return RoutedAnswer(outcome=outcome, recorded=True)
 
     def _frame_forwarder(self, vehicle_id: str) -> Callable[[Msg], Awaitable[None]]:
         async def forward(msg: Msg) -> None:

@@ -15,6 +15,7 @@ import threading
 import time
 import uuid
 from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -83,6 +84,7 @@ class TwoHubs:
     b: str
     database_url: str
     start_b: Callable[[], None]  # hub B again, as the fixture started it
+    bus_prefix: str
 
     def admin_token(self, base: str) -> str:
         return access_token(base, "admin", self.fleet.plan.admin_password)
@@ -113,13 +115,20 @@ def _wait_ready(fleet: LocalFleet, base: str, timeout_s: float = 60.0) -> None:
 @pytest.fixture
 def hubs(tmp_path: Path) -> Iterator[TwoHubs]:
     _nats_reachable()
+    bus = {"GCS_BUS_URL": f"nats://{NATS_ADDRESS}"}
+    with two_hubs(tmp_path, bus, bus) as started:
+        yield started
+
+
+@contextmanager
+def two_hubs(tmp_path: Path, bus_a: dict[str, str], bus_b: dict[str, str]) -> Iterator[TwoHubs]:
+    """Hubs A and B on a fresh database, each joining the bus with its settings."""
     with scratch_postgres() as database_url:
         plan = FleetPlan(vehicles=1, port=free_port(), data_dir=tmp_path / "a", speedup=5.0)
         port_b = free_port()
         fleet = FailoverFleet(plan, f"ws://127.0.0.1:{port_b}")
         shared = {
             "DATABASE_URL": database_url,
-            "GCS_BUS_URL": f"nats://{NATS_ADDRESS}",
             # One prefix per test: other tests and other helpers share the server.
             "GCS_BUS_PREFIX": f"t{uuid.uuid4().hex[:12]}",
             "GCS_VIZ_ENABLED": "false",
@@ -128,7 +137,7 @@ def hubs(tmp_path: Path) -> Iterator[TwoHubs]:
             plan.data_dir.mkdir(mode=0o700, parents=True)
             fleet.log_dir.mkdir(mode=0o700)
             # One after the other: the first creates the schema, the second finds it.
-            fleet.start_hub(shared)
+            fleet.start_hub({**shared, **bus_a})
             _wait_ready(fleet, plan.hub_http)
             tokens = f"{VEHICLE}={plan.agent_token(0)}"
             hub_b = f"http://127.0.0.1:{port_b}"
@@ -139,6 +148,7 @@ def hubs(tmp_path: Path) -> Iterator[TwoHubs]:
                     ["hub", "--port", str(port_b), "--data-dir", str(tmp_path / "b")],
                     {
                         **shared,
+                        **bus_b,
                         "GCS_ENVIRONMENT": "development",
                         "GCS_ADMIN_PASSWORD": plan.admin_password,
                         "GCS_AGENT_TOKENS": tokens,
@@ -148,7 +158,9 @@ def hubs(tmp_path: Path) -> Iterator[TwoHubs]:
 
             start_b()
             fleet.start_vehicle(0)
-            yield TwoHubs(fleet, plan.hub_http, hub_b, database_url, start_b)
+            yield TwoHubs(
+                fleet, plan.hub_http, hub_b, database_url, start_b, shared["GCS_BUS_PREFIX"]
+            )
 
 
 def _psycopg_url(database_url: str) -> str:

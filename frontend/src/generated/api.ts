@@ -6894,6 +6894,13 @@ export interface operations {
                     "application/json": components["schemas"]["ErrorMessage"];
                 };
             };
+            /** @description A `.plan` or `.waypoints` file for a vehicle that has not reported its home yet (both files carry it) */
+            409: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content?: never;
+            };
             /** @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed) */
             422: {
                 headers: {

@@ -80,6 +80,13 @@ class HubSettings(BaseSettings):
     body_timeout_s: float = Field(default=10.0, gt=0)
     body_min_rate_bps: float = Field(default=1024.0, gt=0)
     keep_alive_timeout_s: int = Field(default=5, ge=1)
+    shutdown_grace_s: int = Field(
+        default=5,
+        ge=1,
+        le=60,
+        description="on SIGTERM, how long requests in progress (a survey plan, an export) "
+        "may run on before they are cancelled and the hub stops",
+    )
     max_connections: int = Field(default=1000, ge=1)
     max_tlog_bytes_per_vehicle: int = Field(
         default=4 * 1024 * 1024 * 1024,

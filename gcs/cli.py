@@ -83,6 +83,9 @@ def _hub(args: argparse.Namespace) -> int:
         # Bounds on what slow or idle clients can hold (a body timeout is in the app).
         limit_concurrency=settings.max_connections,
         timeout_keep_alive=settings.keep_alive_timeout_s,
+        # uvicorn otherwise waits for every request in progress before it stops: a hub
+        # told to stop kept planning a survey for as long as the plan took.
+        timeout_graceful_shutdown=settings.shutdown_grace_s,
         ssl_certfile=args.ssl_certfile,
         ssl_keyfile=args.ssl_keyfile,
         # Client addresses (audit, login limits) come from X-Forwarded-For only when

@@ -46,24 +46,15 @@ import httpx
 
 from common.geodesy import LocalFrame
 from gcs.launcher import FleetPlan, LocalFleet, free_port
-from protocol.photos import MAX_PHOTO_BYTES, CameraIntrinsics, PhotoMeta, PhotoPose
+from protocol.photos import MAX_PHOTO_BYTES, PhotoMeta
 from tests.helpers import access_token
 from tests.integration.test_hub_bad_input import scripted_agent
+from tests.integration.test_photo_routes import CAMERA, POSE
+from tests.survey_shapes import kml_polygon
 
 PROBE_EVERY_S = 0.05
 PASSWORD = "correct horse battery"
 MAX_REQUESTS = 200_000  # a bound on any flood's loop, whatever its duration
-
-CAMERA = CameraIntrinsics(
-    sensor_width_mm=6.3,
-    sensor_height_mm=4.7,
-    image_width_px=4000,
-    image_height_px=3000,
-    focal_length_mm=4.5,
-)
-POSE = PhotoPose(
-    lat=-35.36, lon=149.16, alt_msl=620, alt_rel=36, roll=0, pitch=0, yaw=0, time=1.7e9
-)
 
 PROBE = """
 import sys, time, httpx
@@ -219,15 +210,6 @@ def _square(vehicle: dict[str, Any], side_m: float, altitude_m: float) -> dict[s
     }
 
 
-def _kml(vertices: int) -> str:
-    points = " ".join(f"{8 + k * 1e-6:.6f},47.000000" for k in range(vertices - 1))
-    return (
-        '<kml xmlns="http://www.opengis.net/kml/2.2"><Placemark><Polygon><outerBoundaryIs>'
-        f"<LinearRing><coordinates>{points} 8.5,47.5</coordinates></LinearRing>"
-        "</outerBoundaryIs></Polygon></Placemark></kml>"
-    )
-
-
 def _operators(base: str, admin_token: str, count: int) -> list[str]:
     """``count`` new operators' tokens (the imports' rate is per user)."""
     tokens = []
@@ -271,7 +253,10 @@ async def previews(flood: Flood) -> None:
 
 
 async def imports(flood: Flood) -> None:
-    files = [{"format": "kml", "content": _kml(45_000)}, {"format": "kml", "content": _kml(9_000)}]
+    files = [
+        {"format": "kml", "content": kml_polygon(45_000)},
+        {"format": "kml", "content": kml_polygon(9_000)},
+    ]
     tokens = await asyncio.to_thread(_operators, flood.base, flood.admin_token, 20)
     await _posting(flood, tokens, "/api/v1/surveys/import", files)
 

@@ -39,3 +39,14 @@ def geojson_area(frame: LocalFrame, corners: list[tuple[float, float]]) -> dict[
     ``corners``, each (east, north) in metres from ``frame``'s origin."""
     ring = [list(reversed(frame.to_geo(x, y))) for x, y in [*corners, corners[0]]]
     return {"type": "Polygon", "coordinates": [ring]}
+
+
+def kml_polygon(vertices: int) -> str:
+    """A KML area of ``vertices`` corners (a long thin sliver near 47°N 8°E): the large
+    import that the hub's vertex limit and its import flood are about."""
+    points = " ".join(f"{8 + k * 1e-6:.6f},47.000000" for k in range(vertices - 1))
+    return (
+        '<kml xmlns="http://www.opengis.net/kml/2.2"><Placemark><Polygon><outerBoundaryIs>'
+        f"<LinearRing><coordinates>{points} 8.5,47.5</coordinates></LinearRing>"
+        "</outerBoundaryIs></Polygon></Placemark></kml>"
+    )

@@ -172,23 +172,7 @@ class Accounts:
             .where(UserTokenRow.token_hash == digest)
         )
         found = session.execute(query).first()
-        if found is None:
-            return None
-        token_row, user = found
-        now = time.time()
-        if token_row.revoked_at is not None or user.disabled:
-            return None
-        if token_row.expires_at is not None and token_row.expires_at <= now:
-            return None
-        return user_principal(
-            user.username,
-            Role(user.role),
-            _parse_scopes(token_row.scopes),
-            token_row.id,
-            token_row.expires_at,
-            token_kind=token_row.kind,
-            token_name=token_row.name,
-        )
+        return None if found is None else _live_principal(*found)
 
     def principal_of_token(
         self, token_id: int, name: str, role: str, kind: str
@@ -206,21 +190,9 @@ class Accounts:
         if found is None:
             return None
         token_row, user = found
-        if token_row.revoked_at is not None or user.disabled:
-            return None
-        if token_row.expires_at is not None and token_row.expires_at <= time.time():
-            return None
         if user.username != name or user.role != role or token_row.kind != kind:
             return None  # a forged or stale identity: the database has the last word
-        return user_principal(
-            user.username,
-            Role(user.role),
-            _parse_scopes(token_row.scopes),
-            token_row.id,
-            token_row.expires_at,
-            token_kind=token_row.kind,
-            token_name=token_row.name,
-        )
+        return _live_principal(token_row, user)
 
     def revoke_user_token(self, token_id: int, owner: str | None) -> None:
         """Revoke one token; ``owner`` limits it to that user's tokens (None: any, for admins)."""
@@ -359,3 +331,21 @@ class Accounts:
                 raise NotFound(f"no agent token {token_id}")
             row.revoked_at = row.revoked_at or time.time()
         return row
+
+
+def _live_principal(token_row: UserTokenRow, user: UserRow) -> Principal | None:
+    """The principal a user token stands for, or None if the token is revoked or expired
+    or its user disabled."""
+    if token_row.revoked_at is not None or user.disabled:
+        return None
+    if token_row.expires_at is not None and token_row.expires_at <= time.time():
+        return None
+    return user_principal(
+        user.username,
+        Role(user.role),
+        _parse_scopes(token_row.scopes),
+        token_row.id,
+        token_row.expires_at,
+        token_kind=token_row.kind,
+        token_name=token_row.name,
+    )

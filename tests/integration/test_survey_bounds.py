@@ -26,6 +26,7 @@ import pytest
 from common.geodesy import LocalFrame
 from gcs.launcher import LocalFleet
 from tests.helpers import FleetWatcher, access_token, api_client, poll_until, ready
+from tests.survey_shapes import kml_polygon
 
 pytestmark = pytest.mark.integration
 
@@ -208,15 +209,6 @@ def _user(admin_api: httpx.Client, hub: str, role: str) -> str:
 GEOJSON = '{"type": "Polygon", "coordinates": [[[8, 47], [8.01, 47], [8.01, 47.01], [8, 47]]]}'
 
 
-def _kml(vertices: int) -> str:
-    points = " ".join(f"{8 + k * 1e-6:.6f},47.000000" for k in range(vertices - 1))
-    return (
-        '<kml xmlns="http://www.opengis.net/kml/2.2"><Placemark><Polygon><outerBoundaryIs>'
-        f"<LinearRing><coordinates>{points} 8.5,47.5</coordinates></LinearRing>"
-        "</outerBoundaryIs></Polygon></Placemark></kml>"
-    )
-
-
 def test_importing_an_area_needs_the_planning_permission(hub: str, admin_api: httpx.Client) -> None:
     file = {"format": "geojson", "content": GEOJSON}
     with api_client(hub, _user(admin_api, hub, "viewer")) as viewer:
@@ -238,7 +230,7 @@ def test_an_oversized_area_file_is_refused_naming_the_limit(
         assert "the limit is 1,000,000 (survey_import_max_bytes)" in big.text
         # 45,000 vertices in 900 kB: under the size limit, over the vertices'.
         many = operator.post(
-            "/api/v1/surveys/import", json={"format": "kml", "content": _kml(45_000)}
+            "/api/v1/surveys/import", json={"format": "kml", "content": kml_polygon(45_000)}
         )
         assert many.status_code == 422, many.text[:500]
         assert "45,000 vertices; the limit is 10,000 (survey_import_max_vertices)" in many.text

@@ -284,7 +284,9 @@ class FcuLink:
             if not self._up and self._connection is not None:
                 self._set_up(True, f"heartbeat from system {self.target_system}")
         elif kind == "STATUSTEXT":
-            self.statustexts.append(StatusText(time.time(), message.severity, message.text))
+            # Trimmed as the joined events are (PX4 ends some texts with a tab).
+            text = message.text.rstrip()
+            self.statustexts.append(StatusText(time.time(), message.severity, text))
             log.info("FCU: %s", message.text)
         for listener in self.listeners:
             listener(message)

@@ -30,6 +30,13 @@ class JoinedText:
     text: str
 
 
+def _whole(severity: int, text: str) -> JoinedText:
+    """A whole text, without the whitespace an autopilot leaves at its end (PX4 ends some
+    with a tab, which showed in the event feed and the flight log). Only the whole text
+    is trimmed: a chunk may end in a space that belongs between two words."""
+    return JoinedText(severity, text.rstrip())
+
+
 @dataclass
 class _Partial:
     severity: int
@@ -61,21 +68,21 @@ class StatusTextJoiner:
         last = "\x00" in raw or len(text) < TEXT_FIELD_CHARS
         text_id = int(getattr(message, "id", 0) or 0)
         if text_id == 0:
-            done.append(JoinedText(int(message.severity), text))
+            done.append(_whole(int(message.severity), text))
             return done
         partial = self._partial.get(text_id)
         seq = int(getattr(message, "chunk_seq", 0) or 0)
         if partial is None or seq in partial.chunks:
             # a new text, or the id came round again with the old one unfinished
             if partial is not None:
-                done.append(JoinedText(partial.severity, partial.text()))
+                done.append(_whole(partial.severity, partial.text()))
             partial = self._partial[text_id] = _Partial(int(message.severity), now)
         partial.chunks[seq] = text
         if last:
             partial.last_seq = seq
         if partial.complete():
             del self._partial[text_id]
-            done.append(JoinedText(partial.severity, partial.text()))
+            done.append(_whole(partial.severity, partial.text()))
         return done
 
     def due(self, now: float) -> list[JoinedText]:
@@ -89,4 +96,4 @@ class StatusTextJoiner:
 
     def _release(self, text_id: int) -> JoinedText:
         partial = self._partial.pop(text_id)
-        return JoinedText(partial.severity, partial.text())
+        return _whole(partial.severity, partial.text())

@@ -40,6 +40,16 @@ def test_a_single_text_passes_at_once() -> None:
     assert StatusTextJoiner().add(chunk("Arming", 0, 0), now=0.0) == [JoinedText(WARNING, "Arming")]
 
 
+def test_the_whitespace_px4_leaves_at_a_texts_end_goes_but_not_between_chunks() -> None:
+    joiner = StatusTextJoiner()
+    assert joiner.add(chunk("Takeoff detected\t", 0, 0), now=0.0) == [
+        JoinedText(WARNING, "Takeoff detected")
+    ]
+    first = "Preflight Fail: " + "x" * 33 + " "  # 50 characters, ending between two words
+    assert joiner.add(chunk(first, 7, 0), now=0.0) == []
+    assert joiner.add(chunk("done\t", 7, 1), now=0.1) == [JoinedText(WARNING, first + "done")]
+
+
 def test_a_reached_item_is_news_once_per_pass() -> None:
     reached = ReachedItems()
     reached.current(1)

@@ -223,6 +223,10 @@ export interface paths {
          *     ``mission_set_current`` beyond the mission is refused at once (422). A refusal by the
          *     flight controller is an answer (status ``refused``, with its reason), so it comes back
          *     as 200; a missing answer is 504.
+         *
+         *     Refused with 422 though the schema allows it:
+         *     - a command the safety rails refuse, for the vehicle's state, mission and rails as they are now (`violations` lists every rule)
+         *     - `mission_set_current` beyond the mission on board; `set_mode` to the mission mode with no mission on board, or one that fails the mission check
          */
         post: operations["send_command_api_v1_vehicles__vehicle_id__commands_post"];
         delete?: never;
@@ -241,6 +245,9 @@ export interface paths {
         /**
          * Telemetry History
          * @description Stored telemetry samples in a time range, oldest first.
+         *
+         *     Refused with 422 though the schema allows it:
+         *     - `start` after `end`, or a date-time outside the Unix seconds the range allows (from 1970)
          */
         get: operations["telemetry_history_api_v1_vehicles__vehicle_id__telemetry_get"];
         put?: never;
@@ -312,6 +319,9 @@ export interface paths {
          *     rules are those of `mission-check`): every item problem and every rail it breaks is
          *     listed (422) before anything reaches the vehicle; a vehicle that rejects an item keeps
          *     its previous mission (409).
+         *
+         *     Refused with 422 though the schema allows it:
+         *     - an item whose MAV_CMD is unknown or lacks what it needs (rule `mission_item`), or that breaks the safety rails; an altitude above sea level before the vehicle has reported home's
          */
         post: operations["upload_mission_api_v1_vehicles__vehicle_id__mission_post"];
         /** Clear Mission */
@@ -333,6 +343,9 @@ export interface paths {
          * Set Current Item
          * @description Fly on from item ``seq`` (1 is the first after home). An item beyond the mission
          *     on board is refused at once (422, naming the mission's length).
+         *
+         *     Refused with 422 though the schema allows it:
+         *     - a `seq` that is not an item of the mission on board
          */
         put: operations["set_current_item_api_v1_vehicles__vehicle_id__mission_current_put"];
         post?: never;
@@ -360,6 +373,9 @@ export interface paths {
          *     a vehicle the hub does not know is refused whole (422), before anything is sent.
          *     Each vehicle reached counts as one command in the caller's rate limit; a call is
          *     accepted while the caller has budget left, so a fleet-wide RTL is never split.
+         *
+         *     Refused with 422 though the schema allows it:
+         *     - a `vehicle_ids` entry the hub does not know
          */
         post: operations["send_group_command_api_v1_fleet_commands_post"];
         delete?: never;
@@ -380,7 +396,11 @@ export interface paths {
          * @description The site's rails, which apply to every vehicle unless narrowed per vehicle.
          */
         get: operations["site_rails_api_v1_safety_rails_get"];
-        /** Set Site Rails */
+        /**
+         * Set Site Rails
+         * @description Refused with 422 though the schema allows it:
+         *     - `min_altitude_m` above `max_altitude_m`; a geofence polygon with fewer than 3 distinct vertices, crossing edges, or a vertex over 100 km from its centre
+         */
         put: operations["set_site_rails_api_v1_safety_rails_put"];
         post?: never;
         delete?: never;
@@ -404,6 +424,9 @@ export interface paths {
         /**
          * Set Vehicle Rails
          * @description Per-vehicle rails: each value set here replaces the site's for this vehicle.
+         *
+         *     Refused with 422 though the schema allows it:
+         *     - `min_altitude_m` above `max_altitude_m`; a geofence polygon with fewer than 3 distinct vertices, crossing edges, or a vertex over 100 km from its centre
          */
         put: operations["set_vehicle_rails_api_v1_vehicles__vehicle_id__safety_rails_put"];
         post?: never;
@@ -492,6 +515,9 @@ export interface paths {
          * @description Plan a survey and split it across the chosen drones, without uploading anything:
          *     the camera's numbers, the coverage of the photos' footprints, and per drone its
          *     mission, its times and the safety rails' check of that mission.
+         *
+         *     Refused with 422 though the schema allows it:
+         *     - `vehicle_ids` naming a vehicle twice, or one the hub does not know, has no position or home yet, or (to start) is not connected, not ready, flying or busy in another survey; an `area` the planner cannot cover (rings not closed, crossing edges, over its size limits); a `camera` that names no preset
          */
         post: operations["preview_survey_api_v1_surveys_preview_post"];
         delete?: never;
@@ -519,6 +545,9 @@ export interface paths {
          *     nothing is uploaded until it is started. Each chosen drone must be connected, ready,
          *     on the ground and in no other survey (422 naming it otherwise); a part that breaks a
          *     rail refuses the whole survey (422, each violation naming its vehicle).
+         *
+         *     Refused with 422 though the schema allows it:
+         *     - `vehicle_ids` naming a vehicle twice, or one the hub does not know, has no position or home yet, or (to start) is not connected, not ready, flying or busy in another survey; an `area` the planner cannot cover (rings not closed, crossing edges, over its size limits); a `camera` that names no preset
          */
         post: operations["create_survey_api_v1_surveys_post"];
         delete?: never;
@@ -683,6 +712,9 @@ export interface paths {
          * @description A survey request's fields from another tool's file (no side effects): at least the
          *     `area`, and from a QGC Survey also its camera and settings. Add `vehicle_ids` (and
          *     anything to change) and send it to `POST /surveys` or the preview.
+         *
+         *     Refused with 422 though the schema allows it:
+         *     - `content` that is not a file of the named `format` holding an area
          */
         post: operations["import_survey_area_api_v1_surveys_import_post"];
         delete?: never;
@@ -702,6 +734,9 @@ export interface paths {
          * Export Survey Mission
          * @description One drone's survey mission as a file other tools open: a QGroundControl `.plan`,
          *     a `QGC WPL 110` waypoint file (Mission Planner, MAVProxy), or its path as GeoJSON.
+         *
+         *     Refused with 422 though the schema allows it:
+         *     - a `vehicle_id` that is not one of the survey's drones
          */
         get: operations["export_survey_mission_api_v1_surveys__survey_id__vehicles__vehicle_id__mission_get"];
         put?: never;
@@ -727,6 +762,9 @@ export interface paths {
         /**
          * Upload Photo Chunk
          * @description One chunk of a photo at byte ``offset`` (the body: raw JPEG bytes).
+         *
+         *     Refused with 422 though the schema allows it:
+         *     - a first chunk (`offset` 0) without the photo's metadata in `X-Photo-Meta`, or metadata, image or survey the photo checks refuse (`code` names which)
          */
         put: operations["upload_photo_chunk_api_v1_vehicles__vehicle_id__photos__photo_id__put"];
         post?: never;
@@ -896,6 +934,9 @@ export interface paths {
         /**
          * Scans Between
          * @description Stored scans in a time range, oldest first, as world points.
+         *
+         *     Refused with 422 though the schema allows it:
+         *     - `start` after `end`, or a date-time outside the Unix seconds the range allows (from 1970)
          */
         get: operations["scans_between_api_v1_vehicles__vehicle_id__scans_get"];
         put?: never;
@@ -1001,6 +1042,10 @@ export interface paths {
          * @description Telemetry of one vehicle or the fleet over a range, at most ``points`` samples per
          *     vehicle, keeping the true minimum and maximum of ``metric`` (a chart shows the real
          *     extremes, not every n-th row).
+         *
+         *     Refused with 422 though the schema allows it:
+         *     - `start` after `end`, or a date-time outside the Unix seconds the range allows (from 1970)
+         *     - a range (`end` - `start`) over 7 days
          */
         get: operations["telemetry_series_api_v1_telemetry_series_get"];
         put?: never;
@@ -1099,6 +1144,9 @@ export interface paths {
         /**
          * List Events
          * @description STATUSTEXTs, mode changes, arming, failsafes and link changes, newest first.
+         *
+         *     Refused with 422 though the schema allows it:
+         *     - `start` after `end`, or a date-time outside the Unix seconds the range allows (from 1970)
          */
         get: operations["list_events_api_v1_events_get"];
         put?: never;
@@ -1119,6 +1167,9 @@ export interface paths {
         /**
          * List Commands
          * @description Commands sent, who sent them and what the vehicle answered, newest first.
+         *
+         *     Refused with 422 though the schema allows it:
+         *     - `start` after `end`, or a date-time outside the Unix seconds the range allows (from 1970)
          */
         get: operations["list_commands_api_v1_commands_get"];
         put?: never;
@@ -1146,6 +1197,9 @@ export interface paths {
          *     The body must be a .tlog (timestamped MAVLink frames: 422 otherwise, at the first
          *     record that is not), and fit the vehicle's quota (``max_tlog_bytes_per_vehicle``
          *     over all its files: 413 otherwise; ``max_tlog_bytes`` bounds one file).
+         *
+         *     Refused with 422 though the schema allows it:
+         *     - a body that is not a MAVLink telemetry log (no complete MAVLink frame)
          */
         post: operations["upload_tlog_api_v1_vehicles__vehicle_id__tlogs_post"];
         delete?: never;
@@ -1201,7 +1255,11 @@ export interface paths {
         /** List Users */
         get: operations["list_users_api_v1_users_get"];
         put?: never;
-        /** Create User */
+        /**
+         * Create User
+         * @description Refused with 422 though the schema allows it:
+         *     - a `password` that is easy to guess
+         */
         post: operations["create_user_api_v1_users_post"];
         delete?: never;
         options?: never;
@@ -1423,6 +1481,9 @@ export interface paths {
          * Get Mosaic Tile
          * @description One tile: JPEG where the photos cover all of it, PNG (transparent where they do
          *     not) at the mosaic's edges.
+         *
+         *     Refused with 422 though the schema allows it:
+         *     - `x` or `y` not below 2**`z` (no such tile in the grid)
          */
         get: operations["get_mosaic_tile_api_v1_mosaics__survey_id__tiles__z___x___y__get"];
         put?: never;
@@ -2187,7 +2248,7 @@ export interface components {
              */
             vehicle_ids?: string[] | null;
             /** Command */
-            command: components["schemas"]["ArmCommand"] | components["schemas"]["DisarmCommand"] | components["schemas"]["TakeoffCommand"] | components["schemas"]["LandCommand"] | components["schemas"]["ReturnToLaunchCommand"] | components["schemas"]["SetModeCommand"] | components["schemas"]["GotoCommand"] | components["schemas"]["HoldCommand"] | components["schemas"]["ChangeSpeedCommand"] | components["schemas"]["SetHomeCommand"] | components["schemas"]["RebootCommand"] | components["schemas"]["ParamListCommand"] | components["schemas"]["ParamGetCommand"] | components["schemas"]["ParamSetCommand"] | components["schemas"]["MissionUploadCommand"] | components["schemas"]["MissionDownloadCommand"] | components["schemas"]["MissionClearCommand"] | components["schemas"]["MissionSetCurrentCommand"] | components["schemas"]["ManualStartCommand"] | components["schemas"]["ManualStopCommand"];
+            command: components["schemas"]["ArmCommand"] | components["schemas"]["DisarmCommand"] | components["schemas"]["TakeoffCommand"] | components["schemas"]["LandCommand"] | components["schemas"]["ReturnToLaunchCommand"] | components["schemas"]["SetModeCommand"] | components["schemas"]["GotoCommand"] | components["schemas"]["HoldCommand"] | components["schemas"]["ChangeSpeedCommand"] | components["schemas"]["SetHomeCommand"] | components["schemas"]["RebootCommand"] | components["schemas"]["ParamListCommand"] | components["schemas"]["ParamGetCommand"] | components["schemas"]["ParamSetCommand"] | components["schemas"]["MissionUploadCommand"] | components["schemas"]["MissionDownloadCommand"] | components["schemas"]["MissionClearCommand"] | components["schemas"]["MissionSetCurrentCommand"];
         };
         /** GroupCommandResponse */
         GroupCommandResponse: {
@@ -3273,7 +3334,13 @@ export interface components {
             hover_and_capture: boolean;
             /** Vehicle Ids */
             vehicle_ids: string[];
-        };
+        } & ({
+            altitude_m: number;
+            gsd_cm?: null;
+        } | {
+            gsd_cm: number;
+            altitude_m?: null;
+        });
         /** SurveyRun */
         SurveyRun: {
             /** Id */
@@ -4491,7 +4558,7 @@ export interface operations {
         };
         requestBody: {
             content: {
-                "application/json": components["schemas"]["ArmCommand"] | components["schemas"]["DisarmCommand"] | components["schemas"]["TakeoffCommand"] | components["schemas"]["LandCommand"] | components["schemas"]["ReturnToLaunchCommand"] | components["schemas"]["SetModeCommand"] | components["schemas"]["GotoCommand"] | components["schemas"]["HoldCommand"] | components["schemas"]["ChangeSpeedCommand"] | components["schemas"]["SetHomeCommand"] | components["schemas"]["RebootCommand"] | components["schemas"]["ParamListCommand"] | components["schemas"]["ParamGetCommand"] | components["schemas"]["ParamSetCommand"] | components["schemas"]["MissionUploadCommand"] | components["schemas"]["MissionDownloadCommand"] | components["schemas"]["MissionClearCommand"] | components["schemas"]["MissionSetCurrentCommand"] | components["schemas"]["ManualStartCommand"] | components["schemas"]["ManualStopCommand"];
+                "application/json": components["schemas"]["ArmCommand"] | components["schemas"]["DisarmCommand"] | components["schemas"]["TakeoffCommand"] | components["schemas"]["LandCommand"] | components["schemas"]["ReturnToLaunchCommand"] | components["schemas"]["SetModeCommand"] | components["schemas"]["GotoCommand"] | components["schemas"]["HoldCommand"] | components["schemas"]["ChangeSpeedCommand"] | components["schemas"]["SetHomeCommand"] | components["schemas"]["RebootCommand"] | components["schemas"]["ParamListCommand"] | components["schemas"]["ParamGetCommand"] | components["schemas"]["ParamSetCommand"] | components["schemas"]["MissionUploadCommand"] | components["schemas"]["MissionDownloadCommand"] | components["schemas"]["MissionClearCommand"] | components["schemas"]["MissionSetCurrentCommand"];
             };
         };
         responses: {
@@ -4549,7 +4616,11 @@ export interface operations {
                     "application/json": components["schemas"]["ErrorMessage"];
                 };
             };
-            /** @description Invalid parameters, or refused by safety rules (all listed) */
+            /**
+             * @description Invalid parameters, or refused by safety rules (all listed). Refused with 422 though the schema allows it:
+             *     - a command the safety rails refuse, for the vehicle's state, mission and rails as they are now (`violations` lists every rule)
+             *     - `mission_set_current` beyond the mission on board; `set_mode` to the mission mode with no mission on board, or one that fails the mission check
+             */
             422: {
                 headers: {
                     [name: string]: unknown;
@@ -4645,7 +4716,10 @@ export interface operations {
                     "application/json": components["schemas"]["ErrorMessage"];
                 };
             };
-            /** @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed) */
+            /**
+             * @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed). Refused with 422 though the schema allows it:
+             *     - `start` after `end`, or a date-time outside the Unix seconds the range allows (from 1970)
+             */
             422: {
                 headers: {
                     [name: string]: unknown;
@@ -5148,7 +5222,10 @@ export interface operations {
                     "application/json": components["schemas"]["ErrorMessage"];
                 };
             };
-            /** @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed) */
+            /**
+             * @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed). Refused with 422 though the schema allows it:
+             *     - an item whose MAV_CMD is unknown or lacks what it needs (rule `mission_item`), or that breaks the safety rails; an altitude above sea level before the vehicle has reported home's
+             */
             422: {
                 headers: {
                     [name: string]: unknown;
@@ -5357,7 +5434,10 @@ export interface operations {
                     "application/json": components["schemas"]["ErrorMessage"];
                 };
             };
-            /** @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed) */
+            /**
+             * @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed). Refused with 422 though the schema allows it:
+             *     - a `seq` that is not an item of the mission on board
+             */
             422: {
                 headers: {
                     [name: string]: unknown;
@@ -5460,7 +5540,10 @@ export interface operations {
                     "application/json": components["schemas"]["ErrorMessage"];
                 };
             };
-            /** @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed) */
+            /**
+             * @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed). Refused with 422 though the schema allows it:
+             *     - a `vehicle_ids` entry the hub does not know
+             */
             422: {
                 headers: {
                     [name: string]: unknown;
@@ -5591,7 +5674,10 @@ export interface operations {
                     "application/json": components["schemas"]["ErrorMessage"];
                 };
             };
-            /** @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed) */
+            /**
+             * @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed). Refused with 422 though the schema allows it:
+             *     - `min_altitude_m` above `max_altitude_m`; a geofence polygon with fewer than 3 distinct vertices, crossing edges, or a vertex over 100 km from its centre
+             */
             422: {
                 headers: {
                     [name: string]: unknown;
@@ -5742,7 +5828,10 @@ export interface operations {
                     "application/json": components["schemas"]["ErrorMessage"];
                 };
             };
-            /** @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed) */
+            /**
+             * @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed). Refused with 422 though the schema allows it:
+             *     - `min_altitude_m` above `max_altitude_m`; a geofence polygon with fewer than 3 distinct vertices, crossing edges, or a vertex over 100 km from its centre
+             */
             422: {
                 headers: {
                     [name: string]: unknown;
@@ -6093,7 +6182,10 @@ export interface operations {
                     "application/json": components["schemas"]["ErrorMessage"];
                 };
             };
-            /** @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed) */
+            /**
+             * @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed). Refused with 422 though the schema allows it:
+             *     - `vehicle_ids` naming a vehicle twice, or one the hub does not know, has no position or home yet, or (to start) is not connected, not ready, flying or busy in another survey; an `area` the planner cannot cover (rings not closed, crossing edges, over its size limits); a `camera` that names no preset
+             */
             422: {
                 headers: {
                     [name: string]: unknown;
@@ -6213,7 +6305,10 @@ export interface operations {
                     "application/json": components["schemas"]["ErrorMessage"];
                 };
             };
-            /** @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed) */
+            /**
+             * @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed). Refused with 422 though the schema allows it:
+             *     - `vehicle_ids` naming a vehicle twice, or one the hub does not know, has no position or home yet, or (to start) is not connected, not ready, flying or busy in another survey; an `area` the planner cannot cover (rings not closed, crossing edges, over its size limits); a `camera` that names no preset
+             */
             422: {
                 headers: {
                     [name: string]: unknown;
@@ -6770,7 +6865,10 @@ export interface operations {
                     "application/json": components["schemas"]["ErrorMessage"];
                 };
             };
-            /** @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed) */
+            /**
+             * @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed). Refused with 422 though the schema allows it:
+             *     - `content` that is not a file of the named `format` holding an area
+             */
             422: {
                 headers: {
                     [name: string]: unknown;
@@ -6843,7 +6941,10 @@ export interface operations {
                     "application/json": components["schemas"]["ErrorMessage"];
                 };
             };
-            /** @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed) */
+            /**
+             * @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed). Refused with 422 though the schema allows it:
+             *     - a `vehicle_id` that is not one of the survey's drones
+             */
             422: {
                 headers: {
                     [name: string]: unknown;
@@ -7012,7 +7113,10 @@ export interface operations {
                     "application/json": components["schemas"]["ErrorMessage"];
                 };
             };
-            /** @description Refused for good, with the reason and its `code` */
+            /**
+             * @description Refused for good, with the reason and its `code`. Refused with 422 though the schema allows it:
+             *     - a first chunk (`offset` 0) without the photo's metadata in `X-Photo-Meta`, or metadata, image or survey the photo checks refuse (`code` names which)
+             */
             422: {
                 headers: {
                     [name: string]: unknown;
@@ -7756,7 +7860,10 @@ export interface operations {
                     "application/json": components["schemas"]["ErrorMessage"];
                 };
             };
-            /** @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed) */
+            /**
+             * @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed). Refused with 422 though the schema allows it:
+             *     - `start` after `end`, or a date-time outside the Unix seconds the range allows (from 1970)
+             */
             422: {
                 headers: {
                     [name: string]: unknown;
@@ -8083,7 +8190,11 @@ export interface operations {
                     "application/json": components["schemas"]["ErrorMessage"];
                 };
             };
-            /** @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed) */
+            /**
+             * @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed). Refused with 422 though the schema allows it:
+             *     - `start` after `end`, or a date-time outside the Unix seconds the range allows (from 1970)
+             *     - a range (`end` - `start`) over 7 days
+             */
             422: {
                 headers: {
                     [name: string]: unknown;
@@ -8443,7 +8554,10 @@ export interface operations {
                     "application/json": components["schemas"]["ErrorMessage"];
                 };
             };
-            /** @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed) */
+            /**
+             * @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed). Refused with 422 though the schema allows it:
+             *     - `start` after `end`, or a date-time outside the Unix seconds the range allows (from 1970)
+             */
             422: {
                 headers: {
                     [name: string]: unknown;
@@ -8519,7 +8633,10 @@ export interface operations {
                     "application/json": components["schemas"]["ErrorMessage"];
                 };
             };
-            /** @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed) */
+            /**
+             * @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed). Refused with 422 though the schema allows it:
+             *     - `start` after `end`, or a date-time outside the Unix seconds the range allows (from 1970)
+             */
             422: {
                 headers: {
                     [name: string]: unknown;
@@ -8666,7 +8783,10 @@ export interface operations {
                     "application/json": components["schemas"]["ErrorMessage"];
                 };
             };
-            /** @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed) */
+            /**
+             * @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed). Refused with 422 though the schema allows it:
+             *     - a body that is not a MAVLink telemetry log (no complete MAVLink frame)
+             */
             422: {
                 headers: {
                     [name: string]: unknown;
@@ -8913,7 +9033,10 @@ export interface operations {
                     "application/json": components["schemas"]["ErrorMessage"];
                 };
             };
-            /** @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed) */
+            /**
+             * @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed). Refused with 422 though the schema allows it:
+             *     - a `password` that is easy to guess
+             */
             422: {
                 headers: {
                     [name: string]: unknown;
@@ -9680,7 +9803,10 @@ export interface operations {
                     "application/json": components["schemas"]["ErrorMessage"];
                 };
             };
-            /** @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed) */
+            /**
+             * @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed). Refused with 422 though the schema allows it:
+             *     - `x` or `y` not below 2**`z` (no such tile in the grid)
+             */
             422: {
                 headers: {
                     [name: string]: unknown;

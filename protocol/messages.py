@@ -93,7 +93,7 @@ Number = Annotated[float, Strict()]
 Boolean = Annotated[bool, Strict()]
 
 
-def _whole(value: object) -> object:
+def whole_number(value: object) -> object:
     """JSON has one number type: 3.0 is the integer 3 (JSON Schema's "integer" says so,
     and a client's float arithmetic writes it), so it is taken as 3. A fraction, a bool
     or a string still fails the strict integer after this."""
@@ -102,7 +102,10 @@ def _whole(value: object) -> object:
     return value
 
 
-Integer = Annotated[int, Strict(), BeforeValidator(_whole)]
+# Bounds for an Integer go before the validator, inside one Annotated (as UInt16 has
+# them): pydantic would write bounds applied around it into the schema as "ge" and "le",
+# which JSON Schema does not know, rather than "minimum" and "maximum".
+Integer = Annotated[int, Strict(), BeforeValidator(whole_number)]
 
 
 def _fits_float32(value: float) -> float:
@@ -131,7 +134,7 @@ UInt16 = Annotated[
     int,
     Strict(),
     Field(ge=WIRE_RANGES["uint16_t"][0], le=WIRE_RANGES["uint16_t"][1]),
-    BeforeValidator(_whole),
+    BeforeValidator(whole_number),
 ]
 
 

@@ -7,7 +7,8 @@ The rules follow from where errors arise, so a new route is documented by them:
 - a request body: 413.
 ``ROUTE_STATUSES`` adds what only some routes do: talk to a vehicle (409 offline or
 refused, 504 no answer in time, 429 over the caller's budget of requests to vehicles),
-rate limits (429), conflicts (409).
+rate limits (429), conflicts (409). ``BEYOND_SCHEMA`` lists the 422s a request the schema
+allows can still get (rules across fields, or against the fleet as it is).
 """
 
 from __future__ import annotations
@@ -188,12 +189,15 @@ def _rules(route: APIRoute) -> list[str]:
     """The rules beyond the schema that this route refuses with 422."""
     names = {param.name for param in get_flat_params(route.dependant)}
     rules = [TIME_RANGE_RULE] if {"start", "end"} <= names else []
-    for pattern, methods, rule in BEYOND_SCHEMA:
-        if re.fullmatch(pattern, route.path) and (
-            methods is None or (route.methods or set()) & methods
-        ):
-            rules.append(rule)
+    rules += [rule for pattern, methods, rule in BEYOND_SCHEMA if _is(route, pattern, methods)]
     return rules
+
+
+def _is(route: APIRoute, pattern: str, methods: frozenset[str] | None) -> bool:
+    """Whether ``route`` is one a table's row names (its path, and its method if given)."""
+    return re.fullmatch(pattern, route.path) is not None and (
+        methods is None or bool((route.methods or set()) & methods)
+    )
 
 
 def _state_rules(route: APIRoute) -> None:
@@ -223,9 +227,7 @@ def _statuses(route: APIRoute) -> set[int]:
     if route.body_field is not None:
         statuses.add(413)
     for pattern, methods, more in ROUTE_STATUSES:
-        if re.fullmatch(pattern, route.path) and (
-            methods is None or (route.methods or set()) & methods
-        ):
+        if _is(route, pattern, methods):
             statuses |= more
     return statuses
 

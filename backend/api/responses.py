@@ -131,8 +131,9 @@ BEYOND_SCHEMA: list[tuple[str, frozenset[str] | None, str]] = [
     (
         r"/vehicles/\{vehicle_id\}/commands",
         frozenset({"POST"}),
-        "`mission_set_current` beyond the mission on board; `set_mode` to the mission mode "
-        "with no mission on board, or one that fails the mission check",
+        "`set_mode` to a mode the vehicle does not report, or to the mission mode with no "
+        "mission on board or one that fails the mission check; `mission_set_current` "
+        "beyond the mission on board",
     ),
     (
         r"/vehicles/\{vehicle_id\}/mission",
@@ -149,10 +150,12 @@ BEYOND_SCHEMA: list[tuple[str, frozenset[str] | None, str]] = [
     (
         r"/surveys(/preview)?",
         frozenset({"POST"}),
-        "`vehicle_ids` naming a vehicle twice, or one the hub does not know, has no position "
-        "or home yet, or (to start) is not connected, not ready, flying or busy in another "
-        "survey; an `area` the planner cannot cover (rings not closed, crossing edges, over "
-        "its size limits); a `camera` that names no preset",
+        "`vehicle_ids` naming a vehicle twice, or one the hub does not know, has no "
+        "position or home yet, or (`POST /surveys` only) is not connected, not ready, "
+        "flying or busy in another survey; an `area` the planner cannot cover (rings not "
+        "closed, crossing edges, over its size limits); a `camera` that names no preset; "
+        "(`POST /surveys` only) a drone's mission the safety rails refuse (`violations` "
+        "lists every rule)",
     ),
     (
         r"/surveys/import",

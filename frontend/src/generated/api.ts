@@ -226,7 +226,7 @@ export interface paths {
          *
          *     Refused with 422 though the schema allows it:
          *     - a command the safety rails refuse, for the vehicle's state, mission and rails as they are now (`violations` lists every rule)
-         *     - `mission_set_current` beyond the mission on board; `set_mode` to the mission mode with no mission on board, or one that fails the mission check
+         *     - `set_mode` to a mode the vehicle does not report, or to the mission mode with no mission on board or one that fails the mission check; `mission_set_current` beyond the mission on board
          */
         post: operations["send_command_api_v1_vehicles__vehicle_id__commands_post"];
         delete?: never;
@@ -517,7 +517,7 @@ export interface paths {
          *     mission, its times and the safety rails' check of that mission.
          *
          *     Refused with 422 though the schema allows it:
-         *     - `vehicle_ids` naming a vehicle twice, or one the hub does not know, has no position or home yet, or (to start) is not connected, not ready, flying or busy in another survey; an `area` the planner cannot cover (rings not closed, crossing edges, over its size limits); a `camera` that names no preset
+         *     - `vehicle_ids` naming a vehicle twice, or one the hub does not know, has no position or home yet, or (`POST /surveys` only) is not connected, not ready, flying or busy in another survey; an `area` the planner cannot cover (rings not closed, crossing edges, over its size limits); a `camera` that names no preset; (`POST /surveys` only) a drone's mission the safety rails refuse (`violations` lists every rule)
          */
         post: operations["preview_survey_api_v1_surveys_preview_post"];
         delete?: never;
@@ -547,7 +547,7 @@ export interface paths {
          *     rail refuses the whole survey (422, each violation naming its vehicle).
          *
          *     Refused with 422 though the schema allows it:
-         *     - `vehicle_ids` naming a vehicle twice, or one the hub does not know, has no position or home yet, or (to start) is not connected, not ready, flying or busy in another survey; an `area` the planner cannot cover (rings not closed, crossing edges, over its size limits); a `camera` that names no preset
+         *     - `vehicle_ids` naming a vehicle twice, or one the hub does not know, has no position or home yet, or (`POST /surveys` only) is not connected, not ready, flying or busy in another survey; an `area` the planner cannot cover (rings not closed, crossing edges, over its size limits); a `camera` that names no preset; (`POST /surveys` only) a drone's mission the safety rails refuse (`violations` lists every rule)
          */
         post: operations["create_survey_api_v1_surveys_post"];
         delete?: never;
@@ -4619,7 +4619,7 @@ export interface operations {
             /**
              * @description Invalid parameters, or refused by safety rules (all listed). Refused with 422 though the schema allows it:
              *     - a command the safety rails refuse, for the vehicle's state, mission and rails as they are now (`violations` lists every rule)
-             *     - `mission_set_current` beyond the mission on board; `set_mode` to the mission mode with no mission on board, or one that fails the mission check
+             *     - `set_mode` to a mode the vehicle does not report, or to the mission mode with no mission on board or one that fails the mission check; `mission_set_current` beyond the mission on board
              */
             422: {
                 headers: {
@@ -6184,7 +6184,7 @@ export interface operations {
             };
             /**
              * @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed). Refused with 422 though the schema allows it:
-             *     - `vehicle_ids` naming a vehicle twice, or one the hub does not know, has no position or home yet, or (to start) is not connected, not ready, flying or busy in another survey; an `area` the planner cannot cover (rings not closed, crossing edges, over its size limits); a `camera` that names no preset
+             *     - `vehicle_ids` naming a vehicle twice, or one the hub does not know, has no position or home yet, or (`POST /surveys` only) is not connected, not ready, flying or busy in another survey; an `area` the planner cannot cover (rings not closed, crossing edges, over its size limits); a `camera` that names no preset; (`POST /surveys` only) a drone's mission the safety rails refuse (`violations` lists every rule)
              */
             422: {
                 headers: {
@@ -6307,7 +6307,7 @@ export interface operations {
             };
             /**
              * @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed). Refused with 422 though the schema allows it:
-             *     - `vehicle_ids` naming a vehicle twice, or one the hub does not know, has no position or home yet, or (to start) is not connected, not ready, flying or busy in another survey; an `area` the planner cannot cover (rings not closed, crossing edges, over its size limits); a `camera` that names no preset
+             *     - `vehicle_ids` naming a vehicle twice, or one the hub does not know, has no position or home yet, or (`POST /surveys` only) is not connected, not ready, flying or busy in another survey; an `area` the planner cannot cover (rings not closed, crossing edges, over its size limits); a `camera` that names no preset; (`POST /surveys` only) a drone's mission the safety rails refuse (`violations` lists every rule)
              */
             422: {
                 headers: {

@@ -34,6 +34,7 @@ from pydantic import (
     BaseModel,
     BeforeValidator,
     ConfigDict,
+    Discriminator,
     Field,
     Strict,
     TypeAdapter,
@@ -89,8 +90,22 @@ MessageText = Annotated[str, BeforeValidator(_clip), Field(max_length=MAX_MESSAG
 # client's type mistake would fly (a battery reserve of `false` is a reserve of 0 %).
 # Strict, each is a 422 naming the field. A whole number is still a number.
 Number = Annotated[float, Strict()]
-Integer = Annotated[int, Strict()]
 Boolean = Annotated[bool, Strict()]
+
+
+def whole_number(value: object) -> object:
+    """JSON has one number type: 3.0 is the integer 3 (JSON Schema's "integer" says so,
+    and a client's float arithmetic writes it), so it is taken as 3. A fraction, a bool
+    or a string still fails the strict integer after this."""
+    if type(value) is float and value.is_integer():
+        return int(value)
+    return value
+
+
+# Bounds for an Integer go before the validator, inside one Annotated (as UInt16 has
+# them): pydantic would write bounds applied around it into the schema as "ge" and "le",
+# which JSON Schema does not know, rather than "minimum" and "maximum".
+Integer = Annotated[int, Strict(), BeforeValidator(whole_number)]
 
 
 def _fits_float32(value: float) -> float:
@@ -116,7 +131,10 @@ Float32 = Annotated[
     AfterValidator(_fits_float32),
 ]
 UInt16 = Annotated[
-    int, Strict(), Field(ge=WIRE_RANGES["uint16_t"][0], le=WIRE_RANGES["uint16_t"][1])
+    int,
+    Strict(),
+    Field(ge=WIRE_RANGES["uint16_t"][0], le=WIRE_RANGES["uint16_t"][1]),
+    BeforeValidator(whole_number),
 ]
 
 
@@ -355,6 +373,53 @@ Command = Annotated[
     | ManualStartCommand
     | ManualStopCommand,
     Field(discriminator="name"),
+]
+
+LEASE_COMMANDS = frozenset({"manual_start", "manual_stop"})
+
+
+def lease_only(name: str) -> str:
+    """Why a client cannot send ``name`` (one of LEASE_COMMANDS) as a command."""
+    return (
+        f"{name} comes with the manual-control lease: send a 'control' message on the "
+        "live feed (docs/websockets.md)"
+    )
+
+
+def _not_lease_only(value: object) -> object:
+    # Said in words: the union's own error would only list the names it takes.
+    name = value.get("name") if isinstance(value, dict) else None
+    if isinstance(name, str) and name in LEASE_COMMANDS:
+        raise ValueError(lease_only(name))
+    return value
+
+
+# What a client may send through the REST API: every command but manual_start and
+# manual_stop, which open and close with the manual-control lease (the live feed's
+# 'control' message), so the API's schema does not offer them.
+ClientCommand = Annotated[
+    ArmCommand
+    | DisarmCommand
+    | TakeoffCommand
+    | LandCommand
+    | ReturnToLaunchCommand
+    | SetModeCommand
+    | GotoCommand
+    | HoldCommand
+    | ChangeSpeedCommand
+    | SetHomeCommand
+    | RebootCommand
+    | ParamListCommand
+    | ParamGetCommand
+    | ParamSetCommand
+    | MissionUploadCommand
+    | MissionDownloadCommand
+    | MissionClearCommand
+    | MissionSetCurrentCommand,
+    # Not Field(discriminator=...): FastAPI lifts a Field out of a body parameter's
+    # Annotated, which would leave the validator below outside the tagged union.
+    Discriminator("name"),
+    BeforeValidator(_not_lease_only),
 ]
 
 CommandStatus = Literal["accepted", "refused", "timeout", "failed"]

@@ -7,7 +7,7 @@ from typing import Annotated
 
 from fastapi import Depends, Path, Request, Response, status
 from fastapi.security import OAuth2PasswordRequestForm
-from pydantic import BaseModel, Field
+from pydantic import BaseModel, BeforeValidator, Field, Strict
 
 from backend.api.deps import HubDep
 from backend.api.security import (
@@ -31,7 +31,7 @@ from backend.auth.policy import (
 from backend.errors import Forbidden, InvalidRequest, RateLimited, Unauthenticated
 from backend.hub import Hub
 from backend.storage.models import UserRow
-from protocol.messages import Integer
+from protocol.messages import whole_number
 
 router = SecuredRouter(prefix="/auth", tags=["auth"])
 
@@ -60,12 +60,16 @@ class AccessToken(BaseModel):
     expires_in: int
 
 
+# An Integer whose bounds the schema states (see protocol.messages.Integer).
+ExpiryDays = Annotated[int, Strict(), Field(ge=1, le=3650), BeforeValidator(whole_number)]
+
+
 class ApiTokenRequest(BaseModel):
     name: str = Field(min_length=1, max_length=128)
     scopes: list[Permission] | None = Field(
         default=None, description="Permissions to keep (a subset of the role's); all if unset"
     )
-    expires_in_days: Integer | None = Field(default=90, ge=1, le=3650)
+    expires_in_days: ExpiryDays | None = 90
 
 
 class ApiToken(BaseModel):

@@ -15,7 +15,7 @@ from backend.auth.policy import Permission, Principal, authorize
 from backend.errors import GcsError, InvalidRequest, SafetyViolation
 from backend.fleet.command_service import execute_command
 from backend.hub import Hub
-from protocol.messages import Command, CommandOutcome, VehicleId
+from protocol.messages import ClientCommand, Command, CommandOutcome, VehicleId
 
 router = SecuredRouter(prefix="/fleet", tags=["vehicles"])
 
@@ -32,7 +32,7 @@ class GroupCommandRequest(BaseModel):
         max_length=MAX_GROUP,
         description="The selection; every connected vehicle when unset",
     )
-    command: Command
+    command: ClientCommand
 
 
 class VehicleCommandResult(BaseModel):

@@ -7,7 +7,8 @@ The rules follow from where errors arise, so a new route is documented by them:
 - a request body: 413.
 ``ROUTE_STATUSES`` adds what only some routes do: talk to a vehicle (409 offline or
 refused, 504 no answer in time, 429 over the caller's budget of requests to vehicles),
-rate limits (429), conflicts (409).
+rate limits (429), conflicts (409). ``BEYOND_SCHEMA`` lists the 422s a request the schema
+allows can still get (rules across fields, or against the fleet as it is).
 """
 
 from __future__ import annotations
@@ -104,6 +105,120 @@ ROUTE_STATUSES: list[tuple[str, frozenset[str] | None, frozenset[int]]] = [
 ]
 
 
+# Rules a request can break though the schema lets it through: rules across fields, or
+# against the fleet and the data as they are now, which JSON Schema cannot state. Each is
+# written into its operation's description and 422 response, and the operation carries
+# REFUSES_VALID, which tests/fuzz/schemathesis.toml selects to take a 422 as a documented
+# answer to schema-valid data there (and only there). A rule the schema can state belongs
+# in the model instead (bounds, patterns, enums, oneOf).
+REFUSES_VALID = "x-refuses-schema-valid-requests"
+TIME_RANGE_RULE = (
+    "`start` after `end`, or a date-time outside the Unix seconds the range allows (from 1970)"
+)
+RAILS_RULE = (
+    "a command the safety rails refuse, for the vehicle's state, mission and rails as they "
+    "are now (`violations` lists every rule)"
+)
+# (path pattern, methods or None for all, rule) for the routes' own rules; routes with
+# both `start` and `end` query parameters get TIME_RANGE_RULE from _rules.
+BEYOND_SCHEMA: list[tuple[str, frozenset[str] | None, str]] = [
+    (r"/telemetry/series", None, "a range (`end` - `start`) over 7 days"),
+    (
+        r"/mosaics/\{survey_id\}/tiles/\{z\}/\{x\}/\{y\}",
+        None,
+        "`x` or `y` not below 2**`z` (no such tile in the grid)",
+    ),
+    (r"/fleet/commands", frozenset({"POST"}), "a `vehicle_ids` entry the hub does not know"),
+    (r"/vehicles/\{vehicle_id\}/commands", frozenset({"POST"}), RAILS_RULE),
+    (
+        r"/vehicles/\{vehicle_id\}/commands",
+        frozenset({"POST"}),
+        "`set_mode` to a mode the vehicle does not report, or to the mission mode with no "
+        "mission on board or one that fails the mission check; `mission_set_current` "
+        "beyond the mission on board",
+    ),
+    (
+        r"/vehicles/\{vehicle_id\}/mission",
+        frozenset({"POST"}),
+        "an item whose MAV_CMD is unknown or lacks what it needs (rule `mission_item`), or "
+        "that breaks the safety rails; an altitude above sea level before the vehicle has "
+        "reported home's",
+    ),
+    (
+        r"/vehicles/\{vehicle_id\}/mission/current",
+        frozenset({"PUT"}),
+        "a `seq` that is not an item of the mission on board",
+    ),
+    (
+        r"/surveys(/preview)?",
+        frozenset({"POST"}),
+        "`vehicle_ids` naming a vehicle twice, or one the hub does not know, has no "
+        "position or home yet, or (`POST /surveys` only) is not connected, not ready, "
+        "flying or busy in another survey; an `area` the planner cannot cover (rings not "
+        "closed, crossing edges, over its size limits); a `camera` that names no preset; "
+        "(`POST /surveys` only) a drone's mission the safety rails refuse (`violations` "
+        "lists every rule)",
+    ),
+    (
+        r"/surveys/import",
+        frozenset({"POST"}),
+        "`content` that is not a file of the named `format` holding an area",
+    ),
+    (
+        r"/surveys/\{survey_id\}/vehicles/\{vehicle_id\}/mission",
+        frozenset({"GET"}),
+        "a `vehicle_id` that is not one of the survey's drones",
+    ),
+    (r"/users", frozenset({"POST"}), "a `password` that is easy to guess"),
+    (
+        r"/vehicles/\{vehicle_id\}/tlogs",
+        frozenset({"POST"}),
+        "a body that is not a MAVLink telemetry log (no complete MAVLink frame)",
+    ),
+    (
+        r"/vehicles/\{vehicle_id\}/photos/\{photo_id\}",
+        frozenset({"PUT"}),
+        "a first chunk (`offset` 0) without the photo's metadata in `X-Photo-Meta`, or "
+        "metadata, image or survey the photo checks refuse (`code` names which)",
+    ),
+    (
+        r"(/vehicles/\{vehicle_id\})?/safety-rails|/safety/rails",
+        frozenset({"PUT"}),
+        "`min_altitude_m` above `max_altitude_m`; a geofence polygon with fewer than 3 "
+        "distinct vertices, crossing edges, or a vertex over 100 km from its centre",
+    ),
+]
+
+
+def _rules(route: APIRoute) -> list[str]:
+    """The rules beyond the schema that this route refuses with 422."""
+    names = {param.name for param in get_flat_params(route.dependant)}
+    rules = [TIME_RANGE_RULE] if {"start", "end"} <= names else []
+    rules += [rule for pattern, methods, rule in BEYOND_SCHEMA if _is(route, pattern, methods)]
+    return rules
+
+
+def _is(route: APIRoute, pattern: str, methods: frozenset[str] | None) -> bool:
+    """Whether ``route`` is one a table's row names (its path, and its method if given)."""
+    return re.fullmatch(pattern, route.path) is not None and (
+        methods is None or bool((route.methods or set()) & methods)
+    )
+
+
+def _state_rules(route: APIRoute) -> None:
+    """Say the route's rules beyond the schema in its description and its 422, and mark it."""
+    extra = route.openapi_extra or {}
+    rules = _rules(route)
+    if not rules or extra.get(REFUSES_VALID):
+        return  # none, or said already (the routers outlive one app)
+    listed = "".join(f"\n- {rule}" for rule in rules)
+    said = f"Refused with 422 though the schema allows it:{listed}"
+    route.description = f"{route.description}\n\n{said}".strip()
+    refused = route.responses[422]
+    refused["description"] = f"{refused['description']}. {said}"
+    route.openapi_extra = {**extra, REFUSES_VALID: True}
+
+
 def _statuses(route: APIRoute) -> set[int]:
     statuses: set[int] = set()
     extra = route.openapi_extra or {}
@@ -117,9 +232,7 @@ def _statuses(route: APIRoute) -> set[int]:
     if route.body_field is not None:
         statuses.add(413)
     for pattern, methods, more in ROUTE_STATUSES:
-        if re.fullmatch(pattern, route.path) and (
-            methods is None or (route.methods or set()) & methods
-        ):
+        if _is(route, pattern, methods):
             statuses |= more
     return statuses
 
@@ -133,6 +246,7 @@ def document_errors(app: FastAPI, routers: Iterable[APIRouter]) -> None:
         for route in router.routes:
             if isinstance(route, APIRoute) and route.include_in_schema:
                 _document(route)
+                _state_rules(route)
     app.openapi = lambda: _openapi(app)  # type: ignore[method-assign]
 
 

@@ -14,7 +14,7 @@ from backend.api.time_ranges import Moment, time_query, time_range
 from backend.api.vehicle_budget import spend_vehicle_budget
 from backend.auth.policy import Permission
 from backend.fleet.command_service import execute_command
-from protocol.messages import Command, VehicleSummary
+from protocol.messages import ClientCommand, VehicleSummary
 
 router = SecuredRouter(prefix="/vehicles", tags=["vehicles"])
 
@@ -48,7 +48,7 @@ async def get_vehicle(vehicle_id: VehicleIdPath, hub: HubDep) -> VehicleSummary:
 )
 async def send_command(
     vehicle_id: VehicleIdPath,
-    command: Annotated[Command, Body()],
+    command: Annotated[ClientCommand, Body()],
     request: Request,
     principal: CurrentPrincipal,
     hub: HubDep,

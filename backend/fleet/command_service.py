@@ -27,7 +27,13 @@ from backend.fleet.mission_gate import check_current_item, unchecked_mission
 from backend.missions.gate import starts_mission
 from backend.storage.logbook import command_row
 from backend.storage.models import CommandRow
-from protocol.messages import Command, CommandOutcome, ManualStartCommand, ManualStopCommand
+from protocol.messages import (
+    Command,
+    CommandOutcome,
+    ManualStartCommand,
+    ManualStopCommand,
+    lease_only,
+)
 from protocol.routing import RoutedCommand
 
 log = logging.getLogger(__name__)
@@ -51,11 +57,7 @@ async def execute_command(
         if isinstance(command, ManualStartCommand | ManualStopCommand):
             # Browser control opens and closes with the lease, whose holder the hub
             # tracks; a bare command would leave the vehicle in a pilot mode nobody flies.
-            raise InvalidRequest(
-                "name",
-                f"{command.name} comes with the manual-control lease: send a 'control' "
-                "message on the live feed (docs/websockets.md)",
-            )
+            raise InvalidRequest("name", lease_only(command.name))
         record = hub.registry.get(vehicle_id)
         critical = hub.safety.check_authority(principal, record, command)
         if critical is not None:

@@ -1,7 +1,8 @@
 """schemathesis, with all its checks, against a running demo fleet, as an admin, an
 operator, a viewer and an agent (each refused what its role may not do): no 5xx, no
-status the OpenAPI document does not list, bodies that match their models, and 405s whose
-Allow header names the path's methods.
+status the OpenAPI document does not list, bodies that match their models, 405s whose
+Allow header names the path's methods, and schema-valid data accepted: a 422 for it only
+where the operation says why (x-refuses-schema-valid-requests, schemathesis.toml).
 
 It runs the `schemathesis` CLI (every phase: examples, coverage, fuzzing, stateful) with a
 fixed seed and a bounded number of examples per operation, so it stays near a minute or

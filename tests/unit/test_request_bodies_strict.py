@@ -8,11 +8,12 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
+import pytest
 from fastapi.routing import APIRoute, iter_route_contexts
-from pydantic import BaseModel, TypeAdapter
+from pydantic import BaseModel, TypeAdapter, ValidationError
 
 from backend.app import create_app
-from protocol.messages import Number
+from protocol.messages import MissionItem, MissionSetCurrentCommand, Number
 from tests.conftest import hub_settings
 
 _SCALARS = {"float", "int", "bool"}
@@ -61,3 +62,17 @@ def test_every_request_body_takes_json_numbers_and_booleans_only(tmp_path: Path)
         if (found := lax_scalars(route.body_field.field_info.annotation))
     }
     assert lax == {}
+
+
+def test_a_whole_number_written_as_a_float_is_that_integer() -> None:
+    """JSON has one number type, and JSON Schema's "integer" takes 3.0: a client's float
+    arithmetic writing 16.0 for a MAV_CMD means 16 (the fuzzer found such a mission
+    refused). A fraction, a boolean or a string is still no integer."""
+    item = MissionItem.model_validate({"command": 16.0, "frame": 3.0, "lat": 1.0})
+    assert (item.command, item.frame) == (16, 3)
+    assert type(item.command) is int
+    assert type(item.frame) is int
+    assert MissionSetCurrentCommand.model_validate({"seq": 2.0}).seq == 2
+    for wrong in (16.5, True, "16", 70_000.0, float("nan")):
+        with pytest.raises(ValidationError):
+            MissionItem.model_validate({"command": wrong})

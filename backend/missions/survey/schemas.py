@@ -8,6 +8,7 @@ from __future__ import annotations
 from typing import Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, model_validator
+from pydantic.config import JsonDict
 
 from backend.missions.schemas import Mission, MissionCheckResponse
 from protocol.messages import Boolean, Integer, Number, VehicleId
@@ -35,7 +36,21 @@ class CameraModel(_Strict):
     distance_trigger: Boolean = True
 
 
+# "Exactly one of altitude_m and gsd_cm" (the validator below), in the schema's words.
+_ONE_HEIGHT: JsonDict = {
+    "oneOf": [
+        {
+            "required": [given],
+            "properties": {given: {"type": "number"}, other: {"type": "null"}},
+        }
+        for given, other in (("altitude_m", "gsd_cm"), ("gsd_cm", "altitude_m"))
+    ]
+}
+
+
 class SurveyRequest(_Strict):
+    model_config = ConfigDict(json_schema_extra=_ONE_HEIGHT)
+
     area: GeoJsonPolygon
     camera: str | CameraModel = Field(
         description="A preset's name (e.g. sony_a6000_16mm) or the camera's figures"

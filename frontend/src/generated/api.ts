@@ -223,6 +223,10 @@ export interface paths {
          *     ``mission_set_current`` beyond the mission is refused at once (422). A refusal by the
          *     flight controller is an answer (status ``refused``, with its reason), so it comes back
          *     as 200; a missing answer is 504.
+         *
+         *     Refused with 422 though the schema allows it:
+         *     - a command the safety rails refuse, for the vehicle's state, mission and rails as they are now (`violations` lists every rule)
+         *     - `set_mode` to a mode the vehicle does not report, or to the mission mode with no mission on board or one that fails the mission check; `mission_set_current` beyond the mission on board
          */
         post: operations["send_command_api_v1_vehicles__vehicle_id__commands_post"];
         delete?: never;
@@ -241,6 +245,9 @@ export interface paths {
         /**
          * Telemetry History
          * @description Stored telemetry samples in a time range, oldest first.
+         *
+         *     Refused with 422 though the schema allows it:
+         *     - `start` after `end`, or a date-time outside the Unix seconds the range allows (from 1970)
          */
         get: operations["telemetry_history_api_v1_vehicles__vehicle_id__telemetry_get"];
         put?: never;
@@ -312,6 +319,9 @@ export interface paths {
          *     rules are those of `mission-check`): every item problem and every rail it breaks is
          *     listed (422) before anything reaches the vehicle; a vehicle that rejects an item keeps
          *     its previous mission (409).
+         *
+         *     Refused with 422 though the schema allows it:
+         *     - an item whose MAV_CMD is unknown or lacks what it needs (rule `mission_item`), or that breaks the safety rails; an altitude above sea level before the vehicle has reported home's
          */
         post: operations["upload_mission_api_v1_vehicles__vehicle_id__mission_post"];
         /** Clear Mission */
@@ -333,6 +343,9 @@ export interface paths {
          * Set Current Item
          * @description Fly on from item ``seq`` (1 is the first after home). An item beyond the mission
          *     on board is refused at once (422, naming the mission's length).
+         *
+         *     Refused with 422 though the schema allows it:
+         *     - a `seq` that is not an item of the mission on board
          */
         put: operations["set_current_item_api_v1_vehicles__vehicle_id__mission_current_put"];
         post?: never;
@@ -360,6 +373,9 @@ export interface paths {
          *     a vehicle the hub does not know is refused whole (422), before anything is sent.
          *     Each vehicle reached counts as one command in the caller's rate limit; a call is
          *     accepted while the caller has budget left, so a fleet-wide RTL is never split.
+         *
+         *     Refused with 422 though the schema allows it:
+         *     - a `vehicle_ids` entry the hub does not know
          */
         post: operations["send_group_command_api_v1_fleet_commands_post"];
         delete?: never;
@@ -380,7 +396,11 @@ export interface paths {
          * @description The site's rails, which apply to every vehicle unless narrowed per vehicle.
          */
         get: operations["site_rails_api_v1_safety_rails_get"];
-        /** Set Site Rails */
+        /**
+         * Set Site Rails
+         * @description Refused with 422 though the schema allows it:
+         *     - `min_altitude_m` above `max_altitude_m`; a geofence polygon with fewer than 3 distinct vertices, crossing edges, or a vertex over 100 km from its centre
+         */
         put: operations["set_site_rails_api_v1_safety_rails_put"];
         post?: never;
         delete?: never;
@@ -404,6 +424,9 @@ export interface paths {
         /**
          * Set Vehicle Rails
          * @description Per-vehicle rails: each value set here replaces the site's for this vehicle.
+         *
+         *     Refused with 422 though the schema allows it:
+         *     - `min_altitude_m` above `max_altitude_m`; a geofence polygon with fewer than 3 distinct vertices, crossing edges, or a vertex over 100 km from its centre
          */
         put: operations["set_vehicle_rails_api_v1_vehicles__vehicle_id__safety_rails_put"];
         post?: never;
@@ -494,6 +517,9 @@ export interface paths {
          *     mission, its times and the safety rails' check of that mission. A plan over the hub's
          *     limits (lanes, photos, a drone's mission items, planning time) is refused with a 422
          *     naming the estimate and the limit's setting (docs/security.md).
+         *
+         *     Refused with 422 though the schema allows it:
+         *     - `vehicle_ids` naming a vehicle twice, or one the hub does not know, has no position or home yet, or (`POST /surveys` only) is not connected, not ready, flying or busy in another survey; an `area` the planner cannot cover (rings not closed, crossing edges, over its size limits); a `camera` that names no preset; (`POST /surveys` only) a drone's mission the safety rails refuse (`violations` lists every rule)
          */
         post: operations["preview_survey_api_v1_surveys_preview_post"];
         delete?: never;
@@ -522,6 +548,9 @@ export interface paths {
          *     on the ground and in no other survey (422 naming it otherwise); a part that breaks a
          *     rail refuses the whole survey (422, each violation naming its vehicle); a plan over
          *     the hub's limits is refused as the preview's is.
+         *
+         *     Refused with 422 though the schema allows it:
+         *     - `vehicle_ids` naming a vehicle twice, or one the hub does not know, has no position or home yet, or (`POST /surveys` only) is not connected, not ready, flying or busy in another survey; an `area` the planner cannot cover (rings not closed, crossing edges, over its size limits); a `camera` that names no preset; (`POST /surveys` only) a drone's mission the safety rails refuse (`violations` lists every rule)
          */
         post: operations["create_survey_api_v1_surveys_post"];
         delete?: never;
@@ -688,6 +717,9 @@ export interface paths {
          *     anything to change) and send it to `POST /surveys` or the preview. It needs the
          *     planning permission (as the preview does), and is bounded: the file's size (413) and
          *     its polygon's vertices (422), and `survey_imports_per_minute` per user (429).
+         *
+         *     Refused with 422 though the schema allows it:
+         *     - `content` that is not a file of the named `format` holding an area
          */
         post: operations["import_survey_area_api_v1_surveys_import_post"];
         delete?: never;
@@ -707,6 +739,9 @@ export interface paths {
          * Export Survey Mission
          * @description One drone's survey mission as a file other tools open: a QGroundControl `.plan`,
          *     a `QGC WPL 110` waypoint file (Mission Planner, MAVProxy), or its path as GeoJSON.
+         *
+         *     Refused with 422 though the schema allows it:
+         *     - a `vehicle_id` that is not one of the survey's drones
          */
         get: operations["export_survey_mission_api_v1_surveys__survey_id__vehicles__vehicle_id__mission_get"];
         put?: never;
@@ -732,6 +767,9 @@ export interface paths {
         /**
          * Upload Photo Chunk
          * @description One chunk of a photo at byte ``offset`` (the body: raw JPEG bytes).
+         *
+         *     Refused with 422 though the schema allows it:
+         *     - a first chunk (`offset` 0) without the photo's metadata in `X-Photo-Meta`, or metadata, image or survey the photo checks refuse (`code` names which)
          */
         put: operations["upload_photo_chunk_api_v1_vehicles__vehicle_id__photos__photo_id__put"];
         post?: never;
@@ -908,6 +946,9 @@ export interface paths {
         /**
          * Scans Between
          * @description Stored scans in a time range, oldest first, as world points.
+         *
+         *     Refused with 422 though the schema allows it:
+         *     - `start` after `end`, or a date-time outside the Unix seconds the range allows (from 1970)
          */
         get: operations["scans_between_api_v1_vehicles__vehicle_id__scans_get"];
         put?: never;
@@ -1013,6 +1054,10 @@ export interface paths {
          * @description Telemetry of one vehicle or the fleet over a range, at most ``points`` samples per
          *     vehicle, keeping the true minimum and maximum of ``metric`` (a chart shows the real
          *     extremes, not every n-th row).
+         *
+         *     Refused with 422 though the schema allows it:
+         *     - `start` after `end`, or a date-time outside the Unix seconds the range allows (from 1970)
+         *     - a range (`end` - `start`) over 7 days
          */
         get: operations["telemetry_series_api_v1_telemetry_series_get"];
         put?: never;
@@ -1111,6 +1156,9 @@ export interface paths {
         /**
          * List Events
          * @description STATUSTEXTs, mode changes, arming, failsafes and link changes, newest first.
+         *
+         *     Refused with 422 though the schema allows it:
+         *     - `start` after `end`, or a date-time outside the Unix seconds the range allows (from 1970)
          */
         get: operations["list_events_api_v1_events_get"];
         put?: never;
@@ -1131,6 +1179,9 @@ export interface paths {
         /**
          * List Commands
          * @description Commands sent, who sent them and what the vehicle answered, newest first.
+         *
+         *     Refused with 422 though the schema allows it:
+         *     - `start` after `end`, or a date-time outside the Unix seconds the range allows (from 1970)
          */
         get: operations["list_commands_api_v1_commands_get"];
         put?: never;
@@ -1158,6 +1209,9 @@ export interface paths {
          *     The body must be a .tlog (timestamped MAVLink frames: 422 otherwise, at the first
          *     record that is not), and fit the vehicle's quota (``max_tlog_bytes_per_vehicle``
          *     over all its files: 413 otherwise; ``max_tlog_bytes`` bounds one file).
+         *
+         *     Refused with 422 though the schema allows it:
+         *     - a body that is not a MAVLink telemetry log (no complete MAVLink frame)
          */
         post: operations["upload_tlog_api_v1_vehicles__vehicle_id__tlogs_post"];
         delete?: never;
@@ -1213,7 +1267,11 @@ export interface paths {
         /** List Users */
         get: operations["list_users_api_v1_users_get"];
         put?: never;
-        /** Create User */
+        /**
+         * Create User
+         * @description Refused with 422 though the schema allows it:
+         *     - a `password` that is easy to guess
+         */
         post: operations["create_user_api_v1_users_post"];
         delete?: never;
         options?: never;
@@ -1435,6 +1493,9 @@ export interface paths {
          * Get Mosaic Tile
          * @description One tile: JPEG where the photos cover all of it, PNG (transparent where they do
          *     not) at the mosaic's edges.
+         *
+         *     Refused with 422 though the schema allows it:
+         *     - `x` or `y` not below 2**`z` (no such tile in the grid)
          */
         get: operations["get_mosaic_tile_api_v1_mosaics__survey_id__tiles__z___x___y__get"];
         put?: never;
@@ -2199,7 +2260,7 @@ export interface components {
              */
             vehicle_ids?: string[] | null;
             /** Command */
-            command: components["schemas"]["ArmCommand"] | components["schemas"]["DisarmCommand"] | components["schemas"]["TakeoffCommand"] | components["schemas"]["LandCommand"] | components["schemas"]["ReturnToLaunchCommand"] | components["schemas"]["SetModeCommand"] | components["schemas"]["GotoCommand"] | components["schemas"]["HoldCommand"] | components["schemas"]["ChangeSpeedCommand"] | components["schemas"]["SetHomeCommand"] | components["schemas"]["RebootCommand"] | components["schemas"]["ParamListCommand"] | components["schemas"]["ParamGetCommand"] | components["schemas"]["ParamSetCommand"] | components["schemas"]["MissionUploadCommand"] | components["schemas"]["MissionDownloadCommand"] | components["schemas"]["MissionClearCommand"] | components["schemas"]["MissionSetCurrentCommand"] | components["schemas"]["ManualStartCommand"] | components["schemas"]["ManualStopCommand"];
+            command: components["schemas"]["ArmCommand"] | components["schemas"]["DisarmCommand"] | components["schemas"]["TakeoffCommand"] | components["schemas"]["LandCommand"] | components["schemas"]["ReturnToLaunchCommand"] | components["schemas"]["SetModeCommand"] | components["schemas"]["GotoCommand"] | components["schemas"]["HoldCommand"] | components["schemas"]["ChangeSpeedCommand"] | components["schemas"]["SetHomeCommand"] | components["schemas"]["RebootCommand"] | components["schemas"]["ParamListCommand"] | components["schemas"]["ParamGetCommand"] | components["schemas"]["ParamSetCommand"] | components["schemas"]["MissionUploadCommand"] | components["schemas"]["MissionDownloadCommand"] | components["schemas"]["MissionClearCommand"] | components["schemas"]["MissionSetCurrentCommand"];
         };
         /** GroupCommandResponse */
         GroupCommandResponse: {
@@ -3289,7 +3350,13 @@ export interface components {
             hover_and_capture: boolean;
             /** Vehicle Ids */
             vehicle_ids: string[];
-        };
+        } & ({
+            altitude_m: number;
+            gsd_cm?: null;
+        } | {
+            gsd_cm: number;
+            altitude_m?: null;
+        });
         /** SurveyRun */
         SurveyRun: {
             /** Id */
@@ -4509,7 +4576,7 @@ export interface operations {
         };
         requestBody: {
             content: {
-                "application/json": components["schemas"]["ArmCommand"] | components["schemas"]["DisarmCommand"] | components["schemas"]["TakeoffCommand"] | components["schemas"]["LandCommand"] | components["schemas"]["ReturnToLaunchCommand"] | components["schemas"]["SetModeCommand"] | components["schemas"]["GotoCommand"] | components["schemas"]["HoldCommand"] | components["schemas"]["ChangeSpeedCommand"] | components["schemas"]["SetHomeCommand"] | components["schemas"]["RebootCommand"] | components["schemas"]["ParamListCommand"] | components["schemas"]["ParamGetCommand"] | components["schemas"]["ParamSetCommand"] | components["schemas"]["MissionUploadCommand"] | components["schemas"]["MissionDownloadCommand"] | components["schemas"]["MissionClearCommand"] | components["schemas"]["MissionSetCurrentCommand"] | components["schemas"]["ManualStartCommand"] | components["schemas"]["ManualStopCommand"];
+                "application/json": components["schemas"]["ArmCommand"] | components["schemas"]["DisarmCommand"] | components["schemas"]["TakeoffCommand"] | components["schemas"]["LandCommand"] | components["schemas"]["ReturnToLaunchCommand"] | components["schemas"]["SetModeCommand"] | components["schemas"]["GotoCommand"] | components["schemas"]["HoldCommand"] | components["schemas"]["ChangeSpeedCommand"] | components["schemas"]["SetHomeCommand"] | components["schemas"]["RebootCommand"] | components["schemas"]["ParamListCommand"] | components["schemas"]["ParamGetCommand"] | components["schemas"]["ParamSetCommand"] | components["schemas"]["MissionUploadCommand"] | components["schemas"]["MissionDownloadCommand"] | components["schemas"]["MissionClearCommand"] | components["schemas"]["MissionSetCurrentCommand"];
             };
         };
         responses: {
@@ -4567,7 +4634,11 @@ export interface operations {
                     "application/json": components["schemas"]["ErrorMessage"];
                 };
             };
-            /** @description Invalid parameters, or refused by safety rules (all listed) */
+            /**
+             * @description Invalid parameters, or refused by safety rules (all listed). Refused with 422 though the schema allows it:
+             *     - a command the safety rails refuse, for the vehicle's state, mission and rails as they are now (`violations` lists every rule)
+             *     - `set_mode` to a mode the vehicle does not report, or to the mission mode with no mission on board or one that fails the mission check; `mission_set_current` beyond the mission on board
+             */
             422: {
                 headers: {
                     [name: string]: unknown;
@@ -4663,7 +4734,10 @@ export interface operations {
                     "application/json": components["schemas"]["ErrorMessage"];
                 };
             };
-            /** @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed) */
+            /**
+             * @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed). Refused with 422 though the schema allows it:
+             *     - `start` after `end`, or a date-time outside the Unix seconds the range allows (from 1970)
+             */
             422: {
                 headers: {
                     [name: string]: unknown;
@@ -5166,7 +5240,10 @@ export interface operations {
                     "application/json": components["schemas"]["ErrorMessage"];
                 };
             };
-            /** @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed) */
+            /**
+             * @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed). Refused with 422 though the schema allows it:
+             *     - an item whose MAV_CMD is unknown or lacks what it needs (rule `mission_item`), or that breaks the safety rails; an altitude above sea level before the vehicle has reported home's
+             */
             422: {
                 headers: {
                     [name: string]: unknown;
@@ -5375,7 +5452,10 @@ export interface operations {
                     "application/json": components["schemas"]["ErrorMessage"];
                 };
             };
-            /** @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed) */
+            /**
+             * @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed). Refused with 422 though the schema allows it:
+             *     - a `seq` that is not an item of the mission on board
+             */
             422: {
                 headers: {
                     [name: string]: unknown;
@@ -5478,7 +5558,10 @@ export interface operations {
                     "application/json": components["schemas"]["ErrorMessage"];
                 };
             };
-            /** @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed) */
+            /**
+             * @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed). Refused with 422 though the schema allows it:
+             *     - a `vehicle_ids` entry the hub does not know
+             */
             422: {
                 headers: {
                     [name: string]: unknown;
@@ -5609,7 +5692,10 @@ export interface operations {
                     "application/json": components["schemas"]["ErrorMessage"];
                 };
             };
-            /** @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed) */
+            /**
+             * @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed). Refused with 422 though the schema allows it:
+             *     - `min_altitude_m` above `max_altitude_m`; a geofence polygon with fewer than 3 distinct vertices, crossing edges, or a vertex over 100 km from its centre
+             */
             422: {
                 headers: {
                     [name: string]: unknown;
@@ -5760,7 +5846,10 @@ export interface operations {
                     "application/json": components["schemas"]["ErrorMessage"];
                 };
             };
-            /** @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed) */
+            /**
+             * @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed). Refused with 422 though the schema allows it:
+             *     - `min_altitude_m` above `max_altitude_m`; a geofence polygon with fewer than 3 distinct vertices, crossing edges, or a vertex over 100 km from its centre
+             */
             422: {
                 headers: {
                     [name: string]: unknown;
@@ -6111,7 +6200,10 @@ export interface operations {
                     "application/json": components["schemas"]["ErrorMessage"];
                 };
             };
-            /** @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed) */
+            /**
+             * @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed). Refused with 422 though the schema allows it:
+             *     - `vehicle_ids` naming a vehicle twice, or one the hub does not know, has no position or home yet, or (`POST /surveys` only) is not connected, not ready, flying or busy in another survey; an `area` the planner cannot cover (rings not closed, crossing edges, over its size limits); a `camera` that names no preset; (`POST /surveys` only) a drone's mission the safety rails refuse (`violations` lists every rule)
+             */
             422: {
                 headers: {
                     [name: string]: unknown;
@@ -6242,7 +6334,10 @@ export interface operations {
                     "application/json": components["schemas"]["ErrorMessage"];
                 };
             };
-            /** @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed) */
+            /**
+             * @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed). Refused with 422 though the schema allows it:
+             *     - `vehicle_ids` naming a vehicle twice, or one the hub does not know, has no position or home yet, or (`POST /surveys` only) is not connected, not ready, flying or busy in another survey; an `area` the planner cannot cover (rings not closed, crossing edges, over its size limits); a `camera` that names no preset; (`POST /surveys` only) a drone's mission the safety rails refuse (`violations` lists every rule)
+             */
             422: {
                 headers: {
                     [name: string]: unknown;
@@ -6810,7 +6905,10 @@ export interface operations {
                     "application/json": components["schemas"]["ErrorMessage"];
                 };
             };
-            /** @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed) */
+            /**
+             * @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed). Refused with 422 though the schema allows it:
+             *     - `content` that is not a file of the named `format` holding an area
+             */
             422: {
                 headers: {
                     [name: string]: unknown;
@@ -6901,7 +6999,10 @@ export interface operations {
                 };
                 content?: never;
             };
-            /** @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed) */
+            /**
+             * @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed). Refused with 422 though the schema allows it:
+             *     - a `vehicle_id` that is not one of the survey's drones
+             */
             422: {
                 headers: {
                     [name: string]: unknown;
@@ -7070,7 +7171,10 @@ export interface operations {
                     "application/json": components["schemas"]["ErrorMessage"];
                 };
             };
-            /** @description Refused for good, with the reason and its `code` */
+            /**
+             * @description Refused for good, with the reason and its `code`. Refused with 422 though the schema allows it:
+             *     - a first chunk (`offset` 0) without the photo's metadata in `X-Photo-Meta`, or metadata, image or survey the photo checks refuse (`code` names which)
+             */
             422: {
                 headers: {
                     [name: string]: unknown;
@@ -7814,7 +7918,10 @@ export interface operations {
                     "application/json": components["schemas"]["ErrorMessage"];
                 };
             };
-            /** @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed) */
+            /**
+             * @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed). Refused with 422 though the schema allows it:
+             *     - `start` after `end`, or a date-time outside the Unix seconds the range allows (from 1970)
+             */
             422: {
                 headers: {
                     [name: string]: unknown;
@@ -8141,7 +8248,11 @@ export interface operations {
                     "application/json": components["schemas"]["ErrorMessage"];
                 };
             };
-            /** @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed) */
+            /**
+             * @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed). Refused with 422 though the schema allows it:
+             *     - `start` after `end`, or a date-time outside the Unix seconds the range allows (from 1970)
+             *     - a range (`end` - `start`) over 7 days
+             */
             422: {
                 headers: {
                     [name: string]: unknown;
@@ -8501,7 +8612,10 @@ export interface operations {
                     "application/json": components["schemas"]["ErrorMessage"];
                 };
             };
-            /** @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed) */
+            /**
+             * @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed). Refused with 422 though the schema allows it:
+             *     - `start` after `end`, or a date-time outside the Unix seconds the range allows (from 1970)
+             */
             422: {
                 headers: {
                     [name: string]: unknown;
@@ -8577,7 +8691,10 @@ export interface operations {
                     "application/json": components["schemas"]["ErrorMessage"];
                 };
             };
-            /** @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed) */
+            /**
+             * @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed). Refused with 422 though the schema allows it:
+             *     - `start` after `end`, or a date-time outside the Unix seconds the range allows (from 1970)
+             */
             422: {
                 headers: {
                     [name: string]: unknown;
@@ -8724,7 +8841,10 @@ export interface operations {
                     "application/json": components["schemas"]["ErrorMessage"];
                 };
             };
-            /** @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed) */
+            /**
+             * @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed). Refused with 422 though the schema allows it:
+             *     - a body that is not a MAVLink telemetry log (no complete MAVLink frame)
+             */
             422: {
                 headers: {
                     [name: string]: unknown;
@@ -8971,7 +9091,10 @@ export interface operations {
                     "application/json": components["schemas"]["ErrorMessage"];
                 };
             };
-            /** @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed) */
+            /**
+             * @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed). Refused with 422 though the schema allows it:
+             *     - a `password` that is easy to guess
+             */
             422: {
                 headers: {
                     [name: string]: unknown;
@@ -9738,7 +9861,10 @@ export interface operations {
                     "application/json": components["schemas"]["ErrorMessage"];
                 };
             };
-            /** @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed) */
+            /**
+             * @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed). Refused with 422 though the schema allows it:
+             *     - `x` or `y` not below 2**`z` (no such tile in the grid)
+             */
             422: {
                 headers: {
                     [name: string]: unknown;

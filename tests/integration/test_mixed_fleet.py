@@ -279,3 +279,39 @@ def test_a_px4_survey_starts_as_qgc_starts_a_mission_mission_mode_then_arm(
         api.post(f"/api/v1/surveys/{survey_id}/abort")
     watcher.wait_until(lambda v: state_of(v, PX4).get("mode") == "RTL", 30, "sent home")
     watcher.wait_until(lambda v: not state_of(v, PX4).get("armed"), 180, "home and disarmed")
+
+
+def test_a_px4_flying_its_mission_runs_a_do_item_made_current_at_once_and_moves_on(
+    clients: tuple[httpx.Client, FleetWatcher],
+) -> None:
+    """PX4 (as ArduPilot) runs a DO_ item made current at once and goes on to the next NAV
+    item: MISSION_CURRENT never names the DO_ item, and the request is still accepted."""
+    api, watcher = clients
+    watcher.wait_until(
+        lambda v: ready(PX4)(v) and not state_of(v, PX4).get("armed"), 120, "on the ground"
+    )
+    state = listed_once_ready(clients, PX4, "the PX4 copter")["state"]
+    lat, lon = state["lat"], state["lon"]
+    items = [
+        {"command": mavlink2.MAV_CMD_NAV_TAKEOFF, "lat": lat, "lon": lon, "alt": 10},
+        {"command": WAYPOINT, "lat": lat + 30 * NORTH, "lon": lon, "alt": 10},
+        {"command": mavlink2.MAV_CMD_DO_CHANGE_SPEED, "param1": 1, "param2": 4, "param3": -1},
+        {"command": WAYPOINT, "lat": lat + 60 * NORTH, "lon": lon, "alt": 10},
+        {"command": RTL},
+    ]
+    url = f"/api/v1/vehicles/{PX4}/mission"
+    assert api.post(url, json={"items": items}).status_code == 200
+    try:
+        assert send_command(api, PX4, name="set_mode", mode="MISSION")["status"] == "accepted"
+        assert send_command(api, PX4, name="arm")["status"] == "accepted"
+        watcher.wait_until(
+            lambda v: (state_of(v, PX4).get("alt_rel") or 0) > 2, 30, "climbing on item 1"
+        )
+        current = api.put(f"{url}/current", json={"seq": 3})
+        assert current.status_code == 200, current.text
+        assert current.json()["outcome"]["message"] == "item 3 ran at once; current item is 4"
+        watcher.wait_until(lambda v: state_of(v, PX4).get("mission_current") == 4, 10, "item 4")
+    finally:
+        send_command(api, PX4, name="rtl")
+        watcher.wait_until(lambda v: not state_of(v, PX4).get("armed"), 180, "home, disarmed")
+        api.delete(url)

@@ -13,7 +13,10 @@ personality maps its flight modes to and from the autopilot's encoding, as a GCS
   land on the copter's behaviours: MANUAL, STABILIZED and ALTCTL hold altitude with the
   sticks centred (STABILIZE here), POSCTL and AUTO.LOITER ("Hold") hold position
   (LOITER), AUTO.MISSION flies the mission (AUTO), AUTO.RTL and AUTO.LAND are RTL and
-  LAND, and a reposition is flown in Hold, as PX4's navigator does. A reposition or a
+  LAND, and a reposition is flown in Hold, as PX4's navigator does. Switched to Mission
+  it does not arm itself (Commander arms on request only); armed in Mission on the
+  ground with a mission it takes off on the take-off item, and a take-off item with a
+  position is flown to once the climb is done. A reposition or a
   set-home sent as COMMAND_INT is taken only in MAV_FRAME_GLOBAL_INT (MAV_RESULT 9,
   COMMAND_UNSUPPORTED_MAV_FRAME, for any other frame). Its parameters have PX4's names
   and types, integers sent bytewise (`px4_params`, `param_wire`).
@@ -76,6 +79,10 @@ class Personality(ABC):
     # MAVLink spec has it) starts the mission itself at 0. The simulator always stores
     # home first; this is how far its numbers are from the wire's.
     mission_wire_offset: int
+    # A mission's NAV_TAKEOFF with a position: PX4 climbs, then flies there as to a
+    # waypoint (navigator/mission.cpp: "if we just did a normal takeoff navigate to the
+    # actual waypoint now"); ArduCopter climbs where it is and ignores it.
+    takeoff_flies_to_position: bool = False
 
     @abstractmethod
     def base_mode(self, mode: CopterMode, armed: bool) -> int: ...
@@ -201,6 +208,7 @@ class Px4Personality(Personality):
     reboot_declined = MavResult.DENIED
     takeoff_alt_is_amsl = True
     mission_wire_offset = 1
+    takeoff_flies_to_position = True
 
     def __init__(self) -> None:
         # the PX4 mode last selected by name, and the copter mode that flies it

@@ -21,6 +21,9 @@ from protocol.mission_rules import mission_problems
 from vehicle_agents.fcu_link import FcuLink, MavMessage, MessagePredicate
 
 MISSION = mavlink2.MAV_MISSION_TYPE_MISSION
+# MAV_CMD_NAV_*: the commands a mission flies one at a time; the rest (DO_*, CONDITION_*)
+# run on the way, and an autopilot moves on past them at once (MAV_CMD_NAV_LAST is 95).
+NAV_COMMANDS = range(mavlink2.MAV_CMD_NAV_WAYPOINT, mavlink2.MAV_CMD_NAV_LAST + 1)
 
 
 @dataclass(frozen=True)
@@ -38,6 +41,9 @@ class MissionClient:
     def __init__(self, link: FcuLink, timeouts: MissionTimeouts | None = None) -> None:
         self.link = link
         self.timeouts = timeouts or MissionTimeouts()
+        # The MAV_CMD of each item on board by wire number, as this agent last uploaded,
+        # downloaded or cleared it; None until it knows.
+        self._on_board: list[int] | None = None
 
     def _target(self) -> tuple[int, int]:
         return self.link.target_system or 1, self.link.target_component
@@ -107,6 +113,7 @@ class MissionClient:
                 continue
             if answer.get_type() == "MISSION_ACK":
                 if answer.type == mavlink2.MAV_MISSION_ACCEPTED:
+                    self._on_board = [item.command for item in sequence]
                     return CommandOutcome(
                         status="accepted", message=f"mission of {len(items)} items uploaded"
                     )
@@ -152,6 +159,7 @@ class MissionClient:
             if received is None:
                 return CommandOutcome(status="timeout", message=f"mission item {seq} never came")
             items.append(_item_of(received))
+        self._on_board = [item.command for item in items]
         if not home_slots(self._autopilot()) or not items:
             # So that item n is the hub's n everywhere. ArduPilot's item 0 is home, but a
             # cleared mission has none (AP_Mission::clear truncates to 0): count 0, no items.
@@ -174,6 +182,7 @@ class MissionClient:
             )
             if ack is not None:
                 if ack.type == mavlink2.MAV_MISSION_ACCEPTED:
+                    self._on_board = []
                     return CommandOutcome(status="accepted", message="mission cleared")
                 return CommandOutcome(
                     status="refused",
@@ -188,12 +197,30 @@ class MissionClient:
         for _ in range(self.timeouts.attempts):
             self.link.send(mavlink2.MAVLink_mission_set_current_message(system, component, on_wire))
             current = await self.link.wait_for(
-                lambda m: m.get_type() == "MISSION_CURRENT" and m.seq == on_wire,
+                lambda m: m.get_type() == "MISSION_CURRENT" and self._went_to(on_wire, m.seq),
                 self.timeouts.item_s,
             )
             if current is not None:
-                return CommandOutcome(status="accepted", message=f"current item is {seq}")
+                if current.seq == on_wire:
+                    return CommandOutcome(status="accepted", message=f"current item is {seq}")
+                now = mission_number(current.seq, self._autopilot())
+                return CommandOutcome(
+                    status="accepted", message=f"item {seq} ran at once; current item is {now}"
+                )
         return CommandOutcome(status="timeout", message=f"the vehicle did not move to item {seq}")
+
+    def _went_to(self, asked: int, current: int) -> bool:
+        """Whether MISSION_CURRENT ``current`` shows the vehicle took item ``asked``: it is
+        that item, or (the asked one being a DO_ or CONDITION_ command, which a running
+        mission runs at once, PX4's as ArduPilot's) the vehicle ran it and every other
+        non-NAV item up to the next NAV command, and moved on there. Only a mission this
+        agent knows the items of can tell the second; an unknown one waits for the first."""
+        if current == asked:
+            return True
+        on_board = self._on_board
+        if on_board is None or not asked < current <= len(on_board):
+            return False
+        return all(command not in NAV_COMMANDS for command in on_board[asked:current])
 
 
 def home_slots(autopilot: str) -> int:

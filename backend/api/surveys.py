@@ -236,8 +236,10 @@ async def start_survey(
     survey_id: SurveyIdPath, principal: CurrentPrincipal, hub: HubDep
 ) -> SurveyDetail:
     """Upload every drone's mission (each checked again on the way), then start them
-    together: a guided take-off, then AUTO. An upload refused anywhere starts nothing
-    (409); a drone that fails to take off drops out and its lanes are offered."""
+    together as QGroundControl starts a mission: ArduPilot a guided take-off, then AUTO;
+    PX4 its mission mode (MISSION), then arm. An upload refused anywhere starts nothing
+    (409); a drone that fails to start (named in its reason) drops out, is disarmed if
+    it is still on the ground, and its lanes are offered."""
     return _detail(hub, await hub.surveys.start(survey_id, principal))
 
 

@@ -4,6 +4,8 @@ vehicle's own mission for them (`backend.fleet.mission_gate`); the rules are her
 
 from __future__ import annotations
 
+from collections.abc import Iterable
+
 from backend.safety.violations import MISSION_UNCHECKED, Violation
 from protocol.messages import Command, MissionItem, SetModeCommand
 
@@ -11,6 +13,11 @@ from protocol.messages import Command, MissionItem, SetModeCommand
 # tables): ArduPilot's AUTO (every vehicle type) and PX4's MISSION (AUTO.MISSION in PX4's
 # own terms, custom main mode 4, sub mode 4).
 MISSION_MODES = frozenset({"AUTO", "MISSION"})
+
+
+def mission_mode(modes: Iterable[str]) -> str | None:
+    """The name under which this vehicle's mode list has the mode that flies the mission."""
+    return next((mode for mode in modes if mode in MISSION_MODES), None)
 
 
 def starts_mission(command: Command) -> bool:

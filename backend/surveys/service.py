@@ -38,6 +38,7 @@ from backend.fleet.collaborators import CommandServices
 from backend.fleet.command_service import execute_command
 from backend.fleet.registry import VehicleRecord
 from backend.fleet.safety_gate import snapshot_of
+from backend.missions.gate import mission_mode
 from backend.missions.survey.run import (
     ACTIVE_STATES,
     LEAVING_MODES,
@@ -61,7 +62,9 @@ from backend.storage.surveys import StoredSurvey, SurveyRepository
 from backend.surveys.ownership import SurveyOwnership
 from backend.surveys.planning import ClientWatch, SurveyPlanner
 from protocol.messages import (
+    ArmCommand,
     Command,
+    DisarmCommand,
     LiveEvent,
     MissionSetCurrentCommand,
     MissionUploadCommand,
@@ -228,8 +231,8 @@ class SurveyService:
         return run
 
     async def start(self, survey_id: str, principal: Principal) -> SurveyRun:
-        """Upload every drone's mission, then start them all together: a guided take-off
-        (which arms), then AUTO. An upload refused anywhere starts nothing."""
+        """Upload every drone's mission, then start them all together (`_launch`). An
+        upload refused anywhere starts nothing."""
         run = self.get(survey_id)
         if run.state is not SurveyState.PLANNED:
             raise Conflict(f"survey {survey_id} is {run.state}; only a planned one can start")
@@ -565,26 +568,51 @@ class SurveyService:
         return None if outcome.status == "accepted" else outcome.message or outcome.status
 
     async def _launch(self, principal: Principal, run: SurveyRun, drone: DroneRun) -> str | None:
-        """Guided take-off (it arms), then AUTO: ArduCopter flies a mission from the ground
-        only once it is "auto armed", which a GCS take-off gives it (a throttle would)."""
+        """Start one drone on its uploaded mission, as QGroundControl's "Start Mission"
+        does for its autopilot; None when it is off, else why not (and what was undone).
+
+        Neither autopilot arms itself for a mission. ArduCopter flies AUTO from the ground
+        only once "auto armed", which a GCS take-off gives it: a guided take-off (it
+        arms), then AUTO. PX4 (PX4FirmwarePlugin::startMission): its mission mode, then
+        arm; armed in Mission on the ground with a mission, it takes off on the take-off
+        item. The mission mode's name is the one the vehicle's own mode list has."""
         record = self._hub.registry.get(drone.vehicle_id)
-        if "AUTO" in record.modes:
-            why = await self._send(
-                principal, drone.vehicle_id, TakeoffCommand(altitude=run.altitude_m)
-            )
-            if why is not None:
-                return f"take-off: {why}"
-            mode = "AUTO"
-        else:
-            mode = "AUTO.MISSION"  # PX4 takes off by itself on the mission's take-off item
+        mode = mission_mode(record.modes)
+        if mode is None:
+            return f"it has no mission mode (its modes: {', '.join(record.modes) or 'none'})"
+        if mode != "AUTO":
+            return await self._launch_in_mission_mode(principal, drone.vehicle_id, mode)
+        why = await self._send(principal, drone.vehicle_id, TakeoffCommand(altitude=run.altitude_m))
+        if why is not None:
+            return f"take-off: {why}{await self._disarm_on_ground(principal, drone.vehicle_id)}"
         why = await self._send(principal, drone.vehicle_id, SetModeCommand(mode=mode))
         if why is None:
             return None
-        if mode == "AUTO":
-            # It took off but will not fly the mission: it must not be left hovering.
-            back = await self._send(principal, drone.vehicle_id, ReturnToLaunchCommand())
-            why += "; sent home" if back is None else f"; RTL also refused: {back}"
+        # It took off but will not fly the mission: it must not be left hovering.
+        back = await self._send(principal, drone.vehicle_id, ReturnToLaunchCommand())
+        why += "; sent home" if back is None else f"; RTL also refused: {back}"
         return f"{mode}: {why}"
+
+    async def _launch_in_mission_mode(
+        self, principal: Principal, vehicle_id: str, mode: str
+    ) -> str | None:
+        """PX4: the mission mode, then arm. A refused mode change leaves the drone as it
+        was; a refused (or unanswered) arming leaves it on the ground, made sure disarmed."""
+        why = await self._send(principal, vehicle_id, SetModeCommand(mode=mode))
+        if why is not None:
+            return f"{mode}: {why}"
+        why = await self._send(principal, vehicle_id, ArmCommand())
+        if why is not None:
+            return f"arm: {why}{await self._disarm_on_ground(principal, vehicle_id)}"
+        return None
+
+    async def _disarm_on_ground(self, principal: Principal, vehicle_id: str) -> str:
+        """After a launch step failed once it may have armed: a plain disarm, which both
+        autopilots take only on the ground (a flying drone keeps flying), so that nothing
+        is left armed on the ground waiting for a mission that will not start. Returns
+        what to add to the reason when it did not go through."""
+        why = await self._send(principal, vehicle_id, DisarmCommand())
+        return "" if why is None else f"; disarm also refused: {why}"
 
     async def _save(self, run: SurveyRun) -> None:
         stored = StoredSurvey(

@@ -68,6 +68,15 @@ class Auto(CopterState):
         phase = self._auto_phase
         if phase is AutoPhase.TAKEOFF and not self._taking_off:
             if abs(self.body.alt - self._hold_alt) < TAKEOFF_DONE_M:
+                if (
+                    item is not None
+                    and item.has_position
+                    and self.personality.takeoff_flies_to_position
+                ):
+                    # PX4: the climb is done; now to the take-off's position, level
+                    self._hold_ne = self._item_ne(item)
+                    self._auto_phase = AutoPhase.FLY
+                    return self._auto_setpoint()
                 self._nav_done()
                 return self._auto_setpoint_after_switch()
         elif phase is AutoPhase.FLY and item is not None:
@@ -79,6 +88,9 @@ class Auto(CopterState):
                 if item.command == MavCmd.NAV_LAND:
                     self._auto_phase = AutoPhase.LAND
                     return self._landing_setpoint(self._land_ne)
+                if item.command == MavCmd.NAV_TAKEOFF:
+                    self._nav_done()  # a take-off's position reached (PX4): done
+                    return self._auto_setpoint_after_switch()
                 if item.command == MavCmd.NAV_WAYPOINT:
                     self._say(Severity.INFO, f"Reached command #{item.seq}")
                 self._auto_phase = AutoPhase.HOLD

@@ -60,6 +60,25 @@ def listed_once_ready(
     return summary
 
 
+def survey_north_of(lat: float, lon: float) -> dict[str, Any]:
+    """A survey request for the PX4 copter: a field 40 to 120 m north of it."""
+    east = NORTH / 0.8  # about a metre east at the simulator's home latitude
+    ring = [
+        [lon, lat + 40 * NORTH],
+        [lon + 120 * east, lat + 40 * NORTH],
+        [lon + 120 * east, lat + 120 * NORTH],
+        [lon, lat + 120 * NORTH],
+        [lon, lat + 40 * NORTH],
+    ]
+    return {
+        "area": {"type": "Polygon", "coordinates": [ring]},
+        "camera": "sony_a6000_16mm",
+        "altitude_m": 40,
+        "angle_deg": 0,
+        "vehicle_ids": [PX4],
+    }
+
+
 def test_rover_connects_lists_rover_modes_and_drives_a_mission(
     clients: tuple[httpx.Client, FleetWatcher],
 ) -> None:
@@ -205,21 +224,7 @@ def test_px4_s_survey_takes_off_where_it_stands_and_a_take_off_at_zero_is_refuse
     api, _ = clients
     state = listed_once_ready(clients, PX4, "the PX4 copter")["state"]
     lat, lon = state["lat"], state["lon"]
-    east = NORTH / 0.8  # about a metre east at the simulator's home latitude
-    ring = [
-        [lon, lat + 40 * NORTH],
-        [lon + 120 * east, lat + 40 * NORTH],
-        [lon + 120 * east, lat + 120 * NORTH],
-        [lon, lat + 120 * NORTH],
-        [lon, lat + 40 * NORTH],
-    ]
-    survey = {
-        "area": {"type": "Polygon", "coordinates": [ring]},
-        "camera": "sony_a6000_16mm",
-        "altitude_m": 40,
-        "angle_deg": 0,
-        "vehicle_ids": [PX4],
-    }
+    survey = survey_north_of(lat, lon)
     preview = api.post("/api/v1/surveys/preview", json=survey)
     assert preview.status_code == 200, preview.text
     [part] = preview.json()["parts"]
@@ -239,3 +244,74 @@ def test_px4_s_survey_takes_off_where_it_stands_and_a_take_off_at_zero_is_refuse
         "item 1 (NAV_TAKEOFF): latitude and longitude are 0, 0: PX4 flies to a take-off's position"
     )
     assert rules["max_distance_from_home"]["items"] == [1]
+
+
+def test_a_px4_survey_starts_as_qgc_starts_a_mission_mission_mode_then_arm(
+    clients: tuple[httpx.Client, FleetWatcher],
+) -> None:
+    """PX4's mission mode is MISSION in its mode list (AUTO.MISSION in PX4's own terms),
+    and PX4 does not arm itself in it: the survey's launch sets it, then arms, and the
+    copter takes off on the mission's take-off item and flies its lanes."""
+    api, watcher = clients
+    watcher.wait_until(
+        lambda v: ready(PX4)(v) and not state_of(v, PX4).get("armed"), 120, "on the ground"
+    )
+    state = listed_once_ready(clients, PX4, "the PX4 copter")["state"]
+    created = api.post("/api/v1/surveys", json=survey_north_of(state["lat"], state["lon"]))
+    assert created.status_code == 201, created.text
+    survey_id = created.json()["survey"]["id"]
+    try:
+        started = api.post(f"/api/v1/surveys/{survey_id}/start")
+        assert started.status_code == 200, started.text
+        progress = started.json()["progress"]
+        assert progress["state"] == "flying", progress
+        assert [d["state"] for d in progress["drones"]] == ["flying"], progress
+        watcher.wait_until(
+            lambda v: (
+                state_of(v, PX4).get("mode") == "MISSION"
+                and state_of(v, PX4).get("armed") is True
+                and (state_of(v, PX4).get("alt_rel") or 0) > 10
+            ),
+            60,
+            "armed in MISSION, climbing on the take-off item",
+        )
+    finally:
+        api.post(f"/api/v1/surveys/{survey_id}/abort")
+    watcher.wait_until(lambda v: state_of(v, PX4).get("mode") == "RTL", 30, "sent home")
+    watcher.wait_until(lambda v: not state_of(v, PX4).get("armed"), 180, "home and disarmed")
+
+
+def test_a_px4_flying_its_mission_runs_a_do_item_made_current_at_once_and_moves_on(
+    clients: tuple[httpx.Client, FleetWatcher],
+) -> None:
+    """PX4 (as ArduPilot) runs a DO_ item made current at once and goes on to the next NAV
+    item: MISSION_CURRENT never names the DO_ item, and the request is still accepted."""
+    api, watcher = clients
+    watcher.wait_until(
+        lambda v: ready(PX4)(v) and not state_of(v, PX4).get("armed"), 120, "on the ground"
+    )
+    state = listed_once_ready(clients, PX4, "the PX4 copter")["state"]
+    lat, lon = state["lat"], state["lon"]
+    items = [
+        {"command": mavlink2.MAV_CMD_NAV_TAKEOFF, "lat": lat, "lon": lon, "alt": 10},
+        {"command": WAYPOINT, "lat": lat + 30 * NORTH, "lon": lon, "alt": 10},
+        {"command": mavlink2.MAV_CMD_DO_CHANGE_SPEED, "param1": 1, "param2": 4, "param3": -1},
+        {"command": WAYPOINT, "lat": lat + 60 * NORTH, "lon": lon, "alt": 10},
+        {"command": RTL},
+    ]
+    url = f"/api/v1/vehicles/{PX4}/mission"
+    assert api.post(url, json={"items": items}).status_code == 200
+    try:
+        assert send_command(api, PX4, name="set_mode", mode="MISSION")["status"] == "accepted"
+        assert send_command(api, PX4, name="arm")["status"] == "accepted"
+        watcher.wait_until(
+            lambda v: (state_of(v, PX4).get("alt_rel") or 0) > 2, 30, "climbing on item 1"
+        )
+        current = api.put(f"{url}/current", json={"seq": 3})
+        assert current.status_code == 200, current.text
+        assert current.json()["outcome"]["message"] == "item 3 ran at once; current item is 4"
+        watcher.wait_until(lambda v: state_of(v, PX4).get("mission_current") == 4, 10, "item 4")
+    finally:
+        send_command(api, PX4, name="rtl")
+        watcher.wait_until(lambda v: not state_of(v, PX4).get("armed"), 180, "home, disarmed")
+        api.delete(url)

@@ -5,6 +5,7 @@ way the agent reads it."""
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 import pytest
 from pymavlink import mavutil
@@ -217,6 +218,42 @@ def test_px4_takeoff_is_above_sea_level_then_holds() -> None:
     assert texts(copter)[-1] == "Disarming denied: not landed"
     assert copter.request_mode(1, 4, 6) is MavResult.ACCEPTED  # AUTO.LAND
     run_until(copter, lambda c: not c.armed, 120)
+
+
+def takeoff_away(north: float) -> list[MissionItem]:
+    """Home, a take-off to 10 m whose position is ``north`` metres north of home, RTL."""
+    takeoff = waypoint(1, north, 0.0)
+    return [
+        MissionItem(0, MavFrame.GLOBAL, MavCmd.NAV_WAYPOINT),
+        MissionItem(1, takeoff.frame, MavCmd.NAV_TAKEOFF, x=takeoff.x, y=takeoff.y, z=10.0),
+        MissionItem(2, MavFrame.GLOBAL_RELATIVE_ALT, MavCmd.NAV_RETURN_TO_LAUNCH),
+    ]
+
+
+@pytest.mark.parametrize(
+    ("make", "flies_there"), [(px4, True), (lambda: Copter(DEFAULT_HOME), False)]
+)
+def test_a_mission_take_off_climbs_then_px4_flies_to_its_position(
+    make: Callable[[], Copter], flies_there: bool
+) -> None:
+    """PX4's Mission arms only when asked; armed, it climbs where it stands, then flies to
+    the take-off item's position before the next item. ArduCopter climbs and goes on."""
+    copter = make()
+    copter.set_mission(takeoff_away(30.0))
+    if flies_there:
+        assert copter.request_mode(*mavutil.px4_map["MISSION"]) is MavResult.ACCEPTED
+        copter.advance(5.0)
+        assert not copter.armed, "PX4 does not arm itself in Mission"
+        assert copter.arm() is MavResult.ACCEPTED
+    else:
+        copter.set_mode(CopterMode.GUIDED)
+        copter.arm()
+        assert copter.set_mode(CopterMode.AUTO) is MavResult.ACCEPTED
+    run_until(copter, lambda c: c.relative_alt > 9.5, 60)
+    assert math.hypot(copter.body.north, copter.body.east) < 1.0, "climbs where it stands"
+    run_until(copter, lambda c: c.mission_current == 2, 60)
+    assert copter.body.north == pytest.approx(30.0 if flies_there else 0.0, abs=2.5)
+    assert copter.relative_alt == pytest.approx(10.0, abs=1.0)
 
 
 # -- over TCP, and on the command line -----------------------------------------------------

@@ -609,8 +609,10 @@ export interface paths {
         /**
          * Start Survey
          * @description Upload every drone's mission (each checked again on the way), then start them
-         *     together: a guided take-off, then AUTO. An upload refused anywhere starts nothing
-         *     (409); a drone that fails to take off drops out and its lanes are offered.
+         *     together as QGroundControl starts a mission: ArduPilot a guided take-off, then AUTO;
+         *     PX4 its mission mode (MISSION), then arm. An upload refused anywhere starts nothing
+         *     (409); a drone that fails to start (named in its reason) drops out, is disarmed if
+         *     it is still on the ground, and its lanes are offered.
          */
         post: operations["start_survey_api_v1_surveys__survey_id__start_post"];
         delete?: never;

@@ -162,6 +162,7 @@ async def photos(flood: Flood) -> None:
     chunk = os.urandom(256 * 1024)
     end = flood.until()
     started = 0
+    refusals: list[str] = []
 
     async def client(http: httpx.AsyncClient) -> None:
         nonlocal started
@@ -185,6 +186,8 @@ async def photos(flood: Flood) -> None:
                     headers=headers if offset == 0 else {},
                 )
                 flood.statuses[str(got.status_code)] += 1
+                if got.status_code == 422 and not refusals:
+                    refusals.append(got.text)  # printed once: what the hub said
                 if got.status_code != 200:
                     break  # refused: start another photo
                 offset += len(chunk)
@@ -196,6 +199,8 @@ async def photos(flood: Flood) -> None:
     ):
         for _ in range(16):
             tasks.create_task(client(http))
+    for text in refusals:
+        print(f"photos: a 422 said {text[:300]}")
 
 
 def _square(vehicle: dict[str, Any], side_m: float, altitude_m: float) -> dict[str, Any]:
@@ -245,7 +250,8 @@ async def _posting(flood: Flood, tokens: list[str], path: str, bodies: list[Any]
 async def previews(flood: Flood) -> None:
     auth = {"Authorization": f"Bearer {flood.admin_token}"}
     async with httpx.AsyncClient(base_url=flood.base, headers=auth) as http:
-        vehicle = (await http.get("/api/v1/vehicles")).json()[0]
+        fleet = (await http.get("/api/v1/vehicles")).json()
+    vehicle = next(v for v in fleet if v["id"].startswith("sim_") and v["state"])
     here = {"id": vehicle["id"], **vehicle["state"]}
     bodies = [_square(here, 4400, 1), _square(here, 200, 1), _square(here, 200, 5)]
     tokens = await asyncio.to_thread(_operators, flood.base, flood.admin_token, 8)

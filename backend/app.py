@@ -38,6 +38,7 @@ from backend.api import (
     websockets,
 )
 from backend.api.docs import install_docs
+from backend.api.early_refusal import EarlyRefusal, early_checks
 from backend.api.hardening import SecurityMiddleware, content_security_policy
 from backend.api.responses import document_errors
 from backend.api.routing import DashboardMount, install_method_not_allowed
@@ -138,6 +139,8 @@ def create_app(settings: HubSettings | None = None) -> FastAPI:
             allow_methods=["GET", "POST", "PUT", "PATCH", "DELETE"],
             allow_headers=["Authorization", "Content-Type"],
         )
+    # Inside the security headers: a refusal made early carries them too.
+    app.add_middleware(EarlyRefusal, checks=early_checks(API_PREFIX))
     app.add_middleware(
         SecurityMiddleware,
         max_body_bytes=settings.max_body_bytes,

@@ -9,6 +9,7 @@ in the security review, come "from" many addresses.
 from __future__ import annotations
 
 import concurrent.futures
+import socket
 import time
 from collections.abc import Iterator
 from pathlib import Path
@@ -73,6 +74,28 @@ def test_guessing_many_users_from_one_address_is_throttled(tmp_path: Path) -> No
         other_address = _login(client, "admin", ADMIN_PASSWORD, "203.0.113.21")
     assert statuses == [401, 401, 401, 429]
     assert other_address.status_code == 200
+
+
+def test_an_address_over_its_login_rate_is_refused_before_its_body_is_read(
+    tmp_path: Path,
+) -> None:
+    """A login flood's refusals are answered from the headers: the form is never read
+    (here it never comes, and the answer does not wait for it)."""
+    settings = hub_settings(tmp_path, login_attempts_per_address_per_minute=2)
+    with running_hub(settings) as hub, httpx.Client(base_url=hub, timeout=30) as client:
+        for n in range(2):
+            assert _login(client, f"user{n}", "wrong", "203.0.113.30").status_code == 401
+        host, port = hub.removeprefix("http://").split(":")
+        with socket.create_connection((host, int(port)), timeout=5) as raw:
+            raw.sendall(
+                b"POST /api/v1/auth/token HTTP/1.1\r\nHost: x\r\n"
+                b"X-Forwarded-For: 203.0.113.30\r\n"
+                b"Content-Type: application/x-www-form-urlencoded\r\n"
+                b"Content-Length: 500\r\n\r\nusername="
+            )
+            answer = b"".join(iter(lambda: raw.recv(4096), b"")).decode()
+    assert answer.startswith("HTTP/1.1 429"), answer
+    assert "login attempts" in answer
 
 
 def test_the_first_admin_name_is_configurable(tmp_path: Path) -> None:

@@ -246,3 +246,28 @@ def test_area_imports_are_rate_limited_per_user(hub: str, admin_api: httpx.Clien
         assert 1 <= int(refused.headers["Retry-After"]) <= 60
     with api_client(hub, _user(admin_api, hub, "operator")) as another:  # a budget of its own
         assert another.post("/api/v1/surveys/import", json=file).status_code == 200
+
+
+def test_an_import_over_its_rate_is_refused_before_its_body_is_read(
+    hub: str, admin_api: httpx.Client
+) -> None:
+    """A user importing in a loop: once over the rate, each request is answered from its
+    headers, its (up to a megabyte of) body never read or decoded on the event loop.
+    Here the body never even comes: the refusal must not wait for it."""
+    file = {"format": "geojson", "content": GEOJSON}
+    token = _user(admin_api, hub, "operator")
+    with api_client(hub, token) as operator:
+        for _ in range(10):  # survey_imports_per_minute
+            assert operator.post("/api/v1/surveys/import", json=file).status_code == 200
+    host, port = hub.removeprefix("http://").split(":")
+    with socket.create_connection((host, int(port)), timeout=5) as raw:
+        raw.sendall(
+            b"POST /api/v1/surveys/import HTTP/1.1\r\nHost: x\r\n"
+            + f"Authorization: Bearer {token}\r\n".encode()
+            + b"Content-Type: application/json\r\nContent-Length: 900000\r\n\r\n{"
+        )
+        # Read to the close (within the 5 s timeout; the hub waits 10 s for a body).
+        answer = b"".join(iter(lambda: raw.recv(4096), b"")).decode()
+    assert answer.startswith("HTTP/1.1 429"), answer
+    assert "retry-after:" in answer.lower()
+    assert "survey imports" in answer

@@ -6,6 +6,7 @@ import asyncio
 import json
 import math
 import os
+import socket
 import sqlite3
 import subprocess
 import sys
@@ -388,3 +389,29 @@ def agent_hello(
         agent_version="test",
         stream_id=stream_id,
     )
+
+
+def raw_http_answer(sock: socket.socket) -> str:
+    """One HTTP/1.1 answer read off a raw socket, headers and body by its Content-Length,
+    without waiting for the connection to close (the server may still be reading)."""
+    data = b""
+    while b"\r\n\r\n" not in data:
+        chunk = sock.recv(4096)
+        if not chunk:
+            break
+        data += chunk
+    head, _, body = data.partition(b"\r\n\r\n")
+    length = next(
+        (
+            int(line.split(b":", 1)[1])
+            for line in head.split(b"\r\n")
+            if line.lower().startswith(b"content-length:")
+        ),
+        0,
+    )
+    while len(body) < length:
+        chunk = sock.recv(4096)
+        if not chunk:
+            break
+        body += chunk
+    return (head + b"\r\n\r\n" + body).decode()

@@ -42,7 +42,7 @@ from vehicle_agents.sensors.relay import DiskBacklog, ScanOutbox, ScanRelay, par
 from vehicle_agents.sensors.ros2 import SCHEME as ROS2_SCHEME
 from vehicle_agents.sensors.ros2 import LaserScanSource
 from vehicle_agents.sensors.sources import MavlinkRangeSource, ScanSource, YdlidarSource
-from vehicle_agents.shutters import ShutterMatcher
+from vehicle_agents.shutters import ShutterMatcher, from_autopilot
 from vehicle_agents.statustext import StatusTextJoiner
 from vehicle_agents.streams import StreamRequester
 from vehicle_agents.telemetry import link_snapshot
@@ -309,7 +309,11 @@ class EventSource:
                     alt_rel=float(message.alt_rel),
                 )
             )
-        elif kind == "CAMERA_IMAGE_CAPTURED" and int(message.capture_result) != CAPTURE_FAILED:
+        elif (
+            kind == "CAMERA_IMAGE_CAPTURED"
+            and from_autopilot(message)
+            and int(message.capture_result) != CAPTURE_FAILED
+        ):
             # PX4's camera_feedback sends one per shutter release, to every GCS link, with
             # where it was; its CAMERA_TRIGGER (the same index) may have come first.
             index = int(message.image_index)

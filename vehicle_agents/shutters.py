@@ -18,9 +18,21 @@ the flight controller).
 from __future__ import annotations
 
 from collections import Counter, OrderedDict
+from typing import Any
 
+from pymavlink.dialects.v20 import ardupilotmega as mavlink2
+
+# MAVLink camera components (a camera of the camera protocol, e.g. the one in PX4's
+# Gazebo SITL) send CAMERA_IMAGE_CAPTURED of their own, numbered their own way: only the
+# autopilot's (its camera_feedback module) tells of its triggers.
+_CAMERA_COMPONENTS = range(mavlink2.MAV_COMP_ID_CAMERA, mavlink2.MAV_COMP_ID_CAMERA6 + 1)
 MATCH_WINDOW_S = 10.0  # CAMERA_IMAGE_CAPTURED follows its CAMERA_TRIGGER within milliseconds
 KEPT = 256  # the newest indexes remembered
+
+
+def from_autopilot(message: Any) -> bool:
+    """The message comes from the autopilot, not a camera component beside it."""
+    return int(message.get_srcComponent()) not in _CAMERA_COMPONENTS
 
 
 class ShutterMatcher:

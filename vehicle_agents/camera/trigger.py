@@ -31,7 +31,7 @@ from vehicle_agents.camera.geotag import NotAJpeg, geotag
 from vehicle_agents.camera.queue import PhotoQueue
 from vehicle_agents.camera.sources import CameraSource, Capture, CaptureError, Shot
 from vehicle_agents.sensors.fcu_time import PoseHistory
-from vehicle_agents.shutters import ShutterMatcher
+from vehicle_agents.shutters import ShutterMatcher, from_autopilot
 
 log = logging.getLogger(__name__)
 
@@ -95,7 +95,7 @@ class CameraTrigger:
             self._triggered(kind, self.shot_of(message))
         elif kind == "CAMERA_TRIGGER":
             self._triggered(kind, self.shot_of_trigger(message))
-        elif kind == "CAMERA_IMAGE_CAPTURED":
+        elif kind == "CAMERA_IMAGE_CAPTURED" and from_autopilot(message):
             self._captured(message)
 
     def _captured(self, message: Any) -> None:

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import asyncio
 from pathlib import Path
+from typing import Any
 
 import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
@@ -16,7 +17,6 @@ from tests.unit.camera.test_camera_trigger import (
     BOOT_EPOCH,
     Clock,
     _feed_streams,
-    _over_the_wire,
     photo_server,
     trigger_for,
 )
@@ -24,12 +24,23 @@ from vehicle_agents.camera.queue import QueuedPhoto
 from vehicle_agents.camera.trigger import CameraTrigger
 from vehicle_agents.shutters import ShutterMatcher
 
+AUTOPILOT = mavlink2.MAV_COMP_ID_AUTOPILOT1
+
+
+def _over_the_wire(message: Any, component: int = AUTOPILOT) -> Any:
+    """Packed into MAVLink 2 bytes by the sender's component and parsed back."""
+    sender = mavlink2.MAVLink(None, srcSystem=1, srcComponent=component)
+    [received] = mavlink2.MAVLink(None).parse_buffer(message.pack(sender)) or []
+    return received
+
 
 def trigger(seq: int) -> object:
     return _over_the_wire(mavlink2.MAVLink_camera_trigger_message(int(42.5e6), seq))
 
 
-def captured(index: int, lat: float = 10.0001, result: int = 1) -> object:
+def captured(
+    index: int, lat: float = 10.0001, result: int = 1, component: int = AUTOPILOT
+) -> object:
     # yawed 90 degrees (a quaternion about the down axis)
     half = 0.7071067811865476
     return _over_the_wire(
@@ -45,7 +56,8 @@ def captured(index: int, lat: float = 10.0001, result: int = 1) -> object:
             index,
             result,
             b"",
-        )
+        ),
+        component,
     )
 
 
@@ -108,6 +120,21 @@ def test_two_shutters_numbered_alike_are_two_photos_none_overwritten(tmp_path: P
     assert camera.stats.triggers == 2
     assert camera.stats.queued == 2
     assert len(camera.queue) == 2
+
+
+def test_a_camera_components_own_captures_are_not_the_autopilots_triggers() -> None:
+    """A MAVLink camera beside the autopilot (Gazebo's, in PX4 SITL) numbers its own
+    CAMERA_IMAGE_CAPTURED: not matched to the autopilot's triggers, not a photo here."""
+    camera = CameraTrigger(
+        "sim_1",
+        source=None,  # type: ignore[arg-type]
+        poses=None,  # type: ignore[arg-type]
+        queue=None,  # type: ignore[arg-type]
+        notify=lambda text, severity: None,
+        monotonic=Clock(),
+    )
+    camera.on_message(captured(0, component=mavlink2.MAV_COMP_ID_CAMERA))
+    assert camera.stats.triggers == 0
 
 
 def test_a_failed_capture_is_counted_and_said() -> None:

@@ -31,7 +31,7 @@ from vehicle_agents.camera.geotag import NotAJpeg, geotag
 from vehicle_agents.camera.queue import PhotoQueue
 from vehicle_agents.camera.sources import CameraSource, Capture, CaptureError, Shot
 from vehicle_agents.sensors.fcu_time import PoseHistory
-from vehicle_agents.shutters import ShutterMatcher, from_autopilot
+from vehicle_agents.shutters import MATCH_WINDOW_S, ShutterMatcher, from_autopilot
 
 log = logging.getLogger(__name__)
 
@@ -82,8 +82,9 @@ class CameraTrigger:
         self._shots: asyncio.Queue[Shot] = asyncio.Queue(maxsize=SHOT_QUEUE)
         self._home_msl: float | None = None  # for the height above home of interpolated poses
         self._shutters = ShutterMatcher()
-        # CAMERA_IMAGE_CAPTURED's poses for shots whose CAMERA_TRIGGER came first
-        self._late_poses: dict[int, PhotoPose] = {}
+        # CAMERA_IMAGE_CAPTURED's poses (and arrivals) for shots whose CAMERA_TRIGGER
+        # came first, the newest SHOT_QUEUE of them
+        self._late_poses: dict[int, tuple[float, PhotoPose]] = {}
         self._photo_ids: set[str] = set()  # taken in this run: no photo overwrites another
         self.stats = CameraStats()
 
@@ -112,7 +113,9 @@ class CameraTrigger:
         if not self._shutters.is_new(kind, shot.index, shot.arrived):
             self.stats.repeats += 1
             if shot.feedback_pose is not None:  # the better pose, for the shot still waiting
-                self._late_poses[shot.index] = shot.feedback_pose
+                self._late_poses[shot.index] = (shot.arrived, shot.feedback_pose)
+                while len(self._late_poses) > SHOT_QUEUE:
+                    del self._late_poses[next(iter(self._late_poses))]
             return
         self.stats.triggers += 1
         try:
@@ -178,8 +181,12 @@ class CameraTrigger:
         while True:
             shot = await self._shots.get()
             late = self._late_poses.pop(shot.index, None)
-            if late is not None and shot.feedback_pose is None:
-                shot = replace(shot, feedback_pose=late)
+            if (
+                late is not None
+                and shot.feedback_pose is None
+                and abs(late[0] - shot.arrived) <= MATCH_WINDOW_S  # not a rebooted counter's
+            ):
+                shot = replace(shot, feedback_pose=late[1])
             try:
                 await self.take(shot)
             except CaptureError as error:

@@ -77,6 +77,11 @@ class SecondGps:
     satellites: int = 18
 
 
+# PX4's CAMERA_IMAGE_CAPTURED.relative_alt is camera_feedback's ground_distance: -1 m
+# without a rangefinder, as this vehicle flies.
+NO_GROUND_DISTANCE_MM = -1000
+
+
 def _quaternion(roll: float, pitch: float, yaw: float) -> list[float]:
     """(w, x, y, z) of body-to-NED Euler angles in radians (ZYX, as MAVLink's ATTITUDE)."""
     cr, sr = math.cos(roll / 2.0), math.sin(roll / 2.0)
@@ -478,7 +483,7 @@ class TelemetryBuilder:
             round(photo.lat * 1e7),
             round(photo.lon * 1e7),
             round(photo.alt_msl * 1000.0),
-            round(photo.alt_rel * 1000.0),
+            NO_GROUND_DISTANCE_MM,  # relative_alt: PX4 puts the rangefinder's reading here
             _quaternion(photo.roll, photo.pitch, photo.yaw),
             photo.index,
             1,  # capture_result: taken

@@ -42,7 +42,7 @@ from vehicle_agents.sensors.relay import DiskBacklog, ScanOutbox, ScanRelay, par
 from vehicle_agents.sensors.ros2 import SCHEME as ROS2_SCHEME
 from vehicle_agents.sensors.ros2 import LaserScanSource
 from vehicle_agents.sensors.sources import MavlinkRangeSource, ScanSource, YdlidarSource
-from vehicle_agents.shutters import ShutterMatcher, from_autopilot
+from vehicle_agents.shutters import ShutterMatcher, captured_alt_rel, from_autopilot
 from vehicle_agents.statustext import StatusTextJoiner
 from vehicle_agents.streams import StreamRequester
 from vehicle_agents.telemetry import link_snapshot
@@ -282,6 +282,7 @@ class EventSource:
         # CAMERA_TRIGGER, which carries no position, was taken.
         self._position: tuple[float, float, float] | None = None
         self._shutters = ShutterMatcher()  # PX4 tells of a shutter twice
+        self._home_msl: float | None = None  # for CAMERA_IMAGE_CAPTURED's height
 
     def on_message(self, message: MavMessage) -> None:
         kind = message.get_type()
@@ -298,6 +299,7 @@ class EventSource:
             self.emit("mission", f"reached mission item {number}", None, mission_item=number)
         elif kind == "GLOBAL_POSITION_INT" and (message.lat or message.lon):
             self._position = (message.lat / 1e7, message.lon / 1e7, message.relative_alt / 1000.0)
+            self._home_msl = message.alt / 1000.0 - message.relative_alt / 1000.0
         elif kind == "CAMERA_FEEDBACK" and int(message.flags) == CAMERA_FEEDBACK_PHOTO:
             # ArduPilot sends one per shutter release (AP_Camera), to every GCS link: the
             # photo's place for the survey's progress and the flight log.
@@ -323,7 +325,7 @@ class EventSource:
                         index=index,
                         lat=message.lat / 1e7,
                         lon=message.lon / 1e7,
-                        alt_rel=message.relative_alt / 1000.0,
+                        alt_rel=captured_alt_rel(message, self._home_msl),
                     )
                 )
         elif kind == "CAMERA_TRIGGER" and self._position is not None:

@@ -35,6 +35,16 @@ def from_autopilot(message: Any) -> bool:
     return int(message.get_srcComponent()) not in _CAMERA_COMPONENTS
 
 
+def captured_alt_rel(message: Any, home_msl: float | None) -> float:
+    """Metres above home of a CAMERA_IMAGE_CAPTURED. PX4 fills its ``relative_alt`` with
+    the distance to the ground (camera_feedback's ``ground_distance``: a rangefinder's,
+    -1 m without one), not the height above home the field's name promises: the height
+    is its ``alt`` (above mean sea level) less home's, known from GLOBAL_POSITION_INT."""
+    if home_msl is not None:
+        return float(message.alt) / 1000.0 - home_msl
+    return float(message.relative_alt) / 1000.0
+
+
 class ShutterMatcher:
     """Says whether a camera message tells of a shutter not told of yet."""
 

@@ -334,9 +334,10 @@ def test_px4s_camera_trigger_becomes_a_camera_event_where_the_drone_was() -> Non
 
 
 def captured(index: int, lat: int = LAT) -> MavMessage:
-    """PX4's CAMERA_IMAGE_CAPTURED (camera_feedback), level and facing north."""
+    """PX4's CAMERA_IMAGE_CAPTURED (camera_feedback), level and facing north, 30.25 m
+    above home; its relative_alt is the rangefinder's (-1 m: none)."""
     return mavlink2.MAVLink_camera_image_captured_message(
-        42_000, 0, 0, lat, LON, 620_500, 30_250, [1.0, 0.0, 0.0, 0.0], index, 1, b""
+        42_000, 0, 0, lat, LON, 614_500, -1000, [1.0, 0.0, 0.0, 0.0], index, 1, b""
     )
 
 

@@ -31,7 +31,12 @@ from vehicle_agents.camera.geotag import NotAJpeg, geotag
 from vehicle_agents.camera.queue import PhotoQueue
 from vehicle_agents.camera.sources import CameraSource, Capture, CaptureError, Shot
 from vehicle_agents.sensors.fcu_time import PoseHistory
-from vehicle_agents.shutters import MATCH_WINDOW_S, ShutterMatcher, from_autopilot
+from vehicle_agents.shutters import (
+    MATCH_WINDOW_S,
+    ShutterMatcher,
+    captured_alt_rel,
+    from_autopilot,
+)
 
 log = logging.getLogger(__name__)
 
@@ -141,7 +146,7 @@ class CameraTrigger:
                 lat=message.lat / 1e7,
                 lon=message.lon / 1e7,
                 alt_msl=message.alt / 1000.0,
-                alt_rel=message.relative_alt / 1000.0,
+                alt_rel=captured_alt_rel(message, self._home_msl),
                 roll=_degrees(math.degrees(roll), 180.0),
                 pitch=max(-90.0, min(90.0, math.degrees(pitch))),
                 yaw=math.degrees(yaw) % 360.0,

@@ -51,7 +51,7 @@ def captured(
             round(lat * 1e7),
             200_000_000,
             150_000,
-            50_000,
+            -1000,  # relative_alt: PX4 puts the rangefinder's reading (none) here
             [half, 0.0, 0.0, half],
             index,
             result,
@@ -110,7 +110,7 @@ def test_each_shutter_is_one_photo_whichever_of_its_messages_come(tmp_path: Path
     assert by_index[1].lat == pytest.approx(10.0001, abs=1e-7)
     assert by_index[1].yaw == pytest.approx(90.0, abs=1e-4)  # a float32 quaternion
     assert by_index[3].lat == pytest.approx(10.0003, abs=1e-7)
-    assert by_index[3].alt_rel == pytest.approx(50.0)
+    assert by_index[3].alt_rel == pytest.approx(50.0)  # alt less home's, from the streams
 
 
 def test_two_shutters_numbered_alike_are_two_photos_none_overwritten(tmp_path: Path) -> None:

@@ -21,7 +21,7 @@ from tests.unit.camera.test_camera_trigger import (
     trigger_for,
 )
 from vehicle_agents.camera.queue import QueuedPhoto
-from vehicle_agents.camera.trigger import CameraTrigger
+from vehicle_agents.camera.trigger import SHOT_QUEUE, CameraTrigger
 from vehicle_agents.shutters import ShutterMatcher
 
 AUTOPILOT = mavlink2.MAV_COMP_ID_AUTOPILOT1
@@ -160,3 +160,27 @@ def test_the_matcher_pairs_by_index_only_and_forgets_a_restarted_counter() -> No
     assert shutters.is_new("CAMERA_TRIGGER", 0, 1.002)  # numbered alike: another shutter
     assert not shutters.is_new("CAMERA_IMAGE_CAPTURED", 0, 1.003)
     assert shutters.is_new("CAMERA_IMAGE_CAPTURED", 0, 60.0)  # after a reboot
+
+
+def test_a_trigger_the_full_queue_cannot_hold_is_counted_and_said() -> None:
+    """More triggers than wait for the camera: the one dropped says so, as an event."""
+    said: list[str] = []
+    camera = CameraTrigger(
+        "sim_1",
+        source=None,  # type: ignore[arg-type]
+        poses=None,  # type: ignore[arg-type]
+        queue=None,  # type: ignore[arg-type]
+        notify=lambda text, severity: said.append(text),
+        monotonic=Clock(),
+    )
+
+    async def burst() -> None:  # the shot queue is the event loop's
+        for seq in range(SHOT_QUEUE + 1):
+            camera.on_message(trigger(seq))
+
+    asyncio.run(burst())
+    assert (camera.stats.triggers, camera.stats.dropped_triggers) == (SHOT_QUEUE + 1, 1)
+    assert said == [
+        f"photo {SHOT_QUEUE} not taken: {SHOT_QUEUE} triggers already wait for the camera "
+        "(1 dropped so far)"
+    ]

@@ -19,7 +19,9 @@ personality maps its flight modes to and from the autopilot's encoding, as a GCS
   position is flown to once the climb is done. A reposition or a
   set-home sent as COMMAND_INT is taken only in MAV_FRAME_GLOBAL_INT (MAV_RESULT 9,
   COMMAND_UNSUPPORTED_MAV_FRAME, for any other frame). Its parameters have PX4's names
-  and types, integers sent bytewise (`px4_params`, `param_wire`).
+  and types, integers sent bytewise (`px4_params`, `param_wire`). Its camera tells of
+  a shutter with CAMERA_IMAGE_CAPTURED, and with CAMERA_TRIGGER where a GCS asked for it,
+  never with ArduPilot's CAMERA_FEEDBACK.
 """
 
 from __future__ import annotations
@@ -79,6 +81,13 @@ class Personality(ABC):
     # MAVLink spec has it) starts the mission itself at 0. The simulator always stores
     # home first; this is how far its numbers are from the wire's.
     mission_wire_offset: int
+    # How the camera tells of a shutter: ArduPilot's AP_Camera sends CAMERA_FEEDBACK (its
+    # img_idx from 1) to every link; PX4 sends CAMERA_IMAGE_CAPTURED (camera_feedback) to
+    # every link and CAMERA_TRIGGER (camera_trigger; both numbered from 0) only to a link
+    # that asked for it with SET_MESSAGE_INTERVAL (mavlink_main.cpp streams it to onboard
+    # links alone).
+    camera_feedback: bool
+    camera_index_from: int
     # A mission's NAV_TAKEOFF with a position: PX4 climbs, then flies there as to a
     # waypoint (navigator/mission.cpp: "if we just did a normal takeoff navigate to the
     # actual waypoint now"); ArduCopter climbs where it is and ignores it.
@@ -134,6 +143,8 @@ class ArduCopterPersonality(Personality):
     reboot_declined = MavResult.FAILED
     takeoff_alt_is_amsl = False
     mission_wire_offset = 0
+    camera_feedback = True
+    camera_index_from = 1
 
     def base_mode(self, mode: CopterMode, armed: bool) -> int:
         """GCS_MAVLINK_Copter::base_mode."""
@@ -208,6 +219,8 @@ class Px4Personality(Personality):
     reboot_declined = MavResult.DENIED
     takeoff_alt_is_amsl = True
     mission_wire_offset = 1
+    camera_feedback = False
+    camera_index_from = 0
     takeoff_flies_to_position = True
 
     def __init__(self) -> None:

@@ -1,7 +1,8 @@
 """The simulated camera's photos, over HTTP: ``GET /photos/{index}`` renders shot ``index``.
 
 When the autopilot fires the camera (a mission's DO_SET_CAM_TRIGG_DIST or
-DO_DIGICAM_CONTROL), the simulator sends CAMERA_FEEDBACK and keeps the shot's true pose
+DO_DIGICAM_CONTROL), the simulator sends CAMERA_FEEDBACK (playing PX4:
+CAMERA_IMAGE_CAPTURED, and CAMERA_TRIGGER where asked for) and keeps the shot's true pose
 here. The agent's simulated camera source then fetches the photo, as it would fetch one
 from a real camera the autopilot fired: the image is the nadir view of the synthetic
 ground (simulator/ground.py) from that pose, through the camera the query names (the

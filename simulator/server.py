@@ -14,6 +14,7 @@ import logging
 import time
 from abc import ABC, abstractmethod
 from collections.abc import Callable
+from dataclasses import replace
 from typing import TYPE_CHECKING, Any
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
@@ -29,7 +30,7 @@ from simulator.telemetry import (
     SecondGps,
     TelemetryBuilder,
 )
-from simulator.vehicle import ItemReached, Vehicle
+from simulator.vehicle import ItemReached, PhotoTaken, Vehicle
 from simulator.vehicles import REBOOT_SILENCE_S, build_vehicle
 
 if TYPE_CHECKING:
@@ -280,15 +281,29 @@ class SimulatorServer:
                 on_wire = event.seq - self.copter.mission_wire_offset
                 self._broadcast(self.telemetry.mission_item_reached(on_wire))
             else:
-                if self.photos is not None:  # before the feedback: the agent fetches on it
-                    self.photos.taken(event)
-                self._broadcast(self.telemetry.camera_feedback(event))
+                self._photo_taken(event)
         signature = self._state_signature()
         if signature != self._signature:
             # ArduCopter sends a HEARTBEAT straight away when its mode changes
             self._signature = signature
             for link in self.links:
                 link.streams.send_soon(MsgId.HEARTBEAT, now)
+
+    def _photo_taken(self, photo: PhotoTaken) -> None:
+        """The camera fired: told as the autopilot tells of it (see `personality`)."""
+        if not self.telemetry.sends_camera_trigger:
+            if self.photos is not None:  # before the feedback: the agent fetches on it
+                self.photos.taken(photo)
+            self._broadcast(self.telemetry.camera_feedback(photo))
+            return
+        photo = replace(photo, index=photo.index - 1)  # PX4's sequence starts at 0
+        if self.photos is not None:
+            self.photos.taken(photo)
+        trigger = self.telemetry.camera_trigger(photo)
+        for link in list(self.links):
+            if link.streams.interval(MsgId.CAMERA_TRIGGER) is not None:
+                link.send(trigger)
+        self._broadcast(self.telemetry.camera_image_captured(photo))
 
     def _state_signature(self) -> tuple[int, bool, int]:
         copter = self.copter

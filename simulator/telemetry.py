@@ -77,6 +77,24 @@ class SecondGps:
     satellites: int = 18
 
 
+# PX4's CAMERA_IMAGE_CAPTURED.relative_alt is camera_feedback's ground_distance: -1 m
+# without a rangefinder, as this vehicle flies.
+NO_GROUND_DISTANCE_MM = -1000
+
+
+def _quaternion(roll: float, pitch: float, yaw: float) -> list[float]:
+    """(w, x, y, z) of body-to-NED Euler angles in radians (ZYX, as MAVLink's ATTITUDE)."""
+    cr, sr = math.cos(roll / 2.0), math.sin(roll / 2.0)
+    cp, sp = math.cos(pitch / 2.0), math.sin(pitch / 2.0)
+    cy, sy = math.cos(yaw / 2.0), math.sin(yaw / 2.0)
+    return [
+        cr * cp * cy + sr * sp * sy,
+        sr * cp * cy - cr * sp * sy,
+        cr * sp * cy + sr * cp * sy,
+        cr * cp * sy - sr * sp * cy,
+    ]
+
+
 def _cdeg(radians: float) -> int:
     """0..35999 centidegrees of a heading in radians."""
     return round(math.degrees(radians) * 100.0) % 36000
@@ -116,7 +134,18 @@ class TelemetryBuilder:
         }
         if self.gps2 is not None:  # a receiver that is not there has no messages
             builders[GPS2_RAW] = self.gps2_raw
+        if self.sends_camera_trigger:
+            # Sent at the shutter (`camera_trigger`), never on a clock: its interval only
+            # says whether this link gets it.
+            builders[MsgId.CAMERA_TRIGGER] = lambda: None
         return builders
+
+    @property
+    def sends_camera_trigger(self) -> bool:
+        """PX4 tells of a shutter with CAMERA_TRIGGER and CAMERA_IMAGE_CAPTURED,
+        ArduPilot (and the rover, which is ArduRover) with CAMERA_FEEDBACK."""
+        personality = getattr(self.copter, "personality", None)
+        return personality is not None and not personality.camera_feedback
 
     @property
     def _time_boot_ms(self) -> int:
@@ -437,6 +466,28 @@ class TelemetryBuilder:
             0.0,
             mavlink2.CAMERA_FEEDBACK_PHOTO,
             photo.index,
+        )
+
+    def camera_trigger(self, photo: PhotoTaken) -> MavMessage:
+        """PX4's CAMERA_TRIGGER (mavlink CAMERA_TRIGGER.hpp): the trigger's time on the
+        flight controller's boot clock, and its sequence number."""
+        return mavlink2.MAVLink_camera_trigger_message(int(photo.time_s * 1e6), photo.index)
+
+    def camera_image_captured(self, photo: PhotoTaken) -> MavMessage:
+        """PX4's CAMERA_IMAGE_CAPTURED (camera_feedback): where the vehicle was and how it
+        was turned at the shutter; ``image_index`` is the trigger's sequence number."""
+        return mavlink2.MAVLink_camera_image_captured_message(
+            int(photo.time_s * 1000.0) & 0xFFFFFFFF,
+            int((self.boot_epoch_s + photo.time_s) * 1e6),
+            0,  # camera_id: the autopilot's own trigger output
+            round(photo.lat * 1e7),
+            round(photo.lon * 1e7),
+            round(photo.alt_msl * 1000.0),
+            NO_GROUND_DISTANCE_MM,  # relative_alt: PX4 puts the rangefinder's reading here
+            _quaternion(photo.roll, photo.pitch, photo.yaw),
+            photo.index,
+            1,  # capture_result: taken
+            b"",
         )
 
     @staticmethod

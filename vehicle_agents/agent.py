@@ -42,6 +42,7 @@ from vehicle_agents.sensors.relay import DiskBacklog, ScanOutbox, ScanRelay, par
 from vehicle_agents.sensors.ros2 import SCHEME as ROS2_SCHEME
 from vehicle_agents.sensors.ros2 import LaserScanSource
 from vehicle_agents.sensors.sources import MavlinkRangeSource, ScanSource, YdlidarSource
+from vehicle_agents.shutters import ShutterMatcher, captured_alt_rel, from_autopilot
 from vehicle_agents.statustext import StatusTextJoiner
 from vehicle_agents.streams import StreamRequester
 from vehicle_agents.telemetry import link_snapshot
@@ -53,6 +54,7 @@ log = logging.getLogger(__name__)
 
 # CAMERA_FEEDBACK.flags: a photo (CAMERA_FEEDBACK_FLAGS; not a video or a bad capture).
 CAMERA_FEEDBACK_PHOTO = 0
+CAPTURE_FAILED = 0  # CAMERA_IMAGE_CAPTURED.capture_result: 1 success, 0 failure
 
 CAPABILITIES = ["telemetry", "commands", "events", "manual", "formation"]
 SCAN_CAPABILITY = "scans"
@@ -279,6 +281,8 @@ class EventSource:
         # The latest GLOBAL_POSITION_INT (lat, lon, metres above home): where PX4's
         # CAMERA_TRIGGER, which carries no position, was taken.
         self._position: tuple[float, float, float] | None = None
+        self._shutters = ShutterMatcher()  # PX4 tells of a shutter twice
+        self._home_msl: float | None = None  # for CAMERA_IMAGE_CAPTURED's height
 
     def on_message(self, message: MavMessage) -> None:
         kind = message.get_type()
@@ -295,6 +299,7 @@ class EventSource:
             self.emit("mission", f"reached mission item {number}", None, mission_item=number)
         elif kind == "GLOBAL_POSITION_INT" and (message.lat or message.lon):
             self._position = (message.lat / 1e7, message.lon / 1e7, message.relative_alt / 1000.0)
+            self._home_msl = message.alt / 1000.0 - message.relative_alt / 1000.0
         elif kind == "CAMERA_FEEDBACK" and int(message.flags) == CAMERA_FEEDBACK_PHOTO:
             # ArduPilot sends one per shutter release (AP_Camera), to every GCS link: the
             # photo's place for the survey's progress and the flight log.
@@ -306,11 +311,31 @@ class EventSource:
                     alt_rel=float(message.alt_rel),
                 )
             )
+        elif (
+            kind == "CAMERA_IMAGE_CAPTURED"
+            and from_autopilot(message)
+            and int(message.capture_result) != CAPTURE_FAILED
+        ):
+            # PX4's camera_feedback sends one per shutter release, to every GCS link, with
+            # where it was; its CAMERA_TRIGGER (the same index) may have come first.
+            index = int(message.image_index)
+            if (message.lat or message.lon) and self._shutters.is_new(kind, index, now):
+                self._photo(
+                    Photo(
+                        index=index,
+                        lat=message.lat / 1e7,
+                        lon=message.lon / 1e7,
+                        alt_rel=captured_alt_rel(message, self._home_msl),
+                    )
+                )
         elif kind == "CAMERA_TRIGGER" and self._position is not None:
-            # PX4's camera_trigger sends one per shutter release, without a position: the
-            # latest one the autopilot streamed (a tenth of a second old at 10 Hz).
-            lat, lon, alt_rel = self._position
-            self._photo(Photo(index=int(message.seq), lat=lat, lon=lon, alt_rel=alt_rel))
+            # PX4's camera_trigger sends one per shutter release (where the agent asks for
+            # it), without a position: the latest one the autopilot streamed (a tenth of
+            # a second old at 10 Hz).
+            index = int(message.seq)
+            if self._shutters.is_new(kind, index, now):
+                lat, lon, alt_rel = self._position
+                self._photo(Photo(index=index, lat=lat, lon=lon, alt_rel=alt_rel))
 
     def _photo(self, photo: Photo) -> None:
         self.emit(

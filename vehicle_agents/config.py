@@ -125,7 +125,8 @@ class AgentSettings(BaseSettings):
     camera: str | None = Field(
         default=None,
         description="a nadir camera whose photos the autopilot's camera trigger "
-        "(CAMERA_FEEDBACK) takes: sim+http://HOST:PORT for the simulator's (gcs sim "
+        "(CAMERA_FEEDBACK; PX4: CAMERA_TRIGGER, CAMERA_IMAGE_CAPTURED) takes: sim+http://HOST:PORT "
+        "for the simulator's (gcs sim "
         "--camera), opencv:DEVICE for a USB/CSI camera (opencv:0, opencv:/dev/video2; needs "
         "OpenCV, the agent's `camera` extra)",
     )

@@ -44,6 +44,13 @@ DEFAULT_RATES_HZ: Mapping[str, float] = {
     "HOME_POSITION": 0.2,
 }
 
+# Messages PX4 sends on an event, not a clock, that its normal GCS link leaves out
+# (mavlink_main.cpp streams CAMERA_TRIGGER only to onboard links): asked for with
+# SET_MESSAGE_INTERVAL, at a rate no trigger sequence reaches, so each shutter's is sent
+# (a slower rate would hold back one of two triggers a millisecond apart). Not watched:
+# silence is no fault.
+PX4_EVENT_RATES_HZ: Mapping[str, float] = {"CAMERA_TRIGGER": 100.0}
+
 # REQUEST_DATA_STREAM's groups, as ArduPilot fills them (GCS_Common.cpp, the
 # STREAM_*_msgs tables; ArduCopter 4.x). Messages in no group (HOME_POSITION,
 # EXTENDED_SYS_STATE) can only be had through SET_MESSAGE_INTERVAL or on request.
@@ -259,7 +266,20 @@ class StreamRequester:
                     "%s at %g Hz not set: %s", request.message, request.rate_hz, _result(result)
                 )
         log.info("requested %d message rates with SET_MESSAGE_INTERVAL", len(self.plan))
+        await self._request_events()
         return "message_interval"
+
+    async def _request_events(self) -> None:
+        modes = self.link.modes
+        if modes is None or modes.autopilot != "px4":
+            return  # ArduPilot sends its camera's CAMERA_FEEDBACK to every link unasked
+        for name, rate in PX4_EVENT_RATES_HZ.items():
+            request = StreamRequest(name, message_id(name), rate)
+            result = await self._set_interval(request)
+            if result == mavlink2.MAV_RESULT_ACCEPTED:
+                log.info("asked PX4 for %s", name)
+            else:
+                log.warning("PX4 did not take the request for %s: %s", name, _result(result))
 
     async def _set_interval(self, request: StreamRequest) -> int | None:
         """The MAV_RESULT of one SET_MESSAGE_INTERVAL, or None if never acknowledged."""

@@ -331,3 +331,45 @@ def test_px4s_camera_trigger_becomes_a_camera_event_where_the_drone_was() -> Non
         }
 
     asyncio.run(run())
+
+
+def captured(index: int, lat: int = LAT) -> MavMessage:
+    """PX4's CAMERA_IMAGE_CAPTURED (camera_feedback), level and facing north, 30.25 m
+    above home; its relative_alt is the rangefinder's (-1 m: none)."""
+    return mavlink2.MAVLink_camera_image_captured_message(
+        42_000, 0, 0, lat, LON, 614_500, -1000, [1.0, 0.0, 0.0, 0.0], index, 1, b""
+    )
+
+
+def test_px4s_two_messages_of_a_shutter_are_one_camera_event_and_a_close_pair_two() -> None:
+    """PX4 tells of each shutter with CAMERA_TRIGGER (where asked for) and
+    CAMERA_IMAGE_CAPTURED, with one index: one event each, whichever comes first or alone;
+    a lane end's two shutters a millisecond apart are two."""
+
+    async def run() -> None:
+        with ScriptedFlightController(autopilot=PX4) as fcu:
+            async with agent_on(fcu) as agent:
+                fcu.push(
+                    mavlink2.MAVLink_global_position_int_message(
+                        1000, LAT, LON, 614_500, 30_250, 0, 0, 0, 0
+                    ),
+                    mavlink2.MAVLink_camera_trigger_message(0, 0),
+                    captured(0),
+                    mavlink2.MAVLink_camera_trigger_message(0, 1),  # the lane end's pair
+                    mavlink2.MAVLink_camera_trigger_message(0, 2),
+                    captured(1),
+                    captured(2),
+                    captured(3, lat=LAT + 100),  # no CAMERA_TRIGGER: the link never asked
+                )
+                events = await agent.events(4)
+                await agent.no_more_events()
+        assert [e["kind"] for e in events] == ["camera"] * 4
+        assert [e["photo"]["index"] for e in events] == [0, 1, 2, 3]
+        assert events[3]["photo"] == {
+            "index": 3,
+            "lat": (LAT + 100) / 1e7,
+            "lon": LON / 1e7,
+            "alt_rel": 30.25,
+        }
+
+    asyncio.run(run())

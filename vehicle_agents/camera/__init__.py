@@ -2,8 +2,9 @@
 
 - `sources`: where the image comes from, behind one interface (the simulator's rendered
   view, or a USB/CSI camera through OpenCV);
-- `trigger`: when: the autopilot's CAMERA_FEEDBACK (ArduPilot) or CAMERA_TRIGGER (PX4),
-  and the pose at the exposure instant;
+- `trigger`: when: the autopilot's CAMERA_FEEDBACK (ArduPilot) or CAMERA_TRIGGER and
+  CAMERA_IMAGE_CAPTURED (PX4, one shutter however many tell of it), and the pose at the
+  exposure instant;
 - `geotag`: EXIF and XMP in the JPEG, as OpenDroneMap reads them;
 - `queue`: the photos waiting on the onboard disk, within a budget;
 - `upload`: resumable HTTP uploads to the hub, bounded so telemetry keeps its bandwidth.

@@ -6,12 +6,14 @@ autopilot fire the camera, and it says so at the shutter, in its own way:
 - ArduPilot's AP_Camera sends CAMERA_FEEDBACK, with its shot counter (``img_idx``, from 1)
   and the vehicle's position and attitude at that instant;
 - PX4's camera_trigger module sends CAMERA_TRIGGER, with its sequence number (``seq``,
-  from 0) and the exposure's UTC (``time_usec``, 0 without a GPS time), but no pose: the
-  pose is interpolated from the streams to the instant the trigger reached the agent.
+  from 0) but no pose (the agent asks for it: PX4 streams it to a GCS link only on
+  request), and its camera_feedback module CAMERA_IMAGE_CAPTURED, with the same number
+  (``image_index``), the position and the attitude (a quaternion) at the shutter.
 
-Each is one photo: the source takes (or fetches) it, the pose at its exposure is found,
-and the JPEG is geotagged and queued for upload. An autopilot sends one or the other,
-never both, so a shot is never counted twice.
+Each shutter is one photo, whichever of its messages comes first (`ShutterMatcher`
+matches PX4's two by their index): the source takes (or fetches) it, the pose at its
+exposure is found, and the JPEG is geotagged and queued for upload. A trigger that makes
+no photo says why, in an event and the log, and is counted in `CameraStats`.
 """
 
 from __future__ import annotations
@@ -21,7 +23,7 @@ import logging
 import math
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 from protocol.photos import PhotoMeta, PhotoPose
@@ -29,10 +31,17 @@ from vehicle_agents.camera.geotag import NotAJpeg, geotag
 from vehicle_agents.camera.queue import PhotoQueue
 from vehicle_agents.camera.sources import CameraSource, Capture, CaptureError, Shot
 from vehicle_agents.sensors.fcu_time import PoseHistory
+from vehicle_agents.shutters import (
+    MATCH_WINDOW_S,
+    ShutterMatcher,
+    captured_alt_rel,
+    from_autopilot,
+)
 
 log = logging.getLogger(__name__)
 
 CAMERA_FEEDBACK_PHOTO = 0  # CAMERA_FEEDBACK_FLAGS: a photo (not video, not a bad capture)
+CAPTURE_FAILED = 0  # CAMERA_IMAGE_CAPTURED.capture_result: 1 success, 0 failure
 SHOT_QUEUE = 64  # triggers waiting for their photo; more are dropped and counted
 POSE_WAIT_S = 0.5  # how long a photo waits for the flight controller's pose to cover it
 POSE_POLL_S = 0.02
@@ -49,6 +58,8 @@ class CameraStats:
     capture_failed: int = 0
     no_pose: int = 0
     dropped_triggers: int = 0
+    failed_on_board: int = 0  # the camera said the capture failed (CAMERA_IMAGE_CAPTURED)
+    repeats: int = 0  # a second message of a shutter already counted (PX4 sends two)
 
 
 class CameraTrigger:
@@ -75,6 +86,11 @@ class CameraTrigger:
         self._wall = wall
         self._shots: asyncio.Queue[Shot] = asyncio.Queue(maxsize=SHOT_QUEUE)
         self._home_msl: float | None = None  # for the height above home of interpolated poses
+        self._shutters = ShutterMatcher()
+        # CAMERA_IMAGE_CAPTURED's poses (and arrivals) for shots whose CAMERA_TRIGGER
+        # came first, the newest SHOT_QUEUE of them
+        self._late_poses: dict[int, tuple[float, PhotoPose]] = {}
+        self._photo_ids: set[str] = set()  # taken in this run: no photo overwrites another
         self.stats = CameraStats()
 
     def on_message(self, message: Any) -> None:
@@ -82,17 +98,61 @@ class CameraTrigger:
         if kind == "GLOBAL_POSITION_INT" and (message.lat or message.lon):
             self._home_msl = message.alt / 1000.0 - message.relative_alt / 1000.0
         elif kind == "CAMERA_FEEDBACK" and int(message.flags) == CAMERA_FEEDBACK_PHOTO:
-            self._triggered(self.shot_of(message))
+            self._triggered(kind, self.shot_of(message))
         elif kind == "CAMERA_TRIGGER":
-            self._triggered(self.shot_of_trigger(message))
+            self._triggered(kind, self.shot_of_trigger(message))
+        elif kind == "CAMERA_IMAGE_CAPTURED" and from_autopilot(message):
+            self._captured(message)
 
-    def _triggered(self, shot: Shot) -> None:
+    def _captured(self, message: Any) -> None:
+        shot = self.shot_of_captured(message)
+        if int(message.capture_result) != CAPTURE_FAILED:
+            self._triggered("CAMERA_IMAGE_CAPTURED", shot)
+            return
+        if self._shutters.is_new("CAMERA_IMAGE_CAPTURED", shot.index, shot.arrived):
+            self.stats.triggers += 1
+            self.stats.failed_on_board += 1
+            self._notify(f"photo {shot.index} not taken: the camera failed", SEVERITY_WARNING)
+
+    def _triggered(self, kind: str, shot: Shot) -> None:
+        if not self._shutters.is_new(kind, shot.index, shot.arrived):
+            self.stats.repeats += 1
+            if shot.feedback_pose is not None:  # the better pose, for the shot still waiting
+                self._late_poses[shot.index] = (shot.arrived, shot.feedback_pose)
+                while len(self._late_poses) > SHOT_QUEUE:
+                    del self._late_poses[next(iter(self._late_poses))]
+            return
         self.stats.triggers += 1
         try:
             self._shots.put_nowait(shot)
         except asyncio.QueueFull:
             self.stats.dropped_triggers += 1
-            log.warning("camera: shot %d dropped, %d waiting", shot.index, SHOT_QUEUE)
+            self._notify(
+                f"photo {shot.index} not taken: {SHOT_QUEUE} triggers already wait for the "
+                f"camera ({self.stats.dropped_triggers} dropped so far)",
+                SEVERITY_WARNING,
+            )
+
+    def shot_of_captured(self, message: Any) -> Shot:
+        """PX4's CAMERA_IMAGE_CAPTURED: the camera_feedback module's record of the shutter,
+        with the vehicle's position and attitude (camera_feedback copies them from the
+        estimator at the trigger)."""
+        time_utc = int(message.time_utc)
+        utc = time_utc / 1e6 if time_utc / 1e6 > PLAUSIBLE_EPOCH_S else self._wall()
+        pose = None
+        if message.lat or message.lon:  # 0, 0: no position to give
+            roll, pitch, yaw = _euler(message.q)
+            pose = PhotoPose(
+                lat=message.lat / 1e7,
+                lon=message.lon / 1e7,
+                alt_msl=message.alt / 1000.0,
+                alt_rel=captured_alt_rel(message, self._home_msl),
+                roll=_degrees(math.degrees(roll), 180.0),
+                pitch=max(-90.0, min(90.0, math.degrees(pitch))),
+                yaw=math.degrees(yaw) % 360.0,
+                time=utc,
+            )
+        return Shot(int(message.image_index), self._monotonic(), utc, pose)
 
     def shot_of_trigger(self, message: Any) -> Shot:
         """PX4's CAMERA_TRIGGER: no pose in it, so the photo is posed from the streams at
@@ -125,6 +185,13 @@ class CameraTrigger:
     async def run(self) -> None:
         while True:
             shot = await self._shots.get()
+            late = self._late_poses.pop(shot.index, None)
+            if (
+                late is not None
+                and shot.feedback_pose is None
+                and abs(late[0] - shot.arrived) <= MATCH_WINDOW_S  # not a rebooted counter's
+            ):
+                shot = replace(shot, feedback_pose=late[1])
             try:
                 await self.take(shot)
             except CaptureError as error:
@@ -150,12 +217,26 @@ class CameraTrigger:
         tagged = await asyncio.to_thread(
             geotag, capture.jpeg, pose, camera, model=type(self.source).__name__
         )
-        photo_id = f"{self.vehicle_id}-{round(pose.time * 1000)}-{shot.index:05d}"
+        photo_id = self._photo_id(pose.time, shot.index)
         meta = PhotoMeta(
             photo_id=photo_id, index=shot.index, size_bytes=len(tagged), pose=pose, camera=camera
         )
         await asyncio.to_thread(self.queue.put, meta, tagged)
         self.stats.queued += 1
+        return photo_id
+
+    def _photo_id(self, utc: float, index: int) -> str:
+        """The photo's id: the vehicle, the exposure's millisecond and the shot counter,
+        told apart from any earlier photo of this run with the same (two shutters in one
+        millisecond with one number), which the queue would otherwise overwrite."""
+        base = f"{self.vehicle_id}-{round(utc * 1000)}-{index:05d}"
+        photo_id, n = base, 1
+        while photo_id in self._photo_ids:
+            n += 1
+            photo_id = f"{base}-{n}"
+        if n > 1:
+            log.warning("photo %s: another photo has its id; kept as %s", base, photo_id)
+        self._photo_ids.add(photo_id)
         return photo_id
 
     async def pose_of(self, shot: Shot, capture: Capture) -> PhotoPose | None:
@@ -197,6 +278,15 @@ class CameraTrigger:
             yaw=math.degrees(pose.yaw) % 360.0,
             time=utc,
         )
+
+
+def _euler(q: Any) -> tuple[float, float, float]:
+    """Roll, pitch and yaw (radians) of a MAVLink quaternion (w, x, y, z; body to NED)."""
+    w, x, y, z = (float(v) for v in q)
+    roll = math.atan2(2.0 * (w * x + y * z), 1.0 - 2.0 * (x * x + y * y))
+    pitch = math.asin(max(-1.0, min(1.0, 2.0 * (w * y - z * x))))
+    yaw = math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
+    return roll, pitch, yaw
 
 
 def _degrees(value: float, half_turn: float) -> float:

@@ -19,6 +19,7 @@ from pydantic import BaseModel, Field
 from starlette.convertors import Convertor, register_url_convertor
 
 from backend.api.deps import HubDep
+from backend.api.responses import ErrorMessage
 from backend.api.security import CurrentPrincipal, SecuredRouter, requires
 from backend.auth.policy import Permission
 from backend.errors import Conflict, InvalidRequest, RequestTooLarge
@@ -364,6 +365,7 @@ def _area_file_json(kind: str, text: str, max_vertices: int) -> bytes:
         409: {
             "description": "A `.plan` or `.waypoints` file for a vehicle that has not "
             "reported its home yet (both files carry it)",
+            "model": ErrorMessage,
         },
     },
 )

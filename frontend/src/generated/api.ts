@@ -6999,7 +6999,9 @@ export interface operations {
                 headers: {
                     [name: string]: unknown;
                 };
-                content?: never;
+                content: {
+                    "application/json": components["schemas"]["ErrorMessage"];
+                };
             };
             /**
              * @description A value the route cannot take (each field and rule named), or a command refused by the safety rails (every rule listed). Refused with 422 though the schema allows it:

@@ -17,6 +17,12 @@ personality maps its flight modes to and from the autopilot's encoding, as a GCS
   set-home sent as COMMAND_INT is taken only in MAV_FRAME_GLOBAL_INT (MAV_RESULT 9,
   COMMAND_UNSUPPORTED_MAV_FRAME, for any other frame). Its parameters have PX4's names
   and types, integers sent bytewise (`px4_params`, `param_wire`).
+
+Manual control: ArduCopter flies MANUAL_CONTROL from SYSID_MYGCS only, as an RC override,
+and without one its LOITER flies SITL's transmitter (throttle at its minimum: it sinks).
+PX4 takes it from any sender when COM_RC_IN_MODE lets MAVLink input in, refuses POSCTL in
+the air until some has come, and when it stops flies NAV_RCL_ACT after COM_RC_LOSS_T +
+COM_FAIL_ACT_T unless COM_RCL_EXCEPT exempts the mode (bit 0 Mission, bit 1 Hold).
 """
 
 from __future__ import annotations

@@ -85,8 +85,11 @@ def test_the_demo_sets_its_vehicles_up_for_the_agent(frame: str) -> None:
     unset = build_vehicle(parse_args(["--frame", frame]))
     assert unset.param_table.get("SYSID_MYGCS") == 255
     assert not _stick_input_from_the_agent(unset)
-    # PX4 checks no sender id: nothing to set, and no SYSID_MYGCS to set it in.
-    assert "--param" not in FleetPlan(autopilots=("px4",)).vehicle_sim_args(0)
+    # PX4 checks no sender id, but its deadman hold must be exempt from its
+    # manual-control-loss failsafe (COM_RCL_EXCEPT bit 1, Hold).
+    px4 = FleetPlan(autopilots=("px4",)).vehicle_sim_args(0)
+    assert px4[-2:] == ["--param", "COM_RCL_EXCEPT=2"]
+    assert build_vehicle(parse_args(px4)).param_table.get("COM_RCL_EXCEPT") == 2
     assert "--param" not in FleetPlan(gcs_configured=False).vehicle_sim_args(0)
 
 

@@ -37,6 +37,9 @@ VEHICLE_SPACING_M = 15.0
 # The agents' MAVLink system id (the agent's own default, given explicitly so that the
 # vehicles' setup below names the same one).
 AGENT_SYSTEM_ID = 254
+# PX4's COM_RCL_EXCEPT with bit 1 set: Hold is exempt from the manual-control-loss
+# failsafe (the agent refuses manual control without it).
+PX4_RCL_EXCEPT_HOLD = 1 << 1
 
 
 def free_port() -> int:
@@ -72,7 +75,9 @@ class FleetPlan:
     # autopilot takes the agent's stick input and counts its heartbeats for the GCS
     # failsafe. The simulator keeps ArduPilot's default, 255, which is what a vehicle not
     # yet set up has; False leaves it there. (PX4 checks no sender id: its
-    # COM_RC_IN_MODE default already lets MAVLink stick input in.)
+    # COM_RC_IN_MODE default already lets MAVLink stick input in; but COM_RCL_EXCEPT = 2
+    # exempts Hold from its manual-control-loss failsafe, so that the agent's deadman
+    # hold stays a hold, where PX4's default 0 returns home.)
     gcs_configured: bool = True
 
     @property
@@ -131,6 +136,8 @@ class FleetPlan:
         autopilot = self.autopilots[index] if index < len(self.autopilots) else "ardupilot"
         if self.gcs_configured and autopilot == "ardupilot":
             args += ["--param", f"SYSID_MYGCS={AGENT_SYSTEM_ID}"]
+        if self.gcs_configured and autopilot == "px4":
+            args += ["--param", f"COM_RCL_EXCEPT={PX4_RCL_EXCEPT_HOLD}"]
         return args
 
     def vehicle_home(self, index: int) -> tuple[float, float, float]:

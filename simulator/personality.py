@@ -22,6 +22,12 @@ personality maps its flight modes to and from the autopilot's encoding, as a GCS
   and types, integers sent bytewise (`px4_params`, `param_wire`). Its camera tells of
   a shutter with CAMERA_IMAGE_CAPTURED, and with CAMERA_TRIGGER where a GCS asked for it,
   never with ArduPilot's CAMERA_FEEDBACK.
+
+Manual control: ArduCopter flies MANUAL_CONTROL from SYSID_MYGCS only, as an RC override,
+and without one its LOITER flies SITL's transmitter (throttle at its minimum: it sinks).
+PX4 takes it from any sender when COM_RC_IN_MODE lets MAVLink input in, refuses POSCTL in
+the air until some has come, and when it stops flies NAV_RCL_ACT after COM_RC_LOSS_T +
+COM_FAIL_ACT_T unless COM_RCL_EXCEPT exempts the mode (bit 0 Mission, bit 1 Hold).
 """
 
 from __future__ import annotations
@@ -42,6 +48,10 @@ from simulator.mavconst import (
 from simulator.param_table import ParamTable
 from simulator.params import CopterParams
 from simulator.px4_params import Px4ParamTable
+
+Sticks = tuple[int, int, int, int]  # MANUAL_CONTROL's x, y, z, r
+# ArduPilot SITL's RC input: roll, pitch and yaw at mid stick, the throttle at its minimum.
+TRANSMITTER_STICKS: Sticks = (0, 0, 0, 0)
 
 # PX4's MIS_TAKEOFF_ALT: how high a take-off without an altitude climbs.
 PX4_TAKEOFF_ALT_M = 2.5
@@ -135,6 +145,29 @@ class Personality(ABC):
         """Whether a COMMAND_INT reposition or set-home in ``frame`` is taken."""
         return True
 
+    @abstractmethod
+    def takes_manual_control(self, sender: int, params: CopterParams, table: ParamTable) -> bool:
+        """Whether a MANUAL_CONTROL from system ``sender`` is flown."""
+
+    def transmitter_sticks(self) -> Sticks | None:
+        """What a pilot mode flies with no fresh MANUAL_CONTROL; None: it holds."""
+        return None
+
+    def sticks_fly(self, mode: CopterMode) -> bool:
+        """Whether the copter's LOITER flies the sticks in the mode it reports now."""
+        return True
+
+    def needs_manual_input(self, request: ModeRequest, table: ParamTable) -> bool:
+        """Whether the mode asked for needs manual input the autopilot must have had."""
+        return False
+
+    def manual_loss_action(
+        self, mode: CopterMode, silent_s: float, table: ParamTable
+    ) -> CopterMode | None:
+        """The mode a manual-control-loss failsafe switches to, manual input having
+        been silent for ``silent_s``; None: no failsafe (yet)."""
+        return None
+
 
 class ArduCopterPersonality(Personality):
     autopilot = MavAutopilot.ARDUPILOTMEGA
@@ -180,6 +213,15 @@ class ArduCopterPersonality(Personality):
             return Declined(MavResult.DENIED)
         return ModeRequest(custom_mode, (custom_mode, 0))
 
+    def takes_manual_control(self, sender: int, params: CopterParams, table: ParamTable) -> bool:
+        # GCS_MAVLINK::handle_manual_control: only from SYSID_MYGCS, else ignored
+        return sender == params.sysid_mygcs
+
+    def transmitter_sticks(self) -> Sticks | None:
+        """RC input with no override: SITL's transmitter has its sticks centred and the
+        throttle at its minimum (RC3 1000 us), so LOITER descends at PILOT_SPEED_DN."""
+        return TRANSMITTER_STICKS
+
     def allows_arming(self, mode: CopterMode) -> bool:
         # Mode::allows_arming is false in RTL, LAND, AUTO and BRAKE
         return mode not in (CopterMode.RTL, CopterMode.LAND, CopterMode.AUTO, CopterMode.BRAKE)
@@ -207,6 +249,10 @@ _PX4_REPORTED: dict[CopterMode, tuple[int, int]] = {
     CopterMode.RTL: (Px4MainMode.AUTO, Px4AutoMode.RTL),
     CopterMode.LAND: (Px4MainMode.AUTO, Px4AutoMode.LAND),
 }
+# COM_RC_IN_MODE values that take MAVLink manual input: 1 MAVLink only, 2 and 3 RC too
+_PX4_MAVLINK_INPUT = (1, 2, 3)
+# NAV_RCL_ACT: what the manual-control-loss failsafe flies
+_PX4_RCL_ACTIONS = {1: CopterMode.LOITER, 2: CopterMode.RTL, 3: CopterMode.LAND}
 _TAKEOFF = (int(Px4MainMode.AUTO), int(Px4AutoMode.TAKEOFF))
 _HOLD = (int(Px4MainMode.AUTO), int(Px4AutoMode.LOITER))
 _AUTO_FLAGS = ModeFlag.AUTO_ENABLED | ModeFlag.STABILIZE_ENABLED | ModeFlag.GUIDED_ENABLED
@@ -301,6 +347,35 @@ class Px4Personality(Personality):
 
     def new_param_table(self, params: CopterParams, system_id: int) -> ParamTable:
         return Px4ParamTable(params, system_id)
+
+    def takes_manual_control(self, sender: int, params: CopterParams, table: ParamTable) -> bool:
+        """MavlinkReceiver::handle_message_manual_control checks only the target; the
+        manual control selector takes MAVLink input if COM_RC_IN_MODE lets it in."""
+        return round(table.get("COM_RC_IN_MODE") or 0) in _PX4_MAVLINK_INPUT
+
+    def sticks_fly(self, mode: CopterMode) -> bool:
+        # Hold (AUTO.LOITER) flies no sticks; POSCTL does
+        return self._wire(mode, taking_off=False)[0] == Px4MainMode.POSCTL
+
+    def needs_manual_input(self, request: ModeRequest, table: ParamTable) -> bool:
+        """Position mode (mode_util's mode_req_manual_control) is refused in the air until
+        manual input has come: TEMPORARILY_REJECTED."""
+        return request.wire[0] == Px4MainMode.POSCTL
+
+    def manual_loss_action(
+        self, mode: CopterMode, silent_s: float, table: ParamTable
+    ) -> CopterMode | None:
+        """The manual-control-loss failsafe: input silent for COM_RC_LOSS_T is lost, and
+        COM_FAIL_ACT_T later NAV_RCL_ACT's mode is flown (1 Hold, 2 Return, 3 Land; the
+        Hold delay is left out), unless COM_RCL_EXCEPT exempts the mode now flown."""
+        lost_after = (table.get("COM_RC_LOSS_T") or 0.0) + (table.get("COM_FAIL_ACT_T") or 0.0)
+        if silent_s <= lost_after or mode in (CopterMode.RTL, CopterMode.LAND):
+            return None
+        exempt = round(table.get("COM_RCL_EXCEPT") or 0)
+        wire = self._wire(mode, taking_off=False)
+        if (exempt & 1 and mode is CopterMode.AUTO) or (exempt & 2 and wire == _HOLD):
+            return None
+        return _PX4_RCL_ACTIONS.get(round(table.get("NAV_RCL_ACT") or 0))
 
     def position_frame_ok(self, frame: int) -> bool:
         """MavlinkReceiver::handle_message_command_int: a position command is taken in

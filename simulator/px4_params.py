@@ -18,16 +18,24 @@ INT32_MIN, INT32_MAX = -(2**31), 2**31 - 1
 PX4_PARAM_DEFS: tuple[ParamDef, ...] = (
     ParamDef("BAT1_CAPACITY", ParamType.REAL32, -1, 100_000, "batt_capacity"),
     ParamDef("CAL_ACC0_ID", ParamType.INT32, INT32_MIN, INT32_MAX, default=1310988),
+    # The failsafe's delay in Hold before its action (the manual-control-loss one here)
+    ParamDef("COM_FAIL_ACT_T", ParamType.REAL32, 0, 25, default=5.0),
     ParamDef("COM_FLTMODE1", ParamType.INT32, -1, 13, default=-1),
     ParamDef("COM_LOW_BAT_ACT", ParamType.INT32, 0, 3),  # reported, not simulated
+    # Modes exempt from the manual-control-loss failsafe: bit 0 Mission, 1 Hold, 2 Offboard
+    ParamDef("COM_RCL_EXCEPT", ParamType.INT32, 0, 31, default=0),
     # PX4 1.14's default: RC or MAVLink manual input, whichever comes first
     ParamDef("COM_RC_IN_MODE", ParamType.INT32, 0, 4, default=3),
+    # Manual input this long silent is lost
+    ParamDef("COM_RC_LOSS_T", ParamType.REAL32, 0, 35, default=0.5),
     ParamDef("MAV_SYS_ID", ParamType.INT32, 1, 250),
     ParamDef("MIS_TAKEOFF_ALT", ParamType.REAL32, 0, 80, default=2.5),
     ParamDef("MPC_XY_CRUISE", ParamType.REAL32, 3, 20, "wpnav_speed"),
     ParamDef("MPC_Z_VEL_MAX_DN", ParamType.REAL32, 0.5, 4, "wpnav_speed_dn"),
     ParamDef("MPC_Z_VEL_MAX_UP", ParamType.REAL32, 0.5, 8, "wpnav_speed_up"),
     ParamDef("NAV_DLL_ACT", ParamType.INT32, 0, 6),
+    # The manual-control-loss failsafe's action: 0 none, 1 Hold, 2 Return, 3 Land
+    ParamDef("NAV_RCL_ACT", ParamType.INT32, 0, 6, default=2),
     ParamDef("RTL_RETURN_ALT", ParamType.REAL32, 0, 150, "rtl_alt"),
     ParamDef("SDLOG_UTC_OFFSET", ParamType.INT32, -1000, 1000),
 )

@@ -11,9 +11,18 @@ reason instead of streaming frames the autopilot would drop:
 - PX4 takes it only when ``COM_RC_IN_MODE`` allows MAVLink input: 1 (MAVLink only),
   2 (RC and MAVLink with fallback) or 3 (RC or MAVLink, keep first); 0 is RC only and
   4 disables manual input. PX4 checks only the target system, not the sender's id.
+  And when the input stops (the deadman's case) PX4's manual-control-loss failsafe
+  flies ``NAV_RCL_ACT`` (Return by default) ``COM_RC_LOSS_T`` + ``COM_FAIL_ACT_T`` later,
+  unless ``COM_RCL_EXCEPT`` exempts the mode flown: the deadman's Hold must be (bit 1),
+  or the hold the lease promises turns into a flight home.
 
 It then switches to a pilot mode (ArduPilot LOITER, PX4 POSCTL), which pauses a mission
 in progress; the mission resumes from the same item when its mode (AUTO) is set again.
+Centred sticks at mid throttle (x, y, r 0, z 500: hold position and height) stream at
+the stream's rate from the start, before and after the switch, until the browser's
+first frame: PX4 refuses POSCTL in the air (TEMPORARILY_REJECTED) before it has had
+manual input, and ArduPilot in LOITER flies the RC transmitter's throttle until an
+override comes, so a low one sinks the copter while the first frame is on its way.
 
 The agent sits next to the aircraft, so the deadman lives here: no fresh frame for
 ``deadman_s`` (0.5 s) puts the vehicle in its hold mode (Copter BRAKE, Rover HOLD,
@@ -81,6 +90,11 @@ PX4_MAVLINK_INPUT = {1: "MAVLink only", 2: "RC and MAVLink", 3: "RC or MAVLink, 
 # in and keeps the RC transmitter's (ArduPilot RC_OVERRIDE_TIME 3 s, PX4 COM_RC_IN_MODE 3).
 RC_OVERRIDE_TIME_DEFAULT = 3.0
 PX4_RC_IN_MODE_DEFAULT = 3
+# PX4 COM_RCL_EXCEPT's bit that exempts Hold from the manual-control-loss failsafe, and
+# the NAV_RCL_ACT values whose action leaves a hold a hold (0 none, 1 Hold).
+PX4_RCL_EXCEPT_HOLD = 1 << 1
+PX4_RCL_ACT_HOLDS = {0: "none", 1: "Hold"}
+PX4_RCL_ACT_NAMES = {2: "Return", 3: "Land", 5: "Terminate", 6: "Disarm"}
 BUTTON_SELECT = 1 << 0
 BUTTON_HOLD = 1 << 1
 SELECT_BELOW_M = 3.0  # the seed's select button acts only this close to the ground
@@ -97,6 +111,9 @@ class ManualTimeouts:
     frozen_s: float = 3.0  # a gamepad's same off-centre values this long: hold
     check_s: float = 0.05  # how often the deadman looks
     echo_s: float = 0.5  # how often a flown frame is echoed to the pilot (its delay)
+    centre_period_s: float = 0.04  # centred sticks at 25 Hz, the stream's rate
+    prime_s: float = 0.2  # centred sticks this long before the mode switch
+    switch_s: float = 1.5  # a switch TEMPORARILY_REJECTED is tried again this long
 
 
 def _off_centre(frame: ManualFrame) -> bool:
@@ -131,6 +148,7 @@ class ManualPilot:
         self._pilot_mode: str | None = None
         self._seen_pilot_mode = False  # the switch to the pilot mode has shown
         self._echoed_at = -1e9
+        self._centring: asyncio.Task[None] | None = None
         self.sent = 0
         self.ignored = 0  # frames that came with no browser control open
         link.listeners.append(self._on_message)
@@ -166,10 +184,13 @@ class ManualPilot:
         self._last_at = now + self.timeouts.first_frame_s - self.timeouts.deadman_s
         self._changed_at = now
         self.active = True
+        self._start_centring()
+        await asyncio.sleep(self.timeouts.prime_s)  # the autopilot sees manual input
         if before != pilot_mode:
-            outcome = await self._executor.execute(SetModeCommand(mode=pilot_mode))
+            outcome = await self._switch(pilot_mode)
             if outcome.status != "accepted":
                 self.active = False
+                self._stop_centring()
                 return CommandOutcome(
                     status="refused",
                     message=f"manual control: {pilot_mode} refused: {outcome.message}",
@@ -190,8 +211,39 @@ class ManualPilot:
             values={"mission_paused": 1.0} if paused is not None else None,
         )
 
+    async def _switch(self, pilot_mode: str) -> CommandOutcome:
+        """The mode change, tried again while PX4 says TEMPORARILY_REJECTED (it has not
+        seen the centred sticks yet) for up to ``switch_s``."""
+        give_up_at = self._clock() + self.timeouts.switch_s
+        while True:
+            outcome = await self._executor.execute(SetModeCommand(mode=pilot_mode))
+            retry = outcome.result == "MAV_RESULT_TEMPORARILY_REJECTED" and self.active
+            if not retry or self._clock() >= give_up_at:
+                return outcome
+            await asyncio.sleep(self.timeouts.prime_s)
+
+    def _start_centring(self) -> None:
+        self._stop_centring()
+        self._centring = asyncio.get_running_loop().create_task(self._centre())
+
+    def _stop_centring(self) -> None:
+        if self._centring is not None:
+            self._centring.cancel()
+            self._centring = None
+
+    async def _centre(self) -> None:
+        """Centred sticks, mid throttle, until the browser's first frame or the end."""
+        while self.active and self._last_seq < 0:
+            target = self._link.target_system
+            if target is not None and self._link.connected:
+                self._link.send(
+                    mavlink2.MAVLink_manual_control_message(target, 0, 0, MID_THROTTLE, 0, 0)
+                )
+            await asyncio.sleep(self.timeouts.centre_period_s)
+
     async def stop(self) -> CommandOutcome:
         """The lease was given back: the vehicle holds where it is."""
+        self._stop_centring()
         if not self.active:
             return CommandOutcome(status="accepted", message="manual control was not open")
         self.active = False
@@ -236,7 +288,28 @@ class ManualPilot:
                     f"set it to 1, 2 or 3 ({PX4_RC_IN_MODE_DEFAULT}, PX4's default, keeps RC too)",
                     ParamFix(param="COM_RC_IN_MODE", value=PX4_RC_IN_MODE_DEFAULT),
                 )
+            return await self._px4_loss_refusal()
         return None
+
+    async def _px4_loss_refusal(self) -> tuple[str, ParamFix | None] | None:
+        """Refused unless the deadman's Hold stays a hold when the input stops: PX4's
+        manual-control-loss failsafe flies NAV_RCL_ACT unless COM_RCL_EXCEPT exempts
+        Hold (bit 1) or that action is itself a hold (or none)."""
+        exempt = await self._param("COM_RCL_EXCEPT")
+        action = await self._param("NAV_RCL_ACT")
+        if exempt is None or action is None:
+            return "could not read COM_RCL_EXCEPT or NAV_RCL_ACT", None
+        bits, act = round(exempt[1]), round(action[1])
+        if bits & PX4_RCL_EXCEPT_HOLD or act in PX4_RCL_ACT_HOLDS:
+            return None
+        needed = bits | PX4_RCL_EXCEPT_HOLD
+        act_name = PX4_RCL_ACT_NAMES.get(act, "its action")
+        return (
+            f"COM_RCL_EXCEPT = {bits} does not exempt Hold from PX4's manual-control-loss "
+            f"failsafe (NAV_RCL_ACT = {act}, {act_name}): the hold after the stream stops "
+            f"would turn into it; set COM_RCL_EXCEPT to {needed} (bit 1, Hold)",
+            ParamFix(param="COM_RCL_EXCEPT", value=needed),
+        )
 
     async def _param(self, name: str) -> tuple[str, float] | None:
         outcome = await self._executor.params.read(name)
@@ -257,6 +330,7 @@ class ManualPilot:
             # No flight controller to fly: the frame is dropped, and the deadman holds the
             # vehicle if the link comes back after the stream stopped.
             return None
+        self._stop_centring()  # the browser flies from here
         now = self._clock()
         axes = frame.axes
         values = (axes.x, axes.y, axes.z, axes.r, axes.buttons)
@@ -313,6 +387,7 @@ class ManualPilot:
 
     async def _hold(self, why: str) -> None:
         self.active = False
+        self._stop_centring()
         log.warning("%s", why)
         self._emit("manual", why, ENDED_SEVERITY)
         outcome = await self._executor.execute(HoldCommand())

@@ -62,8 +62,8 @@ class MessageHandler(ArmingAndModes, Navigation, Parameters, Missions, Requests)
                 self._position_target(msg)
             return self._texts()
         if kind == "MANUAL_CONTROL":
-            # GCS_MAVLINK::handle_manual_control: only from SYSID_MYGCS, else ignored
-            sender_ok = msg.get_srcSystem() == self.copter.params.sysid_mygcs
+            # ArduPilot takes it only from SYSID_MYGCS, PX4 as COM_RC_IN_MODE says
+            sender_ok = self.copter.takes_manual_control(msg.get_srcSystem())
             if self._for_us(msg.target) and sender_ok:
                 self.copter.manual_control(int(msg.x), int(msg.y), int(msg.z), int(msg.r))
             return []

@@ -47,6 +47,7 @@ class Copter(Arming, Modes, Guided, Auto, ReturnAndLand, Failsafes):
         amps = current_draw(self.armed, self.flying, self.body.throttle, p.hover_throttle)
         self.battery.step(DT, amps, p.sim_batt_drain)
         self._check_battery()
+        self._check_manual_loss()
         self._step_sensors()
 
     def _loiter_sticks(self, sticks: tuple[int, int, int, int]) -> Setpoint:
@@ -120,7 +121,12 @@ class Copter(Arming, Modes, Guided, Auto, ReturnAndLand, Failsafes):
         if self.mode is CopterMode.GUIDED:
             return self._guided_setpoint()
         # LOITER, and AUTO without a mission (only reachable by a forced arm): hold
-        if self.mode is CopterMode.LOITER and (sticks := self.overridden_sticks()) is not None:
-            return self._loiter_sticks(sticks)
+        if self.mode is CopterMode.LOITER and self.personality.sticks_fly(self.mode):
+            # A GCS's take-off climbs on; after it the transmitter's sticks rule (ArduPilot's
+            # throttle at its minimum descends) unless a GCS overrides them.
+            transmitter = None if self._taking_off else self.personality.transmitter_sticks()
+            sticks = self.overridden_sticks() or transmitter
+            if sticks is not None:
+                return self._loiter_sticks(sticks)
         speed = self.params.wpnav_speed
         return Setpoint(self._hold_ne, self._hold_alt, speed_xy=speed, face_travel=False)

@@ -47,11 +47,24 @@ class Modes(CopterState):
             return request.result
         if request.takeoff:
             return self._autopilot_takeoff(PX4_TAKEOFF_ALT_M)
+        if (
+            self.armed
+            and self.personality.needs_manual_input(request, self.param_table)
+            and not self._manual_input_fresh()
+        ):
+            self._say(Severity.CRITICAL, "Switching to Position is currently not possible")
+            self._say(Severity.CRITICAL, "No manual control input")
+            return self.personality.declined
         result = self.set_mode(request.mode)
         if result is not MavResult.ACCEPTED:
             return self.personality.declined
         self.personality.selected(request)
         return result
+
+    def _manual_input_fresh(self) -> bool:
+        """Manual input has come within COM_RC_LOSS_T (0.5 s, PX4's default)."""
+        timeout = self.param_table.get("COM_RC_LOSS_T") or 0.5
+        return self._sticks is not None and self.time_s - self._sticks_at <= timeout
 
     def _mode_command(self, mode: CopterMode) -> MavResult:
         result = self.set_mode(mode)

@@ -93,6 +93,9 @@ class CopterState(Vehicle):
     def manual_mode(self) -> bool:
         return self.mode is CopterMode.STABILIZE
 
+    def takes_manual_control(self, sender: int) -> bool:
+        return self.personality.takes_manual_control(sender, self.params, self.param_table)
+
     @property
     def flying(self) -> bool:
         return self.armed and not self.land_complete

@@ -338,6 +338,10 @@ class VehicleState(ABC):
         """Integer parameters travel bytewise (PX4), not cast to float (ArduPilot)."""
         return False
 
+    def takes_manual_control(self, sender: int) -> bool:
+        """GCS_MAVLINK::handle_manual_control: only from SYSID_MYGCS, else ignored."""
+        return sender == self.params.sysid_mygcs
+
     def manual_control(self, x: int, y: int, z: int, r: int) -> None:
         """MANUAL_CONTROL from the GCS, already checked against SYSID_MYGCS: an RC
         override of pitch (x), roll (y), throttle (z, 0..1000) and yaw (r)."""
@@ -346,7 +350,7 @@ class VehicleState(ABC):
 
     def overridden_sticks(self) -> tuple[int, int, int, int] | None:
         """The GCS's sticks while fresh: RC_OVERRIDE_TIME after the last one they lapse
-        and the transmitter's (centred, here) rule again; a negative time never lapses."""
+        and the transmitter's rule again (the personality's); a negative time never lapses."""
         timeout = self.params.rc_override_time
         if self._sticks is None or (0 <= timeout < self.time_s - self._sticks_at):
             return None

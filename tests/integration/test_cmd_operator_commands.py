@@ -251,7 +251,11 @@ def test_a_bad_mission_item_is_refused_with_its_index(
 
 def test_the_fleet_plan_can_name_frames(tmp_path: Path) -> None:
     plan = FleetPlan(data_dir=tmp_path, frames=("quad", "rover"), autopilots=("px4",))
-    assert plan.vehicle_sim_args(0) == ["--frame", "quad", "--autopilot", "px4"]
-    # An ArduPilot vehicle is set up for the agent as a user would set up a real one.
+    # Each vehicle is set up for the agent as a user would set up a real one: PX4's
+    # deadman hold exempt from its manual-control-loss failsafe, ArduPilot's GCS id.
+    assert plan.vehicle_sim_args(0) == [
+        *("--frame", "quad", "--autopilot", "px4"),
+        *("--param", "COM_RCL_EXCEPT=2"),
+    ]
     assert plan.vehicle_sim_args(1) == ["--frame", "rover", "--param", "SYSID_MYGCS=254"]
     assert plan.vehicle_sim_args(2) == ["--param", "SYSID_MYGCS=254"]

@@ -214,6 +214,17 @@ def test_the_agent_refuses_a_lease_the_autopilot_would_ignore(
             assert "COM_RC_IN_MODE = 0" in refused["reason"], refused
             assert refused["fix"] == {"param": "COM_RC_IN_MODE", "value": 3}
             set_param(api, PX4_VEHICLE, "COM_RC_IN_MODE", 3)
+            # PX4's manual-control-loss failsafe would turn the deadman's Hold into a
+            # Return (NAV_RCL_ACT 2) unless COM_RCL_EXCEPT exempts Hold (bit 1): the fix
+            # adds that bit to what is set (here bit 0, Mission).
+            set_param(api, PX4_VEHICLE, "COM_RCL_EXCEPT", 1)
+            px4.received.clear()
+            refused = px4.take()
+            assert "COM_RCL_EXCEPT = 1 does not exempt Hold" in refused["reason"], refused
+            assert "NAV_RCL_ACT = 2, Return" in refused["reason"]
+            assert "set COM_RCL_EXCEPT to 3" in refused["reason"]
+            assert refused["fix"] == {"param": "COM_RCL_EXCEPT", "value": 3}
+            set_param(api, PX4_VEHICLE, "COM_RCL_EXCEPT", 3)
             px4.received.clear()
             granted = px4.take()
             assert granted["type"] == "lease", granted
@@ -223,6 +234,40 @@ def test_the_agent_refuses_a_lease_the_autopilot_would_ignore(
         finally:
             pilot.close()
             px4.close()
+
+
+def test_taking_a_hovering_arducopter_holds_its_height_until_the_first_frame(
+    flying: tuple[LocalFleet, str],
+) -> None:
+    """ArduCopter's LOITER flies the transmitter's throttle until an override comes (SITL's
+    sits at its minimum: a real copter sank 2.8 m). The agent streams centred sticks at
+    mid throttle from the lease's start, so a first frame 1.5 s late costs no height."""
+    fleet, token = flying
+    base = fleet.plan.hub_http
+    with FleetWatcher(base, token) as watcher:
+        watcher.wait_until(ready(VEHICLE), 10, "the fleet")
+        start_alt = watcher.state(VEHICLE)["alt_rel"]
+        assert start_alt > 9.0
+        pilot = Pilot(base, token)
+        try:
+            assert pilot.take()["holder"] == "admin"
+            granted_at = time.monotonic()
+            heights: list[float] = []
+
+            def late_first_frame(vehicles: dict[str, Any]) -> bool:
+                state = vehicles[VEHICLE]["state"]
+                if state["mode"] == "LOITER":
+                    heights.append(state["alt_rel"])
+                return time.monotonic() - granted_at > 1.5 and len(heights) > 2
+
+            watcher.wait_until(late_first_frame, 10, "1.5 s of the lease in LOITER")
+            pilot.stick(0)  # the browser's first frame, late
+            lost = start_alt - min(heights)
+            assert lost < 0.3, (start_alt, heights)
+            pilot.control("release")
+            poll_until(lambda: pilot.leases(None, "released by admin"), 10, "the release")
+        finally:
+            pilot.close()
 
 
 def metres_moved(before: dict[str, Any], after: dict[str, Any]) -> tuple[float, float]:
@@ -571,6 +616,63 @@ def test_the_select_and_hold_buttons(flying: tuple[LocalFleet, str]) -> None:
             ground.control("release")
             high.close()
             ground.close()
+
+
+def test_a_flying_px4_is_taken_by_hand_and_its_deadman_hold_stays_a_hold(
+    flying: tuple[LocalFleet, str],
+) -> None:
+    """PX4 refuses POSCTL in the air (TEMPORARILY_REJECTED) until it has had manual
+    input: the agent's centred sticks come first. When the stream stops, the deadman's
+    Hold stays a hold past PX4's manual-control-loss failsafe (COM_RC_LOSS_T +
+    COM_FAIL_ACT_T, shortened to 1 s here), for COM_RCL_EXCEPT exempts Hold."""
+    fleet, token = flying
+    base = fleet.plan.hub_http
+    with FleetWatcher(base, token) as watcher, api_client(base, token) as api:
+        watcher.wait_until(ready(PX4_VEHICLE), 10, "the PX4 vehicle")
+        set_param(api, PX4_VEHICLE, "COM_RCL_EXCEPT", 2)  # as the refusal's fix sets it
+        set_param(api, PX4_VEHICLE, "COM_FAIL_ACT_T", 1.0)
+        assert send_command(api, PX4_VEHICLE, name="arm")["status"] == "accepted"
+        assert send_command(api, PX4_VEHICLE, name="takeoff", altitude=4)["status"] == "accepted"
+        watcher.wait_until(
+            lambda v: (
+                v[PX4_VEHICLE]["state"]["mode"] == "LOITER"
+                and (v[PX4_VEHICLE]["state"]["alt_rel"] or 0) > 3.5
+            ),
+            60,
+            "the PX4 vehicle hovering in Hold",
+        )
+        pilot = Pilot(base, token, vehicle=PX4_VEHICLE, source="touch")
+        stop = threading.Event()
+        streamer = threading.Thread(target=pilot.stream, args=(stop, 0), daemon=True)
+        try:
+            lease = pilot.take()
+            assert lease["type"] == "lease", lease
+            assert lease["holder"] == "admin"
+            streamer.start()
+            watcher.wait_until(
+                lambda v: v[PX4_VEHICLE]["state"]["mode"] == "POSCTL", 5, "Position mode"
+            )
+            poll_until(lambda: pilot.said("manual_echo"), 5, "a flown frame")
+            stop.set()
+            streamer.join(5)
+            watcher.wait_until(
+                lambda v: v[PX4_VEHICLE]["state"]["mode"] == "LOITER", 5, "the deadman's Hold"
+            )
+            poll_until(lambda: pilot.leases(None, "stopped for"), 5, "the lease to end")
+            # Past the failsafe's 1.5 s from the last frame (and a second more), still Hold.
+            modes: set[str] = set()
+
+            def past_the_failsafe(vehicles: dict[str, Any]) -> bool:
+                modes.add(vehicles[PX4_VEHICLE]["state"]["mode"])
+                return time.monotonic() - pilot.last_sent_at > 2.5
+
+            watcher.wait_until(past_the_failsafe, 10, "the failsafe's time to pass")
+            assert modes == {"LOITER"}, modes
+        finally:
+            stop.set()
+            if streamer.is_alive():
+                streamer.join(5)
+            pilot.close()
 
 
 def test_a_lease_survives_a_hub_restart_only_as_revoked(flying: tuple[LocalFleet, str]) -> None:

@@ -9,9 +9,12 @@ import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from gcs.launcher import AGENT_SYSTEM_ID, FleetPlan
-from simulator import Copter, CopterMode, MavResult, main
+from simulator import DEFAULT_HOME, Copter, CopterMode, MavResult, main
 from simulator.commands.handler import MessageHandler
 from simulator.config import parse_args
+from simulator.mavconst import ModeFlag, Px4AutoMode, Px4MainMode
+from simulator.param_table import SetOutcome
+from simulator.personality import Px4Personality
 from simulator.telemetry import TelemetryBuilder
 from simulator.vehicle import Vehicle
 from simulator.vehicles import build_vehicle
@@ -82,8 +85,11 @@ def test_the_demo_sets_its_vehicles_up_for_the_agent(frame: str) -> None:
     unset = build_vehicle(parse_args(["--frame", frame]))
     assert unset.param_table.get("SYSID_MYGCS") == 255
     assert not _stick_input_from_the_agent(unset)
-    # PX4 checks no sender id: nothing to set, and no SYSID_MYGCS to set it in.
-    assert "--param" not in FleetPlan(autopilots=("px4",)).vehicle_sim_args(0)
+    # PX4 checks no sender id, but its deadman hold must be exempt from its
+    # manual-control-loss failsafe (COM_RCL_EXCEPT bit 1, Hold).
+    px4 = FleetPlan(autopilots=("px4",)).vehicle_sim_args(0)
+    assert px4[-2:] == ["--param", "COM_RCL_EXCEPT=2"]
+    assert build_vehicle(parse_args(px4)).param_table.get("COM_RCL_EXCEPT") == 2
     assert "--param" not in FleetPlan(gcs_configured=False).vehicle_sim_args(0)
 
 
@@ -105,3 +111,64 @@ def test_a_boot_parameter_the_vehicle_cannot_take_stops_the_simulator(
 def test_a_boot_parameter_must_be_name_equals_value(capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["--param", "SYSID_MYGCS"]) == 2
     assert "expected NAME=VALUE" in capsys.readouterr().err
+
+
+def test_arducopter_loiter_flies_the_transmitter_throttle_until_overridden() -> None:
+    """SITL's transmitter sits at minimum throttle: LOITER entered before any override
+    descends (the 2.8 m a late first frame cost); centred sticks at mid throttle hold."""
+    copter = in_loiter()
+    start_alt = copter.body.alt
+    copter.advance(2.0)
+    assert start_alt - copter.body.alt > 1.5
+    copter = in_loiter()
+    start_alt = copter.body.alt
+    for _ in range(50):  # 2 s of centred sticks at 25 Hz
+        copter.manual_control(0, 0, 500, 0)
+        copter.advance(0.04)
+    assert abs(copter.body.alt - start_alt) < 0.1
+
+
+def px4_hovering() -> Copter:
+    """A PX4 copter hovering at 10 m in Hold (AUTO.LOITER)."""
+    px4 = Copter(DEFAULT_HOME, personality=Px4Personality())
+    assert px4.set_mode(CopterMode.GUIDED) is MavResult.ACCEPTED
+    assert px4.arm() is MavResult.ACCEPTED
+    assert px4.takeoff(10.0) is MavResult.ACCEPTED
+    run_until(px4, lambda c: abs(c.body.alt - 10.0) < 0.05 and abs(c.body.vd) < 0.05, 60)
+    assert px4_mode(px4, Px4MainMode.AUTO, Px4AutoMode.LOITER) is MavResult.ACCEPTED
+    px4.drain_texts()
+    return px4
+
+
+def px4_mode(copter: Copter, main_mode: int, sub_mode: int = 0) -> MavResult:
+    return copter.request_mode(ModeFlag.CUSTOM_MODE_ENABLED, main_mode, sub_mode)
+
+
+def test_px4_takes_position_mode_in_the_air_only_with_manual_input() -> None:
+    """Commander refuses POSCTL (TEMPORARILY_REJECTED) until manual input has come within
+    COM_RC_LOSS_T; on the ground it is taken; MAVLink input comes from any sender."""
+    copter = px4_hovering()
+    assert px4_mode(copter, Px4MainMode.POSCTL) is MavResult.TEMPORARILY_REJECTED
+    assert "No manual control input" in [text.text for text in copter.drain_texts()]
+    assert _stick_input_from_the_agent(copter)  # PX4 checks no SYSID_MYGCS
+    assert px4_mode(copter, Px4MainMode.POSCTL) is MavResult.ACCEPTED
+    ground = Copter(DEFAULT_HOME, personality=Px4Personality())
+    assert px4_mode(ground, Px4MainMode.POSCTL) is MavResult.ACCEPTED
+
+
+@pytest.mark.parametrize(("exempt", "mode_after"), [(0, CopterMode.RTL), (2, CopterMode.LOITER)])
+def test_px4_manual_control_loss_returns_unless_hold_is_exempt(
+    exempt: int, mode_after: CopterMode
+) -> None:
+    """Manual input that stops is lost after COM_RC_LOSS_T; COM_FAIL_ACT_T later PX4 flies
+    NAV_RCL_ACT (Return) unless COM_RCL_EXCEPT exempts the mode (bit 1: Hold)."""
+    copter = px4_hovering()
+    assert copter.set_param("COM_RCL_EXCEPT", exempt) is SetOutcome.STORED
+    copter.manual_control(0, 0, 500, 0)
+    assert px4_mode(copter, Px4MainMode.POSCTL) is MavResult.ACCEPTED
+    copter.advance(0.5)
+    assert px4_mode(copter, Px4MainMode.AUTO, Px4AutoMode.LOITER) is MavResult.ACCEPTED
+    copter.advance(5.0)  # COM_RC_LOSS_T 0.5 s + COM_FAIL_ACT_T 5 s from the last input
+    assert copter.mode is CopterMode.LOITER
+    copter.advance(0.2)
+    assert copter.mode is mode_after

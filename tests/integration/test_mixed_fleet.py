@@ -253,8 +253,16 @@ def test_a_px4_survey_starts_as_qgc_starts_a_mission_mission_mode_then_arm(
     and PX4 does not arm itself in it: the survey's launch sets it, then arms, and the
     copter takes off on the mission's take-off item and flies its lanes."""
     api, watcher = clients
+    # On the ground as the survey judges it: disarmed, and landed by the autopilot's word
+    # (a landing just ended still reads "landing" for a moment).
     watcher.wait_until(
-        lambda v: ready(PX4)(v) and not state_of(v, PX4).get("armed"), 120, "on the ground"
+        lambda v: (
+            ready(PX4)(v)
+            and not state_of(v, PX4).get("armed")
+            and state_of(v, PX4).get("landed_state") == "on_ground"
+        ),
+        120,
+        "on the ground",
     )
     state = listed_once_ready(clients, PX4, "the PX4 copter")["state"]
     created = api.post("/api/v1/surveys", json=survey_north_of(state["lat"], state["lon"]))

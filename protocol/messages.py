@@ -351,7 +351,8 @@ class ManualStopCommand(Message):
     name: Literal["manual_stop"] = "manual_stop"
 
 
-Command = Annotated[
+# Every command but the two that come with the manual-control lease.
+_NOT_LEASE_COMMANDS = (
     ArmCommand
     | DisarmCommand
     | TakeoffCommand
@@ -370,8 +371,10 @@ Command = Annotated[
     | MissionDownloadCommand
     | MissionClearCommand
     | MissionSetCurrentCommand
-    | ManualStartCommand
-    | ManualStopCommand,
+)
+
+Command = Annotated[
+    _NOT_LEASE_COMMANDS | ManualStartCommand | ManualStopCommand,
     Field(discriminator="name"),
 ]
 
@@ -398,24 +401,7 @@ def _not_lease_only(value: object) -> object:
 # manual_stop, which open and close with the manual-control lease (the live feed's
 # 'control' message), so the API's schema does not offer them.
 ClientCommand = Annotated[
-    ArmCommand
-    | DisarmCommand
-    | TakeoffCommand
-    | LandCommand
-    | ReturnToLaunchCommand
-    | SetModeCommand
-    | GotoCommand
-    | HoldCommand
-    | ChangeSpeedCommand
-    | SetHomeCommand
-    | RebootCommand
-    | ParamListCommand
-    | ParamGetCommand
-    | ParamSetCommand
-    | MissionUploadCommand
-    | MissionDownloadCommand
-    | MissionClearCommand
-    | MissionSetCurrentCommand,
+    _NOT_LEASE_COMMANDS,
     # Not Field(discriminator=...): FastAPI lifts a Field out of a body parameter's
     # Annotated, which would leave the validator below outside the tagged union.
     Discriminator("name"),

@@ -76,7 +76,9 @@ async def _run(settings: AgentSettings) -> None:
     async with asyncio.TaskGroup() as tasks:
         tasks.create_task(link.run())
         if settings.mavlink_forward:  # third-party GCSs, from the start, whatever the hub does
-            tasks.create_task(MavlinkForwarder(link, settings.mavlink_forward).run())
+            # One set of rates for the agent and the GCSs: the forward merges theirs in.
+            forward = MavlinkForwarder(link, settings.mavlink_forward, streams.merger)
+            tasks.create_task(forward.run())
         tasks.create_task(streams.run())  # on every link up
         log.info("waiting for a heartbeat from %s", settings.fcu)
         await link.wait_identified()

@@ -17,7 +17,15 @@ answer reaches only the GCS that asked, and the agent's own exchanges with the v
 (addressed to its ``source_system``) reach no GCS. A frame that comes back carrying the
 autopilot's own ids is a routing loop: it is dropped and counted.
 
-Frames travel unchanged (their sequence numbers and signatures too). The vehicle's are
+Rate requests are the exception: the flight controller keeps one set of stream rates per
+link, shared by the agent and every GCS behind it, so a GCS's REQUEST_DATA_STREAM and
+SET_MESSAGE_INTERVAL (COMMAND_LONG or COMMAND_INT) go through ``RateMerger``
+(streams.py): the flight controller is sent the highest rate each stream needs, once, and
+a SET_MESSAGE_INTERVAL asking for no more than is already set is answered ACCEPTED here,
+on the autopilot's behalf, and not sent on. Otherwise MAVProxy's REQUEST_DATA_STREAM every
+~15 s lowered the agent's position rate, and the two asked in turn forever.
+
+Other frames travel unchanged (their sequence numbers and signatures too). The vehicle's are
 sent from the FCU reader thread, through a tap, with a non-blocking ``sendto``: there is
 no queue and no thread per GCS, a datagram the kernel will not take is dropped and
 counted, and a GCS that is gone can never stall the reader. A GCS's frames are read on the
@@ -30,6 +38,7 @@ import asyncio
 import contextlib
 import ipaddress
 import logging
+import math
 import socket
 import threading
 from collections.abc import Callable, Sequence
@@ -39,6 +48,7 @@ from typing import Any, Protocol
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from vehicle_agents.fcu_link import MavMessage
+from vehicle_agents.streams import RateMerger, StreamRequest
 
 log = logging.getLogger(__name__)
 
@@ -55,9 +65,15 @@ class VehicleLink(Protocol):
 
     source_system: int
     source_component: int
+    target_system: int | None
+    target_component: int
     taps: list[Callable[[MavMessage], None]]
 
     def write_frame(self, frame: bytes) -> None: ...
+
+    def send(self, message: MavMessage) -> None: ...
+
+    def send_command_long(self, command: int, confirmation: int, params: list[float]) -> None: ...
 
 
 @dataclass(frozen=True)
@@ -271,8 +287,12 @@ class Endpoint:
 class MavlinkForwarder:
     """Routes MAVLink between the flight controller and third-party GCS endpoints."""
 
-    def __init__(self, link: VehicleLink, endpoints: Sequence[str]) -> None:
+    def __init__(
+        self, link: VehicleLink, endpoints: Sequence[str], merger: RateMerger | None = None
+    ) -> None:
         self.link = link
+        # The agent's StreamRequester shares it: the agent's own rates are merged in too.
+        self.merger = merger if merger is not None else RateMerger()
         self.endpoints = [Endpoint(EndpointAddress.parse(text)) for text in endpoints]
         self.vehicle = Heard()  # the ids heard from the flight controller's side
         self._open: list[Endpoint] = []
@@ -362,8 +382,69 @@ class MavlinkForwarder:
                         routed = True
                 if not routed:
                     endpoint.counters.unrouted += 1
-            if to_vehicle:
+            if to_vehicle and not self._rate_request(endpoint, message, ids, target_system):
                 self._to_vehicle(endpoint, frame)
+
+    def _rate_request(
+        self, endpoint: Endpoint, message: MavMessage, ids: Ids, target_system: int
+    ) -> bool:
+        """A GCS's stream-rate request, merged; True when it was dealt with here (the
+        merged rates sent, the GCS answered), False when its frame goes on as it is."""
+        if target_system not in (0, self.link.target_system):
+            return False  # another system's: not this flight controller's rates
+        kind = message.get_type()
+        try:
+            if kind == "REQUEST_DATA_STREAM":
+                if message.start_stop not in (0, 1):
+                    return False  # ArduPilot ignores it: let it
+                changed = self.merger.data_stream(
+                    ids,
+                    int(message.req_stream_id),
+                    int(message.req_message_rate),
+                    message.start_stop == 1,
+                )
+                target = (self.link.target_system or 1, self.link.target_component)
+                for group, rate in changed.items():
+                    self.link.send(
+                        mavlink2.MAVLink_request_data_stream_message(
+                            *target, group, rate, 1 if rate > 0 else 0
+                        )
+                    )
+                return True
+            if (
+                kind in ("COMMAND_LONG", "COMMAND_INT")
+                and message.command == mavlink2.MAV_CMD_SET_MESSAGE_INTERVAL
+                and math.isfinite(message.param1)
+                and math.isfinite(message.param2)
+            ):
+                msg_id = int(message.param1)
+                answer = self.merger.message_interval(ids, msg_id, float(message.param2))
+                if answer.forward:
+                    return False
+                if answer.send_hz is not None:
+                    merged = StreamRequest("", msg_id, answer.send_hz)
+                    self.link.send_command_long(
+                        mavlink2.MAV_CMD_SET_MESSAGE_INTERVAL, 0, [msg_id, merged.interval_us]
+                    )
+                self._answer(endpoint, ids, mavlink2.MAV_CMD_SET_MESSAGE_INTERVAL)
+                return True
+        except (ConnectionError, OSError) as error:
+            with self._lock:
+                endpoint.counters.dropped += 1
+            log.debug("%s: rate request for the vehicle dropped: %s", endpoint, error)
+            return True
+        return False
+
+    def _answer(self, endpoint: Endpoint, ids: Ids, command: int) -> None:
+        """COMMAND_ACK ACCEPTED to the GCS, from the autopilot's ids, as it would answer."""
+        sender = mavlink2.MAVLink(
+            None, self.link.target_system or 1, self.link.target_component or 1
+        )
+        ack = mavlink2.MAVLink_command_ack_message(
+            command, mavlink2.MAV_RESULT_ACCEPTED, 0, 0, ids[0], ids[1]
+        )
+        with self._lock:
+            endpoint.deliver(ack.pack(sender))
 
     def _to_vehicle(self, endpoint: Endpoint, frame: bytes) -> None:
         try:

@@ -6,7 +6,8 @@ often as the zoom is below the native one) is warped with one cv2.warpPerspectiv
 canvas aligned with the tile grid, then cut into tiles and blended into what they hold:
 
 - Nearest nadir wins: each tile pixel remembers how far (in pixels) it lies from the nadir
-  of the photo that painted it; a new photo takes the pixels it sees from nearer, so the
+  of the photo that painted it (measured from the tile's corner, so float32 holds it to a
+  fraction of a pixel at every zoom); a new photo takes the pixels it sees from nearer, so the
   mosaic is made of each photo's least tilted, least distorted middle.
 - Feathered seams: the take-over is a linear ramp of the difference of the two
   distances (2 x FEATHER_PX wide), and a photo's own edges fade in over EDGE_RAMP_PX, so
@@ -129,8 +130,11 @@ def _apply_zoom(
         piece = canvas[top : top + TILE_PX, left : left + TILE_PX]
         if not piece[:, :, 3].any():
             return None
-        dx = (tx * TILE_PX + cols + 0.5 - nadir_x)[None, :]
-        dy = (ty * TILE_PX + cols + 0.5 - nadir_y)[:, None]
+        # The tile's offset from the nadir in float64 first, then per pixel in float32: a
+        # global pixel number near zoom 22 is up to 1.1e9, where float32 steps by 64 px
+        # (the seams were staircases of such blocks); the offsets are a few thousand px.
+        dx = (cols + np.float32(tx * TILE_PX + 0.5 - nadir_x))[None, :]
+        dy = (cols + np.float32(ty * TILE_PX + 0.5 - nadir_y))[:, None]
         distances = np.sqrt(dx * dx + dy * dy)
         key = (zoom, tx, ty)
         blended = _blend(store.read(key), piece, distances)

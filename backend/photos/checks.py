@@ -15,6 +15,7 @@ from shapely.geometry import Point
 
 from backend.missions.survey.camera import preset
 from backend.missions.survey.run import SurveyRun, geometry
+from backend.missions.survey.schemas import ManualCamera
 from protocol.photos import CameraIntrinsics, PhotoPose
 
 
@@ -41,11 +42,14 @@ class Refused(Exception):
         return self.reason
 
 
-def survey_image_size(run: SurveyRun) -> tuple[int, int]:
+def survey_image_size(run: SurveyRun) -> tuple[int, int] | None:
+    """The survey camera's image size; None for a manual camera (it has no figures)."""
     camera = run.request.camera
     if isinstance(camera, str):
         model = preset(camera)
         return model.image_width_px, model.image_height_px
+    if isinstance(camera, ManualCamera):
+        return None
     return camera.image_width_px, camera.image_height_px
 
 
@@ -63,8 +67,9 @@ def check_against_survey(
             f"outside survey {run.id}'s area (at most {margin_m:.0f} m is taken)",
         )
     size = (camera.image_width_px, camera.image_height_px)
-    if size != survey_image_size(run):
-        width, height = survey_image_size(run)
+    expected = survey_image_size(run)
+    if expected is not None and size != expected:
+        width, height = expected
         raise Refused(
             Refusal.WRONG_IMAGE_SIZE,
             f"the photo's camera is {size[0]}x{size[1]} px; survey {run.id}'s camera "

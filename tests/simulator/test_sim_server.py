@@ -20,6 +20,7 @@ from pymavlink import mavutil
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from simulator import ListenAddress, SimulatorConfig, SimulatorServer
+from simulator.clock import Clock
 
 REPO_ROOT = Path(__file__).resolve().parents[2]
 SYSID = 7
@@ -204,9 +205,18 @@ def test_refusals_reach_the_client_with_their_reason() -> None:
 
 
 @contextmanager
-def serving(config: SimulatorConfig) -> Iterator[tuple[SimulatorServer, ListenAddress]]:
-    """A SimulatorServer on its own event loop thread; yields it and its bound address."""
-    server = SimulatorServer(config)
+def serving(
+    config: SimulatorConfig,
+    *,
+    clock: Clock | None = None,
+    wall_clock: Callable[[], float] | None = None,
+) -> Iterator[tuple[SimulatorServer, ListenAddress]]:
+    """A SimulatorServer on its own event loop thread; yields it and its bound address.
+    ``clock`` and ``wall_clock`` replace its clocks (a test runs its streams faster)."""
+    if wall_clock is None:
+        server = SimulatorServer(config, clock=clock)
+    else:
+        server = SimulatorServer(config, clock=clock, wall_clock=wall_clock)
     loop = asyncio.new_event_loop()
     started: queue.Queue[ListenAddress | BaseException] = queue.Queue()
 

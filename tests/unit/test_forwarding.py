@@ -141,6 +141,7 @@ class FakeVehicleLink:
     """The flight controller link, as forwarding sees it; records what it must write."""
 
     source_system, source_component = AGENT
+    target_system, target_component = VEHICLE
 
     def __init__(self) -> None:
         self.taps: list[Callable[[MavMessage], None]] = []
@@ -151,6 +152,14 @@ class FakeVehicleLink:
         if self.down:
             raise ConnectionError("flight controller link is down")
         self.written.put_nowait(bytes(frame))
+
+    def send(self, message: MavMessage) -> None:
+        """The agent's own frame (from its ids), as FcuLink.send writes it."""
+        self.write_frame(encode(message, AGENT))
+
+    def send_command_long(self, command: int, confirmation: int, params: list[float]) -> None:
+        padded = [float(value) for value in params] + [0.0] * (7 - len(params))
+        self.send(mavlink2.MAVLink_command_long_message(*VEHICLE, command, confirmation, *padded))
 
     async def tap(self, message: MavMessage) -> None:
         """Hand a vehicle frame to the taps from another thread, as the reader does."""

@@ -9,8 +9,11 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from vehicle_agents.stream_watch import RateWatch, RateWatchSettings
 from vehicle_agents.streams import (
+    ALL_GROUPS,
     DATA_STREAM_GROUPS,
     DEFAULT_RATES_HZ,
+    IntervalAnswer,
+    RateMerger,
     StreamRequest,
     data_stream_rates,
     message_id,
@@ -149,3 +152,60 @@ def test_messages_not_yet_seen_or_stopped_are_not_judged() -> None:
     watch.watch(stream_plan({"GLOBAL_POSITION_INT": 0.2}))
     arrive(watch, clock, 0.2, 20)
     assert watch.due() == []
+
+
+# -- the rates of everyone on the link, merged -------------------------------------------
+
+MAVPROXY = (250, 230)
+QGC = (255, 190)
+GPI = mavlink2.MAVLINK_MSG_ID_GLOBAL_POSITION_INT
+
+
+def _merger() -> RateMerger:
+    merger = RateMerger()
+    merger.set_agent(stream_plan({}))
+    return merger
+
+
+def test_a_gcs_data_stream_request_is_merged_with_the_agents_needs_and_sent_once() -> None:
+    merger = _merger()
+    changed = merger.data_stream(MAVPROXY, mavlink2.MAV_DATA_STREAM_ALL, 4, True)
+    # ArduPilot's ALL sets every group: none below what the agent needs of it.
+    assert changed[mavlink2.MAV_DATA_STREAM_POSITION] == 10
+    assert changed[mavlink2.MAV_DATA_STREAM_EXTRA1] == 10
+    assert changed[mavlink2.MAV_DATA_STREAM_EXTRA2] == 4
+    assert changed[mavlink2.MAV_DATA_STREAM_RAW_SENSORS] == 4
+    assert len(changed) == len(ALL_GROUPS)
+    # MAVProxy asks again every ~15 s: nothing new, nothing sent.
+    assert merger.data_stream(MAVPROXY, mavlink2.MAV_DATA_STREAM_ALL, 4, True) == {}
+    assert merger.absorbed == 1
+    # A second GCS wants more of one group, then stops it: the group follows the highest.
+    extra3 = mavlink2.MAV_DATA_STREAM_EXTRA3
+    assert merger.data_stream(QGC, extra3, 8, True) == {extra3: 8}
+    assert merger.data_stream(QGC, extra3, 0, False) == {extra3: 4}
+    # MAVProxy stops everything: the agent's own needs stay.
+    stopped = merger.data_stream(MAVPROXY, mavlink2.MAV_DATA_STREAM_ALL, 4, False)
+    assert mavlink2.MAV_DATA_STREAM_POSITION not in stopped  # 10 Hz, as it was
+    assert stopped[extra3] == 1  # BATTERY_STATUS, EKF_STATUS_REPORT at 1 Hz
+    assert stopped[mavlink2.MAV_DATA_STREAM_RAW_SENSORS] == 0  # nobody's: stopped
+
+
+def test_a_gcs_message_interval_is_answered_sent_on_or_merged() -> None:
+    merger = _merger()
+    merger.note_interval(GPI, 10.0)  # the agent's own, accepted
+    # Lower than the agent's: answered here, nothing sent.
+    assert merger.message_interval(MAVPROXY, GPI, 250_000) == IntervalAnswer(forward=False)
+    # Higher: the GCS's own request goes on (the autopilot answers it), once.
+    assert merger.message_interval(MAVPROXY, GPI, 50_000) == IntervalAnswer(forward=True)
+    assert merger.message_interval(MAVPROXY, GPI, 50_000) == IntervalAnswer(forward=False)
+    # Back down: the agent's 10 Hz is restored, from the agent, and the GCS answered.
+    assert merger.message_interval(MAVPROXY, GPI, 250_000) == IntervalAnswer(False, 10.0)
+    # Stopping a message the agent needs is answered, and does not stop it.
+    assert merger.message_interval(MAVPROXY, GPI, -1) == IntervalAnswer(forward=False)
+    # A message nobody else wants is the GCS's own business.
+    wind = mavlink2.MAVLINK_MSG_ID_WIND
+    assert merger.message_interval(MAVPROXY, wind, 500_000) == IntervalAnswer(forward=True)
+    assert merger.message_interval(MAVPROXY, wind, 0) == IntervalAnswer(forward=True)
+    # The link came up again: the flight controller's rates are unknown, asked anew.
+    merger.reset()
+    assert merger.message_interval(QGC, GPI, 50_000) == IntervalAnswer(forward=True)

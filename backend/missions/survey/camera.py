@@ -8,6 +8,9 @@ distance, with QGroundControl's definitions (src/MissionManager/CameraCalc.cc,
   portrait swaps the two.
 - lane spacing = side footprint * (100 - side overlap) / 100;
   trigger distance = frontal footprint * (100 - front overlap) / 100.
+
+QGC's manual camera ("Manual (no camera specs)") has no sensor: the lane spacing and trigger
+distance are given as they are (`manual`), and no GSD, footprint or overlap is known.
 """
 
 from __future__ import annotations
@@ -85,15 +88,44 @@ def preset(name: str) -> Camera:
 class CameraCalc:
     """What a camera gives at a height and overlaps, in QGC's terms."""
 
-    camera: Camera
+    camera: Camera | None  # None: a manual camera (no sensor figures)
     altitude_m: float
-    gsd_cm: float
+    gsd_cm: float | None  # None: a manual camera
     footprint_side_m: float  # across the lanes
     footprint_frontal_m: float  # along the lanes
     side_overlap_pct: float
     front_overlap_pct: float
     lane_spacing_m: float  # QGC's AdjustedFootprintSide
     trigger_distance_m: float  # QGC's AdjustedFootprintFrontal
+    # Cameras that cannot trigger on distance get DO_DIGICAM_CONTROL at each photo instead.
+    distance_trigger: bool = True
+
+
+def manual(
+    *, altitude_m: float, lane_spacing_m: float, trigger_distance_m: float, distance_trigger: bool
+) -> CameraCalc:
+    """A manual camera's plan: the spacing and trigger distance as given. Its footprints are
+    taken as the least that leaves no gap (0 % overlap, the spacing and trigger distance
+    themselves), so the coverage figures say what the plan guarantees and no more."""
+    for field, value in (
+        ("altitude_m", altitude_m),
+        ("lane_spacing_m", lane_spacing_m),
+        ("trigger_distance_m", trigger_distance_m),
+    ):
+        if not value > 0:
+            raise CameraError(f"{field} must be greater than 0, got {value}")
+    return CameraCalc(
+        camera=None,
+        altitude_m=altitude_m,
+        gsd_cm=None,
+        footprint_side_m=lane_spacing_m,
+        footprint_frontal_m=trigger_distance_m,
+        side_overlap_pct=0.0,
+        front_overlap_pct=0.0,
+        lane_spacing_m=lane_spacing_m,
+        trigger_distance_m=trigger_distance_m,
+        distance_trigger=distance_trigger,
+    )
 
 
 def calculate(
@@ -137,4 +169,5 @@ def calculate(
         front_overlap_pct=front_overlap_pct,
         lane_spacing_m=side * (100.0 - side_overlap_pct) / 100.0,
         trigger_distance_m=frontal * (100.0 - front_overlap_pct) / 100.0,
+        distance_trigger=camera.distance_trigger,
     )

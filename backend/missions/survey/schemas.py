@@ -5,9 +5,9 @@ Unknown fields, NaN and infinities are rejected, as for the missions' bodies.
 
 from __future__ import annotations
 
-from typing import Any, Literal
+from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, model_validator
+from pydantic import BaseModel, ConfigDict, Discriminator, Field, Tag, model_validator
 from pydantic.config import JsonDict
 
 from backend.missions.schemas import Mission, MissionCheckResponse
@@ -36,6 +36,42 @@ class CameraModel(_Strict):
     distance_trigger: Boolean = True
 
 
+class ManualCamera(_Strict):
+    """QGroundControl's "Manual (no camera specs)": no sensor figures, the lanes' spacing and
+    the distance between photos given directly (its AdjustedFootprintSide and
+    AdjustedFootprintFrontal), flown at altitude_m (a GSD cannot be computed)."""
+
+    lane_spacing_m: Number = Field(gt=0, le=1000, description="Distance between lanes")
+    trigger_distance_m: Number = Field(gt=0, le=1000, description="Distance between photos")
+    distance_trigger: Boolean = True
+
+
+def _camera_kind(value: Any) -> str | None:
+    """Which of the camera's forms a value is, so a refusal names the fields of that form
+    alone (not "Input should be a valid string" from the preset's branch first)."""
+    if isinstance(value, str):
+        return "preset"
+    if isinstance(value, dict):
+        return "manual" if "lane_spacing_m" in value or "trigger_distance_m" in value else "model"
+    if isinstance(value, ManualCamera):
+        return "manual"
+    if isinstance(value, CameraModel):
+        return "model"
+    return None  # pydantic refuses it: "does not match any of the expected tags"
+
+
+Camera = Annotated[
+    Annotated[str, Tag("preset")]
+    | Annotated[CameraModel, Tag("model")]
+    | Annotated[ManualCamera, Tag("manual")],
+    Discriminator(
+        _camera_kind,
+        custom_error_type="camera_kind",
+        custom_error_message="give a preset's name, the camera's figures or a manual camera",
+    ),
+]
+
+
 # "Exactly one of altitude_m and gsd_cm" (the validator below), in the schema's words.
 _ONE_HEIGHT: JsonDict = {
     "oneOf": [
@@ -52,8 +88,9 @@ class SurveyRequest(_Strict):
     model_config = ConfigDict(json_schema_extra=_ONE_HEIGHT)
 
     area: GeoJsonPolygon
-    camera: str | CameraModel = Field(
-        description="A preset's name (e.g. sony_a6000_16mm) or the camera's figures"
+    camera: Camera = Field(
+        description="A preset's name (e.g. sony_a6000_16mm), the camera's figures, or a manual "
+        "camera (lane spacing and trigger distance, with altitude_m)"
     )
     altitude_m: Number | None = Field(default=None, gt=0, description="Above home; or give gsd_cm")
     gsd_cm: Number | None = Field(
@@ -73,6 +110,8 @@ class SurveyRequest(_Strict):
     def _one_height(self) -> SurveyRequest:
         if (self.altitude_m is None) == (self.gsd_cm is None):
             raise ValueError("give exactly one of altitude_m and gsd_cm")
+        if isinstance(self.camera, ManualCamera) and self.altitude_m is None:
+            raise ValueError("a manual camera has no sensor to derive a GSD: give altitude_m")
         return self
 
 
@@ -95,7 +134,7 @@ class SurveyPart(_Strict):
 class SurveyPreview(_Strict):
     ok: bool = Field(description="True when every part's mission passes the safety rails")
     altitude_m: float
-    gsd_cm: float
+    gsd_cm: float | None = Field(description="null for a manual camera (no sensor figures)")
     footprint_side_m: float
     footprint_frontal_m: float
     lane_spacing_m: float

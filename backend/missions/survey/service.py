@@ -9,14 +9,14 @@ from dataclasses import dataclass
 
 import shapely
 
-from backend.missions.survey.camera import Camera, CameraCalc, calculate, preset
+from backend.missions.survey.camera import Camera, CameraCalc, calculate, manual, preset
 from backend.missions.survey.cancel import checkpoint
 from backend.missions.survey.geo import polygon_from_geojson
 from backend.missions.survey.limits import SurveyLimits, check_estimate, check_missions, estimate
 from backend.missions.survey.mission import survey_mission
 from backend.missions.survey.planner import PlanError, covered_fraction, swaths
 from backend.missions.survey.report import best_angle
-from backend.missions.survey.schemas import SurveyRequest
+from backend.missions.survey.schemas import ManualCamera, SurveyRequest
 from backend.missions.survey.split import Drone, Part, split
 from common.geodesy import GeoPoint, LocalFrame
 from protocol.messages import MissionItem
@@ -54,7 +54,30 @@ class Survey:
 def _camera(request: SurveyRequest) -> Camera:
     if isinstance(request.camera, str):
         return preset(request.camera)
+    assert not isinstance(request.camera, ManualCamera)
     return Camera(name="custom", **request.camera.model_dump())
+
+
+def camera_calc(request: SurveyRequest) -> CameraCalc:
+    """The request's camera at its height and overlaps; a manual camera's spacing and
+    trigger distance as given (its overlaps are not used)."""
+    camera = request.camera
+    if isinstance(camera, ManualCamera):
+        if request.altitude_m is None:  # the request's validator says so first
+            raise ValueError("a manual camera needs altitude_m")
+        return manual(
+            altitude_m=request.altitude_m,
+            lane_spacing_m=camera.lane_spacing_m,
+            trigger_distance_m=camera.trigger_distance_m,
+            distance_trigger=camera.distance_trigger,
+        )
+    return calculate(
+        _camera(request),
+        altitude_m=request.altitude_m,
+        gsd_cm=request.gsd_cm,
+        side_overlap_pct=request.side_overlap_pct,
+        front_overlap_pct=request.front_overlap_pct,
+    )
 
 
 def plan_survey(
@@ -62,15 +85,9 @@ def plan_survey(
 ) -> Survey:
     """With `limits`, the plan is estimated first and refused (PlanTooLarge) past them,
     and so is a drone's planned mission longer than its store."""
-    calc = calculate(
-        _camera(request),
-        altitude_m=request.altitude_m,
-        gsd_cm=request.gsd_cm,
-        side_overlap_pct=request.side_overlap_pct,
-        front_overlap_pct=request.front_overlap_pct,
-    )
+    calc = camera_calc(request)
     area, frame = polygon_from_geojson(request.area.model_dump())
-    per_photo = not calc.camera.distance_trigger or request.hover_and_capture
+    per_photo = not calc.distance_trigger or request.hover_and_capture
     if limits is not None:
         found = estimate(
             area, calc, drones=len(fleet), angle_deg=request.angle_deg, per_photo=per_photo
@@ -113,7 +130,7 @@ def plan_survey(
             # The drone takes off where it stands.
             takeoff=positions[p.drone.name],
             speed_ms=request.speed_ms,
-            per_photo=not calc.camera.distance_trigger,
+            per_photo=not calc.distance_trigger,
             hover=request.hover_and_capture,
         )
         planned.append(

@@ -2440,6 +2440,29 @@ export interface components {
             password: string;
         };
         /**
+         * ManualCamera
+         * @description QGroundControl's "Manual (no camera specs)": no sensor figures, the lanes' spacing and
+         *     the distance between photos given directly (its AdjustedFootprintSide and
+         *     AdjustedFootprintFrontal), flown at altitude_m (a GSD cannot be computed).
+         */
+        ManualCamera: {
+            /**
+             * Lane Spacing M
+             * @description Distance between lanes
+             */
+            lane_spacing_m: number;
+            /**
+             * Trigger Distance M
+             * @description Distance between photos
+             */
+            trigger_distance_m: number;
+            /**
+             * Distance Trigger
+             * @default true
+             */
+            distance_trigger: boolean;
+        };
+        /**
          * ManualStartCommand
          * @description Open browser control on the vehicle (the hub sends it when it grants a lease): the
          *     agent checks that the autopilot will take MANUAL_CONTROL from it (ArduPilot
@@ -3271,8 +3294,11 @@ export interface components {
             ok: boolean;
             /** Altitude M */
             altitude_m: number;
-            /** Gsd Cm */
-            gsd_cm: number;
+            /**
+             * Gsd Cm
+             * @description null for a manual camera (no sensor figures)
+             */
+            gsd_cm: number | null;
             /** Footprint Side M */
             footprint_side_m: number;
             /** Footprint Frontal M */
@@ -3307,9 +3333,9 @@ export interface components {
             area: components["schemas"]["GeoJsonPolygon"];
             /**
              * Camera
-             * @description A preset's name (e.g. sony_a6000_16mm) or the camera's figures
+             * @description A preset's name (e.g. sony_a6000_16mm), the camera's figures, or a manual camera (lane spacing and trigger distance, with altitude_m)
              */
-            camera: string | components["schemas"]["CameraModel"];
+            camera: string | components["schemas"]["CameraModel"] | components["schemas"]["ManualCamera"];
             /**
              * Altitude M
              * @description Above home; or give gsd_cm

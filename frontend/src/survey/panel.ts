@@ -290,7 +290,12 @@ export class SurveyPanel {
       else if (fields.camera) {
         this.fileCamera = fields.camera;
         this.camera.querySelector('option[value="file"]')?.remove();
-        this.camera.append(new Option(`From ${file.name}`, "file"));
+        // A QGC manual camera has no figures: its spacing and trigger distance are the plan.
+        const manual = "lane_spacing_m" in fields.camera ? fields.camera : null;
+        const label = manual
+          ? `From ${file.name} (manual: lanes ${manual.lane_spacing_m} m apart, a photo every ${manual.trigger_distance_m} m)`
+          : `From ${file.name}`;
+        this.camera.append(new Option(label, "file"));
         this.camera.value = "file";
       }
       if (fields.altitude_m != null) [this.heightKind.value, this.height.value] = ["altitude", String(fields.altitude_m)];
@@ -417,7 +422,7 @@ export class SurveyPanel {
       ["lanes", "Lanes", String(preview.lanes)],
       ["time", "Time", formatDuration(slowest)],
       ["area", "Area", formatArea(preview.area_m2)],
-      ["gsd", "GSD", `${preview.gsd_cm.toFixed(2)} cm/px`],
+      ["gsd", "GSD", preview.gsd_cm == null ? "unknown (manual camera)" : `${preview.gsd_cm.toFixed(2)} cm/px`],
       ["altitude", "Altitude", `${preview.altitude_m.toFixed(1)} m`],
       ["spacing", "Lane spacing", `${preview.lane_spacing_m.toFixed(1)} m`],
       ["trigger", "Trigger every", `${preview.trigger_distance_m.toFixed(1)} m`],

@@ -41,7 +41,7 @@ from vehicle_agents.sensors.fcu_time import FcuClock, PoseHistory, ask_timesync
 from vehicle_agents.sensors.relay import DiskBacklog, ScanOutbox, ScanRelay, parse_mount
 from vehicle_agents.sensors.ros2 import SCHEME as ROS2_SCHEME
 from vehicle_agents.sensors.ros2 import LaserScanSource
-from vehicle_agents.sensors.sources import MavlinkRangeSource, ScanSource, YdlidarSource
+from vehicle_agents.sensors.sources import MavlinkRangeSource, ScanSource, SerialLidarSource
 from vehicle_agents.shutters import ShutterMatcher, captured_alt_rel, from_autopilot
 from vehicle_agents.statustext import StatusTextJoiner
 from vehicle_agents.streams import StreamRequester
@@ -190,7 +190,13 @@ def scan_relay(settings: AgentSettings, link: FcuLink, vehicle_id: str) -> ScanR
     elif settings.lidar.startswith(ROS2_SCHEME):
         source = LaserScanSource(settings.lidar)
     else:
-        source = YdlidarSource(settings.lidar, settings.lidar_resolution_deg, settings.lidar_baud)
+        source = SerialLidarSource(
+            settings.lidar,
+            settings.lidar_resolution_deg,
+            settings.lidar_baud,
+            settings.lidar_model,
+            settings.lidar_scan_mode,
+        )
     backlog = None
     if settings.outbox_dir is not None:
         path = settings.outbox_dir / f"{vehicle_id}.scans.sqlite"

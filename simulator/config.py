@@ -232,8 +232,7 @@ def build_parser() -> argparse.ArgumentParser:
         type=_listen,
         default=None,
         metavar="tcp:HOST:PORT",
-        help="fit a 2-D LIDAR and serve its serial bytes on this TCP address (default: no "
-        "LIDAR)",
+        help="fit a 2-D LIDAR and serve its serial bytes on this TCP address (default: no LIDAR)",
     )
     parser.add_argument(
         "--lidar-format",

@@ -78,6 +78,11 @@ class ParserStats:
     responses: int = 0  # answers to the driver's commands
     drops: Counter[str] = field(default_factory=Counter)
 
+    @property
+    def skipped_bytes(self) -> int:
+        """Bytes thrown away outside a packet: noise, lost starts, unknown answers."""
+        return sum(n for reason, n in self.drops.items() if reason.endswith("_bytes"))
+
     def as_dict(self) -> dict[str, int]:
         counts = {"packets": self.packets, "points": self.points, "responses": self.responses}
         counts.update({f"dropped_{reason}": n for reason, n in sorted(self.drops.items())})

@@ -194,6 +194,7 @@ class RplidarParser(StreamParser):
                 length = ANSWERS[kind][1]
                 if buffer[at] >> 4 != 0xA or buffer[at + 1] >> 4 != 0x5:
                     self.skip(1)
+                    self._previous = None  # a capsule may be lost: its angle with it
                     at += 1
                     continue
                 if size - at < length:
@@ -204,6 +205,7 @@ class RplidarParser(StreamParser):
                     check ^= byte
                 if check != (capsule[0] & 0xF) | (capsule[1] & 0xF) << 4:
                     self.stats.drops["bad_checksum"] += 1
+                    self._previous = None  # its samples cannot be placed without this angle
                     at += 1
                     continue
                 self._capsule(kind, capsule, out)

@@ -111,6 +111,12 @@ def device_info(payload: bytes, name: str | None) -> DeviceInfo:
     )
 
 
+def wrap360(angle: float) -> float:
+    """An angle in [0, 360): Python's ``-1e-15 % 360.0`` is 360.0."""
+    angle %= 360.0
+    return 0.0 if angle >= 360.0 else angle
+
+
 class StreamParser:
     """The buffer and the never-raise guard around a family's `_parse`."""
 

@@ -49,6 +49,7 @@ from vehicle_agents.sensors.lidar.common import (
     TurnSplitter,
     descriptor_at,
     device_info,
+    wrap360,
 )
 
 SYNC = 0xA5
@@ -80,6 +81,7 @@ ANSWERS = {
 }
 SCAN_ANSWERS = (STANDARD, LEGACY_CAPSULE, ULTRA_CAPSULE, DENSE_CAPSULE)
 NODE_BYTES = 5
+MAX_ANGLE_WORD = (360 * 64) << 1  # a node's angle word from 360 degrees up
 SERIES = {1: "A1", 2: "A2", 3: "A3"}  # the model byte's high nibble, where we are sure of it
 _NODE = struct.Struct("<BHH")
 _U16 = struct.Struct("<H")
@@ -181,6 +183,10 @@ class RplidarParser(StreamParser):
                     self.skip(1, "bad_check_bits")
                     at += 1
                     continue
+                if angle >= MAX_ANGLE_WORD:  # 360 degrees or more: not a node, misaligned
+                    self.skip(1, "bad_angle")
+                    at += 1
+                    continue
                 if flags & 1 and angles:
                     out.append(Packet(zero, None, angles, distances))
                     angles, distances = [], []
@@ -273,8 +279,8 @@ def _legacy(capsule: bytes, start: float, span: float) -> tuple[list[float], lis
     for k in range(16):
         d1, d2, offsets = struct.unpack_from("<HHB", capsule, 4 + 5 * k)
         base = start + 2 * k * step
-        angles.append((base - ((offsets & 0xF) | (d1 & 3) << 4) / 8.0) % 360.0)
-        angles.append((base + step - ((offsets >> 4) | (d2 & 3) << 4) / 8.0) % 360.0)
+        angles.append(wrap360(base - ((offsets & 0xF) | (d1 & 3) << 4) / 8.0))
+        angles.append(wrap360(base + step - ((offsets >> 4) | (d2 & 3) << 4) / 8.0))
         distances.append(d1 >> 2)
         distances.append(d2 >> 2)
     return angles, distances
@@ -298,6 +304,6 @@ def _ultra(
         third = 0 if predict2 in (511, -512) else (predict2 << level2) + major2
         for i, distance in enumerate((major, max(0, second), max(0, third))):
             angle = start + (3 * k + i) * step - ultra_offset_deg(distance)
-            angles.append(angle % 360.0)
+            angles.append(wrap360(angle))
             distances.append(distance)
     return angles, distances

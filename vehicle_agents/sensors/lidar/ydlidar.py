@@ -35,6 +35,7 @@ from vehicle_agents.sensors.lidar.common import (
     StreamParser,
     descriptor_at,
     device_info,
+    wrap360,
 )
 
 HEADER = b"\xaa\x55"
@@ -171,7 +172,7 @@ class YdlidarParser(StreamParser):
             distances = [(lo | hi << 8) >> 2 for lo, hi in zip(body[0::2], body[1::2], strict=True)]
         if self.intercept:
             angles = [
-                (first + i * step + intercept_correction(d)) % 360.0
+                wrap360(first + i * step + intercept_correction(d))
                 for i, d in enumerate(distances)
             ]
         else:

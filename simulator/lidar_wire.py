@@ -76,12 +76,16 @@ def descriptor(length: int, mode: int, kind: int) -> bytes:
     return b"\xa5\x5a" + struct.pack("<IB", length | mode << 30, kind)
 
 
+TYPICAL_MM = 2000
+
+
 class RangeTable:
     """The latest range of every beam of a turn, for formats whose decoder moves each
     sample's angle by an amount that depends on its range (YDLIDAR X4's intercept
     correction, Slamtec's ultra capsules). The sensor sends evenly spaced nominal angles;
     the sample at nominal angle a must hold the range seen at a + shift(range), which is
-    found by iterating from the beam at a (the shift changes slowly with range)."""
+    found by iterating from the beam at a (the shift changes slowly with range); a
+    sample for which no range is consistent is sent as no return."""
 
     def __init__(self, beams: int) -> None:
         self.ranges = [0] * beams
@@ -92,15 +96,22 @@ class RangeTable:
             self.ranges[i] = distance
 
     def solve(self, angle_deg: float, shift: Callable[[int], float]) -> int:
+        """The range for the sample at nominal ``angle_deg``: one whose shifted angle
+        points at a beam of that range. Tried from the beam at the nominal angle and from
+        the beam a typical range's shift away (from a no-return beam alone, "no return"
+        would be trivially consistent); a sample for which no range is consistent (an
+        object's edge) is sent as no return."""
         beams = len(self.ranges)
-        distance = self.ranges[round(angle_deg / self._step) % beams]
-        for _ in range(4):
-            at = round((angle_deg + shift(distance)) / self._step) % beams
-            found = self.ranges[at]
-            if found == distance:
-                break
-            distance = found
-        return distance
+        for start in (angle_deg, angle_deg + shift(TYPICAL_MM)):
+            distance = self.ranges[round(start / self._step) % beams]
+            for _ in range(4):
+                found = self.ranges[round((angle_deg + shift(distance)) / self._step) % beams]
+                if found == distance:
+                    if distance:
+                        return distance
+                    break
+                distance = found
+        return 0
 
 
 def millimetres(beams: Beams) -> list[int]:

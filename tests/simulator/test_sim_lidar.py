@@ -15,8 +15,8 @@ from simulator import ListenAddress, SimulatorConfig, SimulatorServer
 from simulator.lidar import Lidar, LidarSpec, Pose
 from simulator.world import Cylinder, World, box, load_scene, wall
 from simulator.ydlidar_wire import encode_beams, health
-from vehicle_agents.sensors.sources import Turn, TurnAssembler
 from vehicle_agents.sensors.lidar.ydlidar import GET_HEALTH, START_SCAN, YdlidarParser
+from vehicle_agents.sensors.sources import Turn, TurnAssembler
 
 EXACT = LidarSpec(noise_sigma_m=0.0, dropout=0.0)
 

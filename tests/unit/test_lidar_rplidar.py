@@ -141,7 +141,8 @@ def test_legacy_express_capsules_interpolate_between_start_angles_less_the_compe
         # a turn starts where the angle passes 0 (about sample 20: 360 - 350 = 10 = 20 x 0.5,
         # give or take the compensations)
         zero = [p for p in packets if p.zero]
-        assert len(zero) == 1 and zero[0].angles_deg[0] < 8.0
+        assert len(zero) == 1
+        assert zero[0].angles_deg[0] < 8.0
 
 
 def test_dense_capsules_are_40_evenly_spaced_millimetre_distances() -> None:

@@ -36,6 +36,7 @@ ATTEMPT_MODEL = {"rplidar": "rplidar-a1", "ydlidar": "ydlidar-tmini-pro", "ldlid
 LISTEN_S = 1.5  # long enough for a sensor to answer and send a few hundred points
 TURN_WAIT_S = 3.0  # after recognition, for a whole turn (a slow head turns at 5 Hz)
 MIN_POINTS = 50
+RATE_WINDOW_S = 1.0  # the points per second are counted over at least this
 SECTORS = 12
 
 
@@ -128,21 +129,30 @@ def _attempt(link: Link, family: str, baud: int | None) -> ProbeResult | None:
         time.sleep(0.05)
     packets: list[Packet] = []
     recognised = False
-    first_at: float | None = None
+    first: tuple[float, int] | None = None  # the first data's arrival, and its points
+    last_at = 0.0
     deadline = time.monotonic() + LISTEN_S
     while time.monotonic() < deadline:
         data = link.read()
         if data:
-            first_at = first_at or time.monotonic()
             packets += parser.feed(data)
+            last_at = time.monotonic()
+            if first is None:
+                first = (last_at, parser.stats.points)
         if not recognised and _recognised(family, parser):
             recognised = True
             deadline = time.monotonic() + TURN_WAIT_S  # now wait for a whole turn
-        if recognised and sum(p.zero for p in packets) >= 2:
+        if (
+            recognised
+            and first is not None
+            and last_at - first[0] >= RATE_WINDOW_S
+            and sum(p.zero for p in packets) >= 2
+        ):
             break
     if not _recognised(family, parser):
         return None
-    elapsed = time.monotonic() - (first_at or time.monotonic())
+    assert first is not None
+    elapsed = last_at - first[0]
     turn, hz = _first_turn(packets)
     hint = _model_hint(family, parser)
     if stop:
@@ -154,7 +164,8 @@ def _attempt(link: Link, family: str, baud: int | None) -> ProbeResult | None:
         model_hint=hint,
         info=parser.info,
         health=parser.health,
-        points_per_s=parser.stats.points / elapsed if elapsed > 0 else 0.0,
+        # the points after the first read, over the time since it
+        points_per_s=(parser.stats.points - first[1]) / elapsed if elapsed > 0 else 0.0,
         turn_hz=hz,
         turn=turn,
         drops=dict(parser.stats.drops),

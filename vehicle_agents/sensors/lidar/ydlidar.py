@@ -172,8 +172,7 @@ class YdlidarParser(StreamParser):
             distances = [(lo | hi << 8) >> 2 for lo, hi in zip(body[0::2], body[1::2], strict=True)]
         if self.intercept:
             angles = [
-                wrap360(first + i * step + intercept_correction(d))
-                for i, d in enumerate(distances)
+                wrap360(first + i * step + intercept_correction(d)) for i, d in enumerate(distances)
             ]
         else:
             angles = [(first + i * step) % 360.0 for i in range(count)]

@@ -1,7 +1,8 @@
 """`gcs demo --lidar FORMAT` end to end, one format per manufacturer: the simulator speaks
 the sensor's wire format over TCP, the agent's parser for the paired model reads it (its
 start commands, the sensor's answers, the packets), and the hub places the points on the
-obstacles. Real processes on loopback."""
+obstacles; the parser's counts reach the hub's scan diagnostics. Real processes on
+loopback."""
 
 from __future__ import annotations
 
@@ -13,6 +14,7 @@ import numpy as np
 import pytest
 
 from common.geodesy import LocalFrame
+from gcs.demo_lidars import DEMO_LIDARS
 from simulator.world import default_scene
 from tests.helpers import access_token, poll_until, running_fleet
 
@@ -42,7 +44,20 @@ def test_the_demos_lidar_reaches_the_hub_through_the_real_parser(
         errors = np.minimum(WORLD.distance_to_surface(enu), np.abs(enu[:, 2]))
         assert np.median(errors) <= 0.05, np.median(errors)
         assert np.mean(errors <= 0.20) >= 0.97, np.percentile(errors, 97)
-        diagnostics = httpx.get(
-            f"{base}/api/v1/vehicles/{vehicle}/scans/diagnostics", headers=headers
-        ).json()
+
+        # The agent's parser reports its counts to the hub's scan diagnostics.
+        def reported() -> dict[str, Any] | None:
+            body: dict[str, Any] = httpx.get(
+                f"{base}/api/v1/vehicles/{vehicle}/scans/diagnostics", headers=headers
+            ).json()
+            return body if body["source_counts"].get("points", 0) > 1000 else None
+
+        diagnostics = poll_until(reported, 30, "the parser's counts in the diagnostics")
+        assert diagnostics is not None
         assert diagnostics["rejected"] == {}
+        assert diagnostics["source"] == DEMO_LIDARS[lidar].model
+        counts = diagnostics["source_counts"]
+        assert counts["packets"] > 0
+        # a clean line drops nothing (a reconnect's first bytes may begin mid-packet)
+        dropped = {k: v for k, v in counts.items() if k.startswith("dropped_")}
+        assert sum(dropped.values()) <= 100, dropped

@@ -203,6 +203,7 @@ class SerialLidarSource:
         reported = None
         async for chunk, arrived in self._chunks():
             packets = self.parser.feed(chunk)
+            self.stats = self.parser.stats.as_dict()
             if self.parser.health != reported:
                 reported = self.parser.health
                 if reported is not None and reported.status != 0:
@@ -210,7 +211,6 @@ class SerialLidarSource:
             for packet in packets:
                 turn = self.assembler.add(packet, arrived)
                 if turn is not None:
-                    self.stats = self.parser.stats.as_dict()
                     yield turn
 
     async def _chunks(self) -> AsyncIterator[tuple[bytes, float]]:

@@ -71,6 +71,40 @@ class WireFormat:
     streams: str | None = None
 
 
+REQUEST = 0xA5  # both Slamtec and YDLIDAR requests start with it
+
+
+def split_requests(
+    pending: bytes, has_payload: Callable[[int], bool]
+) -> tuple[list[tuple[int, bytes]], bytes]:
+    """The whole ``A5 <cmd>`` requests at the start of ``pending`` as (command, payload),
+    and the bytes left for later. A command for which ``has_payload`` is true is followed
+    by its size, the payload and an XOR checksum of all before it; one whose checksum
+    fails is dropped, and bytes that start no request are skipped, as a sensor does."""
+    requests: list[tuple[int, bytes]] = []
+    while len(pending) >= 2:
+        if pending[0] != REQUEST:
+            pending = pending[1:]
+            continue
+        command = pending[1]
+        if not has_payload(command):
+            requests.append((command, b""))
+            pending = pending[2:]
+            continue
+        if len(pending) < 3 or len(pending) < 4 + pending[2]:
+            break
+        size = pending[2]
+        check = 0
+        for byte in pending[: 3 + size]:
+            check ^= byte
+        if check != pending[3 + size]:
+            pending = pending[1:]
+            continue
+        requests.append((command, pending[3 : 3 + size]))
+        pending = pending[4 + size :]
+    return requests, pending
+
+
 def descriptor(length: int, mode: int, kind: int) -> bytes:
     """A5 5A, u32 length | mode << 30, type."""
     return b"\xa5\x5a" + struct.pack("<IB", length | mode << 30, kind)

@@ -45,9 +45,9 @@ from simulator.lidar_wire import (
     WireFormat,
     descriptor,
     millimetres,
+    split_requests,
 )
 
-SYNC = 0xA5
 STOP = 0x25
 RESET = 0x40
 SCAN = 0x20
@@ -215,32 +215,10 @@ class RplidarCommands:
         self._model = model
 
     def feed(self, data: bytes) -> list[Action]:
-        actions: list[Action] = []
-        pending = self._pending + data
-        while len(pending) >= 2:
-            if pending[0] != SYNC:
-                pending = pending[1:]
-                continue
-            command = pending[1]
-            payload = b""
-            if command & 0x80:
-                if len(pending) < 3 or len(pending) < 4 + pending[2]:
-                    break
-                size = pending[2]
-                check = 0
-                for byte in pending[: 3 + size]:
-                    check ^= byte
-                if check != pending[3 + size]:  # a corrupt request: the sensor ignores it
-                    pending = pending[1:]
-                    continue
-                payload, pending = pending[3 : 3 + size], pending[4 + size :]
-            else:
-                pending = pending[2:]
-            action = self._action(command, payload)
-            if action is not None:
-                actions.append(action)
-        self._pending = pending
-        return actions
+        # commands from 0x80 up carry a payload (the protocol's rule)
+        requests, self._pending = split_requests(self._pending + data, lambda c: c >= 0x80)
+        actions = [self._action(command, payload) for command, payload in requests]
+        return [action for action in actions if action is not None]
 
     def _action(self, command: int, payload: bytes) -> Action | None:
         if command in (STOP, RESET):

@@ -40,10 +40,10 @@ from simulator.lidar_wire import (
     WireFormat,
     descriptor,
     millimetres,
+    split_requests,
 )
 
 HEADER = 0x55AA
-COMMAND = 0xA5
 START_SCAN = 0x60
 STOP_SCAN = 0x65
 GET_INFO = 0x90
@@ -150,14 +150,9 @@ class YdlidarCommands:
         self._model = model
 
     def feed(self, data: bytes) -> list[Action]:
+        requests, self._pending = split_requests(self._pending + data, lambda c: False)
         actions: list[Action] = []
-        pending = self._pending + data
-        while len(pending) >= 2:
-            if pending[0] != COMMAND:
-                pending = pending[1:]
-                continue
-            command = pending[1]
-            pending = pending[2:]
+        for command, _ in requests:
             if command == START_SCAN:
                 actions.append(Start("scan", SCAN_RESPONSE))
             elif command == STOP_SCAN:
@@ -166,7 +161,6 @@ class YdlidarCommands:
                 actions.append(Reply(health()))
             elif command == GET_INFO:
                 actions.append(Reply(info(self._model)))
-        self._pending = pending
         return actions
 
 

@@ -11,7 +11,8 @@ import pytest
 from simulator.lidar import Lidar, LidarSpec, Pose
 from simulator.world import default_scene
 from simulator.ydlidar_wire import SCAN_RESPONSE, encode_beams, health, packet
-from vehicle_agents.sensors.lidar.ydlidar import Health, Packet, YdlidarParser
+from vehicle_agents.sensors.lidar.common import Health, Packet
+from vehicle_agents.sensors.lidar.ydlidar import YdlidarParser
 
 
 def _stream(seconds: float = 0.5) -> bytes:

@@ -16,6 +16,7 @@ from __future__ import annotations
 import logging
 import struct
 from collections import Counter
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 log = logging.getLogger(__name__)
@@ -30,6 +31,8 @@ DESCRIPTOR = b"\xa5\x5a"
 DESCRIPTOR_BYTES = 7
 MODE_SINGLE = 0
 MODE_CONTINUOUS = 1
+INFO_ANSWER = 0x04  # GET_INFO's answer (both families): 20 bytes
+HEALTH_ANSWER = 0x06  # GET_HEALTH's answer (both families): 3 bytes
 _DESCRIPTOR = struct.Struct("<IB")
 
 
@@ -149,6 +152,36 @@ class StreamParser:
     def _parse(self, buffer: bytearray, out: list[Packet]) -> int:
         """Append the packets at the start of ``buffer`` to ``out``; the bytes used."""
         raise NotImplementedError
+
+    def answer(
+        self,
+        buffer: bytearray,
+        at: int,
+        answers: dict[int, tuple[int, int]],
+        name_of: Callable[[bytes], str | None],
+    ) -> tuple[int, int] | None:
+        """The command answer whose A5 5A is at ``at``: (bytes it takes, its type), 0
+        bytes if it is none of ``answers`` (type -> (mode, length)); None until all of it
+        is here. A health or information answer is kept (``name_of`` names the model
+        from the information's 20 bytes)."""
+        head = descriptor_at(buffer, at)
+        if head is None:
+            return None
+        length, mode, kind = head
+        if answers.get(kind) != (mode, length):
+            return 0, kind
+        payload = at + DESCRIPTOR_BYTES
+        size = DESCRIPTOR_BYTES + (length if mode == MODE_SINGLE else 0)
+        if len(buffer) - at < size:
+            return None
+        if kind == HEALTH_ANSWER:
+            status, code = struct.unpack_from("<BH", buffer, payload)
+            self.health = Health(status, code)
+        elif kind == INFO_ANSWER:
+            info = bytes(buffer[payload : payload + 20])
+            self.info = device_info(info, name_of(info))
+        self.stats.responses += 1
+        return size, kind
 
     def skip(self, count: int, reason: str = "noise_bytes") -> None:
         if count > 0:

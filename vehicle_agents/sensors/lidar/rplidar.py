@@ -41,14 +41,13 @@ import math
 import struct
 
 from vehicle_agents.sensors.lidar.common import (
+    HEALTH_ANSWER,
+    INFO_ANSWER,
     MODE_CONTINUOUS,
     MODE_SINGLE,
-    Health,
     Packet,
     StreamParser,
     TurnSplitter,
-    descriptor_at,
-    device_info,
     wrap360,
 )
 
@@ -64,8 +63,6 @@ SET_MOTOR_PWM = 0xF0
 MOTOR_SPEED_CTRL = 0xA8
 DEFAULT_PWM = 660  # the SDK's default duty for an A2/A3
 
-INFO_ANSWER = 0x04
-HEALTH_ANSWER = 0x06
 STANDARD = 0x81
 LEGACY_CAPSULE = 0x82
 ULTRA_CAPSULE = 0x84
@@ -136,6 +133,11 @@ def ultra_offset_deg(distance_mm: int) -> float:
     return offset * _DEG_PER_RAD_Q16
 
 
+def _series_name(info: bytes) -> str | None:
+    series = SERIES.get(info[0] >> 4)
+    return None if series is None else f"RPLIDAR {series}"
+
+
 def _signed10(value: int) -> int:
     return value - 1024 if value & 0x200 else value
 
@@ -165,10 +167,13 @@ class RplidarParser(StreamParser):
             if size - at < 2:
                 break
             if buffer[at] == SYNC and buffer[at + 1] == 0x5A:
-                taken = self._answer(buffer, at)
-                if taken is None:
+                found = self.answer(buffer, at, ANSWERS, _series_name)
+                if found is None:
                     break
+                taken, answered = found
                 if taken:
+                    if answered in SCAN_ANSWERS:
+                        self._set_scan(answered)
                     if angles:
                         out.append(Packet(zero, None, angles, distances))
                         angles, distances, zero = [], [], False
@@ -222,31 +227,6 @@ class RplidarParser(StreamParser):
         if angles:
             out.append(Packet(zero, None, angles, distances))
         return at
-
-    def _answer(self, buffer: bytearray, at: int) -> int | None:
-        """The bytes of a known answer at ``at`` (0: not one), None until all are here."""
-        head = descriptor_at(buffer, at)
-        if head is None:
-            return None
-        length, mode, kind = head
-        if ANSWERS.get(kind) != (mode, length):
-            return 0
-        payload = at + 7
-        if mode == MODE_CONTINUOUS:
-            self._set_scan(kind)
-            self.stats.responses += 1
-            return 7
-        if len(buffer) - payload < length:
-            return None
-        if kind == HEALTH_ANSWER:
-            status, code = struct.unpack_from("<BH", buffer, payload)
-            self.health = Health(status, code)
-        else:
-            info = bytes(buffer[payload : payload + 20])
-            series = SERIES.get(info[0] >> 4)
-            self.info = device_info(info, None if series is None else f"RPLIDAR {series}")
-        self.stats.responses += 1
-        return 7 + length
 
     def _capsule(self, kind: int, capsule: bytes, out: list[Packet]) -> None:
         (word,) = _U16.unpack_from(capsule, 2)

@@ -28,13 +28,12 @@ from operator import xor
 
 from vehicle_agents.sensors.lidar.common import (
     DESCRIPTOR,
+    HEALTH_ANSWER,
+    INFO_ANSWER,
     MODE_CONTINUOUS,
     MODE_SINGLE,
-    Health,
     Packet,
     StreamParser,
-    descriptor_at,
-    device_info,
     wrap360,
 )
 
@@ -46,8 +45,6 @@ STOP_SCAN = b"\xa5\x65"
 GET_INFO = b"\xa5\x90"
 GET_HEALTH = b"\xa5\x91"
 SCAN_ANSWER = 0x81
-INFO_ANSWER = 0x04
-HEALTH_ANSWER = 0x06
 # The answers the driver asks for: type -> (mode, payload length)
 ANSWERS = {
     SCAN_ANSWER: (MODE_CONTINUOUS, 5),
@@ -58,6 +55,10 @@ LOCK_AFTER = 3  # packets of one sample size in a row before an auto parser stop
 MODEL_NAMES = {4: "S4", 5: "G4", 6: "X4", 8: "F4Pro", 13: "G2"}
 _HEAD = struct.Struct("<HBBHHH")
 _DEG = 180.0 / math.pi
+
+
+def _model_name(info: bytes) -> str | None:
+    return MODEL_NAMES.get(info[0])
 
 
 def intercept_correction(distance_mm: int) -> float:
@@ -99,9 +100,10 @@ class YdlidarParser(StreamParser):
             answer = buffer.find(DESCRIPTOR, start, None if at < 0 else at)
             if answer >= 0:
                 self.skip(answer - start)
-                taken = self._answer(buffer, answer)
-                if taken is None:  # not all here yet
+                found = self.answer(buffer, answer, ANSWERS, _model_name)
+                if found is None:  # not all here yet
                     return answer
+                taken = found[0]
                 if taken == 0:  # not an answer we know: skip its marker
                     self.skip(2, "unknown_answer_bytes")
                     start = answer + 2
@@ -179,26 +181,3 @@ class YdlidarParser(StreamParser):
         zero = bool(ct & 0x01)
         hz = (ct >> 1) / 10.0 if zero and ct >> 1 else None
         return Packet(zero, hz, angles, distances)
-
-    def _answer(self, buffer: bytearray, at: int) -> int | None:
-        """The length of the command answer at ``at`` (0 if it is none the driver asks
-        for), or None until all of it is here."""
-        head = descriptor_at(buffer, at)
-        if head is None:
-            return None
-        length, mode, kind = head
-        if ANSWERS.get(kind) != (mode, length):
-            return 0
-        payload = at + 7
-        size = 7 + (length if mode == MODE_SINGLE else 0)
-        if len(buffer) - at < size:
-            return None
-        if kind == HEALTH_ANSWER:
-            status, code = struct.unpack_from("<BH", buffer, payload)
-            self.health = Health(status, code)
-        elif kind == INFO_ANSWER:
-            self.info = device_info(
-                bytes(buffer[payload : payload + 20]), MODEL_NAMES.get(buffer[payload])
-            )
-        self.stats.responses += 1
-        return size

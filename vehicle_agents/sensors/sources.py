@@ -37,6 +37,7 @@ from vehicle_agents.sensors.lidar.models import (
     start_commands,
     stop_command,
 )
+from vehicle_agents.sensors.lidar.rplidar import motor_pwm
 
 log = logging.getLogger(__name__)
 
@@ -279,7 +280,11 @@ class SerialLidarSource:
             stop.set()
             await asyncio.to_thread(reader.join, 1.0)
             with contextlib.suppress(OSError, serial.SerialException):
-                port.write(stop_bytes)  # the head stops spinning
+                port.write(stop_bytes)  # the scan stops
+                if self.model.motor_pwm:
+                    port.write(motor_pwm(0))  # an A2/A3's motor stops
+                if self.model.family == "rplidar":
+                    port.dtr = True  # and an A1's (or any on Slamtec's USB adapter)
             port.close()
 
 

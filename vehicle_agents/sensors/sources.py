@@ -240,7 +240,10 @@ class SerialLidarSource:
 
         port = serial.Serial(self.url, self.baud, timeout=0.05)
         if self.model.family == "rplidar":
-            port.dtr = False  # Slamtec's USB adapter runs the motor while DTR is low
+            # Slamtec's USB adapter runs the motor while DTR is low (a bare UART has no
+            # DTR line: the motor is then wired to run)
+            with contextlib.suppress(OSError):
+                port.dtr = False
         if stop:
             port.write(stop)
             time.sleep(COMMAND_GAP_S)

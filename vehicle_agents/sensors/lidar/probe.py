@@ -73,7 +73,8 @@ class _SerialLink:
 
         self._port = serial.Serial(device, baud, timeout=0.05)
         if family == "rplidar":
-            self._port.dtr = False  # Slamtec's USB adapter runs the motor while DTR is low
+            with contextlib.suppress(OSError):  # a bare UART has no DTR line
+                self._port.dtr = False  # Slamtec's USB adapter runs the motor while low
 
     def write(self, data: bytes) -> None:
         self._port.write(data)

@@ -45,8 +45,8 @@ from protocol.scans import ScanFrame, ScanPose, decode_scan, encode_scan
 from simulator.lidar import Lidar, Pose
 from simulator.world import default_scene
 from simulator.ydlidar_wire import encode_beams
+from vehicle_agents.sensors.lidar.ydlidar import YdlidarParser
 from vehicle_agents.sensors.sources import Turn, TurnAssembler
-from vehicle_agents.sensors.ydlidar import YdlidarParser
 
 SITE = LocalFrame(-35.363262, 149.165237, 584.0)
 WORLD = default_scene()

@@ -17,6 +17,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from common.log_escaping import escape_control_characters_in_logs
+from gcs.demo_lidars import DEMO_LIDAR_NAMES
 
 if TYPE_CHECKING:
     from backend.settings import HubSettings
@@ -145,6 +146,8 @@ def _demo(args: argparse.Namespace) -> int:
         port=args.port,
         speedup=args.speedup,
         camera_model=args.camera_model,
+        lidars=args.lidar is not None,
+        lidar=args.lidar or "ydlidar",
     )
     fleet = LocalFleet(plan)
     log = logging.getLogger("gcs.demo")
@@ -260,6 +263,13 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="SW_MM,SH_MM,W_PX,H_PX,F_MM",
         help="fit every vehicle with a camera of this model (e.g. 6.3,4.7,1600,1200,4.5): "
         "its survey photos, rendered by the simulator, go to the hub (default: no cameras)",
+    )
+    demo.add_argument(
+        "--lidar",
+        choices=DEMO_LIDAR_NAMES,
+        metavar="FORMAT",
+        help="fit every vehicle with a 2-D LIDAR speaking this wire format, read by the "
+        f"agent's parser for it: {', '.join(DEMO_LIDAR_NAMES)} (default: no LIDAR)",
     )
     return parser
 

@@ -26,6 +26,7 @@ from typing import IO
 
 from common.addresses import WILDCARDS, is_loopback
 from common.geodesy import LocalFrame
+from gcs.demo_lidars import DEMO_LIDARS
 
 log = logging.getLogger(__name__)
 
@@ -66,6 +67,9 @@ class FleetPlan:
     autopilots: tuple[str, ...] = ()
     # Each simulator fits a 2-D LIDAR (its bytes on a TCP port) and each agent relays it.
     lidars: bool = False
+    # Which LIDAR they fit: a name of `DEMO_LIDARS` (its wire format in the simulator, its
+    # model and scan mode in the agent, so that the agent's real parser reads it).
+    lidar: str = "ydlidar"
     # Each simulator serves its camera's photos (a synthetic ground laid around ``home``,
     # the same for all) and each agent uploads them; the value is the agents'
     # --camera-model (sensor mm, image px, focal mm), None for no cameras.
@@ -246,7 +250,12 @@ class LocalFleet:
         lidar: list[str] = []
         if self.plan.lidars:
             self.lidar_ports[index] = free_port()
-            lidar = ["--lidar", f"tcp:127.0.0.1:{self.lidar_ports[index]}"]
+            lidar = [
+                "--lidar",
+                f"tcp:127.0.0.1:{self.lidar_ports[index]}",
+                "--lidar-format",
+                DEMO_LIDARS[self.plan.lidar].wire,
+            ]
         camera: list[str] = []
         if self.plan.camera_model is not None:
             self.camera_ports[index] = free_port()
@@ -294,7 +303,14 @@ class LocalFleet:
                 "--outbox-dir",
                 str(self.plan.data_dir / "onboard" / self.vehicle_id(index)),
                 *(
-                    ["--lidar", f"tcp://127.0.0.1:{self.lidar_ports[index]}"]
+                    [
+                        "--lidar",
+                        f"tcp://127.0.0.1:{self.lidar_ports[index]}",
+                        "--lidar-model",
+                        DEMO_LIDARS[self.plan.lidar].model,
+                        "--lidar-scan-mode",
+                        str(DEMO_LIDARS[self.plan.lidar].scan_mode),
+                    ]
                     if index in self.lidar_ports
                     else []
                 ),

@@ -620,6 +620,24 @@ class LiveState(Message):
     state: VehicleState
 
 
+MAX_SOURCE_COUNTS = 32
+
+
+class ScanSourceStats(Message):
+    """The agent's scan source (its LIDAR's parser): what it decoded and what it threw
+    away, by reason, since the agent started. Sent when the counts change, every few
+    seconds at most; the hub shows the latest in the vehicle's scan diagnostics (never
+    stored), so an empty scan comes with a reason."""
+
+    type: Literal["scan_source_stats"] = "scan_source_stats"
+    source: Name = Field(description="the LIDAR model (rplidar-a1, ld06, ...), mavlink or ros2")
+    counts: dict[Name, Annotated[int, Field(ge=0, le=2**53)]] = Field(
+        max_length=MAX_SOURCE_COUNTS,
+        description="packets, points, responses, and dropped_<reason> (bad_checksum, "
+        "noise_bytes, ...) for a serial LIDAR; each source's own counters otherwise",
+    )
+
+
 EventKind = Literal[
     "statustext",
     "mode",
@@ -1232,7 +1250,15 @@ class LeaderScan(Message):
 # The hub pings an agent to learn whether it is still there (another agent wants its
 # vehicle id); the agent answers with a pong.
 AgentToHub: TypeAlias = Annotated[
-    Hello | Telemetry | LiveState | Event | CommandResult | Unavailable | Pong | ManualApplied,
+    Hello
+    | Telemetry
+    | LiveState
+    | Event
+    | CommandResult
+    | Unavailable
+    | Pong
+    | ManualApplied
+    | ScanSourceStats,
     Field(discriminator="type"),
 ]
 HubToAgent: TypeAlias = Annotated[

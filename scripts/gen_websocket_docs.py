@@ -360,8 +360,10 @@ def render() -> str:
         f"is closed with {CloseCode.BAD_HELLO:d}.",
         "2. The hub answers [`welcome`](#welcome).",
         "3. The agent streams [`telemetry`](#telemetry) and [`event`](#event), each numbered "
-        "per kind in its stream (`seq`), and [`live_state`](#livestate) while it replays a "
-        "backlog. The hub sends [`ack`](#ack) once frames are stored (after the commit), "
+        "per kind in its stream (`seq`), [`live_state`](#livestate) while it replays a "
+        "backlog, and [`scan_source_stats`](#scansourcestats) when its LIDAR parser's counts "
+        "change (every 5 s at most). The hub sends [`ack`](#ack) once frames are stored "
+        "(after the commit), "
         "and [`resend`](#resend) when it sees a gap; the agent replays those frames or "
         "answers [`unavailable`](#unavailable) for frames its full outbox had to drop.",
         "4. The hub sends [`command`](#commandrequest); the agent answers "

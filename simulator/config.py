@@ -12,6 +12,7 @@ from typing import Literal
 
 from common.geodesy import GeoPoint
 from simulator.clock import MAX_SPEEDUP
+from simulator.lidar_wire import LIDAR_FORMATS
 
 # ArduPilot's SITL home, CMAC (Canberra Model Aircraft Club).
 DEFAULT_HOME = GeoPoint(-35.363262, 149.165237, 584.0)
@@ -70,6 +71,7 @@ class SimulatorConfig:
     # A 2-D LIDAR whose serial bytes are served on this TCP address; None: no LIDAR.
     lidar: ListenAddress | None = None
     lidar_rate_hz: float = 10.0
+    lidar_format: str = "ydlidar"  # the wire format: simulator/lidar_wire.py's LIDAR_FORMATS
     scene: Path | None = None  # obstacles (simulator/world.py); None: the default yard
     # The camera's photos served over HTTP on this TCP address; None: CAMERA_FEEDBACK only.
     camera: ListenAddress | None = None
@@ -91,6 +93,10 @@ class SimulatorConfig:
             raise ValueError("the LIDAR's bytes are served over TCP only (--lidar tcp:HOST:PORT)")
         if self.camera is not None and self.camera.scheme != "tcp":
             raise ValueError("the camera's photos are served over HTTP (--camera tcp:HOST:PORT)")
+        if self.lidar_format not in LIDAR_FORMATS:
+            raise ValueError(
+                f"LIDAR format must be one of {', '.join(LIDAR_FORMATS)}, got {self.lidar_format}"
+            )
         if not 5.0 <= self.lidar_rate_hz <= 12.0:
             raise ValueError(f"LIDAR rate must be 5..12 Hz, got {self.lidar_rate_hz}")
         if self.gps2_fix is not None and not 0 <= self.gps2_fix <= 8:
@@ -226,8 +232,15 @@ def build_parser() -> argparse.ArgumentParser:
         type=_listen,
         default=None,
         metavar="tcp:HOST:PORT",
-        help="fit a 2-D LIDAR (a YDLIDAR T-mini Pro) and serve its serial bytes on this TCP "
-        "address (default: no LIDAR)",
+        help="fit a 2-D LIDAR and serve its serial bytes on this TCP address (default: no LIDAR)",
+    )
+    parser.add_argument(
+        "--lidar-format",
+        choices=LIDAR_FORMATS,
+        default=defaults.lidar_format,
+        help="the LIDAR's wire format (default ydlidar, a T-mini Pro): ydlidar-x4 for 2-byte "
+        "samples with the intercept correction, ydlidar-g4 without, rplidar-* for a Slamtec "
+        "sensor whose express scan sends that capsule, ld06 for LDROBOT (LD06/LD19/STL-27L)",
     )
     parser.add_argument(
         "--lidar-rate",
@@ -304,6 +317,7 @@ def parse_args(argv: Sequence[str] | None = None) -> SimulatorConfig:
             autopilot=args.autopilot,
             lidar=args.lidar,
             lidar_rate_hz=args.lidar_rate,
+            lidar_format=args.lidar_format,
             scene=args.scene,
             camera=args.camera,
             ground=args.ground,

@@ -1,11 +1,14 @@
 """The simulated LIDAR's serial line, served over TCP: every client gets the sensor's bytes.
 
-A real T-mini Pro is a serial port; here the same bytes go to whoever connects (the
-agent's driver reads ``tcp://HOST:PORT`` as it reads ``/dev/ttyUSB0``). Like the sensor, a
-connection idles until it sends the start command, and answers the stop and health
-commands (simulator/ydlidar_wire.py), so the driver's start-up is exercised too. A client that falls
-behind loses bytes, as a serial port's receive buffer would overflow, never the
-simulator's memory; the parser resynchronises on the next packet header.
+A real LIDAR is a serial port; here the same bytes go to whoever connects (the agent's
+driver reads ``tcp://HOST:PORT`` as it reads ``/dev/ttyUSB0``). The bytes are those of the
+wire format chosen (simulator/lidar_wire.py lists them). Like the sensor, a connection
+to a Slamtec or YDLIDAR format idles until it sends a start command, and is answered
+its other commands (information, health, stop), so the driver's start-up is exercised
+too; an LDROBOT format sends from the moment of connection, as that sensor does from
+power-up. A client that falls behind loses bytes, as a serial port's receive buffer
+would overflow, never the simulator's memory; the parser resynchronises on the next
+packet.
 """
 
 from __future__ import annotations
@@ -15,23 +18,26 @@ import contextlib
 import logging
 from pathlib import Path
 
+from simulator import ldlidar_wire, rplidar_wire, ydlidar_wire
 from simulator.config import ListenAddress
 from simulator.lidar import Lidar, LidarSpec, Pose
+from simulator.lidar_wire import LIDAR_FORMATS, Encoder, Reply, Start, Stop, WireFormat
 from simulator.vehicle import Vehicle
 from simulator.world import World, default_scene, load_scene
-from simulator.ydlidar_wire import (
-    COMMAND,
-    GET_HEALTH,
-    SCAN_RESPONSE,
-    START_SCAN,
-    STOP_SCAN,
-    encode_beams,
-    health,
-)
 
 log = logging.getLogger(__name__)
 
 MAX_PENDING_BYTES = 64 * 1024  # about 2 s of a T-mini Pro's output
+
+
+def wire_format(name: str) -> WireFormat:
+    if name.startswith("rplidar"):
+        return rplidar_wire.wire_format(name)
+    if name.startswith("ydlidar"):
+        return ydlidar_wire.wire_format(name)
+    if name == "ld06":
+        return ldlidar_wire.wire_format(name)
+    raise ValueError(f"unknown LIDAR format {name!r}; known: {', '.join(LIDAR_FORMATS)}")
 
 
 def pose_of(vehicle: Vehicle) -> Pose:
@@ -43,7 +49,12 @@ class LidarStream:
     """The LIDAR on one vehicle and the TCP server that carries its bytes."""
 
     def __init__(
-        self, listen: ListenAddress, scene: Path | None, rate_hz: float, seed: int
+        self,
+        listen: ListenAddress,
+        scene: Path | None,
+        rate_hz: float,
+        seed: int,
+        wire: str = "ydlidar",
     ) -> None:
         self.listen = listen
         self.world: World = load_scene(scene) if scene is not None else default_scene()
@@ -52,7 +63,10 @@ class LidarStream:
         self.address: ListenAddress | None = None
         self._server: asyncio.Server | None = None
         self._clients: set[asyncio.StreamWriter] = set()
-        self._writers: set[asyncio.StreamWriter] = set()  # the clients that started the scan
+        self.wire = wire_format(wire)
+        # the clients that started a scan, and its mode (one encoder per mode in use)
+        self._writers: dict[asyncio.StreamWriter, str] = {}
+        self._encoders: dict[str, Encoder] = {}
         self._last_time = -1.0
         self.dropped_bytes = 0
 
@@ -77,6 +91,7 @@ class LidarStream:
     def restart(self) -> None:
         """The vehicle was rebooted: its clock starts again, and so does the head."""
         self.lidar = Lidar(self.world, self.lidar.spec, seed=self._seed)
+        self._encoders.clear()
         self._last_time = -1.0
 
     def advance(self, vehicle: Vehicle) -> None:
@@ -89,42 +104,43 @@ class LidarStream:
         beams = self.lidar.advance(pose_of(vehicle))
         if beams is None or not self._writers:
             return
-        data = encode_beams(beams, self.lidar.spec.rate_hz)
-        for writer in list(self._writers):
-            if writer.transport.is_closing():
+        rate = self.lidar.spec.rate_hz
+        encoded: dict[str, bytes] = {}
+        for mode in set(self._writers.values()):
+            encoder = self._encoders.get(mode)
+            if encoder is None:
+                encoder = self._encoders[mode] = self.wire.encoders[mode](self.lidar.spec.beams)
+            encoded[mode] = encoder.encode(beams, rate)
+        for writer, mode in list(self._writers.items()):
+            data = encoded[mode]
+            if not data or writer.transport.is_closing():
                 continue
             if writer.transport.get_write_buffer_size() > MAX_PENDING_BYTES:
                 self.dropped_bytes += len(data)
                 continue
             writer.write(data)
 
-    def _command(self, command: int, writer: asyncio.StreamWriter) -> None:
-        if command == START_SCAN:
-            if writer not in self._writers:
-                writer.write(SCAN_RESPONSE)
-                self._writers.add(writer)
-        elif command == STOP_SCAN:
-            self._writers.discard(writer)
-        elif command == GET_HEALTH:
-            writer.write(health())
-
     async def _on_client(self, reader: asyncio.StreamReader, writer: asyncio.StreamWriter) -> None:
-        pending = b""
+        commands = self.wire.commands()
         self._clients.add(writer)
+        if self.wire.streams is not None:  # a sensor that sends unasked
+            self._writers[writer] = self.wire.streams
         try:
             while data := await reader.read(4096):
-                pending += data
-                while len(pending) >= 2:
-                    if pending[0] != COMMAND:  # not a command's start: the sensor ignores it
-                        pending = pending[1:]
-                        continue
-                    self._command(pending[1], writer)
-                    pending = pending[2:]
+                for action in commands.feed(data):
+                    if isinstance(action, Start):
+                        if self._writers.get(writer) != action.mode:
+                            writer.write(action.reply)
+                            self._writers[writer] = action.mode
+                    elif isinstance(action, Stop):
+                        self._writers.pop(writer, None)
+                    elif isinstance(action, Reply):
+                        writer.write(action.data)
         except (ConnectionError, OSError):
             pass
         finally:
             self._clients.discard(writer)
-            self._writers.discard(writer)
+            self._writers.pop(writer, None)
             writer.close()
             with contextlib.suppress(ConnectionError, OSError):
                 await writer.wait_closed()

@@ -193,6 +193,7 @@ class SimulatorServer:
                 self.config.scene,
                 self.config.lidar_rate_hz,
                 seed=self.config.system_id,
+                wire=self.config.lidar_format,
             )
             self.lidar_address = await self.lidar.start()
         if self.config.camera is not None:

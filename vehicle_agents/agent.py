@@ -41,7 +41,7 @@ from vehicle_agents.sensors.fcu_time import FcuClock, PoseHistory, ask_timesync
 from vehicle_agents.sensors.relay import DiskBacklog, ScanOutbox, ScanRelay, parse_mount
 from vehicle_agents.sensors.ros2 import SCHEME as ROS2_SCHEME
 from vehicle_agents.sensors.ros2 import LaserScanSource
-from vehicle_agents.sensors.sources import MavlinkRangeSource, ScanSource, YdlidarSource
+from vehicle_agents.sensors.sources import MavlinkRangeSource, ScanSource, SerialLidarSource
 from vehicle_agents.shutters import ShutterMatcher, captured_alt_rel, from_autopilot
 from vehicle_agents.statustext import StatusTextJoiner
 from vehicle_agents.streams import StreamRequester
@@ -106,9 +106,11 @@ async def _run(settings: AgentSettings) -> None:
         formation = FormationRunner(link, executor, events.emit)
         tasks.create_task(formation.run())
         scans = None
+        scan_stats = None
         if settings.lidar:
             relay = scan_relay(settings, link, vehicle_id)
             scans = relay.outbox
+            scan_stats = relay.source_stats
             tasks.create_task(relay.run())
             tasks.create_task(ask_timesync(link.send))
         hub = HubLink(
@@ -121,6 +123,7 @@ async def _run(settings: AgentSettings) -> None:
             on_manual=pilot.on_frame,
             on_formation=formation.on_hub,
             scans=scans,
+            scan_stats=scan_stats,
             fallback_urls=settings.hub_fallback,
             timeouts=HubTimeouts(
                 reconnect=reconnect_backoff(
@@ -185,14 +188,23 @@ def scan_relay(settings: AgentSettings, link: FcuLink, vehicle_id: str) -> ScanR
     poses = PoseHistory(FcuClock())
     link.listeners.append(poses.on_message)
     source: ScanSource
+    name = settings.lidar_model
     if settings.lidar == "mavlink":
+        name = "mavlink"
         ranges = MavlinkRangeSource()
         link.listeners.append(ranges.on_message)
         source = ranges
     elif settings.lidar.startswith(ROS2_SCHEME):
         source = LaserScanSource(settings.lidar)
+        name = "ros2"
     else:
-        source = YdlidarSource(settings.lidar, settings.lidar_resolution_deg, settings.lidar_baud)
+        source = SerialLidarSource(
+            settings.lidar,
+            settings.lidar_resolution_deg,
+            settings.lidar_baud,
+            settings.lidar_model,
+            settings.lidar_scan_mode,
+        )
     backlog = None
     if settings.outbox_dir is not None:
         path = settings.outbox_dir / f"{vehicle_id}.scans.sqlite"
@@ -201,7 +213,7 @@ def scan_relay(settings: AgentSettings, link: FcuLink, vehicle_id: str) -> ScanR
         except (OSError, sqlite3.Error) as error:
             log.error("scan backlog file %s unusable (%s); keeping it in memory", path, error)
     outbox = ScanOutbox(settings.scan_budget, backlog)
-    return ScanRelay(source, poses, outbox, parse_mount(settings.lidar_mount))
+    return ScanRelay(source, poses, outbox, parse_mount(settings.lidar_mount), source_name=name)
 
 
 def open_outbox(settings: AgentSettings, vehicle_id: str, stream_id: str) -> Outbox:

@@ -56,7 +56,9 @@ _FLAG_KINDS: dict[str, dict[str, Any]] = {
     "mavlink_forward": {"action": "append", "metavar": "ENDPOINT"},
     "stream_rates_hz": {"action": "append", "metavar": "MESSAGE=HZ"},
     "lidar": {"metavar": "DEVICE|tcp://HOST:PORT|mavlink"},
+    "lidar_model": {"metavar": "MODEL"},
     "lidar_baud": {"type": int, "metavar": "BAUD"},
+    "lidar_scan_mode": {"type": int, "metavar": "MODE"},
     "lidar_resolution_deg": {"type": float, "metavar": "DEG"},
     "lidar_mount": {"metavar": "F,R,D,ROLL,PITCH,YAW"},
     "scan_budget": {"type": int, "metavar": "SCANS"},
@@ -227,7 +229,9 @@ def run_until_signalled(
 
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
-        prog="gcs-agent", description="Bridge one flight controller (MAVLink) to the hub."
+        prog="gcs-agent",
+        description="Bridge one flight controller (MAVLink) to the hub. "
+        "`gcs-agent lidar-probe DEVICE` finds the LIDAR on a serial port instead.",
     )
     parser.add_argument("--log-level", default="INFO")
     add_agent_arguments(parser)
@@ -235,6 +239,11 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
+    argv = sys.argv[1:] if argv is None else argv
+    if argv[:1] == ["lidar-probe"]:
+        from vehicle_agents.sensors.lidar.probe import main as probe_main
+
+        return probe_main(argv[1:])
     args = build_parser().parse_args(argv)
     logging.basicConfig(level=args.log_level.upper(), format=LOG_FORMAT)
     escape_control_characters_in_logs()

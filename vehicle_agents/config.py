@@ -101,12 +101,28 @@ class AgentSettings(BaseSettings):
     )
     lidar: str | None = Field(
         default=None,
-        description="a 2-D LIDAR to relay: a YDLIDAR's serial device (/dev/ttyUSB0), the "
+        description="a 2-D LIDAR to relay: a serial LIDAR's device (/dev/ttyUSB0; see "
+        "lidar_model), the "
         "simulator's tcp://HOST:PORT, 'mavlink' for the flight controller's "
         "OBSTACLE_DISTANCE (PX4) or DISTANCE_SENSOR (ArduPilot's proximity sectors), or "
         "ros2:TOPIC for a ROS 2 LaserScan topic (where rclpy is installed)",
     )
-    lidar_baud: int = Field(default=230400, gt=0, description="the LIDAR's serial baud rate")
+    lidar_model: str = Field(
+        default="ydlidar-tmini-pro",
+        description="the serial LIDAR's model, which picks its wire format and default baud "
+        "rate: rplidar-a1, -a2, -a3, -c1, -s1, -s2, ydlidar-x2, -x4, -g4, -tmini-pro, ld06, "
+        "ld19, stl27l (README, 'Sensors'; `gcs-agent lidar-probe DEVICE` finds it)",
+    )
+    lidar_baud: int | None = Field(
+        default=None, gt=0, description="the LIDAR's serial baud rate (default: the model's)"
+    )
+    lidar_scan_mode: int = Field(
+        default=0,
+        ge=0,
+        le=255,
+        description="RPLIDAR only: 0 for the standard scan, N for an express scan in the "
+        "sensor's working mode N (express, dense or ultra capsules, as the sensor answers)",
+    )
     lidar_resolution_deg: float = Field(
         default=0.5, ge=0.1, le=10.0, description="the angle between beams of a relayed scan"
     )
@@ -186,6 +202,14 @@ class AgentSettings(BaseSettings):
                 "(source the ROS 2 installation's setup script first)"
             )
         return value
+
+    @field_validator("lidar_model")
+    @classmethod
+    def _lidar_model(cls, name: str) -> str:
+        from vehicle_agents.sensors.lidar.models import model_named
+
+        model_named(name)
+        return name
 
     @field_validator("lidar_mount")
     @classmethod

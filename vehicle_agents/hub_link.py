@@ -36,6 +36,7 @@ from protocol.messages import (
     ProtocolError,
     RequestId,
     Resend,
+    ScanSourceStats,
     VehicleState,
     Welcome,
     decode,
@@ -59,6 +60,7 @@ class HubTimeouts:
     unauthorized: Backoff = Backoff(initial_s=15.0, max_s=60.0)
     ping_interval_s: float = 5.0
     live_state_interval_s: float = 0.5
+    scan_stats_interval_s: float = 5.0
 
 
 COMMAND_ANSWER_MARGIN_S = 0.5
@@ -97,6 +99,7 @@ class HubLink:
         live_state: Callable[[], VehicleState] | None = None,
         on_manual: Callable[[ManualFrame], ManualApplied | None] | None = None,
         scans: ScanOutbox | None = None,
+        scan_stats: Callable[[], ScanSourceStats | None] | None = None,
         on_formation: Callable[[FormationSlot | FormationEnd | LeaderUpdate | LeaderScan], None]
         | None = None,
         fallback_urls: Sequence[str] = (),
@@ -115,6 +118,7 @@ class HubLink:
         self._on_manual = on_manual
         self._on_formation = on_formation
         self._scans = scans
+        self._scan_stats = scan_stats
         self.connected = asyncio.Event()
         self.disconnected = asyncio.Event()
         self.disconnected.set()
@@ -200,6 +204,8 @@ class HubLink:
                         tasks.create_task(self._send_scans(websocket, self._scans))
                     if self._live_state is not None:
                         tasks.create_task(self._send_live_while_behind(websocket))
+                    if self._scan_stats is not None:
+                        tasks.create_task(self._send_scan_stats(websocket, self._scan_stats))
                     try:
                         async for frame in websocket:
                             self._handle_frame(frame, websocket, tasks)
@@ -217,6 +223,19 @@ class HubLink:
             await asyncio.sleep(self.timeouts.live_state_interval_s)
             if self._outbox.backlog() > BEHIND_FRAMES:
                 await websocket.send(encode(self._live_now()))
+
+    async def _send_scan_stats(
+        self, websocket: ClientConnection, stats: Callable[[], ScanSourceStats | None]
+    ) -> None:
+        """The LIDAR parser's counts for the hub's scan diagnostics: at the start of each
+        session, then whenever they changed, checked every few seconds."""
+        sent: ScanSourceStats | None = None
+        while True:
+            current = stats()
+            if current is not None and current != sent:
+                await websocket.send(encode(current))
+                sent = current
+            await asyncio.sleep(self.timeouts.scan_stats_interval_s)
 
     def _live_now(self) -> LiveState:
         assert self._live_state is not None

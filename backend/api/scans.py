@@ -66,6 +66,14 @@ class ScanDiagnosticsBody(BaseModel):
     stored: int
     cleaned_ranges: int = Field(description="ranges beyond the sensor's maximum, dropped")
     rejected: dict[str, int] = Field(description="refused scans by reason")
+    source: str | None = Field(
+        default=None, description="the agent's scan source: its LIDAR model, mavlink or ros2"
+    )
+    source_counts: dict[str, int] = Field(
+        default_factory=dict,
+        description="the agent's parser, since the agent started: packets, points, and "
+        "what it dropped by reason (dropped_bad_checksum, dropped_noise_bytes, ...)",
+    )
 
 
 def _body(hub: HubDep, vehicle_id: str, data: bytes) -> ScanPoints:
@@ -151,7 +159,8 @@ async def scans_between(
     openapi_extra=requires(Permission.READ),
 )
 async def scan_diagnostics(vehicle_id: VehicleIdPath, hub: HubDep) -> ScanDiagnosticsBody:
-    """What the hub made of this vehicle's scans: received, stored, refused by reason."""
+    """What the hub made of this vehicle's scans (received, stored, refused by reason), and
+    what the agent's LIDAR parser decoded and dropped by reason, as the agent last said."""
     hub.registry.get(vehicle_id)
     counts = hub.scans.diagnostics_of(vehicle_id)
     return ScanDiagnosticsBody(
@@ -162,6 +171,8 @@ async def scan_diagnostics(vehicle_id: VehicleIdPath, hub: HubDep) -> ScanDiagno
         stored=counts.stored,
         cleaned_ranges=counts.cleaned_ranges,
         rejected=dict(counts.rejected),
+        source=counts.source,
+        source_counts=dict(counts.source_counts),
     )
 
 

@@ -39,6 +39,7 @@ from protocol.messages import (
     Pong,
     ProtocolError,
     Resend,
+    ScanSourceStats,
     SequencedKind,
     Telemetry,
     Unavailable,
@@ -389,6 +390,8 @@ class AgentSession(PeerConnection):
                 pass  # its arrival answered answers_within()
             case ManualApplied(seq=seq, sent_ms=sent_ms):
                 await manual_control.echo(self.hub, hello.vehicle_id, seq, sent_ms)
+            case ScanSourceStats(source=source, counts=counts):
+                self.hub.scans.source_reported(hello.vehicle_id, source, dict(counts))
             case Hello():
                 await self.reject(
                     ErrorReply(code="unexpected_message", message="hello was already received")

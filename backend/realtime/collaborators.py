@@ -50,6 +50,10 @@ class ScanIngest(Protocol):
         """Raises ValueError (with ``reason`` and ``message``) for a refused scan."""
         ...
 
+    def source_reported(self, vehicle_id: str, source: str, counts: dict[str, int]) -> None:
+        """The agent's word on its scan source (its parser's counts), for diagnostics."""
+        ...
+
 
 class ClientConnection(Protocol):
     """A dashboard's or integration's live feed, as the hub keeps it (to revoke)."""

@@ -69,6 +69,9 @@ class ScanDiagnostics:
     stored: int = 0
     cleaned_ranges: int = 0
     rejected: Counter[str] = field(default_factory=Counter)
+    # the agent's own word on its LIDAR source (protocol.messages.ScanSourceStats)
+    source: str | None = None
+    source_counts: dict[str, int] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
@@ -122,6 +125,12 @@ class ScanService:
 
     def diagnostics_of(self, vehicle_id: str) -> ScanDiagnostics:
         return self.diagnostics.setdefault(vehicle_id, ScanDiagnostics())
+
+    def source_reported(self, vehicle_id: str, source: str, counts: dict[str, int]) -> None:
+        """The agent's latest word on its scan source: kept for the diagnostics only."""
+        diagnostics = self.diagnostics_of(vehicle_id)
+        diagnostics.source = source
+        diagnostics.source_counts = counts
 
     async def ingest(self, vehicle_id: str, stream_id: str, data: bytes) -> ScanFrame:
         """Check, store, map and publish one scan frame; ScanRejected if refused."""

@@ -49,6 +49,7 @@ from protocol.messages import (
     Pong,
     ProtocolError,
     Resend,
+    ScanSourceStats,
     SubscribeMap,
     SubscribeScans,
     TakeoffCommand,
@@ -122,6 +123,7 @@ AGENT_FRAMES = [
     CommandResult(request_id="r1", outcome=Outcome(status="accepted", message="ok")),
     Pong(nonce="n"),
     ManualApplied(seq=9, sent_ms=12.5),
+    ScanSourceStats(source="ld06", counts={"packets": 600, "dropped_bad_crc": 2}),
 ]
 CLIENT_FRAMES = [
     Ping(nonce="n1"),

@@ -15,8 +15,8 @@ from simulator import ListenAddress, SimulatorConfig, SimulatorServer
 from simulator.lidar import Lidar, LidarSpec, Pose
 from simulator.world import Cylinder, World, box, load_scene, wall
 from simulator.ydlidar_wire import encode_beams, health
+from vehicle_agents.sensors.lidar.ydlidar import GET_HEALTH, START_SCAN, YdlidarParser
 from vehicle_agents.sensors.sources import Turn, TurnAssembler
-from vehicle_agents.sensors.ydlidar import GET_HEALTH, START_SCAN, YdlidarParser
 
 EXACT = LidarSpec(noise_sigma_m=0.0, dropout=0.0)
 
@@ -120,7 +120,7 @@ def test_the_wire_bytes_parse_back_to_the_beams() -> None:
                 turn = assembler.add(packet, i * 0.02)
                 if turn is not None:
                     turns.append(turn)
-    assert parser.stats.bad_checksums == parser.stats.skipped_bytes == 0
+    assert parser.stats.drops["bad_checksum"] == parser.stats.skipped_bytes == 0
     assert len(turns) == 7  # 0.78 s: the eighth turn is not finished
     assert set(turns[-1].ranges) == {6000}
     assert turns[-1].start == pytest.approx(0.6, abs=0.021)
@@ -155,7 +155,7 @@ async def _serve_and_parse() -> None:
                     if turn is not None:
                         turns.append(turn)
         writer.close()
-        assert parser.stats.bad_checksums == parser.stats.skipped_bytes == 0
+        assert parser.stats.drops["bad_checksum"] == parser.stats.skipped_bytes == 0
         assert parser.stats.responses == 1  # the start command's answer, then packets
         assert sum(1 for r in turns[-1].ranges if r) > 300  # the default yard around home
     finally:

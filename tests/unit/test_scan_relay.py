@@ -19,9 +19,9 @@ from simulator.world import default_scene
 from simulator.ydlidar_wire import encode_beams
 from tests.unit.test_scan_frame import _frame
 from vehicle_agents.sensors.fcu_time import FcuClock, PoseHistory, ask_timesync
+from vehicle_agents.sensors.lidar.ydlidar import YdlidarParser
 from vehicle_agents.sensors.relay import DiskBacklog, ScanOutbox
 from vehicle_agents.sensors.sources import TurnAssembler
-from vehicle_agents.sensors.ydlidar import YdlidarParser
 
 
 def _message(kind: str, boot_s: float, **fields: float) -> SimpleNamespace:

@@ -11,7 +11,8 @@ import pytest
 from simulator.lidar import Lidar, LidarSpec, Pose
 from simulator.world import default_scene
 from simulator.ydlidar_wire import SCAN_RESPONSE, encode_beams, health, packet
-from vehicle_agents.sensors.ydlidar import Health, Packet, YdlidarParser
+from vehicle_agents.sensors.lidar.common import Health, Packet
+from vehicle_agents.sensors.lidar.ydlidar import YdlidarParser
 
 
 def _stream(seconds: float = 0.5) -> bytes:
@@ -42,13 +43,13 @@ def _split(data: bytes, rng: random.Random) -> list[bytes]:
 def test_packets_split_anywhere_or_merged_parse_the_same() -> None:
     data = _stream()
     whole, parser = _parse([data])
-    assert parser.stats.bad_checksums == parser.stats.skipped_bytes == 0
+    assert parser.stats.drops["bad_checksum"] == parser.stats.skipped_bytes == 0
     assert sum(len(p.distances_mm) for p in whole) == 3601  # 0 to 0.5 s of 7,200 samples/s
     assert sum(p.zero for p in whole) == 6
     assert {p.scan_hz for p in whole if p.zero} == {10.0}
     split, parser = _parse(_split(data, random.Random(1)))
     assert split == whole
-    assert parser.stats.bad_checksums == parser.stats.skipped_bytes == 0
+    assert parser.stats.drops["bad_checksum"] == parser.stats.skipped_bytes == 0
 
 
 def test_a_corrupted_packet_is_counted_and_the_rest_survive() -> None:
@@ -59,7 +60,7 @@ def test_a_corrupted_packet_is_counted_and_the_rest_survive() -> None:
     corrupted[3] = bytes(flipped)
     packets, parser = _parse([b"".join(corrupted)])
     assert len(packets) == 9
-    assert parser.stats.bad_checksums == 1
+    assert parser.stats.drops["bad_checksum"] == 1
     assert packets[0].distances_mm == [1000, 2000, 3000]
     assert packets[0].angles_deg == pytest.approx([10.0, 10.5, 11.0])
 
@@ -70,7 +71,7 @@ def test_garbage_between_and_a_truncated_packet_are_skipped() -> None:
     packets, parser = _parse([data])
     assert [p.distances_mm for p in packets] == [[1500, 1600]] * 3
     assert parser.stats.skipped_bytes > 0
-    assert parser.stats.bad_checksums >= 1  # the truncated packet's header read as one
+    assert parser.stats.drops["bad_checksum"] >= 1  # the truncated packet's header read as one
 
 
 def _raw_packet(samples: bytes) -> bytes:
@@ -87,7 +88,7 @@ def test_a_header_pattern_inside_samples_does_not_lose_the_packet() -> None:
     packets, parser = _parse([b"\xaa" + one + one])
     assert len(packets) == 2
     assert packets[0].distances_mm == [0x1055 >> 2, 0x55AA >> 2, 0x0320 >> 2]
-    assert parser.stats.bad_checksums == 0
+    assert parser.stats.drops["bad_checksum"] == 0
 
 
 def test_random_garbage_never_raises_and_memory_stays_bounded() -> None:
@@ -100,7 +101,7 @@ def test_random_garbage_never_raises_and_memory_stays_bounded() -> None:
     for chunk in _split(bytes(noisy) + rng.randbytes(200_000), rng):
         parser.feed(chunk)
         assert len(parser._buffer) <= 64 * 1024 + 2048
-    assert parser.stats.bad_checksums > 0
+    assert parser.stats.drops["bad_checksum"] > 0
     assert parser.stats.packets > 0
 
 
@@ -108,11 +109,11 @@ def test_the_answers_to_the_drivers_commands_are_read_not_counted_as_garbage() -
     # What a T-mini Pro sends after stop, health and start: the health answer (here an
     # error), the start answer, then packets; and an answer of a kind the driver never asks.
     one = packet(0, [90.0, 91.0], [1500, 1600])
-    data = health(2, 0x0102) + SCAN_RESPONSE + one + bytes([0xA5, 0x5A, 0x14, 0, 0, 0, 0x04]) + one
+    data = health(2, 0x0102) + SCAN_RESPONSE + one + bytes([0xA5, 0x5A, 0x04, 0, 0, 0, 0x15]) + one
     for chunks in ([data], _split(data, random.Random(3)), [bytes([b]) for b in data]):
         packets, parser = _parse(chunks)
         assert [p.distances_mm for p in packets] == [[1500, 1600]] * 2
         assert parser.stats.responses == 2
         assert parser.health == Health(2, 0x0102)
         assert parser.stats.skipped_bytes == 7  # the unknown answer's descriptor
-        assert parser.stats.bad_checksums == 0
+        assert parser.stats.drops["bad_checksum"] == 0

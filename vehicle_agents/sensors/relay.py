@@ -22,6 +22,7 @@ from pathlib import Path
 from typing import Protocol
 
 from common.retry import Backoff, Retries
+from protocol.messages import MAX_SOURCE_COUNTS, ScanSourceStats
 from protocol.scans import FLAG_REPLAYED, Mount, ScanFrame, encode_scan, with_flags
 from vehicle_agents.sensors.fcu_time import PoseHistory
 from vehicle_agents.sensors.sources import ScanSource, Turn
@@ -140,8 +141,10 @@ class ScanRelay:
         monotonic: Callable[[], float] = time.monotonic,
         wall: Callable[[], float] = time.time,
         reconnect: Backoff | None = None,
+        source_name: str = "lidar",
     ) -> None:
         self.source = source
+        self.source_name = source_name
         self.poses = poses
         self.outbox = outbox
         self.mount = mount or Mount()
@@ -150,6 +153,14 @@ class ScanRelay:
         self._wall = wall
         self._reconnect = reconnect or Backoff(initial_s=0.5, max_s=5.0)
         self._seq = 0
+
+    def source_stats(self) -> ScanSourceStats | None:
+        """The source's counts (its parser's packets, points, drops by reason) for the
+        hub's scan diagnostics; None before it has any."""
+        counts = dict(list(self.source.stats.items())[:MAX_SOURCE_COUNTS])
+        if not counts:
+            return None
+        return ScanSourceStats(source=self.source_name, counts=counts)
 
     async def run(self) -> None:
         retries = Retries(self._reconnect)

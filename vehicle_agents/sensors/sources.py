@@ -1,8 +1,8 @@
 """Scan sources behind one interface: each yields whole turns, stamped on the agent's clock.
 
-- `YdlidarSource`: a YDLIDAR on a serial port (``/dev/ttyUSB0``, 230400 baud for a
-  T-mini Pro), or the simulator's LIDAR socket (``tcp://HOST:PORT``), whose bytes are the
-  same; parsed by `vehicle_agents.sensors.ydlidar`.
+- `SerialLidarSource`: a Slamtec, YDLIDAR or LDROBOT LIDAR on a serial port
+  (``/dev/ttyUSB0``), or the simulator's LIDAR socket (``tcp://HOST:PORT``), whose bytes
+  are the same; parsed by `vehicle_agents.sensors.lidar` (the model picks the family).
 - `MavlinkRangeSource`: MAVLink OBSTACLE_DISTANCE and DISTANCE_SENSOR from the flight
   controller, for a rangefinder wired to the autopilot (ArduPilot's proximity library
   reports 8 sectors as DISTANCE_SENSOR, PX4 72 as OBSTACLE_DISTANCE; SITL can simulate
@@ -29,13 +29,15 @@ from typing import Any, Protocol
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from vehicle_agents.sensors.envelope import lower_envelope_slope
-from vehicle_agents.sensors.ydlidar import (
-    GET_HEALTH,
-    START_SCAN,
-    STOP_SCAN,
-    Packet,
-    YdlidarParser,
+from vehicle_agents.sensors.lidar.common import Packet
+from vehicle_agents.sensors.lidar.models import (
+    DEFAULT_MODEL,
+    make_parser,
+    model_named,
+    start_commands,
+    stop_command,
 )
+from vehicle_agents.sensors.lidar.rplidar import motor_pwm
 
 log = logging.getLogger(__name__)
 
@@ -121,7 +123,7 @@ class SensorClock:
 
 @dataclass
 class TurnAssembler:
-    """YDLIDAR packets into turns on a fixed grid of ``resolution_deg`` beams, each turn
+    """Packets into turns on a fixed grid of ``resolution_deg`` beams, each turn
     timed by a `SensorClock` (the sensor's own frequency only until it has samples)."""
 
     resolution_deg: float = 0.5
@@ -171,89 +173,98 @@ class TurnAssembler:
         )
 
 
-# What YDLidar-SDK's driver sends to start a sensor: stop whatever it was doing, ask its
-# health, start the scan. A T-mini Pro idles until it gets the start command.
-STARTUP = STOP_SCAN + GET_HEALTH + START_SCAN
+COMMAND_GAP_S = 0.05  # between commands on a serial line: a sensor answers one, then reads on
 
 
-class YdlidarSource:
-    """A YDLIDAR on ``tcp://HOST:PORT`` (the simulator) or a serial device path. The same
-    commands start it on either, and the sensor's health answer is logged if not good."""
+class SerialLidarSource:
+    """A serial LIDAR on ``tcp://HOST:PORT`` (the simulator) or a serial device path. The
+    same commands start it on either (stop whatever it was doing, ask its information and
+    health, start the scan), and a health answer that is not good is logged. ``stats``:
+    the parser's packets, points and drops by reason, refreshed with every turn."""
 
     def __init__(
         self,
         url: str,
         resolution_deg: float = 0.5,
-        baud: int = 230400,
+        baud: int | None = None,
+        model: str = DEFAULT_MODEL,
+        scan_mode: int = 0,
         monotonic: Callable[[], float] = time.monotonic,
     ) -> None:
         self.url = url
-        self.baud = baud
-        self.parser = YdlidarParser()
+        self.model = model_named(model)
+        self.baud = baud or self.model.baud
+        self.scan_mode = scan_mode
+        self.parser = make_parser(self.model)
         self.assembler = TurnAssembler(resolution_deg)
         self._monotonic = monotonic
         self.stats: dict[str, int] = {}
-
-    def _update_stats(self) -> None:
-        s = self.parser.stats
-        self.stats = {
-            "packets": s.packets,
-            "bad_checksums": s.bad_checksums,
-            "skipped_bytes": s.skipped_bytes,
-        }
 
     async def turns(self) -> AsyncIterator[Turn]:
         reported = None
         async for chunk, arrived in self._chunks():
             packets = self.parser.feed(chunk)
+            self.stats = self.parser.stats.as_dict()
             if self.parser.health != reported:
                 reported = self.parser.health
                 if reported is not None and reported.status != 0:
-                    log.warning(
-                        "LIDAR %s reports status %d, error code %#06x",
-                        self.url,
-                        reported.status,
-                        reported.error_code,
-                    )
+                    log.warning("LIDAR %s reports %s", self.url, reported.text)
             for packet in packets:
                 turn = self.assembler.add(packet, arrived)
                 if turn is not None:
-                    self._update_stats()
                     yield turn
 
     async def _chunks(self) -> AsyncIterator[tuple[bytes, float]]:
+        stop = stop_command(self.model)
         if self.url.startswith("tcp://"):
             host, _, port = self.url.removeprefix("tcp://").rpartition(":")
             reader, writer = await asyncio.open_connection(host, int(port))
             try:
-                writer.write(STARTUP)
+                writer.write(stop + b"".join(start_commands(self.model, self.scan_mode)))
                 await writer.drain()
                 while data := await reader.read(READ_SIZE):
                     yield data, self._monotonic()
             finally:
                 with contextlib.suppress(ConnectionError, OSError):
-                    writer.write(STOP_SCAN)
+                    writer.write(stop)
                 writer.close()
                 with contextlib.suppress(ConnectionError, OSError):
                     await writer.wait_closed()
             raise ConnectionError(f"LIDAR {self.url} closed the connection")
-        async for item in self._serial_chunks():
+        async for item in self._serial_chunks(stop):
             yield item
 
-    async def _serial_chunks(self) -> AsyncIterator[tuple[bytes, float]]:
-        """A serial port, read by a thread (pyserial blocks) into the event loop."""
+    def _open_serial(self, stop: bytes) -> Any:
+        """Open the port and start the sensor (blocking: run in a thread)."""
         import serial  # type: ignore[import-untyped]  # pyserial: in the agent's base set
 
         port = serial.Serial(self.url, self.baud, timeout=0.05)
-        port.write(STOP_SCAN)
+        if self.model.family == "rplidar":
+            # Slamtec's USB adapter runs the motor while DTR is low (a bare UART has no
+            # DTR line: the motor is then wired to run)
+            with contextlib.suppress(OSError):
+                port.dtr = False
+        if stop:
+            port.write(stop)
+            time.sleep(COMMAND_GAP_S)
         port.reset_input_buffer()  # the packets of a scan left running
-        port.write(GET_HEALTH + START_SCAN)
+        for command in start_commands(self.model, self.scan_mode):
+            port.write(command)
+            time.sleep(COMMAND_GAP_S)
+        return port
+
+    async def _serial_chunks(self, stop_bytes: bytes) -> AsyncIterator[tuple[bytes, float]]:
+        """A serial port, read by a thread (pyserial blocks) into the event loop."""
+        import serial
+
+        port = await asyncio.to_thread(self._open_serial, stop_bytes)
         queue: asyncio.Queue[tuple[bytes, float]] = asyncio.Queue(maxsize=256)
         loop = asyncio.get_running_loop()
         stop = threading.Event()
 
         def put(item: tuple[bytes, float]) -> None:
             if queue.full():  # the loop fell behind: drop bytes, as a UART would
+                self.parser.stats.drops["queue_full_bytes"] += len(item[0])
                 return
             queue.put_nowait(item)
 
@@ -272,7 +283,11 @@ class YdlidarSource:
             stop.set()
             await asyncio.to_thread(reader.join, 1.0)
             with contextlib.suppress(OSError, serial.SerialException):
-                port.write(STOP_SCAN)  # the head stops spinning
+                port.write(stop_bytes)  # the scan stops
+                if self.model.motor_pwm:
+                    port.write(motor_pwm(0))  # an A2/A3's motor stops
+                if self.model.family == "rplidar":
+                    port.dtr = True  # and an A1's (or any on Slamtec's USB adapter)
             port.close()
 
 

@@ -970,7 +970,8 @@ export interface paths {
         };
         /**
          * Scan Diagnostics
-         * @description What the hub made of this vehicle's scans: received, stored, refused by reason.
+         * @description What the hub made of this vehicle's scans (received, stored, refused by reason), and
+         *     what the agent's LIDAR parser decoded and dropped by reason, as the agent last said.
          */
         get: operations["scan_diagnostics_api_v1_vehicles__vehicle_id__scans_diagnostics_get"];
         put?: never;
@@ -3016,6 +3017,18 @@ export interface components {
              * @description refused scans by reason
              */
             rejected: {
+                [key: string]: number;
+            };
+            /**
+             * Source
+             * @description the agent's scan source: its LIDAR model, mavlink or ros2
+             */
+            source?: string | null;
+            /**
+             * Source Counts
+             * @description the agent's parser, since the agent started: packets, points, and what it dropped by reason (dropped_bad_checksum, dropped_noise_bytes, ...)
+             */
+            source_counts?: {
                 [key: string]: number;
             };
         };

@@ -15,7 +15,15 @@
  */
 export type AnyMessage = AgentToHub | HubToAgent | ClientToHub | HubToClient;
 export type AgentToHub =
-  Hello | Telemetry | LiveState | Event | CommandResult | Unavailable | Pong | ManualApplied;
+  | Hello
+  | Telemetry
+  | LiveState
+  | Event
+  | CommandResult
+  | Unavailable
+  | Pong
+  | ManualApplied
+  | ScanSourceStats;
 export type HubToAgent =
   | Welcome
   | CommandRequest
@@ -366,6 +374,25 @@ export interface ManualApplied {
   type: "manual_applied";
   seq: number;
   sent_ms: number | null;
+}
+/**
+ * The agent's scan source (its LIDAR's parser): what it decoded and what it threw
+ * away, by reason, since the agent started. Sent when the counts change, every few
+ * seconds at most; the hub shows the latest in the vehicle's scan diagnostics (never
+ * stored), so an empty scan comes with a reason.
+ */
+export interface ScanSourceStats {
+  type: "scan_source_stats";
+  /**
+   * the LIDAR model (rplidar-a1, ld06, ...), mavlink or ros2
+   */
+  source: string;
+  /**
+   * packets, points, responses, and dropped_<reason> (bad_checksum, noise_bytes, ...) for a serial LIDAR; each source's own counters otherwise
+   */
+  counts: {
+    [k: string]: number | undefined;
+  };
 }
 export interface Welcome {
   type: "welcome";

@@ -1033,7 +1033,7 @@ class LeaseState(Message):
         default=None,
         max_length=MAX_NAME_CHARS,
         description="a mission was in progress when the lease began and is paused: "
-        "set this mode to resume it (ArduPilot AUTO, PX4 AUTO.MISSION)",
+        "set this mode to resume it (ArduPilot AUTO, PX4 MISSION)",
     )
 
 

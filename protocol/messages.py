@@ -953,6 +953,19 @@ class Pong(Message):
     nonce: str | None = Field(default=None, max_length=64)
 
 
+class ModeList(Message):
+    """The vehicle's modes as its autopilot reports them (MAVLink AVAILABLE_MODES: PX4
+    from 1.15, ArduPilot from 4.7), sent when the agent has read the list after its hello
+    and whenever the autopilot says it changed (AVAILABLE_MODES_MONITOR). It replaces the
+    hello's ``modes``, which were the agent's fixed table for the autopilot until then."""
+
+    type: Literal["modes"] = "modes"
+    modes: list[Name] = Field(
+        max_length=MAX_MODES,
+        description="Mode names set_mode accepts, as the autopilot lists them.",
+    )
+
+
 # ---------------------------------------------------------------------------
 # Manual control (browser -> hub -> agent)
 # ---------------------------------------------------------------------------
@@ -1232,7 +1245,15 @@ class LeaderScan(Message):
 # The hub pings an agent to learn whether it is still there (another agent wants its
 # vehicle id); the agent answers with a pong.
 AgentToHub: TypeAlias = Annotated[
-    Hello | Telemetry | LiveState | Event | CommandResult | Unavailable | Pong | ManualApplied,
+    Hello
+    | Telemetry
+    | LiveState
+    | Event
+    | CommandResult
+    | Unavailable
+    | Pong
+    | ManualApplied
+    | ModeList,
     Field(discriminator="type"),
 ]
 HubToAgent: TypeAlias = Annotated[

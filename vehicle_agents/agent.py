@@ -24,6 +24,7 @@ from protocol.messages import (
     encode,
 )
 from vehicle_agents import __version__
+from vehicle_agents.available_modes import AvailableModes
 from vehicle_agents.commands import CommandExecutor
 from vehicle_agents.config import AgentSettings, default_vehicle_id, hub_http_base
 from vehicle_agents.fcu_events import FcuLinkEvents
@@ -31,7 +32,7 @@ from vehicle_agents.fcu_link import FcuLink, MavMessage
 from vehicle_agents.formation import FormationRunner
 from vehicle_agents.forwarding import MavlinkForwarder
 from vehicle_agents.hub_failsafe import HubLinkFailsafe, reconnect_backoff
-from vehicle_agents.hub_link import HubLink, HubTimeouts, VehicleIdInUse
+from vehicle_agents.hub_link import HubLink, HubTimeouts, ModeReport, VehicleIdInUse
 from vehicle_agents.manual import ManualPilot
 from vehicle_agents.mission_progress import ReachedItems
 from vehicle_agents.missions import mission_number
@@ -94,6 +95,9 @@ async def _run(settings: AgentSettings) -> None:
             agent_version=__version__,
             stream_id=uuid.uuid4().hex[:16],
         )
+        # The autopilot's own mode list, once read, replaces the fixed table the hello has.
+        mode_report = ModeReport(hello.modes)
+        tasks.create_task(AvailableModes(link, lambda table: mode_report.update(table.names)).run())
         outbox = open_outbox(settings, vehicle_id, hello.stream_id)
         events = EventSource(outbox, link.modes.autopilot)
         link.listeners.append(events.on_message)
@@ -120,6 +124,7 @@ async def _run(settings: AgentSettings) -> None:
             on_formation=formation.on_hub,
             scans=scans,
             fallback_urls=settings.hub_fallback,
+            modes=mode_report,
             timeouts=HubTimeouts(
                 reconnect=reconnect_backoff(
                     settings.hub_failsafe_action,

@@ -156,6 +156,7 @@ AGENT_MESSAGE_PERMISSIONS: dict[str, Permission] = {
     "unavailable": Permission.AGENT,
     "pong": Permission.AGENT,
     "manual_applied": Permission.AGENT,
+    "modes": Permission.AGENT,
 }
 
 

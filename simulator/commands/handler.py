@@ -22,7 +22,7 @@ from simulator.commands.missions import MISSION_MESSAGES, Missions
 from simulator.commands.navigation import POSITION_COMMANDS, Navigation
 from simulator.commands.params import Parameters
 from simulator.commands.requests import Requests, StreamControl
-from simulator.mavconst import MavCmd, MavResult
+from simulator.mavconst import MavCmd, MavResult, MsgId
 
 
 class MessageHandler(ArmingAndModes, Navigation, Parameters, Missions, Requests):
@@ -118,6 +118,12 @@ class MessageHandler(ArmingAndModes, Navigation, Parameters, Missions, Requests)
                     extra_after.append(Reply(self.telemetry.home_position(), False))
             case MavCmd.PREFLIGHT_REBOOT_SHUTDOWN:
                 result = self._reboot(cmd)
+            case MavCmd.REQUEST_MESSAGE if as_int(cmd.param1) == MsgId.AVAILABLE_MODES:
+                # param2: 0 every mode, else the one at that index (GCS_MAVLINK / PX4's
+                # AVAILABLE_MODES stream); one message each, after the ACK
+                listed = self.telemetry.available_modes(as_int(cmd.param2))
+                result = MavResult.ACCEPTED if listed is not None else MavResult.UNSUPPORTED
+                extra_after.extend(Reply(message) for message in listed or ())
             case MavCmd.REQUEST_MESSAGE:
                 requested = self.telemetry.build(as_int(cmd.param1))
                 result = MavResult.ACCEPTED if requested is not None else MavResult.FAILED

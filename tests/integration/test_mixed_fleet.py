@@ -131,23 +131,51 @@ def test_rover_connects_lists_rover_modes_and_drives_a_mission(
 def test_px4_copter_lists_px4_modes_and_reports_them_decoded(
     clients: tuple[httpx.Client, FleetWatcher],
 ) -> None:
+    """PX4 lists its own modes (AVAILABLE_MODES): the hub offers those, under the names
+    the agent gives every PX4 mode (pymavlink's where it has one), and none PX4 lacks
+    (RATTITUDE, RTGS) or keeps from the user (Termination, unregistered external modes)."""
     api, watcher = clients
-    copter = listed_once_ready(clients, PX4, "the PX4 copter")
-    assert (copter["vehicle_type"], copter["autopilot"]) == ("multirotor", "px4")
-    assert {"MANUAL", "POSCTL", "LOITER", "MISSION", "RTL", "LAND", "OFFBOARD"} <= set(
-        copter["modes"]
+    listed_once_ready(clients, PX4, "the PX4 copter")
+    # The list comes after the hello, once the agent has read it off the autopilot.
+    watcher.wait_until(
+        lambda v: "PRECISION_LANDING" in v[PX4].get("modes", []), 20, "PX4's own mode list"
     )
-    assert "GUIDED" not in copter["modes"]
+    copter = api.get(f"/api/v1/vehicles/{PX4}").json()
+    assert (copter["vehicle_type"], copter["autopilot"]) == ("multirotor", "px4")
+    assert sorted(copter["modes"]) == [
+        "ACRO",
+        "ALTCTL",
+        "FOLLOWME",
+        "LAND",
+        "LOITER",
+        "MANUAL",
+        "MISSION",
+        "OFFBOARD",
+        "ORBIT",
+        "POSCTL",
+        "PRECISION_LANDING",
+        "RTL",
+        "STABILIZED",
+        "TAKEOFF",
+        "VTOL_TAKEOFF",
+    ]
     assert copter["state"]["mode"] == "MANUAL"
+    refused = api.post(
+        f"/api/v1/vehicles/{PX4}/commands", json={"name": "set_mode", "mode": "RATTITUDE"}
+    )
+    assert refused.status_code == 422, refused.text
 
     assert send_command(api, PX4, name="set_mode", mode="POSCTL")["status"] == "accepted"
     watcher.wait_until(lambda v: state_of(v, PX4).get("mode") == "POSCTL", 10, "POSCTL")
     assert send_command(api, PX4, name="hold")["status"] == "accepted"  # PX4's Hold: AUTO.LOITER
     watcher.wait_until(lambda v: state_of(v, PX4).get("mode") == "LOITER", 10, "Hold")
 
+    # PX4 accepts OFFBOARD without a setpoint stream and stays in Hold: not a change.
     offboard = send_command(api, PX4, name="set_mode", mode="OFFBOARD")
-    assert offboard["status"] == "refused"
-    assert offboard["result"] == "MAV_RESULT_TEMPORARILY_REJECTED"
+    assert offboard["status"] == "failed", offboard
+    assert offboard["result"] == "MAV_RESULT_ACCEPTED"
+    assert offboard["message"] == "OFFBOARD: accepted but the mode stayed LOITER"
+    assert state_of(watcher.vehicles, PX4).get("mode") == "LOITER"
 
     assert send_command(api, PX4, name="takeoff", altitude=8)["status"] == "accepted"
     watcher.wait_until(lambda v: state_of(v, PX4).get("mode") == "TAKEOFF", 10, "Takeoff mode")

@@ -777,7 +777,8 @@ def _said_once_schema(schema: dict[str, Any]) -> None:
 class VehicleChange(Message):
     """One vehicle's live update. It carries ``autopilot``, ``vehicle_type`` and ``modes``
     (a third of the frame, ten times a second) only the first time this connection shows
-    the vehicle and when they change (its agent reconnected with another hello); the fleet
+    the vehicle and when they change (its agent reconnected with another hello, or sent
+    the autopilot's own mode list); the fleet
     snapshot a new connection starts with always has them."""
 
     model_config = ConfigDict(json_schema_extra=_said_once_schema)

@@ -15,7 +15,15 @@
  */
 export type AnyMessage = AgentToHub | HubToAgent | ClientToHub | HubToClient;
 export type AgentToHub =
-  Hello | Telemetry | LiveState | Event | CommandResult | Unavailable | Pong | ManualApplied;
+  | Hello
+  | Telemetry
+  | LiveState
+  | Event
+  | CommandResult
+  | Unavailable
+  | Pong
+  | ManualApplied
+  | ModeList;
 export type HubToAgent =
   | Welcome
   | CommandRequest
@@ -366,6 +374,21 @@ export interface ManualApplied {
   type: "manual_applied";
   seq: number;
   sent_ms: number | null;
+}
+/**
+ * The vehicle's modes as its autopilot reports them (MAVLink AVAILABLE_MODES: PX4
+ * from 1.15, ArduPilot from 4.7), sent when the agent has read the list after its hello
+ * and whenever the autopilot says it changed (AVAILABLE_MODES_MONITOR). It replaces the
+ * hello's ``modes``, which were the agent's fixed table for the autopilot until then.
+ */
+export interface ModeList {
+  type: "modes";
+  /**
+   * Mode names set_mode accepts, as the autopilot lists them.
+   *
+   * @maxItems 64
+   */
+  modes: string[];
 }
 export interface Welcome {
   type: "welcome";
@@ -840,7 +863,8 @@ export interface VehicleBatch {
 /**
  * One vehicle's live update. It carries ``autopilot``, ``vehicle_type`` and ``modes``
  * (a third of the frame, ten times a second) only the first time this connection shows
- * the vehicle and when they change (its agent reconnected with another hello); the fleet
+ * the vehicle and when they change (its agent reconnected with another hello, or sent
+ * the autopilot's own mode list); the fleet
  * snapshot a new connection starts with always has them.
  */
 export interface VehicleChange {
@@ -934,7 +958,7 @@ export interface LeaseState {
   holder: string | null;
   reason: string;
   /**
-   * a mission was in progress when the lease began and is paused: set this mode to resume it (ArduPilot AUTO, PX4 AUTO.MISSION)
+   * a mission was in progress when the lease began and is paused: set this mode to resume it (ArduPilot AUTO, PX4 MISSION)
    */
   resume_mode: string | null;
 }

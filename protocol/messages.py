@@ -420,6 +420,33 @@ class ParamFix(Message):
     value: Float32
 
 
+MAX_PARAM_ENUM_VALUES = 64
+MAX_PARAM_TEXT_CHARS = 500
+
+
+class ParamEnumValue(Message):
+    value: float
+    description: str = Field(max_length=MAX_PARAM_TEXT_CHARS)
+
+
+class ParamMeta(Message):
+    """What a parameter means, from the autopilot's own metadata (PX4's parameter
+    metadata over its component metadata protocol): its range, the values it takes, its
+    units and description. A write outside the range or the values is refused."""
+
+    source: Literal["autopilot"] = Field(
+        default="autopilot", description="where it came from: the autopilot's own metadata"
+    )
+    description: str = Field(default="", max_length=MAX_PARAM_TEXT_CHARS)
+    units: str | None = Field(default=None, max_length=32)
+    min: float | None = None
+    max: float | None = None
+    values: list[ParamEnumValue] | None = Field(
+        default=None, max_length=MAX_PARAM_ENUM_VALUES, description="the values it takes"
+    )
+    reboot_required: bool = False
+
+
 class CommandOutcome(Message):
     """What the flight controller answered, in words an operator can act on."""
 
@@ -444,6 +471,11 @@ class CommandOutcome(Message):
         default=None,
         description="A refusal the vehicle's setup causes: the parameter change that "
         "would lift it (e.g. SYSID_MYGCS for manual control)",
+    )
+    param_meta: ParamMeta | None = Field(
+        default=None,
+        description="For param_get and param_set: the parameter's metadata, when the "
+        "autopilot publishes it (PX4); absent, its range was not checked.",
     )
 
 

@@ -38,6 +38,7 @@ from vehicle_agents.mission_progress import ReachedItems
 from vehicle_agents.missions import mission_number
 from vehicle_agents.modes import is_armed
 from vehicle_agents.outbox import Outbox, SpillFile
+from vehicle_agents.param_metadata import ParamMetadata
 from vehicle_agents.sensors.fcu_time import FcuClock, PoseHistory, ask_timesync
 from vehicle_agents.sensors.relay import DiskBacklog, ScanOutbox, ScanRelay, parse_mount
 from vehicle_agents.sensors.ros2 import SCHEME as ROS2_SCHEME
@@ -103,6 +104,9 @@ async def _run(settings: AgentSettings) -> None:
         link.listeners.append(events.on_message)
         link.state_listeners.append(FcuLinkEvents(events.emit).on_link_change)
         executor = CommandExecutor(link)
+        if link.modes.autopilot == "px4":  # the autopilot that publishes its metadata
+            executor.params.metadata = ParamMetadata(link)
+            tasks.create_task(executor.params.metadata.run())
         pilot = ManualPilot(link, executor, events.emit, source_system=settings.source_system)
         tasks.create_task(pilot.run())
         formation = FormationRunner(link, executor, events.emit)

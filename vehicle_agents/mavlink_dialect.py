@@ -6,6 +6,8 @@ import os
 import sys
 from typing import Any
 
+from protocol import mavlink_extra as component_metadata
+
 DIALECT = "ardupilotmega"
 UNUSED_ON_IMPORT = "pymavlink.dialects.v10.all"
 
@@ -51,6 +53,7 @@ def teach_standard_modes() -> None:
 
     for message_id in STANDARD_MODES_IDS:
         ardupilotmega.mavlink_map.setdefault(message_id, development.mavlink_map[message_id])
+    component_metadata.register()  # COMPONENT_METADATA, which no pymavlink dialect has
 
 
 teach_standard_modes()

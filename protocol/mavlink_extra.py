@@ -19,7 +19,7 @@ MAVLINK_MSG_ID_COMPONENT_METADATA = 397
 URI_LEN = 100
 
 
-class MAVLink_component_metadata_message(ardupilotmega.MAVLink_message):  # type: ignore[misc]  # noqa: N801
+class MAVLink_component_metadata_message(ardupilotmega.MAVLink_message):  # type: ignore[misc]
     id = MAVLINK_MSG_ID_COMPONENT_METADATA
     msgname = "COMPONENT_METADATA"
     fieldnames = ["time_boot_ms", "file_crc", "uri"]

@@ -48,7 +48,7 @@ from simulator.mavconst import (
 )
 from simulator.param_table import ParamTable
 from simulator.params import CopterParams
-from simulator.px4_params import Px4ParamTable
+from simulator.px4_params import GENERAL_METADATA_URI, Px4ParamTable, metadata_files
 
 Sticks = tuple[int, int, int, int]  # MANUAL_CONTROL's x, y, z, r
 # ArduPilot SITL's RC input: roll, pitch and yaw at mid stick, the throttle at its minimum.
@@ -192,6 +192,13 @@ class Personality(ABC):
     # CURRENT_MODE stream).
     available_modes: tuple[AvailableMode, ...] = ()
     sends_current_mode: bool = False
+    # The component metadata PX4 publishes (COMPONENT_METADATA's mftp:// address, and the
+    # files its MAVLink FTP serves); ArduPilot publishes none.
+    general_metadata_uri: str | None = None
+
+    def metadata_files(self) -> dict[str, bytes]:
+        return {}
+
     # A mission's NAV_TAKEOFF with a position: PX4 climbs, then flies there as to a
     # waypoint (navigator/mission.cpp: "if we just did a normal takeoff navigate to the
     # actual waypoint now"); ArduCopter climbs where it is and ignores it.
@@ -365,6 +372,10 @@ class Px4Personality(Personality):
     takeoff_flies_to_position = True
     available_modes = PX4_AVAILABLE_MODES
     sends_current_mode = True
+    general_metadata_uri = GENERAL_METADATA_URI
+
+    def metadata_files(self) -> dict[str, bytes]:
+        return metadata_files()
 
     def __init__(self) -> None:
         # the PX4 mode last selected by name, and the copter mode that flies it

@@ -13,6 +13,7 @@ from typing import Any
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 from pymavlink.dialects.v20 import development
 
+from protocol.mavlink_extra import MAVLink_component_metadata_message
 from simulator.mavconst import MsgId, SysSensor
 from simulator.mission import MissionItem
 from simulator.param_table import PARAM_ID_LEN
@@ -393,6 +394,10 @@ class TelemetryBuilder:
             )
             for at in indices
         ]
+
+    def component_metadata(self, uri: str) -> MavMessage:
+        """COMPONENT_METADATA: where the general metadata file is (an mftp:// address)."""
+        return MAVLink_component_metadata_message(self._time_boot_ms, 0, uri.encode())
 
     def current_mode(self) -> MavMessage:
         """CURRENT_MODE (PX4 sends it on each change): the mode now, and as intended."""

@@ -301,6 +301,10 @@ export interface CommandOutcome {
    * A refusal the vehicle's setup causes: the parameter change that would lift it (e.g. SYSID_MYGCS for manual control)
    */
   fix: ParamFix | null;
+  /**
+   * For param_get and param_set: the parameter's metadata, when the autopilot publishes it (PX4); absent, its range was not checked.
+   */
+  param_meta: ParamMeta | null;
 }
 /**
  * One mission item, as MISSION_ITEM_INT carries it (positions in degrees).
@@ -349,6 +353,30 @@ export interface ParamFix {
    */
   param: string;
   value: number;
+}
+/**
+ * What a parameter means, from the autopilot's own metadata (PX4's parameter
+ * metadata over its component metadata protocol): its range, the values it takes, its
+ * units and description. A write outside the range or the values is refused.
+ */
+export interface ParamMeta {
+  /**
+   * where it came from: the autopilot's own metadata
+   */
+  source: "autopilot";
+  description: string;
+  units: string | null;
+  min: number | null;
+  max: number | null;
+  /**
+   * the values it takes
+   */
+  values: ParamEnumValue[] | null;
+  reboot_required: boolean;
+}
+export interface ParamEnumValue {
+  value: number;
+  description: string;
 }
 /**
  * The agent's answer to a resend it cannot serve: those frames were dropped when its

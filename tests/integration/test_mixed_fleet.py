@@ -15,6 +15,7 @@ from tests.helpers import (
     FleetWatcher,
     access_token,
     api_client,
+    poll_until,
     ready,
     running_fleet,
     send_command,
@@ -351,3 +352,44 @@ def test_a_px4_flying_its_mission_runs_a_do_item_made_current_at_once_and_moves_
         send_command(api, PX4, name="rtl")
         watcher.wait_until(lambda v: not state_of(v, PX4).get("armed"), 180, "home, disarmed")
         api.delete(url)
+
+
+def test_px4s_parameter_metadata_refuses_a_value_outside_it_and_explains_each(
+    clients: tuple[httpx.Client, FleetWatcher],
+) -> None:
+    """PX4 stores whatever PARAM_SET says (it checks no range): the agent reads PX4's own
+    parameter metadata (COMPONENT_METADATA, then its xz files over MAVLink FTP) and refuses
+    a value outside it before it is sent. The answers say what a parameter means."""
+    api, _watcher = clients
+    listed_once_ready(clients, PX4, "the PX4 copter")
+    url = f"/api/v1/vehicles/{PX4}/params/COM_RC_IN_MODE"
+    read = poll_until(
+        lambda: (answer := api.get(url).json()).get("metadata") and answer,
+        30,
+        "the metadata read off the autopilot",
+    )
+    assert read["values"] == {"COM_RC_IN_MODE": 3.0}
+    meta = read["metadata"]
+    assert meta["source"] == "autopilot"
+    assert meta["description"] == "Manual control input source configuration"
+    assert [v["value"] for v in meta["values"]] == [0, 1, 2, 3, 4]
+    assert meta["values"][4]["description"] == "Disable manual control"
+
+    refused = api.put(url, json={"value": 9})
+    assert refused.status_code == 409, refused.text
+    assert (
+        "COM_RC_IN_MODE: 9 is not one of the values it takes (0 RC Transmitter only, "
+        "1 MAVLink only, 2 RC and MAVLink with fallback, 3 RC or MAVLink keep first, "
+        "4 Disable manual control)" in refused.json()["detail"]
+    )
+    assert api.get(url).json()["values"] == {"COM_RC_IN_MODE": 3.0}  # never sent
+
+    too_high = api.put(f"/api/v1/vehicles/{PX4}/params/MIS_TAKEOFF_ALT", json={"value": 100})
+    assert too_high.status_code == 409, too_high.text
+    assert "MIS_TAKEOFF_ALT: 100 is outside its range 0..80 m" in too_high.json()["detail"]
+
+    written = api.put(f"/api/v1/vehicles/{PX4}/params/MIS_TAKEOFF_ALT", json={"value": 3})
+    assert written.status_code == 200, written.text
+    assert written.json()["range_checked"] is True
+    assert written.json()["metadata"]["units"] == "m"
+    assert api.put(f"/api/v1/vehicles/{PX4}/params/MIS_TAKEOFF_ALT", json={"value": 2.5}).is_success

@@ -430,12 +430,15 @@ class ParamEnumValue(Message):
 
 
 class ParamMeta(Message):
-    """What a parameter means, from the autopilot's own metadata (PX4's parameter
-    metadata over its component metadata protocol): its range, the values it takes, its
-    units and description. A write outside the range or the values is refused."""
+    """What a parameter means, from the autopilot's own metadata (PX4's, over its component
+    metadata protocol) or the hub's file for the firmware (ArduPilot's apm.pdef.json): its
+    range, the values it takes, its units and description. A write outside the range or
+    the values is refused."""
 
-    source: Literal["autopilot"] = Field(
-        default="autopilot", description="where it came from: the autopilot's own metadata"
+    source: Literal["autopilot", "file"] = Field(
+        default="autopilot",
+        description="where it came from: the autopilot's own metadata (PX4), or the "
+        "hub's metadata file for the firmware family (ArduPilot's apm.pdef.json)",
     )
     description: str = Field(default="", max_length=MAX_PARAM_TEXT_CHARS)
     units: str | None = Field(default=None, max_length=32)

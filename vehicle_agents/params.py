@@ -17,10 +17,11 @@ from dataclasses import dataclass
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from protocol.messages import CommandOutcome
+from protocol.param_checks import out_of_range
 from vehicle_agents import param_encoding
 from vehicle_agents.fcu_link import FcuLink, MavMessage, next_match
 from vehicle_agents.param_encoding import ParamEncoding, ParamSetBytes
-from vehicle_agents.param_metadata import ParamMetadata, out_of_range
+from vehicle_agents.param_metadata import ParamMetadata
 
 log = logging.getLogger(__name__)
 

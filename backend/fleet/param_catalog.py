@@ -5,11 +5,12 @@ made by Tools/autotest/param_metadata's JSON emitter):
 
     <folder>/ArduCopter/apm.pdef.json, ArduPlane/..., Rover/..., ArduSub/...
 
-Each file maps groups to parameters, each with ``description``, ``Units``, ``Range``
-(``{"low": "0", "high": "100"}``, as strings) and ``Values`` (``{"0": "Disabled"}``). With a
-file for the vehicle's family, a write outside its range or values is refused and answers
-carry the metadata; without one, nothing is checked and the API says so (``range_checked``
-false). PX4's metadata comes from the vehicle itself, through its agent.
+Each file maps groups to parameters, each with ``DisplayName``, ``Description``,
+``Units``, ``Range`` (``{"low": "0", "high": "100"}``, as strings) and ``Values``
+(``{"0": "Disabled"}``). With a file for the vehicle's family, a write outside its range or
+values is refused and answers carry the metadata; without one, nothing is checked and the
+API says so (``range_checked`` false). PX4's metadata comes from the vehicle itself,
+through its agent.
 """
 
 from __future__ import annotations
@@ -51,7 +52,8 @@ def _number(text: object) -> float | None:
 
 
 def _entry(fields: dict[str, Any]) -> ParamMeta:
-    description = str(fields.get("displayName") or fields.get("description") or "")
+    # DisplayName is the short name ("Throttle Failsafe Enable"), Description the sentence
+    description = str(fields.get("DisplayName") or fields.get("Description") or "")
     ranged = fields.get("Range") if isinstance(fields.get("Range"), dict) else {}
     values = None
     if isinstance(fields.get("Values"), dict):

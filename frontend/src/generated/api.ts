@@ -2797,18 +2797,19 @@ export interface components {
         };
         /**
          * ParamMeta
-         * @description What a parameter means, from the autopilot's own metadata (PX4's parameter
-         *     metadata over its component metadata protocol): its range, the values it takes, its
-         *     units and description. A write outside the range or the values is refused.
+         * @description What a parameter means, from the autopilot's own metadata (PX4's, over its component
+         *     metadata protocol) or the hub's file for the firmware (ArduPilot's apm.pdef.json): its
+         *     range, the values it takes, its units and description. A write outside the range or
+         *     the values is refused.
          */
         ParamMeta: {
             /**
              * Source
-             * @description where it came from: the autopilot's own metadata
+             * @description where it came from: the autopilot's own metadata (PX4), or the hub's metadata file for the firmware family (ArduPilot's apm.pdef.json)
              * @default autopilot
-             * @constant
+             * @enum {string}
              */
-            source: "autopilot";
+            source: "autopilot" | "file";
             /**
              * Description
              * @default

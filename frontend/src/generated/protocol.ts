@@ -355,15 +355,16 @@ export interface ParamFix {
   value: number;
 }
 /**
- * What a parameter means, from the autopilot's own metadata (PX4's parameter
- * metadata over its component metadata protocol): its range, the values it takes, its
- * units and description. A write outside the range or the values is refused.
+ * What a parameter means, from the autopilot's own metadata (PX4's, over its component
+ * metadata protocol) or the hub's file for the firmware (ArduPilot's apm.pdef.json): its
+ * range, the values it takes, its units and description. A write outside the range or
+ * the values is refused.
  */
 export interface ParamMeta {
   /**
-   * where it came from: the autopilot's own metadata
+   * where it came from: the autopilot's own metadata (PX4), or the hub's metadata file for the firmware family (ArduPilot's apm.pdef.json)
    */
-  source: "autopilot";
+  source: "autopilot" | "file";
   description: string;
   units: string | null;
   min: number | null;

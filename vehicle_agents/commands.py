@@ -324,7 +324,10 @@ class CommandExecutor:
                 first_stamp = stamp if first_stamp is None else first_stamp
                 if stamp - first_stamp >= self.timeouts.mode_shown_s:
                     break
-        stayed = mode_name(heartbeat) if heartbeat is not None else "unknown"
+        stayed = "unknown"
+        if heartbeat is not None:
+            listed = link.modes.name_of(int(heartbeat.custom_mode)) if link.modes else None
+            stayed = listed or mode_name(heartbeat)
         return CommandOutcome(
             status="failed",
             result=accepted.result,

@@ -71,6 +71,20 @@ class ModeTable:
     def names(self) -> list[str]:
         return sorted(self.settings)
 
+    def name_of(self, custom_mode: int) -> str | None:
+        """The listed mode a HEARTBEAT's custom_mode is, if the autopilot listed it: for
+        the modes pymavlink's tables lack (PX4's Orbit, Precision Landing)."""
+        if not self.reported:
+            return None
+        return next(
+            (
+                name
+                for name, setting in self.settings.items()
+                if shows_mode(self.autopilot, custom_mode, setting)
+            ),
+            None,
+        )
+
     @property
     def guided_mode(self) -> str | None:
         """The mode in which the vehicle takes position targets and take-off commands."""

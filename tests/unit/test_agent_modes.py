@@ -60,6 +60,10 @@ def test_px4s_list_keeps_pymavlinks_names_and_drops_what_a_user_may_not_select()
     assert table.settings["PRECISION_LANDING"] == ModeSetting(1, 4, 9)  # PX4's own name
     assert "TERMINATION" not in table.names
     assert not any(name.startswith("MODE_NOT") for name in table.names)  # unregistered
+    # A HEARTBEAT in a mode pymavlink cannot name gets the listed name (it says POSCTL).
+    assert table.name_of((3 << 16) | (1 << 24)) == "ORBIT"
+    assert table.name_of((4 << 16) | (9 << 24)) == "PRECISION_LANDING"
+    assert table.name_of((4 << 16) | (1 << 24)) is None  # AUTO.READY: not listed
     assert shows_mode("px4", (4 << 16) | (3 << 24), table.settings["LOITER"])
     assert not shows_mode("px4", (4 << 16) | (3 << 24), table.settings["OFFBOARD"])
 

@@ -26,6 +26,7 @@ from backend.errors import NotFound
 from backend.fleet.command_service import carry_out_routed
 from backend.fleet.commands import CommandDispatcher
 from backend.fleet.formations import FormationService, ScanPoints
+from backend.fleet.param_catalog import ParamCatalog
 from backend.fleet.registry import FleetRegistry, VehicleRecord
 from backend.fleet.safety_gate import SafetyGate
 from backend.mapping.tiles import TileLibrary
@@ -118,6 +119,8 @@ class Hub:
     spool: RowSpool
     # The offline tile sets in the tiles folder.
     tiles: TileLibrary
+    # ArduPilot's parameter metadata files (PX4 serves its own through the agent).
+    param_catalog: ParamCatalog
     # Refused requests, one audit row per principal, route and reason per interval.
     denials: DenialCoalescer
     # Live agent connections by vehicle, so revoking a token can drop its connection.
@@ -190,6 +193,7 @@ class Hub:
             audit=audit,
             spool=spool,
             tiles=TileLibrary(settings.tiles_folder),
+            param_catalog=ParamCatalog(settings.param_metadata_dir),
             denials=DenialCoalescer(settings.audit_denial_interval_s),
             login_limiter=RateLimiter(Limit(settings.login_attempts_per_minute, 60.0)),
             login_address_limiter=RateLimiter(

@@ -347,6 +347,13 @@ class HubSettings(BaseSettings):
     tiles_dir: Path | None = Field(
         default=None, description="offline tile sets (.mbtiles, .pmtiles); <data dir>/tiles"
     )
+    param_metadata_dir: Path | None = Field(
+        default=None,
+        description="ArduPilot's parameter metadata, as ArduPilot publishes it: "
+        "<dir>/ArduCopter/apm.pdef.json (ArduPlane, Rover, ArduSub alike); a write outside a "
+        "parameter's range or values is refused. Unset or missing: ArduPilot writes are not "
+        "range-checked (PX4 vehicles serve their own metadata)",
+    )
     frontend_dir: Path | None = Field(
         default=None,
         description="the built dashboard (its index.html); unset: frontend/dist of the "

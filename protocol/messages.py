@@ -420,6 +420,36 @@ class ParamFix(Message):
     value: Float32
 
 
+MAX_PARAM_ENUM_VALUES = 64
+MAX_PARAM_TEXT_CHARS = 500
+
+
+class ParamEnumValue(Message):
+    value: float
+    description: str = Field(max_length=MAX_PARAM_TEXT_CHARS)
+
+
+class ParamMeta(Message):
+    """What a parameter means, from the autopilot's own metadata (PX4's, over its component
+    metadata protocol) or the hub's file for the firmware (ArduPilot's apm.pdef.json): its
+    range, the values it takes, its units and description. A write outside the range or
+    the values is refused."""
+
+    source: Literal["autopilot", "file"] = Field(
+        default="autopilot",
+        description="where it came from: the autopilot's own metadata (PX4), or the "
+        "hub's metadata file for the firmware family (ArduPilot's apm.pdef.json)",
+    )
+    description: str = Field(default="", max_length=MAX_PARAM_TEXT_CHARS)
+    units: str | None = Field(default=None, max_length=32)
+    min: float | None = None
+    max: float | None = None
+    values: list[ParamEnumValue] | None = Field(
+        default=None, max_length=MAX_PARAM_ENUM_VALUES, description="the values it takes"
+    )
+    reboot_required: bool = False
+
+
 class CommandOutcome(Message):
     """What the flight controller answered, in words an operator can act on."""
 
@@ -444,6 +474,11 @@ class CommandOutcome(Message):
         default=None,
         description="A refusal the vehicle's setup causes: the parameter change that "
         "would lift it (e.g. SYSID_MYGCS for manual control)",
+    )
+    param_meta: ParamMeta | None = Field(
+        default=None,
+        description="For param_get and param_set: the parameter's metadata, when the "
+        "autopilot publishes it (PX4); absent, its range was not checked.",
     )
 
 
@@ -795,7 +830,8 @@ def _said_once_schema(schema: dict[str, Any]) -> None:
 class VehicleChange(Message):
     """One vehicle's live update. It carries ``autopilot``, ``vehicle_type`` and ``modes``
     (a third of the frame, ten times a second) only the first time this connection shows
-    the vehicle and when they change (its agent reconnected with another hello); the fleet
+    the vehicle and when they change (its agent reconnected with another hello, or sent
+    the autopilot's own mode list); the fleet
     snapshot a new connection starts with always has them."""
 
     model_config = ConfigDict(json_schema_extra=_said_once_schema)
@@ -971,6 +1007,19 @@ class Pong(Message):
     nonce: str | None = Field(default=None, max_length=64)
 
 
+class ModeList(Message):
+    """The vehicle's modes as its autopilot reports them (MAVLink AVAILABLE_MODES: PX4
+    from 1.15, ArduPilot from 4.7), sent when the agent has read the list after its hello
+    and whenever the autopilot says it changed (AVAILABLE_MODES_MONITOR). It replaces the
+    hello's ``modes``, which were the agent's fixed table for the autopilot until then."""
+
+    type: Literal["modes"] = "modes"
+    modes: list[Name] = Field(
+        max_length=MAX_MODES,
+        description="Mode names set_mode accepts, as the autopilot lists them.",
+    )
+
+
 # ---------------------------------------------------------------------------
 # Manual control (browser -> hub -> agent)
 # ---------------------------------------------------------------------------
@@ -1051,7 +1100,7 @@ class LeaseState(Message):
         default=None,
         max_length=MAX_NAME_CHARS,
         description="a mission was in progress when the lease began and is paused: "
-        "set this mode to resume it (ArduPilot AUTO, PX4 AUTO.MISSION)",
+        "set this mode to resume it (ArduPilot AUTO, PX4 MISSION)",
     )
 
 
@@ -1258,7 +1307,8 @@ AgentToHub: TypeAlias = Annotated[
     | Unavailable
     | Pong
     | ManualApplied
-    | ScanSourceStats,
+    | ScanSourceStats
+    | ModeList,
     Field(discriminator="type"),
 ]
 HubToAgent: TypeAlias = Annotated[

@@ -10,11 +10,22 @@ from __future__ import annotations
 
 import math
 import re
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from protocol.messages import MissionItem
+
+# The modes that fly the stored mission, by the names the agent lists (its mode names
+# for PX4 are pymavlink's, which the AVAILABLE_MODES list is named after too): ArduPilot's
+# AUTO (every vehicle type) and PX4's MISSION (AUTO.MISSION in PX4's own terms, custom main
+# mode 4, sub mode 4). The hub's AUTO gate and the agent's mission pause both read this.
+MISSION_MODES = frozenset({"AUTO", "MISSION"})
+
+
+def mission_mode(modes: Iterable[str]) -> str | None:
+    """The name under which this vehicle's mode list has the mode that flies the mission."""
+    return next((mode for mode in modes if mode in MISSION_MODES), None)
 
 
 def known_command(command: int) -> bool:

@@ -107,6 +107,14 @@ class Px4AutoMode(IntEnum):
     LAND = 6
     FOLLOW_TARGET = 8
     PRECLAND = 9
+    VTOL_TAKEOFF = 10
+
+
+class Px4PosctlMode(IntEnum):
+    """PX4_CUSTOM_SUB_MODE_POSCTL: the sub mode of main mode POSCTL."""
+
+    POSCTL = 0
+    ORBIT = 1
 
 
 class MavType(IntEnum):
@@ -233,6 +241,8 @@ class MsgId(IntEnum):
     MESSAGE_INTERVAL = mavlink2.MAVLINK_MSG_ID_MESSAGE_INTERVAL
     EXTENDED_SYS_STATE = mavlink2.MAVLINK_MSG_ID_EXTENDED_SYS_STATE
     STATUSTEXT = mavlink2.MAVLINK_MSG_ID_STATUSTEXT
+    AVAILABLE_MODES = 435  # MAVLink standard modes (pymavlink: development dialect only)
+    CURRENT_MODE = 436
 
 
 class MavMissionResult(IntEnum):

@@ -101,7 +101,7 @@ class SetOutcome(StrEnum):
     REFUSED = "refused"  # out of range or not a number: the stored value is echoed
 
 
-def _wire_float(value: float) -> float:
+def wire_float(value: float) -> float:
     """``value`` as PARAM_VALUE carries it (float32)."""
     return float(struct.unpack("<f", struct.pack("<f", value))[0])
 
@@ -116,7 +116,7 @@ class ParamTable:
         self._values: dict[str, float] = {}
         for d in PARAM_DEFS:
             if d.field is not None:
-                self._values[d.name] = _wire_float(float(getattr(base, d.field)) / d.scale)
+                self._values[d.name] = wire_float(float(getattr(base, d.field)) / d.scale)
             elif d.name == "SYSID_THISMAV":
                 self._values[d.name] = float(system_id)
             else:
@@ -152,7 +152,7 @@ class ParamTable:
         if not definition.low <= value <= definition.high:
             return SetOutcome.REFUSED
         # an integer is stored as the integer (PX4's travel bytewise, exactly)
-        self._values[name] = value if definition.is_integer else _wire_float(value)
+        self._values[name] = value if definition.is_integer else wire_float(value)
         return SetOutcome.STORED
 
     def apply(self, name: str, params: CopterParams) -> CopterParams:

@@ -44,10 +44,11 @@ from simulator.mavconst import (
     ModeFlag,
     Px4AutoMode,
     Px4MainMode,
+    Px4PosctlMode,
 )
 from simulator.param_table import ParamTable
 from simulator.params import CopterParams
-from simulator.px4_params import Px4ParamTable
+from simulator.px4_params import GENERAL_METADATA_URI, Px4ParamTable, metadata_files
 
 Sticks = tuple[int, int, int, int]  # MANUAL_CONTROL's x, y, z, r
 # ArduPilot SITL's RC input: roll, pitch and yaw at mid stick, the throttle at its minimum.
@@ -59,6 +60,94 @@ PX4_TAKEOFF_ALT_M = 2.5
 # ArduCopter reports MAV_MODE_FLAG_GUIDED_ENABLED in these (GCS_MAVLINK_Copter::base_mode).
 _ARDUCOPTER_GUIDED_FLAG = frozenset(
     {CopterMode.AUTO, CopterMode.GUIDED, CopterMode.LOITER, CopterMode.RTL, CopterMode.BRAKE}
+)
+
+
+@dataclass(frozen=True)
+class AvailableMode:
+    """One entry of the autopilot's AVAILABLE_MODES list (MAVLink standard modes)."""
+
+    custom_mode: int  # as HEARTBEAT carries it
+    name: str  # empty for PX4's standard modes, which it names by standard_mode alone
+    standard_mode: int = 0  # MAV_STANDARD_MODE; 0 NON_STANDARD
+    properties: int = 0  # MAV_MODE_PROPERTY: 1 ADVANCED, 2 NOT_USER_SELECTABLE
+
+
+ADVANCED = 1
+NOT_USER_SELECTABLE = 2
+# MAV_STANDARD_MODE values PX4 reports (mode_util::getStandardModeFromNavState)
+STANDARD_POSITION_HOLD, STANDARD_ORBIT, STANDARD_ALTITUDE_HOLD = 1, 2, 4
+STANDARD_SAFE_RECOVERY, STANDARD_MISSION, STANDARD_LAND, STANDARD_TAKEOFF = 5, 6, 7, 8
+
+
+def _px4(main: int, sub: int = 0) -> int:
+    return (main << 16) | (sub << 24)
+
+
+# GCS_MAVLINK_Copter::send_available_mode of ArduCopter 4.7, for a standard build (no
+# FLOWHOLD, FOLLOW, ZIGZAG, SYSTEMID, AUTOROTATE, TURTLE): its order, its mode numbers, its
+# modes' own names, no properties, all NON_STANDARD. AUTO RTL comes first, as there.
+ARDUCOPTER_AVAILABLE_MODES: tuple[AvailableMode, ...] = tuple(
+    AvailableMode(int(mode), name)
+    for mode, name in (
+        (CopterMode.AUTO_RTL, "AUTO RTL"),
+        (CopterMode.AUTO, "AUTO"),
+        (CopterMode.ACRO, "ACRO"),
+        (CopterMode.STABILIZE, "STABILIZE"),
+        (CopterMode.ALT_HOLD, "ALT_HOLD"),
+        (CopterMode.CIRCLE, "CIRCLE"),
+        (CopterMode.LOITER, "LOITER"),
+        (CopterMode.GUIDED, "GUIDED"),
+        (CopterMode.LAND, "LAND"),
+        (CopterMode.RTL, "RTL"),
+        (CopterMode.DRIFT, "DRIFT"),
+        (CopterMode.SPORT, "SPORT"),
+        (CopterMode.FLIP, "FLIP"),
+        (CopterMode.AUTOTUNE, "AUTOTUNE"),
+        (CopterMode.POSHOLD, "POSHOLD"),
+        (CopterMode.BRAKE, "BRAKE"),
+        (CopterMode.THROW, "THROW"),
+        (CopterMode.AVOID_ADSB, "AVOID_ADSB"),
+        (CopterMode.GUIDED_NOGPS, "GUIDED_NOGPS"),
+        (CopterMode.SMART_RTL, "SMARTRTL"),
+    )
+)
+
+_M, _A = Px4MainMode, Px4AutoMode
+PX4_EXTERNAL_MODES = 8  # NAVIGATION_STATE_EXTERNAL1..8
+PX4_SUB_MODE_EXTERNAL1 = 11  # PX4_CUSTOM_SUB_MODE_EXTERNAL1, after VTOL_TAKEOFF (10)
+# PX4's AVAILABLE_MODES stream for a multicopter (1.16): every valid nav state in nav
+# state order (mode_util::getValidNavStates), custom_mode from get_px4_custom_mode, a name
+# only for non-standard modes (mode_util::nav_state_names), ADVANCED for all but Altitude,
+# Position and the external modes (mode_util::isAdvanced), and NOT_USER_SELECTABLE for
+# Termination and for external modes no ROS 2 component registered ("(Mode not
+# available)", ModeManagement::getModeStatus). No RATTITUDE, no RTGS: PX4 has neither.
+PX4_AVAILABLE_MODES: tuple[AvailableMode, ...] = (
+    AvailableMode(_px4(_M.MANUAL), "Manual", properties=ADVANCED),
+    AvailableMode(_px4(_M.ALTCTL), "", STANDARD_ALTITUDE_HOLD),
+    AvailableMode(_px4(_M.POSCTL), "", STANDARD_POSITION_HOLD),
+    AvailableMode(_px4(_M.AUTO, _A.MISSION), "", STANDARD_MISSION, ADVANCED),
+    AvailableMode(_px4(_M.AUTO, _A.LOITER), "Hold", properties=ADVANCED),
+    AvailableMode(_px4(_M.AUTO, _A.RTL), "", STANDARD_SAFE_RECOVERY, ADVANCED),
+    AvailableMode(_px4(_M.ACRO), "Acro", properties=ADVANCED),
+    AvailableMode(_px4(_M.AUTO, _A.LAND), "Descend", properties=ADVANCED),
+    AvailableMode(_px4(_M.MANUAL), "Termination", properties=ADVANCED | NOT_USER_SELECTABLE),
+    AvailableMode(_px4(_M.OFFBOARD), "Offboard", properties=ADVANCED),
+    AvailableMode(_px4(_M.STABILIZED), "Stabilized", properties=ADVANCED),
+    AvailableMode(_px4(_M.AUTO, _A.TAKEOFF), "", STANDARD_TAKEOFF, ADVANCED),
+    AvailableMode(_px4(_M.AUTO, _A.LAND), "", STANDARD_LAND, ADVANCED),
+    AvailableMode(_px4(_M.AUTO, _A.FOLLOW_TARGET), "Follow Target", properties=ADVANCED),
+    AvailableMode(_px4(_M.AUTO, _A.PRECLAND), "Precision Landing", properties=ADVANCED),
+    AvailableMode(_px4(_M.POSCTL, Px4PosctlMode.ORBIT), "", STANDARD_ORBIT, ADVANCED),
+    AvailableMode(_px4(_M.AUTO, _A.VTOL_TAKEOFF), "VTOL Takeoff", properties=ADVANCED),
+    *(
+        AvailableMode(
+            _px4(_M.AUTO, PX4_SUB_MODE_EXTERNAL1 + index),
+            "(Mode not available)",
+            properties=NOT_USER_SELECTABLE,
+        )
+        for index in range(PX4_EXTERNAL_MODES)
+    ),
 )
 
 
@@ -98,6 +187,18 @@ class Personality(ABC):
     # links alone).
     camera_feedback: bool
     camera_index_from: int
+    # AVAILABLE_MODES, as the autopilot answers MAV_CMD_REQUEST_MESSAGE (PX4 from 1.15,
+    # ArduPilot from 4.7), and whether it sends CURRENT_MODE on each mode change (PX4's
+    # CURRENT_MODE stream).
+    available_modes: tuple[AvailableMode, ...] = ()
+    sends_current_mode: bool = False
+    # The component metadata PX4 publishes (COMPONENT_METADATA's mftp:// address, and the
+    # files its MAVLink FTP serves); ArduPilot publishes none.
+    general_metadata_uri: str | None = None
+
+    def metadata_files(self) -> dict[str, bytes]:
+        return {}
+
     # A mission's NAV_TAKEOFF with a position: PX4 climbs, then flies there as to a
     # waypoint (navigator/mission.cpp: "if we just did a normal takeoff navigate to the
     # actual waypoint now"); ArduCopter climbs where it is and ignores it.
@@ -178,6 +279,7 @@ class ArduCopterPersonality(Personality):
     mission_wire_offset = 0
     camera_feedback = True
     camera_index_from = 1
+    available_modes = ARDUCOPTER_AVAILABLE_MODES
 
     def base_mode(self, mode: CopterMode, armed: bool) -> int:
         """GCS_MAVLINK_Copter::base_mode."""
@@ -268,6 +370,12 @@ class Px4Personality(Personality):
     camera_feedback = False
     camera_index_from = 0
     takeoff_flies_to_position = True
+    available_modes = PX4_AVAILABLE_MODES
+    sends_current_mode = True
+    general_metadata_uri = GENERAL_METADATA_URI
+
+    def metadata_files(self) -> dict[str, bytes]:
+        return metadata_files()
 
     def __init__(self) -> None:
         # the PX4 mode last selected by name, and the copter mode that flies it
@@ -313,6 +421,12 @@ class Px4Personality(Personality):
         if not base_mode & ModeFlag.CUSTOM_MODE_ENABLED:
             return Declined(MavResult.DENIED)
         main, sub = custom_mode & 0xFF, custom_sub_mode & 0xFF
+        if main == Px4MainMode.OFFBOARD:
+            # Commander takes the request, but without an offboard setpoint stream the
+            # vehicle stays in the mode it was in (seen on PX4 SITL: ACCEPTED, still Hold).
+            return Declined(MavResult.ACCEPTED)
+        if main == Px4MainMode.POSCTL and sub == Px4PosctlMode.ORBIT:
+            return Declined(self.declined, "ORBIT mode not simulated")
         if main == Px4MainMode.AUTO:
             if sub == 0:
                 sub = Px4AutoMode.MISSION  # AUTO without a sub mode is a mission

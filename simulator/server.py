@@ -286,9 +286,12 @@ class SimulatorServer:
         signature = self._state_signature()
         if signature != self._signature:
             # ArduCopter sends a HEARTBEAT straight away when its mode changes
+            mode_changed = signature[0] != self._signature[0]
             self._signature = signature
             for link in self.links:
                 link.streams.send_soon(MsgId.HEARTBEAT, now)
+            if mode_changed and self.telemetry.sends_current_mode:
+                self._broadcast(self.telemetry.current_mode())  # PX4: on each change
 
     def _photo_taken(self, photo: PhotoTaken) -> None:
         """The camera fired: told as the autopilot tells of it (see `personality`)."""

@@ -11,7 +11,9 @@ from dataclasses import dataclass
 from typing import Any
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
+from pymavlink.dialects.v20 import development
 
+from protocol.mavlink_extra import MAVLink_component_metadata_message
 from simulator.mavconst import MsgId, SysSensor
 from simulator.mission import MissionItem
 from simulator.param_table import PARAM_ID_LEN
@@ -146,6 +148,11 @@ class TelemetryBuilder:
         ArduPilot (and the rover, which is ArduRover) with CAMERA_FEEDBACK."""
         personality = getattr(self.copter, "personality", None)
         return personality is not None and not personality.camera_feedback
+
+    @property
+    def sends_current_mode(self) -> bool:
+        personality = getattr(self.copter, "personality", None)
+        return personality is not None and personality.sends_current_mode
 
     @property
     def _time_boot_ms(self) -> int:
@@ -365,6 +372,42 @@ class TelemetryBuilder:
         """The answer to a TIMESYNC request: nanoseconds since boot, the clock of
         time_boot_ms (ArduPilot: AP_HAL::micros64() * 1000)."""
         return mavlink2.MAVLink_timesync_message(int(self.copter.time_s * 1e6) * 1000, ts1)
+
+    def available_modes(self, index: int) -> list[MavMessage] | None:
+        """AVAILABLE_MODES for MAV_CMD_REQUEST_MESSAGE: every mode for ``index`` 0, else
+        the one at ``index`` (1..N); None where the autopilot does not list its modes (the
+        rover) or there is no such index."""
+        personality = getattr(self.copter, "personality", None)
+        modes = personality.available_modes if personality is not None else ()
+        total = len(modes)
+        if not modes or not 0 <= index <= total:
+            return None
+        indices = range(1, total + 1) if index == 0 else (index,)
+        return [
+            development.MAVLink_available_modes_message(
+                total,
+                at,
+                modes[at - 1].standard_mode,
+                modes[at - 1].custom_mode,
+                modes[at - 1].properties,
+                modes[at - 1].name.encode(),
+            )
+            for at in indices
+        ]
+
+    def component_metadata(self, uri: str) -> MavMessage:
+        """COMPONENT_METADATA: where the general metadata file is (an mftp:// address)."""
+        return MAVLink_component_metadata_message(self._time_boot_ms, 0, uri.encode())
+
+    def current_mode(self) -> MavMessage:
+        """CURRENT_MODE (PX4 sends it on each change): the mode now, and as intended."""
+        custom_mode = self.copter.custom_mode()
+        personality = getattr(self.copter, "personality", None)
+        listed = personality.available_modes if personality is not None else ()
+        standard = next(
+            (mode.standard_mode for mode in listed if mode.custom_mode == custom_mode), 0
+        )
+        return development.MAVLink_current_mode_message(standard, custom_mode, custom_mode)
 
     def autopilot_version(self) -> MavMessage:
         major, minor, patch = FIRMWARE_VERSION

@@ -24,6 +24,7 @@ from protocol.messages import (
     encode,
 )
 from vehicle_agents import __version__
+from vehicle_agents.available_modes import AvailableModes
 from vehicle_agents.commands import CommandExecutor
 from vehicle_agents.config import AgentSettings, default_vehicle_id, hub_http_base
 from vehicle_agents.fcu_events import FcuLinkEvents
@@ -31,12 +32,13 @@ from vehicle_agents.fcu_link import FcuLink, MavMessage
 from vehicle_agents.formation import FormationRunner
 from vehicle_agents.forwarding import MavlinkForwarder
 from vehicle_agents.hub_failsafe import HubLinkFailsafe, reconnect_backoff
-from vehicle_agents.hub_link import HubLink, HubTimeouts, VehicleIdInUse
+from vehicle_agents.hub_link import HubLink, HubTimeouts, ModeReport, VehicleIdInUse
 from vehicle_agents.manual import ManualPilot
 from vehicle_agents.mission_progress import ReachedItems
 from vehicle_agents.missions import mission_number
 from vehicle_agents.modes import is_armed
 from vehicle_agents.outbox import Outbox, SpillFile
+from vehicle_agents.param_metadata import ParamMetadata
 from vehicle_agents.sensors.fcu_time import FcuClock, PoseHistory, ask_timesync
 from vehicle_agents.sensors.relay import DiskBacklog, ScanOutbox, ScanRelay, parse_mount
 from vehicle_agents.sensors.ros2 import SCHEME as ROS2_SCHEME
@@ -96,11 +98,17 @@ async def _run(settings: AgentSettings) -> None:
             agent_version=__version__,
             stream_id=uuid.uuid4().hex[:16],
         )
+        # The autopilot's own mode list, once read, replaces the fixed table the hello has.
+        mode_report = ModeReport(hello.modes)
+        tasks.create_task(AvailableModes(link, lambda table: mode_report.update(table.names)).run())
         outbox = open_outbox(settings, vehicle_id, hello.stream_id)
         events = EventSource(outbox, link.modes.autopilot)
         link.listeners.append(events.on_message)
         link.state_listeners.append(FcuLinkEvents(events.emit).on_link_change)
         executor = CommandExecutor(link)
+        if link.modes.autopilot == "px4":  # the autopilot that publishes its metadata
+            executor.params.metadata = ParamMetadata(link)
+            tasks.create_task(executor.params.metadata.run())
         pilot = ManualPilot(link, executor, events.emit, source_system=settings.source_system)
         tasks.create_task(pilot.run())
         formation = FormationRunner(link, executor, events.emit)
@@ -125,6 +133,7 @@ async def _run(settings: AgentSettings) -> None:
             scans=scans,
             scan_stats=scan_stats,
             fallback_urls=settings.hub_fallback,
+            modes=mode_report,
             timeouts=HubTimeouts(
                 reconnect=reconnect_backoff(
                     settings.hub_failsafe_action,

@@ -46,7 +46,7 @@ from protocol.messages import (
 from vehicle_agents.fcu_link import FcuLink, LinkChange, MavMessage, next_match
 from vehicle_agents.mav_results import result_name
 from vehicle_agents.missions import MissionClient
-from vehicle_agents.modes import is_armed, mode_name
+from vehicle_agents.modes import ModeSetting, is_armed, mode_name, shows_mode
 from vehicle_agents.params import ParamClient
 from vehicle_agents.readiness import readiness
 
@@ -79,6 +79,10 @@ class CommandTimeouts:
     # answer that cannot come. They are refused at once for this long, or until the link
     # has gone down (the link-down answer takes over) or come back.
     reboot_quiet_s: float = 5.0
+    # After an accepted mode change, how long the autopilot has to report the new mode
+    # (seconds of its own clock), and the most the agent waits for that by its own.
+    mode_shown_s: float = 2.0
+    mode_shown_wall_s: float = 6.0
 
 
 class CommandRefused(Exception):
@@ -269,9 +273,65 @@ class CommandExecutor:
             return CommandOutcome(
                 status="refused", message=f"unknown mode {mode!r}; this vehicle has: {known}"
             )
-        return await self.command_long(
+        outcome = await self.command_long(
             mavlink2.MAV_CMD_DO_SET_MODE,
             [setting.base_mode, setting.custom_mode, setting.custom_sub_mode],
+        )
+        if outcome.status != "accepted":
+            return outcome
+        return await self._mode_shown(mode, setting, outcome)
+
+    async def _mode_shown(
+        self, mode: str, setting: ModeSetting, accepted: CommandOutcome
+    ) -> CommandOutcome:
+        """An accepted mode change is a change only once the autopilot reports the mode:
+        PX4 accepts OFFBOARD with no setpoint stream and stays where it was. Reported by
+        the autopilot's HEARTBEAT or CURRENT_MODE (sent on each change), waited for
+        `mode_shown_s` of the autopilot's own clock (its messages' time_boot_ms, so a
+        sped-up simulator waits as long in its time), or that long by the agent's clock
+        when nothing stamped comes, at most `mode_shown_wall_s`."""
+        link = self.link
+        autopilot = link.modes.autopilot if link.modes is not None else "generic"
+
+        def shows(message: MavMessage) -> bool:
+            return shows_mode(autopilot, int(message.custom_mode), setting)
+
+        def relevant(message: MavMessage) -> bool:
+            kind = message.get_type()
+            if kind == "HEARTBEAT":
+                return bool(message.get_srcComponent() == link.target_component)
+            return kind == "CURRENT_MODE" or hasattr(message, "time_boot_ms")
+
+        heartbeat = link.latest.get("HEARTBEAT")
+        if heartbeat is not None and shows(heartbeat):
+            return accepted
+        with link.collect(relevant) as messages:
+            started = time.monotonic()
+            first_stamp: float | None = None
+            while (left := self.timeouts.mode_shown_wall_s - (time.monotonic() - started)) > 0:
+                if first_stamp is None and time.monotonic() - started > self.timeouts.mode_shown_s:
+                    break  # nothing stamped came: the agent's clock decides
+                message = await next_match(messages, left)
+                if message is None:
+                    break
+                if message.get_type() in ("HEARTBEAT", "CURRENT_MODE"):
+                    if shows(message):
+                        return accepted
+                    if message.get_type() == "HEARTBEAT":
+                        heartbeat = message
+                    continue
+                stamp = float(message.time_boot_ms) / 1000
+                first_stamp = stamp if first_stamp is None else first_stamp
+                if stamp - first_stamp >= self.timeouts.mode_shown_s:
+                    break
+        stayed = "unknown"
+        if heartbeat is not None:
+            listed = link.modes.name_of(int(heartbeat.custom_mode)) if link.modes else None
+            stayed = listed or mode_name(heartbeat)
+        return CommandOutcome(
+            status="failed",
+            result=accepted.result,
+            message=f"{mode}: accepted but the mode stayed {stayed}",
         )
 
     def _is_px4(self) -> bool:

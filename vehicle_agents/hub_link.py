@@ -31,6 +31,7 @@ from protocol.messages import (
     LiveState,
     ManualApplied,
     ManualFrame,
+    ModeList,
     Ping,
     Pong,
     ProtocolError,
@@ -87,6 +88,20 @@ class HubClosed(Exception):
         self.reason = reason
 
 
+class ModeReport:
+    """The mode names the hub should list for the vehicle: each hello carries the current
+    ones, and a change while connected (the autopilot listed its own) goes as a ModeList."""
+
+    def __init__(self, names: list[str]) -> None:
+        self.names = list(names)
+        self.changed = asyncio.Event()
+
+    def update(self, names: list[str]) -> None:
+        if names != self.names:
+            self.names = list(names)
+            self.changed.set()
+
+
 class HubLink:
     def __init__(
         self,
@@ -103,6 +118,7 @@ class HubLink:
         on_formation: Callable[[FormationSlot | FormationEnd | LeaderUpdate | LeaderScan], None]
         | None = None,
         fallback_urls: Sequence[str] = (),
+        modes: ModeReport | None = None,
     ) -> None:
         # Several hubs (README "Several hubs"): after a failed or ended session the next
         # attempt goes to the next URL, round the list, still after a jittered wait, so
@@ -119,6 +135,7 @@ class HubLink:
         self._on_formation = on_formation
         self._scans = scans
         self._scan_stats = scan_stats
+        self._modes = modes
         self.connected = asyncio.Event()
         self.disconnected = asyncio.Event()
         self.disconnected.set()
@@ -177,8 +194,12 @@ class HubLink:
             ping_interval=self.timeouts.ping_interval_s,
             open_timeout=self.timeouts.welcome_s,
         ) as websocket:
+            hello = self._hello
+            if self._modes is not None:
+                self._modes.changed.clear()  # this hello carries the names as they are now
+                hello = hello.model_copy(update={"modes": self._modes.names})
             try:
-                await websocket.send(encode(self._hello))
+                await websocket.send(encode(hello))
                 reply = await asyncio.wait_for(websocket.recv(), self.timeouts.welcome_s)
             except ConnectionClosed:
                 raise HubClosed(websocket.close_code, websocket.close_reason or "") from None
@@ -206,6 +227,8 @@ class HubLink:
                         tasks.create_task(self._send_live_while_behind(websocket))
                     if self._scan_stats is not None:
                         tasks.create_task(self._send_scan_stats(websocket, self._scan_stats))
+                    if self._modes is not None:
+                        tasks.create_task(self._send_mode_changes(websocket, self._modes))
                     try:
                         async for frame in websocket:
                             self._handle_frame(frame, websocket, tasks)
@@ -236,6 +259,12 @@ class HubLink:
                 await websocket.send(encode(current))
                 sent = current
             await asyncio.sleep(self.timeouts.scan_stats_interval_s)
+
+    async def _send_mode_changes(self, websocket: ClientConnection, modes: ModeReport) -> None:
+        while True:
+            await modes.changed.wait()
+            modes.changed.clear()
+            await websocket.send(encode(ModeList(modes=modes.names)))
 
     def _live_now(self) -> LiveState:
         assert self._live_state is not None

@@ -71,6 +71,7 @@ from protocol.messages import (
     ParamFix,
     SetModeCommand,
 )
+from protocol.mission_rules import MISSION_MODES
 from vehicle_agents.commands import CommandExecutor
 from vehicle_agents.fcu_link import FcuLink, MavMessage
 from vehicle_agents.modes import is_armed, mode_name
@@ -82,8 +83,6 @@ EmitEvent = Callable[[EventKind, str, int | None], None]
 # The pilot modes that take stick input and hold position when the sticks centre, per
 # autopilot: PX4's "LOITER" (AUTO.LOITER, Hold) flies no sticks, its POSCTL does.
 PILOT_MODES = {"ardupilot": ("LOITER", "MANUAL"), "px4": ("POSCTL",)}
-# Modes that fly the uploaded mission: taking the sticks pauses it, setting it resumes.
-MISSION_MODES = ("AUTO", "AUTO.MISSION")
 # PX4 COM_RC_IN_MODE values that let MAVLink manual input through.
 PX4_MAVLINK_INPUT = {1: "MAVLink only", 2: "RC and MAVLink", 3: "RC or MAVLink, keep first"}
 # What a refusal offers to set instead: each autopilot's own default, which lets our input

@@ -17,9 +17,11 @@ from dataclasses import dataclass
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from protocol.messages import CommandOutcome
+from protocol.param_checks import out_of_range
 from vehicle_agents import param_encoding
 from vehicle_agents.fcu_link import FcuLink, MavMessage, next_match
 from vehicle_agents.param_encoding import ParamEncoding, ParamSetBytes
+from vehicle_agents.param_metadata import ParamMetadata
 
 log = logging.getLogger(__name__)
 
@@ -43,6 +45,8 @@ class ParamClient:
     def __init__(self, link: FcuLink, timeouts: ParamTimeouts | None = None) -> None:
         self.link = link
         self.timeouts = timeouts or ParamTimeouts()
+        # The autopilot's own metadata (PX4), when the agent reads it: checks writes.
+        self.metadata: ParamMetadata | None = None
         # each parameter's four wire bytes and MAV_PARAM_TYPE, decoded when reported: the
         # encoding may be learnt after the values arrived
         self._raw: dict[str, tuple[bytes, int]] = {}
@@ -158,14 +162,18 @@ class ParamClient:
         if echo is None:
             return CommandOutcome(status="timeout", message=f"{name}: no PARAM_VALUE answer")
         value = self._value(echo)
+        meta = self.metadata.of(name) if self.metadata is not None else None
         return CommandOutcome(
-            status="accepted", message=f"{name} = {value:g}", values={name: value}
+            status="accepted", message=f"{name} = {value:g}", values={name: value}, param_meta=meta
         )
 
     async def write(self, name: str, value: float) -> CommandOutcome:
         refusal = await self._known(name)
         if refusal is not None:
             return refusal
+        meta = self.metadata.of(name) if self.metadata is not None else None
+        if meta is not None and (problem := out_of_range(name, value, meta)) is not None:
+            return CommandOutcome(status="refused", message=problem, param_meta=meta)
         encoding = await self._learn_encoding()
         link = self.link
         param_type = self._raw[name][1]
@@ -184,7 +192,10 @@ class ParamClient:
         wanted = param_encoding.decode(raw, param_type, encoding)
         if stored == wanted or math.isclose(stored, wanted, rel_tol=1e-6, abs_tol=1e-6):
             return CommandOutcome(
-                status="accepted", message=f"{name} set to {stored:g}", values={name: stored}
+                status="accepted",
+                message=f"{name} set to {stored:g}",
+                values={name: stored},
+                param_meta=meta,
             )
         reasons = [entry.text for entry in link.statustexts][-1:]
         return CommandOutcome(

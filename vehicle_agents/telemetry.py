@@ -49,7 +49,13 @@ def link_snapshot(link: FcuLink) -> VehicleState:
         vehicle_type=link.modes.vehicle_type if link.modes else "multirotor",
     )
     ready = readiness(link.latest, link.statustexts, time.time())
-    return state.model_copy(update={"ready_to_fly": ready.ready, "not_ready_reason": ready.reason})
+    update: dict[str, object] = {"ready_to_fly": ready.ready, "not_ready_reason": ready.reason}
+    heartbeat = link.latest.get("HEARTBEAT")
+    if heartbeat is not None and link.modes is not None:
+        listed = link.modes.name_of(int(heartbeat.custom_mode))
+        if listed is not None:
+            update["mode"] = listed  # the name the mode list and set_mode use
+    return state.model_copy(update=update)
 
 
 def snapshot(

@@ -5,7 +5,7 @@ from __future__ import annotations
 from typing import Annotated
 
 from fastapi import Path, Request
-from pydantic import BaseModel
+from pydantic import BaseModel, Field
 
 from backend.api.deps import HubDep
 from backend.api.security import CurrentPrincipal, SecuredRouter, client_address, requires
@@ -17,6 +17,7 @@ from protocol.messages import (
     Float32,
     ParamGetCommand,
     ParamListCommand,
+    ParamMeta,
     ParamName,
     ParamSetCommand,
     VehicleId,
@@ -31,6 +32,18 @@ ParamPath = Annotated[ParamName, Path()]
 class ParamValues(BaseModel):
     vehicle_id: str
     values: dict[str, float]
+    metadata: ParamMeta | None = Field(
+        default=None,
+        description="For one parameter read or written: what it means, from the autopilot's "
+        "own metadata (PX4 publishes it; the agent reads it over MAVLink FTP). Absent when "
+        "the autopilot publishes none (ArduPilot) or it has not been read yet.",
+    )
+    range_checked: bool | None = Field(
+        default=None,
+        description="For a write: true if the value was checked against the metadata's range "
+        "and values before it was sent (a value outside them is a 409 naming them); false if "
+        "there was no metadata to check it against, so only the vehicle's own answer counted.",
+    )
 
 
 class ParamUpdate(BaseModel):
@@ -46,7 +59,13 @@ async def _ask(
     outcome = await execute_expecting_acceptance(
         hub, principal, client_address(request), vehicle_id, command
     )
-    return ParamValues(vehicle_id=vehicle_id, values=outcome.values or {})
+    checked = (outcome.param_meta is not None) if isinstance(command, ParamSetCommand) else None
+    return ParamValues(
+        vehicle_id=vehicle_id,
+        values=outcome.values or {},
+        metadata=outcome.param_meta,
+        range_checked=checked,
+    )
 
 
 @router.get("", response_model=ParamValues, openapi_extra=requires(Permission.READ))
@@ -78,6 +97,8 @@ async def set_param(
     hub: HubDep,
 ) -> ParamValues:
     """Set a parameter; succeeds only when the flight controller echoes the new value
-    (409 with the value it kept otherwise, e.g. out of its range)."""
+    (409 with the value it kept otherwise, e.g. out of its range). Where the autopilot
+    publishes parameter metadata (PX4), a value outside its range or its values is a 409
+    naming them, and is never sent; `range_checked` says whether that check was made."""
     command = ParamSetCommand(param=param, value=body.value)
     return await _ask(hub, request, principal, vehicle_id, command)

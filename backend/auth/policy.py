@@ -157,6 +157,7 @@ AGENT_MESSAGE_PERMISSIONS: dict[str, Permission] = {
     "pong": Permission.AGENT,
     "manual_applied": Permission.AGENT,
     "scan_source_stats": Permission.AGENT,
+    "modes": Permission.AGENT,
 }
 
 

@@ -11,6 +11,7 @@ from typing import Protocol
 
 from backend.audit import AuditEntry
 from backend.fleet.commands import CommandDispatcher
+from backend.fleet.param_catalog import ParamCatalog
 from backend.fleet.registry import FleetRegistry
 from backend.fleet.safety_gate import SafetyGate
 from backend.storage.spool import RowSpool
@@ -34,6 +35,9 @@ class CommandServices(MissionServices, Protocol):
 
     @property
     def spool(self) -> RowSpool: ...
+
+    @property
+    def param_catalog(self) -> ParamCatalog: ...
 
     async def record(self, entry: AuditEntry) -> None: ...
 

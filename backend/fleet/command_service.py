@@ -32,8 +32,11 @@ from protocol.messages import (
     CommandOutcome,
     ManualStartCommand,
     ManualStopCommand,
+    ParamGetCommand,
+    ParamSetCommand,
     lease_only,
 )
+from protocol.param_checks import out_of_range
 from protocol.routing import RoutedCommand
 
 log = logging.getLogger(__name__)
@@ -62,6 +65,16 @@ async def execute_command(
         critical = hub.safety.check_authority(principal, record, command)
         if critical is not None:
             details["safety_critical"] = critical
+        file_meta = None
+        if isinstance(command, ParamGetCommand | ParamSetCommand):
+            # Off the event loop: the first use of a family reads its file (a few MB).
+            file_meta = await asyncio.to_thread(
+                hub.param_catalog.meta, record.autopilot, record.vehicle_type, command.param
+            )
+        if isinstance(command, ParamSetCommand) and file_meta is not None:
+            problem = out_of_range(command.param, command.value, file_meta)
+            if problem is not None:
+                raise VehicleRefused(problem)
         try:
             violations = await asyncio.to_thread(hub.safety.check_command, record, command)
         except SQLAlchemyError:
@@ -101,6 +114,8 @@ async def execute_command(
             status = "timeout" if isinstance(error, CommandTimedOut) else "refused"
             await _log(hub, principal, vehicle_id, command, status, None, error.message)
         raise
+    if file_meta is not None and outcome.param_meta is None:
+        outcome = outcome.model_copy(update={"param_meta": file_meta})
     if elsewhere:
         return outcome
     details["answer"] = outcome.model_dump()

@@ -171,6 +171,12 @@ class FleetRegistry:
         record.channel = None
         return record
 
+    def set_modes(self, vehicle_id: str, modes: list[str]) -> VehicleRecord:
+        """The modes the vehicle's autopilot listed, in place of its hello's."""
+        record = self.get(vehicle_id)
+        record.modes = list(modes)
+        return record
+
     def apply_live(self, vehicle_id: str, time: float, state: VehicleState) -> bool:
         """The agent's state now, sent ahead of a replayed backlog; older samples that
         arrive after it are stored but no longer move the live state."""

@@ -4,20 +4,9 @@ vehicle's own mission for them (`backend.fleet.mission_gate`); the rules are her
 
 from __future__ import annotations
 
-from collections.abc import Iterable
-
 from backend.safety.violations import MISSION_UNCHECKED, Violation
 from protocol.messages import Command, MissionItem, SetModeCommand
-
-# The modes that fly the stored mission, by the names the agent lists (pymavlink's mode
-# tables): ArduPilot's AUTO (every vehicle type) and PX4's MISSION (AUTO.MISSION in PX4's
-# own terms, custom main mode 4, sub mode 4).
-MISSION_MODES = frozenset({"AUTO", "MISSION"})
-
-
-def mission_mode(modes: Iterable[str]) -> str | None:
-    """The name under which this vehicle's mode list has the mode that flies the mission."""
-    return next((mode for mode in modes if mode in MISSION_MODES), None)
+from protocol.mission_rules import MISSION_MODES
 
 
 def starts_mission(command: Command) -> bool:

@@ -35,6 +35,7 @@ from protocol.messages import (
     Hello,
     LiveState,
     ManualApplied,
+    ModeList,
     Ping,
     Pong,
     ProtocolError,
@@ -392,10 +393,25 @@ class AgentSession(PeerConnection):
                 await manual_control.echo(self.hub, hello.vehicle_id, seq, sent_ms)
             case ScanSourceStats(source=source, counts=counts):
                 self.hub.scans.source_reported(hello.vehicle_id, source, dict(counts))
+            case ModeList(modes=modes):
+                await self._take_modes(hello, modes)
             case Hello():
                 await self.reject(
                     ErrorReply(code="unexpected_message", message="hello was already received")
                 )
+
+    async def _take_modes(self, hello: Hello, modes: list[str]) -> None:
+        """The autopilot's own mode list replaces the agent's fixed table: in the live
+        state (the dashboard's picker, set_mode's check) and in the store (the list an
+        offline vehicle shows after a restart)."""
+        hub = self.hub
+        record = hub.registry.set_modes(hello.vehicle_id, modes)
+        log.info("%s lists its modes: %s", hello.vehicle_id, ", ".join(modes))
+        try:
+            await asyncio.to_thread(hub.repository.set_modes, hello.vehicle_id, modes)
+        except SQLAlchemyError as error:
+            log.warning("could not store the modes of %s (%s)", hello.vehicle_id, error)
+        await hub.publish_state(record)
 
     async def _end_manual_control(self, vehicle_id: str, why: str) -> None:
         """The agent ended browser control (deadman hold, the RC pilot's mode change)."""

@@ -33,12 +33,12 @@ from backend.fleet.registry import FleetRegistry
 from backend.realtime.collaborators import ClientConnection, LeaseListener
 from backend.storage.models import AuditRow
 from protocol.messages import LeaseState, ManualEcho, ManualStartCommand, ManualStopCommand
+from protocol.mission_rules import MISSION_MODES
 
 log = logging.getLogger(__name__)
 
 EXPIRY_CHECK_S = 0.1  # how often the hub looks for leases that input stopped renewing
 RESTART_SCAN_ROWS = 10_000  # the newest lease audit rows read at start
-MISSION_MODES = ("AUTO", "AUTO.MISSION")
 
 
 class LeaseServices(Protocol):

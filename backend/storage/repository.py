@@ -7,7 +7,7 @@ from collections.abc import Sequence
 from dataclasses import asdict
 from typing import Any
 
-from sqlalchemy import Connection, Engine, delete, func, insert, select
+from sqlalchemy import Connection, Engine, delete, func, insert, select, update
 from sqlalchemy.orm import Session
 
 from backend.storage.database import dialect_insert, transaction
@@ -41,6 +41,12 @@ class Repository:
         statement = statement.on_conflict_do_update(index_elements=["id"], set_=values)
         with self.engine.begin() as connection:
             connection.execute(statement)
+
+    def set_modes(self, vehicle_id: str, modes: list[str]) -> None:
+        with self.engine.begin() as connection:
+            connection.execute(
+                update(VehicleRow).where(VehicleRow.id == vehicle_id).values(modes=",".join(modes))
+            )
 
     def vehicles(self) -> Sequence[VehicleRow]:
         with Session(self.engine) as session:

@@ -38,7 +38,6 @@ from backend.fleet.collaborators import CommandServices
 from backend.fleet.command_service import execute_command
 from backend.fleet.registry import VehicleRecord
 from backend.fleet.safety_gate import snapshot_of
-from backend.missions.gate import mission_mode
 from backend.missions.survey.run import (
     ACTIVE_STATES,
     LEAVING_MODES,
@@ -76,6 +75,7 @@ from protocol.messages import (
     TakeoffCommand,
     VehicleSummary,
 )
+from protocol.mission_rules import mission_mode
 
 log = logging.getLogger(__name__)
 

@@ -16,17 +16,25 @@ from __future__ import annotations
 
 from typing import Any
 
+from pymavlink.dialects.v20 import ardupilotmega as mavlink2
+
+from protocol.mavftp import FtpPayload
+from protocol.mavlink_extra import MAVLINK_MSG_ID_COMPONENT_METADATA
 from simulator.commands.arming import ArmingAndModes
 from simulator.commands.base import Command, Reply, as_int, log
 from simulator.commands.missions import MISSION_MESSAGES, Missions
 from simulator.commands.navigation import POSITION_COMMANDS, Navigation
 from simulator.commands.params import Parameters
 from simulator.commands.requests import Requests, StreamControl
-from simulator.mavconst import MavCmd, MavResult
+from simulator.mavconst import MavCmd, MavResult, MsgId
+from simulator.mavftp_server import FtpServer
+from simulator.telemetry import MavMessage
 
 
 class MessageHandler(ArmingAndModes, Navigation, Parameters, Missions, Requests):
     """Dispatches one vehicle's incoming messages."""
+
+    _ftp_server: FtpServer | None = None  # made on the first FTP request
 
     def handle(self, msg: Any, streams: StreamControl, now: float) -> list[Reply]:
         """Replies to ``msg``; ``now`` is the wall clock, for stream scheduling."""
@@ -67,6 +75,10 @@ class MessageHandler(ArmingAndModes, Navigation, Parameters, Missions, Requests)
             if self._for_us(msg.target) and sender_ok:
                 self.copter.manual_control(int(msg.x), int(msg.y), int(msg.z), int(msg.r))
             return []
+        if kind == "FILE_TRANSFER_PROTOCOL":
+            if not self._for_us(msg.target_system):
+                return []
+            return [Reply(self._ftp(msg))]
         if kind == "TIMESYNC":
             # GCS_MAVLINK::handle_timesync: a request (tc1 == 0) gets the board's
             # nanoseconds since boot in tc1, with the request's ts1
@@ -76,6 +88,23 @@ class MessageHandler(ArmingAndModes, Navigation, Parameters, Missions, Requests)
         # HEARTBEAT, REQUEST_DATA_STREAM (accepted and ignored: streams keep their rates),
         # and anything else the simulator does not model
         return []
+
+    # -- component metadata over MAVLink FTP ----------------------------------
+
+    def _metadata_uri(self) -> str | None:
+        personality = getattr(self.copter, "personality", None)
+        return personality.general_metadata_uri if personality is not None else None
+
+    def _ftp(self, msg: Any) -> MavMessage:
+        """MavlinkFTP's answer to the sender, from the files the autopilot keeps."""
+        if self._ftp_server is None:
+            personality = getattr(self.copter, "personality", None)
+            files = personality.metadata_files() if personality is not None else {}
+            self._ftp_server = FtpServer(files)
+        answer = self._ftp_server.answer(FtpPayload.unpack(msg.payload))
+        return mavlink2.MAVLink_file_transfer_protocol_message(
+            0, msg.get_srcSystem(), msg.get_srcComponent(), answer.pack()
+        )
 
     # -- commands ------------------------------------------------------------
 
@@ -118,6 +147,17 @@ class MessageHandler(ArmingAndModes, Navigation, Parameters, Missions, Requests)
                     extra_after.append(Reply(self.telemetry.home_position(), False))
             case MavCmd.PREFLIGHT_REBOOT_SHUTDOWN:
                 result = self._reboot(cmd)
+            case MavCmd.REQUEST_MESSAGE if as_int(cmd.param1) == MAVLINK_MSG_ID_COMPONENT_METADATA:
+                uri = self._metadata_uri()
+                result = MavResult.ACCEPTED if uri is not None else MavResult.FAILED
+                if uri is not None:
+                    extra_after.append(Reply(self.telemetry.component_metadata(uri)))
+            case MavCmd.REQUEST_MESSAGE if as_int(cmd.param1) == MsgId.AVAILABLE_MODES:
+                # param2: 0 every mode, else the one at that index (GCS_MAVLINK / PX4's
+                # AVAILABLE_MODES stream); one message each, after the ACK
+                listed = self.telemetry.available_modes(as_int(cmd.param2))
+                result = MavResult.ACCEPTED if listed is not None else MavResult.UNSUPPORTED
+                extra_after.extend(Reply(message) for message in listed or ())
             case MavCmd.REQUEST_MESSAGE:
                 requested = self.telemetry.build(as_int(cmd.param1))
                 result = MavResult.ACCEPTED if requested is not None else MavResult.FAILED

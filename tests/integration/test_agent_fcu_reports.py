@@ -19,11 +19,13 @@ from typing import Any
 
 import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
+from pymavlink.dialects.v20 import development
 
 from protocol.messages import VehicleState
 from tests.helpers import FleetWatcher, agent_process, api_client, poll_until, state_of
-from tests.mavlink_peer import ScriptedFlightController
+from tests.mavlink_peer import ScriptedFlightController, _is_command
 from vehicle_agents.agent import EventSource
+from vehicle_agents.available_modes import AvailableModes
 from vehicle_agents.fcu_link import FcuLink, MavMessage
 from vehicle_agents.outbox import Outbox
 from vehicle_agents.telemetry import link_snapshot
@@ -371,5 +373,60 @@ def test_px4s_two_messages_of_a_shutter_are_one_camera_event_and_a_close_pair_tw
             "lon": LON / 1e7,
             "alt_rel": 30.25,
         }
+
+    asyncio.run(run())
+
+
+# -- the autopilot's own mode list (AVAILABLE_MODES) -------------------------------------
+
+
+class ListingFlightController(ScriptedFlightController):
+    """Answers MAV_CMD_REQUEST_MESSAGE for AVAILABLE_MODES (param2 0) as PX4 does: every
+    mode of ``modes`` (main, sub, name, properties), numbered 1..N."""
+
+    modes: tuple[tuple[int, int, str, int], ...] = ()
+
+    def _answer(self, message: MavMessage, now: float) -> list[tuple[float, MavMessage]]:
+        answers = super()._answer(message, now)
+        if _is_command(message, mavlink2.MAV_CMD_REQUEST_MESSAGE) and message.param1 == 435:
+            total = len(self.modes)
+            answers += [
+                (
+                    now,
+                    development.MAVLink_available_modes_message(
+                        total, index, 0, (main << 16) | (sub << 24), properties, name.encode()
+                    ),
+                )
+                for index, (main, sub, name, properties) in enumerate(self.modes, start=1)
+            ]
+        return answers
+
+
+def test_the_mode_list_is_read_again_when_the_autopilots_monitor_says_it_changed() -> None:
+    """After the link comes up the agent asks for every mode (REQUEST_MESSAGE 435, param2
+    0); when AVAILABLE_MODES_MONITOR's seq moves (a PX4 external mode registered) it asks
+    again, and the new list replaces the table and is reported. Modes the autopilot marks
+    NOT_USER_SELECTABLE are left out."""
+
+    async def run() -> None:
+        with ListingFlightController(autopilot=PX4) as fcu:
+            fcu.modes = ((3, 0, "", 0), (4, 3, "Hold", 1), (1, 0, "Termination", 2))
+            async with agent_on(fcu) as agent:
+                reported: asyncio.Queue[list[str]] = asyncio.Queue()
+                lister = AvailableModes(agent.link, lambda table: reported.put_nowait(table.names))
+                task = asyncio.create_task(lister.run())
+                try:
+                    assert await asyncio.wait_for(reported.get(), 5) == ["LOITER", "POSCTL"]
+                    [asked] = fcu.commands(mavlink2.MAV_CMD_REQUEST_MESSAGE)
+                    assert (asked.param1, asked.param2) == (435, 0)
+                    fcu.modes += ((4, 11, "My Survey", 0),)  # a ROS 2 mode registers
+                    fcu.push(development.MAVLink_available_modes_monitor_message(1))  # as it was
+                    fcu.push(development.MAVLink_available_modes_monitor_message(2))  # changed
+                    changed = await asyncio.wait_for(reported.get(), 5)
+                    assert changed == ["LOITER", "MY_SURVEY", "POSCTL"]
+                    assert agent.link.modes is not None
+                    assert agent.link.modes.settings["MY_SURVEY"].custom_sub_mode == 11
+                finally:
+                    task.cancel()
 
     asyncio.run(run())

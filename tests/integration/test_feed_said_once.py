@@ -13,7 +13,14 @@ from typing import Any
 from websockets.exceptions import ConnectionClosed
 from websockets.sync.client import ClientConnection, connect
 
-from protocol.messages import AGENT_WS_PATH, CLIENT_WS_PATH, Telemetry, VehicleState, encode
+from protocol.messages import (
+    AGENT_WS_PATH,
+    CLIENT_WS_PATH,
+    ModeList,
+    Telemetry,
+    VehicleState,
+    encode,
+)
 from tests.helpers import agent_hello
 
 SAID_ONCE = ("autopilot", "vehicle_type", "modes")
@@ -101,3 +108,27 @@ def test_modes_go_once_per_feed_and_again_when_they_change(
             _send_telemetry(agent, 1)
             frames = _vehicle_frames(first, lambda vehicle: vehicle.get("modes") is not None)
             assert frames[-1]["modes"] == list(fewer)
+
+
+def test_the_autopilots_own_mode_list_replaces_the_hellos(
+    hub: str, enrol: Callable[[str], str], admin_token: str, admin_api: Any
+) -> None:
+    """An agent says the modes the autopilot listed (AVAILABLE_MODES) after its hello: the
+    feed sends them once, the REST API lists them, and set_mode is checked against them."""
+    token = enrol("v1")
+    with _socket(hub, CLIENT_WS_PATH, admin_token) as client:
+        assert json.loads(client.recv(timeout=5))["type"] == "fleet"
+        with _agent(hub, token, COPTER_MODES) as agent:
+            _send_telemetry(agent, 1)
+            first = _vehicle_frames(client, lambda vehicle: vehicle.get("modes") is not None)
+            assert first[-1]["modes"] == list(COPTER_MODES)
+            listed = ("STABILIZE", "LOITER", "SMART_RTL", "AUTO_RTL")
+            agent.send(encode(ModeList(modes=list(listed))))
+            frames = _vehicle_frames(client, lambda vehicle: vehicle.get("modes") is not None)
+            assert frames[-1]["modes"] == list(listed)
+            assert admin_api.get("/api/v1/vehicles/v1").json()["modes"] == list(listed)
+            dropped = admin_api.post(
+                "/api/v1/vehicles/v1/commands", json={"name": "set_mode", "mode": "GUIDED"}
+            )
+            assert dropped.status_code == 422, dropped.text
+            assert "it has: STABILIZE, LOITER, SMART_RTL, AUTO_RTL" in dropped.text

@@ -675,6 +675,85 @@ def test_a_flying_px4_is_taken_by_hand_and_its_deadman_hold_stays_a_hold(
             pilot.close()
 
 
+def test_a_px4_mission_pauses_under_the_lease_and_resumes_after(
+    flying: tuple[LocalFleet, str],
+) -> None:
+    """PX4's mission mode is MISSION (AUTO.MISSION in PX4's terms): taking the sticks in it
+    pauses the mission, the lease and its release offer MISSION to resume it, and MISSION
+    carries on from the item it was flying to."""
+    fleet, token = flying
+    base = fleet.plan.hub_http
+    with FleetWatcher(base, token) as watcher, api_client(base, token) as api:
+        watcher.wait_until(ready(PX4_VEHICLE), 10, "the PX4 vehicle")
+        # Mission and Hold exempt from PX4's manual-control-loss failsafe: an earlier
+        # test's stick input has stopped, and the mission must not turn into a Return.
+        set_param(api, PX4_VEHICLE, "COM_RCL_EXCEPT", 3)
+        if not watcher.state(PX4_VEHICLE)["armed"]:  # run alone: fly it up first
+            assert send_command(api, PX4_VEHICLE, name="arm")["status"] == "accepted"
+            taken_off = send_command(api, PX4_VEHICLE, name="takeoff", altitude=4)
+            assert taken_off["status"] == "accepted", taken_off
+        watcher.wait_until(
+            lambda v: (v[PX4_VEHICLE]["state"]["alt_rel"] or 0) > 3.5, 60, "the PX4 vehicle up"
+        )
+        here = watcher.state(PX4_VEHICLE)
+        north = 1 / 111_320.0
+        items = [
+            {"command": WAYPOINT, "lat": here["lat"] + 10 * north, "lon": here["lon"], "alt": 5},
+            {"command": WAYPOINT, "lat": here["lat"] + 60 * north, "lon": here["lon"], "alt": 5},
+            {"command": WAYPOINT, "lat": here["lat"], "lon": here["lon"], "alt": 5},
+        ]
+        uploaded = api.post(f"/api/v1/vehicles/{PX4_VEHICLE}/mission", json={"items": items})
+        assert uploaded.status_code == 200, uploaded.text
+        started = send_command(api, PX4_VEHICLE, name="set_mode", mode="MISSION")
+        assert started["status"] == "accepted", started
+        watcher.wait_until(
+            lambda v: v[PX4_VEHICLE]["state"].get("mission_current") == 2, 60, "off to item 2"
+        )
+        pilot = Pilot(base, token, vehicle=PX4_VEHICLE)
+        stop = threading.Event()
+        streamer = threading.Thread(target=pilot.stream, args=(stop, 0), daemon=True)
+        try:
+            granted = pilot.take()
+            assert granted.get("resume_mode") == "MISSION", granted
+            assert pilot.events("the mission is paused (MISSION resumes it)")
+            streamer.start()
+            paused = watcher.wait_until(
+                lambda v: (
+                    v[PX4_VEHICLE]["state"]["mode"] == "POSCTL"
+                    and speed_of(v[PX4_VEHICLE]["state"]) < 0.3
+                ),
+                20,
+                "the mission paused in POSCTL",
+            )[PX4_VEHICLE]["state"]
+            assert paused["mission_current"] == 2
+            stop.set()
+            streamer.join(5)
+            pilot.control("release")
+            released = poll_until(lambda: pilot.leases(None, "released"), 5, "the release")
+            assert released[-1]["resume_mode"] == "MISSION"
+
+            resumed = send_command(api, PX4_VEHICLE, name="set_mode", mode="MISSION")
+            assert resumed["status"] == "accepted", resumed
+            watcher.wait_until(
+                lambda v: (
+                    v[PX4_VEHICLE]["state"]["mode"] == "MISSION"
+                    and speed_of(v[PX4_VEHICLE]["state"]) > 1.0
+                ),
+                20,
+                "the mission resumed",
+            )
+            assert watcher.state(PX4_VEHICLE)["mission_current"] >= 2
+            watcher.wait_until(
+                lambda v: v[PX4_VEHICLE]["state"].get("mission_current") == 3, 60, "item 3 next"
+            )
+            assert send_command(api, PX4_VEHICLE, name="hold")["status"] == "accepted"
+        finally:
+            stop.set()
+            if streamer.is_alive():
+                streamer.join(5)
+            pilot.close()
+
+
 def test_a_lease_survives_a_hub_restart_only_as_revoked(flying: tuple[LocalFleet, str]) -> None:
     """Last: it restarts the hub. The hub is killed with a lease held; the restarted hub
     reports that lease revoked to every dashboard, refuses the old pilot's stream, and

@@ -15,6 +15,7 @@ from tests.helpers import (
     FleetWatcher,
     access_token,
     api_client,
+    poll_until,
     ready,
     running_fleet,
     send_command,
@@ -131,23 +132,51 @@ def test_rover_connects_lists_rover_modes_and_drives_a_mission(
 def test_px4_copter_lists_px4_modes_and_reports_them_decoded(
     clients: tuple[httpx.Client, FleetWatcher],
 ) -> None:
+    """PX4 lists its own modes (AVAILABLE_MODES): the hub offers those, under the names
+    the agent gives every PX4 mode (pymavlink's where it has one), and none PX4 lacks
+    (RATTITUDE, RTGS) or keeps from the user (Termination, unregistered external modes)."""
     api, watcher = clients
-    copter = listed_once_ready(clients, PX4, "the PX4 copter")
-    assert (copter["vehicle_type"], copter["autopilot"]) == ("multirotor", "px4")
-    assert {"MANUAL", "POSCTL", "LOITER", "MISSION", "RTL", "LAND", "OFFBOARD"} <= set(
-        copter["modes"]
+    listed_once_ready(clients, PX4, "the PX4 copter")
+    # The list comes after the hello, once the agent has read it off the autopilot.
+    watcher.wait_until(
+        lambda v: "PRECISION_LANDING" in v[PX4].get("modes", []), 20, "PX4's own mode list"
     )
-    assert "GUIDED" not in copter["modes"]
+    copter = api.get(f"/api/v1/vehicles/{PX4}").json()
+    assert (copter["vehicle_type"], copter["autopilot"]) == ("multirotor", "px4")
+    assert sorted(copter["modes"]) == [
+        "ACRO",
+        "ALTCTL",
+        "FOLLOWME",
+        "LAND",
+        "LOITER",
+        "MANUAL",
+        "MISSION",
+        "OFFBOARD",
+        "ORBIT",
+        "POSCTL",
+        "PRECISION_LANDING",
+        "RTL",
+        "STABILIZED",
+        "TAKEOFF",
+        "VTOL_TAKEOFF",
+    ]
     assert copter["state"]["mode"] == "MANUAL"
+    refused = api.post(
+        f"/api/v1/vehicles/{PX4}/commands", json={"name": "set_mode", "mode": "RATTITUDE"}
+    )
+    assert refused.status_code == 422, refused.text
 
     assert send_command(api, PX4, name="set_mode", mode="POSCTL")["status"] == "accepted"
     watcher.wait_until(lambda v: state_of(v, PX4).get("mode") == "POSCTL", 10, "POSCTL")
     assert send_command(api, PX4, name="hold")["status"] == "accepted"  # PX4's Hold: AUTO.LOITER
     watcher.wait_until(lambda v: state_of(v, PX4).get("mode") == "LOITER", 10, "Hold")
 
+    # PX4 accepts OFFBOARD without a setpoint stream and stays in Hold: not a change.
     offboard = send_command(api, PX4, name="set_mode", mode="OFFBOARD")
-    assert offboard["status"] == "refused"
-    assert offboard["result"] == "MAV_RESULT_TEMPORARILY_REJECTED"
+    assert offboard["status"] == "failed", offboard
+    assert offboard["result"] == "MAV_RESULT_ACCEPTED"
+    assert offboard["message"] == "OFFBOARD: accepted but the mode stayed LOITER"
+    assert state_of(watcher.vehicles, PX4).get("mode") == "LOITER"
 
     assert send_command(api, PX4, name="takeoff", altitude=8)["status"] == "accepted"
     watcher.wait_until(lambda v: state_of(v, PX4).get("mode") == "TAKEOFF", 10, "Takeoff mode")
@@ -323,3 +352,44 @@ def test_a_px4_flying_its_mission_runs_a_do_item_made_current_at_once_and_moves_
         send_command(api, PX4, name="rtl")
         watcher.wait_until(lambda v: not state_of(v, PX4).get("armed"), 180, "home, disarmed")
         api.delete(url)
+
+
+def test_px4s_parameter_metadata_refuses_a_value_outside_it_and_explains_each(
+    clients: tuple[httpx.Client, FleetWatcher],
+) -> None:
+    """PX4 stores whatever PARAM_SET says (it checks no range): the agent reads PX4's own
+    parameter metadata (COMPONENT_METADATA, then its xz files over MAVLink FTP) and refuses
+    a value outside it before it is sent. The answers say what a parameter means."""
+    api, _watcher = clients
+    listed_once_ready(clients, PX4, "the PX4 copter")
+    url = f"/api/v1/vehicles/{PX4}/params/COM_RC_IN_MODE"
+    read = poll_until(
+        lambda: (answer := api.get(url).json()).get("metadata") and answer,
+        30,
+        "the metadata read off the autopilot",
+    )
+    assert read["values"] == {"COM_RC_IN_MODE": 3.0}
+    meta = read["metadata"]
+    assert meta["source"] == "autopilot"
+    assert meta["description"] == "Manual control input source configuration"
+    assert [v["value"] for v in meta["values"]] == [0, 1, 2, 3, 4]
+    assert meta["values"][4]["description"] == "Disable manual control"
+
+    refused = api.put(url, json={"value": 9})
+    assert refused.status_code == 409, refused.text
+    assert (
+        "COM_RC_IN_MODE: 9 is not one of the values it takes (0 RC Transmitter only, "
+        "1 MAVLink only, 2 RC and MAVLink with fallback, 3 RC or MAVLink keep first, "
+        "4 Disable manual control)" in refused.json()["detail"]
+    )
+    assert api.get(url).json()["values"] == {"COM_RC_IN_MODE": 3.0}  # never sent
+
+    too_high = api.put(f"/api/v1/vehicles/{PX4}/params/MIS_TAKEOFF_ALT", json={"value": 100})
+    assert too_high.status_code == 409, too_high.text
+    assert "MIS_TAKEOFF_ALT: 100 is outside its range 0..80 m" in too_high.json()["detail"]
+
+    written = api.put(f"/api/v1/vehicles/{PX4}/params/MIS_TAKEOFF_ALT", json={"value": 3})
+    assert written.status_code == 200, written.text
+    assert written.json()["range_checked"] is True
+    assert written.json()["metadata"]["units"] == "m"
+    assert api.put(f"/api/v1/vehicles/{PX4}/params/MIS_TAKEOFF_ALT", json={"value": 2.5}).is_success

@@ -7,6 +7,7 @@ from typing import Any
 
 import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
+from pymavlink.dialects.v20 import development
 
 from simulator import DEFAULT_HOME, Copter
 from simulator.commands import MessageHandler, Reply
@@ -96,7 +97,9 @@ def test_enums_match_pymavlink() -> None:
             assert getattr(mavlink2, prefix + str(member.name)) == member.value, member
     assert MavResult.COMMAND_UNSUPPORTED_MAV_FRAME == 9  # common.xml
     for msg in MsgId:
-        assert getattr(mavlink2, f"MAVLINK_MSG_ID_{msg.name}") == msg.value
+        # The standard-modes messages are in pymavlink's development dialect only
+        dialect = development if msg in (MsgId.AVAILABLE_MODES, MsgId.CURRENT_MODE) else mavlink2
+        assert getattr(dialect, f"MAVLINK_MSG_ID_{msg.name}") == msg.value
     for mode in CopterMode:
         assert mavlink2.enums["COPTER_MODE"][mode.value].name == f"COPTER_MODE_{mode.name}"
     assert FORCE_DISARM_MAGIC == 21196.0

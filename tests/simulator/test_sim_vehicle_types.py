@@ -33,6 +33,7 @@ from simulator.telemetry import TelemetryBuilder
 from simulator.vehicle import ItemReached
 from tests.simulator.test_sim_copter import run_until, texts
 from tests.simulator.test_sim_server import command, mavlink_client, simulator_process, wait_for
+from vehicle_agents import mavlink_dialect  # noqa: F401  (decodes AVAILABLE_MODES)
 
 # Degrees per metre north and east of home.
 _FRAME = LocalFrame(DEFAULT_HOME.lat, DEFAULT_HOME.lon, DEFAULT_HOME.alt)
@@ -61,7 +62,7 @@ def test_new_enums_match_pymavlink() -> None:
     for main_mode in Px4MainMode:
         assert getattr(mavutil, f"PX4_CUSTOM_MAIN_MODE_{main_mode.name}") == main_mode.value
     for sub_mode in Px4AutoMode:
-        if sub_mode.name not in ("PRECLAND",):  # newer than pymavlink's list
+        if sub_mode.name not in ("PRECLAND", "VTOL_TAKEOFF"):  # newer than pymavlink
             assert getattr(mavutil, f"PX4_CUSTOM_SUB_MODE_AUTO_{sub_mode.name}") == sub_mode
     for mav_type in MavType:
         assert getattr(mavlink2, f"MAV_TYPE_{mav_type.name}") == mav_type.value
@@ -197,9 +198,12 @@ def test_px4_reports_no_mission_as_px4_does() -> None:
 
 def test_px4_declines_as_px4_does() -> None:
     copter = px4()
-    assert copter.request_mode(1, 6, 0) is MavResult.TEMPORARILY_REJECTED  # OFFBOARD
+    before = copter.custom_mode()
+    # OFFBOARD with no setpoint stream: Commander takes it, and the vehicle stays put.
+    assert copter.request_mode(1, 6, 0) is MavResult.ACCEPTED
+    assert copter.custom_mode() == before
     assert copter.request_mode(1, 4, 42) is MavResult.TEMPORARILY_REJECTED
-    assert texts(copter) == ["OFFBOARD mode not simulated", "Unsupported auto mode"]
+    assert texts(copter) == ["Unsupported auto mode"]
     copter.request_mode(1, 4, 5)  # AUTO.RTL
     assert copter.arm() is MavResult.TEMPORARILY_REJECTED
 
@@ -281,7 +285,21 @@ def test_px4_process_over_tcp() -> None:
         assert heartbeat.autopilot == mavlink2.MAV_AUTOPILOT_PX4
         base, main_mode, sub_mode = mavutil.px4_map["POSCTL"]
         assert command(gcs, mavlink2.MAV_CMD_DO_SET_MODE, base, main_mode, sub_mode) == 0
+        # PX4 sends CURRENT_MODE on each change (at once), and lists its modes when asked.
+        current = wait_for(gcs, ["CURRENT_MODE"], lambda m: True, 5, "CURRENT_MODE")
+        assert (current.custom_mode, current.standard_mode) == (main_mode << 16, 1)
         wait_for(gcs, ["HEARTBEAT"], lambda m: mavutil.mode_string_v10(m) == "POSCTL", 5, "POSCTL")
+        assert command(gcs, mavlink2.MAV_CMD_REQUEST_MESSAGE, 435, 0) == 0
+        listed = [wait_for(gcs, ["AVAILABLE_MODES"], lambda m: True, 5, "a mode")]
+        while len(listed) < listed[0].number_modes:
+            listed.append(wait_for(gcs, ["AVAILABLE_MODES"], lambda m: True, 5, "a mode"))
+        assert [m.mode_index for m in listed] == list(range(1, len(listed) + 1))
+        names = {m.mode_name for m in listed}
+        assert {"Manual", "Hold", "Offboard", "Precision Landing"} <= names
+        hidden = [m for m in listed if m.properties & 2]  # NOT_USER_SELECTABLE
+        assert {m.mode_name for m in hidden} == {"Termination", "(Mode not available)"}
+        assert len(hidden) == 9
+        assert not any(m.custom_mode >> 16 & 0xFF == 8 for m in listed)  # no RATTITUDE
 
 
 def test_frame_and_autopilot_options() -> None:

@@ -290,7 +290,9 @@ export interface paths {
         /**
          * Set Param
          * @description Set a parameter; succeeds only when the flight controller echoes the new value
-         *     (409 with the value it kept otherwise, e.g. out of its range).
+         *     (409 with the value it kept otherwise, e.g. out of its range). Where the autopilot
+         *     publishes parameter metadata (PX4), a value outside its range or its values is a 409
+         *     naming them, and is never sent; `range_checked` says whether that check was made.
          */
         put: operations["set_param_api_v1_vehicles__vehicle_id__params__param__put"];
         post?: never;
@@ -1831,6 +1833,8 @@ export interface components {
             items?: components["schemas"]["MissionItem"][] | null;
             /** @description A refusal the vehicle's setup causes: the parameter change that would lift it (e.g. SYSID_MYGCS for manual control) */
             fix?: components["schemas"]["ParamFix"] | null;
+            /** @description For param_get and param_set: the parameter's metadata, when the autopilot publishes it (PX4); absent, its range was not checked. */
+            param_meta?: components["schemas"]["ParamMeta"] | null;
         };
         /** CommandPage */
         CommandPage: {
@@ -2769,6 +2773,13 @@ export interface components {
             /** @default heading */
             frame: components["schemas"]["OffsetFrame"];
         };
+        /** ParamEnumValue */
+        ParamEnumValue: {
+            /** Value */
+            value: number;
+            /** Description */
+            description: string;
+        };
         /**
          * ParamFix
          * @description The parameter change that would let a refused request through, as the refusal's
@@ -2809,6 +2820,43 @@ export interface components {
             name: "param_list";
         };
         /**
+         * ParamMeta
+         * @description What a parameter means, from the autopilot's own metadata (PX4's, over its component
+         *     metadata protocol) or the hub's file for the firmware (ArduPilot's apm.pdef.json): its
+         *     range, the values it takes, its units and description. A write outside the range or
+         *     the values is refused.
+         */
+        ParamMeta: {
+            /**
+             * Source
+             * @description where it came from: the autopilot's own metadata (PX4), or the hub's metadata file for the firmware family (ArduPilot's apm.pdef.json)
+             * @default autopilot
+             * @enum {string}
+             */
+            source: "autopilot" | "file";
+            /**
+             * Description
+             * @default
+             */
+            description: string;
+            /** Units */
+            units?: string | null;
+            /** Min */
+            min?: number | null;
+            /** Max */
+            max?: number | null;
+            /**
+             * Values
+             * @description the values it takes
+             */
+            values?: components["schemas"]["ParamEnumValue"][] | null;
+            /**
+             * Reboot Required
+             * @default false
+             */
+            reboot_required: boolean;
+        };
+        /**
          * ParamSetCommand
          * @description Set one parameter; accepted only when the flight controller echoes the new value.
          */
@@ -2842,6 +2890,13 @@ export interface components {
             values: {
                 [key: string]: number;
             };
+            /** @description For one parameter read or written: what it means, from the autopilot's own metadata (PX4 publishes it; the agent reads it over MAVLink FTP). Absent when the autopilot publishes none (ArduPilot) or it has not been read yet. */
+            metadata?: components["schemas"]["ParamMeta"] | null;
+            /**
+             * Range Checked
+             * @description For a write: true if the value was checked against the metadata's range and values before it was sent (a value outside them is a 409 naming them); false if there was no metadata to check it against, so only the vehicle's own answer counted.
+             */
+            range_checked?: boolean | null;
         };
         /**
          * Permission

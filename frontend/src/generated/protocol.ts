@@ -23,7 +23,8 @@ export type AgentToHub =
   | Unavailable
   | Pong
   | ManualApplied
-  | ScanSourceStats;
+  | ScanSourceStats
+  | ModeList;
 export type HubToAgent =
   | Welcome
   | CommandRequest
@@ -301,6 +302,10 @@ export interface CommandOutcome {
    * A refusal the vehicle's setup causes: the parameter change that would lift it (e.g. SYSID_MYGCS for manual control)
    */
   fix: ParamFix | null;
+  /**
+   * For param_get and param_set: the parameter's metadata, when the autopilot publishes it (PX4); absent, its range was not checked.
+   */
+  param_meta: ParamMeta | null;
 }
 /**
  * One mission item, as MISSION_ITEM_INT carries it (positions in degrees).
@@ -351,6 +356,31 @@ export interface ParamFix {
   value: number;
 }
 /**
+ * What a parameter means, from the autopilot's own metadata (PX4's, over its component
+ * metadata protocol) or the hub's file for the firmware (ArduPilot's apm.pdef.json): its
+ * range, the values it takes, its units and description. A write outside the range or
+ * the values is refused.
+ */
+export interface ParamMeta {
+  /**
+   * where it came from: the autopilot's own metadata (PX4), or the hub's metadata file for the firmware family (ArduPilot's apm.pdef.json)
+   */
+  source: "autopilot" | "file";
+  description: string;
+  units: string | null;
+  min: number | null;
+  max: number | null;
+  /**
+   * the values it takes
+   */
+  values: ParamEnumValue[] | null;
+  reboot_required: boolean;
+}
+export interface ParamEnumValue {
+  value: number;
+  description: string;
+}
+/**
  * The agent's answer to a resend it cannot serve: those frames were dropped when its
  * outbox was full. The hub records the loss and stops waiting for them.
  */
@@ -393,6 +423,21 @@ export interface ScanSourceStats {
   counts: {
     [k: string]: number | undefined;
   };
+}
+/**
+ * The vehicle's modes as its autopilot reports them (MAVLink AVAILABLE_MODES: PX4
+ * from 1.15, ArduPilot from 4.7), sent when the agent has read the list after its hello
+ * and whenever the autopilot says it changed (AVAILABLE_MODES_MONITOR). It replaces the
+ * hello's ``modes``, which were the agent's fixed table for the autopilot until then.
+ */
+export interface ModeList {
+  type: "modes";
+  /**
+   * Mode names set_mode accepts, as the autopilot lists them.
+   *
+   * @maxItems 64
+   */
+  modes: string[];
 }
 export interface Welcome {
   type: "welcome";
@@ -867,7 +912,8 @@ export interface VehicleBatch {
 /**
  * One vehicle's live update. It carries ``autopilot``, ``vehicle_type`` and ``modes``
  * (a third of the frame, ten times a second) only the first time this connection shows
- * the vehicle and when they change (its agent reconnected with another hello); the fleet
+ * the vehicle and when they change (its agent reconnected with another hello, or sent
+ * the autopilot's own mode list); the fleet
  * snapshot a new connection starts with always has them.
  */
 export interface VehicleChange {
@@ -961,7 +1007,7 @@ export interface LeaseState {
   holder: string | null;
   reason: string;
   /**
-   * a mission was in progress when the lease began and is paused: set this mode to resume it (ArduPilot AUTO, PX4 AUTO.MISSION)
+   * a mission was in progress when the lease began and is paused: set this mode to resume it (ArduPilot AUTO, PX4 MISSION)
    */
   resume_mode: string | null;
 }

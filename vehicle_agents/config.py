@@ -86,6 +86,11 @@ class AgentSettings(BaseSettings):
         description="keep the outbox here while the hub is unreachable, so it survives "
         "outages and agent restarts; without it the outbox lives in memory only",
     )
+    health_file: Path | None = Field(
+        default=None,
+        description="rewrite this file every 5 s with whether the flight controller and "
+        "the hub are linked, for `--health` (a container's health check)",
+    )
     hub_failsafe_action: Literal["continue", "hold", "rtl"] = Field(
         default="continue",
         description="what the vehicle does when the hub link has been lost for "

@@ -64,7 +64,9 @@ ENV PATH=/opt/venv/bin:$PATH PYTHONPATH=/app \
     GCS_FRONTEND_DIR=/app/frontend/dist GCS_DATA_DIR=/data
 # /data: the SQLite database (without DATABASE_URL), uploaded .tlogs, photos, mosaics,
 # offline tiles and the spool of audit and command rows kept through a database outage.
-RUN mkdir -m 700 /data && chown gcs:gcs /data
+# /spool: the spool instead (GCS_SPOOL_DIR=/spool), for hubs that share one /data. A named
+# volume mounted on either takes its owner (gcs) from the image's folder.
+RUN mkdir -m 700 /data /spool && chown gcs:gcs /data /spool
 VOLUME ["/data"]
 USER gcs
 EXPOSE 8000

@@ -195,7 +195,7 @@ class Builder:
                 built.workdir = built.workdir / rest
                 built.path(".").mkdir(parents=True, exist_ok=True)
             elif keyword == "ENV":
-                built.env.update(_env(rest, built.env))
+                built.env.update(env_values(rest, built.env))
             elif keyword == "COPY":
                 self._copy(built, rest)
             elif keyword == "RUN":
@@ -301,7 +301,7 @@ def _under(name: str, source: str) -> bool:
     return source in (".", name) or name.startswith(source + "/")
 
 
-def _env(text: str, env: dict[str, str]) -> dict[str, str]:
+def env_values(text: str, env: dict[str, str]) -> dict[str, str]:
     values = {}
     for word in shlex.split(text):
         name, _, value = word.partition("=")

@@ -25,6 +25,7 @@ from backend.auth.policy import (
     USER_SCOPES,
     Permission,
     Role,
+    UserScope,
     scope_list,
     user_principal,
 )
@@ -66,7 +67,7 @@ ExpiryDays = Annotated[int, Strict(), Field(ge=1, le=3650), BeforeValidator(whol
 
 class ApiTokenRequest(BaseModel):
     name: str = Field(min_length=1, max_length=128)
-    scopes: list[Permission] | None = Field(
+    scopes: list[UserScope] | None = Field(
         default=None, description="Permissions to keep (a subset of the role's); all if unset"
     )
     expires_in_days: ExpiryDays | None = 90
@@ -265,7 +266,11 @@ async def create_api_token(
     """A long-lived bearer token for an integration, scoped to some of the caller's rights."""
     user = await asyncio.to_thread(hub.accounts.user, principal.name)
     role_scopes = ROLE_PERMISSIONS[Role(user.role)]
-    scopes = frozenset(body.scopes) if body.scopes is not None else role_scopes
+    scopes = (
+        frozenset(Permission(scope) for scope in body.scopes)
+        if body.scopes is not None
+        else role_scopes
+    )
     # A token never carries more than the session that created it.
     if not scopes <= principal.permissions:
         raise Forbidden(

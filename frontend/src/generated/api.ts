@@ -1582,7 +1582,7 @@ export interface components {
              * Scopes
              * @description Permissions to keep (a subset of the role's); all if unset
              */
-            scopes?: components["schemas"]["Permission"][] | null;
+            scopes?: ("read" | "command" | "audit" | "admin")[] | null;
             /**
              * Expires In Days
              * @default 90
@@ -2819,11 +2819,6 @@ export interface components {
                 [key: string]: number;
             };
         };
-        /**
-         * Permission
-         * @enum {string}
-         */
-        Permission: "read" | "command" | "audit" | "admin" | "agent";
         /** PhotoFailure */
         PhotoFailure: {
             /** Photo Id */
@@ -8566,7 +8561,8 @@ export interface operations {
         parameters: {
             query?: {
                 vehicle_id?: string | null;
-                kind?: string | null;
+                /** @description One of the kinds listed */
+                kind?: ("statustext" | "mode" | "armed" | "disarmed" | "link_up" | "link_down" | "failsafe" | "mission" | "id_clash" | "manual" | "upload" | "camera" | "formation") | null;
                 /** @description Unix seconds (0 to 100000000000, fractions kept exactly) or an ISO 8601 date-time (no time zone means UTC, precise to the microsecond) in the same range. Both bounds are inclusive. Default: unbounded. */
                 start?: number | string | null;
                 /** @description Unix seconds (0 to 100000000000, fractions kept exactly) or an ISO 8601 date-time (no time zone means UTC, precise to the microsecond) in the same range. Both bounds are inclusive. Default: unbounded. */

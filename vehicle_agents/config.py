@@ -326,7 +326,10 @@ def load_agent_settings(
     from_file: dict[str, Any] = {}
     if path is not None:
         with path.open("rb") as file:
-            from_file = tomllib.load(file)
+            try:
+                from_file = tomllib.load(file)
+            except tomllib.TOMLDecodeError as error:
+                raise SettingsError(f"{path}: not valid TOML: {error}") from None
         unknown = sorted(set(from_file) - set(AgentSettings.model_fields))
         if unknown:
             raise SettingsError("; ".join(_unknown_key(path, key) for key in unknown))

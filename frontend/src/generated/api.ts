@@ -140,7 +140,8 @@ export interface paths {
         put?: never;
         /**
          * Create Api Token
-         * @description A long-lived bearer token for an integration, scoped to some of the caller's rights.
+         * @description A bearer token for an integration, scoped to some of the caller's rights. It expires
+         *     after ``expires_in_days`` (90 by default; 1 to 3,650), or never when that is null.
          */
         post: operations["create_api_token_api_v1_auth_api_tokens_post"];
         delete?: never;
@@ -1585,6 +1586,7 @@ export interface components {
             scopes?: ("read" | "command" | "audit" | "admin")[] | null;
             /**
              * Expires In Days
+             * @description Days until the token expires, 1 to 3,650 (90 if not given); null: it never expires (revoke it when it is no longer needed)
              * @default 90
              */
             expires_in_days: number | null;

@@ -3,7 +3,7 @@
 #   docker build --target agent .      the vehicle agent, as its wheel (fleet-gcs-agent)
 #   docker build --target simulator .  the MAVLink simulator (fleet-gcs-simulator)
 # docker-compose.yml builds all three. Every image runs as the unprivileged user gcs
-# (uid 10001). tests/packaging/test_image_roles.py reads this file: for each target it
+# (uid and gid 10001). tests/packaging/test_image_roles.py reads this file: for each target it
 # puts exactly the files the stages copy on a path of their own and checks that the
 # role's commands start and every module it ships imports, and that the lock the stage
 # installs holds every third-party package they import (no image is built in CI).
@@ -24,7 +24,8 @@ RUN npm run build
 FROM python:3.11-slim-bookworm AS python
 ENV PYTHONDONTWRITEBYTECODE=1 PYTHONUNBUFFERED=1 \
     PIP_NO_CACHE_DIR=1 PIP_DISABLE_PIP_VERSION_CHECK=1
-RUN useradd --system --uid 10001 --user-group --create-home --home-dir /home/gcs gcs
+RUN groupadd --system --gid 10001 gcs \
+    && useradd --system --uid 10001 --gid gcs --create-home --home-dir /home/gcs gcs
 
 # -- third-party packages, each role's lock in a virtualenv of its own ---------------
 FROM python AS hub-deps

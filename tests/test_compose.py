@@ -360,3 +360,16 @@ def test_each_service_runs_a_command_its_image_understands() -> None:
         else:
             simulator_args(command)
     assert set(roles.values()) == {"hub", "agent", "simulator"}
+
+
+def test_the_deployment_guide_names_every_volume_and_image() -> None:
+    """docs/deploy.md tells a deployer where each piece of state lives and which image
+    runs what: it names every named volume and every image of the compose file."""
+    rendered = yaml.safe_load(_config({**COMPOSE_SECRETS, **SCALED_SECRETS}).stdout)
+    guide = (ROOT / "docs" / "deploy.md").read_text()
+    for volume in rendered["volumes"]:
+        assert f"`{volume}`" in guide, volume
+    for service in rendered["services"].values():
+        if "build" in service:
+            assert f"`{service['image'].partition(':')[0]}`" in guide, service["image"]
+            assert f"`{service['build']['target']}`" in guide

@@ -39,7 +39,9 @@ RUN python -m venv /opt/venv \
     && /opt/venv/bin/pip install --require-hashes -r /tmp/simulator.txt
 
 # The agent's wheel, built as agent/pyproject.toml says (hatchling comes from the index
-# here, in the build stage; nothing of it reaches the image).
+# here, in the build stage; nothing of it reaches the image), installed as on a drone:
+# the lock, the wheel, then pymavlink without the dialects the agent never loads (88 of
+# its 92 MB; tests/integration/test_slim_install.py runs the agent on such a pymavlink).
 FROM python AS agent-build
 WORKDIR /src
 COPY agent/ agent/
@@ -50,7 +52,8 @@ COPY requirements/agent.txt /tmp/
 RUN pip wheel --no-deps --wheel-dir /dist ./agent \
     && python -m venv /opt/venv \
     && /opt/venv/bin/pip install --require-hashes -r /tmp/agent.txt \
-    && /opt/venv/bin/pip install --no-deps /dist/fleet_gcs_agent-*.whl
+    && /opt/venv/bin/pip install --no-deps /dist/fleet_gcs_agent-*.whl \
+    && /opt/venv/bin/python -m vehicle_agents.slim_install
 
 # -- the hub: gcs hub, the API, the dashboard ----------------------------------------
 FROM python AS hub

@@ -37,6 +37,7 @@ from backend.api import (
     viz_viewers,
     websockets,
 )
+from backend.api.auth import API_TOKEN_DAYS
 from backend.api.docs import install_docs
 from backend.api.early_refusal import EarlyRefusal, early_checks
 from backend.api.hardening import SecurityMiddleware, content_security_policy
@@ -66,8 +67,9 @@ API_DESCRIPTION = f"""Live fleet state, commands and telemetry history for drone
 
 **Authenticating.** `POST {API_PREFIX}/auth/token` takes a form (`username`, `password`)
 and answers a bearer token; send it as `Authorization: Bearer <token>` on every request.
-`POST {API_PREFIX}/auth/api-tokens` makes a long-lived one limited to scopes (the OAuth2
-scheme lists them; each operation names the one it needs).
+`POST {API_PREFIX}/auth/api-tokens` makes one for an integration, limited to scopes (the
+OAuth2 scheme lists them; each operation names the one it needs), which expires after
+{API_TOKEN_DAYS} days unless `expires_in_days` asks for 1 to 3,650 (or null: never).
 
 **WebSockets**, which this document cannot describe:
 

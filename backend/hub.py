@@ -177,7 +177,8 @@ class Hub:
         log.info("hub store: %s", engine.url.render_as_string(hide_password=True))
         cache = PrincipalCache(settings.principal_cache_s, settings.principal_cache_outage_s)
         accounts = Accounts(engine, cache)
-        spool = RowSpool(settings.data_dir / "spool.jsonl", engine, [AuditRow, CommandRow])
+        await asyncio.to_thread(settings.spool_file.parent.mkdir, 0o700, True, True)
+        spool = RowSpool(settings.spool_file, engine, [AuditRow, CommandRow])
         audit = AuditLog(engine, spool)
         await asyncio.to_thread(_bootstrap_accounts, accounts, audit, settings)
         hub = cls(

@@ -344,6 +344,11 @@ class HubSettings(BaseSettings):
     imagery_url: str | None = Field(default=None, description="aerial imagery; off when unset")
     imagery_attribution: str = ""
     imagery_max_zoom: int = Field(default=19, ge=1, le=24)
+    spool_dir: Path | None = Field(
+        default=None,
+        description="the spool of audit and command rows kept through a database outage; "
+        "<data dir> when unset. Hubs that share a data folder need one each",
+    )
     tiles_dir: Path | None = Field(
         default=None, description="offline tile sets (.mbtiles, .pmtiles); <data dir>/tiles"
     )
@@ -471,6 +476,10 @@ class HubSettings(BaseSettings):
     @property
     def photos_folder(self) -> Path:
         return self.data_dir / "photos"
+
+    @property
+    def spool_file(self) -> Path:
+        return (self.spool_dir or self.data_dir) / "spool.jsonl"
 
     @property
     def tiles_folder(self) -> Path:

@@ -234,10 +234,15 @@ def build_parser() -> argparse.ArgumentParser:
         "--forwarded-allow-ips", help="proxies trusted for X-Forwarded-For (127.0.0.1)"
     )
 
-    from vehicle_agents.cli import add_agent_arguments
-
-    agent = commands.add_parser("agent", help="bridge one flight controller to the hub")
-    add_agent_arguments(agent)
+    try:
+        from vehicle_agents.cli import add_agent_arguments
+    except ModuleNotFoundError as error:
+        # The hub's image holds no agent: there, `gcs agent` is not a command.
+        if error.name != "vehicle_agents":
+            raise
+    else:
+        agent = commands.add_parser("agent", help="bridge one flight controller to the hub")
+        add_agent_arguments(agent)
 
     commands.add_parser(
         "sim", help="run a simulated MAVLink copter (see `gcs sim --help`)", add_help=False

@@ -24,6 +24,7 @@ from typing import Any
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from backend.api.auth import API_TOKEN_DAYS  # noqa: E402
 from backend.auth.credentials import SESSION_COOKIE  # noqa: E402
 from backend.auth.policy import AGENT_MESSAGE_PERMISSIONS, CLIENT_MESSAGE_PERMISSIONS  # noqa: E402
 from backend.realtime.agent_gateway import HELLO_TIMEOUT_S  # noqa: E402
@@ -268,7 +269,8 @@ def render() -> str:
         "",
         "- **A script** sends `Authorization: Bearer <token>`. The token is an access token "
         "from `POST /api/v1/auth/token` (a form with `username` and `password`; it expires) "
-        "or an API token from `POST /api/v1/auth/api-tokens` (long-lived, scoped, revocable). "
+        "or an API token from `POST /api/v1/auth/api-tokens` (scoped, revocable; it expires after "
+        f"{API_TOKEN_DAYS} days unless its `expires_in_days` says otherwise). "
         "With Python's `websockets`: "
         "`connect(url, additional_headers={'Authorization': f'Bearer {token}'})`.",
         "- **A browser** cannot set headers on a WebSocket: it logs in with "

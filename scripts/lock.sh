@@ -8,7 +8,9 @@
 # One lock per install set, each resolved within the one before it, so a package has the
 # same version in all of them:
 #   requirements/agent.txt   the agent: the base dependencies (a drone's install)
-#   requirements/hub.txt     plus the `hub` extra (scripts/setup.sh, the Docker image)
+#   requirements/hub.txt     plus the `hub` extra (scripts/setup.sh, the hub's image)
+#   requirements/simulator.txt  the base set plus the `simulator` extra (the simulator's
+#                            image), resolved within hub.txt so it shares its versions
 #   requirements/dev.txt     plus the `dev` extra (scripts/setup.sh --dev, CI)
 # Each is universal (one file for every platform and every Python from 3.11 on, with
 # environment markers where they differ) and lists the sha256 of every wheel and sdist of
@@ -28,6 +30,7 @@ fi
 locks=(
     "agent  -      -"
     "hub    hub    agent"
+    "simulator simulator hub"
     "dev    dev    hub"
 )
 mkdir -p requirements

@@ -258,3 +258,118 @@ def test_the_scaled_proxy_sends_every_connection_to_the_two_hubs_with_websocket_
         assert services[name]["environment"]["GCS_AGENT_HUB"] == f"ws://proxy:{listen}"
     for name in SCALED_HUBS:
         assert "ports" not in services[name]
+
+
+# -- images, commands and volumes: what each service runs and where its state lives ----
+
+
+def _mounts(service: dict[str, Any]) -> dict[str, str]:
+    """A service's volumes as target -> source (compose v1 renders "source:target:mode",
+    v2 a mapping)."""
+    mounts = {}
+    for volume in service.get("volumes", []):
+        if isinstance(volume, dict):
+            mounts[volume["target"]] = str(volume.get("source", ""))
+        else:
+            source, target = str(volume).split(":")[:2]
+            mounts[target] = source
+    return mounts
+
+
+def _image_env() -> dict[str, dict[str, str]]:
+    """Each Dockerfile target's environment, as its image has it."""
+    from tests.packaging.image_build import env_values, parse
+
+    envs = {}
+    for target, stage in parse((ROOT / "Dockerfile").read_text()).items():
+        env: dict[str, str] = {}
+        for keyword, rest in stage.instructions:
+            if keyword == "ENV":
+                env.update(env_values(rest, env))
+        envs[target] = env
+    return envs
+
+
+def test_every_service_that_keeps_state_keeps_it_in_a_named_volume() -> None:
+    services = _scaled_services()
+    declared = set(yaml.safe_load(_config({**COMPOSE_SECRETS, **SCALED_SECRETS}).stdout)["volumes"])
+    envs = _image_env()
+    state = {
+        "hub": envs["hub"]["GCS_DATA_DIR"],
+        # The outbox, onboard .tlogs and the health file are all in one folder.
+        "agent": str(Path(envs["agent"]["GCS_AGENT_OUTBOX_DIR"]).parent),
+    }
+    assert Path(envs["agent"]["GCS_AGENT_TLOG_DIR"]).parent == Path(state["agent"])
+    checked = set()
+    for name, service in services.items():
+        mounts = _mounts(service)
+        if service.get("image", "").startswith("postgres"):
+            folder = "/var/lib/postgresql/data"
+        elif "build" in service and service["build"]["target"] in state:
+            folder = state[service["build"]["target"]]
+        else:
+            continue
+        assert mounts.get(folder) in declared, f"{name} keeps {folder} in no named volume"
+        checked.add(name)
+    assert checked == {
+        "db",
+        "hub",
+        "agent-1",
+        "agent-2",
+        "scaled-db",
+        "hub-a",
+        "hub-b",
+        "fleet-agent-1",
+        "fleet-agent-2",
+    }
+
+
+def test_the_scaled_hubs_share_their_files_and_keep_their_spools_apart() -> None:
+    services = _scaled_services()
+    a, b = (_mounts(services[name]) for name in SCALED_HUBS)
+    # Photos, mosaics, offline tiles and .tlogs: one folder, whichever hub took them.
+    assert a["/data"] == b["/data"]
+    # Each hub replays its own spool of rows kept through a database outage.
+    spool = services["hub-a"]["environment"]["GCS_SPOOL_DIR"]
+    assert a[spool] != b[spool]
+    assert _mounts(services["hub"])["/data"] != a["/data"]  # the single hub is apart
+
+
+def test_each_service_runs_a_command_its_image_understands() -> None:
+    """Each service names a Dockerfile target, and its command parses with that role's
+    own command line (the image's entrypoint before it)."""
+    from gcs.cli import build_parser as gcs_parser
+    from simulator.config import parse_args as simulator_args
+    from tests.packaging.image_build import parse
+    from vehicle_agents.cli import build_parser as agent_parser
+
+    targets = set(parse((ROOT / "Dockerfile").read_text()))
+    roles = {}
+    for name, service in _scaled_services().items():
+        if "build" not in service:
+            continue
+        target = service["build"]["target"]
+        assert target in targets, f"{name}: no target {target!r} in the Dockerfile"
+        roles[name] = target
+        command = [str(word) for word in service["command"]]
+        if target == "hub":
+            assert command[:3] == ["python", "-m", "gcs"]
+            assert gcs_parser().parse_args(command[3:]).command == "hub"
+        elif target == "agent":
+            agent_parser().parse_args(command)
+        else:
+            simulator_args(command)
+    assert set(roles.values()) == {"hub", "agent", "simulator"}
+
+
+def test_the_deployment_guide_names_every_volume_and_image() -> None:
+    """docs/deploy.md tells a deployer where each piece of state lives and which image
+    runs what: it names every named volume and every image of the compose file."""
+    rendered = yaml.safe_load(_config({**COMPOSE_SECRETS, **SCALED_SECRETS}).stdout)
+    guide = (ROOT / "docs" / "deploy.md").read_text()
+    for volume in rendered["volumes"]:
+        assert f"`{volume}`" in guide, volume
+    for service in rendered["services"].values():
+        if "build" in service:
+            assert f"`{service['image'].partition(':')[0]}`" in guide, service["image"]
+            assert f"`{service['build']['target']}`" in guide

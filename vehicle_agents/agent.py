@@ -31,6 +31,7 @@ from vehicle_agents.fcu_events import FcuLinkEvents
 from vehicle_agents.fcu_link import FcuLink, MavMessage
 from vehicle_agents.formation import FormationRunner
 from vehicle_agents.forwarding import MavlinkForwarder
+from vehicle_agents.health import HealthFile
 from vehicle_agents.hub_failsafe import HubLinkFailsafe, reconnect_backoff
 from vehicle_agents.hub_link import HubLink, HubTimeouts, ModeReport, VehicleIdInUse
 from vehicle_agents.manual import ManualPilot
@@ -154,6 +155,9 @@ async def _run(settings: AgentSettings) -> None:
             settings.hub_failsafe_timeout_s,
         )
         tasks.create_task(failsafe.run())
+        if settings.health_file is not None:
+            health = HealthFile(settings.health_file, lambda: link.connected, hub.connected.is_set)
+            tasks.create_task(health.run())
         if settings.camera is not None:
             from vehicle_agents.camera.wiring import start_camera  # only with a camera
 

@@ -28,6 +28,7 @@ from vehicle_agents.config import (
     describe_errors,
     flag_for,
     load_agent_settings,
+    ways_to_give,
 )
 
 LOG_FORMAT = "%(asctime)s %(levelname)-7s %(name)s: %(message)s"
@@ -51,6 +52,7 @@ _FLAG_KINDS: dict[str, dict[str, Any]] = {
     "tlog_keep_mb": {"type": float, "metavar": "MIB"},
     "outbox_limit": {"type": int, "metavar": "FRAMES"},
     "outbox_dir": {"type": Path, "metavar": "DIR"},
+    "health_file": {"type": Path, "metavar": "FILE"},
     "hub_failsafe_action": {"choices": ["continue", "hold", "rtl"]},
     "hub_failsafe_timeout_s": {"type": float, "metavar": "SECONDS"},
     "mavlink_forward": {"action": "append", "metavar": "ENDPOINT"},
@@ -90,6 +92,12 @@ def add_agent_arguments(parser: argparse.ArgumentParser) -> None:
         action="store_true",
         help="print this vehicle's id (what an admin enrols) and exit; without --vehicle-id "
         "it waits for the flight controller's heartbeat, which names the vehicle type",
+    )
+    parser.add_argument(
+        "--health",
+        action="store_true",
+        help="exit 0 if the running agent's health file (--health-file) is fresh and says "
+        "both links are up, else say what is wrong and exit 1 (a container's health check)",
     )
     for name, field in AgentSettings.model_fields.items():
         default = (
@@ -135,7 +143,7 @@ def run(args: argparse.Namespace, prog: str = "gcs-agent") -> int:
     """Run the agent (or print its id) with the parsed flags; the exit code."""
     try:
         settings = load_agent_settings(
-            overrides_from(args), args.config, require_token=not args.print_id
+            overrides_from(args), args.config, require_token=not (args.print_id or args.health)
         )
     except ValidationError as error:
         print(f"{prog}: invalid settings:\n{describe_errors(error)}", file=sys.stderr)
@@ -146,6 +154,8 @@ def run(args: argparse.Namespace, prog: str = "gcs-agent") -> int:
         return 2
     if args.print_id:
         return print_id(settings, prog)
+    if args.health:
+        return report_health(settings, prog)
     from vehicle_agents.agent import run_agent
     from vehicle_agents.hub_link import VehicleIdInUse
 
@@ -181,6 +191,25 @@ def print_id(settings: AgentSettings, prog: str) -> int:
         )
         return 1
     print(vehicle_id)
+    return 0
+
+
+def report_health(settings: AgentSettings, prog: str) -> int:
+    """0 if the running agent says, in its fresh health file, that both links are up."""
+    from vehicle_agents.health import check
+
+    if settings.health_file is None:
+        print(
+            f"{prog}: --health reads the running agent's health file: give it as "
+            + ways_to_give("health_file"),
+            file=sys.stderr,
+        )
+        return 2
+    problem = check(settings.health_file)
+    if problem is not None:
+        print(f"{prog}: unhealthy: {problem}", file=sys.stderr)
+        return 1
+    print("healthy: the flight controller and the hub are linked")
     return 0
 
 

@@ -86,6 +86,11 @@ class AgentSettings(BaseSettings):
         description="keep the outbox here while the hub is unreachable, so it survives "
         "outages and agent restarts; without it the outbox lives in memory only",
     )
+    health_file: Path | None = Field(
+        default=None,
+        description="rewrite this file every 5 s with whether the flight controller and "
+        "the hub are linked, for `--health` (a container's health check)",
+    )
     hub_failsafe_action: Literal["continue", "hold", "rtl"] = Field(
         default="continue",
         description="what the vehicle does when the hub link has been lost for "
@@ -345,7 +350,10 @@ def load_agent_settings(
     from_file: dict[str, Any] = {}
     if path is not None:
         with path.open("rb") as file:
-            from_file = tomllib.load(file)
+            try:
+                from_file = tomllib.load(file)
+            except tomllib.TOMLDecodeError as error:
+                raise SettingsError(f"{path}: not valid TOML: {error}") from None
         unknown = sorted(set(from_file) - set(AgentSettings.model_fields))
         if unknown:
             raise SettingsError("; ".join(_unknown_key(path, key) for key in unknown))

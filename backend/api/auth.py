@@ -25,6 +25,7 @@ from backend.auth.policy import (
     USER_SCOPES,
     Permission,
     Role,
+    UserScope,
     scope_list,
     user_principal,
 )
@@ -60,16 +61,21 @@ class AccessToken(BaseModel):
     expires_in: int
 
 
+API_TOKEN_DAYS = 90  # an API token's lifetime unless its creator asks for another
 # An Integer whose bounds the schema states (see protocol.messages.Integer).
 ExpiryDays = Annotated[int, Strict(), Field(ge=1, le=3650), BeforeValidator(whole_number)]
 
 
 class ApiTokenRequest(BaseModel):
     name: str = Field(min_length=1, max_length=128)
-    scopes: list[Permission] | None = Field(
+    scopes: list[UserScope] | None = Field(
         default=None, description="Permissions to keep (a subset of the role's); all if unset"
     )
-    expires_in_days: ExpiryDays | None = 90
+    expires_in_days: ExpiryDays | None = Field(
+        default=API_TOKEN_DAYS,
+        description=f"Days until the token expires, 1 to 3,650 ({API_TOKEN_DAYS} if not "
+        "given); null: it never expires (revoke it when it is no longer needed)",
+    )
 
 
 class ApiToken(BaseModel):
@@ -262,10 +268,15 @@ async def list_api_tokens(principal: CurrentPrincipal, hub: HubDep) -> list[ApiT
 async def create_api_token(
     body: ApiTokenRequest, request: Request, principal: CurrentPrincipal, hub: HubDep
 ) -> IssuedApiToken:
-    """A long-lived bearer token for an integration, scoped to some of the caller's rights."""
+    """A bearer token for an integration, scoped to some of the caller's rights. It expires
+    after ``expires_in_days`` (90 by default; 1 to 3,650), or never when that is null."""
     user = await asyncio.to_thread(hub.accounts.user, principal.name)
     role_scopes = ROLE_PERMISSIONS[Role(user.role)]
-    scopes = frozenset(body.scopes) if body.scopes is not None else role_scopes
+    scopes = (
+        frozenset(Permission(scope) for scope in body.scopes)
+        if body.scopes is not None
+        else role_scopes
+    )
     # A token never carries more than the session that created it.
     if not scopes <= principal.permissions:
         raise Forbidden(

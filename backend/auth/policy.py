@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from enum import StrEnum
+from typing import Literal
 
 from backend.errors import Forbidden
 
@@ -33,6 +34,11 @@ USER_SCOPES: dict[Permission, str] = {
     Permission.AUDIT: "The audit log",
     Permission.ADMIN: "Users, vehicle enrolment, safety rails, safety overrides",
 }
+
+
+# The scopes a user's token may be given, as the API takes them (`agent` is for agent
+# tokens only, which enrolment issues: a scope error must not offer it).
+UserScope = Literal["read", "command", "audit", "admin"]
 
 
 def scope_list(scopes: frozenset[Permission] | set[Permission]) -> str:

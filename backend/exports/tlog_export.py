@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import math
 import struct
+import unicodedata
 from collections.abc import Iterable, Iterator
 from typing import Any
 
@@ -198,10 +199,32 @@ class _SampleEncoder:
         )
 
 
+# What the hub's event texts use beyond ASCII, said in ASCII (the mode event's arrow):
+# arrows, en and em dashes, the ellipsis and the degree sign.
+_ASCII_SPELLINGS = str.maketrans(
+    {
+        "\u2192": "->",
+        "\u2190": "<-",
+        "\u2013": "-",
+        "\u2014": "-",
+        "\u2026": "...",
+        "\u00b0": " deg",
+    }
+)
+
+
+def mavlink_ascii(text: str) -> bytes:
+    """``text`` for a MAVLink char[] field, which readers decode as ASCII (pymavlink, and
+    so mavlogdump and MAVProxy, turn every other byte into U+FFFD): accents dropped
+    (é -> e), a few symbols spelled out (→ -> "->"), anything else "?"."""
+    spelled = unicodedata.normalize("NFKD", text.translate(_ASCII_SPELLINGS))
+    bare = "".join(c for c in spelled if not unicodedata.combining(c))
+    return bare.encode("ascii", errors="replace")
+
+
 def _statustext(event: ExportEvent) -> Any:
     severity = mavlink2.MAV_SEVERITY_INFO if event.severity is None else event.severity
-    text = (event.text or event.kind).encode("utf-8")[:STATUSTEXT_MAX_BYTES]
-    text = text.decode("utf-8", errors="ignore").encode("utf-8")  # no half characters
+    text = mavlink_ascii(event.text or event.kind)[:STATUSTEXT_MAX_BYTES]
     return mavlink2.MAVLink_statustext_message(max(0, min(7, severity)), text)
 
 

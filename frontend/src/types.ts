@@ -36,8 +36,11 @@ export type ParamValues = Schemas["ParamValues"];
 /** `GET /api/v1/health`: the hub's store, as the dashboard's header reports it. */
 export type HubHealth = Schemas["Health"];
 
-/** What the hub's permissions are called (`backend/auth/policy.py`). */
-export type Permission = Schemas["Permission"];
+/** What a user's permissions (its token's scopes) are called (`backend/auth/policy.py`,
+ * `UserScope`; `agent` is an agent token's alone). */
+export type Permission = NonNullable<
+  Schemas["ApiTokenRequest"]["scopes"]
+>[number];
 export type Role = Schemas["Role"];
 
 /** `POST /api/v1/auth/login` and `GET /api/v1/auth/me`. */

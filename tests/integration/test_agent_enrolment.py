@@ -91,3 +91,23 @@ def test_print_id_with_a_chosen_id_needs_no_flight_controller() -> None:
         timeout=30,
     )
     assert (printed.returncode, printed.stdout) == (0, "survey_7\n")
+
+
+@pytest.mark.parametrize("fcu", ["tcp:127.0.0.1:{port}", "/dev/ttyGCS-absent-{port}"])
+def test_print_id_without_a_flight_controller_gives_up_saying_why(
+    fcu: str, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Nothing answers (a closed port, a serial device that is not there): --print-id
+    stops retrying after its wait, says what to check, and exits 1."""
+    from vehicle_agents import cli
+    from vehicle_agents.config import load_agent_settings
+
+    monkeypatch.setattr(cli, "PRINT_ID_TIMEOUT_S", 1.5)  # 30 s on a board
+    for name in set(os.environ) - set(_without_agent_settings()):
+        monkeypatch.delenv(name)
+    url = fcu.format(port=free_port())
+    settings = load_agent_settings({"fcu": url}, None, require_token=False)
+    assert cli.print_id(settings, "gcs-agent") == 1
+    said = capsys.readouterr().err
+    assert f"gcs-agent: no heartbeat from {url} within 1.5 s" in said
+    assert "Check --fcu, or choose an id with --vehicle-id." in said

@@ -12,6 +12,8 @@ from contextlib import ExitStack, contextmanager
 from pathlib import Path
 from typing import Any
 
+import pytest
+
 from protocol.messages import CommandOutcome, CommandResult, encode
 from tests.conftest import ADMIN_PASSWORD, POSTGRES_ADDRESS, hub_settings, scratch_postgres
 from tests.helpers import access_token, api_client, poll_until, running_hub
@@ -116,12 +118,16 @@ def test_land_rtl_and_hold_go_through_a_database_outage_and_nothing_is_lost(
         ]
 
 
+@pytest.mark.parametrize("spool_dir", [None, "spool"], ids=["in-the-data-folder", "spool-dir"])
 def test_a_spool_left_by_a_hub_that_stopped_mid_outage_is_stored_at_the_next_start(
-    tmp_path: Path,
+    tmp_path: Path, spool_dir: str | None
 ) -> None:
+    """...in the data folder, or in GCS_SPOOL_DIR (hubs that share a data folder), which
+    the hub creates."""
+    spool = {"spool_dir": tmp_path / spool_dir} if spool_dir else {}
     with CuttableProxy(POSTGRES) as proxy, scratch_postgres() as url:
         proxied = url.replace(POSTGRES_ADDRESS, f"127.0.0.1:{proxy.port}")
-        settings = hub_settings(tmp_path, database_url=proxied, spool_retry_s=0.2)
+        settings = hub_settings(tmp_path, database_url=proxied, spool_retry_s=0.2, **spool)
         with running_hub(settings) as base:
             admin = api_client(base, access_token(base, "admin", ADMIN_PASSWORD))
             with admin:
@@ -131,9 +137,11 @@ def test_a_spool_left_by_a_hub_that_stopped_mid_outage_is_stored_at_the_next_sta
                 denied = admin.post("/api/v1/vehicles/v9/commands", json={"name": "land"})
                 assert denied.status_code == 404
                 assert admin.get("/api/v1/health").json()["rows_spooled"] == 1
-        assert (tmp_path / "spool.jsonl").stat().st_mode & 0o777 == 0o600
+        assert (tmp_path / (spool_dir or ".") / "spool.jsonl").stat().st_mode & 0o777 == 0o600
+        if spool_dir:
+            assert not (tmp_path / "spool.jsonl").exists()
         proxy.start()
-        with running_hub(hub_settings(tmp_path, database_url=proxied)) as base:
+        with running_hub(hub_settings(tmp_path, database_url=proxied, **spool)) as base:
             admin = api_client(base, access_token(base, "admin", ADMIN_PASSWORD))
             with admin:
 

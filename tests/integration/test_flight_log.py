@@ -9,6 +9,7 @@ import json
 import math
 import time
 from pathlib import Path
+from typing import get_args
 
 import httpx
 import pytest
@@ -22,7 +23,7 @@ from backend.storage.records import StoredRecord, TelemetryEnvelope
 from backend.storage.repository import Repository
 from backend.storage.retention import RetentionPolicy
 from backend.storage.writer import StorageWriter
-from protocol.messages import Telemetry, VehicleState
+from protocol.messages import EventKind, Telemetry, VehicleState
 from tests.conftest import ADMIN_PASSWORD, hub_settings
 from tests.helpers import access_token, agent_hello, api_client, running_hub
 from tests.mavutil_state import mavutil_in_mavlink2, read_tlog
@@ -187,6 +188,14 @@ def test_flight_log_bad_input(hub: str, admin_api: httpx.Client) -> None:
     assert "start" in json.dumps(backwards.json())
     points = admin_api.get("/api/v1/telemetry/series", params={"points": 10**6})
     assert points.status_code == 422
+    # An unknown event kind is refused naming the kinds, as the audit log's filters are.
+    nonsense = admin_api.get("/api/v1/events", params={"kind": "nonsense"})
+    assert nonsense.status_code == 422
+    (problem,) = nonsense.json()["detail"]
+    assert problem["loc"] == ["query", "kind"]
+    for kind in get_args(EventKind):
+        assert f"'{kind}'" in problem["msg"]
+    assert admin_api.get("/api/v1/events", params={"kind": "mode"}).status_code == 200
 
 
 def test_retention_removes_only_old_rows(engine: Engine) -> None:

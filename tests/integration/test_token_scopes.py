@@ -81,6 +81,33 @@ def test_an_unknown_scope_is_named_with_the_valid_ones(hub: str) -> None:
     assert granted.status_code == 200, granted.text
 
 
+@pytest.mark.parametrize("scope", ["agent", "write"])
+def test_an_api_token_s_scope_error_offers_only_what_can_be_granted(
+    admin_api: httpx.Client, scope: str
+) -> None:
+    """`agent` belongs to agent tokens, which enrolment issues: it is no scope of a
+    user's token, so it is refused as unknown and not offered among the valid ones."""
+    refused = admin_api.post(
+        "/api/v1/auth/api-tokens", json={"name": "integration", "scopes": ["read", scope]}
+    )
+    assert refused.status_code == 422, refused.text
+    (problem,) = refused.json()["detail"]
+    assert problem["loc"] == ["body", "scopes", 1]
+    assert problem["msg"] == "Input should be 'read', 'command', 'audit' or 'admin'"
+    document = admin_api.get("/openapi.json").json()
+    body = document["components"]["schemas"]["ApiTokenRequest"]["properties"]["scopes"]
+    (listed,) = [option for option in body["anyOf"] if option.get("type") == "array"]
+    assert sorted(listed["items"]["enum"]) == SCOPES
+
+
+def test_user_scope_names_the_scopes_of_the_security_scheme() -> None:
+    from typing import get_args
+
+    from backend.auth.policy import USER_SCOPES, UserScope
+
+    assert sorted(get_args(UserScope)) == sorted(scope.value for scope in USER_SCOPES)
+
+
 def test_the_openapi_security_scheme_lists_the_scopes(hub: str) -> None:
     document = httpx.get(f"{hub}/openapi.json").json()
     (scheme,) = document["components"]["securitySchemes"].values()

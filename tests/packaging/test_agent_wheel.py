@@ -79,3 +79,14 @@ def test_the_agent_runs_from_its_wheel_without_the_rest(agent_wheel: Path, tmp_p
     )
     assert done.returncode == 0, done.stderr
     assert "--telemetry-rate-hz" in done.stdout
+
+
+def test_the_offline_build_the_readme_gives_is_the_one_built_here() -> None:
+    """An offline board cannot fetch the build backend: the README says so, and gives
+    the command this module builds with (PIP_WHEEL), which needs no package index."""
+    readme = " ".join((ROOT / "README.md").read_text().split())
+    backend = tomllib.loads((ROOT / "agent" / "pyproject.toml").read_text())["build-system"]
+    assert backend["requires"] == ["hatchling>=1.21"]
+    assert "fetches the build backend (hatchling" in readme
+    assert "python3 -m pip wheel --no-deps --no-build-isolation -w dist ./agent" in readme
+    assert {"--no-deps", "--no-build-isolation"} <= set(PIP_WHEEL)

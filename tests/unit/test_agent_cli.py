@@ -151,6 +151,23 @@ def test_gcs_hub_without_the_hub_extra_names_the_extra() -> None:
     assert "fleet-gcs[hub]" in done.stderr
 
 
+def test_a_toml_syntax_error_names_the_file_and_the_place(tmp_path: Path) -> None:
+    config = tmp_path / "agent.toml"
+    config.write_text('vehicle_id = "copter_1"\nfcu = "tcp:127.0.0.1:5760\n')
+    done = subprocess.run(
+        [sys.executable, "-m", "gcs", "agent", "--config", str(config), "--print-id"],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        cwd=ROOT,
+        check=False,
+    )
+    assert done.returncode == 2
+    assert f"{config}: not valid TOML: " in done.stderr
+    assert "(at line 2, column 26)" in done.stderr
+    assert "Traceback" not in done.stderr
+
+
 def test_the_readme_lists_every_setting_by_its_one_name() -> None:
     """The README's table of the agent's settings: a row per setting, each naming the
     config key, the flag and the variable, and nothing else."""

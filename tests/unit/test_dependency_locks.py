@@ -13,7 +13,7 @@ from packaging.utils import canonicalize_name
 ROOT = Path(__file__).resolve().parents[2]
 PROJECT = "fleet-gcs"
 # lock file -> the extras it installs on top of the base dependencies
-LOCKS = {"agent": (), "hub": ("hub",), "dev": ("dev",)}
+LOCKS = {"agent": (), "hub": ("hub",), "simulator": ("simulator",), "dev": ("dev",)}
 PIN = re.compile(r"^([A-Za-z0-9][A-Za-z0-9._-]*)==([^\s;\\]+)", re.MULTILINE)
 
 
@@ -52,6 +52,7 @@ def test_each_lock_pins_every_dependency_within_its_bounds(
 
 
 def test_the_locks_agree_on_every_shared_package() -> None:
-    agent, hub, dev = (_pins(lock) for lock in LOCKS)
+    agent, hub, simulator, dev = (_pins(lock) for lock in LOCKS)
     assert agent.items() <= hub.items(), "run scripts/lock.sh"
+    assert agent.items() <= simulator.items() <= hub.items(), "run scripts/lock.sh"
     assert hub.items() <= dev.items(), "run scripts/lock.sh"

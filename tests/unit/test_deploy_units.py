@@ -57,3 +57,27 @@ def test_the_agent_units_state_is_private() -> None:
     unit = _settings(ROOT / "deploy" / "gcs-agent.service")
     assert unit["StateDirectoryMode"] == ["0700"]
     assert unit["UMask"] == ["0077"]
+
+
+def test_the_proxies_let_an_agent_s_tlog_through() -> None:
+    """The hub takes a .tlog of up to max_tlog_bytes in one body on its upload route;
+    each proxy in deploy/ takes it there (and keeps 2 MB elsewhere)."""
+    import re
+
+    from backend.settings import HubSettings
+
+    route = "/api/v1/vehicles/survey_1/tlogs"
+    limit = HubSettings.model_fields["max_tlog_bytes"].default
+    for name in ("nginx.conf", "nginx-scaled.conf"):
+        text = (ROOT / "deploy" / name).read_text()
+        (pattern, block) = re.findall(r"location ~ (\S+) \{([^}]*)\}", text)[0]
+        assert re.match(pattern, route), name
+        (size,) = re.findall(r"client_max_body_size (\d+)m;", block)
+        assert int(size) * 2**20 >= limit, name
+        assert "proxy_request_buffering off;" in block
+        assert "client_max_body_size 2m;" in text  # everything else
+    caddy = (ROOT / "deploy" / "Caddyfile").read_text()
+    (pattern,) = set(re.findall(r"path_regexp (\S+)", caddy))
+    assert re.match(pattern, route)
+    (size,) = re.findall(r"request_body @tlog_upload \{\s*max_size (\d+)MiB", caddy)
+    assert int(size) * 2**20 >= limit

@@ -140,7 +140,8 @@ export interface paths {
         put?: never;
         /**
          * Create Api Token
-         * @description A long-lived bearer token for an integration, scoped to some of the caller's rights.
+         * @description A bearer token for an integration, scoped to some of the caller's rights. It expires
+         *     after ``expires_in_days`` (90 by default; 1 to 3,650), or never when that is null.
          */
         post: operations["create_api_token_api_v1_auth_api_tokens_post"];
         delete?: never;
@@ -1585,9 +1586,10 @@ export interface components {
              * Scopes
              * @description Permissions to keep (a subset of the role's); all if unset
              */
-            scopes?: components["schemas"]["Permission"][] | null;
+            scopes?: ("read" | "command" | "audit" | "admin")[] | null;
             /**
              * Expires In Days
+             * @description Days until the token expires, 1 to 3,650 (90 if not given); null: it never expires (revoke it when it is no longer needed)
              * @default 90
              */
             expires_in_days: number | null;
@@ -2898,11 +2900,6 @@ export interface components {
              */
             range_checked?: boolean | null;
         };
-        /**
-         * Permission
-         * @enum {string}
-         */
-        Permission: "read" | "command" | "audit" | "admin" | "agent";
         /** PhotoFailure */
         PhotoFailure: {
             /** Photo Id */
@@ -8660,7 +8657,8 @@ export interface operations {
         parameters: {
             query?: {
                 vehicle_id?: string | null;
-                kind?: string | null;
+                /** @description One of the kinds listed */
+                kind?: ("statustext" | "mode" | "armed" | "disarmed" | "link_up" | "link_down" | "failsafe" | "mission" | "id_clash" | "manual" | "upload" | "camera" | "formation") | null;
                 /** @description Unix seconds (0 to 100000000000, fractions kept exactly) or an ISO 8601 date-time (no time zone means UTC, precise to the microsecond) in the same range. Both bounds are inclusive. Default: unbounded. */
                 start?: number | string | null;
                 /** @description Unix seconds (0 to 100000000000, fractions kept exactly) or an ISO 8601 date-time (no time zone means UTC, precise to the microsecond) in the same range. Both bounds are inclusive. Default: unbounded. */

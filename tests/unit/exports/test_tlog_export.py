@@ -8,7 +8,7 @@ from types import ModuleType
 
 import pytest
 
-from backend.exports import ExportSample, sample_position, tlog_chunks
+from backend.exports import ExportEvent, ExportSample, sample_position, tlog_chunks
 from tests.mavutil_state import mavutil_in_mavlink2, read_tlog
 from tests.unit.exports import flight_data
 from tests.unit.exports.flight_data import T0, events, flight, samples
@@ -117,6 +117,26 @@ def test_events_are_statustexts_merged_in_time_order(tmp_path: Path, mavutil: Mo
     assert [t._timestamp for t in texts] == pytest.approx(
         [T0 - 1.0, T0 + 0.1, T0 + 4.04, T0 + 99.0], abs=1e-6
     )
+
+
+@pytest.mark.parametrize(
+    ("text", "logged"),
+    [
+        ("mode STABILIZE → GUIDED", "mode STABILIZE -> GUIDED"),  # the hub's mode event
+        ("Caméra prête", "Camera prete"),
+        ("GPS 不好", "GPS ??"),
+        ("→" * 30, "->" * 25),  # 50 bytes, the field's size
+    ],
+)
+def test_a_statustext_is_ascii_as_mavlink_readers_decode_it(
+    tmp_path: Path, mavutil: ModuleType, text: str, logged: str
+) -> None:
+    event = ExportEvent(time=T0 + 1.0, kind="mode", severity=None, text=text)
+    path = _write(tmp_path / "f.tlog", list(tlog_chunks(flight(), samples(), [event])))
+
+    (message,) = [m for m in read_tlog(mavutil, path) if m.get_type() == "STATUSTEXT"]
+
+    assert message.text == logged
 
 
 def test_mavlogdump_reads_the_log(tmp_path: Path) -> None:

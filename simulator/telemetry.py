@@ -11,9 +11,12 @@ from dataclasses import dataclass
 from typing import Any
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
-from pymavlink.dialects.v20 import development
 
-from protocol.mavlink_extra import MAVLink_component_metadata_message
+from protocol.mavlink_extra import (
+    MAVLink_available_modes_message,
+    MAVLink_component_metadata_message,
+    MAVLink_current_mode_message,
+)
 from simulator.mavconst import MsgId, SysSensor
 from simulator.mission import MissionItem
 from simulator.param_table import PARAM_ID_LEN
@@ -384,7 +387,7 @@ class TelemetryBuilder:
             return None
         indices = range(1, total + 1) if index == 0 else (index,)
         return [
-            development.MAVLink_available_modes_message(
+            MAVLink_available_modes_message(
                 total,
                 at,
                 modes[at - 1].standard_mode,
@@ -407,7 +410,7 @@ class TelemetryBuilder:
         standard = next(
             (mode.standard_mode for mode in listed if mode.custom_mode == custom_mode), 0
         )
-        return development.MAVLink_current_mode_message(standard, custom_mode, custom_mode)
+        return MAVLink_current_mode_message(standard, custom_mode, custom_mode)
 
     def autopilot_version(self) -> MavMessage:
         major, minor, patch = FIRMWARE_VERSION

@@ -6,7 +6,7 @@ import os
 import sys
 from typing import Any
 
-from protocol import mavlink_extra as component_metadata
+from protocol import mavlink_extra
 
 DIALECT = "ardupilotmega"
 UNUSED_ON_IMPORT = "pymavlink.dialects.v10.all"
@@ -39,21 +39,8 @@ def mavutil() -> Any:
     return module
 
 
-# MAVLink's standard-modes messages (AVAILABLE_MODES 435, CURRENT_MODE 436,
-# AVAILABLE_MODES_MONITOR 437), which PX4 (1.15 on) and ArduPilot (4.7 on) send. pymavlink
-# 2.4.50 keeps them in its development dialect only, so the ArduPilot dialect the agent
-# decodes with would drop them as unknown; its decoder looks each id up in the module's
-# ``mavlink_map``, and the development dialect's classes pack and unpack the same bytes.
-STANDARD_MODES_IDS = (435, 436, 437)
-
-
-def teach_standard_modes() -> None:
-    """Make the agent's dialect decode the standard-modes messages (idempotent)."""
-    from pymavlink.dialects.v20 import ardupilotmega, development
-
-    for message_id in STANDARD_MODES_IDS:
-        ardupilotmega.mavlink_map.setdefault(message_id, development.mavlink_map[message_id])
-    component_metadata.register()  # COMPONENT_METADATA, which no pymavlink dialect has
-
-
-teach_standard_modes()
+# The standard-modes messages (AVAILABLE_MODES, CURRENT_MODE, AVAILABLE_MODES_MONITOR) and
+# COMPONENT_METADATA, which the ArduPilot dialect the agent decodes with lacks: defined in
+# `protocol.mavlink_extra` rather than taken from pymavlink's development dialect, whose
+# import would cost a small board several MB for three messages.
+mavlink_extra.register()

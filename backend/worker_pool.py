@@ -38,6 +38,7 @@ import socket
 import struct
 import sys
 from collections.abc import Awaitable, Callable, Sequence
+from multiprocessing import forkserver
 from multiprocessing.process import BaseProcess
 from typing import Any, TypeVar
 
@@ -63,7 +64,17 @@ class JobStopped(GcsError):
 
 
 def _die_with_parent(hub_pid: int) -> None:
-    """In a worker: SIGKILL when its parent ends; if the hub is gone already, end now."""
+    """In a worker: SIGKILL when its parent ends; if the hub is gone already, end now.
+
+    The fork server hands each child the write end of the pipe by which the hub keeps it
+    alive (so that the child could ask it for processes of its own): a busy worker then
+    kept the fork server alive after the hub ended, and the fork server it. Closed here,
+    the fork server's only keeper is the hub."""
+    alive_fd = getattr(forkserver._forkserver, "_forkserver_alive_fd", None)
+    if isinstance(alive_fd, int):
+        with contextlib.suppress(OSError):
+            os.close(alive_fd)
+        forkserver._forkserver._forkserver_alive_fd = None
     if sys.platform.startswith("linux"):
         ctypes.CDLL(None, use_errno=True).prctl(PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0)
     try:

@@ -98,7 +98,8 @@ def test_past_its_pending_bound_the_pool_refuses_with_a_retry_after() -> None:
     async def run() -> None:
         jobs = [asyncio.ensure_future(pool.run(FOREVER_S, time.sleep, 0.5)) for _ in range(2)]
         await asyncio.sleep(0)  # both taken: one running, one waiting for the worker
-        with pytest.raises(RateLimited, match=r"2 test jobs .* the most \(test_max_pending\)") as no:
+        refusal = r"2 test jobs .* the most \(test_max_pending\)"
+        with pytest.raises(RateLimited, match=refusal) as no:
             await pool.run(FOREVER_S, time.sleep, 0.5)
         assert no.value.retry_after_s >= 1
         with pytest.raises(RateLimited):

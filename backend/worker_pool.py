@@ -74,7 +74,7 @@ def _die_with_parent(hub_pid: int) -> None:
     if isinstance(alive_fd, int):
         with contextlib.suppress(OSError):
             os.close(alive_fd)
-        forkserver._forkserver._forkserver_alive_fd = None
+        setattr(forkserver._forkserver, "_forkserver_alive_fd", None)  # noqa: B010 (private)
     if sys.platform.startswith("linux"):
         ctypes.CDLL(None, use_errno=True).prctl(PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0)
     try:

@@ -12,7 +12,7 @@ killed at once, wherever it is (GEOS, numpy).
 At most `survey_plan_workers` plans run at once and `survey_plan_max_pending` run or wait;
 beyond, a 429 with Retry-After. Imports alike: one worker, `survey_import_max_pending`,
 `survey_import_timeout_s`. The plan comes back as JSON of `SurveyPlan` (pydantic reads it
-in Rust: a 549-item mission's plan costs the event loop about a millisecond, where the
+in Rust: a 549-item mission's plan costs the event loop about 2 ms, where the
 planner's own objects took 50 ms to unpickle). On /metrics: plans running or waiting now,
 and plans stopped before they finished by reason.
 """

@@ -10,7 +10,6 @@ from dataclasses import dataclass
 import shapely
 
 from backend.missions.survey.camera import Camera, CameraCalc, calculate, preset
-from backend.missions.survey.cancel import checkpoint
 from backend.missions.survey.geo import polygon_from_geojson
 from backend.missions.survey.limits import SurveyLimits, check_estimate, check_missions, estimate
 from backend.missions.survey.mission import survey_mission
@@ -149,7 +148,6 @@ def plan_survey(
     if angle is None:
         angle = best_angle(area, calc, request.speed_ms, turnaround_m=request.turnaround_m)
     parts = split(area, calc, drones, angle_deg=angle, turnaround_m=request.turnaround_m)
-    checkpoint()
     # The photos' footprints united lane by lane (the same union, a few shapes per lane).
     shots = [
         f for p in parts for f in swaths(p.plan, calc.footprint_side_m, calc.footprint_frontal_m)
@@ -159,11 +157,9 @@ def plan_survey(
         for p in parts
         for f in swaths(p.plan, calc.lane_spacing_m * 1.0001, calc.trigger_distance_m * 1.0001)
     ]
-    checkpoint()
     positions = {vehicle.vehicle_id: vehicle.position for vehicle in fleet}
     planned = []
     for p in parts:
-        checkpoint()
         mission = survey_mission(
             p.plan,
             frame,
@@ -184,7 +180,6 @@ def plan_survey(
         )
     if limits is not None:
         check_missions({p.part.drone.name: len(p.items) for p in planned}, limits)
-    checkpoint()
     return Survey(
         calc=calc,
         frame=frame,

@@ -256,7 +256,7 @@ class HubSettings(BaseSettings):
         default=30.0, gt=0, le=600, description="a survey plan still running after this stops"
     )
     survey_plan_workers: int = Field(
-        default=2, ge=1, le=32, description="survey plans computed at once (worker threads)"
+        default=2, ge=1, le=32, description="survey plans computed at once (worker processes)"
     )
     survey_plan_max_pending: int = Field(
         default=8, ge=1, description="survey plans running or waiting for a worker; beyond, 429"
@@ -266,6 +266,12 @@ class HubSettings(BaseSettings):
     )
     survey_import_max_vertices: int = Field(
         default=10_000, ge=4, description="the vertices of a survey area file's polygon"
+    )
+    survey_import_max_pending: int = Field(
+        default=4, ge=1, description="area files being read or waiting (one worker); beyond, 429"
+    )
+    survey_import_timeout_s: float = Field(
+        default=10.0, gt=0, le=600, description="an area file still being read after this stops"
     )
     survey_imports_per_minute: int = Field(
         default=10, ge=1, description="survey area files one user may import per minute"

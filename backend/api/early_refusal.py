@@ -1,5 +1,6 @@
 """Refusals made before a request's body is read: a client refused in a loop costs the hub
-its headers, not its body and the whole route.
+its headers, not its body and the whole route. So is one that would find its work's
+queue full (the password checks, the area files' worker).
 
 A rate limit checked in a route comes after FastAPI has read and decoded the body and
 resolved the route's dependencies: an area import refused for its user's rate still had
@@ -29,12 +30,15 @@ EarlyCheck = Callable[[HTTPConnection], Awaitable[None]]
 async def _import_rate(connection: HTTPConnection) -> None:
     principal = await principal_of(connection)
     if principal is not None:  # no caller: the route answers 401 as usual
-        get_hub(connection).surveys.import_limiter.check(principal.name, "survey imports")
+        surveys = get_hub(connection).surveys
+        surveys.import_limiter.check(principal.name, "survey imports")
+        surveys.planner.import_pool.check_room()  # its worker's queue is full
 
 
 async def _login_rate(connection: HTTPConnection) -> None:
     hub = get_hub(connection)
     hub.login_address_limiter.check(client_address(connection), "login attempts")
+    hub.passwords.check_room()  # as many password checks as allowed are under way
 
 
 def early_checks(api_prefix: str) -> dict[tuple[str, str], EarlyCheck]:

@@ -9,7 +9,6 @@ returns one mission per drone, each with the same mission check an upload runs.
 from __future__ import annotations
 
 import asyncio
-import json
 from functools import partial
 from typing import Annotated, Any, Literal
 
@@ -28,10 +27,7 @@ from backend.missions.schemas import Mission, MissionCheckResponse
 from backend.missions.survey.camera import PRESETS
 from backend.missions.survey.interop import (
     MAX_FILE_BYTES,
-    InteropError,
-    TooManyVertices,
     mission_path_geojson,
-    read_area_file,
     to_qgc_plan,
     to_wpl,
 )
@@ -105,22 +101,21 @@ async def preview_survey(body: SurveyRequest, request: Request, hub: HubDep) -> 
         fleet.append(Fleet(vid, here, base))
     survey = await hub.surveys.planner.plan(body, fleet, partial(client_gone, request))
     parts = []
-    for planned in survey.parts:
-        p = planned.part
-        record = records[p.drone.name]
-        check = await asyncio.to_thread(hub.safety.check_mission, record, planned.items)
+    for part in survey.parts:
+        record = records[part.vehicle_id]
+        check = await asyncio.to_thread(hub.safety.check_mission, record, part.items)
         parts.append(
             SurveyPart(
-                vehicle_id=p.drone.name,
-                mission=Mission(items=planned.items),
-                lanes=len(p.plan.lanes),
-                photo_count=p.plan.photo_count,
-                path_length_m=p.plan.path_length_m,
-                transit_s=p.transit_s,
-                survey_s=p.survey_s,
-                home_s=p.home_s,
-                total_s=p.total_s,
-                lane_paths=planned.lane_paths,
+                vehicle_id=part.vehicle_id,
+                mission=Mission(items=part.items),
+                lanes=len(part.lane_paths),
+                photo_count=part.photo_count,
+                path_length_m=part.path_length_m,
+                transit_s=part.transit_s,
+                survey_s=part.survey_s,
+                home_s=part.home_s,
+                total_s=part.total_s,
+                lane_paths=part.lane_paths,
                 check=MissionCheckResponse.from_plan_check(check),
             )
         )
@@ -327,34 +322,9 @@ async def import_survey_area(
             f"the file is {size:,} bytes; the limit is {settings.survey_import_max_bytes:,} "
             "(survey_import_max_bytes)"
         )
-    try:
-        # Parsing a large file, and writing its thousands of points out, take a while: in
-        # a thread, never on the event loop.
-        content = await asyncio.get_running_loop().run_in_executor(
-            hub.surveys.import_executor,
-            _area_file_json,
-            body.format,
-            body.content,
-            settings.survey_import_max_vertices,
-        )
-    except TooManyVertices as error:
-        raise InvalidRequest(
-            "content",
-            f"the file's area has {error.count:,} vertices; the limit is {error.limit:,} "
-            "(survey_import_max_vertices)",
-        ) from error
-    except InteropError as error:
-        raise InvalidRequest("content", str(error)) from error
-    except ValueError as error:  # a NaN (QGC writes null for one) cannot be JSON
-        raise InvalidRequest(
-            "content", f"the file holds a value that is not a number: {error}"
-        ) from error
+    # Parsed in a worker process (backend/surveys/planning.py), never on the event loop.
+    content = await hub.surveys.planner.read_area_file(body.format, body.content)
     return Response(content, media_type="application/json")
-
-
-def _area_file_json(kind: str, text: str, max_vertices: int) -> bytes:
-    fields = read_area_file(kind, text, max_vertices)
-    return json.dumps(fields, allow_nan=False, separators=(",", ":")).encode()
 
 
 @router.get(

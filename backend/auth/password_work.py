@@ -56,13 +56,20 @@ class PasswordWork:
         # Only touched from the event loop: a plain semaphore, tested without waiting.
         self._slots = asyncio.Semaphore(max_pending)
 
+    def check_room(self) -> None:
+        """RateLimited if ``max_pending`` password checks are already running or waiting:
+        also asked from a login's headers, before its body is read (early_refusal.py)."""
+        if self._slots.locked():
+            raise RateLimited(
+                f"too many password checks in progress, the most ({self.max_pending}, "
+                "password_hash_max_pending); try again in 1 s",
+                BUSY_RETRY_AFTER_S,
+            )
+
     async def run(self, work: Callable[P, T], *args: P.args, **kwargs: P.kwargs) -> T:
         """``work`` (which hashes or verifies a password) on the password threads;
         RateLimited at once if ``max_pending`` are already running or waiting."""
-        if self._slots.locked():
-            raise RateLimited(
-                "too many password checks in progress; try again in 1 s", BUSY_RETRY_AFTER_S
-            )
+        self.check_room()
         async with self._slots:
             loop = asyncio.get_running_loop()
             # A cancelled request also cancels its job if no thread has taken it yet.

@@ -76,12 +76,14 @@ COMMAND_SECONDS = Histogram(
 )
 
 SURVEY_PLANS_RUNNING = Gauge(
-    "gcs_survey_plans_running", "Survey plans being computed in worker threads now."
+    "gcs_survey_plans_running",
+    "Survey plans being computed in worker processes, or waiting for one, now.",
 )
 SURVEY_PLANS_STOPPED = Counter(
     "gcs_survey_plans_stopped",
-    "Survey plans stopped before they finished, by reason (disconnect: the client went "
-    "away; timeout: past survey_plan_timeout_s; shutdown: the hub stopped).",
+    "Survey plans stopped before they finished, their worker killed, by reason (disconnect: "
+    "the client went away; timeout: past survey_plan_timeout_s; shutdown: the hub stopped; "
+    "died: the worker ended on its own).",
     ["reason"],
 )
 
@@ -99,7 +101,7 @@ for _kind in ("agent", "dashboard"):
     CONNECTIONS.labels(kind=_kind)
 for _reason in ("coalesced", "slow_client"):
     DROPPED.labels(reason=_reason)
-for _reason in ("disconnect", "timeout", "shutdown"):
+for _reason in ("disconnect", "timeout", "shutdown", "died"):
     SURVEY_PLANS_STOPPED.labels(reason=_reason)
 for _field in STATE_BOUNDS:
     TELEMETRY_REFUSED.labels(reason=f"{_field}_out_of_range")

@@ -26,7 +26,6 @@ import logging
 import time
 import uuid
 from collections.abc import Callable, Sequence
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import asdict
 
 from sqlalchemy.exc import SQLAlchemyError
@@ -53,7 +52,7 @@ from backend.missions.survey.run import (
     handover_missions,
 )
 from backend.missions.survey.schemas import SurveyRequest
-from backend.missions.survey.service import Fleet, Survey
+from backend.missions.survey.service import Fleet, SurveyPlan
 from backend.realtime.bus import Bus, LatestSubscription, ReliableSubscription, Topic
 from backend.safety.snapshot import home, position
 from backend.settings import HubSettings
@@ -109,10 +108,8 @@ class SurveyService:
         # Plans off the event loop, bounded (planning.py); the preview plans here too.
         self.planner = SurveyPlanner(settings)
         # Area files (KML, GeoJSON, .plan) each user may import (api/surveys.py), parsed
-        # one at a time: XML parsing holds the GIL, so parallel parses would starve the
-        # event loop, where one at a time leaves it a turn between files.
+        # in the planner's import worker.
         self.import_limiter = RateLimiter(Limit(settings.survey_imports_per_minute, 60.0))
-        self.import_executor = ThreadPoolExecutor(1, thread_name_prefix="survey-import")
 
     # -- life cycle ----------------------------------------------------------------------
 
@@ -171,7 +168,6 @@ class SurveyService:
             self._bus.unsubscribe(Topic.VEHICLE_EVENT, events)
             self._bus.unsubscribe(Topic.VEHICLE_STATE, states)
             self.planner.close()
-            self.import_executor.shutdown(wait=False, cancel_futures=True)
             with contextlib.suppress(SQLAlchemyError):
                 await self._save_dirty()
 
@@ -214,9 +210,9 @@ class SurveyService:
             fleet.append(Fleet(vid, here, base))
         survey = await self.planner.plan(request, fleet, gone)
         violations: list[dict[str, object]] = []
-        for planned in survey.parts:
-            record = records[planned.part.drone.name]
-            check = await asyncio.to_thread(self._hub.safety.check_mission, record, planned.items)
+        for part in survey.parts:
+            record = records[part.vehicle_id]
+            check = await asyncio.to_thread(self._hub.safety.check_mission, record, part.items)
             for violation in check.violations:
                 violations.append({**asdict(violation), "vehicle_id": record.id})
         if violations:
@@ -655,25 +651,15 @@ class SurveyService:
         }
 
 
-def new_run(request: SurveyRequest, survey: Survey) -> SurveyRun:
+def new_run(request: SurveyRequest, survey: SurveyPlan) -> SurveyRun:
     calc = survey.calc
-    frame = survey.frame
     drones = []
-    for planned in survey.parts:
+    for part in survey.parts:
         lanes = [
-            LaneRecord(
-                start=frame.to_geo(*lane.start),
-                end=frame.to_geo(*lane.end),
-                entry=entry,
-                exit=exit_,
-            )
-            for lane, (entry, exit_) in zip(
-                planned.part.plan.lanes, planned.lane_items, strict=True
-            )
+            LaneRecord(start=(start[0], start[1]), end=(end[0], end[1]), entry=entry, exit=exit_)
+            for (start, end), (entry, exit_) in zip(part.lane_paths, part.lane_items, strict=True)
         ]
-        drones.append(
-            DroneRun(vehicle_id=planned.part.drone.name, items=planned.items, lanes=lanes)
-        )
+        drones.append(DroneRun(vehicle_id=part.vehicle_id, items=part.items, lanes=lanes))
     return SurveyRun(
         id=uuid.uuid4().hex[:12],
         created=time.time(),

@@ -8,8 +8,10 @@ in the security review, come "from" many addresses.
 
 from __future__ import annotations
 
+import asyncio
 import concurrent.futures
 import socket
+import threading
 import time
 from collections.abc import Iterator
 from pathlib import Path
@@ -17,8 +19,11 @@ from pathlib import Path
 import httpx
 import pytest
 
+from backend.app import create_app
+from backend.auth.password_work import PasswordWork
+from backend.errors import RateLimited
 from tests.conftest import ADMIN_PASSWORD, hub_settings
-from tests.helpers import access_token, api_client, raw_http_answer, running_hub
+from tests.helpers import access_token, api_client, poll_until, raw_http_answer, running_hub
 
 PASSWORD = "correct horse battery"
 
@@ -96,6 +101,46 @@ def test_an_address_over_its_login_rate_is_refused_before_its_body_is_read(
             answer = raw_http_answer(raw)  # within the 5 s timeout
     assert answer.startswith("HTTP/1.1 429"), answer
     assert "login attempts" in answer
+
+
+def test_a_login_is_refused_from_its_headers_while_every_password_check_is_taken(
+    tmp_path: Path,
+) -> None:
+    """With `password_hash_max_pending` checks under way, the next login is refused before
+    its form is read (here it never comes): a login flood's refusals cost the event loop
+    its headers, not the form's parsing and the whole route."""
+    settings = hub_settings(tmp_path, password_hash_threads=1, password_hash_max_pending=1)
+    app = create_app(settings)
+    release = threading.Event()
+    with running_hub(settings, app) as hub:
+        passwords = app.state.hub.passwords
+        # The one password check allowed, held (as a slow hash would hold it) until released.
+        holder = threading.Thread(target=asyncio.run, args=(passwords.run(release.wait, 30),))
+        holder.start()
+        try:
+            poll_until(lambda: _refuses(passwords), 10, "the password checks all taken")
+            host, port = hub.removeprefix("http://").split(":")
+            with socket.create_connection((host, int(port)), timeout=5) as raw:
+                raw.sendall(
+                    b"POST /api/v1/auth/login HTTP/1.1\r\nHost: x\r\n"
+                    b"Content-Type: application/json\r\nContent-Length: 500\r\n\r\n{"
+                )
+                answer = raw_http_answer(raw)  # within the 5 s timeout
+        finally:
+            release.set()
+            holder.join(10)
+    assert answer.startswith("HTTP/1.1 429"), answer
+    assert "retry-after:" in answer.lower()
+    assert "password checks in progress" in answer
+    assert "password_hash_max_pending" in answer
+
+
+def _refuses(passwords: PasswordWork) -> bool:
+    try:
+        passwords.check_room()
+    except RateLimited:
+        return True
+    return False
 
 
 def test_the_first_admin_name_is_configurable(tmp_path: Path) -> None:

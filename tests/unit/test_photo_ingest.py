@@ -19,7 +19,7 @@ from backend.errors import NotFound
 from backend.hub import MosaicSink
 from backend.missions.survey.run import DroneState, SurveyRun, SurveyState
 from backend.missions.survey.schemas import SurveyRequest
-from backend.missions.survey.service import Fleet, plan_survey
+from backend.missions.survey.service import Fleet, plan_survey, summary
 from backend.mosaic.service import MosaicService
 from backend.photos.checks import Refusal, Refused
 from backend.photos.export import write_zip
@@ -61,7 +61,9 @@ def survey() -> SurveyRun:
     lat, lon = FRAME.to_geo(-20.0, -30.0)
     run = new_run(
         request,
-        plan_survey(request, [Fleet("d0", GeoPoint(lat, lon, 500), GeoPoint(lat, lon, 500))]),
+        summary(
+            plan_survey(request, [Fleet("d0", GeoPoint(lat, lon, 500), GeoPoint(lat, lon, 500))])
+        ),
     )
     run.state = SurveyState.FLYING
     run.started = 1_000.0

@@ -20,7 +20,7 @@ from backend.missions.formation.route import LeaderRoute
 from backend.missions.formation.schemas import FormationRequest
 from backend.missions.survey.run import DroneState, SurveyRun, SurveyState
 from backend.missions.survey.schemas import SurveyRequest
-from backend.missions.survey.service import Fleet, plan_survey
+from backend.missions.survey.service import Fleet, plan_survey, summary
 from backend.mosaic.georef import TILE_PX, pixel_to_lonlat
 from backend.mosaic.service import MosaicService
 from backend.mosaic.store import TileStore
@@ -76,7 +76,7 @@ def _survey(drones: DroneState = DroneState.FLYING) -> SurveyRun:
     )
     spots = {v: GeoPoint(*TRUTH.to_geo(east, 0.0), HOME[2]) for v, east in (("a", 0), ("b", 8))}
     fleet = [Fleet(v, spot, spot) for v, spot in spots.items()]
-    run = new_run(request, plan_survey(request, fleet))
+    run = new_run(request, summary(plan_survey(request, fleet)))
     run.state = SurveyState.FLYING
     for drone in run.drones:
         drone.state = drones

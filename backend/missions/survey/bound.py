@@ -57,7 +57,6 @@ import shapely
 from shapely.geometry import LinearRing, Polygon
 
 from backend.missions.survey.camera import CameraCalc
-from backend.missions.survey.cancel import checkpoint
 from backend.missions.survey.planner import (
     Piece,
     crossings,
@@ -212,7 +211,6 @@ def _one_tree_m(distance: np.ndarray) -> float:
     scale = 2.0
     stale = 0
     for _ in range(_SUBGRADIENT_STEPS):
-        checkpoint()
         cost = base + weights[:, None] + weights[None, :]
         tree, degree = _spanning_tree(cost)
         two = np.argpartition(weights, 2)[:2]

@@ -39,6 +39,10 @@ class TooManyVertices(InteropError):
         self.count = count
         self.limit = limit
 
+    def __reduce__(self) -> tuple[type[TooManyVertices], tuple[int, int]]:
+        # Raised in a worker process and again in the hub's: rebuilt from both numbers.
+        return TooManyVertices, (self.count, self.limit)
+
 
 def _check_vertices(count: int, limit: int | None) -> None:
     if limit is not None and count > limit:

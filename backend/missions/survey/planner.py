@@ -35,7 +35,6 @@ from shapely.geometry.base import BaseGeometry
 from shapely.validation import explain_validity
 
 from backend.missions.survey.camera import CameraCalc
-from backend.missions.survey.cancel import checkpoint
 from backend.missions.survey.sequence import Step, improve
 
 MAX_VERTICES = 10_000
@@ -174,7 +173,6 @@ def _segments(
     hole_boxes = [hole.bounds for hole in holes]
     out: list[list[tuple[float, float]]] = []
     for y, piece in zip(ys, pieces, strict=True):
-        checkpoint()  # a stopped plan ends within a row (cancel.py)
         parts = [
             p for p in getattr(piece, "geoms", [piece]) if isinstance(p, Polygon) and p.area > 1e-6
         ]
@@ -271,7 +269,6 @@ def _order(
         cost += ends[first][2]
         order, done, here = [first], {first[0]}, first
         while len(done) < len(cells):
-            checkpoint()
             step, way = min(
                 (
                     math.dist(ends[here][1], ends[w][0])
@@ -310,7 +307,6 @@ def plan_lanes(
     """Lanes over `area` (metres) at `angle_deg` (the lanes' heading, degrees east of north's
     perpendicular: 0 runs them east-west). With a `grid`, lanes and photos lie on that
     common grid (a fleet's parts), else the lanes are centred on the area."""
-    checkpoint()
     area = validate_area(area)
     spacing, trigger = calc.lane_spacing_m, calc.trigger_distance_m
     # A fleet's part may be smaller than a photo; the area as a whole may not.
@@ -344,7 +340,6 @@ def plan_lanes(
     steps: list[Step] = []
     for i, rev_rows, rev_x in _order(cells, ys, origin, holes):
         cell = cells[i]
-        checkpoint()
         for k, (r, a, b) in enumerate(reversed(cell) if rev_rows else cell):
             if grid is not None and holes.is_empty:
                 # Photos on the common grid: the first within half a trigger distance
@@ -382,7 +377,6 @@ def plan_lanes(
         blocked,
         restarts=0 if blocked is None else min(8, max(1, _RESTARTS_LANES // len(runs))),
     ):
-        checkpoint()
         y, a, b, shots = runs[index]
         forward = end == 0
         xs, xe = (a, b) if forward else (b, a)

@@ -14,7 +14,6 @@ from shapely.geometry import Polygon
 
 from backend.missions.survey.bound import lower_bound
 from backend.missions.survey.camera import CameraCalc
-from backend.missions.survey.cancel import checkpoint
 from backend.missions.survey.planner import LanePlan, plan_lanes
 
 DEFAULT_ACCEL_MS2 = 2.5  # ArduCopter's WPNAV_ACCEL default, 250 cm/s²
@@ -51,7 +50,6 @@ def best_angle(
     angles = [i * step_deg for i in range(math.ceil(180.0 / step_deg - 1e-9))]
     floors = []
     for angle in angles:
-        checkpoint()
         bound = lower_bound(area, calc, angle, turnaround_m, quick=True)
         corners = 2 * max(bound.lanes - 1, 0) + 2
         floors.append(bound.total_m / speed_ms + corners * speed_ms / DEFAULT_ACCEL_MS2)

@@ -15,8 +15,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from backend.missions.survey.cancel import checkpoint
-
 Step = tuple[int, int]  # (lane, end it is entered at: 0 its west end, 1 its east end)
 
 _MAX_LANES = 600  # above this, the chain is kept as it is (the n x n arrays grow large)
@@ -61,7 +59,6 @@ def improve(
 def _descend(seq: list[Step], dist: np.ndarray, start: int, finish: int) -> list[Step]:
     """The best improving move each time, until none is left."""
     for _ in range(_MAX_MOVES):
-        checkpoint()
         move = _best_move(seq, dist, start, finish)
         if move is None:
             break

@@ -10,7 +10,6 @@ from dataclasses import dataclass
 import shapely
 
 from backend.missions.survey.camera import Camera, CameraCalc, calculate, manual, preset
-from backend.missions.survey.cancel import checkpoint
 from backend.missions.survey.geo import polygon_from_geojson
 from backend.missions.survey.limits import SurveyLimits, check_estimate, check_missions, estimate
 from backend.missions.survey.mission import survey_mission
@@ -49,6 +48,64 @@ class Survey:
     coverage: float
     coverage_at_overlaps: float
     parts: list[PlannedPart]
+
+
+@dataclass(frozen=True, slots=True)
+class PartPlan:
+    """What the hub keeps of a drone's part: its mission, its lanes' ends and its figures,
+    without the planner's geometry (every photo's point). Small, so it crosses from a
+    planning worker process quickly (backend/surveys/planning.py)."""
+
+    vehicle_id: str
+    items: list[MissionItem]
+    lane_paths: list[list[list[float]]]  # per lane, [[lat, lon] of its start, of its end]
+    lane_items: list[tuple[int, int]]  # per lane, the item numbers of its entry and exit
+    photo_count: int
+    path_length_m: float
+    transit_s: float
+    survey_s: float
+    home_s: float
+
+    @property
+    def total_s(self) -> float:
+        return self.transit_s + self.survey_s + self.home_s
+
+
+@dataclass(frozen=True, slots=True)
+class SurveyPlan:
+    """A planned survey as the preview answers it and a survey run starts from."""
+
+    calc: CameraCalc
+    angle_deg: float
+    area_m2: float
+    coverage: float
+    coverage_at_overlaps: float
+    parts: list[PartPlan]
+
+
+def summary(survey: Survey) -> SurveyPlan:
+    parts = [
+        PartPlan(
+            vehicle_id=planned.part.drone.name,
+            items=planned.items,
+            lane_paths=planned.lane_paths,
+            lane_items=planned.lane_items,
+            photo_count=planned.part.plan.photo_count,
+            path_length_m=planned.part.plan.path_length_m,
+            transit_s=planned.part.transit_s,
+            survey_s=planned.part.survey_s,
+            home_s=planned.part.home_s,
+        )
+        for planned in survey.parts
+    ]
+    return SurveyPlan(
+        calc=survey.calc,
+        angle_deg=survey.angle_deg,
+        area_m2=survey.area_m2,
+        coverage=survey.coverage,
+        coverage_at_overlaps=survey.coverage_at_overlaps,
+        parts=parts,
+    )
 
 
 def _camera(request: SurveyRequest) -> Camera:
@@ -108,7 +165,6 @@ def plan_survey(
     if angle is None:
         angle = best_angle(area, calc, request.speed_ms, turnaround_m=request.turnaround_m)
     parts = split(area, calc, drones, angle_deg=angle, turnaround_m=request.turnaround_m)
-    checkpoint()
     # The photos' footprints united lane by lane (the same union, a few shapes per lane).
     shots = [
         f for p in parts for f in swaths(p.plan, calc.footprint_side_m, calc.footprint_frontal_m)
@@ -118,11 +174,9 @@ def plan_survey(
         for p in parts
         for f in swaths(p.plan, calc.lane_spacing_m * 1.0001, calc.trigger_distance_m * 1.0001)
     ]
-    checkpoint()
     positions = {vehicle.vehicle_id: vehicle.position for vehicle in fleet}
     planned = []
     for p in parts:
-        checkpoint()
         mission = survey_mission(
             p.plan,
             frame,
@@ -143,7 +197,6 @@ def plan_survey(
         )
     if limits is not None:
         check_missions({p.part.drone.name: len(p.items) for p in planned}, limits)
-    checkpoint()
     return Survey(
         calc=calc,
         frame=frame,

@@ -22,7 +22,6 @@ from shapely.geometry import Polygon, box
 from shapely.geometry.base import BaseGeometry
 
 from backend.missions.survey.camera import CameraCalc
-from backend.missions.survey.cancel import checkpoint
 from backend.missions.survey.planner import (
     DEFAULT_TURNAROUND_M,
     Grid,
@@ -184,7 +183,6 @@ def split(
     order = sorted(drones, key=along)
 
     def make(d: Drone, u0: int, u1: int) -> Part:
-        checkpoint()  # the split plans each drone's part many times over
         return _part(d, part_area(u0, u1), calc, angle_deg, turnaround_m, accel_ms2, grid)
 
     def cuts_for(target: float) -> tuple[list[int], float]:

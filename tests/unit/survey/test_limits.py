@@ -1,17 +1,15 @@
 """A survey plan's size is estimated before it is planned: never above what the planner
-makes (so nothing that fits is refused), refused past the limits naming each one, and the
-planner stops at its next checkpoint once its budget is stopped or out of time."""
+makes (so nothing that fits is refused), refused past the limits naming each one. (A plan's
+time is bounded by killing its worker process: tests/unit/test_worker_pool.py.)"""
 
 from __future__ import annotations
 
 import math
-import threading
 
 import pytest
 from shapely.geometry import box
 
 from backend.missions.survey.camera import calculate, preset
-from backend.missions.survey.cancel import PlanBudget, PlanStopped, checkpoint, planning
 from backend.missions.survey.limits import (
     PlanTooLarge,
     SurveyLimits,
@@ -65,46 +63,3 @@ def test_a_mission_over_the_store_is_refused_by_drone() -> None:
     check_missions({"a": 700, "b": 12}, LIMITS)
     with pytest.raises(PlanTooLarge, match=r"b 701\); the limit is 700"):
         check_missions({"a": 700, "b": 701}, LIMITS)
-
-
-def test_a_stopped_plan_ends_at_its_next_checkpoint() -> None:
-    checkpoint()  # outside a plan: nothing to stop
-    budget = PlanBudget(deadline=math.inf)
-    with planning(budget):
-        checkpoint()
-        budget.stop("disconnect")
-        with pytest.raises(PlanStopped, match="disconnect"):
-            checkpoint()
-
-
-def test_the_planner_checks_its_budget_as_it_goes() -> None:
-    """A plan stopped from another thread ends long before it would have finished."""
-    calc = calculate(preset("sony_a6000_16mm"), altitude_m=5.0)
-    budget = PlanBudget(deadline=math.inf)
-    stopped: list[BaseException] = []
-
-    def run() -> None:
-        with planning(budget):
-            try:
-                best_angle(SHAPES["convex"], calc, 10.0, turnaround_m=10.0)
-            except PlanStopped as error:
-                stopped.append(error)
-
-    worker = threading.Thread(target=run)
-    worker.start()
-    while budget.checks < 5:  # planning has begun
-        pass
-    budget.stop("disconnect")
-    worker.join(5)
-    assert not worker.is_alive()
-    assert stopped, "the plan ran to its end"
-
-
-def test_a_plan_past_its_deadline_stops() -> None:
-    now = [0.0]
-    budget = PlanBudget(deadline=10.0, clock=lambda: now[0])
-    with planning(budget):
-        checkpoint()
-        now[0] = 10.5
-        with pytest.raises(PlanStopped, match="timeout"):
-            checkpoint()

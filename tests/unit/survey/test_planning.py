@@ -1,10 +1,11 @@
 """The hub's survey planner (backend/surveys/planning.py): a plan past its time limit is a
-422 naming the setting and its worker ends; a client that goes away stops its plan; past
-the plans allowed at once, a 429."""
+422 naming the setting and its worker process is killed; a client that goes away stops its
+plan (its worker killed too); past the plans allowed at once, a 429."""
 
 from __future__ import annotations
 
 import asyncio
+import os
 import time
 from pathlib import Path
 
@@ -17,7 +18,7 @@ from backend.observability import metrics
 from backend.surveys.planning import ClientGone, SurveyPlanner
 from common.geodesy import GeoPoint, LocalFrame
 from tests.conftest import hub_settings
-from tests.helpers import poll_until_async
+from tests.helpers import poll_until, poll_until_async
 
 FRAME = LocalFrame(47.0, 8.0, 0.0)
 
@@ -44,20 +45,33 @@ async def _workers_done() -> None:
     )
 
 
-def test_a_plan_past_its_time_limit_is_refused_and_stops(tmp_path: Path) -> None:
+def test_a_plan_past_its_time_limit_is_refused_and_its_worker_killed(tmp_path: Path) -> None:
     planner = SurveyPlanner(hub_settings(tmp_path, survey_plan_timeout_s=0.3))
 
-    async def run() -> float:
+    async def run() -> tuple[float, list[int]]:
+        plan = asyncio.ensure_future(planner.plan(*_slow_plan()))
+        busy = await poll_until_async(planner.pool.pids, 20, "the plan's worker", every_s=0.01)
         started = time.monotonic()
         with pytest.raises(InvalidRequest, match=r"longer than 0.3 s.*survey_plan_timeout_s"):
-            await planner.plan(*_slow_plan())
+            await plan
         await _workers_done()
-        return time.monotonic() - started
+        try:
+            return time.monotonic() - started, busy
+        finally:
+            planner.close()
 
+    took, busy = asyncio.run(run())
+    assert took < 2.5
+    for pid in busy:
+        poll_until(lambda pid=pid: not _alive(pid), 5, f"worker {pid} killed")
+
+
+def _alive(pid: int) -> bool:
     try:
-        assert asyncio.run(run()) < 2.5
-    finally:
-        planner.close()
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    return True
 
 
 def test_a_client_gone_stops_its_plan(tmp_path: Path) -> None:

@@ -24,7 +24,7 @@ from backend.missions.survey.run import (
     split_orphans,
 )
 from backend.missions.survey.schemas import SurveyRequest
-from backend.missions.survey.service import Fleet, plan_survey
+from backend.missions.survey.service import Fleet, plan_survey, summary
 from backend.surveys.service import new_run
 from common.geodesy import GeoPoint, LocalFrame
 from protocol.messages import Photo
@@ -52,7 +52,7 @@ def _run(vehicles: int = 3) -> SurveyRun:
     for i in range(vehicles):
         lat, lon = FRAME.to_geo(-20.0 + 5 * i, -30.0)
         fleet.append(Fleet(f"d{i}", GeoPoint(lat, lon, 500), GeoPoint(lat, lon, 500)))
-    run = new_run(request, plan_survey(request, fleet))
+    run = new_run(request, summary(plan_survey(request, fleet)))
     run.state = SurveyState.FLYING
     run.started = 1_000.0
     for drone in run.drones:

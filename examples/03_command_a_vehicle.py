@@ -42,7 +42,8 @@ async def fly() -> None:
         print(f"{vehicle} at {state().alt_rel:.1f} m")
 
         here = state()
-        assert here.lat is not None and here.lon is not None  # flying, so it has a position
+        assert here.lat is not None, "flying, so it has a position"
+        assert here.lon is not None
         target = {"lat": here.lat + NORTH_DEG, "lon": here.lon}
         await command("goto", altitude=args.altitude, **target)
         await fleet.wait_until(

@@ -432,5 +432,10 @@ def without_none(params: Mapping[str, Any]) -> dict[str, Any]:
 
 
 def unreachable(url: str, error: httpx.TransportError) -> HubUnreachable:
-    cause = str(error) or type(error).__name__
-    return HubUnreachable(f"cannot reach the hub at {url}: {cause}")
+    """No answer from the hub, with the operating system's reason where there is one
+    (httpx's async transport says only "All connection attempts failed")."""
+    cause: BaseException | None = error
+    while cause is not None and not (isinstance(cause, OSError) and cause.errno):
+        cause = cause.__cause__ or cause.__context__
+    reason = os.strerror(cause.errno) if isinstance(cause, OSError) and cause.errno else str(error)
+    return HubUnreachable(f"cannot reach the hub at {url}: {reason or type(error).__name__}")

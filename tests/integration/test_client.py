@@ -40,7 +40,7 @@ from tests.tcp_proxy import CuttableProxy
 pytestmark = pytest.mark.integration
 
 # Short enough that the test sees the client renew it, long enough for a request or two.
-SHORT_TTL_S = 3.0
+SHORT_TTL_S = 5.0
 
 
 def admin(url: str) -> Hub:
@@ -174,7 +174,9 @@ def test_the_feed_logs_in_again_when_the_hub_closes_it_for_an_expired_token(
                         return feed.connections
         raise AssertionError("the feed ended")
 
-    assert asyncio.run(run()) == 2
+    # Each connection lasts as long as its token; one could end before its snapshot on a
+    # busy machine, so two snapshots may take more than two connections.
+    assert asyncio.run(run()) >= 2
 
     async def refused() -> None:
         async with Hub(short_lived_hub, token="not-a-token") as hub:

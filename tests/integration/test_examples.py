@@ -134,7 +134,8 @@ def test_every_example_uses_the_client_package() -> None:
         source = example.read_text()
         assert "from gcs_client import" in source, example.name
         assert "import httpx" not in source, example.name
-        assert "websockets" not in source, example.name
+        assert "import websockets" not in source, example.name
+        assert "from websockets" not in source, example.name
     assert not (EXAMPLES / "hubclient.py").exists()
 
 

@@ -54,3 +54,11 @@ def test_the_models_read_what_the_hub_and_the_feed_send() -> None:
     assert newer.model_extra == {"wind_speed": 3.0}
     # A command is picked by its name, with its tag filled in.
     assert models.COMMAND_ADAPTER.validate_python({"name": "land"}) == models.LandCommand()
+
+
+def test_the_api_document_and_the_readme_point_to_the_client() -> None:
+    from backend.openapi_document import openapi_document
+
+    assert "docs/client.md" in openapi_document()["info"]["description"]
+    assert (ROOT / "docs" / "client.md").is_file()
+    assert "| Python client | `gcs_client/`" in (ROOT / "README.md").read_text()

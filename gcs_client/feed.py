@@ -102,6 +102,8 @@ class LiveFeed:
                             if missed := await self._missed_events():
                                 yield missed
                 # The hub closed normally (it is stopping): connect again below.
+                if not self._reconnect:
+                    return
             except ConnectionClosed as closed:
                 code = closed.rcvd.code if closed.rcvd is not None else 1006
                 reason = closed.rcvd.reason if closed.rcvd is not None else "connection lost"
@@ -174,7 +176,11 @@ class FleetWatch:
 
     async def __aenter__(self) -> FleetWatch:
         self._task = asyncio.create_task(self._follow())
-        await self.wait_until(lambda: self._snapshot, 60, "the fleet")
+        try:
+            await self.wait_until(lambda: self._snapshot, 60, "the fleet")
+        except BaseException:
+            await self.__aexit__()
+            raise
         return self
 
     async def __aexit__(self, *exc: object) -> None:

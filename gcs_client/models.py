@@ -458,26 +458,7 @@ class GroupCommandRequest(Model):
     vehicle_ids: list[str] | None = Field(
         default=None, description="The selection; every connected vehicle when unset"
     )
-    command: (
-        ArmCommand
-        | DisarmCommand
-        | TakeoffCommand
-        | LandCommand
-        | ReturnToLaunchCommand
-        | SetModeCommand
-        | GotoCommand
-        | HoldCommand
-        | ChangeSpeedCommand
-        | SetHomeCommand
-        | RebootCommand
-        | ParamListCommand
-        | ParamGetCommand
-        | ParamSetCommand
-        | MissionUploadCommand
-        | MissionDownloadCommand
-        | MissionClearCommand
-        | MissionSetCurrentCommand
-    )
+    command: Command
 
 
 class GroupCommandResponse(Model):

@@ -63,8 +63,11 @@ class Model(BaseModel):
 
 
 class Generator:
-    def __init__(self, schemas: dict[str, Schema]) -> None:
+    def __init__(self, schemas: dict[str, Schema], unions: dict[str, Schema] | None = None) -> None:
         self.schemas = schemas
+        # The named unions (the commands, the feed's messages): a field that takes one of
+        # them is typed by its name, not by the members written out again.
+        self.unions = {_members(schema): name for name, schema in (unions or {}).items()}
 
     def class_name(self, ref: str) -> str:
         name = ref.rsplit("/", 1)[1]
@@ -78,6 +81,8 @@ class Generator:
             return f"Literal[{schema['const']!r}]"
         if "enum" in schema:
             return f"Literal[{', '.join(repr(value) for value in schema['enum'])}]"
+        if "oneOf" in schema and (named := self.unions.get(_members(schema))):
+            return named
         for union in ("anyOf", "oneOf"):
             if union in schema:
                 parts = list(dict.fromkeys(self.annotation(part) for part in schema[union]))
@@ -145,6 +150,10 @@ class Generator:
         return "\n".join(lines) + "\n"
 
 
+def _members(schema: Schema) -> frozenset[str]:
+    return frozenset(json.dumps(part, sort_keys=True) for part in schema.get("oneOf", []))
+
+
 def _mutable(value: object) -> bool:
     return isinstance(value, list | dict)
 
@@ -201,10 +210,6 @@ def _shape(schema: Schema) -> str:
 
 def generate(openapi: Schema, protocol: Schema) -> str:
     schemas = merged_schemas(openapi, protocol)
-    generator = Generator(schemas)
-    blocks = [HEADER]
-    for name in sorted(schemas):
-        blocks.append(generator.definition(generator.class_name(f"#/{name}"), schemas[name]))
     feed = {
         key: json.loads(json.dumps(value).replace("#/$defs/", "#/components/schemas/"))
         for key, value in protocol["hub_to_client"].items()
@@ -217,6 +222,12 @@ def generate(openapi: Schema, protocol: Schema) -> str:
     }
     command_body = openapi["paths"]["/api/v1/vehicles/{vehicle_id}/commands"]["post"]
     commands = command_body["requestBody"]["content"]["application/json"]["schema"]
+    generator = Generator(
+        schemas, {"FeedMessage": feed, "ClientMessage": outgoing, "Command": commands}
+    )
+    blocks = [HEADER]
+    for name in sorted(schemas):
+        blocks.append(generator.definition(generator.class_name(f"#/{name}"), schemas[name]))
     blocks.append(
         union_alias(generator, "FeedMessage", feed, "What the hub sends on the live feed.")
     )

@@ -15,7 +15,7 @@ import asyncio
 import contextlib
 import random
 import time
-from collections.abc import AsyncIterator, Callable
+from collections.abc import AsyncGenerator, AsyncIterator, Callable
 from typing import TYPE_CHECKING
 
 import websockets
@@ -64,10 +64,27 @@ class LiveFeed:
         self._resume_events = resume_events
         self._socket: ClientConnection | None = None
         self._last_event_time: float | None = None
+        self._iterator: AsyncGenerator[FeedMessage, None] | None = None
         self.connections = 0
+        hub.keep_open(self)
 
     def __aiter__(self) -> AsyncIterator[FeedMessage]:
-        return self._messages()
+        if self._iterator is None:
+            self._iterator = self._messages()
+        return self._iterator
+
+    async def __aenter__(self) -> LiveFeed:
+        return self
+
+    async def __aexit__(self, *exc: object) -> None:
+        await self.aclose()
+
+    async def aclose(self) -> None:
+        """Close the connection now (the Hub's exit does it for every feed it made):
+        leaving an ``async for`` early leaves the socket open until garbage collection."""
+        if self._iterator is not None:
+            iterator, self._iterator = self._iterator, None
+            await iterator.aclose()
 
     async def send(self, message: ClientMessage) -> None:
         """Send a message to the hub (a ``Ping``, a ``ControlRequest`` ...) on the
@@ -76,7 +93,7 @@ class LiveFeed:
             raise HubError("the live feed is not connected")
         await self._socket.send(message.model_dump_json(by_alias=True))
 
-    async def _messages(self) -> AsyncIterator[FeedMessage]:
+    async def _messages(self) -> AsyncGenerator[FeedMessage, None]:
         wait_s = FIRST_WAIT_S
         while True:
             token = await self._hub.token()
@@ -165,8 +182,12 @@ class FleetWatch:
     latest telemetry, and ``await fleet.wait_until(...)`` follows the feed until a
     condition holds."""
 
-    def __init__(self, feed: LiveFeed) -> None:
+    def __init__(self, hub: Hub, feed: LiveFeed) -> None:
         self.feed = feed
+        # The watch closes its feed: the Hub closes the watch (its task iterates the feed,
+        # which cannot be closed from outside while it runs).
+        hub.release(feed)
+        hub.keep_open(self)
         self.vehicles: dict[str, VehicleSummary] = {}
         self._changed = asyncio.Condition()
         self._task: asyncio.Task[None] | None = None
@@ -179,15 +200,21 @@ class FleetWatch:
         try:
             await self.wait_until(lambda: self._snapshot, 60, "the fleet")
         except BaseException:
-            await self.__aexit__()
+            await self.aclose()
             raise
         return self
 
     async def __aexit__(self, *exc: object) -> None:
+        await self.aclose()
+
+    async def aclose(self) -> None:
+        """Stop following the feed, and close it."""
         if self._task is not None:
-            self._task.cancel()
+            task, self._task = self._task, None
+            task.cancel()
             with contextlib.suppress(asyncio.CancelledError):
-                await self._task
+                await task
+        await self.feed.aclose()
 
     def state(self, vehicle_id: str) -> VehicleState:
         """The vehicle's latest telemetry (all defaults before its first)."""

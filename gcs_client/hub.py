@@ -19,9 +19,10 @@ from __future__ import annotations
 import asyncio
 import os
 import time
+import weakref
 from collections.abc import AsyncIterator, Mapping
 from pathlib import Path
-from typing import Any, Literal, TypeVar
+from typing import Any, Literal, Protocol, TypeVar
 
 import httpx
 from pydantic import BaseModel, TypeAdapter, ValidationError
@@ -60,6 +61,10 @@ REFRESH_MARGIN_S = 60.0
 VEHICLES_ADAPTER = TypeAdapter(list[VehicleSummary])
 
 
+class Closable(Protocol):
+    async def aclose(self) -> None: ...
+
+
 class Hub:
     """An authenticated connection to one hub's REST API and live feed."""
 
@@ -86,6 +91,9 @@ class Hub:
         self._verify = verify
         self._login_lock = asyncio.Lock()
         self._http: httpx.AsyncClient | None = None
+        # Feeds and watches made by this Hub, closed with it (weakly: one the caller
+        # has dropped and closed is not kept alive for this).
+        self._open: weakref.WeakSet[Closable] = weakref.WeakSet()
         self.vehicles = Vehicles(self)
         self.fleet = Fleet(self)
         self.flights = Flights(self)
@@ -130,7 +138,18 @@ class Hub:
                 await self.aclose()
                 raise
 
+    def keep_open(self, closable: Closable) -> None:
+        """Close ``closable`` (a feed, a watch) when this Hub closes."""
+        self._open.add(closable)
+
+    def release(self, closable: Closable) -> None:
+        """Leave ``closable`` to its owner to close."""
+        self._open.discard(closable)
+
     async def aclose(self) -> None:
+        """Close every feed and watch this Hub made, then its HTTP connections."""
+        for closable in list(self._open):
+            await closable.aclose()
         if self._http is not None:
             await self._http.aclose()
             self._http = None
@@ -228,7 +247,7 @@ class Hub:
     def watch(self, *, reconnect: bool = True) -> FleetWatch:
         """The fleet as the feed shows it, kept up to date: ``fleet.state(id)``,
         ``await fleet.wait_until(condition, timeout_s, what)``."""
-        return FleetWatch(self.feed(reconnect=reconnect))
+        return FleetWatch(self, self.feed(reconnect=reconnect))
 
     @property
     def feed_url(self) -> str:

@@ -41,7 +41,7 @@ if TYPE_CHECKING:
 
 # Close codes after which connecting again cannot help (docs/websockets.md, "Close
 # codes"): 4401 is retried once after logging in again, when the client can.
-FINAL_CLOSE_CODES = {1008: "POLICY_VIOLATION", 1009: "MESSAGE_TOO_BIG", 4401: "", 4403: ""}
+FINAL_CLOSE_CODES = frozenset({1008, 1009, 4401, 4403})
 # Waits between attempts to reconnect: full jitter, doubling from the first to the cap.
 FIRST_WAIT_S = 0.25
 MAX_WAIT_S = 10.0
@@ -124,9 +124,10 @@ class LiveFeed:
             except ConnectionClosed as closed:
                 code = closed.rcvd.code if closed.rcvd is not None else 1006
                 reason = closed.rcvd.reason if closed.rcvd is not None else "connection lost"
-                if code == 4401 and await self._hub.renew_after_refusal(token):
-                    continue  # the token expired or was revoked: logged in again
-                if code in FINAL_CLOSE_CODES or not self._reconnect:
+                renewed = code == 4401 and await self._hub.renew_after_refusal(token)
+                # The token expired or was revoked: logged in again, connect again (after
+                # the same short wait, so that a hub that keeps refusing is not hammered).
+                if not renewed and (code in FINAL_CLOSE_CODES or not self._reconnect):
                     raise FeedClosed(code, reason) from None
             except (OSError, InvalidHandshake, TimeoutError) as error:
                 if not self._reconnect:
@@ -146,7 +147,12 @@ class LiveFeed:
         since = self._last_event_time
         if since is None:
             return None
-        page = await self._hub.events.page(start=since, limit=RESUME_EVENTS)
+        try:
+            page = await self._hub.events.page(start=since, limit=RESUME_EVENTS)
+        except HubError:
+            # The link dropped again, or the log is unavailable: the feed goes on without
+            # this batch (the events stay in the flight log, GET /api/v1/events).
+            return None
         missed = [
             LiveEvent(
                 vehicle_id=record.vehicle_id,

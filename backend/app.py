@@ -80,6 +80,11 @@ OAuth2 scheme lists them; each operation names the one it needs), which expires 
 Every message, field and close code of both is in the repository's `docs/websockets.md`,
 written from the wire protocol (`protocol/messages.py`; `python -m protocol.messages`
 prints its JSON Schema).
+
+**From Python**, the client package `gcs_client` (its own wheel, built from the
+repository's `client/`) does all of this typed, sync or async, with the live feed as an
+async iterator that reconnects and token renewal built in: see the repository's
+`docs/client.md`.
 """
 
 _DASHBOARD_MISSING = """<!doctype html><title>Fleet GCS</title>

@@ -3,13 +3,16 @@
     GCS_HUB=http://127.0.0.1:8000 GCS_TOKEN=... \\
         python examples/03_command_a_vehicle.py [VEHICLE] [--altitude 10]
 
-Each command answers with the flight controller's verdict (accepted, or refused with
-its reason); the live feed shows what the vehicle then does.
+Each command waits for the flight controller's verdict: accepted, or `CommandRefused` with
+its reason; the live feed (`hub.watch()`) shows what the vehicle then does.
 """
 
 import argparse
+import asyncio
+from typing import Any
 
-from hubclient import LiveFeed, accepted, check, connect
+from gcs_client import Hub, HubError
+from gcs_client.models import VehicleState
 
 NORTH_DEG = 30 / 111_320  # 30 m of latitude
 
@@ -18,30 +21,42 @@ parser.add_argument("vehicle", nargs="?", help="a vehicle id (default: the first
 parser.add_argument("--altitude", type=float, default=10, help="metres above home")
 args = parser.parse_args()
 
-with connect() as api, LiveFeed(api) as feed:
-    vehicle = args.vehicle or next(
-        v["id"] for v in check(api.get("/api/v1/vehicles")) if v["connected"]
-    )
 
-    def command(**body: object) -> None:
-        answer = check(api.post(f"/api/v1/vehicles/{vehicle}/commands", json=body))
-        accepted(answer, f"{body['name']} on {vehicle}")
-        print(f"{vehicle} {body['name']}: {answer['outcome']['message']}")
+async def fly() -> None:
+    async with Hub.from_env() as hub, hub.watch() as fleet:
+        vehicle = args.vehicle or next(v.id for v in await hub.vehicles.list() if v.connected)
 
-    # A take-off is refused until the autopilot's pre-arm checks pass (GPS, EKF).
-    feed.wait_until(lambda: feed.state(vehicle).get("ready_to_fly"), f"{vehicle} ready to fly")
-    command(name="takeoff", altitude=args.altitude)
-    feed.wait_until(lambda: feed.state(vehicle)["alt_rel"] >= args.altitude - 1, "the climb")
-    print(f"{vehicle} at {feed.state(vehicle)['alt_rel']:.1f} m")
+        async def command(name: str, **fields: Any) -> None:
+            answer = await hub.vehicles.command(vehicle, name, **fields)
+            print(f"{vehicle} {name}: {answer.outcome.message}")
 
-    here = feed.state(vehicle)
-    target = {"lat": here["lat"] + NORTH_DEG, "lon": here["lon"]}
-    command(name="goto", altitude=args.altitude, **target)
-    feed.wait_until(
-        lambda: abs(feed.state(vehicle)["lat"] - target["lat"]) < NORTH_DEG / 10, "the point"
-    )
-    print(f"{vehicle} at {feed.state(vehicle)['lat']:.6f}, {feed.state(vehicle)['lon']:.6f}")
+        def state() -> VehicleState:
+            return fleet.state(vehicle)
 
-    command(name="land")
-    feed.wait_until(lambda: not feed.state(vehicle)["armed"], f"{vehicle} to land and disarm")
-    print(f"{vehicle} landed and disarmed")
+        # A take-off is refused until the autopilot's pre-arm checks pass (GPS, EKF).
+        await fleet.wait_until(lambda: state().ready_to_fly, 120, f"{vehicle} ready to fly")
+        await command("takeoff", altitude=args.altitude)
+        await fleet.wait_until(
+            lambda: (state().alt_rel or 0) >= args.altitude - 1, 120, "the climb"
+        )
+        print(f"{vehicle} at {state().alt_rel:.1f} m")
+
+        here = state()
+        assert here.lat is not None, "flying, so it has a position"
+        assert here.lon is not None
+        target = {"lat": here.lat + NORTH_DEG, "lon": here.lon}
+        await command("goto", altitude=args.altitude, **target)
+        await fleet.wait_until(
+            lambda: abs((state().lat or 0) - target["lat"]) < NORTH_DEG / 10, 120, "the point"
+        )
+        print(f"{vehicle} at {state().lat:.6f}, {state().lon:.6f}")
+
+        await command("land")
+        await fleet.wait_until(lambda: not state().armed, 120, f"{vehicle} to land and disarm")
+        print(f"{vehicle} landed and disarmed")
+
+
+try:
+    asyncio.run(fly())
+except HubError as error:
+    raise SystemExit(f"error: {error}") from None

@@ -10,7 +10,7 @@ MAVProxy and pymavlink's mavlogdump.py.
 import argparse
 from pathlib import Path
 
-from hubclient import check, connect
+from gcs_client import HubError, SyncHub
 
 parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
 parser.add_argument("--vehicle", help="a vehicle id (default: any)")
@@ -18,25 +18,23 @@ parser.add_argument("--format", choices=["geojson", "csv", "tlog"], default="geo
 parser.add_argument("--output", type=Path, default=Path.cwd(), help="folder to write to")
 args = parser.parse_args()
 
-with connect() as api:
-    query = {"vehicle_id": args.vehicle} if args.vehicle else {}
-    page = check(api.get("/api/v1/flights", params=query))  # newest first
-    flights = [flight for flight in page["flights"] if flight["end_time"] is not None]
-    if not flights:
-        raise SystemExit("error: no finished flight yet (fly one: 03_command_a_vehicle.py)")
-    flight = flights[0]
-    print(
-        f"flight {flight['id']} of {flight['vehicle_id']}: {flight['duration_s']:.0f} s, "
-        f"{flight['distance_m']:.0f} m, up to {flight['max_alt_m']:.1f} m"
-    )
+# Said before asking the hub anything: a flight is not downloaded to be thrown away.
+if not args.output.is_dir():
+    raise SystemExit(f"error: the output folder {args.output} does not exist")
 
-    path = args.output / f"{flight['vehicle_id']}_flight{flight['id']}.{args.format}"
-    # Streamed: a long flight is never held in memory whole, here or in the hub.
-    with api.stream("GET", f"/api/v1/flights/{flight['id']}/export.{args.format}") as answer:
-        if not answer.is_success:
-            answer.read()
-            check(answer)
-        with path.open("wb") as file:
-            for chunk in answer.iter_bytes():
-                file.write(chunk)
-    print(f"wrote {path} ({path.stat().st_size} bytes)")
+try:
+    with SyncHub.from_env() as hub:
+        page = hub.flights.list(args.vehicle)  # newest first
+        flights = [flight for flight in page.flights if flight.end_time is not None]
+        if not flights:
+            raise SystemExit("error: no finished flight yet (fly one: 03_command_a_vehicle.py)")
+        flight = flights[0]
+        print(
+            f"flight {flight.id} of {flight.vehicle_id}: {flight.duration_s or 0:.0f} s, "
+            f"{flight.distance_m or 0:.0f} m, up to {flight.max_alt_m or 0:.1f} m"
+        )
+        path = args.output / f"{flight.vehicle_id}_flight{flight.id}.{args.format}"
+        hub.flights.export(flight.id, args.format, path)  # streamed to the file
+        print(f"wrote {path} ({path.stat().st_size} bytes)")
+except HubError as error:
+    raise SystemExit(f"error: {error}") from None

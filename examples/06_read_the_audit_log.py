@@ -12,7 +12,7 @@ docs/security.md; an unknown action or filter is refused naming the valid ones.
 import argparse
 import datetime
 
-from hubclient import check, connect
+from gcs_client import HubError, SyncHub
 
 parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
 parser.add_argument("--action", help="only this action (e.g. command, login, token.create)")
@@ -21,24 +21,21 @@ parser.add_argument("--last", type=int, default=20, help="how many entries (defa
 parser.add_argument("--page", type=int, default=100, help="entries per request (up to 1000)")
 args = parser.parse_args()
 
-filters = {"action": args.action, "actor": args.actor}
-params: dict[str, str | int] = {k: v for k, v in filters.items() if v is not None}
 shown = 0
-with connect() as api:
-    while shown < args.last:
-        params["limit"] = min(args.page, args.last - shown)
-        page = check(api.get("/api/v1/audit", params=params))
-        for entry in page["entries"]:
-            when = datetime.datetime.fromtimestamp(entry["time"]).isoformat(timespec="seconds")
+try:
+    with SyncHub.from_env() as hub:
+        # The client follows next_before_id from page to page (older entries each time).
+        for entry in hub.audit.entries(
+            action=args.action, actor=args.actor, last=args.last, page_size=args.page
+        ):
+            when = datetime.datetime.fromtimestamp(entry.time).isoformat(timespec="seconds")
             # The credential: an API token by its name, else how the actor logged in.
-            credential = entry["token"] or entry["token_kind"] or "-"
+            credential = entry.token or entry.token_kind or "-"
             print(
-                f"{entry['id']:6} {when} {entry['actor']:12} via {credential:12}"
-                f" {entry['action']:16} {entry['target']:14} {entry['outcome']}"
+                f"{entry.id:6} {when} {entry.actor:12} via {credential:12}"
+                f" {entry.action:16} {entry.target:14} {entry.outcome}"
             )
-        shown += len(page["entries"])
-        # The next page holds older entries: the hub says where it starts (null: the end).
-        if page["next_before_id"] is None:
-            break
-        params["before_id"] = page["next_before_id"]
+            shown += 1
+except HubError as error:
+    raise SystemExit(f"error: {error}") from None
 print(f"{shown} entries")

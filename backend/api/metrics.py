@@ -4,20 +4,36 @@ Who may read them: a bearer token with the ``admin`` permission, as for every ot
 operator-only route (a Prometheus scrape job sends one with ``authorization:
 credentials_file``). Not loopback-open: behind a reverse proxy on the same machine every
 request comes from loopback, and the figures (vehicle counts, rates) are the operator's.
+
+The per-vehicle series (``gcs_vehicle_*{vehicle}``) are read from this hub's registry at
+each scrape rather than kept in the process-wide registry: a vehicle no longer in the
+registry has no series, and the number of series is bounded by MAX_VEHICLE_SERIES
+vehicles (connected ones first, then by id); ``gcs_vehicle_series_omitted`` counts the
+vehicles beyond it.
 """
 
 from __future__ import annotations
 
+import time
+from collections.abc import Iterator
+
 from fastapi import Response
-from prometheus_client import CONTENT_TYPE_LATEST, generate_latest
+from prometheus_client import CONTENT_TYPE_LATEST, CollectorRegistry, generate_latest
+from prometheus_client.core import GaugeMetricFamily
+from prometheus_client.registry import Collector
 
 from backend.api.deps import HubDep
 from backend.api.security import SecuredRouter, requires
 from backend.auth.policy import Permission
+from backend.fleet.registry import VehicleRecord
+from backend.hub import Hub
 from backend.observability import metrics
 from backend.realtime.client_feed import ClientFeed
 
 router = SecuredRouter(tags=["system"])
+
+# The most vehicles given series of their own: 6 series each, so at most 3,000 series.
+MAX_VEHICLE_SERIES = 500
 
 
 @router.get(
@@ -38,4 +54,86 @@ async def prometheus_metrics(hub: HubDep) -> Response:
             default=0,
         )
     )
-    return Response(generate_latest(), media_type=CONTENT_TYPE_LATEST)
+    per_vehicle = CollectorRegistry(auto_describe=False)
+    per_vehicle.register(VehicleSeries(hub))
+    body = generate_latest() + generate_latest(per_vehicle)
+    return Response(body, media_type=CONTENT_TYPE_LATEST)
+
+
+class VehicleSeries(Collector):
+    """Each vehicle's link, freshness, battery, telemetry rate and storage lag, now."""
+
+    def __init__(self, hub: Hub) -> None:
+        self._hub = hub
+
+    def collect(self) -> Iterator[GaugeMetricFamily]:
+        labels = ["vehicle"]
+        link = GaugeMetricFamily(
+            "gcs_vehicle_link_up",
+            "1 while the vehicle's agent is connected, else 0.",
+            labels=labels,
+        )
+        age = GaugeMetricFamily(
+            "gcs_vehicle_seconds_since_sample",
+            "Seconds since the vehicle's newest telemetry sample (its own clock's stamp).",
+            labels=labels,
+        )
+        percent = GaugeMetricFamily(
+            "gcs_vehicle_battery_percent",
+            "Battery remaining, percent, as the autopilot reports it (absent if unknown).",
+            labels=labels,
+        )
+        volts = GaugeMetricFamily(
+            "gcs_vehicle_battery_volts",
+            "Battery voltage, as the autopilot reports it (absent if unknown).",
+            labels=labels,
+        )
+        rate = GaugeMetricFamily(
+            "gcs_vehicle_telemetry_rate_hz",
+            "New telemetry samples per second from the vehicle's agent over the last 5 s "
+            "(a backlog replayed or resent is not counted).",
+            labels=labels,
+        )
+        lag = GaugeMetricFamily(
+            "gcs_vehicle_write_lag_seconds",
+            "Age of the vehicle's oldest sample in the last batch of its samples the storage "
+            "writer committed, at the commit.",
+            labels=labels,
+        )
+        vehicles = self._hub.registry.all()
+        # Connected vehicles first (what an operator watches), then by id: stable order.
+        shown = sorted(vehicles, key=lambda record: (not record.connected, record.id))
+        shown = shown[:MAX_VEHICLE_SERIES]
+        now, monotonic = time.time(), time.monotonic()
+        for record in shown:
+            add_vehicle(record, now, monotonic, link, age, percent, volts, rate)
+            if (written := self._hub.writer.vehicle_lag_s.get(record.id)) is not None:
+                lag.add_metric([record.id], written)
+        omitted = GaugeMetricFamily(
+            "gcs_vehicle_series_omitted",
+            f"Vehicles in the registry beyond the {MAX_VEHICLE_SERIES} given series of their own.",
+            value=len(vehicles) - len(shown),
+        )
+        yield from (link, age, percent, volts, rate, lag, omitted)
+
+
+def add_vehicle(
+    record: VehicleRecord,
+    now: float,
+    monotonic: float,
+    link: GaugeMetricFamily,
+    age: GaugeMetricFamily,
+    percent: GaugeMetricFamily,
+    volts: GaugeMetricFamily,
+    rate: GaugeMetricFamily,
+) -> None:
+    label = [record.id]
+    link.add_metric(label, 1.0 if record.connected else 0.0)
+    rate.add_metric(label, record.telemetry_rate(monotonic))
+    if record.last_seen is not None:
+        age.add_metric(label, max(0.0, now - record.last_seen))
+    state = record.state
+    if state is not None and state.battery_remaining is not None:
+        percent.add_metric(label, state.battery_remaining)
+    if state is not None and state.battery_voltage is not None:
+        volts.add_metric(label, state.battery_voltage)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections import deque
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Protocol
@@ -36,6 +37,11 @@ class KnownVehicle(Protocol):
     def last_seen(self) -> float: ...
 
 
+# The telemetry rate on /metrics: frames over the last 5 s; an agent sends 10 a second.
+RATE_WINDOW_S = 5.0
+RATE_MAX_FRAMES = 1000  # 200 frames a second over the window, far beyond any agent
+
+
 @dataclass
 class VehicleRecord:
     id: str
@@ -54,6 +60,11 @@ class VehicleRecord:
     # clock may step back (time sync after boot) and the view must not freeze until
     # the clock catches up.
     live_ahead_at: float | None = None
+    # When this hub received the vehicle's latest telemetry frames (monotonic seconds), for
+    # its rate on /metrics: at most RATE_MAX_FRAMES, so memory stays bounded at any rate.
+    frame_times: deque[float] = field(
+        default_factory=lambda: deque(maxlen=RATE_MAX_FRAMES), repr=False, compare=False
+    )
     # The connected agent's command channel, None while no agent is connected: the one
     # record of whether the vehicle is online (commands go down this channel).
     channel: AgentChannel | None = field(default=None, repr=False, compare=False)
@@ -61,6 +72,15 @@ class VehicleRecord:
     @property
     def connected(self) -> bool:
         return self.channel is not None
+
+    def count_frame(self, now: float) -> None:
+        """A new telemetry sample moved the live state (``now``: monotonic)."""
+        self.frame_times.append(now)
+
+    def telemetry_rate(self, now: float) -> float:
+        """Frames per second received over the last RATE_WINDOW_S."""
+        since = now - RATE_WINDOW_S
+        return sum(1 for at in self.frame_times if at > since) / RATE_WINDOW_S
 
     def earlier_run(self, stream_id: str) -> tuple[str, int] | None:
         """The agent run this vehicle's live state came from last, and its last sample's

@@ -457,7 +457,10 @@ class AgentSession(PeerConnection):
         if stream_id == hello.stream_id and hub.registry.apply(
             hello.vehicle_id, stream_id, telemetry
         ):
-            await hub.publish_state(hub.registry.get(hello.vehicle_id))
+            record = hub.registry.get(hello.vehicle_id)
+            # The live rate on /metrics: new samples only, not a backlog replayed or resent.
+            record.count_frame(time.monotonic())
+            await hub.publish_state(record)
 
 
 def _restart_gap(registry: FleetRegistry, hello: Hello, now: float) -> str | None:

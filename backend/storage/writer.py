@@ -93,6 +93,9 @@ class StorageWriter:
         self._gap_asked_at: dict[StreamKey, float] = {}
         self._news: tuple[dict[StreamKey, int], list[Gap]] | None = None
         self.stats = WriterStats()
+        # Per vehicle, how old its oldest sample in the last batch that held one was when
+        # that batch committed (the per-vehicle gcs_storage_write_lag_seconds on /metrics).
+        self.vehicle_lag_s: dict[str, float] = {}
 
     @property
     def backlog(self) -> int:
@@ -236,8 +239,15 @@ class StorageWriter:
         self.stats.written += len(new_telemetry)
         metrics.STORAGE_ROWS.inc(len(new_telemetry))
         if new_telemetry:
-            oldest = min(envelope.telemetry.time for envelope in new_telemetry)
-            metrics.STORAGE_WRITE_LAG.set(max(0.0, time.time() - oldest))
+            now = time.time()
+            oldest_by_vehicle: dict[str, float] = {}
+            for envelope in new_telemetry:
+                sampled = envelope.telemetry.time
+                known = oldest_by_vehicle.get(envelope.vehicle_id, sampled)
+                oldest_by_vehicle[envelope.vehicle_id] = min(known, sampled)
+            for vehicle, oldest in oldest_by_vehicle.items():
+                self.vehicle_lag_s[vehicle] = max(0.0, now - oldest)
+            metrics.STORAGE_WRITE_LAG.set(max(0.0, now - min(oldest_by_vehicle.values())))
         self.stats.duplicates += len(sequenced) - (len(stored) - len(new_handled))
         self.stats.events_written += events_written
         self.stats.lost += sum(

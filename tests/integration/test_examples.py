@@ -16,7 +16,7 @@ from typing import Any
 
 import pytest
 
-from gcs.launcher import LocalFleet
+from gcs.launcher import LocalFleet, free_port
 from tests.conftest import FLEET_SPEEDUP
 from tests.helpers import (
     FleetWatcher,
@@ -111,6 +111,32 @@ def test_without_credentials_the_example_says_how_to_log_in(fleet: LocalFleet) -
 
     run = run_example("01_log_in_and_list_the_fleet.py", fleet, GCS_PASSWORD="not-the-password")
     assert failed(run).startswith("error: POST /api/v1/auth/token answered 401:")
+
+
+@pytest.mark.parametrize("name", sorted(path.name for path in EXAMPLES.glob("0*.py")))
+def test_with_the_hub_unreachable_each_example_says_so(name: str, fleet: LocalFleet) -> None:
+    """One line with the reason and status 1, not a traceback: nothing listens there."""
+    nowhere = f"http://127.0.0.1:{free_port()}"
+    message = failed(run_example(name, fleet, GCS_HUB=nowhere))
+    assert message.startswith(f"error: cannot reach the hub at {nowhere}: "), message
+    assert "refused" in message.lower(), message
+
+
+def test_export_to_a_missing_folder_says_so(fleet: LocalFleet, tmp_path: Path) -> None:
+    missing = tmp_path / "not-made-yet"
+    run = run_example("05_export_a_flight.py", fleet, "--output", str(missing))
+    assert failed(run) == f"error: the output folder {missing} does not exist"
+    assert not missing.exists()
+
+
+def test_every_example_uses_the_client_package() -> None:
+    for example in EXAMPLES.glob("*.py"):
+        source = example.read_text()
+        assert "from gcs_client import" in source, example.name
+        assert "import httpx" not in source, example.name
+        assert "import websockets" not in source, example.name
+        assert "from websockets" not in source, example.name
+    assert not (EXAMPLES / "hubclient.py").exists()
 
 
 def test_watch_the_fleet(fleet: LocalFleet) -> None:

@@ -17,7 +17,7 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
 CONFIG = ROOT / "pyproject.toml"
-PACKAGES = ("protocol", "common", "vehicle_agents", "simulator", "backend", "gcs")
+PACKAGES = ("protocol", "common", "vehicle_agents", "simulator", "backend", "gcs", "gcs_client")
 LINT_IMPORTS = Path(sys.executable).with_name("lint-imports")
 
 
@@ -53,6 +53,8 @@ UPWARD = {
     "the hub imports the command line": ("backend/api/upward.py", "gcs.launcher"),
     "the agent imports the database": ("vehicle_agents/upward.py", "sqlalchemy"),
     "the registry imports the store": ("backend/fleet/registry.py", "backend.storage.models"),
+    "the client imports the protocol": ("gcs_client/upward.py", "protocol.messages"),
+    "the client imports the web framework": ("gcs_client/upward.py", "fastapi"),
 }
 
 

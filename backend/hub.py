@@ -173,7 +173,7 @@ class Hub:
         )
         log.info("hub store: %s", engine.url.render_as_string(hide_password=True))
         cache = PrincipalCache(settings.principal_cache_s, settings.principal_cache_outage_s)
-        accounts = Accounts(engine, cache)
+        accounts = Accounts(engine, cache, settings.password_hash_cost)
         spool = RowSpool(settings.data_dir / "spool.jsonl", engine, [AuditRow, CommandRow])
         audit = AuditLog(engine, spool)
         await asyncio.to_thread(_bootstrap_accounts, accounts, audit, settings)

@@ -23,6 +23,7 @@ from tests.browser.conftest import log_in
 from tests.browser.test_missions import PixelMap, _assert_on_open_map
 from tests.helpers import FleetWatcher, access_token, api_client, poll_until
 from tests.integration.test_formation import take_off_all
+from tests.support.hubs import TEST_HUB_ENV
 
 pytestmark = [pytest.mark.browser, pytest.mark.integration]
 
@@ -48,7 +49,9 @@ def airborne(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[LocalFl
         speedup=1.0,
     )
     with LocalFleet(plan) as fleet:
-        fleet.start(hub_env={"GCS_BASEMAP_URL": "", "GCS_COMMANDS_PER_SECOND": "1000"})
+        fleet.start(
+            hub_env={**TEST_HUB_ENV, "GCS_BASEMAP_URL": "", "GCS_COMMANDS_PER_SECOND": "1000"}
+        )
         fleet.wait_until_ready()
         token = access_token(plan.hub_http, "admin", plan.admin_password)
         with FleetWatcher(plan.hub_http, token) as watcher, api_client(plan.hub_http, token) as api:

@@ -24,6 +24,7 @@ from tests.browser.conftest import SIZES, checked_page, log_in
 from tests.conftest import FLEET_SPEEDUP
 from tests.helpers import access_token, api_client, poll_until
 from tests.map_tiles import farmland_tiles, write_mbtiles
+from tests.support.hubs import TEST_HUB_ENV
 
 pytestmark = [pytest.mark.browser, pytest.mark.integration]
 
@@ -47,7 +48,7 @@ def mission_fleet(tmp_path_factory: pytest.TempPathFactory) -> Iterator[LocalFle
     write_mbtiles(data_dir / "tiles" / "farmland.mbtiles", tiles, attribution="Made-up farmland")
     plan = FleetPlan(port=free_port(), data_dir=data_dir, vehicles=3, speedup=FLEET_SPEEDUP)
     with LocalFleet(plan) as fleet:
-        fleet.start(hub_env={"GCS_BASEMAP_URL": ""})
+        fleet.start(hub_env={**TEST_HUB_ENV, "GCS_BASEMAP_URL": ""})
         fleet.wait_until_ready()
         yield fleet
 

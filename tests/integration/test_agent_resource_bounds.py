@@ -21,7 +21,7 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 from protocol.messages import AGENT_WS_PATH, MAX_FRAME_BYTES, CloseCode
 from tests.conftest import ADMIN_PASSWORD, hub_settings
 from tests.helpers import access_token, agent_hello, api_client, running_hub
-from tests.integration.test_hub_bad_input import _close_code, scripted_agent, websocket
+from tests.support.agents import close_code, scripted_agent, websocket
 
 pytestmark = pytest.mark.integration
 
@@ -97,7 +97,7 @@ def test_a_hello_with_60_kb_of_modes_is_refused(hub: str, enrol: Callable[[str],
     url = hub.replace("http://", "ws://") + AGENT_WS_PATH
     with websocket(url, {"Authorization": f"Bearer {token}"}) as socket:
         socket.send(json.dumps(hello))
-        code, reason = _close_code(socket)
+        code, reason = close_code(socket)
     assert code == CloseCode.BAD_HELLO, (code, reason)
     assert "modes" in reason
     with api_client(hub, access_token(hub, "admin", ADMIN_PASSWORD)) as api:

@@ -20,7 +20,7 @@ from simulator import ListenAddress, SimulatorConfig, SimulatorServer
 from simulator.config import DEFAULT_HOME, Autopilot
 from simulator.copter import Copter
 from tests.mavlink_peer import Answer, ScriptedFlightController
-from tests.simulator.test_sim_server import serving
+from tests.support.simulators import serving
 from vehicle_agents.commands import CommandExecutor, CommandTimeouts
 from vehicle_agents.fcu_link import FcuLink, MavMessage
 from vehicle_agents.mav_results import result_name

@@ -16,7 +16,7 @@ from common.retry import Backoff
 from protocol.messages import AGENT_WS_PATH, CloseCode
 from tests.conftest import ADMIN_PASSWORD, hub_settings
 from tests.helpers import access_token, api_client, running_hub
-from tests.integration.test_hub_bad_input import _close_code, scripted_agent, websocket
+from tests.support.agents import close_code, scripted_agent, websocket
 from vehicle_agents.tlog import TlogRecorder
 from vehicle_agents.tlog_uploads import UPLOAD_BACKOFF, TlogUploader
 
@@ -143,7 +143,7 @@ def test_upload_backoff_doubles_from_5_s_to_10_min() -> None:
 
 def _refused_agent(base: str, token: str) -> tuple[int | None, str]:
     with websocket(base.replace("http://", "ws://") + AGENT_WS_PATH, _bearer(token)) as socket:
-        return _close_code(socket)
+        return close_code(socket)
 
 
 def _bearer(token: str) -> dict[str, str]:

@@ -11,7 +11,7 @@ from typing import Any
 import httpx
 
 from protocol.messages import Event, LiveState, Telemetry, Unavailable, VehicleState, encode
-from tests.integration.test_hub_bad_input import ScriptedAgent, _telemetry, scripted_agent
+from tests.support.agents import ScriptedAgent, scripted_agent, telemetry_frame
 
 Enrol = Callable[[str], str]
 
@@ -34,13 +34,13 @@ def test_gap_is_asked_for_filled_and_then_acknowledged(
 ) -> None:
     with scripted_agent(hub, "gappy", enrol("gappy"), delivery=True) as agent:
         for seq in (0, 1, 2, 5):
-            agent.send(_telemetry(seq))
+            agent.send(telemetry_frame(seq))
         resend = _next(agent, lambda frame: frame["type"] == "resend")
         assert (resend["kind"], resend["first_seq"], resend["last_seq"]) == ("telemetry", 3, 4)
         assert resend["stream_id"] == "s1"
         # Until the gap is filled, the hub acknowledges only what has no hole below it.
         for seq in (3, 4, 1):  # 1 again: a duplicate, as a replay would send it
-            agent.send(_telemetry(seq, alt=99.0))
+            agent.send(telemetry_frame(seq, alt=99.0))
         _next(agent, _acked("telemetry", 5))
     stored = admin_api.get("/api/v1/vehicles/gappy/telemetry")
     assert stored.status_code == 200, stored.text
@@ -53,8 +53,8 @@ def test_frames_the_vehicle_no_longer_has_are_recorded_as_lost(
     hub: str, enrol: Enrol, admin_api: httpx.Client
 ) -> None:
     with scripted_agent(hub, "lossy", enrol("lossy"), delivery=True) as agent:
-        agent.send(_telemetry(0))
-        agent.send(_telemetry(9))
+        agent.send(telemetry_frame(0))
+        agent.send(telemetry_frame(9))
         _next(agent, lambda frame: frame["type"] == "resend" and frame["first_seq"] == 1)
         lost = Unavailable(
             stream_id="s1", kind="telemetry", first_seq=1, last_seq=8, reason="outbox full"

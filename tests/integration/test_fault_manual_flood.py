@@ -27,6 +27,7 @@ from tests.helpers import (
 )
 from tests.integration.test_fcu_link import FcuTap
 from tests.integration.test_manual_control import Pilot
+from tests.support.hubs import TEST_HUB_ENV
 
 pytestmark = pytest.mark.integration
 
@@ -40,7 +41,7 @@ MAX_RATE_HZ = 100  # the hub's relay cap (ManualRelay's max_rate_hz)
 def tapped(tmp_path: Path) -> Iterator[tuple[LocalFleet, FcuTap]]:
     plan = FleetPlan(vehicles=1, port=free_port(), data_dir=tmp_path, speedup=1.0)
     with LocalFleet(plan) as fleet:
-        fleet.start()
+        fleet.start(TEST_HUB_ENV)
         fleet.wait_until_ready()
         # The agent again, now through the tap.
         fleet.kill("agent_1")

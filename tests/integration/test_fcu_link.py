@@ -27,7 +27,7 @@ from simulator import ListenAddress, SimulatorConfig, SimulatorServer
 from simulator.config import MessageIntervalSupport
 from simulator.telemetry import SecondGps
 from tests.helpers import FleetWatcher, agent_process, api_client, poll_until
-from tests.simulator.test_sim_server import serving
+from tests.support.simulators import serving
 from tests.tcp_proxy import CuttableProxy, Filter
 from vehicle_agents.fcu_link import FcuLink
 from vehicle_agents.forwarding import MavlinkForwarder

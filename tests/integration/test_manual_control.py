@@ -32,6 +32,7 @@ from tests.helpers import (
     speed_of,
     take_off,
 )
+from tests.support.hubs import TEST_HUB_ENV
 
 pytestmark = pytest.mark.integration
 
@@ -689,7 +690,7 @@ def test_a_lease_survives_a_hub_restart_only_as_revoked(flying: tuple[LocalFleet
     finally:
         pilot.close()
     fleet.kill("hub")
-    fleet.start_hub()
+    fleet.start_hub(TEST_HUB_ENV)
     fleet.wait_until_ready()
     token = access_token(base, "admin", fleet.plan.admin_password)
     with FleetWatcher(base, token) as watcher:

@@ -38,6 +38,7 @@ from tests.helpers import (
     poll_until,
     send_command,
 )
+from tests.support.hubs import TEST_HUB_ENV
 
 pytestmark = pytest.mark.integration
 
@@ -137,7 +138,7 @@ def two_hubs(tmp_path: Path, bus_a: dict[str, str], bus_b: dict[str, str]) -> It
             plan.data_dir.mkdir(mode=0o700, parents=True)
             fleet.log_dir.mkdir(mode=0o700)
             # One after the other: the first creates the schema, the second finds it.
-            fleet.start_hub({**shared, **bus_a})
+            fleet.start_hub({**TEST_HUB_ENV, **shared, **bus_a})
             _wait_ready(fleet, plan.hub_http)
             tokens = f"{VEHICLE}={plan.agent_token(0)}"
             hub_b = f"http://127.0.0.1:{port_b}"

@@ -24,7 +24,7 @@ from protocol.messages import (
 )
 from tests.conftest import hub_settings
 from tests.helpers import FleetWatcher, access_token, api_client, running_hub
-from tests.integration.test_hub_bad_input import scripted_agent
+from tests.support.agents import scripted_agent
 
 PASSWORD = "correct horse battery"
 Enrol = Callable[[str], str]

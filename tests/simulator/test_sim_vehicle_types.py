@@ -32,7 +32,7 @@ from simulator.rover import Rover
 from simulator.telemetry import TelemetryBuilder
 from simulator.vehicle import ItemReached
 from tests.simulator.test_sim_copter import run_until, texts
-from tests.simulator.test_sim_server import command, mavlink_client, simulator_process, wait_for
+from tests.support.simulators import command, mavlink_client, simulator_process, wait_for
 
 # Degrees per metre north and east of home.
 _FRAME = LocalFrame(DEFAULT_HOME.lat, DEFAULT_HOME.lon, DEFAULT_HOME.alt)

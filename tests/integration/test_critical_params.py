@@ -20,7 +20,7 @@ from protocol.messages import (
     encode,
 )
 from tests.helpers import access_token, api_client
-from tests.integration.test_security import PASSWORD, _no_command_reaches, _user
+from tests.support.accounts import PASSWORD, _no_command_reaches, _user
 from tests.support.agents import ScriptedAgent, websocket
 
 

@@ -15,7 +15,7 @@ from typing import Any
 from protocol.messages import CommandOutcome, CommandResult, encode
 from tests.conftest import ADMIN_PASSWORD, POSTGRES_ADDRESS, hub_settings, scratch_postgres
 from tests.helpers import access_token, api_client, poll_until, running_hub
-from tests.integration.test_security import PASSWORD, _no_command_reaches, _user
+from tests.support.accounts import PASSWORD, _no_command_reaches, _user
 from tests.support.agents import ScriptedAgent, scripted_agent
 from tests.tcp_proxy import CuttableProxy
 

@@ -19,7 +19,7 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from tests.helpers import FleetWatcher, agent_process, api_client, connected
 from tests.integration.test_agent_silent_fcu import SilentFlightController
-from tests.integration.test_fcu_link import FcuTap, sim_config, state_of
+from tests.support.fcu import FcuTap, sim_config, state_of
 from tests.support.simulators import serving
 from vehicle_agents.commands import CommandTimeouts
 

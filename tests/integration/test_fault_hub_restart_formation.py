@@ -27,7 +27,7 @@ from tests.helpers import (
     running_fleet,
     spilled_frames,
 )
-from tests.integration.test_formation import ALTITUDES, LEADER, LEFT, RIGHT, _request, take_off_all
+from tests.support.formations import ALTITUDES, LEADER, LEFT, RIGHT, _request, take_off_all
 from tests.support.hubs import TEST_HUB_ENV
 
 pytestmark = [pytest.mark.integration, pytest.mark.slow]

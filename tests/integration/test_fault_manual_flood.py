@@ -25,8 +25,8 @@ from tests.helpers import (
     ready,
     take_off,
 )
-from tests.integration.test_fcu_link import FcuTap
 from tests.integration.test_manual_control import Pilot
+from tests.support.fcu import FcuTap
 from tests.support.hubs import TEST_HUB_ENV
 
 pytestmark = pytest.mark.integration

@@ -11,7 +11,7 @@ import httpx
 from websockets.sync.client import ClientConnection
 
 from protocol.messages import CommandOutcome, CommandResult, encode
-from tests.integration.test_security import _report_position
+from tests.support.accounts import _report_position
 from tests.support.agents import scripted_agent
 
 

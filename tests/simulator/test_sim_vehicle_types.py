@@ -31,7 +31,7 @@ from simulator.personality import Px4Personality
 from simulator.rover import Rover
 from simulator.telemetry import TelemetryBuilder
 from simulator.vehicle import ItemReached
-from tests.simulator.test_sim_copter import run_until, texts
+from tests.support.copters import run_until, texts
 from tests.support.simulators import command, mavlink_client, simulator_process, wait_for
 
 # Degrees per metre north and east of home.

@@ -25,7 +25,7 @@ from tests.support.formations import take_off_all
 from tests.support.hubs import TEST_HUB_ENV
 from tests.support.maps import PixelMap, _assert_on_open_map
 
-pytestmark = [pytest.mark.browser, pytest.mark.integration]
+pytestmark = [pytest.mark.browser, pytest.mark.integration, pytest.mark.slow]
 
 ROOT = Path(__file__).resolve().parents[2]
 OUTPUT = ROOT / "test-output" / "formation"

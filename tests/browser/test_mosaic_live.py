@@ -19,7 +19,7 @@ from tests.helpers import access_token, api_client, poll_until
 from tests.support.hubs import TEST_HUB_ENV
 from tests.survey_shapes import geojson_area
 
-pytestmark = [pytest.mark.browser, pytest.mark.integration]
+pytestmark = [pytest.mark.browser, pytest.mark.integration, pytest.mark.slow]
 
 ROOT = Path(__file__).resolve().parents[2]
 OUTPUT = ROOT / "test-output" / "mosaic"

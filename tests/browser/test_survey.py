@@ -20,7 +20,7 @@ from tests.helpers import access_token, api_client, poll_until
 from tests.support.hubs import TEST_HUB_ENV
 from tests.support.maps import PixelMap, _assert_on_open_map, _box
 
-pytestmark = [pytest.mark.browser, pytest.mark.integration]
+pytestmark = [pytest.mark.browser, pytest.mark.integration, pytest.mark.slow]
 
 ROOT = Path(__file__).resolve().parents[2]
 QGC_SURVEY = ROOT / "tests" / "data" / "qgc" / "survey.plan"

@@ -113,6 +113,7 @@ def _schemathesis(
     )
 
 
+@pytest.mark.slow
 @pytest.mark.timeout(RUN_LIMIT_S + 60)
 @pytest.mark.parametrize("role", ROLES)
 def test_api_answers_what_its_document_says(

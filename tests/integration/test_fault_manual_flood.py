@@ -29,7 +29,7 @@ from tests.integration.test_manual_control import Pilot
 from tests.support.fcu import FcuTap
 from tests.support.hubs import TEST_HUB_ENV
 
-pytestmark = pytest.mark.integration
+pytestmark = [pytest.mark.integration, pytest.mark.slow]
 
 VEHICLE = "sim_1"
 FLOOD_S = 2.0

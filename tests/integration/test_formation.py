@@ -42,7 +42,7 @@ from tests.support.formations import (
     take_off_all,
 )
 
-pytestmark = pytest.mark.integration
+pytestmark = [pytest.mark.integration, pytest.mark.slow]
 
 
 @pytest.fixture(scope="module")

@@ -20,7 +20,7 @@ from tests.helpers import (
 )
 from tests.support.hubs import TEST_HUB_ENV
 
-pytestmark = pytest.mark.integration
+pytestmark = [pytest.mark.integration, pytest.mark.slow]
 
 VEHICLE = "sim_1"
 

@@ -45,7 +45,7 @@ from tests.support.hubs import TEST_HUB_ENV
 from tests.survey_shapes import geojson_area
 from tests.tcp_proxy import CuttableProxy
 
-pytestmark = pytest.mark.integration
+pytestmark = [pytest.mark.integration, pytest.mark.slow]
 
 VEHICLES = ["sim_1", "sim_2", "sim_3"]
 CUT = 1  # sim_2's link is the one cut

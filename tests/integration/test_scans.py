@@ -28,7 +28,7 @@ from simulator.world import default_scene
 from tests.helpers import FleetWatcher, access_token, api_client, poll_until, running_fleet
 from tests.support.hubs import TEST_HUB_ENV
 
-pytestmark = pytest.mark.integration
+pytestmark = [pytest.mark.integration, pytest.mark.slow]
 
 ALTITUDE_M = 3.0
 WORLD = default_scene()

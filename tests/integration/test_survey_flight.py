@@ -28,7 +28,7 @@ from tests.helpers import (
 from tests.support.hubs import TEST_HUB_ENV
 from tests.survey_shapes import geojson_area
 
-pytestmark = pytest.mark.integration
+pytestmark = [pytest.mark.integration, pytest.mark.slow]
 
 VEHICLES = ["sim_1", "sim_2", "sim_3"]
 SPEEDUP = 10.0

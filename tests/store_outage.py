@@ -11,8 +11,8 @@ from contextlib import contextmanager
 import httpx
 
 from tests.helpers import poll_until
-from tests.integration.test_database_outage import answering
 from tests.support.agents import ScriptedAgent, telemetry_frame
+from tests.support.databases import answering
 
 VEHICLE = "v1"
 

@@ -3,30 +3,16 @@ losses recorded, duplicates dropped. A scripted agent plays the agent's side."""
 
 from __future__ import annotations
 
-import json
 import time
 from collections.abc import Callable
-from typing import Any
 
 import httpx
 
 from protocol.messages import Event, LiveState, Telemetry, Unavailable, VehicleState, encode
-from tests.support.agents import ScriptedAgent, scripted_agent, telemetry_frame
+from tests.support.agents import scripted_agent, telemetry_frame
+from tests.support.delivery import _acked, _next
 
 Enrol = Callable[[str], str]
-
-
-def _next(socket: ScriptedAgent, wanted: Callable[[dict[str, Any]], bool]) -> dict[str, Any]:
-    """The first frame from the hub that matches, within a few seconds."""
-    deadline = time.monotonic() + 10
-    while True:
-        frame = json.loads(socket.recv(timeout=max(0.1, deadline - time.monotonic())))
-        if wanted(frame):
-            return frame
-
-
-def _acked(kind: str, seq: int) -> Callable[[dict[str, Any]], bool]:
-    return lambda frame: frame["type"] == "ack" and frame.get(f"{kind}_seq") == seq
 
 
 def test_gap_is_asked_for_filled_and_then_acknowledged(

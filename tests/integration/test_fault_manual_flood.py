@@ -25,9 +25,9 @@ from tests.helpers import (
     ready,
     take_off,
 )
-from tests.integration.test_manual_control import Pilot
 from tests.support.fcu import FcuTap
 from tests.support.hubs import TEST_HUB_ENV
+from tests.support.pilots import Pilot
 
 pytestmark = [pytest.mark.integration, pytest.mark.slow]
 

@@ -27,7 +27,6 @@ import pytest
 from gcs.launcher import free_port
 from tests.conftest import ADMIN_PASSWORD, hub_settings
 from tests.helpers import access_token, api_client, poll_until, running_hub
-from tests.integration.test_database_outage import answering
 from tests.store_outage import (
     degraded,
     everything_stored,
@@ -36,6 +35,7 @@ from tests.store_outage import (
     streaming,
 )
 from tests.support.agents import scripted_agent, telemetry_frame
+from tests.support.databases import answering
 
 pytestmark = pytest.mark.integration
 

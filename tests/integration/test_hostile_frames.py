@@ -27,12 +27,6 @@ from protocol.messages import (
     client_to_hub,
     decode,
 )
-from tests.fuzz.test_decoders_fuzz import (
-    AGENT_FRAMES,
-    CLIENT_FRAMES,
-    any_frames,
-    scan_frames,
-)
 from tests.helpers import api_client
 from tests.support.agents import (
     close_code,
@@ -42,6 +36,7 @@ from tests.support.agents import (
     websocket,
     ws_url,
 )
+from tests.support.frames import AGENT_FRAMES, CLIENT_FRAMES, any_frames, scan_frames
 
 Enrol = Callable[[str], str]
 MAX_BAD_FRAMES = 20  # the hub's default (settings.max_bad_frames)

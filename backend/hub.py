@@ -176,7 +176,7 @@ class Hub:
         )
         log.info("hub store: %s", engine.url.render_as_string(hide_password=True))
         cache = PrincipalCache(settings.principal_cache_s, settings.principal_cache_outage_s)
-        accounts = Accounts(engine, cache)
+        accounts = Accounts(engine, cache, settings.password_hash_cost)
         await asyncio.to_thread(settings.spool_file.parent.mkdir, 0o700, True, True)
         spool = RowSpool(settings.spool_file, engine, [AuditRow, CommandRow])
         audit = AuditLog(engine, spool)

@@ -11,6 +11,7 @@ from pydantic import AliasChoices, Field, SecretStr, model_validator
 from pydantic_settings import BaseSettings, SettingsConfigDict
 
 from backend.auth.password_policy import password_problem
+from backend.auth.secrets import PasswordCost
 from backend.storage.retention import AUDIT_MIN_RETENTION_DAYS, RetentionPolicy
 from common.addresses import is_loopback
 from common.geodesy import LocalFrame
@@ -101,6 +102,11 @@ class HubSettings(BaseSettings):
     )
     password_hash_threads: int = Field(
         default=2, ge=1, le=32, description="threads of their own for argon2 (64 MB each)"
+    )
+    password_hash_cost: PasswordCost = Field(
+        default="standard",
+        description="argon2's cost: 'test' is its least, for the test suite only "
+        "(refused in production)",
     )
     password_hash_max_pending: int = Field(
         default=8, ge=1, description="password checks running or waiting; beyond, 429"
@@ -409,6 +415,8 @@ class HubSettings(BaseSettings):
                 )
             return self
         problems = []
+        if self.password_hash_cost != "standard":
+            problems.append("GCS_PASSWORD_HASH_COST is only for the test suite")
         if self.admin_password is not None:
             password = self.admin_password.get_secret_value()
             weakness = password_problem(password, self.admin_username)

@@ -12,9 +12,8 @@ import psycopg
 import pytest
 from sqlalchemy import Engine
 
-from backend.settings import HubSettings
 from backend.storage.database import make_engine
-from gcs.launcher import LocalFleet, free_port
+from gcs.launcher import LocalFleet
 from tests.helpers import (
     access_token,
     api_client,
@@ -23,24 +22,17 @@ from tests.helpers import (
     running_hub,
     settle_fleet,
 )
+from tests.support.hubs import ADMIN_PASSWORD, hub_settings
 
-ADMIN_PASSWORD = "test-admin-password"
+__all__ = ["ADMIN_PASSWORD", "hub_settings"]  # imported from here by many test modules
+
+# The slow-test budget: an unmarked test over 20 s fails (tests/support/budget.py).
+pytest_plugins = ["tests.support.budget"]
+
 # Fast enough that a take-off and landing take seconds, slow enough that the
 # 10 Hz telemetry still samples the climb finely.
 FLEET_SPEEDUP = 5.0
 FLEET_BATTERY_DRAIN = 0.1
-
-
-def hub_settings(data_dir: Path, **overrides: object) -> HubSettings:
-    values: dict[str, object] = {
-        "port": free_port(),
-        "data_dir": data_dir,
-        "environment": "development",
-        "admin_password": ADMIN_PASSWORD,
-        "frontend_dir": data_dir / "no-dashboard",
-    }
-    values.update(overrides)
-    return HubSettings(**values)  # type: ignore[arg-type]
 
 
 @pytest.fixture
@@ -169,13 +161,29 @@ def scratch_postgres() -> Iterator[str]:
             admin.execute(f"DROP DATABASE {name} WITH (FORCE)")
 
 
+@contextmanager
+def _database_of_kind(kind: str, folder: Path) -> Iterator[str]:
+    if kind == "sqlite":
+        yield f"sqlite:///{folder}/store.sqlite3"
+        return
+    with scratch_postgres() as url:
+        yield url
+
+
 @pytest.fixture(params=["sqlite", "postgresql"])
 def database_url(request: pytest.FixtureRequest, tmp_path: Path) -> Iterator[str]:
     """The same storage test on the embedded default and on PostgreSQL."""
-    if request.param == "sqlite":
-        yield f"sqlite:///{tmp_path}/store.sqlite3"
-        return
-    with scratch_postgres() as url:
+    with _database_of_kind(request.param, tmp_path) as url:
+        yield url
+
+
+@pytest.fixture(scope="module", params=["sqlite", "postgresql"])
+def module_database_url(
+    request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFactory
+) -> Iterator[str]:
+    """`database_url` once per module and kind, for a module whose tests only read what
+    its fixture stored (tests/README.md, "Read-only fixtures at module scope")."""
+    with _database_of_kind(request.param, tmp_path_factory.mktemp("store")) as url:
         yield url
 
 

@@ -11,8 +11,8 @@ from contextlib import contextmanager
 import httpx
 
 from tests.helpers import poll_until
-from tests.integration.test_database_outage import answering
-from tests.integration.test_hub_bad_input import ScriptedAgent, _telemetry
+from tests.support.agents import ScriptedAgent, telemetry_frame
+from tests.support.databases import answering
 
 VEHICLE = "v1"
 
@@ -32,7 +32,7 @@ def streaming(agent: ScriptedAgent, rate_hz: float) -> Iterator[Stream]:
 
     def send() -> None:
         while not stop.is_set():
-            agent.send(_telemetry(stream.sent))
+            agent.send(telemetry_frame(stream.sent))
             stream.sent += 1
             stop.wait(1 / rate_hz)  # the agent's sampling rate
 

@@ -24,6 +24,7 @@ from backend.auth.policy import (
 from backend.auth.principal_cache import PrincipalCache
 from backend.auth.secrets import (
     USER_TOKEN_PREFIXES,
+    PasswordCost,
     generate_password,
     hash_password,
     new_token,
@@ -58,8 +59,14 @@ def _parse_scopes(text: str) -> frozenset[Permission] | None:
 
 
 class Accounts:
-    def __init__(self, engine: Engine, cache: PrincipalCache | None = None) -> None:
+    def __init__(
+        self,
+        engine: Engine,
+        cache: PrincipalCache | None = None,
+        password_cost: PasswordCost = "standard",
+    ) -> None:
         self.engine = engine
+        self.password_cost = password_cost
         # No caching unless asked for (the hub asks): a zero-age cache never answers.
         self.cache = cache or PrincipalCache(fresh_s=0.0, outage_s=0.0)
         self._serving_from_cache = False
@@ -79,7 +86,7 @@ class Accounts:
     def create_user(self, username: str, password: str, role: Role) -> UserRow:
         row = UserRow(
             username=username,
-            password_hash=hash_password(password),
+            password_hash=hash_password(password, self.password_cost),
             role=role.value,
             disabled=False,
             created_at=time.time(),
@@ -119,7 +126,7 @@ class Accounts:
             if role is not None:
                 row.role = role.value
             if password is not None:
-                row.password_hash = hash_password(password)
+                row.password_hash = hash_password(password, self.password_cost)
             if disabled is not None:
                 row.disabled = disabled
             if disabled or password is not None:
@@ -135,7 +142,8 @@ class Accounts:
         with Session(self.engine) as session:
             row = session.scalar(select(UserRow).where(UserRow.username == username))
         stored_hash = row.password_hash if row is not None else None
-        if not verify_password(stored_hash, password) or row is None or row.disabled:
+        matches = verify_password(stored_hash, password, self.password_cost)
+        if not matches or row is None or row.disabled:
             return None
         return row
 

@@ -24,9 +24,12 @@ CHROMIUM_ARGS = [
 SIZES = {"desktop": (1920, 1080), "tablet": (1024, 768), "phone": (390, 844)}
 
 
-# Module scope: Playwright's sync API keeps an event loop running in this thread while
-# it is open, which would stop other tests from using asyncio.run().
-@pytest.fixture(scope="module")
+# One Chromium for all of tests/browser (package scope: pytest closes it after the
+# package's last test; each test still gets a fresh context, so no cookie or storage
+# crosses tests). Not session scope: Playwright's sync API keeps an event loop running
+# in this thread while it is open, which would stop the tests after this package from
+# using asyncio.run().
+@pytest.fixture(scope="package")
 def browser() -> Iterator[Browser]:
     # Playwright gives each launch a fresh, empty profile of its own.
     with sync_playwright() as playwright:

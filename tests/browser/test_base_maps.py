@@ -19,6 +19,7 @@ from playwright.sync_api import Browser, Page, expect
 from gcs.launcher import DEFAULT_HOME, FleetPlan, LocalFleet, free_port
 from tests.browser.conftest import SIZES, checked_page, log_in
 from tests.map_tiles import png_tile, write_mbtiles
+from tests.support.hubs import TEST_HUB_ENV
 
 pytestmark = [pytest.mark.browser, pytest.mark.integration]
 
@@ -54,7 +55,9 @@ def tiled_fleet(tmp_path_factory: pytest.TempPathFactory) -> Iterator[LocalFleet
     write_mbtiles(data_dir / "tiles" / "field.mbtiles", _field_tiles(), attribution="Test field")
     plan = FleetPlan(port=free_port(), data_dir=data_dir, vehicles=3, speedup=5.0)
     with LocalFleet(plan) as fleet:
-        fleet.start(hub_env={"GCS_BASEMAP_URL": ""})  # nothing online: the offline set
+        fleet.start(
+            hub_env={**TEST_HUB_ENV, "GCS_BASEMAP_URL": ""}
+        )  # nothing online: the offline set
         fleet.wait_until_ready()
         yield fleet
 
@@ -180,7 +183,7 @@ def test_with_nothing_reachable_and_nothing_installed_the_map_says_so(
     plan = FleetPlan(port=free_port(), data_dir=tmp_path / "data", vehicles=0)
     with LocalFleet(plan) as hub:
         # A street map nobody answers for (the discard port), and no tiles folder.
-        hub.start(hub_env={"GCS_BASEMAP_URL": "http://127.0.0.1:9/{z}/{x}/{y}.png"})
+        hub.start(hub_env={**TEST_HUB_ENV, "GCS_BASEMAP_URL": "http://127.0.0.1:9/{z}/{x}/{y}.png"})
         hub.wait_until_ready()
         log_in(page, plan.hub_http, "admin", plan.admin_password)
         notice = page.locator('[data-field="basemap-notice"]')

@@ -20,11 +20,12 @@ from playwright.sync_api import Browser, Page, expect
 from common.geodesy import LocalFrame
 from gcs.launcher import FleetPlan, LocalFleet, free_port
 from tests.browser.conftest import log_in
-from tests.browser.test_missions import PixelMap, _assert_on_open_map
 from tests.helpers import FleetWatcher, access_token, api_client, poll_until
-from tests.integration.test_formation import take_off_all
+from tests.support.formations import take_off_all
+from tests.support.hubs import TEST_HUB_ENV
+from tests.support.maps import PixelMap, _assert_on_open_map
 
-pytestmark = [pytest.mark.browser, pytest.mark.integration]
+pytestmark = [pytest.mark.browser, pytest.mark.integration, pytest.mark.slow]
 
 ROOT = Path(__file__).resolve().parents[2]
 OUTPUT = ROOT / "test-output" / "formation"
@@ -48,7 +49,9 @@ def airborne(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[LocalFl
         speedup=1.0,
     )
     with LocalFleet(plan) as fleet:
-        fleet.start(hub_env={"GCS_BASEMAP_URL": "", "GCS_COMMANDS_PER_SECOND": "1000"})
+        fleet.start(
+            hub_env={**TEST_HUB_ENV, "GCS_BASEMAP_URL": "", "GCS_COMMANDS_PER_SECOND": "1000"}
+        )
         fleet.wait_until_ready()
         token = access_token(plan.hub_http, "admin", plan.admin_password)
         with FleetWatcher(plan.hub_http, token) as watcher, api_client(plan.hub_http, token) as api:

@@ -16,9 +16,10 @@ from common.geodesy import LocalFrame
 from gcs.launcher import FleetPlan, LocalFleet, free_port
 from tests.browser.conftest import log_in
 from tests.helpers import access_token, api_client, poll_until
+from tests.support.hubs import TEST_HUB_ENV
 from tests.survey_shapes import geojson_area
 
-pytestmark = [pytest.mark.browser, pytest.mark.integration]
+pytestmark = [pytest.mark.browser, pytest.mark.integration, pytest.mark.slow]
 
 ROOT = Path(__file__).resolve().parents[2]
 OUTPUT = ROOT / "test-output" / "mosaic"
@@ -50,6 +51,7 @@ def fleet(tmp_path_factory: pytest.TempPathFactory) -> Iterator[LocalFleet]:
     with LocalFleet(plan) as local:
         local.start(
             hub_env={
+                **TEST_HUB_ENV,
                 "GCS_BASEMAP_URL": "",  # no base map tiles: only the mosaic's are images
                 "GCS_SURVEY_UPDATE_INTERVAL_S": "0.2",
                 "GCS_COMMANDS_PER_SECOND": "1000",

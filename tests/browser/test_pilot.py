@@ -15,7 +15,7 @@ from gcs.launcher import LocalFleet
 from tests.browser.conftest import log_in
 from tests.helpers import FleetWatcher, access_token, api_client, ready, running_fleet, send_command
 
-pytestmark = [pytest.mark.browser, pytest.mark.integration]
+pytestmark = [pytest.mark.browser, pytest.mark.integration, pytest.mark.slow]
 
 VEHICLE = "sim_1"
 

@@ -15,7 +15,7 @@ from gcs.launcher import LocalFleet
 from tests.browser.conftest import log_in
 from tests.helpers import access_token, api_client, poll_until, running_fleet
 
-pytestmark = [pytest.mark.browser, pytest.mark.integration]
+pytestmark = [pytest.mark.browser, pytest.mark.integration, pytest.mark.slow]
 
 
 @pytest.fixture

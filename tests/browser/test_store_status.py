@@ -15,7 +15,7 @@ from playwright.sync_api import Page, expect
 from tests.browser.conftest import log_in
 from tests.conftest import ADMIN_PASSWORD, POSTGRES_ADDRESS, hub_settings, scratch_postgres
 from tests.helpers import access_token, api_client, running_hub
-from tests.integration.test_hub_bad_input import _telemetry, scripted_agent
+from tests.support.agents import scripted_agent, telemetry_frame
 from tests.tcp_proxy import CuttableProxy
 
 pytestmark = [pytest.mark.browser, pytest.mark.integration]
@@ -41,7 +41,7 @@ def test_the_header_reports_a_store_outage_and_its_end(page: Page, tmp_path: Pat
                 def stream() -> None:
                     seq = 0
                     while not stop.wait(0.1):  # the agent's 10 Hz
-                        agent.send(_telemetry(seq))
+                        agent.send(telemetry_frame(seq))
                         seq += 1
 
                 streamer = threading.Thread(target=stream, daemon=True)

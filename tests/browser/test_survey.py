@@ -16,10 +16,11 @@ from playwright.sync_api import Page, expect
 from common.geodesy import LocalFrame
 from gcs.launcher import FleetPlan, LocalFleet, free_port
 from tests.browser.conftest import log_in
-from tests.browser.test_missions import PixelMap, _assert_on_open_map, _box
 from tests.helpers import access_token, api_client, poll_until
+from tests.support.hubs import TEST_HUB_ENV
+from tests.support.maps import PixelMap, _assert_on_open_map, _box
 
-pytestmark = [pytest.mark.browser, pytest.mark.integration]
+pytestmark = [pytest.mark.browser, pytest.mark.integration, pytest.mark.slow]
 
 ROOT = Path(__file__).resolve().parents[2]
 QGC_SURVEY = ROOT / "tests" / "data" / "qgc" / "survey.plan"
@@ -42,6 +43,7 @@ def survey_fleet(tmp_path_factory: pytest.TempPathFactory) -> Iterator[LocalFlee
     with LocalFleet(plan) as fleet:
         fleet.start(
             hub_env={
+                **TEST_HUB_ENV,
                 "GCS_BASEMAP_URL": "",
                 "GCS_SURVEY_UPDATE_INTERVAL_S": "0.2",
                 "GCS_COMMANDS_PER_SECOND": "1000",

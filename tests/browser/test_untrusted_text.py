@@ -23,7 +23,7 @@ from protocol.messages import Event, Telemetry, VehicleState, encode
 from tests.browser.conftest import log_in
 from tests.conftest import ADMIN_PASSWORD, hub_settings
 from tests.helpers import poll_until, running_hub
-from tests.integration.test_hub_bad_input import scripted_agent
+from tests.support.agents import scripted_agent
 
 pytestmark = [pytest.mark.browser, pytest.mark.integration]
 

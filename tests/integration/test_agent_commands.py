@@ -9,13 +9,11 @@ one case goes the whole way through the hub's REST API and an agent process.
 
 from __future__ import annotations
 
-import asyncio
-import contextlib
 import subprocess
 import time
-from collections.abc import Awaitable, Callable, Iterator
+from collections.abc import Callable, Iterator
 from pathlib import Path
-from typing import Any, TypeVar
+from typing import Any
 
 import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
@@ -34,35 +32,14 @@ from protocol.messages import (
 from tests.conftest import hub_settings
 from tests.helpers import FleetWatcher, agent_process, api_client, connected, running_hub
 from tests.mavlink_peer import HOME_ALT_MSL, Answer, Script, ScriptedFlightController
-from vehicle_agents.commands import CommandExecutor, CommandTimeouts
-from vehicle_agents.fcu_link import FcuLink, MavMessage
+from tests.support.executors import with_executor
+from vehicle_agents.commands import CommandExecutor
+from vehicle_agents.fcu_link import MavMessage
 
 pytestmark = pytest.mark.integration
 
 IN_PROGRESS = mavlink2.MAV_RESULT_IN_PROGRESS
 ACCEPTED = mavlink2.MAV_RESULT_ACCEPTED
-# Short enough that a case takes a second or two, long enough for a loaded machine.
-TIMEOUTS = CommandTimeouts(ack_s=0.5, attempts=3, in_progress_s=1.5)
-T = TypeVar("T")
-
-
-def with_executor(
-    fcu: ScriptedFlightController, body: Callable[[CommandExecutor], Awaitable[T]]
-) -> T:
-    """Run ``body`` with an executor on a live FcuLink to ``fcu``."""
-
-    async def run() -> T:
-        link = FcuLink(f"tcp:127.0.0.1:{fcu.port}")
-        running = asyncio.create_task(link.run())
-        try:
-            await asyncio.wait_for(link.wait_identified(), 10)
-            return await body(CommandExecutor(link, TIMEOUTS))
-        finally:
-            running.cancel()
-            with contextlib.suppress(asyncio.CancelledError):
-                await running
-
-    return asyncio.run(run())
 
 
 def execute(fcu: ScriptedFlightController, command: Command) -> CommandOutcome:

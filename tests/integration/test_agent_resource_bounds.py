@@ -9,19 +9,17 @@ updates) is refused at the door.
 from __future__ import annotations
 
 import json
-import struct
-import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import httpx
 import pytest
-from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from protocol.messages import AGENT_WS_PATH, MAX_FRAME_BYTES, CloseCode
 from tests.conftest import ADMIN_PASSWORD, hub_settings
 from tests.helpers import access_token, agent_hello, api_client, running_hub
-from tests.integration.test_hub_bad_input import _close_code, scripted_agent, websocket
+from tests.support.agents import close_code, scripted_agent, websocket
+from tests.support.tlogs import tlog_of
 
 pytestmark = pytest.mark.integration
 
@@ -37,17 +35,6 @@ def small_quota_hub(tmp_path: Path) -> Iterator[str]:
     )
     with running_hub(settings) as base:
         yield base
-
-
-def tlog_of(size: int) -> bytes:
-    """About ``size`` bytes of a real .tlog: timestamped MAVLink 2 frames."""
-    mav = mavlink2.MAVLink(None, srcSystem=1, srcComponent=1)
-    records = bytearray()
-    now = int(time.time() * 1e6)
-    while len(records) < size:
-        frame = mavlink2.MAVLink_attitude_message(len(records), 0.1, 0.2, 0.3, 0, 0, 0)
-        records += struct.pack(">Q", now + len(records)) + frame.pack(mav)
-    return bytes(records)
 
 
 def _upload(base: str, token: str, body: bytes) -> httpx.Response:
@@ -97,7 +84,7 @@ def test_a_hello_with_60_kb_of_modes_is_refused(hub: str, enrol: Callable[[str],
     url = hub.replace("http://", "ws://") + AGENT_WS_PATH
     with websocket(url, {"Authorization": f"Bearer {token}"}) as socket:
         socket.send(json.dumps(hello))
-        code, reason = _close_code(socket)
+        code, reason = close_code(socket)
     assert code == CloseCode.BAD_HELLO, (code, reason)
     assert "modes" in reason
     with api_client(hub, access_token(hub, "admin", ADMIN_PASSWORD)) as api:

@@ -8,42 +8,20 @@ personalities, which refuse what the real autopilots refuse.
 from __future__ import annotations
 
 import asyncio
-import contextlib
-from collections.abc import Awaitable, Callable, Iterator
-from typing import TypeVar
 
 import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from protocol.messages import ChangeSpeedCommand, CommandOutcome, GotoCommand, SetHomeCommand
-from simulator import ListenAddress, SimulatorConfig, SimulatorServer
 from simulator.config import DEFAULT_HOME, Autopilot
 from simulator.copter import Copter
 from tests.mavlink_peer import Answer, ScriptedFlightController
-from tests.simulator.test_sim_server import serving
-from vehicle_agents.commands import CommandExecutor, CommandTimeouts
-from vehicle_agents.fcu_link import FcuLink, MavMessage
+from tests.support.fcu import fcu_url, on_link, simulated
+from vehicle_agents.commands import CommandExecutor
+from vehicle_agents.fcu_link import MavMessage
 from vehicle_agents.mav_results import result_name
 
 pytestmark = pytest.mark.integration
-
-TIMEOUTS = CommandTimeouts(ack_s=0.5, attempts=3, in_progress_s=1.5)
-T = TypeVar("T")
-
-
-async def on_link(url: str, body: Callable[[CommandExecutor], Awaitable[T]]) -> T:
-    """Run ``body`` with an executor on a live FcuLink to ``url``, telemetry flowing."""
-    link = FcuLink(url)
-    running = asyncio.create_task(link.run())
-    try:
-        await asyncio.wait_for(link.wait_identified(), 10)
-        while link.latest.get("HOME_POSITION") is None:
-            await link.wait_for(lambda m: m.get_type() == "HOME_POSITION", 5)
-        return await body(CommandExecutor(link, TIMEOUTS))
-    finally:
-        running.cancel()
-        with contextlib.suppress(asyncio.CancelledError):
-            await running
 
 
 # -- MAV_RESULT names -------------------------------------------------------------------
@@ -96,20 +74,6 @@ def test_a_refusal_names_the_result_the_flight_controller_sent() -> None:
 
 
 # -- frames of position commands, against the simulator's personalities ---------------
-
-
-@contextlib.contextmanager
-def simulated(autopilot: Autopilot) -> Iterator[SimulatorServer]:
-    config = SimulatorConfig(
-        listen=ListenAddress("tcp", "127.0.0.1", 0), speedup=10.0, autopilot=autopilot
-    )
-    with serving(config) as (server, _address):
-        yield server
-
-
-def fcu_url(server: SimulatorServer) -> str:
-    assert server.address is not None
-    return f"tcp:127.0.0.1:{server.address.port}"
 
 
 GOTO = GotoCommand(lat=DEFAULT_HOME.lat + 0.0003, lon=DEFAULT_HOME.lon + 0.0002, altitude=15)

@@ -9,18 +9,9 @@ from collections.abc import Callable, Iterator
 import pytest
 
 from tests.helpers import FleetWatcher, agent_process, api_client, connected
-from tests.mavlink_peer import ScriptedFlightController
-from vehicle_agents.fcu_link import MavMessage
+from tests.support.silent_fcu import SilentFlightController
 
 pytestmark = pytest.mark.integration
-
-
-class SilentFlightController(ScriptedFlightController):
-    """A real MAVLink peer on TCP that sends heartbeats and ignores every command (it has
-    no scripts, so it answers none)."""
-
-    def telemetry(self) -> list[MavMessage]:
-        return [self.heartbeat()]  # a 5 Hz heartbeat is the whole behaviour
 
 
 @pytest.fixture

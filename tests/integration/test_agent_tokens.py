@@ -8,7 +8,6 @@ from pathlib import Path
 from typing import Any
 
 import httpx
-from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from backend.auth.accounts import Accounts
 from backend.storage.database import make_engine
@@ -16,45 +15,12 @@ from common.retry import Backoff
 from protocol.messages import AGENT_WS_PATH, CloseCode
 from tests.conftest import ADMIN_PASSWORD, hub_settings
 from tests.helpers import access_token, api_client, running_hub
-from tests.integration.test_hub_bad_input import _close_code, scripted_agent, websocket
-from vehicle_agents.tlog import TlogRecorder
+from tests.support.agents import close_code, scripted_agent, websocket
+from tests.support.flights import OPERATOR_TOKEN, _heartbeat, _recorded_flight
 from vehicle_agents.tlog_uploads import UPLOAD_BACKOFF, TlogUploader
 
-# Tokens as an operator writes them into a compose file: no gcs_v_ prefix.
-OPERATOR_TOKEN = "field-kit-alpha-0123456789abcdef"
 LATER_TOKEN = "field-kit-alpha-rotated-9876543210"
 FAST_RETRIES = Backoff(initial_s=0.05, max_s=0.2)
-
-
-def _packed(message: Any) -> Any:
-    sender = mavlink2.MAVLink(None, srcSystem=1, srcComponent=1)
-    (parsed,) = mavlink2.MAVLink(None).parse_buffer(message.pack(sender))
-    return parsed
-
-
-def _heartbeat(armed: bool) -> Any:
-    mode = mavlink2.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED
-    if armed:
-        mode |= mavlink2.MAV_MODE_FLAG_SAFETY_ARMED
-    return _packed(
-        mavlink2.MAVLink_heartbeat_message(
-            mavlink2.MAV_TYPE_QUADROTOR, mavlink2.MAV_AUTOPILOT_ARDUPILOTMEGA, mode, 4, 4, 3
-        )
-    )
-
-
-def _recorded_flight(directory: Path, vehicle: str) -> TlogRecorder:
-    """A recorder holding one finished flight, recorded from real MAVLink bytes."""
-    recorder = TlogRecorder(directory, vehicle)
-    recorder.record(_heartbeat(armed=True), 1_700_000_000.0)
-    for index in range(20):
-        position = mavlink2.MAVLink_global_position_int_message(
-            index * 100, 473977420 + index, 85455940, 488000, 1000, 1, 2, 3, 9000
-        )
-        recorder.record(_packed(position), 1_700_000_000.1 + index / 10)
-    recorder.record(_heartbeat(armed=False), 1_700_000_003.0)
-    assert len(recorder.finished) == 1
-    return recorder
 
 
 def _tlogs(api: httpx.Client, vehicle: str) -> list[dict[str, Any]]:
@@ -143,7 +109,7 @@ def test_upload_backoff_doubles_from_5_s_to_10_min() -> None:
 
 def _refused_agent(base: str, token: str) -> tuple[int | None, str]:
     with websocket(base.replace("http://", "ws://") + AGENT_WS_PATH, _bearer(token)) as socket:
-        return _close_code(socket)
+        return close_code(socket)
 
 
 def _bearer(token: str) -> dict[str, str]:

@@ -13,7 +13,7 @@ import httpx
 from backend.audit import AuditAction
 from tests.conftest import ADMIN_PASSWORD, hub_settings
 from tests.helpers import access_token, api_client, poll_until, running_hub
-from tests.integration.test_hub_bad_input import scripted_agent
+from tests.support.agents import scripted_agent
 
 
 def test_an_entry_names_the_api_token_that_acted(

@@ -25,8 +25,8 @@ import pytest
 
 from gcs.launcher import free_port
 from tests.helpers import FleetWatcher, api_client, connected, poll_until, send_command
-from tests.integration.test_multi_hub import VEHICLE, TwoHubs, two_hubs
 from tests.nats_server import HUB_USER, login_refused, nats_server
+from tests.support.two_hubs import VEHICLE, TwoHubs, two_hubs
 
 pytestmark = pytest.mark.integration
 

@@ -20,8 +20,8 @@ from protocol.messages import (
     encode,
 )
 from tests.helpers import access_token, api_client
-from tests.integration.test_hub_bad_input import ScriptedAgent, websocket
-from tests.integration.test_security import PASSWORD, _no_command_reaches, _user
+from tests.support.accounts import PASSWORD, _no_command_reaches, _user
+from tests.support.agents import ScriptedAgent, websocket
 
 
 @contextmanager

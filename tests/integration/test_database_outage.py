@@ -4,8 +4,6 @@ local spool until the database is back, none lost."""
 
 from __future__ import annotations
 
-import json
-import threading
 import time
 from collections.abc import Iterator
 from contextlib import ExitStack, contextmanager
@@ -14,11 +12,11 @@ from typing import Any
 
 import pytest
 
-from protocol.messages import CommandOutcome, CommandResult, encode
 from tests.conftest import ADMIN_PASSWORD, POSTGRES_ADDRESS, hub_settings, scratch_postgres
 from tests.helpers import access_token, api_client, poll_until, running_hub
-from tests.integration.test_hub_bad_input import ScriptedAgent, scripted_agent
-from tests.integration.test_security import PASSWORD, _no_command_reaches, _user
+from tests.support.accounts import PASSWORD, _no_command_reaches, _user
+from tests.support.agents import scripted_agent
+from tests.support.databases import answering
 from tests.tcp_proxy import CuttableProxy
 
 # The server the suite uses (GCS_TEST_POSTGRES_ADDRESS may name another), behind the proxy.
@@ -26,24 +24,6 @@ _host, _, _port = POSTGRES_ADDRESS.rpartition(":")
 POSTGRES = (_host, int(_port))
 
 SAFETY_COMMANDS = ("land", "rtl", "hold")
-
-
-@contextmanager
-def answering(agent: ScriptedAgent) -> Iterator[list[dict[str, Any]]]:
-    """Accept the next command as a flight controller would, from a helper thread;
-    yields the commands received, filled in on the way out."""
-    received: list[dict[str, Any]] = []
-
-    def answer() -> None:
-        request = json.loads(agent.recv(timeout=10))
-        received.append(request["command"])
-        outcome = CommandOutcome(status="accepted", result="MAV_RESULT_ACCEPTED", message="ok")
-        agent.send(encode(CommandResult(request_id=request["request_id"], outcome=outcome)))
-
-    worker = threading.Thread(target=answer, daemon=True)
-    worker.start()
-    yield received
-    worker.join(10)
 
 
 @contextmanager

@@ -3,30 +3,16 @@ losses recorded, duplicates dropped. A scripted agent plays the agent's side."""
 
 from __future__ import annotations
 
-import json
 import time
 from collections.abc import Callable
-from typing import Any
 
 import httpx
 
 from protocol.messages import Event, LiveState, Telemetry, Unavailable, VehicleState, encode
-from tests.integration.test_hub_bad_input import ScriptedAgent, _telemetry, scripted_agent
+from tests.support.agents import scripted_agent, telemetry_frame
+from tests.support.delivery import _acked, _next
 
 Enrol = Callable[[str], str]
-
-
-def _next(socket: ScriptedAgent, wanted: Callable[[dict[str, Any]], bool]) -> dict[str, Any]:
-    """The first frame from the hub that matches, within a few seconds."""
-    deadline = time.monotonic() + 10
-    while True:
-        frame = json.loads(socket.recv(timeout=max(0.1, deadline - time.monotonic())))
-        if wanted(frame):
-            return frame
-
-
-def _acked(kind: str, seq: int) -> Callable[[dict[str, Any]], bool]:
-    return lambda frame: frame["type"] == "ack" and frame.get(f"{kind}_seq") == seq
 
 
 def test_gap_is_asked_for_filled_and_then_acknowledged(
@@ -34,13 +20,13 @@ def test_gap_is_asked_for_filled_and_then_acknowledged(
 ) -> None:
     with scripted_agent(hub, "gappy", enrol("gappy"), delivery=True) as agent:
         for seq in (0, 1, 2, 5):
-            agent.send(_telemetry(seq))
+            agent.send(telemetry_frame(seq))
         resend = _next(agent, lambda frame: frame["type"] == "resend")
         assert (resend["kind"], resend["first_seq"], resend["last_seq"]) == ("telemetry", 3, 4)
         assert resend["stream_id"] == "s1"
         # Until the gap is filled, the hub acknowledges only what has no hole below it.
         for seq in (3, 4, 1):  # 1 again: a duplicate, as a replay would send it
-            agent.send(_telemetry(seq, alt=99.0))
+            agent.send(telemetry_frame(seq, alt=99.0))
         _next(agent, _acked("telemetry", 5))
     stored = admin_api.get("/api/v1/vehicles/gappy/telemetry")
     assert stored.status_code == 200, stored.text
@@ -53,8 +39,8 @@ def test_frames_the_vehicle_no_longer_has_are_recorded_as_lost(
     hub: str, enrol: Enrol, admin_api: httpx.Client
 ) -> None:
     with scripted_agent(hub, "lossy", enrol("lossy"), delivery=True) as agent:
-        agent.send(_telemetry(0))
-        agent.send(_telemetry(9))
+        agent.send(telemetry_frame(0))
+        agent.send(telemetry_frame(9))
         _next(agent, lambda frame: frame["type"] == "resend" and frame["first_seq"] == 1)
         lost = Unavailable(
             stream_id="s1", kind="telemetry", first_seq=1, last_seq=8, reason="outbox full"

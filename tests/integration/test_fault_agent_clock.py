@@ -16,7 +16,7 @@ import pytest
 
 from protocol.messages import Telemetry, VehicleState, encode
 from tests.helpers import FleetWatcher, connected, poll_until, state_of
-from tests.integration.test_hub_bad_input import scripted_agent
+from tests.support.agents import scripted_agent
 
 pytestmark = pytest.mark.integration
 

@@ -29,7 +29,7 @@ from tests.helpers import (
     take_off,
 )
 
-pytestmark = pytest.mark.integration
+pytestmark = [pytest.mark.integration, pytest.mark.slow]
 
 VEHICLE = "sim_1"
 

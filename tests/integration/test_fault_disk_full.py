@@ -22,7 +22,6 @@ import pytest
 
 from tests.conftest import ADMIN_PASSWORD, hub_settings
 from tests.helpers import access_token, api_client, poll_until, running_hub
-from tests.integration.test_hub_bad_input import scripted_agent
 from tests.store_outage import (
     degraded,
     everything_stored,
@@ -30,6 +29,7 @@ from tests.store_outage import (
     stored,
     streaming,
 )
+from tests.support.agents import scripted_agent
 
 pytestmark = pytest.mark.integration
 

@@ -18,9 +18,9 @@ import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from tests.helpers import FleetWatcher, agent_process, api_client, connected
-from tests.integration.test_agent_silent_fcu import SilentFlightController
-from tests.integration.test_fcu_link import FcuTap, sim_config, state_of
-from tests.simulator.test_sim_server import serving
+from tests.support.fcu import FcuTap, sim_config, state_of
+from tests.support.silent_fcu import SilentFlightController
+from tests.support.simulators import serving
 from vehicle_agents.commands import CommandTimeouts
 
 pytestmark = pytest.mark.integration

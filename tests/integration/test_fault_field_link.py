@@ -26,6 +26,7 @@ from gcs.launcher import FleetPlan, LocalFleet, end_with_parent, free_port
 from protocol.messages import CLIENT_WS_PATH
 from tests.helpers import access_token, api_client, poll_until, send_command
 from tests.netem import FieldLink, ImpairedRelay, field_link
+from tests.support.hubs import TEST_HUB_ENV
 
 pytestmark = [pytest.mark.integration, pytest.mark.slow]
 
@@ -49,7 +50,7 @@ def field_fleet(tmp_path: Path) -> Iterator[FieldFleet]:
         link = stack.enter_context(field_link())
         plan = FleetPlan(vehicles=0, port=free_port(), data_dir=tmp_path)
         fleet = stack.enter_context(LocalFleet(plan))
-        fleet.start()
+        fleet.start(TEST_HUB_ENV)
         fleet.wait_until_ready()
         admin = access_token(plan.hub_http, "admin", plan.admin_password)
         with api_client(plan.hub_http, admin) as api:

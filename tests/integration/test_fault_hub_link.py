@@ -28,6 +28,7 @@ from tests.helpers import (
     spilled_frames,
     take_off,
 )
+from tests.support.hubs import TEST_HUB_ENV
 from tests.tcp_proxy import CuttableProxy
 
 pytestmark = [pytest.mark.integration, pytest.mark.slow]
@@ -50,7 +51,7 @@ def proxied_fleet(
     with LocalFleet(plan) as fleet:
         plan.data_dir.mkdir(parents=True, exist_ok=True)
         fleet.log_dir.mkdir(parents=True, exist_ok=True)
-        fleet.start_hub()
+        fleet.start_hub(TEST_HUB_ENV)
         fleet.wait_until_ready()
         with CuttableProxy(("127.0.0.1", plan.port)) as proxy:
             # The vehicle's agent dials the proxy; everything else the hub directly.

@@ -27,7 +27,8 @@ from tests.helpers import (
     running_fleet,
     spilled_frames,
 )
-from tests.integration.test_formation import ALTITUDES, LEADER, LEFT, RIGHT, _request, take_off_all
+from tests.support.formations import ALTITUDES, LEADER, LEFT, RIGHT, _request, take_off_all
+from tests.support.hubs import TEST_HUB_ENV
 
 pytestmark = [pytest.mark.integration, pytest.mark.slow]
 
@@ -78,7 +79,7 @@ def test_a_hub_killed_mid_formation_leaves_followers_holding_and_records_it_stop
             f"{follower} to hold on its own",
         )
     time.sleep(max(0.0, killed_at + OUTAGE_S - time.time()))  # the outage, not a sync
-    fleet.start_hub()
+    fleet.start_hub(TEST_HUB_ENV)
     fleet.wait_until_ready()
 
     token = access_token(base, "admin", fleet.plan.admin_password)

@@ -25,10 +25,11 @@ from tests.helpers import (
     ready,
     take_off,
 )
-from tests.integration.test_fcu_link import FcuTap
-from tests.integration.test_manual_control import Pilot
+from tests.support.fcu import FcuTap
+from tests.support.hubs import TEST_HUB_ENV
+from tests.support.pilots import Pilot
 
-pytestmark = pytest.mark.integration
+pytestmark = [pytest.mark.integration, pytest.mark.slow]
 
 VEHICLE = "sim_1"
 FLOOD_S = 2.0
@@ -40,7 +41,7 @@ MAX_RATE_HZ = 100  # the hub's relay cap (ManualRelay's max_rate_hz)
 def tapped(tmp_path: Path) -> Iterator[tuple[LocalFleet, FcuTap]]:
     plan = FleetPlan(vehicles=1, port=free_port(), data_dir=tmp_path, speedup=1.0)
     with LocalFleet(plan) as fleet:
-        fleet.start()
+        fleet.start(TEST_HUB_ENV)
         fleet.wait_until_ready()
         # The agent again, now through the tap.
         fleet.kill("agent_1")

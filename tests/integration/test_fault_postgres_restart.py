@@ -27,8 +27,6 @@ import pytest
 from gcs.launcher import free_port
 from tests.conftest import ADMIN_PASSWORD, hub_settings
 from tests.helpers import access_token, api_client, poll_until, running_hub
-from tests.integration.test_database_outage import answering
-from tests.integration.test_hub_bad_input import _telemetry, scripted_agent
 from tests.store_outage import (
     degraded,
     everything_stored,
@@ -36,6 +34,8 @@ from tests.store_outage import (
     stored,
     streaming,
 )
+from tests.support.agents import scripted_agent, telemetry_frame
+from tests.support.databases import answering
 
 pytestmark = pytest.mark.integration
 
@@ -144,7 +144,7 @@ def test_an_agent_reconnecting_while_postgres_is_down_is_served_and_commanded(
         ):
             agent_token = api.post("/api/v1/vehicles/v1/agent-tokens").json()["token"]
             with scripted_agent(base, "v1", agent_token) as agent:
-                agent.send(_telemetry(0))
+                agent.send(telemetry_frame(0))
                 poll_until(lambda: stored(api) == [0], 30, "the vehicle known to the store")
             cluster.ctl("-m", "immediate", "stop")
             with scripted_agent(base, "v1", agent_token) as agent:

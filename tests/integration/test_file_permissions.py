@@ -16,6 +16,7 @@ import pytest
 from gcs.launcher import FleetPlan, LocalFleet, free_port
 from tests.helpers import access_token, agent_process, poll_until
 from tests.mavlink_peer import ScriptedFlightController
+from tests.support.hubs import TEST_HUB_ENV
 
 pytestmark = pytest.mark.integration
 
@@ -38,7 +39,7 @@ def test_database_wal_and_logs_are_private(tmp_path: Path) -> None:
     data = tmp_path / "data"
     plan = FleetPlan(vehicles=0, port=free_port(), data_dir=data)
     with permissive_umask(), LocalFleet(plan) as fleet:
-        fleet.start()
+        fleet.start(TEST_HUB_ENV)
         fleet.wait_until_ready()
         # A write, so that SQLite has its WAL and shared-memory files open.
         access_token(plan.hub_http, "admin", plan.admin_password)

@@ -15,9 +15,9 @@ import pytest
 
 from common.geodesy import LocalFrame
 from tests.helpers import FleetWatcher, access_token, api_client, poll_until, running_fleet
-from tests.integration.test_formation import take_off_all
+from tests.support.formations import take_off_all
 
-pytestmark = pytest.mark.integration
+pytestmark = [pytest.mark.integration, pytest.mark.slow]
 
 LEADER, FOLLOWER = "sim_1", "sim_2"
 ALTITUDE_M = 3.0

@@ -20,7 +20,7 @@ from common.geodesy import LocalFrame
 from protocol.messages import LandedState, Telemetry, VehicleState, encode
 from tests.conftest import hub_settings
 from tests.helpers import api_client, poll_until, running_hub
-from tests.integration.test_hub_bad_input import ScriptedAgent, scripted_agent
+from tests.support.agents import ScriptedAgent, scripted_agent
 
 Enrol = Callable[[str], str]
 SITE = LocalFrame(-35.363262, 149.165237)

@@ -10,8 +10,9 @@ import pytest
 from gcs.launcher import FleetPlan, LocalFleet, free_port
 from protocol.messages import Unavailable, encode
 from tests.helpers import access_token, api_client
-from tests.integration.test_delivery import _acked, _next
-from tests.integration.test_hub_bad_input import _telemetry, scripted_agent
+from tests.support.agents import scripted_agent, telemetry_frame
+from tests.support.delivery import _acked, _next
+from tests.support.hubs import TEST_HUB_ENV
 
 pytestmark = pytest.mark.integration
 
@@ -19,7 +20,7 @@ pytestmark = pytest.mark.integration
 def test_an_open_gap_survives_a_hub_killed_and_restarted(tmp_path: Path) -> None:
     plan = FleetPlan(vehicles=0, port=free_port(), data_dir=tmp_path)
     with LocalFleet(plan) as fleet:
-        fleet.start()
+        fleet.start(TEST_HUB_ENV)
         fleet.wait_until_ready()
         admin = access_token(plan.hub_http, "admin", plan.admin_password)
         with api_client(plan.hub_http, admin) as api:
@@ -27,18 +28,18 @@ def test_an_open_gap_survives_a_hub_killed_and_restarted(tmp_path: Path) -> None
 
         with scripted_agent(plan.hub_http, "gappy", token, delivery=True) as agent:
             for seq in (0, 1, 2, 7, 8, 9):
-                agent.send(_telemetry(seq))
+                agent.send(telemetry_frame(seq))
             resend = _next(agent, lambda frame: frame["type"] == "resend")
             assert (resend["first_seq"], resend["last_seq"]) == (3, 6)
             # The hub dies before the agent answers: no flush, no goodbye.
             fleet.kill("hub")
 
-        fleet.start_hub()
+        fleet.start_hub(TEST_HUB_ENV)
         fleet.wait_until_ready()
         with scripted_agent(plan.hub_http, "gappy", token, delivery=True) as agent:
             # As the agent does on reconnecting: what was never acknowledged, again.
             for seq in (7, 8, 9, 10):
-                agent.send(_telemetry(seq))
+                agent.send(telemetry_frame(seq))
             resend = _next(agent, lambda frame: frame["type"] == "resend")
             assert (resend["stream_id"], resend["first_seq"], resend["last_seq"]) == ("s1", 3, 6)
             lost = Unavailable(
@@ -63,18 +64,18 @@ def test_a_reconnecting_agent_is_asked_for_open_gaps_before_it_sends_anything(
     hub must still ask it, or that loss would never be recorded."""
     plan = FleetPlan(vehicles=0, port=free_port(), data_dir=tmp_path)
     with LocalFleet(plan) as fleet:
-        fleet.start()
+        fleet.start(TEST_HUB_ENV)
         fleet.wait_until_ready()
         admin = access_token(plan.hub_http, "admin", plan.admin_password)
         with api_client(plan.hub_http, admin) as api:
             token = api.post("/api/v1/vehicles/quiet/agent-tokens").json()["token"]
         with scripted_agent(plan.hub_http, "quiet", token, delivery=True) as agent:
             for seq in (0, 5):
-                agent.send(_telemetry(seq))
+                agent.send(telemetry_frame(seq))
             _next(agent, lambda frame: frame["type"] == "resend")
             fleet.kill("hub")
 
-        fleet.start_hub()
+        fleet.start_hub(TEST_HUB_ENV)
         fleet.wait_until_ready()
         with scripted_agent(plan.hub_http, "quiet", token, delivery=True) as agent:
             resend = _next(agent, lambda frame: frame["type"] == "resend")

@@ -10,7 +10,7 @@ import httpx
 
 from tests.conftest import ADMIN_PASSWORD, hub_settings
 from tests.helpers import access_token, api_client, running_hub
-from tests.integration.test_hub_bad_input import scripted_agent
+from tests.support.agents import scripted_agent
 
 
 def _audit_entries(api: httpx.Client) -> int:

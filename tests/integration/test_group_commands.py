@@ -11,8 +11,8 @@ import httpx
 from websockets.sync.client import ClientConnection
 
 from protocol.messages import CommandOutcome, CommandResult, encode
-from tests.integration.test_hub_bad_input import scripted_agent
-from tests.integration.test_security import _report_position
+from tests.support.accounts import _report_position
+from tests.support.agents import scripted_agent
 
 
 def _answer_commands(agent: ClientConnection, answered: list[str]) -> threading.Thread:

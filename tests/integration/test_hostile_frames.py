@@ -27,21 +27,16 @@ from protocol.messages import (
     client_to_hub,
     decode,
 )
-from tests.fuzz.test_decoders_fuzz import (
-    AGENT_FRAMES,
-    CLIENT_FRAMES,
-    any_frames,
-    scan_frames,
-)
 from tests.helpers import api_client
-from tests.integration.test_hub_bad_input import (
-    _close_code,
-    _telemetry,
-    _wait_stored,
-    _ws,
+from tests.support.agents import (
+    close_code,
     scripted_agent,
+    telemetry_frame,
+    wait_stored,
     websocket,
+    ws_url,
 )
+from tests.support.frames import AGENT_FRAMES, CLIENT_FRAMES, any_frames, scan_frames
 
 Enrol = Callable[[str], str]
 MAX_BAD_FRAMES = 20  # the hub's default (settings.max_bad_frames)
@@ -110,12 +105,12 @@ def test_fuzzed_agent_frames_are_answered_counted_and_the_hub_goes_on(
                     if replies % MAX_BAD_FRAMES == 0:
                         too_many = json.loads(agent.recv(timeout=5))
                         assert too_many["code"] == "too_many_errors"
-                        assert _close_code(agent.socket)[0] == CloseCode.POLICY_VIOLATION
+                        assert close_code(agent.socket)[0] == CloseCode.POLICY_VIOLATION
                         closes += 1
                         break
                 else:
-                    agent.send(_telemetry(0))  # a good frame after the junk is stored
-                    _wait_stored(api, "fz", 1)
+                    agent.send(telemetry_frame(0))  # a good frame after the junk is stored
+                    wait_stored(api, "fz", 1)
     assert replies == len(frames) + 1
     assert closes == (len(frames) + 1) // MAX_BAD_FRAMES
     assert rejected("agent_ws") - before == len(frames) + 1
@@ -140,7 +135,7 @@ def test_fuzzed_dashboard_frames_are_answered_counted_and_the_feed_goes_on(
     replies = 0
     pending = list(frames)
     while pending:
-        with websocket(_ws(hub, CLIENT_WS_PATH), headers) as client:
+        with websocket(ws_url(hub, CLIENT_WS_PATH), headers) as client:
             assert json.loads(client.recv(timeout=5))["type"] == "fleet"
             while pending:
                 frame = pending.pop(0)
@@ -151,7 +146,7 @@ def test_fuzzed_dashboard_frames_are_answered_counted_and_the_feed_goes_on(
                 assert reply["code"] in ("bad_frame", "invalid_message"), reply
                 replies += 1
                 if replies % MAX_BAD_FRAMES == 0:
-                    assert _close_code(client)[0] == CloseCode.POLICY_VIOLATION
+                    assert close_code(client)[0] == CloseCode.POLICY_VIOLATION
                     break
             else:
                 client.send('{"type": "ping", "nonce": "after"}')
@@ -195,18 +190,18 @@ def test_100k_nested_json_over_a_websocket_closes_it_too_big(
     the most nesting that fits is an undecodable frame like any other."""
     headers = {"Authorization": f"Bearer {admin_token}"}
     fits = "[" * 30_000 + "]" * 30_000
-    with websocket(_ws(hub, CLIENT_WS_PATH), headers) as client:
+    with websocket(ws_url(hub, CLIENT_WS_PATH), headers) as client:
         assert json.loads(client.recv(timeout=5))["type"] == "fleet"
         client.send(fits)
         assert json.loads(client.recv(timeout=5))["code"] == "bad_frame"
         client.send(NESTED["arrays"])
-        assert _close_code(client)[0] == CloseCode.MESSAGE_TOO_BIG
+        assert close_code(client)[0] == CloseCode.MESSAGE_TOO_BIG
     before = rejected("agent_ws")
     with scripted_agent(hub, "deep", enrol("deep")) as agent:
         agent.send(fits)
         assert json.loads(agent.recv(timeout=5))["code"] == "bad_frame"
         agent.send(NESTED["objects"])
-        assert _close_code(agent.socket)[0] == CloseCode.MESSAGE_TOO_BIG
+        assert close_code(agent.socket)[0] == CloseCode.MESSAGE_TOO_BIG
     # The server's WebSocket layer closes an oversized frame before the hub reads it
     # (uvicorn's ws_max_size), so only the undecodable one is counted.
     assert rejected("agent_ws") - before == 1
@@ -219,9 +214,9 @@ def test_a_bad_first_frame_is_closed_as_a_bad_hello_and_counted(hub: str, enrol:
     headers = {"Authorization": f"Bearer {enrol('hi')}"}
     for frame in ("", "[" * 30_000, '{"type": "hello", "protocol": "x"}'):
         before = rejected("agent_ws")
-        with websocket(_ws(hub, AGENT_WS_PATH), headers) as socket:
+        with websocket(ws_url(hub, AGENT_WS_PATH), headers) as socket:
             socket.send(frame)
-            code, reason = _close_code(socket)
+            code, reason = close_code(socket)
         assert code == CloseCode.BAD_HELLO, (frame[:40], code, reason)
         assert "first frame must be a hello" in reason
         assert rejected("agent_ws") - before == 1

@@ -10,7 +10,7 @@ from collections.abc import Callable
 import httpx
 
 from protocol.messages import MAX_SEQ
-from tests.integration.test_hub_bad_input import _telemetry, _wait_stored, scripted_agent
+from tests.support.agents import scripted_agent, telemetry_frame, wait_stored
 
 Enrol = Callable[[str], str]
 
@@ -21,8 +21,8 @@ def test_replayed_decreasing_and_huge_sequence_numbers(
     sent = (0, 1, 2, MAX_SEQ, 1, 0, 2, 3, 4)
     with scripted_agent(hub, "sq", enrol("sq"), delivery=True) as agent:
         for seq in sent:
-            agent.send(_telemetry(seq))
-        _wait_stored(admin_api, "sq", 6)
+            agent.send(telemetry_frame(seq))
+        wait_stored(admin_api, "sq", 6)
         acked, resend = -1, None
         while acked < 4 or resend is None:
             reply = json.loads(agent.recv(timeout=10))

@@ -24,9 +24,9 @@ from PIL import Image
 from backend.missions.survey.interop import MAX_FILE_BYTES
 from tests.conftest import ADMIN_PASSWORD, hub_settings
 from tests.helpers import access_token, api_client, running_hub
-from tests.integration.test_agent_resource_bounds import tlog_of
-from tests.integration.test_hub_bad_input import scripted_agent
 from tests.map_tiles import png_tile, write_mbtiles
+from tests.support.agents import scripted_agent
+from tests.support.tlogs import tlog_of
 
 Enrol = Callable[[str], str]
 

@@ -2,107 +2,34 @@
 
 from __future__ import annotations
 
-import contextlib
 import json
 import logging
-import time
-from collections.abc import Callable, Iterator
-from contextlib import contextmanager
+from collections.abc import Callable
 from typing import Any
 
 import httpx
 import pytest
 from websockets.exceptions import ConnectionClosed
-from websockets.sync.client import ClientConnection, connect
 
 from protocol.messages import (
     AGENT_WS_PATH,
     CLIENT_WS_PATH,
     MAX_FRAME_BYTES,
     CloseCode,
-    Telemetry,
-    VehicleState,
     encode,
 )
-from tests.helpers import agent_hello, api_client, poll_until
+from tests.helpers import agent_hello, api_client
+from tests.support.agents import (
+    close_code,
+    scripted_agent,
+    stored_count,
+    telemetry_frame,
+    wait_stored,
+    websocket,
+    ws_url,
+)
 
 Enrol = Callable[[str], str]
-
-
-def _ws(base_url: str, path: str) -> str:
-    return base_url.replace("http://", "ws://") + path
-
-
-def _telemetry(seq: int, alt: float = 1.0) -> str:
-    return encode(Telemetry(seq=seq, time=time.time(), state=VehicleState(alt_rel=alt)))
-
-
-@contextmanager
-def websocket(url: str, headers: dict[str, str] | None = None) -> Iterator[ClientConnection]:
-    """A client connection whose closing handshake may legitimately carry an error code."""
-    stack = contextlib.ExitStack()
-    socket = stack.enter_context(connect(url, additional_headers=headers or {}, max_size=None))
-    try:
-        yield socket
-    finally:
-        with contextlib.suppress(ConnectionClosed):
-            stack.close()
-
-
-class ScriptedAgent:
-    """The agent's end of a real WebSocket. Unless ``delivery`` is asked for, the hub's
-    acks and resend requests are read past, so a test sees commands and errors only."""
-
-    def __init__(self, socket: ClientConnection, delivery: bool) -> None:
-        self.socket = socket
-        self._delivery = delivery
-
-    def send(self, frame: str) -> None:
-        self.socket.send(frame)
-
-    def recv(self, timeout: float | None = None) -> str | bytes:
-        deadline = None if timeout is None else time.monotonic() + timeout
-        while True:
-            remaining = None if deadline is None else max(0.0, deadline - time.monotonic())
-            frame = self.socket.recv(timeout=remaining)
-            if self._delivery or json.loads(frame).get("type") not in ("ack", "resend"):
-                return frame
-
-
-@contextmanager
-def scripted_agent(
-    base_url: str, vehicle_id: str, token: str, *, delivery: bool = False
-) -> Iterator[ScriptedAgent]:
-    """A real WebSocket peer speaking the agent protocol, frame by frame."""
-    headers = {"Authorization": f"Bearer {token}"}
-    with websocket(_ws(base_url, AGENT_WS_PATH), headers) as socket:
-        socket.send(encode(agent_hello(vehicle_id, stream_id="s1")))
-        assert json.loads(socket.recv(timeout=5))["type"] == "welcome"
-        yield ScriptedAgent(socket, delivery)
-
-
-def _close_code(socket: ClientConnection) -> tuple[int | None, str]:
-    def read_until_closed() -> None:
-        while True:
-            socket.recv(timeout=5)
-
-    with pytest.raises(ConnectionClosed) as closed:
-        read_until_closed()
-    received = closed.value.rcvd
-    return (received.code, received.reason) if received else (None, "")
-
-
-def _stored_count(api: httpx.Client, vehicle_id: str) -> int:
-    page = api.get(
-        f"/api/v1/vehicles/{vehicle_id}/telemetry", params={"start": 0, "limit": 10000}
-    ).json()
-    return len(page["samples"])
-
-
-def _wait_stored(api: httpx.Client, vehicle_id: str, count: int) -> None:
-    # the batching writer flushes every 0.25 s; poll the real store
-    what = f"{count} samples of {vehicle_id} stored"
-    poll_until(lambda: _stored_count(api, vehicle_id) >= count, 10, what, every_s=0.05)
 
 
 def test_unknown_vehicle_is_404(hub: str, enrol: Enrol, admin_token: str) -> None:
@@ -162,9 +89,9 @@ def test_agent_with_bad_token_is_refused_and_logged(
     caplog: pytest.LogCaptureFixture,
 ) -> None:
     caplog.set_level(logging.WARNING, logger="backend.realtime.agent_gateway")
-    with websocket(_ws(hub, AGENT_WS_PATH), headers) as socket:
+    with websocket(ws_url(hub, AGENT_WS_PATH), headers) as socket:
         # The hub closes before reading anything, so the hello never counts.
-        code, text = _close_code(socket)
+        code, text = close_code(socket)
     assert code == CloseCode.UNAUTHORIZED
     assert reason in text
     assert any(reason in record.getMessage() for record in caplog.records)
@@ -176,7 +103,7 @@ def test_bad_frames_get_error_replies_and_the_connection_survives(
     hub: str, enrol: Enrol, admin_token: str
 ) -> None:
     with scripted_agent(hub, "v1", enrol("v1")) as agent, api_client(hub, admin_token) as api:
-        agent.send(_telemetry(0))
+        agent.send(telemetry_frame(0))
         agent.send("{not json")
         reply = json.loads(agent.recv(timeout=5))
         assert reply == {"type": "error", "code": "bad_frame", "message": reply["message"]}
@@ -189,8 +116,8 @@ def test_bad_frames_get_error_replies_and_the_connection_survives(
         assert reply["code"] == "invalid_message"
         assert "state.lat" in reply["message"]
 
-        agent.send(_telemetry(1))
-        _wait_stored(api, "v1", 2)  # the good frames before and after both stored
+        agent.send(telemetry_frame(1))
+        wait_stored(api, "v1", 2)  # the good frames before and after both stored
 
 
 def test_oversized_frame_closes_only_that_agent(hub: str, enrol: Enrol, admin_token: str) -> None:
@@ -199,14 +126,14 @@ def test_oversized_frame_closes_only_that_agent(hub: str, enrol: Enrol, admin_to
         scripted_agent(hub, "good", enrol("good")) as good,
         api_client(hub, admin_token) as api,
     ):
-        big.send(_telemetry(0))
-        _wait_stored(api, "big", 1)
+        big.send(telemetry_frame(0))
+        wait_stored(api, "big", 1)
         big.send("x" * (MAX_FRAME_BYTES + 1))
-        code, _ = _close_code(big)
+        code, _ = close_code(big)
         assert code == CloseCode.MESSAGE_TOO_BIG
-        good.send(_telemetry(0))
-        _wait_stored(api, "good", 1)
-        assert _stored_count(api, "big") == 1  # what was accepted stays stored
+        good.send(telemetry_frame(0))
+        wait_stored(api, "good", 1)
+        assert stored_count(api, "big") == 1  # what was accepted stays stored
         vehicles = {v["id"]: v for v in api.get("/api/v1/vehicles").json()}
         assert vehicles["good"]["connected"] is True
         assert vehicles["big"]["connected"] is False
@@ -219,7 +146,7 @@ def test_repeated_abuse_closes_the_connection(hub: str, enrol: Enrol, admin_toke
                 agent.send("garbage")
             except ConnectionClosed:
                 break
-        code, reason = _close_code(agent)
+        code, reason = close_code(agent)
     assert code == CloseCode.POLICY_VIOLATION
     assert "too many bad frames" in reason
 
@@ -227,8 +154,8 @@ def test_repeated_abuse_closes_the_connection(hub: str, enrol: Enrol, admin_toke
 def test_duplicate_telemetry_is_stored_once(hub: str, enrol: Enrol, admin_token: str) -> None:
     with scripted_agent(hub, "v1", enrol("v1")) as agent, api_client(hub, admin_token) as api:
         for seq in (0, 1, 1, 2, 0, 3):
-            agent.send(_telemetry(seq))
-        _wait_stored(api, "v1", 4)
+            agent.send(telemetry_frame(seq))
+        wait_stored(api, "v1", 4)
         page = api.get("/api/v1/vehicles/v1/telemetry", params={"start": 0}).json()
         assert [sample["seq"] for sample in page["samples"]] == [0, 1, 2, 3]
 
@@ -236,7 +163,9 @@ def test_duplicate_telemetry_is_stored_once(hub: str, enrol: Enrol, admin_token:
 def test_client_bad_frame_gets_error_reply_and_feed_continues(
     hub: str, enrol: Enrol, admin_token: str
 ) -> None:
-    with websocket(_ws(hub, CLIENT_WS_PATH), {"Authorization": f"Bearer {admin_token}"}) as client:
+    with websocket(
+        ws_url(hub, CLIENT_WS_PATH), {"Authorization": f"Bearer {admin_token}"}
+    ) as client:
         assert json.loads(client.recv(timeout=5))["type"] == "fleet"
         client.send('{"type": "launch_missiles"}')
         reply: dict[str, Any] = json.loads(client.recv(timeout=5))
@@ -258,13 +187,13 @@ def test_revoked_agent_token_drops_the_live_agent(
     token = enrol("rev")
     token_id = admin_api.get("/api/v1/agent-tokens", params={"vehicle_id": "rev"}).json()[0]["id"]
     with scripted_agent(hub, "rev", token) as agent:
-        agent.send(_telemetry(0))
+        agent.send(telemetry_frame(0))
         assert admin_api.delete(f"/api/v1/agent-tokens/{token_id}").status_code == 204
-        code, reason = _close_code(agent)
+        code, reason = close_code(agent)
     assert code == CloseCode.UNAUTHORIZED
     assert "revoked" in reason
-    with websocket(_ws(hub, AGENT_WS_PATH), {"Authorization": f"Bearer {token}"}) as again:
-        assert _close_code(again)[0] == CloseCode.UNAUTHORIZED
+    with websocket(ws_url(hub, AGENT_WS_PATH), {"Authorization": f"Bearer {token}"}) as again:
+        assert close_code(again)[0] == CloseCode.UNAUTHORIZED
 
 
 def test_agent_token_cannot_speak_for_another_vehicle(
@@ -273,9 +202,9 @@ def test_agent_token_cannot_speak_for_another_vehicle(
     token_a = enrol("alpha")
     enrol("bravo")
     headers = {"Authorization": f"Bearer {token_a}"}
-    with websocket(_ws(hub, AGENT_WS_PATH), headers) as socket:
+    with websocket(ws_url(hub, AGENT_WS_PATH), headers) as socket:
         socket.send(encode(agent_hello("bravo", stream_id="s1")))
-        code, reason = _close_code(socket)
+        code, reason = close_code(socket)
     assert code == CloseCode.FORBIDDEN
     assert "alpha" in reason
     assert "bravo" in reason

@@ -18,8 +18,9 @@ from tests.helpers import (
     running_fleet,
     spilled_frames,
 )
+from tests.support.hubs import TEST_HUB_ENV
 
-pytestmark = pytest.mark.integration
+pytestmark = [pytest.mark.integration, pytest.mark.slow]
 
 VEHICLE = "sim_1"
 
@@ -57,7 +58,7 @@ def test_lost_hub_link_triggers_rtl_and_is_reported_on_reconnect(
         "the agent to act on the lost hub link",
     )
 
-    fleet.start_hub()
+    fleet.start_hub(TEST_HUB_ENV)
     fleet.wait_until_ready()
     token = access_token(base, "admin", fleet.plan.admin_password)
     with FleetWatcher(base, token) as watcher, api_client(base, token) as api:

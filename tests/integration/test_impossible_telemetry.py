@@ -27,9 +27,9 @@ from backend.storage.writer import StorageWriter
 from protocol.messages import STATE_BOUNDS, LiveState, Telemetry, VehicleState, encode
 from tests.conftest import ADMIN_PASSWORD, hub_settings
 from tests.helpers import access_token, agent_hello, api_client, poll_until, running_hub
-from tests.integration.test_hub_bad_input import ScriptedAgent, scripted_agent
-from tests.integration.test_metrics import _metrics, _value
 from tests.mavutil_state import mavutil_in_mavlink2, read_tlog
+from tests.support.agents import ScriptedAgent, scripted_agent
+from tests.support.metrics import _metrics, _value
 
 Enrol = Callable[[str], str]
 HOME = (-35.363262, 149.165237)

@@ -9,7 +9,7 @@ import httpx
 import pytest
 
 from tests.conftest import ADMIN_PASSWORD
-from tests.integration.test_hub_bad_input import scripted_agent
+from tests.support.agents import scripted_agent
 
 
 def test_json_to_the_token_route_is_told_it_takes_a_form(hub: str) -> None:

@@ -9,7 +9,7 @@ import pytest
 
 from protocol.messages import Event, encode
 from tests.helpers import FleetWatcher
-from tests.integration.test_hub_bad_input import scripted_agent
+from tests.support.agents import scripted_agent
 
 pytestmark = pytest.mark.integration
 

@@ -10,8 +10,9 @@ import httpx
 
 from gcs.launcher import FleetPlan, LocalFleet, free_port
 from tests.helpers import agent_process
-from tests.integration.test_agent_survives_bad_commands import ScriptedHub, _command
 from tests.mavlink_peer import ScriptedFlightController
+from tests.support.hubs import TEST_HUB_ENV
+from tests.support.scripted_hub import ScriptedHub, _command
 
 FORGED = "2031-01-01 00:00:00,000 INFO    backend.audit: audit: admin"
 
@@ -20,7 +21,7 @@ def test_a_user_name_cannot_forge_a_log_line(tmp_path: Path) -> None:
     plan = FleetPlan(vehicles=0, port=free_port(), data_dir=tmp_path)
     with LocalFleet(plan) as fleet:
         # The real `gcs hub` process, with the logging its command line sets up.
-        fleet.start(hub_env={"GCS_AGENT_TOKENS": "v1=" + "t" * 32})
+        fleet.start(hub_env={**TEST_HUB_ENV, "GCS_AGENT_TOKENS": "v1=" + "t" * 32})
         fleet.wait_until_ready()
         # A denied login: the audit logger logs the user name it was given.
         denied = httpx.post(

@@ -11,13 +11,7 @@ import pytest
 
 from protocol.messages import CLIENT_WS_PATH, ProtocolError, agent_to_hub, decode
 from tests.helpers import api_client
-from tests.integration.test_hub_bad_input import (
-    _telemetry,
-    _wait_stored,
-    _ws,
-    scripted_agent,
-    websocket,
-)
+from tests.support.agents import scripted_agent, telemetry_frame, wait_stored, websocket, ws_url
 
 Enrol = Callable[[str], str]
 
@@ -44,13 +38,13 @@ def test_agent_socket_answers_unparsable_frames_and_goes_on(
             assert reply["type"] == "error"
             assert reply["code"] == "bad_frame"
             assert "not valid JSON" in reply["message"]
-        agent.send(_telemetry(0))
-        _wait_stored(api, "v1", 1)
+        agent.send(telemetry_frame(0))
+        wait_stored(api, "v1", 1)
 
 
 def test_dashboard_socket_answers_unparsable_frames_and_goes_on(hub: str, admin_token: str) -> None:
     headers = {"Authorization": f"Bearer {admin_token}"}
-    with websocket(_ws(hub, CLIENT_WS_PATH), headers) as client:
+    with websocket(ws_url(hub, CLIENT_WS_PATH), headers) as client:
         assert json.loads(client.recv(timeout=5))["type"] == "fleet"
         for frame in UNPARSABLE.values():
             client.send(frame)

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import contextlib
 import json
-import re
 
 import httpx
 from websockets.exceptions import ConnectionClosed
@@ -12,19 +11,7 @@ from websockets.sync.client import connect
 
 from protocol.messages import AGENT_WS_PATH, CLIENT_WS_PATH
 from tests.helpers import access_token
-
-
-def _value(text: str, series: str) -> float:
-    match = re.search(rf"^{re.escape(series)} (\S+)$", text, re.MULTILINE)
-    assert match, f"{series} is not in /metrics"
-    return float(match.group(1))
-
-
-def _metrics(hub: str, token: str) -> str:
-    response = httpx.get(f"{hub}/metrics", headers={"Authorization": f"Bearer {token}"})
-    assert response.status_code == 200, response.text
-    assert response.headers["content-type"].startswith("text/plain")
-    return response.text
+from tests.support.metrics import _metrics, _value
 
 
 def test_metrics_need_an_admin(hub: str, admin_api: httpx.Client) -> None:

@@ -14,7 +14,7 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from gcs.launcher import LocalFleet
 from tests.helpers import FleetWatcher, api_client, ready, state_of
-from tests.simulator.test_sim_server import mavlink_client, wait_for
+from tests.support.simulators import mavlink_client, wait_for
 
 pytestmark = pytest.mark.integration
 

@@ -15,7 +15,7 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 from protocol.messages import MissionItem
 from simulator import ListenAddress, SimulatorConfig
 from simulator.config import Autopilot
-from tests.simulator.test_sim_server import SYSID, serving
+from tests.support.simulators import SYSID, serving
 from vehicle_agents.fcu_link import FcuLink
 from vehicle_agents.missions import MissionClient
 

@@ -41,10 +41,11 @@ from protocol.photos import CameraIntrinsics, PhotoPose
 from simulator.ground import Ground
 from tests.helpers import FleetWatcher, access_token, api_client, on_the_ground, poll_until
 from tests.mosaic_photos import NO_RTK, Noise, marker_errors_m, mosaic_of, target_errors_m
+from tests.support.hubs import TEST_HUB_ENV
 from tests.survey_shapes import geojson_area
 from tests.tcp_proxy import CuttableProxy
 
-pytestmark = pytest.mark.integration
+pytestmark = [pytest.mark.integration, pytest.mark.slow]
 
 VEHICLES = ["sim_1", "sim_2", "sim_3"]
 CUT = 1  # sim_2's link is the one cut
@@ -87,6 +88,7 @@ def fleet(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Fleet]:
         local.agent_hubs[CUT] = f"ws://127.0.0.1:{proxy.port}"
         local.start(
             hub_env={
+                **TEST_HUB_ENV,
                 # The cut lasts a few seconds: long enough for photos to queue, too short
                 # for the survey to give the drone's lanes away.
                 "GCS_SURVEY_LINK_TIMEOUT_S": "120",

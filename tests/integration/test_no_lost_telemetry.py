@@ -27,8 +27,9 @@ from tests.helpers import (
     running_fleet,
     spilled_frames,
 )
+from tests.support.hubs import TEST_HUB_ENV
 
-pytestmark = pytest.mark.integration
+pytestmark = [pytest.mark.integration, pytest.mark.slow]
 
 VEHICLE = "sim_1"
 OUTAGE_S = 30.0
@@ -94,7 +95,7 @@ def test_hub_killed_for_30_s_mid_mission_loses_and_duplicates_nothing(
     poll_until(lambda: len(spilled_frames(fleet, VEHICLE)) > 100, OUTAGE_S, "the outbox to spill")
     time.sleep(max(0.0, deadline - time.monotonic()))  # the outage itself, not a sync
     restarted_at = time.time()
-    fleet.start_hub()
+    fleet.start_hub(TEST_HUB_ENV)
     fleet.wait_until_ready()
 
     # Everything the agent produced up to now must arrive, without holes.
@@ -151,7 +152,7 @@ def test_an_agent_restarted_during_an_outage_replays_its_earlier_run(
     (earlier_run,) = {f.stream_id for f in spilled}
     spilled_up_to = max(f.seq for f in spilled)
     fleet.start_agent(0, fleet.sim_ports[0])
-    fleet.start_hub()
+    fleet.start_hub(TEST_HUB_ENV)
     fleet.wait_until_ready()
 
     def earlier_run_stored() -> list[int]:

@@ -10,7 +10,7 @@ import httpx
 import pytest
 
 from tests.helpers import api_client
-from tests.integration.test_hub_bad_input import scripted_agent
+from tests.support.agents import scripted_agent
 
 Enrol = Callable[[str], str]
 JSON = {"Content-Type": "application/json"}

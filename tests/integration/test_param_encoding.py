@@ -21,7 +21,7 @@ from protocol.messages import (
     ParamSetCommand,
 )
 from simulator.config import Autopilot
-from tests.integration.test_agent_results_frames import fcu_url, on_link, simulated
+from tests.support.fcu import fcu_url, on_link, simulated
 from vehicle_agents.commands import CommandExecutor
 from vehicle_agents.param_encoding import ParamEncoding, decode, encode
 

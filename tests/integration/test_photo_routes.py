@@ -16,7 +16,7 @@ from PIL import Image
 
 from protocol.photos import CameraIntrinsics, PhotoMeta, PhotoPose
 from tests.helpers import poll_until_async
-from tests.integration.test_hub_bad_input import scripted_agent
+from tests.support.agents import scripted_agent
 from vehicle_agents.camera.geotag import geotag
 from vehicle_agents.camera.queue import PhotoQueue
 from vehicle_agents.camera.upload import PhotoUploader

@@ -8,7 +8,6 @@ vehicle stays on the ground, over a ground laid 30 m below it.
 
 from __future__ import annotations
 
-import socket
 import subprocess
 import sys
 from collections.abc import Iterator
@@ -25,13 +24,12 @@ from gcs.launcher import free_port
 from simulator.config import DEFAULT_HOME
 from tests.conftest import ADMIN_PASSWORD, hub_settings
 from tests.helpers import access_token, agent_process, api_client, poll_until, running_hub
+from tests.support.photos import CAMERA_MODEL, GROUND_BELOW_M, _accepts
 from tests.tcp_proxy import CuttableProxy
 
 pytestmark = pytest.mark.integration
 
 VEHICLE = "cam_1"
-CAMERA_MODEL = "4.8,3.6,320,240,5.4"  # a small sensor and image: fast to render and send
-GROUND_BELOW_M = 30.0
 
 
 @dataclass
@@ -112,14 +110,6 @@ def vehicle(tmp_path_factory: pytest.TempPathFactory) -> Iterator[CameraVehicle]
         finally:
             sim.terminate()
             sim.wait(10)
-
-
-def _accepts(port: int) -> bool:
-    try:
-        socket.create_connection(("127.0.0.1", port), timeout=1).close()
-    except OSError:
-        return False
-    return True
 
 
 def _exif_position(path: Path) -> tuple[float, float, float]:

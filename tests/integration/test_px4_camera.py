@@ -13,7 +13,7 @@ import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from simulator.config import ListenAddress, SimulatorConfig
-from tests.simulator.test_sim_server import serving
+from tests.support.simulators import serving
 from vehicle_agents.fcu_link import FcuLink, MavMessage
 from vehicle_agents.streams import StreamRequester, StreamTimeouts
 

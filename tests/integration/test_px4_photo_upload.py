@@ -19,7 +19,7 @@ from gcs.launcher import free_port
 from simulator.config import DEFAULT_HOME
 from tests.conftest import ADMIN_PASSWORD, hub_settings
 from tests.helpers import access_token, agent_process, api_client, poll_until, running_hub
-from tests.integration.test_photo_upload import CAMERA_MODEL, GROUND_BELOW_M, _accepts
+from tests.support.photos import CAMERA_MODEL, GROUND_BELOW_M, _accepts
 
 pytestmark = pytest.mark.integration
 

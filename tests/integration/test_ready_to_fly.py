@@ -12,7 +12,7 @@ import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from protocol.messages import CommandOutcome, TakeoffCommand, VehicleState
-from tests.integration.test_agent_results_frames import fcu_url, on_link, simulated
+from tests.support.fcu import fcu_url, on_link, simulated
 from vehicle_agents.commands import CommandExecutor
 from vehicle_agents.fcu_link import FcuLink
 from vehicle_agents.telemetry import link_snapshot

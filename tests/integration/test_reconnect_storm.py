@@ -24,6 +24,7 @@ from common.retry import Backoff
 from gcs.launcher import FleetPlan, LocalFleet, free_port
 from protocol.messages import CommandOutcome, Telemetry, VehicleState, encode
 from tests.helpers import agent_hello, poll_until_async
+from tests.support.hubs import TEST_HUB_ENV
 from vehicle_agents.hub_link import HubLink, HubTimeouts
 from vehicle_agents.outbox import Outbox
 
@@ -109,7 +110,7 @@ def test_a_hub_restarted_under_200_agents_gets_them_all_back_with_every_sample_o
         plan.data_dir.mkdir(mode=0o700, parents=True, exist_ok=True)
         fleet.log_dir.mkdir(mode=0o700, exist_ok=True)
         hub_env = {"GCS_VIZ_ENABLED": "false"}
-        fleet.start_hub(hub_env)
+        fleet.start_hub({**TEST_HUB_ENV, **hub_env})
         fleet.wait_until_ready(60)
         agents = [
             LightAgent(plan.vehicle_id(i), plan.agent_token(i), plan.hub_ws) for i in range(AGENTS)

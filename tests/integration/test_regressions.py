@@ -13,7 +13,7 @@ from backend.storage.flights import FlightTracker
 from backend.storage.records import TelemetryEnvelope
 from protocol.messages import CLIENT_WS_PATH, CloseCode, Telemetry, VehicleState
 from tests.helpers import FleetWatcher, api_client, poll_until
-from tests.integration.test_hub_bad_input import _close_code, _telemetry, scripted_agent, websocket
+from tests.support.agents import close_code, scripted_agent, telemetry_frame, websocket
 
 Enrol = Callable[[str], str]
 
@@ -30,7 +30,7 @@ def test_live_feed_needs_the_read_permission(
     ).json()["token"]
     for token in (enrol("v1"), audit_only):  # an agent's token; a token without "read"
         with websocket(_feed_url(hub), {"Authorization": f"Bearer {token}"}) as feed:
-            assert _close_code(feed)[0] == CloseCode.FORBIDDEN
+            assert close_code(feed)[0] == CloseCode.FORBIDDEN
 
 
 def test_revoking_a_token_ends_its_live_feed(hub: str, admin_api: httpx.Client) -> None:
@@ -38,7 +38,7 @@ def test_revoking_a_token_ends_its_live_feed(hub: str, admin_api: httpx.Client) 
     with websocket(_feed_url(hub), {"Authorization": f"Bearer {created['token']}"}) as feed:
         assert json.loads(feed.recv(timeout=5))["type"] == "fleet"
         assert admin_api.delete(f"/api/v1/auth/api-tokens/{created['id']}").status_code == 204
-        code, reason = _close_code(feed)
+        code, reason = close_code(feed)
     assert code == CloseCode.UNAUTHORIZED
     assert "revoked" in reason
 
@@ -54,7 +54,7 @@ def test_nan_and_oversized_numbers_are_refused_at_the_edge(
         ):
             agent.send(bad)
             assert json.loads(agent.recv(timeout=5))["code"] in ("bad_frame", "invalid_message")
-        agent.send(_telemetry(2))
+        agent.send(telemetry_frame(2))
         poll_until(  # polling the store; the writer flushes every 0.25 s
             lambda: admin_api.get("/api/v1/health").json()["telemetry_written"] >= 1,
             10,
@@ -68,7 +68,7 @@ def test_a_reconnecting_agent_keeps_its_vehicle_online(
 ) -> None:
     token = enrol("v1")
     with scripted_agent(hub, "v1", token) as first, scripted_agent(hub, "v1", token):
-        assert _close_code(first)[0] == CloseCode.SUPERSEDED
+        assert close_code(first)[0] == CloseCode.SUPERSEDED
         with FleetWatcher(hub, admin_token) as watcher:
             watcher.wait_until(lambda v: "v1" in v, 5, "the fleet snapshot")
             assert watcher.vehicles["v1"]["connected"] is True

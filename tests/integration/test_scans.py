@@ -26,8 +26,9 @@ from protocol.messages import CLIENT_WS_PATH
 from protocol.scans import ScanFrame, split_client_scan_frame
 from simulator.world import default_scene
 from tests.helpers import FleetWatcher, access_token, api_client, poll_until, running_fleet
+from tests.support.hubs import TEST_HUB_ENV
 
-pytestmark = pytest.mark.integration
+pytestmark = [pytest.mark.integration, pytest.mark.slow]
 
 ALTITUDE_M = 3.0
 WORLD = default_scene()
@@ -236,7 +237,7 @@ def test_after_a_30_s_hub_outage_the_scans_in_the_budget_arrive_and_telemetry_is
         fleet.kill("hub")
         time.sleep(OUTAGE_S)  # the outage itself, not a wait for anything
         back = time.time()
-        fleet.start_hub()
+        fleet.start_hub(TEST_HUB_ENV)
         fleet.wait_until_ready()
 
         within = (

@@ -18,19 +18,15 @@ from backend.settings import HubSettings
 from protocol.messages import (
     CommandOutcome,
     CommandResult,
-    Telemetry,
-    VehicleState,
     encode,
 )
 from tests.conftest import hub_settings
 from tests.helpers import FleetWatcher, access_token, api_client, running_hub
-from tests.integration.test_hub_bad_input import scripted_agent
+from tests.support.accounts import PASSWORD, _no_command_reaches, _report_position, _user
+from tests.support.agents import scripted_agent
 
-PASSWORD = "correct horse battery"
 Enrol = Callable[[str], str]
 
-# A 200 m square around the vehicle's home, near ArduPilot's SITL field.
-HOME = (-35.363262, 149.165237)
 FENCE = [
     {"lat": lat, "lon": lon}
     for lat, lon in [
@@ -40,33 +36,6 @@ FENCE = [
         (-35.3623, 149.1641),
     ]
 ]
-
-
-def _user(admin_api: httpx.Client, name: str, role: str) -> str:
-    response = admin_api.post(
-        "/api/v1/users", json={"username": name, "password": PASSWORD, "role": role}
-    )
-    assert response.status_code == 201, response.text
-    return name
-
-
-def _report_position(agent: ClientConnection, seq: int = 0) -> None:
-    state = VehicleState(
-        lat=HOME[0],
-        lon=HOME[1],
-        alt_rel=0.0,
-        home_lat=HOME[0],
-        home_lon=HOME[1],
-        battery_remaining=90.0,
-        gps_fix=3,
-        mode="GUIDED",
-    )
-    agent.send(encode(Telemetry(seq=seq, time=time.time(), state=state)))
-
-
-def _no_command_reaches(agent: ClientConnection) -> None:
-    with pytest.raises(TimeoutError):
-        agent.recv(timeout=0.5)  # nothing may arrive: waiting briefly is the assertion
 
 
 @pytest.fixture

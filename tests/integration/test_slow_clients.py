@@ -16,6 +16,7 @@ import pytest
 
 from gcs.launcher import FleetPlan, LocalFleet, free_port
 from tests.helpers import poll_until
+from tests.support.hubs import TEST_HUB_ENV
 
 pytestmark = pytest.mark.integration
 
@@ -29,7 +30,7 @@ SLOW_POST = (
 def hub_process(tmp_path: Path, **env: str) -> Iterator[LocalFleet]:
     plan = FleetPlan(vehicles=0, port=free_port(), data_dir=tmp_path)
     with LocalFleet(plan) as fleet:
-        fleet.start(hub_env=env)
+        fleet.start(hub_env={**TEST_HUB_ENV, **env})
         fleet.wait_until_ready()
         yield fleet
 

@@ -8,7 +8,7 @@ import httpx
 
 from tests.conftest import ADMIN_PASSWORD, POSTGRES_ADDRESS, hub_settings, scratch_postgres
 from tests.helpers import access_token, api_client, poll_until, running_hub
-from tests.integration.test_hub_bad_input import _telemetry, scripted_agent
+from tests.support.agents import scripted_agent, telemetry_frame
 from tests.tcp_proxy import CuttableProxy
 
 SAMPLES = 200
@@ -32,7 +32,7 @@ def test_writer_holds_samples_while_postgres_is_unreachable(tmp_path: Path) -> N
                 agent_token = api.post("/api/v1/vehicles/v1/agent-tokens").json()["token"]
                 with scripted_agent(base, "v1", agent_token) as agent:
                     for seq in range(SAMPLES // 2):
-                        agent.send(_telemetry(seq))
+                        agent.send(telemetry_frame(seq))
                     poll_until(
                         lambda: _stored(api, "v1") == SAMPLES // 2,
                         30,
@@ -42,7 +42,7 @@ def test_writer_holds_samples_while_postgres_is_unreachable(tmp_path: Path) -> N
 
                     proxy.cut()
                     for seq in range(SAMPLES // 2, SAMPLES):
-                        agent.send(_telemetry(seq))
+                        agent.send(telemetry_frame(seq))
                     health = poll_until(
                         lambda: (h := api.get("/api/v1/health").json())["write_retries"] and h,
                         30,
@@ -77,7 +77,7 @@ def test_stopping_the_hub_stores_everything_it_received(tmp_path: Path) -> None:
             agent_token = api.post("/api/v1/vehicles/v1/agent-tokens").json()["token"]
             with scripted_agent(base, "v1", agent_token) as agent:
                 for seq in range(SAMPLES):
-                    agent.send(_telemetry(seq))
+                    agent.send(telemetry_frame(seq))
                 # Received means taken off the socket and queued for the writer.
                 poll_until(
                     lambda: _received(api) >= SAMPLES,

@@ -25,9 +25,10 @@ from tests.helpers import (
     on_the_ground,
     poll_until,
 )
+from tests.support.hubs import TEST_HUB_ENV
 from tests.survey_shapes import geojson_area
 
-pytestmark = pytest.mark.integration
+pytestmark = [pytest.mark.integration, pytest.mark.slow]
 
 VEHICLES = ["sim_1", "sim_2", "sim_3"]
 SPEEDUP = 10.0
@@ -43,6 +44,7 @@ def fleet(tmp_path_factory: pytest.TempPathFactory) -> Iterator[LocalFleet]:
     with LocalFleet(plan) as local:
         local.start(
             hub_env={
+                **TEST_HUB_ENV,
                 "GCS_SURVEY_LINK_TIMEOUT_S": str(LINK_TIMEOUT_S),
                 "GCS_SURVEY_UPDATE_INTERVAL_S": "0.2",
                 "GCS_COMMANDS_PER_SECOND": "1000",
@@ -222,7 +224,11 @@ def test_a_survey_carries_on_across_a_hub_restart(
     )
     fleet.kill("hub")
     fleet.start_hub(
-        {"GCS_SURVEY_LINK_TIMEOUT_S": str(LINK_TIMEOUT_S), "GCS_COMMANDS_PER_SECOND": "1000"}
+        {
+            **TEST_HUB_ENV,
+            "GCS_SURVEY_LINK_TIMEOUT_S": str(LINK_TIMEOUT_S),
+            "GCS_COMMANDS_PER_SECOND": "1000",
+        }
     )
     # Generous: the new hub opens the store while three simulators run at ten times speed
     # on a shared machine.

@@ -6,7 +6,6 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Iterator
 from datetime import UTC, datetime
-from pathlib import Path
 
 import httpx
 import pytest
@@ -14,16 +13,20 @@ import pytest
 from protocol.messages import Telemetry, VehicleState, encode
 from tests.conftest import ADMIN_PASSWORD, hub_settings
 from tests.helpers import access_token, api_client, poll_until, running_hub
-from tests.integration.test_hub_bad_input import scripted_agent
+from tests.support.agents import scripted_agent
 
 # Finer than a microsecond, as a clock's float seconds are.
 TIMES = [1_700_000_000.1234567, 1_700_000_000.2234567, 1_700_000_000.3234567]
 
 
-@pytest.fixture
-def stored(database_url: str, tmp_path: Path) -> Iterator[httpx.Client]:
-    """A hub on the given database holding three samples of vehicle v1 at ``TIMES``."""
-    with running_hub(hub_settings(tmp_path, database_url=database_url)) as base:
+@pytest.fixture(scope="module")
+def stored(
+    module_database_url: str, tmp_path_factory: pytest.TempPathFactory
+) -> Iterator[httpx.Client]:
+    """A hub on the given database holding three samples of vehicle v1 at ``TIMES``; one
+    per module and database, as the tests only read it."""
+    data_dir = tmp_path_factory.mktemp("hub")
+    with running_hub(hub_settings(data_dir, database_url=module_database_url)) as base:
         token = access_token(base, "admin", ADMIN_PASSWORD)
         with api_client(base, token) as api:
             agent_token = api.post("/api/v1/vehicles/v1/agent-tokens").json()["token"]

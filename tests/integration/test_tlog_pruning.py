@@ -12,8 +12,8 @@ import pytest
 
 from tests.conftest import ADMIN_PASSWORD, hub_settings
 from tests.helpers import access_token, api_client, poll_until_async, running_hub
-from tests.integration.test_agent_tokens import OPERATOR_TOKEN, _heartbeat, _recorded_flight
-from tests.integration.test_hub_bad_input import scripted_agent
+from tests.support.agents import scripted_agent
+from tests.support.flights import OPERATOR_TOKEN, _heartbeat, _recorded_flight
 from vehicle_agents.tlog_pruning import DAY_S, UPLOADED_DIR, TlogRetention
 from vehicle_agents.tlog_uploads import TlogUploader
 

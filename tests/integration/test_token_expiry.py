@@ -14,7 +14,7 @@ from websockets.sync.client import ClientConnection, connect
 from protocol.messages import CLIENT_WS_PATH, CloseCode
 from tests.conftest import ADMIN_PASSWORD, hub_settings
 from tests.helpers import access_token, running_hub
-from tests.integration.test_hub_bad_input import _telemetry, scripted_agent
+from tests.support.agents import scripted_agent, telemetry_frame
 from tests.viz_wire import SUBPROTOCOL
 
 TOKEN_TTL_S = 3.0
@@ -44,7 +44,7 @@ def test_a_dashboard_socket_closes_with_4401_when_its_token_expires(tmp_path: Pa
                 nonlocal sent
                 give_up = time.monotonic() + TOKEN_TTL_S + 5
                 while time.monotonic() < give_up:
-                    agent.send(_telemetry(sent))
+                    agent.send(telemetry_frame(sent))
                     sent += 1
                     feed.recv(timeout=TOKEN_TTL_S + 5)
 
@@ -60,7 +60,9 @@ def test_a_dashboard_socket_closes_with_4401_when_its_token_expires(tmp_path: Pa
 
 def test_the_3d_views_socket_closes_with_4401_when_its_token_expires(tmp_path: Path) -> None:
     """The other socket a user's token opens: the relay to the 3D scene under /viz/."""
-    with running_hub(hub_settings(tmp_path, access_token_ttl_s=TOKEN_TTL_S)) as base:
+    with running_hub(
+        hub_settings(tmp_path, access_token_ttl_s=TOKEN_TTL_S, viz_enabled=True)
+    ) as base:
         token = access_token(base, "admin", ADMIN_PASSWORD)
         opened = time.time()
         url = base.replace("http://", "ws://") + "/viz"

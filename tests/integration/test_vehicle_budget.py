@@ -12,7 +12,7 @@ import backend.hub
 from backend.auth.rate_limit import Limit, RateLimiter
 from tests.conftest import ADMIN_PASSWORD, hub_settings
 from tests.helpers import access_token, api_client, running_hub
-from tests.integration.test_hub_bad_input import scripted_agent
+from tests.support.agents import scripted_agent
 
 VEHICLE = "b1"
 Route = tuple[str, str, dict[str, object] | None]

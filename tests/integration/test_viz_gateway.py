@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import socket
+from collections.abc import Iterator
+from pathlib import Path
 
 import httpx
 import pytest
@@ -10,11 +12,18 @@ from websockets.exceptions import ConnectionClosed
 from websockets.sync.client import connect
 
 from protocol.messages import CloseCode
-from tests.conftest import ADMIN_PASSWORD
-from tests.helpers import access_token
+from tests.conftest import ADMIN_PASSWORD, hub_settings
+from tests.helpers import access_token, running_hub
 from tests.viz_wire import SUBPROTOCOL, scene_messages, scene_socket
 
 PASSWORD = "correct horse battery staple"
+
+
+@pytest.fixture
+def hub(tmp_path: Path) -> Iterator[str]:
+    """The suite's hub with its 3D view on (`hub_settings` leaves it off)."""
+    with running_hub(hub_settings(tmp_path, viz_enabled=True)) as base_url:
+        yield base_url
 
 
 def _viz_ws(hub: str) -> str:

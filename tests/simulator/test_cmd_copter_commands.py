@@ -15,9 +15,8 @@ from simulator import server as server_module
 from simulator.config import ListenAddress, SimulatorConfig
 from simulator.mavconst import FORCE_REBOOT_MAGIC, MavCmd, MavFrame, ModeFlag
 from simulator.mission import MissionItem
-from tests.simulator.test_sim_commands import Vehicle, ack_of, kinds
-from tests.simulator.test_sim_copter import airborne, run_until, texts
-from tests.simulator.test_sim_server import SYSID, mavlink_client, serving, wait_for
+from tests.support.copters import Vehicle, ack_of, airborne, kinds, run_until, texts
+from tests.support.simulators import SYSID, mavlink_client, serving, wait_for
 
 _FRAME = LocalFrame(DEFAULT_HOME.lat, DEFAULT_HOME.lon, DEFAULT_HOME.alt)
 NORTH = _FRAME.to_geo(0.0, 1.0)[0] - DEFAULT_HOME.lat  # degrees of latitude per metre

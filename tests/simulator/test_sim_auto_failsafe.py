@@ -11,7 +11,7 @@ from simulator.mavconst import MavCmd, MavFrame, MavState, MissionState
 from simulator.mission import MissionItem
 from simulator.param_table import SetOutcome
 from simulator.vehicle import ItemReached, PhotoTaken
-from tests.simulator.test_sim_copter import airborne, run_until, texts
+from tests.support.copters import airborne, run_until, texts
 
 REL = MavFrame.GLOBAL_RELATIVE_ALT_INT
 

@@ -9,32 +9,7 @@ import pytest
 from simulator import DEFAULT_HOME, DT, Copter, CopterMode, CopterParams, MavResult
 from simulator.mavconst import LandedState, MavState, ModeFlag, Severity
 from simulator.vehicle import EKF_GPS_DELAY_S
-
-
-def texts(copter: Copter) -> list[str]:
-    return [text.text for text in copter.drain_texts()]
-
-
-def run_until(copter: Copter, condition: object, limit_s: float, step_s: float = 0.1) -> float:
-    """Advance until ``condition(copter)`` holds; returns the sim time it took."""
-    assert callable(condition)
-    start = copter.time_s
-    while not condition(copter):
-        if copter.time_s - start > limit_s:
-            raise AssertionError(f"condition not met within {limit_s} s of sim time")
-        copter.advance(step_s)
-    return copter.time_s - start
-
-
-def airborne(altitude: float = 10.0) -> Copter:
-    """A copter hovering at ``altitude`` m above home in GUIDED."""
-    copter = Copter(DEFAULT_HOME)
-    assert copter.set_mode(CopterMode.GUIDED) is MavResult.ACCEPTED
-    assert copter.arm() is MavResult.ACCEPTED
-    assert copter.takeoff(altitude) is MavResult.ACCEPTED
-    run_until(copter, lambda c: abs(c.body.alt - altitude) < 0.05 and abs(c.body.vd) < 0.05, 60)
-    copter.drain_texts()
-    return copter
+from tests.support.copters import airborne, run_until, texts
 
 
 def test_boots_disarmed_on_the_ground_in_stabilize() -> None:

@@ -18,7 +18,7 @@ from simulator.personality import Px4Personality
 from simulator.telemetry import TelemetryBuilder
 from simulator.vehicle import Vehicle
 from simulator.vehicles import build_vehicle
-from tests.simulator.test_sim_copter import airborne, run_until
+from tests.support.copters import airborne, run_until
 
 
 def in_loiter() -> Copter:

@@ -9,7 +9,7 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from simulator import ListenAddress, SimulatorConfig
 from simulator.param_table import PARAM_DEFS
-from tests.simulator.test_sim_server import SYSID, mavlink_client, serving, wait_for
+from tests.support.simulators import SYSID, mavlink_client, serving, wait_for
 
 
 def _config() -> SimulatorConfig:

@@ -24,7 +24,7 @@ from simulator.telemetry import (
     SecondGps,
     TelemetryBuilder,
 )
-from tests.simulator.test_sim_server import mavlink_client, serving, wait_for
+from tests.support.simulators import mavlink_client, serving, wait_for
 
 SYSID = 7  # the system id tests.simulator.test_sim_server's helpers expect
 

@@ -31,8 +31,8 @@ from simulator.personality import Px4Personality
 from simulator.rover import Rover
 from simulator.telemetry import TelemetryBuilder
 from simulator.vehicle import ItemReached
-from tests.simulator.test_sim_copter import run_until, texts
-from tests.simulator.test_sim_server import command, mavlink_client, simulator_process, wait_for
+from tests.support.copters import run_until, texts
+from tests.support.simulators import command, mavlink_client, simulator_process, wait_for
 from vehicle_agents import mavlink_dialect  # noqa: F401  (decodes AVAILABLE_MODES)
 
 # Degrees per metre north and east of home.

@@ -17,7 +17,7 @@ from protocol.scans import FLAG_REPLAYED, decode_scan, encode_scan
 from simulator.lidar import Lidar, LidarSpec, Pose
 from simulator.world import default_scene
 from simulator.ydlidar_wire import encode_beams
-from tests.unit.test_scan_frame import _frame
+from tests.support.scans import _frame
 from vehicle_agents.sensors.fcu_time import FcuClock, PoseHistory, ask_timesync
 from vehicle_agents.sensors.lidar.ydlidar import YdlidarParser
 from vehicle_agents.sensors.relay import DiskBacklog, ScanOutbox

@@ -10,7 +10,7 @@ from backend.scans.service import ScanRejected, ScanService
 from backend.storage.database import make_engine
 from backend.storage.scans import ScanRepository
 from protocol.scans import encode_scan
-from tests.unit.test_scan_frame import _frame
+from tests.support.scans import _frame
 
 NOW = 1_760_000_000.0
 

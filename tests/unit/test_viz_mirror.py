@@ -29,7 +29,7 @@ from common.geodesy import GeoPoint, LocalFrame
 from protocol.scans import NO_RETURN, ScanFrame, ScanPose, encode_scan
 from simulator.lidar import Lidar, LidarSpec, Pose
 from simulator.world import default_scene
-from tests.unit.test_viz_scene import HOME, _node, _summary
+from tests.support.scenes import HOME, _node, _summary
 
 INTERVAL_S = 0.1
 WORLD = default_scene()

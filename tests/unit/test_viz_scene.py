@@ -3,46 +3,18 @@
 from __future__ import annotations
 
 import math
-from typing import Any
 
 import numpy as np
 import pytest
-import viser
 
 from backend.viz3d.colours import rgb, vehicle_colour
 from backend.viz3d.frame import SceneFrame, attitude_wxyz, reframe
 from backend.viz3d.scene import SCANS, FleetScene
 from backend.viz3d.server import VizServer
 from common.geodesy import LocalFrame
-from protocol.messages import MissionItem, VehicleState, VehicleSummary
+from protocol.messages import MissionItem
+from tests.support.scenes import HOME, _node, _summary
 from tests.viz_wire import scene_messages, scene_socket
-
-HOME = (47.397742, 8.545594, 488.0)
-
-
-def _summary(vehicle: str, t: float, connected: bool = True, **state: Any) -> VehicleSummary:
-    values: dict[str, Any] = {
-        "home_lat": HOME[0],
-        "home_lon": HOME[1],
-        "home_alt_msl": HOME[2],
-        "mode": "GUIDED",
-    }
-    values.update(state)
-    # model_construct: the tests feed what a faulty source might (NaN), as the hub's
-    # registry would hold it; the scene must cope without the wire's validation.
-    return VehicleSummary(
-        id=vehicle,
-        autopilot="ardupilot",
-        vehicle_type="quadrotor",
-        modes=["GUIDED"],
-        connected=connected,
-        last_seen=t,
-        state=VehicleState.model_construct(**{**VehicleState().model_dump(), **values}),
-    )
-
-
-def _node(server: viser.ViserServer, name: str) -> Any:
-    return server.scene._handle_from_node_name.get(name)
 
 
 @pytest.fixture

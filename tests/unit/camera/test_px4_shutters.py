@@ -13,13 +13,7 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from simulator.vehicle import PhotoTaken
 from tests.helpers import poll_until_async
-from tests.unit.camera.test_camera_trigger import (
-    BOOT_EPOCH,
-    Clock,
-    _feed_streams,
-    photo_server,
-    trigger_for,
-)
+from tests.support.cameras import BOOT_EPOCH, Clock, _feed_streams, photo_server, trigger_for
 from vehicle_agents.camera.queue import QueuedPhoto
 from vehicle_agents.camera.trigger import SHOT_QUEUE, CameraTrigger
 from vehicle_agents.shutters import ShutterMatcher

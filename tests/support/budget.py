@@ -1,0 +1,103 @@
+"""The suite's slow-test budget (README, "Slow tests"), a pytest plugin that the root
+conftest loads.
+
+A test whose setup and call together take longer than `budget_s()` fails unless it is
+marked ``@pytest.mark.slow`` (on the function, or ``pytestmark`` for a module) and the
+README's list of slow tests names it (its node id, or its module for a module-wide mark)
+with the reason. `tests/unit/test_slow_list.py` checks that list against the marks.
+"""
+
+from __future__ import annotations
+
+import ast
+import os
+import re
+from collections.abc import Generator
+from pathlib import Path
+
+import pytest
+
+BUDGET_S = 20.0
+# A machine much slower or busier than the 2-core reference can widen the budget; CI
+# keeps the default.
+BUDGET_VARIABLE = "GCS_TEST_BUDGET_S"
+REPO = Path(__file__).resolve().parents[2]
+README = REPO / "README.md"
+SLOW_LIST_HEADING = "### Slow tests"
+
+_SETUP_S = pytest.StashKey[float]()
+
+
+def budget_s() -> float:
+    return float(os.environ.get(BUDGET_VARIABLE, BUDGET_S))
+
+
+@pytest.hookimpl(wrapper=True)
+def pytest_runtest_makereport(
+    item: pytest.Item, call: pytest.CallInfo[None]
+) -> Generator[None, pytest.TestReport, pytest.TestReport]:
+    report = yield
+    record(item, report)
+    return report
+
+
+def record(item: pytest.Item, report: pytest.TestReport) -> None:
+    """Each phase's report: a passed call over the budget, without the ``slow`` mark,
+    becomes a failure that says what to do."""
+    if report.when == "setup":
+        item.stash[_SETUP_S] = report.duration
+        return
+    if report.when != "call" or not report.passed or item.get_closest_marker("slow"):
+        return
+    setup_s = item.stash.get(_SETUP_S, 0.0)
+    total_s = setup_s + report.duration
+    if total_s <= budget_s():
+        return
+    report.outcome = "failed"
+    report.longrepr = (
+        f"{item.nodeid} took {total_s:.1f} s (setup {setup_s:.1f} s, call "
+        f"{report.duration:.1f} s), over the suite's {budget_s():g} s budget for a test "
+        "that is not marked slow. Make it faster (tests/README.md), or mark it "
+        "@pytest.mark.slow and add it with its reason to the README's list of slow tests."
+    )
+
+
+def marked_slow(tests_dir: Path = REPO / "tests") -> set[str]:
+    """What carries the ``slow`` mark in the source: a module's path (``pytestmark``) or
+    a test's node id without parameters (``@pytest.mark.slow`` on the function)."""
+    found: set[str] = set()
+    for path in sorted(tests_dir.rglob("test_*.py")):
+        module = path.relative_to(REPO).as_posix()
+        tree = ast.parse(path.read_text(), str(path))
+        for node in tree.body:
+            if isinstance(node, ast.Assign) and any(
+                isinstance(target, ast.Name) and target.id == "pytestmark"
+                for target in node.targets
+            ):
+                if _names_slow(node.value):
+                    found.add(module)
+            elif isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef) and any(
+                _names_slow(decorator) for decorator in node.decorator_list
+            ):
+                found.add(f"{module}::{node.name}")
+    return found
+
+
+def _names_slow(node: ast.expr) -> bool:
+    """``pytest.mark.slow`` or ``pytest.mark.slow(...)`` anywhere in the expression."""
+    return any(
+        isinstance(inner, ast.Attribute)
+        and inner.attr == "slow"
+        and isinstance(inner.value, ast.Attribute)
+        and inner.value.attr == "mark"
+        for inner in ast.walk(node)
+    )
+
+
+def listed_slow(readme: Path = README) -> dict[str, str]:
+    """The README's list of slow tests: each row's module or node id and its reason."""
+    text = readme.read_text()
+    start = text.index(SLOW_LIST_HEADING)
+    section = text[start : text.find("\n#", start + len(SLOW_LIST_HEADING))]
+    rows = re.findall(r"^\| `(tests/[^`]+)` \| (.+?) \|$", section, re.MULTILINE)
+    return dict(rows)

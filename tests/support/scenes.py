@@ -1,0 +1,36 @@
+"""The 3D scene's nodes as a test reads them."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import viser
+
+from protocol.messages import VehicleState, VehicleSummary
+
+HOME = (47.397742, 8.545594, 488.0)
+
+
+def _summary(vehicle: str, t: float, connected: bool = True, **state: Any) -> VehicleSummary:
+    values: dict[str, Any] = {
+        "home_lat": HOME[0],
+        "home_lon": HOME[1],
+        "home_alt_msl": HOME[2],
+        "mode": "GUIDED",
+    }
+    values.update(state)
+    # model_construct: the tests feed what a faulty source might (NaN), as the hub's
+    # registry would hold it; the scene must cope without the wire's validation.
+    return VehicleSummary(
+        id=vehicle,
+        autopilot="ardupilot",
+        vehicle_type="quadrotor",
+        modes=["GUIDED"],
+        connected=connected,
+        last_seen=t,
+        state=VehicleState.model_construct(**{**VehicleState().model_dump(), **values}),
+    )
+
+
+def _node(server: viser.ViserServer, name: str) -> Any:
+    return server.scene._handle_from_node_name.get(name)

@@ -1,0 +1,46 @@
+"""The slow-test budget: the README's list of slow tests is the tests marked slow, each
+with a reason, and an unmarked test over the budget fails."""
+
+from __future__ import annotations
+
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+from tests.support.budget import BUDGET_VARIABLE, REPO, listed_slow, marked_slow
+
+
+def test_the_readme_lists_exactly_the_tests_marked_slow_each_with_a_reason() -> None:
+    listed = listed_slow()
+    assert set(listed) == marked_slow(), (
+        "README's Slow tests and the @pytest.mark.slow marks differ: "
+        f"listed but not marked {sorted(set(listed) - marked_slow())}, "
+        f"marked but not listed {sorted(marked_slow() - set(listed))}"
+    )
+    assert all(reason.strip() for reason in listed.values())
+
+
+def test_an_unmarked_test_over_the_budget_fails_and_a_marked_one_passes(tmp_path: Path) -> None:
+    (tmp_path / "test_timed.py").write_text(
+        "import time\n"
+        "import pytest\n"
+        "def test_quick():\n    pass\n"
+        "def test_over():\n    time.sleep(2.0)\n"
+        "@pytest.mark.slow\n"
+        "def test_over_but_marked():\n    time.sleep(2.0)\n"
+    )
+    result = subprocess.run(
+        [
+            *(sys.executable, "-m", "pytest", "-p", "tests.support.budget"),
+            *("-p", "no:cacheprovider", "-o", "markers=slow: slow", "-q", str(tmp_path)),
+        ],
+        capture_output=True,
+        text=True,
+        cwd=REPO,
+        env={"PYTHONPATH": str(REPO), BUDGET_VARIABLE: "1", "PATH": "/usr/bin:/bin"},
+        timeout=120,
+    )
+    assert "1 failed, 2 passed" in result.stdout, result.stdout + result.stderr
+    assert re.search(r"test_over took [0-9.]+ s \(setup [0-9.]+ s, call [0-9.]+ s\)", result.stdout)
+    assert "over the suite's 1 s budget for a test that is not marked slow" in result.stdout

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import pytest
 
-from tests.simulator.test_sim_server import free_port, simulator_process
+from tests.support.simulators import free_port, simulator_process
 from vehicle_agents.health import STALE_AFTER_S, HealthFile, check
 
 ROOT = Path(__file__).resolve().parents[2]

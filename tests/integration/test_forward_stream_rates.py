@@ -29,7 +29,7 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from gcs.launcher import free_port
 from simulator import ListenAddress, SimulatorConfig
-from tests.simulator.test_sim_server import serving
+from tests.support.simulators import serving
 from vehicle_agents.fcu_link import FcuLink, MavMessage
 from vehicle_agents.forwarding import MavlinkForwarder
 from vehicle_agents.stream_watch import RateWatchSettings

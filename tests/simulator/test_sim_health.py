@@ -9,7 +9,7 @@ import sys
 
 from simulator import ListenAddress, SimulatorConfig
 from simulator.health import heartbeat_from
-from tests.simulator.test_sim_server import REPO_ROOT, SYSID, free_port, serving
+from tests.support.simulators import REPO_ROOT, SYSID, free_port, serving
 
 
 def test_a_ticking_simulator_is_healthy() -> None:

@@ -94,6 +94,7 @@ class FolderCamera:
         self._baseline_taken = False
         self._changed = asyncio.Event()
         self._warned_truncated = False
+        self._warned_missing = False
         self.unpaired = 0
 
     # -- watching --------------------------------------------------------------------------
@@ -108,16 +109,26 @@ class FolderCamera:
     def poll(self) -> None:
         self.update(self.snapshot())
 
-    def snapshot(self) -> dict[Path, int | None]:
-        """The JPEGs under the folder and their sizes (None: gone between list and stat)."""
+    def snapshot(self) -> dict[Path, int | None] | None:
+        """The JPEGs under the folder and their sizes (None: gone between list and stat);
+        None when the folder itself cannot be listed (a card not mounted yet)."""
+        if not self.folder.is_dir():
+            return None
         return {path: _size(path) for path in self._listing()}
 
-    def update(self, sizes: dict[Path, int | None]) -> None:
+    def update(self, sizes: dict[Path, int | None] | None) -> None:
         """One listing: new whole files become ready, in the order they appeared; ready
         files no trigger can claim any more are told as unpaired."""
         now = self._monotonic()
+        if sizes is None:
+            if not self._warned_missing:
+                self._warned_missing = True
+                log.warning("camera folder %s is not there (yet): waiting for it", self.folder)
+            return
         present = set(sizes)
         if not self._baseline_taken:
+            # Taken when the folder is first there: a card mounted after the agent started
+            # brings its earlier flights' files, which are no trigger's either.
             self._known = present  # the card's earlier files: never this flight's photos
             self._baseline_taken = True
             log.info("camera folder %s: %d files there before the start", self.folder, len(present))

@@ -22,8 +22,10 @@ POSE = PhotoPose(lat=1.0, lon=2.0, alt_msl=3.0, alt_rel=4.0, roll=0.0, pitch=0.0
 
 
 class Folder:
-    def __init__(self, path: Path) -> None:
+    def __init__(self, path: Path, *, mounted: bool = True) -> None:
         self.path = path
+        if mounted:
+            path.mkdir(parents=True, exist_ok=True)
         self.clock = Clock()
         self.said: list[str] = []
         self.camera = FolderCamera(
@@ -70,6 +72,15 @@ def test_new_files_go_to_the_triggers_in_order_and_the_cards_old_files_to_none(
     folder.polls()
     assert folder.capture(first) == b"\xff\xd8 first"
     assert folder.capture(second) == b"\xff\xd8 second"
+    assert folder.said == []
+
+
+def test_a_card_mounted_later_brings_no_old_files(tmp_path: Path) -> None:
+    folder = Folder(tmp_path / "not-mounted-yet", mounted=False)
+    folder.polls(1)
+    folder.write("DSC00001.JPG", b"an earlier flight's")  # the card appears, with its files
+    folder.polls(3)
+    assert not folder.camera._ready
     assert folder.said == []
 
 

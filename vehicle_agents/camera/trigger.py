@@ -10,6 +10,10 @@ autopilot fire the camera, and it says so at the shutter, in its own way:
   request), and its camera_feedback module CAMERA_IMAGE_CAPTURED, with the same number
   (``image_index``), the position and the attitude (a quaternion) at the shutter.
 
+With a MAVLink camera as the source (``--camera mavlink``) the camera itself tells of
+each photo, with CAMERA_IMAGE_CAPTURED from its own component and the file's address:
+that message is the shutter, and the autopilot's make no photo.
+
 Each shutter is one photo, whichever of its messages comes first (`ShutterMatcher`
 matches PX4's two by their index): the source takes (or fetches) it, the pose at its
 exposure is found, and the JPEG is geotagged and queued for upload. A trigger that makes

@@ -57,3 +57,23 @@ class PhotoMeta(BaseModel):
     size_bytes: int = Field(gt=0, le=MAX_PHOTO_BYTES)
     pose: PhotoPose
     camera: CameraIntrinsics
+
+
+def parse_camera_model(text: str) -> CameraIntrinsics:
+    """``sensor_w,sensor_h,width_px,height_px,focal``: millimetres and pixels."""
+    parts = text.split(",")
+    try:
+        if len(parts) != 5:
+            raise ValueError
+        return CameraIntrinsics(
+            sensor_width_mm=float(parts[0]),
+            sensor_height_mm=float(parts[1]),
+            image_width_px=int(parts[2]),
+            image_height_px=int(parts[3]),
+            focal_length_mm=float(parts[4]),
+        )
+    except ValueError:
+        raise ValueError(
+            "expected sensor width,height (mm),image width,height (px),focal length (mm), "
+            f"e.g. 13.2,8.8,5472,3648,8.8; got {text!r}"
+        ) from None

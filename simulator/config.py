@@ -11,6 +11,7 @@ from pathlib import Path
 from typing import Literal
 
 from common.geodesy import GeoPoint
+from protocol.photos import CameraIntrinsics, parse_camera_model
 from simulator.clock import MAX_SPEEDUP
 from simulator.lidar_wire import LIDAR_FORMATS
 
@@ -75,6 +76,13 @@ class SimulatorConfig:
     scene: Path | None = None  # obstacles (simulator/world.py); None: the default yard
     # The camera's photos served over HTTP on this TCP address; None: CAMERA_FEEDBACK only.
     camera: ListenAddress | None = None
+    # The camera as a MAVLink camera component (CAMERA_IMAGE_CAPTURED with the photo
+    # server's address of each shot), beside the autopilot's own camera messages.
+    camera_component: bool = False
+    # The camera writes each shot's rendered photo into this folder; None: it does not.
+    camera_folder: Path | None = None
+    # The camera the component's and the folder's photos are rendered with.
+    camera_model: CameraIntrinsics | None = None
     # Where the camera's synthetic ground is laid (its origin and elevation); None: home.
     # Simulators of one fleet share it, so that their photos show one world.
     ground: GeoPoint | None = None
@@ -97,10 +105,27 @@ class SimulatorConfig:
             raise ValueError(
                 f"LIDAR format must be one of {', '.join(LIDAR_FORMATS)}, got {self.lidar_format}"
             )
+        if self.camera_component and self.camera is None:
+            raise ValueError(
+                "a MAVLink camera component gives its photos' HTTP address: it needs the "
+                "photo server (--camera tcp:HOST:PORT)"
+            )
+        if (self.camera_component or self.camera_folder is not None) and self.camera_model is None:
+            raise ValueError(
+                "the camera component's and the camera folder's photos are rendered with "
+                "--camera-model SW_MM,SH_MM,W_PX,H_PX,F_MM"
+            )
         if not 5.0 <= self.lidar_rate_hz <= 12.0:
             raise ValueError(f"LIDAR rate must be 5..12 Hz, got {self.lidar_rate_hz}")
         if self.gps2_fix is not None and not 0 <= self.gps2_fix <= 8:
             raise ValueError(f"GPS2 fix type must be a GPS_FIX_TYPE, 0..8, got {self.gps2_fix}")
+
+
+def _camera_model(text: str) -> CameraIntrinsics:
+    try:
+        return parse_camera_model(text)
+    except ValueError as error:
+        raise argparse.ArgumentTypeError(str(error)) from None
 
 
 def _listen(text: str) -> ListenAddress:
@@ -266,6 +291,29 @@ def build_parser() -> argparse.ArgumentParser:
         "CAMERA_FEEDBACK only, no images)",
     )
     parser.add_argument(
+        "--camera-component",
+        action="store_true",
+        help="the camera is also a MAVLink camera component (component id 100, heartbeats of "
+        "MAV_TYPE_CAMERA): at each shutter it sends CAMERA_IMAGE_CAPTURED with the photo "
+        "server's address of the shot (needs --camera and --camera-model)",
+    )
+    parser.add_argument(
+        "--camera-folder",
+        type=Path,
+        default=None,
+        metavar="DIR",
+        help="the camera writes each shot's rendered photo into DIR (DSC00001.JPG, ...), as a "
+        "camera's SD card fills (needs --camera-model)",
+    )
+    parser.add_argument(
+        "--camera-model",
+        type=_camera_model,
+        default=None,
+        metavar="SW_MM,SH_MM,W_PX,H_PX,F_MM",
+        help="the camera the component's and the folder's photos are rendered with: sensor "
+        "width,height (mm), image width,height (px), focal length (mm)",
+    )
+    parser.add_argument(
         "--ground",
         type=_home,
         default=None,
@@ -320,6 +368,9 @@ def parse_args(argv: Sequence[str] | None = None) -> SimulatorConfig:
             lidar_format=args.lidar_format,
             scene=args.scene,
             camera=args.camera,
+            camera_component=args.camera_component,
+            camera_folder=args.camera_folder,
+            camera_model=args.camera_model,
             ground=args.ground,
             params=tuple(args.param),
         )

@@ -34,12 +34,14 @@ from simulator.vehicle import ItemReached, PhotoTaken, Vehicle
 from simulator.vehicles import REBOOT_SILENCE_S, build_vehicle
 
 if TYPE_CHECKING:
+    from simulator.camera_outputs import CameraComponent, FolderCamera
     from simulator.lidar_stream import LidarStream
     from simulator.photo_server import PhotoServer
 
 log = logging.getLogger(__name__)
 
 COMPONENT_ID = 1  # MAV_COMP_ID_AUTOPILOT1
+CAMERA_COMPONENT_ID = mavlink2.MAV_COMP_ID_CAMERA  # a MAVLink camera (--camera-component)
 TICK_S = 0.01  # wall seconds between physics catch-ups and stream checks
 MAX_PENDING_BYTES = 256 * 1024  # a client this far behind loses messages, not memory
 READ_SIZE = 4096
@@ -52,7 +54,10 @@ class Link(ABC):
         self.name = name
         self._parser: Any = mavlink2.MAVLink(None, srcSystem=system_id, srcComponent=COMPONENT_ID)
         self._parser.robust_parsing = True
-        self._encoder: Any = mavlink2.MAVLink(None, srcSystem=system_id, srcComponent=COMPONENT_ID)
+        self._system_id = system_id
+        # One encoder (sequence numbers) per component that speaks on this link: the
+        # autopilot, and the camera where it is a MAVLink camera component.
+        self._encoders: dict[int, Any] = {}
         self.streams = StreamSchedule(DEFAULT_RATES_HZ, now)
         self.bad_frames = 0
 
@@ -67,9 +72,13 @@ class Link(ABC):
         self.bad_frames += len(messages) - len(good)
         return good
 
-    def send(self, message: MavMessage) -> None:
-        frame: bytes = message.pack(self._encoder)
-        self._encoder.seq = (self._encoder.seq + 1) % 256
+    def send(self, message: MavMessage, component: int = COMPONENT_ID) -> None:
+        encoder = self._encoders.get(component)
+        if encoder is None:
+            encoder = mavlink2.MAVLink(None, srcSystem=self._system_id, srcComponent=component)
+            self._encoders[component] = encoder
+        frame: bytes = message.pack(encoder)
+        encoder.seq = (encoder.seq + 1) % 256
         self._write(frame)
 
     @abstractmethod
@@ -165,6 +174,14 @@ class SimulatorServer:
         self.lidar: LidarStream | None = None
         self.lidar_address: ListenAddress | None = None
         self.photos: PhotoServer | None = None
+        self.camera_component: CameraComponent | None = None
+        self.camera_folder: FolderCamera | None = None
+        self._renderer: Callable[..., bytes] | None = None
+        self._next_camera_heartbeat = 0.0
+        # Shots for the camera folder, written one after another (a camera's card
+        # fills in order) by one task.
+        self._folder_shots: asyncio.Queue[PhotoTaken] = asyncio.Queue()
+        self._folder_writer: asyncio.Task[None] | None = None
 
     # -- lifecycle -------------------------------------------------------------
 
@@ -196,14 +213,31 @@ class SimulatorServer:
                 wire=self.config.lidar_format,
             )
             self.lidar_address = await self.lidar.start()
-        if self.config.camera is not None:
+        if self.config.camera is not None or self.config.camera_folder is not None:
             # numpy and OpenCV are imported only by a simulator that renders photos
             from simulator.photo_server import PhotoServer, nadir_renderer
 
             ground = self.config.ground or self.config.home
             render = await asyncio.to_thread(nadir_renderer, ground)  # the texture: a second
-            self.photos = PhotoServer(self.config.camera, render, self.telemetry.boot_epoch_s)
-            await self.photos.start()
+            self._renderer = render
+            if self.config.camera is not None:
+                self.photos = PhotoServer(self.config.camera, render, self.telemetry.boot_epoch_s)
+                photos_at = await self.photos.start()
+                if self.config.camera_component:
+                    from simulator.camera_outputs import CameraComponent
+
+                    assert self.config.camera_model is not None  # SimulatorConfig checks
+                    self.camera_component = CameraComponent(photos_at, self.config.camera_model)
+            if self.config.camera_folder is not None:
+                from simulator.camera_outputs import FolderCamera
+
+                assert self.config.camera_model is not None
+                self.camera_folder = FolderCamera(
+                    self.config.camera_folder, self.config.camera_model
+                )
+                self._folder_writer = asyncio.create_task(
+                    self._write_to_folder(), name="simulator-camera-folder"
+                )
         self._ticker = asyncio.create_task(self._tick_forever(), name="simulator-tick")
         log.info(
             "simulator sysid=%d listening on %s speedup=%g",
@@ -226,6 +260,11 @@ class SimulatorServer:
             await self.lidar.stop()
         if self.photos is not None:
             await self.photos.stop()
+        if self._folder_writer is not None:
+            self._folder_writer.cancel()
+            with contextlib.suppress(asyncio.CancelledError):
+                await self._folder_writer
+            self._folder_writer = None
         for link in list(self.links):
             link.close()
         if self._client_tasks:
@@ -264,6 +303,9 @@ class SimulatorServer:
         if now < self._silent_until:
             return
         self._publish_changes(now)
+        if self.camera_component is not None and now >= self._next_camera_heartbeat:
+            self._next_camera_heartbeat = now + 1.0  # a MAVLink component's 1 Hz
+            self._broadcast(self.camera_component.heartbeat(), CAMERA_COMPONENT_ID)
         built: dict[int, MavMessage] = {}
         for link in list(self.links):
             for msg_id in link.streams.due(now):
@@ -294,20 +336,50 @@ class SimulatorServer:
                 self._broadcast(self.telemetry.current_mode())  # PX4: on each change
 
     def _photo_taken(self, photo: PhotoTaken) -> None:
-        """The camera fired: told as the autopilot tells of it (see `personality`)."""
-        if not self.telemetry.sends_camera_trigger:
-            if self.photos is not None:  # before the feedback: the agent fetches on it
-                self.photos.taken(photo)
-            self._broadcast(self.telemetry.camera_feedback(photo))
-            return
-        photo = replace(photo, index=photo.index - 1)  # PX4's sequence starts at 0
-        if self.photos is not None:
+        """The camera fired: told as the autopilot tells of it (see `personality`), and
+        as the camera itself does where it is a component or fills a folder."""
+        px4 = self.telemetry.sends_camera_trigger
+        if px4:
+            photo = replace(photo, index=photo.index - 1)  # PX4's sequence starts at 0
+        if self.photos is not None:  # before the feedback: the agent fetches on it
             self.photos.taken(photo)
-        trigger = self.telemetry.camera_trigger(photo)
-        for link in list(self.links):
-            if link.streams.interval(MsgId.CAMERA_TRIGGER) is not None:
-                link.send(trigger)
-        self._broadcast(self.telemetry.camera_image_captured(photo))
+        if not px4:
+            self._broadcast(self.telemetry.camera_feedback(photo))
+        else:
+            trigger = self.telemetry.camera_trigger(photo)
+            for link in list(self.links):
+                if link.streams.interval(MsgId.CAMERA_TRIGGER) is not None:
+                    link.send(trigger)
+            self._broadcast(self.telemetry.camera_image_captured(photo))
+        if self.camera_component is not None:
+            from simulator.photo_server import pose_of
+
+            pose = pose_of(photo, self.telemetry.boot_epoch_s)
+            self._broadcast(
+                self.camera_component.image_captured(photo, pose, self.telemetry.boot_epoch_s),
+                CAMERA_COMPONENT_ID,
+            )
+        if self.camera_folder is not None:
+            self._folder_shots.put_nowait(photo)
+
+    async def _write_to_folder(self) -> None:
+        """Render each shot and write it to the camera's folder, off the event loop: the
+        file lands a moment after the autopilot's message, as a real camera's does."""
+        from simulator.photo_server import pose_of
+
+        assert self.camera_folder is not None
+        assert self._renderer is not None
+        folder = self.camera_folder
+        number = 0
+        while True:
+            photo = await self._folder_shots.get()
+            number += 1  # the card's own count: DSC00001 first
+            pose = pose_of(photo, self.telemetry.boot_epoch_s)
+            try:
+                jpeg = await asyncio.to_thread(self._renderer, pose, folder.camera)
+                await asyncio.to_thread(folder.write, number, jpeg)
+            except (ValueError, OSError) as error:
+                log.warning("camera folder: shot %d not written: %s", photo.index, error)
 
     def _state_signature(self) -> tuple[int, bool, int]:
         copter = self.copter
@@ -329,12 +401,14 @@ class SimulatorServer:
             link.streams = StreamSchedule(DEFAULT_RATES_HZ, self._silent_until)
         if self.photos is not None:
             self.photos.restart(self.telemetry.boot_epoch_s)
+        if self.camera_component is not None:
+            self.camera_component.restart()
         self._signature = self._state_signature()
         log.info("simulator sysid=%d rebooting", self.config.system_id)
 
-    def _broadcast(self, message: MavMessage) -> None:
+    def _broadcast(self, message: MavMessage, component: int = COMPONENT_ID) -> None:
         for link in list(self.links):
-            link.send(message)
+            link.send(message, component)
 
     # -- receiving -------------------------------------------------------------
 

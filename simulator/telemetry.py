@@ -87,7 +87,7 @@ class SecondGps:
 NO_GROUND_DISTANCE_MM = -1000
 
 
-def _quaternion(roll: float, pitch: float, yaw: float) -> list[float]:
+def quaternion(roll: float, pitch: float, yaw: float) -> list[float]:
     """(w, x, y, z) of body-to-NED Euler angles in radians (ZYX, as MAVLink's ATTITUDE)."""
     cr, sr = math.cos(roll / 2.0), math.sin(roll / 2.0)
     cp, sp = math.cos(pitch / 2.0), math.sin(pitch / 2.0)
@@ -530,7 +530,7 @@ class TelemetryBuilder:
             round(photo.lon * 1e7),
             round(photo.alt_msl * 1000.0),
             NO_GROUND_DISTANCE_MM,  # relative_alt: PX4 puts the rangefinder's reading here
-            _quaternion(photo.roll, photo.pitch, photo.yaw),
+            quaternion(photo.roll, photo.pitch, photo.yaw),
             photo.index,
             1,  # capture_result: taken
             b"",

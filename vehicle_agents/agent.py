@@ -54,6 +54,7 @@ from vehicle_agents.tlog_pruning import MIB, TlogRetention
 from vehicle_agents.tlog_uploads import TlogUploader
 
 log = logging.getLogger(__name__)
+SEVERITY_NOTICE = 5  # MAV_SEVERITY_NOTICE: normal but significant
 
 # CAMERA_FEEDBACK.flags: a photo (CAMERA_FEEDBACK_FLAGS; not a video or a bad capture).
 CAMERA_FEEDBACK_PHOTO = 0
@@ -103,7 +104,9 @@ async def _run(settings: AgentSettings) -> None:
         mode_report = ModeReport(hello.modes)
         tasks.create_task(AvailableModes(link, lambda table: mode_report.update(table.names)).run())
         outbox = open_outbox(settings, vehicle_id, hello.stream_id)
-        events = EventSource(outbox, link.modes.autopilot)
+        events = EventSource(
+            outbox, link.modes.autopilot, has_image_source=settings.camera is not None
+        )
         link.listeners.append(events.on_message)
         link.state_listeners.append(FcuLinkEvents(events.emit).on_link_change)
         executor = CommandExecutor(link)
@@ -298,8 +301,14 @@ class EventSource:
         outbox: Outbox,
         autopilot: str,
         clock: Callable[[], float] = time.monotonic,
+        *,
+        has_image_source: bool = True,
     ) -> None:
         self._outbox = outbox
+        # Without a camera source (--camera) a shutter is counted but has no image: SITL's
+        # camera feedback, or a drone whose camera nobody told the agent of. Said once.
+        self._has_image_source = has_image_source
+        self._told_no_image = False
         self._autopilot = autopilot
         self._seq = 0
         self._clock = clock
@@ -372,6 +381,14 @@ class EventSource:
             None,
             photo=photo,
         )
+        if not self._has_image_source and not self._told_no_image:
+            self._told_no_image = True
+            text = (
+                f"photo {photo.index}: the autopilot's camera fired, but no image source is "
+                "configured (--camera): shots are counted, no image is uploaded"
+            )
+            log.warning("%s", text)
+            self.emit("upload", text, SEVERITY_NOTICE)
 
     def emit(
         self,

@@ -18,7 +18,7 @@ from pydantic import Field, SecretStr, ValidationError, field_validator
 from pydantic_settings import BaseSettings, SettingsConfigDict
 
 from protocol.messages import AGENT_WS_PATH
-from protocol.photos import CameraIntrinsics
+from protocol.photos import parse_camera_model
 
 
 class AgentSettings(BaseSettings):
@@ -149,7 +149,10 @@ class AgentSettings(BaseSettings):
         "(CAMERA_FEEDBACK; PX4: CAMERA_TRIGGER, CAMERA_IMAGE_CAPTURED) takes: sim+http://HOST:PORT "
         "for the simulator's (gcs sim "
         "--camera), opencv:DEVICE for a USB/CSI camera (opencv:0, opencv:/dev/video2; needs "
-        "OpenCV, the agent's `camera` extra)",
+        "OpenCV, the agent's `camera` extra), mavlink for a MAVLink camera component (each "
+        "CAMERA_IMAGE_CAPTURED's http(s) file_url is fetched), folder:PATH for a camera that "
+        "writes its files into PATH (an SD card, gphoto2's downloads; each new JPEG is "
+        "paired with a trigger)",
     )
     camera_model: str = Field(
         default="13.2,8.8,5472,3648,8.8",
@@ -233,9 +236,14 @@ class AgentSettings(BaseSettings):
     @field_validator("camera")
     @classmethod
     def _camera(cls, value: str | None) -> str | None:
-        if value is not None and not value.startswith(("sim+http://", "opencv:")):
+        if value is None:
+            return value
+        folder = value.startswith("folder:") and bool(value.removeprefix("folder:"))
+        if not (value.startswith(("sim+http://", "opencv:")) or value == "mavlink" or folder):
             raise ValueError(
-                f"{value}: a camera is sim+http://HOST:PORT (the simulator) or opencv:DEVICE"
+                f"{value}: a camera is sim+http://HOST:PORT (the simulator), "
+                "opencv:DEVICE, mavlink (a MAVLink camera component) or folder:PATH (a "
+                "folder the camera writes its files into)"
             )
         return value
 
@@ -264,26 +272,6 @@ class AgentSettings(BaseSettings):
         if parts.path in ("", "/"):
             parts = parts._replace(path=AGENT_WS_PATH)
         return urlunsplit(parts)
-
-
-def parse_camera_model(text: str) -> CameraIntrinsics:
-    """``sensor_w,sensor_h,width_px,height_px,focal``: millimetres and pixels."""
-    parts = text.split(",")
-    try:
-        if len(parts) != 5:
-            raise ValueError
-        return CameraIntrinsics(
-            sensor_width_mm=float(parts[0]),
-            sensor_height_mm=float(parts[1]),
-            image_width_px=int(parts[2]),
-            image_height_px=int(parts[3]),
-            focal_length_mm=float(parts[4]),
-        )
-    except ValueError:
-        raise ValueError(
-            "expected sensor width,height (mm),image width,height (px),focal length (mm), "
-            f"e.g. 13.2,8.8,5472,3648,8.8; got {text!r}"
-        ) from None
 
 
 def default_vehicle_id(model: str, machine_id_file: Path = Path("/etc/machine-id")) -> str:

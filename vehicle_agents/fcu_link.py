@@ -269,6 +269,11 @@ class FcuLink:
             self._identify(message)
         if message.get_srcSystem() != self.target_system:
             return
+        if kind == "HEARTBEAT" and message.get_srcComponent() != self.target_component:
+            # Another component of the vehicle (a MAVLink camera, a gimbal, a companion
+            # computer): its heartbeat says nothing of the autopilot's mode or arming, and
+            # taken as the autopilot's it would show the vehicle disarmed in flight.
+            return
         if kind not in _SENDER_IN_TARGET and getattr(message, "target_system", 0) not in (
             0,
             self.source_system,

@@ -8,6 +8,7 @@ raises `HttpError` with the start of the hub's reason; a network failure raises 
 
 from __future__ import annotations
 
+import time
 import urllib.error
 import urllib.parse
 import urllib.request
@@ -15,6 +16,10 @@ from dataclasses import dataclass
 from typing import IO, Any
 
 ERROR_BODY_ROOM = 500  # bytes of a refusal's body kept for the operator's event
+
+
+class TooLarge(Exception):
+    """The answer is longer than the caller's bound."""
 
 
 class HttpError(Exception):
@@ -52,8 +57,14 @@ def send(
     body: bytes | IO[bytes] | None = None,
     headers: dict[str, str] | None = None,
     timeout_s: float = 60.0,
+    max_bytes: int | None = None,
 ) -> Answer:
-    """One request (blocking: call it from a thread); the 2xx answer, read whole."""
+    """One request (blocking: call it from a thread); the 2xx answer, read whole.
+
+    With ``max_bytes``, an answer longer than that raises `TooLarge` (its declared length
+    before a byte is read, else as soon as it passes the bound), and ``timeout_s`` bounds
+    the whole read as well as each wait: a server that trickles bytes cannot hold the
+    caller longer."""
     if urllib.parse.urlsplit(url).scheme not in ("http", "https"):
         raise ValueError(f"not an http(s) URL: {url!r}")
     all_headers = dict(headers or {})
@@ -62,8 +73,29 @@ def send(
     request = urllib.request.Request(url, data=body, method=method, headers=all_headers)
     try:
         with _opener.open(request, timeout=timeout_s) as response:
-            return Answer(response.status, dict(response.headers.items()), response.read())
+            headers = dict(response.headers.items())
+            if max_bytes is None:
+                return Answer(response.status, headers, response.read())
+            return Answer(response.status, headers, _read_bounded(response, max_bytes, timeout_s))
     except urllib.error.HTTPError as error:
         with error:
             text = error.read(ERROR_BODY_ROOM).decode("utf-8", errors="replace")
         raise HttpError(error.code, str(error.reason), text) from None
+
+
+READ_CHUNK = 64 * 1024
+
+
+def _read_bounded(response: Any, max_bytes: int, timeout_s: float) -> bytes:
+    declared = response.headers.get("Content-Length")
+    if declared is not None and declared.isdigit() and int(declared) > max_bytes:
+        raise TooLarge(f"{declared} bytes, more than the {max_bytes} allowed")
+    deadline = time.monotonic() + timeout_s
+    body = bytearray()
+    while chunk := response.read(READ_CHUNK):
+        body += chunk
+        if len(body) > max_bytes:
+            raise TooLarge(f"more than the {max_bytes} bytes allowed")
+        if time.monotonic() > deadline:
+            raise TimeoutError(f"the answer took longer than {timeout_s:g} s to arrive")
+    return bytes(body)

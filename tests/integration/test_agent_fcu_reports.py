@@ -74,14 +74,17 @@ class Agent:
 
 
 @contextlib.asynccontextmanager
-async def agent_on(fcu: ScriptedFlightController) -> AsyncIterator[Agent]:
+async def agent_on(
+    fcu: ScriptedFlightController, *, has_image_source: bool = True
+) -> AsyncIterator[Agent]:
     link = FcuLink(f"tcp:127.0.0.1:{fcu.port}")
     running = asyncio.create_task(link.run())
     try:
         await asyncio.wait_for(link.wait_identified(), 10)
         assert link.modes is not None
         outbox = Outbox("test", 1000)
-        link.listeners.append(EventSource(outbox, link.modes.autopilot).on_message)
+        events = EventSource(outbox, link.modes.autopilot, has_image_source=has_image_source)
+        link.listeners.append(events.on_message)
         yield Agent(link, outbox)
     finally:
         running.cancel()
@@ -304,6 +307,30 @@ def test_camera_feedback_becomes_a_camera_event_with_the_photo() -> None:
         }
         assert events[1]["photo"]["index"] == 3
         assert events[0]["text"].startswith("photo 1 at -35.3632620, 149.1652370")
+
+    asyncio.run(run())
+
+
+def test_camera_feedback_without_an_image_source_is_counted_and_said_once() -> None:
+    """SITL's camera (ArduPilot's CAM1_TYPE 1, PX4's TRIG_INTERFACE 3) tells of each
+    shutter with no image anywhere: the agent without --camera counts each, and says
+    once that no image will follow."""
+
+    async def run() -> None:
+        with ScriptedFlightController(autopilot=ARDUPILOT) as fcu:
+            async with agent_on(fcu, has_image_source=False) as agent:
+                fcu.push(
+                    feedback(1, fcu.system_id, mavlink2.CAMERA_FEEDBACK_PHOTO),
+                    feedback(2, fcu.system_id, mavlink2.CAMERA_FEEDBACK_PHOTO),
+                )
+                events = await agent.events(3)
+                await agent.no_more_events()
+        assert [e["kind"] for e in events] == ["camera", "upload", "camera"]
+        assert events[1]["text"] == (
+            "photo 1: the autopilot's camera fired, but no image source is configured "
+            "(--camera): shots are counted, no image is uploaded"
+        )
+        assert events[1]["severity"] == mavlink2.MAV_SEVERITY_NOTICE
 
     asyncio.run(run())
 

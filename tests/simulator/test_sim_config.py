@@ -98,6 +98,9 @@ def test_bad_listen_addresses(text: str) -> None:
         ["--listen", "tcp:nowhere"],
         ["--log-level", "chatty"],
         ["--unknown"],
+        ["--camera-component", "--camera-model", "4.8,3.6,320,240,5.4"],  # no photo server
+        ["--camera-folder", "/tmp/card"],  # no camera model to render with
+        ["--camera-model", "4.8,3.6,320"],
     ],
 )
 def test_bad_arguments_exit_2(argv: list[str], capsys: pytest.CaptureFixture[str]) -> None:

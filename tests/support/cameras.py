@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import asyncio
 import contextlib
 import io
 from collections.abc import AsyncIterator
@@ -13,6 +14,7 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 from protocol.photos import CameraIntrinsics, PhotoPose
 from simulator.config import ListenAddress
 from simulator.photo_server import PhotoServer
+from tests.helpers import poll_until_async
 from vehicle_agents.camera.queue import PhotoQueue
 from vehicle_agents.camera.sources import SimulatedCamera
 from vehicle_agents.camera.trigger import CameraTrigger
@@ -75,3 +77,30 @@ def _feed_streams(trigger: CameraTrigger, clock: Clock) -> None:
         ):
             for listen in listeners:
                 listen(message)
+
+
+async def queued(trigger: CameraTrigger) -> None:
+    task = asyncio.create_task(trigger.run())
+    try:
+        await poll_until_async(lambda: trigger.stats.queued, 10, "the photo queued")
+    finally:
+        task.cancel()
+
+
+def feedback(index: int, lat: float, lon: float) -> object:
+    return mavlink2.MAVLink_camera_feedback_message(
+        int((BOOT_EPOCH + 42.5) * 1e6),
+        1,
+        0,
+        index,
+        round(lat * 1e7),
+        round(lon * 1e7),
+        612.5,
+        30.25,
+        2.0,
+        -1.0,
+        91.0,
+        0.0,
+        mavlink2.CAMERA_FEEDBACK_PHOTO,
+        index,
+    )

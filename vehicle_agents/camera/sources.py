@@ -7,6 +7,10 @@
   for a CSI camera where OpenCV was built with it). OpenCV is not one of the agent's
   dependencies (the `camera` extra installs opencv-python-headless); it is imported when
   this source starts.
+- `MavlinkCamera` (`mavlink_camera.py`): a camera of MAVLink's camera protocol, whose
+  CAMERA_IMAGE_CAPTURED gives each photo's address.
+- `FolderCamera` (`folder.py`): a camera the autopilot fires that writes its files into a
+  folder (an SD card, gphoto2's downloads), each new file paired with a trigger.
 """
 
 from __future__ import annotations
@@ -41,6 +45,7 @@ class Shot:
     arrived: float
     utc: float
     feedback_pose: PhotoPose | None = None
+    file_url: str | None = None  # where a MAVLink camera says the image is
 
 
 @dataclass(frozen=True)
@@ -54,6 +59,9 @@ class Capture:
 
 class CameraSource(Protocol):
     camera: CameraIntrinsics
+    # True: the camera itself tells of each photo (a MAVLink camera's
+    # CAMERA_IMAGE_CAPTURED), and the autopilot's trigger messages make none.
+    announces_shots: bool
 
     async def capture(self, shot: Shot) -> Capture: ...
 
@@ -63,6 +71,8 @@ class CameraSource(Protocol):
 class SimulatedCamera:
     """``sim+http://HOST:PORT``: ``GET /photos/{index}`` renders the simulator's shot
     ``index`` with this camera's intrinsics (query parameters) and answers a JPEG."""
+
+    announces_shots = False
 
     def __init__(self, url: str, camera: CameraIntrinsics) -> None:
         base = url.removeprefix(SIM_SCHEME).rstrip("/")
@@ -97,6 +107,8 @@ class OpenCvCamera:
     pipeline), set to the camera model's image size. The exposure is the grab: the agent
     grabs when the autopilot's trigger arrives, so the pose is interpolated to that
     instant, not taken from the trigger."""
+
+    announces_shots = False
 
     def __init__(
         self,
@@ -161,12 +173,24 @@ class OpenCvCamera:
             self._capture = None
 
 
-def open_source(spec: str, camera: CameraIntrinsics) -> CameraSource:
-    """The source a ``--camera`` value names."""
+def open_source(
+    spec: str, camera: CameraIntrinsics, notify: Callable[[str, int], None]
+) -> CameraSource:
+    """The source a ``--camera`` value names; ``notify`` tells the operator of what a
+    source finds wrong outside any one shot (a folder's file no trigger claims)."""
+    # Imported here: they build on this module's Shot and Capture.
+    from vehicle_agents.camera.folder import FOLDER_SCHEME, FolderCamera
+    from vehicle_agents.camera.mavlink_camera import MAVLINK_SCHEME, MavlinkCamera
+
     if spec.startswith(SIM_SCHEME):
         return SimulatedCamera(spec, camera)
     if spec.startswith(OPENCV_SCHEME):
         return OpenCvCamera(spec, camera)
+    if spec == MAVLINK_SCHEME:
+        return MavlinkCamera(camera)
+    if spec.startswith(FOLDER_SCHEME):
+        return FolderCamera(spec, camera, notify)
     raise ValueError(
-        f"unknown camera {spec!r}: sim+http://HOST:PORT (the simulator) or opencv:DEVICE"
+        f"unknown camera {spec!r}: sim+http://HOST:PORT (the simulator), opencv:DEVICE, "
+        "mavlink (a MAVLink camera component) or folder:PATH (files the camera writes)"
     )

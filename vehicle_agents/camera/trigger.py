@@ -10,6 +10,10 @@ autopilot fire the camera, and it says so at the shutter, in its own way:
   request), and its camera_feedback module CAMERA_IMAGE_CAPTURED, with the same number
   (``image_index``), the position and the attitude (a quaternion) at the shutter.
 
+With a MAVLink camera as the source (``--camera mavlink``) the camera itself tells of
+each photo, with CAMERA_IMAGE_CAPTURED from its own component and the file's address:
+that message is the shutter, and the autopilot's make no photo.
+
 Each shutter is one photo, whichever of its messages comes first (`ShutterMatcher`
 matches PX4's two by their index): the source takes (or fetches) it, the pose at its
 exposure is found, and the JPEG is geotagged and queued for upload. A trigger that makes
@@ -22,6 +26,7 @@ import asyncio
 import logging
 import math
 import time
+from collections import OrderedDict
 from collections.abc import Callable
 from dataclasses import dataclass, replace
 from typing import Any
@@ -42,6 +47,7 @@ log = logging.getLogger(__name__)
 
 CAMERA_FEEDBACK_PHOTO = 0  # CAMERA_FEEDBACK_FLAGS: a photo (not video, not a bad capture)
 CAPTURE_FAILED = 0  # CAMERA_IMAGE_CAPTURED.capture_result: 1 success, 0 failure
+KEPT_PHOTOS = 256  # a MAVLink camera's newest photos remembered, against resends
 SHOT_QUEUE = 64  # triggers waiting for their photo; more are dropped and counted
 POSE_WAIT_S = 0.5  # how long a photo waits for the flight controller's pose to cover it
 POSE_POLL_S = 0.02
@@ -87,6 +93,10 @@ class CameraTrigger:
         self._shots: asyncio.Queue[Shot] = asyncio.Queue(maxsize=SHOT_QUEUE)
         self._home_msl: float | None = None  # for the height above home of interpolated poses
         self._shutters = ShutterMatcher()
+        # A MAVLink camera's photos already taken, by (image_index, time_utc): a message
+        # it sends again (another GCS asks for a missing one by its index) is the same
+        # photo, while a restarted camera's index 0 comes with another time.
+        self._camera_photos: OrderedDict[tuple[int, int], None] = OrderedDict()
         # CAMERA_IMAGE_CAPTURED's poses (and arrivals) for shots whose CAMERA_TRIGGER
         # came first, the newest SHOT_QUEUE of them
         self._late_poses: dict[int, tuple[float, PhotoPose]] = {}
@@ -97,6 +107,11 @@ class CameraTrigger:
         kind = message.get_type()
         if kind == "GLOBAL_POSITION_INT" and (message.lat or message.lon):
             self._home_msl = message.alt / 1000.0 - message.relative_alt / 1000.0
+        elif self.source.announces_shots:
+            # A MAVLink camera's own CAMERA_IMAGE_CAPTURED is the photo; the autopilot's
+            # trigger messages (which may well fire that camera) make none of their own.
+            if kind == "CAMERA_IMAGE_CAPTURED" and not from_autopilot(message):
+                self._camera_captured(message)
         elif kind == "CAMERA_FEEDBACK" and int(message.flags) == CAMERA_FEEDBACK_PHOTO:
             self._triggered(kind, self.shot_of(message))
         elif kind == "CAMERA_TRIGGER":
@@ -108,11 +123,28 @@ class CameraTrigger:
         shot = self.shot_of_captured(message)
         if int(message.capture_result) != CAPTURE_FAILED:
             self._triggered("CAMERA_IMAGE_CAPTURED", shot)
+        elif self._shutters.is_new("CAMERA_IMAGE_CAPTURED", shot.index, shot.arrived):
+            self._failed_on_board(shot)
+
+    def _camera_captured(self, message: Any) -> None:
+        key = (int(message.image_index), int(message.time_utc))
+        if key in self._camera_photos:
+            self.stats.repeats += 1
             return
-        if self._shutters.is_new("CAMERA_IMAGE_CAPTURED", shot.index, shot.arrived):
+        self._camera_photos[key] = None
+        while len(self._camera_photos) > KEPT_PHOTOS:
+            self._camera_photos.popitem(last=False)
+        shot = self.shot_of_captured(message)
+        if int(message.capture_result) == CAPTURE_FAILED:
+            self._failed_on_board(shot)
+        else:
             self.stats.triggers += 1
-            self.stats.failed_on_board += 1
-            self._notify(f"photo {shot.index} not taken: the camera failed", SEVERITY_WARNING)
+            self._enqueue(shot)
+
+    def _failed_on_board(self, shot: Shot) -> None:
+        self.stats.triggers += 1
+        self.stats.failed_on_board += 1
+        self._notify(f"photo {shot.index} not taken: the camera failed", SEVERITY_WARNING)
 
     def _triggered(self, kind: str, shot: Shot) -> None:
         if not self._shutters.is_new(kind, shot.index, shot.arrived):
@@ -123,6 +155,9 @@ class CameraTrigger:
                     del self._late_poses[next(iter(self._late_poses))]
             return
         self.stats.triggers += 1
+        self._enqueue(shot)
+
+    def _enqueue(self, shot: Shot) -> None:
         try:
             self._shots.put_nowait(shot)
         except asyncio.QueueFull:
@@ -152,7 +187,8 @@ class CameraTrigger:
                 yaw=math.degrees(yaw) % 360.0,
                 time=utc,
             )
-        return Shot(int(message.image_index), self._monotonic(), utc, pose)
+        file_url = str(message.file_url).split("\0", 1)[0].strip()  # NUL-padded char[205]
+        return Shot(int(message.image_index), self._monotonic(), utc, pose, file_url or None)
 
     def shot_of_trigger(self, message: Any) -> Shot:
         """PX4's CAMERA_TRIGGER: no pose in it, so the photo is posed from the streams at

@@ -6,11 +6,13 @@ import asyncio
 import logging
 from collections.abc import Callable
 
+from protocol.photos import parse_camera_model
+from vehicle_agents.camera.folder import FolderCamera
 from vehicle_agents.camera.queue import MIB, PhotoQueue
 from vehicle_agents.camera.sources import open_source
 from vehicle_agents.camera.trigger import CameraTrigger
 from vehicle_agents.camera.upload import PhotoUploader
-from vehicle_agents.config import AgentSettings, hub_http_base, parse_camera_model
+from vehicle_agents.config import AgentSettings, hub_http_base
 from vehicle_agents.fcu_link import FcuLink
 from vehicle_agents.sensors.fcu_time import FcuClock, PoseHistory
 
@@ -33,7 +35,7 @@ def start_camera(
         emit("upload", text, severity)
 
     camera = parse_camera_model(settings.camera_model)
-    source = open_source(settings.camera, camera)
+    source = open_source(settings.camera, camera, notify)
     queue = PhotoQueue(settings.photo_folder(), round(settings.photo_budget_mb * MIB), notify)
     poses = PoseHistory(FcuClock())
     link.listeners.append(poses.on_message)
@@ -49,6 +51,8 @@ def start_camera(
         concurrency=settings.photo_upload_concurrency,
     )
     tasks.create_task(trigger.run())
+    if isinstance(source, FolderCamera):
+        tasks.create_task(source.run())
     tasks.create_task(uploader.run())
     log.info(
         "camera %s (%dx%d px), photos in %s",

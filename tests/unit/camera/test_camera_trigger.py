@@ -15,13 +15,14 @@ from protocol.photos import PhotoMeta, PhotoPose
 from simulator.config import ListenAddress
 from simulator.photo_server import PhotoServer
 from simulator.vehicle import PhotoTaken
-from tests.helpers import poll_until_async
 from tests.support.cameras import (
     BOOT_EPOCH,
     CAMERA,
     Clock,
     _feed_streams,
+    feedback,
     photo_server,
+    queued,
     render,
     trigger_for,
 )
@@ -29,33 +30,6 @@ from vehicle_agents.camera.queue import PhotoQueue
 from vehicle_agents.camera.sources import SimulatedCamera
 from vehicle_agents.camera.trigger import CameraTrigger
 from vehicle_agents.sensors.fcu_time import FcuClock, PoseHistory
-
-
-async def queued(trigger: CameraTrigger) -> None:
-    task = asyncio.create_task(trigger.run())
-    try:
-        await poll_until_async(lambda: trigger.stats.queued, 10, "the photo queued")
-    finally:
-        task.cancel()
-
-
-def feedback(index: int, lat: float, lon: float) -> object:
-    return mavlink2.MAVLink_camera_feedback_message(
-        int((BOOT_EPOCH + 42.5) * 1e6),
-        1,
-        0,
-        index,
-        round(lat * 1e7),
-        round(lon * 1e7),
-        612.5,
-        30.25,
-        2.0,
-        -1.0,
-        91.0,
-        0.0,
-        mavlink2.CAMERA_FEEDBACK_PHOTO,
-        index,
-    )
 
 
 def test_a_feedback_with_its_pose_becomes_a_geotagged_photo_of_that_pose(tmp_path: Path) -> None:

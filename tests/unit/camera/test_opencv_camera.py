@@ -46,10 +46,10 @@ def test_a_grabbed_frame_is_a_jpeg_of_the_models_size_exposed_at_the_grab(tmp_pa
 
 
 def test_a_camera_of_another_size_or_none_at_all_is_a_clear_error(tmp_path: Path) -> None:
-    source = open_source(video(tmp_path / "big.avi", (320, 240)), CAMERA)
+    source = open_source(video(tmp_path / "big.avi", (320, 240)), CAMERA, print)
     with pytest.raises(CaptureError, match="delivers 320x240 px, the camera model says 160x120"):
         asyncio.run(source.capture(Shot(1, 0.0, 1.7e9)))
     source.close()
-    missing = open_source(f"opencv:{tmp_path / 'none.avi'}", CAMERA)
+    missing = open_source(f"opencv:{tmp_path / 'none.avi'}", CAMERA, print)
     with pytest.raises(CaptureError, match="could not open"):
         asyncio.run(missing.capture(Shot(1, 0.0, 1.7e9)))

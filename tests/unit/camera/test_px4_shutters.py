@@ -13,12 +13,22 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from simulator.vehicle import PhotoTaken
 from tests.helpers import poll_until_async
-from tests.support.cameras import BOOT_EPOCH, Clock, _feed_streams, photo_server, trigger_for
+from tests.support.cameras import (
+    BOOT_EPOCH,
+    CAMERA,
+    Clock,
+    _feed_streams,
+    photo_server,
+    trigger_for,
+)
 from vehicle_agents.camera.queue import QueuedPhoto
+from vehicle_agents.camera.sources import SimulatedCamera
 from vehicle_agents.camera.trigger import SHOT_QUEUE, CameraTrigger
 from vehicle_agents.shutters import ShutterMatcher
 
 AUTOPILOT = mavlink2.MAV_COMP_ID_AUTOPILOT1
+
+UNREACHABLE_CAMERA = SimulatedCamera("sim+http://127.0.0.1:9", CAMERA)
 
 
 def _over_the_wire(message: Any, component: int = AUTOPILOT) -> Any:
@@ -121,7 +131,7 @@ def test_a_camera_components_own_captures_are_not_the_autopilots_triggers() -> N
     CAMERA_IMAGE_CAPTURED: not matched to the autopilot's triggers, not a photo here."""
     camera = CameraTrigger(
         "sim_1",
-        source=None,  # type: ignore[arg-type]
+        source=UNREACHABLE_CAMERA,  # the shots are counted; none is fetched
         poses=None,  # type: ignore[arg-type]
         queue=None,  # type: ignore[arg-type]
         notify=lambda text, severity: None,
@@ -135,7 +145,7 @@ def test_a_failed_capture_is_counted_and_said() -> None:
     said: list[str] = []
     camera = CameraTrigger(
         "sim_1",
-        source=None,  # type: ignore[arg-type]
+        source=UNREACHABLE_CAMERA,  # the shots are counted; none is fetched
         poses=None,  # type: ignore[arg-type]
         queue=None,  # type: ignore[arg-type]
         notify=lambda text, severity: said.append(text),
@@ -161,7 +171,7 @@ def test_a_trigger_the_full_queue_cannot_hold_is_counted_and_said() -> None:
     said: list[str] = []
     camera = CameraTrigger(
         "sim_1",
-        source=None,  # type: ignore[arg-type]
+        source=UNREACHABLE_CAMERA,  # the shots are counted; none is fetched
         poses=None,  # type: ignore[arg-type]
         queue=None,  # type: ignore[arg-type]
         notify=lambda text, severity: said.append(text),

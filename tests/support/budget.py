@@ -1,8 +1,9 @@
 """The suite's slow-test budget (README, "Slow tests"), a pytest plugin that the root
 conftest loads.
 
-A test whose setup and call together take longer than `budget_s()` fails unless it is
-marked ``@pytest.mark.slow`` (on the function, or ``pytestmark`` for a module) and the
+A test whose setup and call together take longer than `budget_s()` is named in the run's
+summary, and fails beyond `FAIL_FACTOR` times the budget, unless it is marked
+``@pytest.mark.slow`` (on the function, or ``pytestmark`` for a module) and the
 README's list of slow tests names it (its node id, or its module for a module-wide mark)
 with the reason. `tests/unit/test_slow_list.py` checks that list against the marks.
 """
@@ -25,7 +26,14 @@ REPO = Path(__file__).resolve().parents[2]
 README = REPO / "README.md"
 SLOW_LIST_HEADING = "### Slow tests"
 
+# A busy or slower machine stretches every test alike: an unmarked test between the
+# budget and FAIL_FACTOR times it is named in the run's summary (fix it or mark it);
+# beyond, it fails. A hard line at the budget itself failed whole CI runs for a test that
+# took 21 s on a machine where it usually takes 15.
+FAIL_FACTOR = 2.0
+
 _SETUP_S = pytest.StashKey[float]()
+_OVER_BUDGET = pytest.StashKey[list[str]]()
 
 
 def budget_s() -> float:
@@ -42,8 +50,9 @@ def pytest_runtest_makereport(
 
 
 def record(item: pytest.Item, report: pytest.TestReport) -> None:
-    """Each phase's report: a passed call over the budget, without the ``slow`` mark,
-    becomes a failure that says what to do."""
+    """Each phase's report: a passed call over the budget, without the ``slow`` mark, is
+    named in the run's summary; over `FAIL_FACTOR` times the budget it becomes a failure
+    that says what to do."""
     if report.when == "setup":
         item.stash[_SETUP_S] = report.duration
         return
@@ -53,13 +62,27 @@ def record(item: pytest.Item, report: pytest.TestReport) -> None:
     total_s = setup_s + report.duration
     if total_s <= budget_s():
         return
-    report.outcome = "failed"
-    report.longrepr = (
+    timing = (
         f"{item.nodeid} took {total_s:.1f} s (setup {setup_s:.1f} s, call "
         f"{report.duration:.1f} s), over the suite's {budget_s():g} s budget for a test "
-        "that is not marked slow. Make it faster (tests/README.md), or mark it "
+        "that is not marked slow"
+    )
+    if total_s <= FAIL_FACTOR * budget_s():
+        item.config.stash.setdefault(_OVER_BUDGET, []).append(timing)
+        return
+    report.outcome = "failed"
+    report.longrepr = (
+        f"{timing}. Make it faster (tests/README.md), or mark it "
         "@pytest.mark.slow and add it with its reason to the README's list of slow tests."
     )
+
+
+def pytest_terminal_summary(terminalreporter: pytest.TerminalReporter) -> None:
+    over = terminalreporter.config.stash.get(_OVER_BUDGET, [])
+    if over:
+        terminalreporter.section("over the slow-test budget, not marked slow")
+        for line in over:
+            terminalreporter.line(line)
 
 
 def marked_slow(tests_dir: Path = REPO / "tests") -> set[str]:

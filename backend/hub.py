@@ -78,6 +78,7 @@ from protocol.messages import (
     MAX_SCAN_POINTS,
     CloseCode,
     CommandOutcome,
+    HubEventKind,
     MapLayer,
     MissionItem,
     ObstaclesUpdate,
@@ -466,7 +467,7 @@ class Hub:
             await asyncio.sleep(self.settings.spool_retry_s)
 
     async def store_event(
-        self, vehicle_id: str, kind: str, text: str, severity: int | None = None
+        self, vehicle_id: str, kind: HubEventKind, text: str, severity: int | None = None
     ) -> None:
         """An event the hub itself observed (a link coming up or going down, a refused
         second agent); ``severity`` is a MAV_SEVERITY."""

@@ -688,6 +688,18 @@ EventKind = Literal[
     "camera",  # the camera fired (CAMERA_FEEDBACK; PX4: CAMERA_TRIGGER); its photo says where
     "formation",  # a follower joined, held, backed off or left its formation
 ]
+# The kinds the hub itself records in a vehicle's flight log, beside its agent's.
+HubEventKind = Literal[
+    "command",  # a command sent to the vehicle, with its answer
+    "data_lost",  # samples or events the agent no longer had, or the hub refused
+    "agent_restart",  # the vehicle's agent came back as a new process
+    "obstacle",  # the LIDAR map found an obstacle on the vehicle's path
+    "id_clash",
+    "link_up",
+    "link_down",
+    "manual",
+]
+StoredEventKind = Literal[EventKind, HubEventKind]  # one flat list (typing flattens it)
 
 
 class Photo(Message):

@@ -15,6 +15,7 @@ from backend.fleet.param_catalog import ParamCatalog
 from backend.fleet.registry import FleetRegistry
 from backend.fleet.safety_gate import SafetyGate
 from backend.storage.spool import RowSpool
+from protocol.messages import HubEventKind
 
 
 class MissionServices(Protocol):
@@ -42,5 +43,5 @@ class CommandServices(MissionServices, Protocol):
     async def record(self, entry: AuditEntry) -> None: ...
 
     async def store_event(
-        self, vehicle_id: str, kind: str, text: str, severity: int | None = None
+        self, vehicle_id: str, kind: HubEventKind, text: str, severity: int | None = None
     ) -> None: ...

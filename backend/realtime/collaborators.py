@@ -24,7 +24,13 @@ from backend.settings import HubSettings
 from backend.storage.records import StoredEvent
 from backend.storage.repository import Repository
 from backend.storage.sequences import Gap, StreamKey
-from protocol.messages import MapLayer, Message, ObstaclesUpdate, PointMapUpdate
+from protocol.messages import (
+    HubEventKind,
+    MapLayer,
+    Message,
+    ObstaclesUpdate,
+    PointMapUpdate,
+)
 
 
 class AgentConnection(Protocol):
@@ -102,7 +108,7 @@ class FeedServices(Protocol):
     async def record(self, entry: AuditEntry) -> None: ...
 
     async def store_event(
-        self, vehicle_id: str, kind: str, text: str, severity: int | None = None
+        self, vehicle_id: str, kind: HubEventKind, text: str, severity: int | None = None
     ) -> None: ...
 
     async def map_now(self, layers: Collection[MapLayer]) -> list[PointMapUpdate | ObstaclesUpdate]:
@@ -154,7 +160,7 @@ class GatewayServices(Protocol):
     async def record(self, entry: AuditEntry) -> None: ...
 
     async def store_event(
-        self, vehicle_id: str, kind: str, text: str, severity: int | None = None
+        self, vehicle_id: str, kind: HubEventKind, text: str, severity: int | None = None
     ) -> None: ...
 
     async def publish_state(self, record: VehicleRecord) -> None: ...

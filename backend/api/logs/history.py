@@ -14,7 +14,7 @@ from backend.api.logs.common import MAX_ID, MAX_PAGE, next_before_id
 from backend.api.security import SecuredRouter, requires
 from backend.api.time_ranges import TimeQuery, optional_time_range
 from backend.auth.policy import Permission
-from protocol.messages import EventKind
+from protocol.messages import StoredEventKind
 
 router = SecuredRouter(tags=["flight log"])
 
@@ -73,7 +73,7 @@ class CommandPage(BaseModel):
 async def list_events(
     hub: HubDep,
     vehicle_id: Annotated[str | None, Query(max_length=64)] = None,
-    kind: Annotated[EventKind | None, Query(description="One of the kinds listed")] = None,
+    kind: Annotated[StoredEventKind | None, Query(description="One of the kinds listed")] = None,
     start: TimeQuery = None,
     end: TimeQuery = None,
     before_id: Annotated[int | None, Query(ge=1, le=MAX_ID)] = None,

@@ -8658,7 +8658,7 @@ export interface operations {
             query?: {
                 vehicle_id?: string | null;
                 /** @description One of the kinds listed */
-                kind?: ("statustext" | "mode" | "armed" | "disarmed" | "link_up" | "link_down" | "failsafe" | "mission" | "id_clash" | "manual" | "upload" | "camera" | "formation") | null;
+                kind?: ("statustext" | "mode" | "armed" | "disarmed" | "link_up" | "link_down" | "failsafe" | "mission" | "id_clash" | "manual" | "upload" | "camera" | "formation" | "command" | "data_lost" | "agent_restart" | "obstacle") | null;
                 /** @description Unix seconds (0 to 100000000000, fractions kept exactly) or an ISO 8601 date-time (no time zone means UTC, precise to the microsecond) in the same range. Both bounds are inclusive. Default: unbounded. */
                 start?: number | string | null;
                 /** @description Unix seconds (0 to 100000000000, fractions kept exactly) or an ISO 8601 date-time (no time zone means UTC, precise to the microsecond) in the same range. Both bounds are inclusive. Default: unbounded. */

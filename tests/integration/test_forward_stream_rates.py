@@ -35,7 +35,7 @@ from vehicle_agents.forwarding import MavlinkForwarder
 from vehicle_agents.stream_watch import RateWatchSettings
 from vehicle_agents.streams import StreamRequester, StreamTimeouts
 
-pytestmark = pytest.mark.integration
+pytestmark = [pytest.mark.integration, pytest.mark.slow]
 
 SPEEDUP = 2.5  # a busy machine stalls a thread for tenths of a second, 2.5 x that in sim time
 DURATION_S = 300.0  # simulated

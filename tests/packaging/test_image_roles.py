@@ -26,6 +26,8 @@ from packaging.utils import canonicalize_name
 
 from tests.packaging.image_build import LOCKS, ROOT, SITE, Builder, Built, context_files
 
+pytestmark = pytest.mark.slow
+
 DOCKERFILE = (ROOT / "Dockerfile").read_text()
 THIRD_PARTY = Path(sysconfig.get_paths()["purelib"])
 VENV = PurePosixPath("/opt/venv")

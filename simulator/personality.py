@@ -191,6 +191,15 @@ class Personality(ABC):
     # ArduPilot from 4.7), and whether it sends CURRENT_MODE on each mode change (PX4's
     # CURRENT_MODE stream).
     available_modes: tuple[AvailableMode, ...] = ()
+    # Whether a request for every mode (param2 0) brings them all. ArduPilot's does not:
+    # GCS_MAVLINK::send_available_modes sends one mode each time the deferred message
+    # goes out, and only its PARAMS stream (SRn_PARAMS) sends it again, so a GCS that
+    # sets its rates with SET_MESSAGE_INTERVAL gets mode 1 alone (ArduCopter 4.7 SITL,
+    # three requests); each mode asked for by its index comes (param2 N).
+    lists_every_mode_at_once: bool = True
+    # Whether a mission upload keeps the current item's index: PX4's does unless an item
+    # comes flagged current; ArduPilot starts a new mission from its first item.
+    upload_keeps_current_item: bool = False
     sends_current_mode: bool = False
     # The component metadata PX4 publishes (COMPONENT_METADATA's mftp:// address, and the
     # files its MAVLink FTP serves); ArduPilot publishes none.
@@ -280,6 +289,7 @@ class ArduCopterPersonality(Personality):
     camera_feedback = True
     camera_index_from = 1
     available_modes = ARDUCOPTER_AVAILABLE_MODES
+    lists_every_mode_at_once = False
 
     def base_mode(self, mode: CopterMode, armed: bool) -> int:
         """GCS_MAVLINK_Copter::base_mode."""
@@ -371,6 +381,7 @@ class Px4Personality(Personality):
     camera_index_from = 0
     takeoff_flies_to_position = True
     available_modes = PX4_AVAILABLE_MODES
+    upload_keeps_current_item = True
     sends_current_mode = True
     general_metadata_uri = GENERAL_METADATA_URI
 

@@ -377,15 +377,17 @@ class TelemetryBuilder:
         return mavlink2.MAVLink_timesync_message(int(self.copter.time_s * 1e6) * 1000, ts1)
 
     def available_modes(self, index: int) -> list[MavMessage] | None:
-        """AVAILABLE_MODES for MAV_CMD_REQUEST_MESSAGE: every mode for ``index`` 0, else
-        the one at ``index`` (1..N); None where the autopilot does not list its modes (the
-        rover) or there is no such index."""
+        """AVAILABLE_MODES for MAV_CMD_REQUEST_MESSAGE: every mode for ``index`` 0 (the
+        first alone where the autopilot sends one per request, ArduPilot), else the one at
+        ``index`` (1..N); None where the autopilot does not list its modes (the rover) or
+        there is no such index."""
         personality = getattr(self.copter, "personality", None)
         modes = personality.available_modes if personality is not None else ()
         total = len(modes)
-        if not modes or not 0 <= index <= total:
+        if personality is None or not modes or not 0 <= index <= total:
             return None
-        indices = range(1, total + 1) if index == 0 else (index,)
+        every = range(1, total + 1) if personality.lists_every_mode_at_once else (1,)
+        indices = every if index == 0 else (index,)
         return [
             MAVLink_available_modes_message(
                 total,

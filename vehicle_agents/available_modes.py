@@ -105,20 +105,42 @@ class AvailableModes:
         return int(heartbeat.type) if heartbeat is not None else mavlink2.MAV_TYPE_GENERIC
 
     async def read(self) -> list[ReportedMode] | None:
-        """Every mode the autopilot lists, in its order; None if it did not list them all."""
+        """Every mode the autopilot lists, in its order; None if it did not list them all.
+
+        A request for every mode brings PX4's whole list, but ArduPilot's first mode alone
+        (GCS_MAVLINK::send_available_modes sends one per deferred send, the rest only at its
+        PARAMS stream's rate): the modes that did not come are asked for by index."""
         link = self._link
+        got: dict[int, ReportedMode] = {}
+        total: int | None = None
         with link.collect(lambda m: m.get_type() == "AVAILABLE_MODES") as answers:
             for attempt in range(self.timeouts.attempts):
                 link.send_command_long(
                     mavlink2.MAV_CMD_REQUEST_MESSAGE, attempt, [AVAILABLE_MODES_ID, ALL_MODES]
                 )
-                got: dict[int, ReportedMode] = {}
-                total: int | None = None
                 while (message := await next_match(answers, self.timeouts.between_s)) is not None:
                     total = int(message.number_modes)
                     got[int(message.mode_index)] = reported_mode(message)
                     if total and all(index in got for index in range(1, total + 1)):
                         return [got[index] for index in range(1, total + 1)]
-                if got:
-                    log.info("AVAILABLE_MODES: %d of %s modes came; asking again", len(got), total)
-        return None
+                if total:
+                    break
+            if not total:
+                return None
+            for index in range(1, total + 1):
+                for attempt in range(self.timeouts.attempts):
+                    if index in got:
+                        break
+                    link.send_command_long(
+                        mavlink2.MAV_CMD_REQUEST_MESSAGE, attempt, [AVAILABLE_MODES_ID, index]
+                    )
+                    while (
+                        message := await next_match(answers, self.timeouts.between_s)
+                    ) is not None:
+                        got[int(message.mode_index)] = reported_mode(message)
+                        if int(message.mode_index) == index:
+                            break
+                if index not in got:
+                    log.info("AVAILABLE_MODES: mode %d of %d never came", index, total)
+                    return None
+        return [got[index] for index in range(1, total + 1)]

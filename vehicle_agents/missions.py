@@ -56,7 +56,11 @@ class MissionClient:
             seq,
             item.frame,
             item.command,
-            0,
+            # The first item is flagged current: PX4 starts a changed mission there, and
+            # without the flag keeps the index it had (mavlink_mission.cpp, MissionBase::
+            # updateMavlinkMission), so a new survey after a finished one started at its
+            # end ("Mission finished") or midway. ArduPilot reads only 2 and 3 on upload.
+            1 if seq == 0 else 0,
             int(item.autocontinue),
             _wire(item.param1),
             _wire(item.param2),

@@ -40,6 +40,7 @@ class _Upload:
     count: int
     items: list[MissionItem]
     peer: tuple[int, int]
+    current: int | None = None  # the item flagged current (MISSION_ITEM_INT.current 1)
 
 
 class Missions(HandlerBase):
@@ -129,6 +130,8 @@ class Missions(HandlerBase):
             )
             log.info("mission item %d (command %d) refused: %s", seq, item.command, problem)
             return [self._mission_ack(result, peer)]
+        if int(getattr(msg, "current", 0)) == 1:
+            upload.current = seq
         upload.items.append(replace(item, frame=stored_frame(item.frame)))
         if len(upload.items) < upload.count:
             return [Reply(self.telemetry.mission_request_int(len(upload.items), *peer))]
@@ -137,7 +140,9 @@ class Missions(HandlerBase):
         if self.copter.mission_wire_offset:
             # PX4's item 0 is the first real one: home goes in front, as stored here.
             items = [HOME_PLACEHOLDER] + [replace(i, seq=i.seq + 1) for i in items]
-        self.copter.set_mission(items)
+        offset = self.copter.mission_wire_offset
+        flagged = None if upload.current is None else upload.current + offset
+        self.copter.set_mission(items, flagged)
         text = self.telemetry.statustext_of(Severity.INFO, "Flight plan received")
         return [
             self._mission_ack(MavMissionResult.ACCEPTED, peer),

@@ -139,6 +139,10 @@ class CopterState(Vehicle):
     def in_auto(self) -> bool:
         return self.mode is CopterMode.AUTO
 
+    @property
+    def upload_keeps_current_item(self) -> bool:
+        return self.personality.upload_keeps_current_item
+
     def _landing(self) -> bool:
         """In the descent of LAND, of RTL, or of a mission's NAV_LAND / RTL."""
         rtl_landing = self._rtl_stage is RtlStage.LAND

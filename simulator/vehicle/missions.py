@@ -20,6 +20,11 @@ class MissionRunner(Camera, GcsCommands):
         """In the mode that runs the stored mission."""
 
     @property
+    def upload_keeps_current_item(self) -> bool:
+        """Whether a mission upload keeps the current item's index (PX4's does)."""
+        return False
+
+    @property
     def mission_count(self) -> int:
         """Mission commands stored after item 0 (home)."""
         return max(0, len(self.mission) - 1)
@@ -40,13 +45,20 @@ class MissionRunner(Camera, GcsCommands):
             )
         return self.mission[seq]
 
-    def set_mission(self, items: list[MissionItem]) -> None:
-        """Replace the stored mission (a completed upload; item 0 is home)."""
+    def set_mission(self, items: list[MissionItem], flagged: int | None = None) -> None:
+        """Replace the stored mission (a completed upload; item 0 is home). ``flagged``:
+        the item the upload marked current, if any."""
         self.mission = list(items) if len(items) > 1 else []
         if self._mission_running():
             # carry on with the command in flight; the new mission follows it
             self._auto_next = min(self._auto_next, len(self.mission))
             self.mission_current = min(self.mission_current, max(0, len(self.mission) - 1))
+        elif self.upload_keeps_current_item:
+            # PX4 (MissionBase::updateMavlinkMission): the item flagged current, else the
+            # index it had, within the new mission; the first item is "not started".
+            kept = self.mission_current if flagged is None else flagged
+            kept = min(kept, max(0, len(self.mission) - 1))
+            self.mission_current = 0 if kept <= 1 else kept
         else:
             # Not running, or run to its end (landed, or holding after its last item):
             # the new mission starts from its first item, as ArduPilot's does (its

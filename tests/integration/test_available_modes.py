@@ -3,10 +3,17 @@ build's modes, not pymavlink's table of every mode ArduCopter ever had."""
 
 from __future__ import annotations
 
+import asyncio
+import contextlib
+
 import pytest
 
 from gcs.launcher import LocalFleet
+from simulator import ListenAddress, SimulatorConfig
 from tests.helpers import FleetWatcher, api_client, ready
+from tests.support.simulators import serving
+from vehicle_agents.available_modes import AvailableModes
+from vehicle_agents.fcu_link import FcuLink
 
 pytestmark = pytest.mark.integration
 
@@ -61,3 +68,35 @@ def test_an_arducopter_lists_the_modes_its_build_has(
             )
             assert refused.status_code == 422, refused.text
             assert f"unknown mode {missing!r}" in refused.text
+
+
+def test_arducopters_modes_are_read_one_by_one_when_asking_for_all_brings_one() -> None:
+    """ArduCopter 4.7 answers a request for every mode (param2 0) with its first mode
+    alone (the simulator's ArduPilot personality does as SITL did): the agent asks for the
+    rest by index, and the autopilot's own list replaces the fixed table."""
+
+    async def run() -> None:
+        with serving(SimulatorConfig(listen=ListenAddress("tcp", "127.0.0.1", 0))) as (
+            _server,
+            address,
+        ):
+            link = FcuLink(f"tcp:127.0.0.1:{address.port}")
+            running = asyncio.create_task(link.run())
+            try:
+                await asyncio.wait_for(link.wait_identified(), 10)
+                reported: asyncio.Queue[list[str]] = asyncio.Queue()
+                lister = AvailableModes(link, lambda table: reported.put_nowait(table.names))
+                listing = asyncio.create_task(lister.run())
+                try:
+                    assert await asyncio.wait_for(reported.get(), 20) == (ARDUCOPTER_STANDARD_BUILD)
+                    assert lister.answered is True
+                    assert link.modes is not None
+                    assert link.modes.reported
+                finally:
+                    listing.cancel()
+            finally:
+                running.cancel()
+                with contextlib.suppress(asyncio.CancelledError):
+                    await running
+
+    asyncio.run(run())

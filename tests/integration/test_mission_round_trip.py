@@ -120,3 +120,31 @@ def test_a_vehicle_without_a_mission_downloads_as_home_alone(autopilot: Autopilo
     assert message == "0 items (plus home)"
     [home] = items
     assert (home.lat, home.lon) == pytest.approx((HOME_LAT, HOME_LON), abs=1e-6)
+
+
+@pytest.mark.parametrize("autopilot", ["ardupilot", "px4"])
+def test_a_new_mission_starts_from_its_first_item(autopilot: Autopilot) -> None:
+    """PX4 keeps the index it had when a changed mission arrives with no item flagged
+    current (real PX4 SITL flew a new survey's upload from the old one's last item:
+    "Mission finished" at once, then RTL): the agent flags the first item."""
+    first = [
+        MissionItem(command=TAKEOFF, lat=HOME_LAT, lon=HOME_LON, alt=10),
+        *(
+            MissionItem(command=WAYPOINT, lat=HOME_LAT + k * 1e-4, lon=HOME_LON, alt=12)
+            for k in range(1, 6)
+        ),
+    ]
+    second = [item.model_copy(update={"alt": item.alt + 5}) for item in first]
+
+    async def body(client: MissionClient) -> int:
+        assert (await client.upload(first)).status == "accepted"
+        moved = await client.set_current(5)
+        assert moved.status == "accepted", moved
+        assert (await client.upload(second)).status == "accepted"
+        link = client.link
+        await link.wait_for(lambda m: m.get_type() == "MISSION_CURRENT", 5)
+        current = await link.wait_for(lambda m: m.get_type() == "MISSION_CURRENT", 5)
+        assert current is not None
+        return int(current.seq)
+
+    assert with_missions(autopilot, body) == 0

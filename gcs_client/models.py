@@ -278,6 +278,7 @@ class DroneRun(Model):
     photo_indexes: list[int] | None = Field(default=None)
     current: int | None = Field(default=None)
     airborne: bool = Field(default=False)
+    armed_seen: bool = Field(default=False)
     reason: str | None = Field(default=None)
     finished: float | None = Field(default=None)
 

@@ -421,20 +421,29 @@ class SurveyService:
                 continue
             if run.current_item(vid, state.mission_current):
                 self._dirty.add(run.id)
+            drone.armed_seen = drone.armed_seen or state.armed
             if state.armed and state.landed_state in ("in_air", "takeoff", None):
                 drone.airborne = drone.airborne or (state.alt_rel or 0) > 1.0
             remaining = drone.unflown()
-            if drone.airborne and not state.armed:
+            if (drone.airborne or drone.armed_seen) and not state.armed:
                 # Landed: done if every lane is flown, else it stopped short. A drone that
                 # landed while the hub was away has its "reached" events still coming (the
                 # agent replays them): it is given the link timeout before it is judged.
+                # One that disarmed without ever leaving the ground flew nothing, whatever
+                # its mission's progress says (a jump to the last item marks every lane).
                 key = (run.id, vid)
                 landed = self._landed_since.setdefault(key, self._clock())
-                if not remaining:
+                if drone.airborne and not remaining:
                     drone.state = DroneState.DONE
                     drone.finished = time.time()
                 elif self._clock() - landed >= self._settings.survey_link_timeout_s:
-                    self._drop(run, drone, "landed before its lanes were flown")
+                    self._drop(
+                        run,
+                        drone,
+                        "landed before its lanes were flown"
+                        if drone.airborne
+                        else "disarmed on the ground before it took off",
+                    )
                 else:
                     continue
                 self._landed_since.pop(key, None)

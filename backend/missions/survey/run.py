@@ -79,6 +79,9 @@ class DroneRun(_Model):
     photo_indexes: list[int] = Field(default_factory=list)
     current: int | None = None
     airborne: bool = False
+    # Armed since it started flying the survey: a drone that disarms on the ground after
+    # (PX4's preflight auto-disarm, a refused take-off) has stopped, though never airborne.
+    armed_seen: bool = False
     reason: str | None = None  # why it dropped out
     finished: float | None = None  # Unix time it was seen done or dropped out
 

@@ -1961,6 +1961,11 @@ export interface components {
              * @default false
              */
             airborne: boolean;
+            /**
+             * Armed Seen
+             * @default false
+             */
+            armed_seen: boolean;
             /** Reason */
             reason?: string | null;
             /** Finished */

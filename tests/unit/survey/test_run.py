@@ -23,45 +23,13 @@ from backend.missions.survey.run import (
     handover_missions,
     split_orphans,
 )
-from backend.missions.survey.schemas import SurveyRequest
-from backend.missions.survey.service import Fleet, plan_survey, summary
-from backend.surveys.service import new_run
-from common.geodesy import GeoPoint, LocalFrame
+from common.geodesy import GeoPoint
 from protocol.messages import Photo
-
-LAT, LON = 47.0, 8.0
-FRAME = LocalFrame(LAT, LON)
-
-
-def _ring(width: float, depth: float) -> list[list[float]]:
-    corners = [(0, 0), (width, 0), (width, depth), (0, depth), (0, 0)]
-    return [list(reversed(FRAME.to_geo(x, y))) for x, y in corners]
-
-
-def _run(vehicles: int = 3) -> SurveyRun:
-    request = SurveyRequest.model_validate(
-        {
-            "area": {"type": "Polygon", "coordinates": [_ring(300, 200)]},
-            "camera": "sony_a6000_16mm",
-            "altitude_m": 40,
-            "angle_deg": 0,
-            "vehicle_ids": [f"d{i}" for i in range(vehicles)],
-        }
-    )
-    fleet = []
-    for i in range(vehicles):
-        lat, lon = FRAME.to_geo(-20.0 + 5 * i, -30.0)
-        fleet.append(Fleet(f"d{i}", GeoPoint(lat, lon, 500), GeoPoint(lat, lon, 500)))
-    run = new_run(request, summary(plan_survey(request, fleet)))
-    run.state = SurveyState.FLYING
-    run.started = 1_000.0
-    for drone in run.drones:
-        drone.state = DroneState.FLYING
-    return run
+from tests.support.surveys import LAT, LON, flying_run
 
 
 def test_lane_items_point_at_the_lanes_entry_and_exit_waypoints() -> None:
-    run = _run(1)
+    run = flying_run(1)
     geo = geometry(run)
     plan = plan_lanes(geo.area, _calc(run), angle_deg=0)
     mission = survey_mission(
@@ -85,7 +53,7 @@ def _calc(run: SurveyRun) -> CameraCalc:
 
 
 def test_progress_comes_from_reached_items_current_item_and_photos() -> None:
-    run = _run(2)
+    run = flying_run(2)
     first = run.drones[0]
     total = run.lanes_total()
     assert run.lanes_done() == 0
@@ -125,7 +93,7 @@ def test_split_orphans_gives_every_lost_lane_to_exactly_one_drone_balanced() -> 
 
 
 def test_a_lost_drone_s_unflown_lanes_go_to_the_others_resuming_where_they_are() -> None:
-    run = _run(3)
+    run = flying_run(3)
     keeper, lost, other = run.drones
     run.reached("d1", lost.lanes[0].exit)  # d1 flew one lane, then its link went
     lost.state = DroneState.DROPPED

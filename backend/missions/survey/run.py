@@ -157,8 +157,13 @@ class SurveyRun(_Model):
             or (drone.finished is not None and taken > drone.finished + CLOCK_SLACK_S)
         ):
             return False
-        if photo.index in drone.photo_indexes[-256:]:
-            return False  # at-least-once delivery: the same photo again
+        # At-least-once delivery sends the same photo again: the same index at the same
+        # place. The same index somewhere else is another photo (a second camera, or a
+        # counter that restarted with the autopilot). Newest first: the lists end together.
+        position = (photo.lat, photo.lon)
+        recent = zip(reversed(drone.photo_indexes[-256:]), reversed(drone.photos), strict=False)
+        if any(index == photo.index and tuple(where) == position for index, where in recent):
+            return False
         drone.photos.append((photo.lat, photo.lon))
         drone.photo_indexes.append(photo.index)
         return True

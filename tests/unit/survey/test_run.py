@@ -68,11 +68,14 @@ def test_progress_comes_from_reached_items_current_item_and_photos() -> None:
     photo = Photo(index=1, lat=LAT, lon=LON, alt_rel=40)
     assert run.photo("d0", photo)
     assert not run.photo("d0", photo)  # delivered twice, counted once
+    # the same number elsewhere is another photo (a second camera, a restarted counter)
+    assert run.photo("d0", Photo(index=1, lat=LAT + 0.0002, lon=LON, alt_rel=40))
+    assert not run.photo("d0", Photo(index=1, lat=LAT + 0.0002, lon=LON, alt_rel=40))
     # replayed late, after the drone was seen landed: counted if taken before that
     first.finished = 2_000.0
     assert run.photo("d0", Photo(index=2, lat=LAT, lon=LON, alt_rel=40), 1_990.0)
     assert not run.photo("d0", Photo(index=3, lat=LAT, lon=LON, alt_rel=40), 2_500.0)
-    assert run.photo_count() == 2
+    assert run.photo_count() == 3
     assert 0 < covered_fraction(run, geometry(run)) < 1
 
 

@@ -65,6 +65,10 @@ from protocol.messages import (
 log = logging.getLogger(__name__)
 
 REFUSAL_SEVERITY = 4  # MAV_SEVERITY_WARNING: a lease refused, in every event feed
+# A pilot clicking "Take control" again gets the refusal again, but the flight log and the
+# other dashboards have it: the same refusal from one connection is stored once a window.
+REFUSAL_EVENT_WINDOW_S = 60.0
+MAX_REFUSALS_REMEMBERED = 64
 CONTROL_VERBS = {"acquire": "take", "release": "give back", "revoke": "revoke"}
 
 
@@ -171,6 +175,8 @@ class ClientFeed(PeerConnection):
         self.map = LatestSubscription()  # newest per layer, never a queue
         self.map_layers: set[MapLayer] = set()
         self.vehicles = VehicleFeed({})
+        # (vehicle, action, reason) -> when this connection last stored that refusal
+        self._refusals_stored: dict[tuple[str, str, str], float] = {}
 
     async def serve(self) -> None:
         await self.websocket.accept()
@@ -420,13 +426,25 @@ class ClientFeed(PeerConnection):
         await self.send(
             LeaseRefusal(vehicle_id=vehicle_id, action=message.action, reason=text, fix=fix)
         )
-        if known:  # an unknown vehicle gets no event row of its own
+        if known and self._first_in_window((vehicle_id, message.action, text)):
+            # An unknown vehicle gets no event row of its own.
             await self.hub.store_event(
                 vehicle_id,
                 "manual",
                 f"{self.user} may not {CONTROL_VERBS[message.action]} manual control: {text}",
                 REFUSAL_SEVERITY,
             )
+
+    def _first_in_window(self, key: tuple[str, str, str]) -> bool:
+        """Whether this refusal is the first of its window on this connection."""
+        now = time.monotonic()
+        last = self._refusals_stored.get(key)
+        if last is not None and now - last < REFUSAL_EVENT_WINDOW_S:
+            return False
+        if len(self._refusals_stored) >= MAX_REFUSALS_REMEMBERED:
+            self._refusals_stored.clear()  # a bound, not a policy: forgetting says again
+        self._refusals_stored[key] = now
+        return True
 
     def _count_collapse(self) -> None:
         self.hub.leases.refused.too_fast += 1

@@ -97,12 +97,20 @@ def test_the_agent_refuses_a_lease_the_autopilot_would_ignore(
             assert event["kind"] == "manual"
             assert event["severity"] == 4
             assert "set SYSID_MYGCS to 254" in event["text"]
+            # A second click is told again, but stored once (not a flight-log row a click).
+            again = pilot.take()
+            assert again["type"] == "lease_refused"
+            assert "SYSID_MYGCS" in again["reason"]
             set_param(api, VEHICLE, "SYSID_MYGCS", 254)
             set_param(api, VEHICLE, "RC_OVERRIDE_TIME", 0)
+            said_before = pilot.events("SYSID_MYGCS = 255")
             pilot.received.clear()
             refused = pilot.take()
             assert "RC_OVERRIDE_TIME is 0" in refused["reason"], refused
             assert refused["fix"] == {"param": "RC_OVERRIDE_TIME", "value": 3}
+            # This refusal's event comes after any the second click stored: one was.
+            poll_until(lambda: pilot.events("RC_OVERRIDE_TIME is 0"), 1, "the second event")
+            assert len(said_before + pilot.events("SYSID_MYGCS = 255")) == 1
             set_param(api, VEHICLE, "RC_OVERRIDE_TIME", 3)
             # Nothing was granted, nothing changed on the vehicle: it still hovers in GUIDED.
             assert pilot.leases("admin") == []

@@ -34,6 +34,12 @@ ARDUPILOT: tuple[CriticalGroup, ...] = (
         "the GCS's system id: whose heartbeats feed the GCS failsafe and who may fly it by hand",
         ("SYSID_MYGCS", "MAV_GCS_SYSID", "MAV_GCS_SYSID_HI"),
     ),
+    # How long ArduPilot holds an RC override after the last one: 0 ignores overrides, and
+    # -1 holds the last stick for ever, so a stopped stick stream would never let go.
+    CriticalGroup(
+        "how long a stick override holds once the stick stream stops",
+        ("RC_OVERRIDE_TIME",),
+    ),
 )
 
 PX4: tuple[CriticalGroup, ...] = (

@@ -130,6 +130,7 @@ def test_an_operator_cannot_change_a_safety_critical_parameter(
 def test_the_lists_are_per_autopilot() -> None:
     assert critical_reason("ardupilot", "BATT2_FS_CRT_ACT") == "battery failsafe"
     assert critical_reason("ardupilot", "WPNAV_SPEED") is None
+    assert critical_reason("ardupilot", "RC_OVERRIDE_TIME") is not None  # -1: held for ever
     assert critical_reason("px4", "FENCE_ENABLE") is None  # not a PX4 parameter
     assert critical_reason("px4", "COM_DL_LOSS_T") is not None
     assert critical_reason("generic", "FENCE_ENABLE") == "geofence"  # unknown: both lists

@@ -11,10 +11,6 @@ vehicle stays on the ground, over a ground laid 30 m below it.
 from __future__ import annotations
 
 import asyncio
-import contextlib
-import subprocess
-import sys
-from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -24,85 +20,18 @@ from PIL import Image
 from pymavlink import mavutil
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
-from gcs.launcher import free_port
 from protocol.photos import parse_camera_model
 from simulator import ListenAddress, SimulatorConfig
 from simulator.config import DEFAULT_HOME
-from tests.conftest import ADMIN_PASSWORD, hub_settings
 from tests.helpers import (
-    access_token,
-    agent_process,
-    api_client,
     poll_until,
     poll_until_async,
-    running_hub,
 )
-from tests.support.photos import CAMERA_MODEL, GROUND_BELOW_M, _accepts
+from tests.support.photos import CAMERA_MODEL, camera_vehicle
 from tests.support.simulators import serving
 from vehicle_agents.fcu_link import FcuLink
 
 pytestmark = pytest.mark.integration
-
-
-@contextlib.contextmanager
-def camera_vehicle(
-    folder: Path, vehicle: str, sim_args: Sequence[str], camera: str
-) -> Iterator[tuple[httpx.Client, Any, Path]]:
-    """A hub, a simulator with ``sim_args`` (its photo server on a free port given as
-    ``{camera_port}``) and an agent with ``--camera camera``; yields the API, a second
-    GCS's connection to the simulator, and the agent's log."""
-    hub_dir, logs = folder / "hub", folder / "logs"
-    logs.mkdir(parents=True)
-    sim_port, camera_port = free_port(), free_port()
-    lat, lon, alt = DEFAULT_HOME.lat, DEFAULT_HOME.lon, DEFAULT_HOME.alt
-    with (
-        running_hub(hub_settings(hub_dir)) as hub,
-        api_client(hub, access_token(hub, "admin", ADMIN_PASSWORD)) as api,
-        (logs / "sim.log").open("wb") as sim_log,
-    ):
-        enrolled = api.post(f"/api/v1/vehicles/{vehicle}/agent-tokens")
-        assert enrolled.status_code == 201, enrolled.text
-        sim = subprocess.Popen(
-            [
-                *(sys.executable, "-m", "gcs", "sim"),
-                *("--listen", f"tcp:127.0.0.1:{sim_port}"),
-                *(arg.format(camera_port=camera_port) for arg in sim_args),
-                *("--camera-model", CAMERA_MODEL),
-                f"--ground={lat},{lon},{alt - GROUND_BELOW_M}",
-            ],
-            stdout=sim_log,
-            stderr=subprocess.STDOUT,
-        )
-        try:
-            poll_until(lambda: _accepts(sim_port), 60, "the simulator listening")
-            with agent_process(
-                hub,
-                enrolled.json()["token"],
-                vehicle,
-                sim_port,
-                logs,
-                extra_args=[
-                    *("--camera", camera),
-                    *("--camera-model", CAMERA_MODEL),
-                    *("--photo-dir", str(folder / "onboard")),
-                ],
-            ):
-                fcu = mavutil.mavlink_connection(
-                    f"tcp:127.0.0.1:{sim_port}", source_system=250, source_component=190
-                )
-                try:
-                    fcu.wait_heartbeat(timeout=30)
-                    poll_until(
-                        lambda: api.get(f"/api/v1/vehicles/{vehicle}").status_code == 200,
-                        60,
-                        f"{vehicle} connected to the hub",
-                    )
-                    yield api, fcu, logs / f"{vehicle}.log"
-                finally:
-                    fcu.close()
-        finally:
-            sim.terminate()
-            sim.wait(10)
 
 
 def _fire(fcu: Any, shots: int) -> None:

@@ -6,8 +6,6 @@ a lane end's two shutters fired together included."""
 
 from __future__ import annotations
 
-import subprocess
-import sys
 from collections.abc import Iterator
 from typing import Any
 
@@ -15,11 +13,9 @@ import httpx
 import pytest
 from pymavlink import mavutil
 
-from gcs.launcher import free_port
 from simulator.config import DEFAULT_HOME
-from tests.conftest import ADMIN_PASSWORD, hub_settings
-from tests.helpers import access_token, agent_process, api_client, poll_until, running_hub
-from tests.support.photos import CAMERA_MODEL, GROUND_BELOW_M, _accepts
+from tests.helpers import poll_until
+from tests.support.photos import camera_vehicle
 
 pytestmark = pytest.mark.integration
 
@@ -28,67 +24,20 @@ VEHICLE = "px4_cam_1"
 
 @pytest.fixture(scope="module")
 def px4_camera(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[httpx.Client, Any]]:
-    hub_dir = tmp_path_factory.mktemp("hub")
-    logs = tmp_path_factory.mktemp("logs")
-    photo_dir = tmp_path_factory.mktemp("onboard") / "photos"
-    sim_port, camera_port = free_port(), free_port()
-    lat, lon, alt = DEFAULT_HOME.lat, DEFAULT_HOME.lon, DEFAULT_HOME.alt
-    with (
-        running_hub(hub_settings(hub_dir)) as hub,
-        api_client(hub, access_token(hub, "admin", ADMIN_PASSWORD)) as api,
-        (logs / "sim.log").open("wb") as sim_log,
-    ):
-        enrolled = api.post(f"/api/v1/vehicles/{VEHICLE}/agent-tokens")
-        assert enrolled.status_code == 201, enrolled.text
-        sim = subprocess.Popen(
-            [
-                *(sys.executable, "-m", "gcs", "sim", "--autopilot", "px4"),
-                *("--listen", f"tcp:127.0.0.1:{sim_port}"),
-                *("--camera", f"tcp:127.0.0.1:{camera_port}"),
-                f"--ground={lat},{lon},{alt - GROUND_BELOW_M}",
-            ],
-            stdout=sim_log,
-            stderr=subprocess.STDOUT,
+    with camera_vehicle(
+        tmp_path_factory.mktemp("px4"),
+        VEHICLE,
+        ["--autopilot", "px4", "--camera", "tcp:127.0.0.1:{camera_port}"],
+        "sim+http://127.0.0.1:{camera_port}",
+        sim_camera_model=False,
+    ) as (api, fcu, log):
+        # The agent has asked for CAMERA_TRIGGER once its log says so.
+        poll_until(
+            lambda: "asked PX4 for CAMERA_TRIGGER" in log.read_text(errors="replace"),
+            60,
+            "the agent asking PX4 for CAMERA_TRIGGER",
         )
-        try:
-            poll_until(lambda: _accepts(sim_port), 60, "the simulator listening")
-            with agent_process(
-                hub,
-                enrolled.json()["token"],
-                VEHICLE,
-                sim_port,
-                logs,
-                extra_args=[
-                    *("--camera", f"sim+http://127.0.0.1:{camera_port}"),
-                    *("--camera-model", CAMERA_MODEL),
-                    *("--photo-dir", str(photo_dir)),
-                ],
-            ):
-                fcu = mavutil.mavlink_connection(
-                    f"tcp:127.0.0.1:{sim_port}", source_system=250, source_component=190
-                )
-                try:
-                    fcu.wait_heartbeat(timeout=30)
-                    poll_until(
-                        lambda: api.get(f"/api/v1/vehicles/{VEHICLE}").status_code == 200,
-                        60,
-                        f"{VEHICLE} connected to the hub",
-                    )
-                    # The agent has asked for CAMERA_TRIGGER once its log says so.
-                    poll_until(
-                        lambda: (
-                            "asked PX4 for CAMERA_TRIGGER"
-                            in (logs / f"{VEHICLE}.log").read_text(errors="replace")
-                        ),
-                        60,
-                        "the agent asking PX4 for CAMERA_TRIGGER",
-                    )
-                    yield api, fcu
-                finally:
-                    fcu.close()
-        finally:
-            sim.terminate()
-            sim.wait(10)
+        yield api, fcu
 
 
 def _fire(fcu: Any, shots: int) -> None:

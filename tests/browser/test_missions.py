@@ -381,6 +381,7 @@ def _close_up(page: Page, middle: tuple[float, float]) -> None:
     )
 
 
+@pytest.mark.slow
 def test_a_drawn_mission_is_refused_on_its_leg_fixed_by_dragging_and_flown(
     sized_page: tuple[Page, str], mission_fleet: LocalFleet, api: httpx.Client
 ) -> None:

@@ -317,6 +317,7 @@ def _survey_over_home(hubs: TwoHubs) -> dict[str, Any]:
     }
 
 
+@pytest.mark.slow
 def test_one_hub_drives_a_survey_and_another_takes_it_over_when_it_dies(hubs: TwoHubs) -> None:
     admin_a = hubs.admin_token(hubs.a)
     with FleetWatcher(hubs.a, admin_a) as on_a, api_client(hubs.a, admin_a) as api_a:

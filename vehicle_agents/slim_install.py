@@ -23,7 +23,7 @@ import sys
 from collections.abc import Iterable, Iterator
 from pathlib import Path
 
-from vehicle_agents.mavlink_dialect import DIALECT
+from vehicle_agents.fcu.dialect import DIALECT
 
 KEPT_DIALECTS = frozenset({DIALECT, "common", "minimal"})
 WIRE_VERSIONS = ("v10", "v20")

@@ -14,7 +14,7 @@ from simulator import DEFAULT_HOME, Copter, CopterMode, LocalFrame, MavResult
 from simulator import server as server_module
 from simulator.config import ListenAddress, SimulatorConfig
 from simulator.mavconst import FORCE_REBOOT_MAGIC, MavCmd, MavFrame, ModeFlag
-from simulator.mission import MissionItem
+from simulator.vehicle.stored_mission import MissionItem
 from tests.support.copters import Vehicle, ack_of, airborne, kinds, run_until, texts
 from tests.support.simulators import SYSID, mavlink_client, serving, wait_for
 

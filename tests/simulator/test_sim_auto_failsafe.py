@@ -8,9 +8,9 @@ import pytest
 
 from simulator import DEFAULT_HOME, Copter, CopterMode, MavResult
 from simulator.mavconst import MavCmd, MavFrame, MavState, MissionState
-from simulator.mission import MissionItem
-from simulator.param_table import SetOutcome
+from simulator.params.table import SetOutcome
 from simulator.vehicle import ItemReached, PhotoTaken
+from simulator.vehicle.stored_mission import MissionItem
 from tests.support.copters import airborne, run_until, texts
 
 REL = MavFrame.GLOBAL_RELATIVE_ALT_INT

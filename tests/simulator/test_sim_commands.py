@@ -9,7 +9,6 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 from pymavlink.dialects.v20 import development
 
 from simulator import DEFAULT_HOME
-from simulator.commands import Reply
 from simulator.mavconst import (
     FORCE_ARM_MAGIC,
     FORCE_DISARM_MAGIC,
@@ -24,7 +23,8 @@ from simulator.mavconst import (
     Severity,
     SysSensor,
 )
-from simulator.telemetry import DEFAULT_RATES_HZ
+from simulator.mavlink.commands import Reply
+from simulator.mavlink.telemetry import DEFAULT_RATES_HZ
 from tests.support.copters import GCS_COMPID, GCS_SYSID, SYSID, Vehicle, ack_of, kinds
 
 

@@ -12,9 +12,9 @@ import numpy as np
 import pytest
 
 from simulator import ListenAddress, SimulatorConfig, SimulatorServer
-from simulator.lidar import Lidar, LidarSpec, Pose
-from simulator.world import Cylinder, World, box, load_scene, wall
-from simulator.ydlidar_wire import encode_beams, health
+from simulator.sensors.lidar import Lidar, LidarSpec, Pose
+from simulator.wire.ydlidar import encode_beams, health
+from simulator.world.obstacles import Cylinder, World, box, load_scene, wall
 from vehicle_agents.sensors.lidar.ydlidar import GET_HEALTH, START_SCAN, YdlidarParser
 from vehicle_agents.sensors.sources import Turn, TurnAssembler
 

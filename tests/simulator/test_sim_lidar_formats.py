@@ -12,10 +12,10 @@ import pytest
 
 from gcs.demo_lidars import DEMO_LIDARS
 from simulator.config import ListenAddress, SimulatorConfig
-from simulator.lidar import Lidar, LidarSpec, Pose
-from simulator.lidar_stream import wire_format
+from simulator.outputs.lidar import wire_format
+from simulator.sensors.lidar import Lidar, LidarSpec, Pose
 from simulator.server import SimulatorServer
-from simulator.world import default_scene
+from simulator.world.obstacles import default_scene
 from vehicle_agents.sensors.lidar.models import MODELS, make_parser
 from vehicle_agents.sensors.lidar.probe import probe
 from vehicle_agents.sensors.sources import SerialLidarSource, Turn

@@ -10,12 +10,12 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from gcs.launcher import AGENT_SYSTEM_ID, FleetPlan
 from simulator import DEFAULT_HOME, Copter, CopterMode, MavResult, main
-from simulator.commands.handler import MessageHandler
 from simulator.config import parse_args
 from simulator.mavconst import ModeFlag, Px4AutoMode, Px4MainMode
-from simulator.param_table import SetOutcome
-from simulator.personality import Px4Personality
-from simulator.telemetry import TelemetryBuilder
+from simulator.mavlink.commands.handler import MessageHandler
+from simulator.mavlink.telemetry import TelemetryBuilder
+from simulator.params.table import SetOutcome
+from simulator.personality.px4 import Px4Personality
 from simulator.vehicle import Vehicle
 from simulator.vehicles import build_vehicle
 from tests.support.copters import airborne, run_until

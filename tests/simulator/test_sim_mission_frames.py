@@ -4,7 +4,7 @@ commands that store a location (stored_in_location)."""
 from __future__ import annotations
 
 from simulator.mavconst import MavCmd, MavFrame
-from simulator.mission import MissionItem, check_item
+from simulator.vehicle.stored_mission import MissionItem, check_item
 
 
 def test_rtl_in_the_mission_frame_is_stored_as_qgc_writes_it() -> None:

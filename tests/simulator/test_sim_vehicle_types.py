@@ -26,14 +26,14 @@ from simulator.mavconst import (
     Px4MainMode,
     RoverMode,
 )
-from simulator.mission import MissionItem
-from simulator.personality import Px4Personality
+from simulator.mavlink.telemetry import TelemetryBuilder
+from simulator.personality.px4 import Px4Personality
 from simulator.rover import Rover
-from simulator.telemetry import TelemetryBuilder
 from simulator.vehicle import ItemReached
+from simulator.vehicle.stored_mission import MissionItem
 from tests.support.copters import run_until, texts
 from tests.support.simulators import command, mavlink_client, simulator_process, wait_for
-from vehicle_agents import mavlink_dialect  # noqa: F401  (decodes AVAILABLE_MODES)
+from vehicle_agents.fcu import dialect as mavlink_dialect  # noqa: F401  (decodes AVAILABLE_MODES)
 
 # Degrees per metre north and east of home.
 _FRAME = LocalFrame(DEFAULT_HOME.lat, DEFAULT_HOME.lon, DEFAULT_HOME.alt)

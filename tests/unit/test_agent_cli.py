@@ -18,7 +18,7 @@ from vehicle_agents.config import (
     flag_for,
     load_agent_settings,
 )
-from vehicle_agents.modes import _VEHICLE_TYPE_NAMES
+from vehicle_agents.fcu.modes import _VEHICLE_TYPE_NAMES
 
 ROOT = Path(__file__).resolve().parents[2]
 

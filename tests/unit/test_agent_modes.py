@@ -5,8 +5,12 @@ from __future__ import annotations
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 from pymavlink.dialects.v20 import development
 
-from simulator.personality import ARDUCOPTER_AVAILABLE_MODES, PX4_AVAILABLE_MODES, AvailableMode
-from vehicle_agents.modes import (
+from simulator.personality.available_modes import (
+    ARDUCOPTER_AVAILABLE_MODES,
+    PX4_AVAILABLE_MODES,
+    AvailableMode,
+)
+from vehicle_agents.fcu.modes import (
     ModeSetting,
     mode_table_for,
     reported_mode,

@@ -12,7 +12,7 @@ import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from tests.mavutil_state import mavutil_in_mavlink2, read_tlog
-from vehicle_agents.tlog import TlogRecorder, TlogUploadError, upload_tlog
+from vehicle_agents.tlog.recorder import TlogRecorder, TlogUploadError, upload_tlog
 
 T0 = 1_700_000_000.0  # 2023-11-14T22:13:20Z
 ARMED = mavlink2.MAV_MODE_FLAG_SAFETY_ARMED | mavlink2.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED
@@ -133,7 +133,7 @@ def test_writing_stops_past_max_bytes_and_says_so_once(
     limit = 8 + len(first.get_msgbuf()) + 3 * one_position
     recorder = TlogRecorder(tmp_path, "alpha-1", max_bytes=limit)
 
-    with caplog.at_level(logging.WARNING, logger="vehicle_agents.tlog"):
+    with caplog.at_level(logging.WARNING, logger="vehicle_agents.tlog.recorder"):
         recorder.record(first, T0)
         for i in range(10):
             recorder.record(wire.receive(position(i)), T0 + i * 0.1)

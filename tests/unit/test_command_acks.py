@@ -9,8 +9,9 @@ from typing import Any
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from protocol.messages import ChangeSpeedCommand
-from vehicle_agents.commands import CommandExecutor, CommandTimeouts
-from vehicle_agents.fcu_link import FcuLink
+from vehicle_agents.control.executor import CommandExecutor
+from vehicle_agents.fcu.commands import CommandTimeouts
+from vehicle_agents.fcu.link import FcuLink
 
 VEHICLE = 1
 

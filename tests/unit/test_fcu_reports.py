@@ -6,8 +6,8 @@ from typing import Any
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
-from vehicle_agents.mission_progress import ReachedItems
-from vehicle_agents.statustext import JoinedText, StatusTextJoiner, StatusTextTimeouts
+from vehicle_agents.telemetry.mission_progress import ReachedItems
+from vehicle_agents.telemetry.statustext import JoinedText, StatusTextJoiner, StatusTextTimeouts
 
 WARNING = mavlink2.MAV_SEVERITY_WARNING
 

@@ -31,7 +31,7 @@ from common.geodesy import GeoPoint, LocalFrame
 from simulator import DEFAULT_HOME
 from simulator.mavconst import CopterMode
 from tests.formation_sim import SimVehicle, take_off
-from vehicle_agents.formation import (
+from vehicle_agents.control.formation import (
     POSVEL_TYPE_MASK,
     Action,
     Follower,

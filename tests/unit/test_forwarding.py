@@ -16,15 +16,9 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from gcs.launcher import free_port
 from tests.helpers import poll_until_async
-from vehicle_agents.fcu_link import MavMessage
-from vehicle_agents.forwarding import (
-    NO_TARGET,
-    Endpoint,
-    EndpointAddress,
-    Heard,
-    MavlinkForwarder,
-    targets,
-)
+from vehicle_agents.fcu.messages import MavMessage
+from vehicle_agents.forwarding.endpoints import NO_TARGET, Endpoint, EndpointAddress, Heard, targets
+from vehicle_agents.forwarding.forwarder import MavlinkForwarder
 
 VEHICLE = (1, 1)
 AGENT = (254, 191)

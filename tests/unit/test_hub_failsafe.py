@@ -10,9 +10,9 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from common.retry import Backoff
 from protocol.messages import EventKind
-from vehicle_agents.commands import CommandExecutor
-from vehicle_agents.fcu_link import FcuLink
-from vehicle_agents.hub_failsafe import HubLinkFailsafe, reconnect_backoff
+from vehicle_agents.control.executor import CommandExecutor
+from vehicle_agents.control.hub_failsafe import HubLinkFailsafe, reconnect_backoff
+from vehicle_agents.fcu.link import FcuLink
 
 COPTER_MODES = {"STABILIZE": 0, "GUIDED": 4, "RTL": 6, "LAND": 9}
 

@@ -8,7 +8,7 @@ from typing import Any
 import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
-from vehicle_agents.telemetry import snapshot
+from vehicle_agents.telemetry.snapshot import snapshot
 
 NOW = 1000.0
 

@@ -46,7 +46,7 @@ UPWARD = {
     "storage imports the api": ("backend/storage/upward.py", "backend.api.security"),
     "realtime imports the hub": ("backend/realtime/upward.py", "backend.hub"),
     "the domain imports the fleet": ("backend/safety/upward.py", "backend.fleet.registry"),
-    "the hub imports the agent": ("backend/fleet/upward.py", "vehicle_agents.missions"),
+    "the hub imports the agent": ("backend/fleet/upward.py", "vehicle_agents.fcu.missions"),
     "the agent imports the hub": ("vehicle_agents/upward.py", "backend.errors"),
     "the simulator imports the agent": ("simulator/upward.py", "vehicle_agents.config"),
     "the protocol imports common": ("protocol/upward.py", "common.retry"),

@@ -15,10 +15,10 @@ from contextlib import contextmanager
 
 import pytest
 
-from simulator.lidar import Lidar, LidarSpec, Pose
-from simulator.lidar_stream import wire_format
-from simulator.lidar_wire import Reply, Start, Stop
-from simulator.world import default_scene
+from simulator.outputs.lidar import wire_format
+from simulator.sensors.lidar import Lidar, LidarSpec, Pose
+from simulator.wire.formats import Reply, Start, Stop
+from simulator.world.obstacles import default_scene
 from vehicle_agents.sensors.sources import SerialLidarSource, Turn
 
 

@@ -22,8 +22,9 @@ from protocol.messages import (
     SetHomeCommand,
     TakeoffCommand,
 )
-from vehicle_agents.fcu_link import FcuLink, wire_problems
-from vehicle_agents.missions import MissionClient, wire_seq
+from vehicle_agents.fcu.link import FcuLink
+from vehicle_agents.fcu.messages import wire_problems
+from vehicle_agents.fcu.missions import MissionClient, wire_seq
 
 # (protocol model, its field) -> (the MAVLink message that carries it, that field, the
 # scale applied on the way). What the agent's commands.py, params.py and missions.py send.

@@ -17,7 +17,7 @@ def test_the_agent_loads_one_dialect() -> None:
     the agent's process never holds it (a fresh interpreter, as the agent starts)."""
     script = (
         "import sys\n"
-        "from vehicle_agents.mavlink_dialect import mavutil\n"
+        "from vehicle_agents.fcu.dialect import mavutil\n"
         "module = mavutil()\n"
         "loaded = sorted(n for n, m in sys.modules.items()\n"
         "                if n.count('.') == 3 and n.startswith('pymavlink.dialects.')\n"

@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 
 from protocol.messages import Ack, Resend
-from vehicle_agents.outbox import Outbox, SpillFile
+from vehicle_agents.hub.outbox import Outbox, SpillFile
 
 
 def _put(outbox: Outbox, seqs: range, kind: str = "telemetry") -> None:

@@ -11,9 +11,9 @@ from backend.fleet.param_catalog import ParamCatalog
 from protocol.mavftp import MAX_DATA, FtpError, FtpPayload, Opcode, mftp_path
 from protocol.messages import ParamMeta
 from protocol.param_checks import out_of_range
-from simulator.mavftp_server import FtpServer
-from simulator.px4_params import PARAMETERS_PATH, metadata_files
-from vehicle_agents.param_metadata import parse_px4_parameters
+from simulator.mavlink.ftp_server import FtpServer
+from simulator.params.px4 import PARAMETERS_PATH, metadata_files
+from vehicle_agents.fcu.param_metadata import parse_px4_parameters
 
 METADATA = Path(__file__).parent.parent / "data" / "param_metadata"
 

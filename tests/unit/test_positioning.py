@@ -8,8 +8,14 @@ from typing import Any
 import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
-from vehicle_agents.positioning import PositionFix, PositionTimeouts, best, candidates, choose
-from vehicle_agents.telemetry import snapshot
+from vehicle_agents.telemetry.positioning import (
+    PositionFix,
+    PositionTimeouts,
+    best,
+    candidates,
+    choose,
+)
+from vehicle_agents.telemetry.snapshot import snapshot
 
 NO_GPS = mavlink2.GPS_FIX_TYPE_NO_GPS
 NO_FIX = mavlink2.GPS_FIX_TYPE_NO_FIX

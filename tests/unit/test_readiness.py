@@ -6,8 +6,8 @@ from dataclasses import dataclass
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
-from vehicle_agents.fcu_link import MavMessage
-from vehicle_agents.readiness import PREARM_TEXT_WINDOW_S, Readiness, readiness
+from vehicle_agents.fcu.messages import MavMessage
+from vehicle_agents.telemetry.readiness import PREARM_TEXT_WINDOW_S, Readiness, readiness
 
 NOW = 1_000_000.0
 ALL = (

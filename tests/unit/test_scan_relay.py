@@ -14,9 +14,9 @@ import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from protocol.scans import FLAG_REPLAYED, decode_scan, encode_scan
-from simulator.lidar import Lidar, LidarSpec, Pose
-from simulator.world import default_scene
-from simulator.ydlidar_wire import encode_beams
+from simulator.sensors.lidar import Lidar, LidarSpec, Pose
+from simulator.wire.ydlidar import encode_beams
+from simulator.world.obstacles import default_scene
 from tests.support.scans import _frame
 from vehicle_agents.sensors.fcu_time import FcuClock, PoseHistory, ask_timesync
 from vehicle_agents.sensors.lidar.ydlidar import YdlidarParser

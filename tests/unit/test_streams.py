@@ -7,18 +7,16 @@ import itertools
 import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
-from vehicle_agents.stream_watch import RateWatch, RateWatchSettings
-from vehicle_agents.streams import (
-    ALL_GROUPS,
+from vehicle_agents.fcu.rate_merger import ALL_GROUPS, IntervalAnswer, RateMerger
+from vehicle_agents.fcu.stream_plan import (
     DATA_STREAM_GROUPS,
     DEFAULT_RATES_HZ,
-    IntervalAnswer,
-    RateMerger,
     StreamRequest,
     data_stream_rates,
     message_id,
     stream_plan,
 )
+from vehicle_agents.fcu.stream_watch import RateWatch, RateWatchSettings
 
 
 def rates(plan: list[StreamRequest]) -> dict[str, float]:

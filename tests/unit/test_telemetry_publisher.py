@@ -12,8 +12,8 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from protocol.messages import Telemetry, agent_to_hub, decode
 from vehicle_agents.agent import TelemetryPublisher
-from vehicle_agents.fcu_link import FcuLink
-from vehicle_agents.outbox import Outbox
+from vehicle_agents.fcu.link import FcuLink
+from vehicle_agents.hub.outbox import Outbox
 
 VEHICLE = 1
 GUIDED = 4

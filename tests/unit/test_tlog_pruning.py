@@ -5,7 +5,7 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-from vehicle_agents.tlog_pruning import DAY_S, UPLOADED_DIR, TlogRetention, prune_uploaded_tlogs
+from vehicle_agents.tlog.pruning import DAY_S, UPLOADED_DIR, TlogRetention, prune_uploaded_tlogs
 
 NOW = 1_800_000_000.0
 

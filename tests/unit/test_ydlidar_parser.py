@@ -8,9 +8,9 @@ import struct
 
 import pytest
 
-from simulator.lidar import Lidar, LidarSpec, Pose
-from simulator.world import default_scene
-from simulator.ydlidar_wire import SCAN_RESPONSE, encode_beams, health, packet
+from simulator.sensors.lidar import Lidar, LidarSpec, Pose
+from simulator.wire.ydlidar import SCAN_RESPONSE, encode_beams, health, packet
+from simulator.world.obstacles import default_scene
 from vehicle_agents.sensors.lidar.common import Health, Packet
 from vehicle_agents.sensors.lidar.ydlidar import YdlidarParser
 

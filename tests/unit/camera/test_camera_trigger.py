@@ -13,7 +13,7 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from protocol.photos import PhotoMeta, PhotoPose
 from simulator.config import ListenAddress
-from simulator.photo_server import PhotoServer
+from simulator.outputs.photos import PhotoServer
 from simulator.vehicle import PhotoTaken
 from tests.support.cameras import (
     BOOT_EPOCH,

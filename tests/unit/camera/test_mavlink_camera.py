@@ -15,8 +15,8 @@ from typing import Any
 import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
-from simulator.camera_outputs import CameraComponent
-from simulator.photo_server import pose_of
+from simulator.outputs.cameras import CameraComponent
+from simulator.outputs.photos import pose_of
 from simulator.vehicle import PhotoTaken
 from tests.helpers import poll_until_async
 from tests.support.cameras import (

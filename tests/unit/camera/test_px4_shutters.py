@@ -24,7 +24,7 @@ from tests.support.cameras import (
 from vehicle_agents.camera.queue import QueuedPhoto
 from vehicle_agents.camera.sources import SimulatedCamera
 from vehicle_agents.camera.trigger import SHOT_QUEUE, CameraTrigger
-from vehicle_agents.shutters import ShutterMatcher
+from vehicle_agents.telemetry.shutters import ShutterMatcher
 
 AUTOPILOT = mavlink2.MAV_COMP_ID_AUTOPILOT1
 

@@ -20,7 +20,7 @@ from vehicle_agents.config import (
 )
 from vehicle_agents.fcu.modes import _VEHICLE_TYPE_NAMES
 
-ROOT = Path(__file__).resolve().parents[2]
+ROOT = Path(__file__).resolve().parents[3]
 
 
 def _empty_config(tmp_path: Path) -> Path:

@@ -15,7 +15,7 @@ from simulator.mavlink.ftp_server import FtpServer
 from simulator.params.px4 import PARAMETERS_PATH, metadata_files
 from vehicle_agents.fcu.param_metadata import parse_px4_parameters
 
-METADATA = Path(__file__).parent.parent / "data" / "param_metadata"
+METADATA = Path(__file__).parents[3] / "data" / "param_metadata"
 
 
 def test_mftp_addresses_and_the_payload_round_trip() -> None:

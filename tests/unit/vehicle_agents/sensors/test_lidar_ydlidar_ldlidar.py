@@ -1,7 +1,7 @@
 """The agent's YDLIDAR (2-byte samples, the X4's intercept correction, telling 2- from
 3-byte samples) and LDROBOT parsers on byte streams built here from the manufacturers'
 published formats, field by field (the simulator's encoders are tested against them in
-tests/simulator/test_sim_lidar_formats.py)."""
+tests/simulator/outputs/test_sim_lidar_formats.py)."""
 
 from __future__ import annotations
 

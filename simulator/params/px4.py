@@ -1,7 +1,7 @@
 """PX4 parameters the simulated multirotor reports when it plays PX4, by PX4's names.
 
 PX4 has two parameter types, INT32 and FLOAT, and sends its integers bytewise (see
-`param_wire`). The integers here are chosen to exercise that: MAV_SYS_ID (small),
+`wire`). The integers here are chosen to exercise that: MAV_SYS_ID (small),
 COM_FLTMODE1 (-1, "unassigned", a NaN when read as a float), SDLOG_UTC_OFFSET (the
 field trial's write of 60) and CAL_ACC0_ID (a device id in the millions). The floats map
 onto the copter's own parameters where the meaning is the same.

@@ -1,7 +1,7 @@
 """Which autopilot the simulated multirotor plays: how it names its modes on the wire and
 answers what it declines.
 
-The flight behaviour is the copter's own (ArduCopter's rules, see `copter.py`); a
+The flight behaviour is the copter's own (ArduCopter's rules, see `simulator.copter`); a
 personality maps its flight modes to and from the autopilot's encoding, as a GCS sees it:
 
 * ArduCopter: HEARTBEAT.custom_mode is the mode number; DO_SET_MODE param2 is that number;
@@ -19,7 +19,7 @@ personality maps its flight modes to and from the autopilot's encoding, as a GCS
   position is flown to once the climb is done. A reposition or a
   set-home sent as COMMAND_INT is taken only in MAV_FRAME_GLOBAL_INT (MAV_RESULT 9,
   COMMAND_UNSUPPORTED_MAV_FRAME, for any other frame). Its parameters have PX4's names
-  and types, integers sent bytewise (`px4_params`, `param_wire`). Its camera tells of
+  and types, integers sent bytewise (`params.px4`, `params.wire`). Its camera tells of
   a shutter with CAMERA_IMAGE_CAPTURED, and with CAMERA_TRIGGER where a GCS asked for it,
   never with ArduPilot's CAMERA_FEEDBACK.
 

@@ -7,7 +7,7 @@ drop COMMAND_LONG), get the older REQUEST_DATA_STREAM instead: one rate per grou
 messages (ArduPilot's SRx_ parameters), with no acknowledgement.
 
 Another GCS on the same link can change those rates at any time; `RateWatch`
-(stream_watch.py) measures what arrives, and the requester asks again for any message
+(`stream_watch.py`) measures what arrives, and the requester asks again for any message
 that falls below its rate, the same way it asked the first time.
 """
 

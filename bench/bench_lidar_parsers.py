@@ -17,9 +17,9 @@ import argparse
 import time
 
 from gcs.demo_lidars import DEMO_LIDARS
-from simulator.lidar import Lidar, LidarSpec, Pose
-from simulator.lidar_stream import wire_format
-from simulator.world import default_scene
+from simulator.outputs.lidar import wire_format
+from simulator.sensors.lidar import Lidar, LidarSpec, Pose
+from simulator.world.obstacles import default_scene
 from vehicle_agents.sensors.lidar.models import MODELS, make_parser
 from vehicle_agents.sensors.sources import TurnAssembler
 

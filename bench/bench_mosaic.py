@@ -31,7 +31,7 @@ from backend.mosaic.engine import Applied
 from backend.mosaic.photo import StoredPhoto
 from backend.mosaic.service import MosaicService
 from protocol.photos import CameraIntrinsics
-from simulator.ground import Ground
+from simulator.world.ground import Ground
 from tests.mosaic_photos import HOME, lane_poses, survey_photos
 
 # A 1/2.3" 12 MP drone camera (DJI Mavic 2 Zoom / Mini class): 6.3 x 4.7 mm, 4000 x 3000 px.

@@ -26,7 +26,7 @@ from pathlib import Path
 from backend.photos.checks import check_image
 from common.geodesy import GeoPoint
 from protocol.photos import CameraIntrinsics, PhotoMeta, PhotoPose
-from simulator.photo_server import nadir_renderer
+from simulator.outputs.photos import nadir_renderer
 from tests.conftest import ADMIN_PASSWORD, hub_settings
 from tests.helpers import access_token, api_client, poll_until_async, running_hub
 from tests.integration.test_hub_bad_input import scripted_agent

@@ -42,9 +42,9 @@ from backend.storage.scans import ScanRepository, StoredScan
 from common.geodesy import LocalFrame
 from gcs.launcher import FleetPlan, LocalFleet, free_port
 from protocol.scans import ScanFrame, ScanPose, decode_scan, encode_scan
-from simulator.lidar import Lidar, Pose
-from simulator.world import default_scene
-from simulator.ydlidar_wire import encode_beams
+from simulator.sensors.lidar import Lidar, Pose
+from simulator.wire.ydlidar import encode_beams
+from simulator.world.obstacles import default_scene
 from vehicle_agents.sensors.lidar.ydlidar import YdlidarParser
 from vehicle_agents.sensors.sources import Turn, TurnAssembler
 

@@ -10,7 +10,7 @@ from simulator.clock import Clock, ManualClock, SimClock
 from simulator.config import DEFAULT_HOME, ListenAddress, SimulatorConfig
 from simulator.copter import Copter
 from simulator.mavconst import CopterMode, MavResult
-from simulator.params import CopterParams
+from simulator.params.values import CopterParams
 from simulator.server import SimulatorServer
 from simulator.vehicle import DT, StatusText
 

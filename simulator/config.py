@@ -13,7 +13,7 @@ from typing import Literal
 from common.geodesy import GeoPoint
 from protocol.photos import CameraIntrinsics, parse_camera_model
 from simulator.clock import MAX_SPEEDUP
-from simulator.lidar_wire import LIDAR_FORMATS
+from simulator.wire.formats import LIDAR_FORMATS
 
 # ArduPilot's SITL home, CMAC (Canberra Model Aircraft Club).
 DEFAULT_HOME = GeoPoint(-35.363262, 149.165237, 584.0)
@@ -72,8 +72,8 @@ class SimulatorConfig:
     # A 2-D LIDAR whose serial bytes are served on this TCP address; None: no LIDAR.
     lidar: ListenAddress | None = None
     lidar_rate_hz: float = 10.0
-    lidar_format: str = "ydlidar"  # the wire format: simulator/lidar_wire.py's LIDAR_FORMATS
-    scene: Path | None = None  # obstacles (simulator/world.py); None: the default yard
+    lidar_format: str = "ydlidar"  # the wire format: simulator/wire/formats.py's LIDAR_FORMATS
+    scene: Path | None = None  # obstacles (simulator/world/obstacles.py); None: the default yard
     # The camera's photos served over HTTP on this TCP address; None: CAMERA_FEEDBACK only.
     camera: ListenAddress | None = None
     # The camera as a MAVLink camera component (CAMERA_IMAGE_CAPTURED with the photo

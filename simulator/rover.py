@@ -23,7 +23,6 @@ import struct
 from typing import Self
 
 from common.geodesy import GeoPoint
-from simulator.battery import current_draw
 from simulator.mavconst import (
     SUPPORTED_ROVER_MODES,
     LandedState,
@@ -36,11 +35,12 @@ from simulator.mavconst import (
     RoverMode,
     Severity,
 )
-from simulator.mission import MissionItem
-from simulator.param_table import ParamDef, ParamTable, ParamType
-from simulator.params import CopterParams
-from simulator.physics import Setpoint
+from simulator.params.table import ParamDef, ParamTable, ParamType
+from simulator.params.values import CopterParams
 from simulator.vehicle import DT, AutoPhase, Vehicle
+from simulator.vehicle.battery import current_draw
+from simulator.vehicle.physics import Setpoint
+from simulator.vehicle.stored_mission import MissionItem
 
 # Rover's defaults for what the shared parameter fields mean on a rover.
 ROVER_DEFAULTS = dataclasses.replace(

@@ -20,23 +20,18 @@ from typing import TYPE_CHECKING, Any
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from simulator.clock import Clock, SimClock
-from simulator.commands import MessageHandler
 from simulator.config import ListenAddress, SimulatorConfig
 from simulator.mavconst import MsgId
-from simulator.streams import StreamRequests, StreamSchedule
-from simulator.telemetry import (
-    DEFAULT_RATES_HZ,
-    MavMessage,
-    SecondGps,
-    TelemetryBuilder,
-)
+from simulator.mavlink.commands import MessageHandler
+from simulator.mavlink.streams import StreamRequests, StreamSchedule
+from simulator.mavlink.telemetry import DEFAULT_RATES_HZ, MavMessage, SecondGps, TelemetryBuilder
 from simulator.vehicle import ItemReached, PhotoTaken, Vehicle
 from simulator.vehicles import REBOOT_SILENCE_S, build_vehicle
 
 if TYPE_CHECKING:
-    from simulator.camera_outputs import CameraComponent, FolderCamera
-    from simulator.lidar_stream import LidarStream
-    from simulator.photo_server import PhotoServer
+    from simulator.outputs.cameras import CameraComponent, FolderCamera
+    from simulator.outputs.lidar import LidarStream
+    from simulator.outputs.photos import PhotoServer
 
 log = logging.getLogger(__name__)
 
@@ -203,7 +198,7 @@ class SimulatorServer:
         self.address = ListenAddress(listen.scheme, listen.host, port)
         if self.config.lidar is not None:
             # numpy is imported only by a simulator that has a LIDAR to ray-cast for
-            from simulator.lidar_stream import LidarStream
+            from simulator.outputs.lidar import LidarStream
 
             self.lidar = LidarStream(
                 self.config.lidar,
@@ -215,7 +210,7 @@ class SimulatorServer:
             self.lidar_address = await self.lidar.start()
         if self.config.camera is not None or self.config.camera_folder is not None:
             # numpy and OpenCV are imported only by a simulator that renders photos
-            from simulator.photo_server import PhotoServer, nadir_renderer
+            from simulator.outputs.photos import PhotoServer, nadir_renderer
 
             ground = self.config.ground or self.config.home
             render = await asyncio.to_thread(nadir_renderer, ground)  # the texture: a second
@@ -224,12 +219,12 @@ class SimulatorServer:
                 self.photos = PhotoServer(self.config.camera, render, self.telemetry.boot_epoch_s)
                 photos_at = await self.photos.start()
                 if self.config.camera_component:
-                    from simulator.camera_outputs import CameraComponent
+                    from simulator.outputs.cameras import CameraComponent
 
                     assert self.config.camera_model is not None  # SimulatorConfig checks
                     self.camera_component = CameraComponent(photos_at, self.config.camera_model)
             if self.config.camera_folder is not None:
-                from simulator.camera_outputs import FolderCamera
+                from simulator.outputs.cameras import FolderCamera
 
                 assert self.config.camera_model is not None
                 self.camera_folder = FolderCamera(
@@ -352,7 +347,7 @@ class SimulatorServer:
                     link.send(trigger)
             self._broadcast(self.telemetry.camera_image_captured(photo))
         if self.camera_component is not None:
-            from simulator.photo_server import pose_of
+            from simulator.outputs.photos import pose_of
 
             pose = pose_of(photo, self.telemetry.boot_epoch_s)
             self._broadcast(
@@ -365,7 +360,7 @@ class SimulatorServer:
     async def _write_to_folder(self) -> None:
         """Render each shot and write it to the camera's folder, off the event loop: the
         file lands a moment after the autopilot's message, as a real camera's does."""
-        from simulator.photo_server import pose_of
+        from simulator.outputs.photos import pose_of
 
         assert self.camera_folder is not None
         assert self._renderer is not None

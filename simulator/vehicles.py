@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from simulator.config import SimulatorConfig
 from simulator.copter import Copter
-from simulator.param_table import SetOutcome
+from simulator.params.table import SetOutcome
 from simulator.personality import personality_for
 from simulator.rover import Rover
 from simulator.vehicle import Vehicle

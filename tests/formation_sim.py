@@ -30,11 +30,11 @@ from common.formation import (
 )
 from common.geodesy import GeoPoint, LocalFrame
 from simulator import DEFAULT_HOME, Copter
-from simulator.commands import MessageHandler
 from simulator.mavconst import CopterMode
-from simulator.streams import StreamSchedule
-from simulator.telemetry import DEFAULT_RATES_HZ, TelemetryBuilder
-from vehicle_agents.formation import (
+from simulator.mavlink.commands import MessageHandler
+from simulator.mavlink.streams import StreamSchedule
+from simulator.mavlink.telemetry import DEFAULT_RATES_HZ, TelemetryBuilder
+from vehicle_agents.control.formation import (
     Action,
     Follower,
     FollowerSettings,

@@ -20,7 +20,7 @@ from typing import Any
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
-from vehicle_agents.fcu_link import MavMessage
+from vehicle_agents.fcu.messages import MavMessage
 
 HOME_ALT_MSL = 584.0
 TELEMETRY_PERIOD_S = 0.2

@@ -21,8 +21,8 @@ from backend.mosaic.service import MosaicService
 from common.camera_geometry import gsd_m
 from common.geodesy import LocalFrame
 from protocol.photos import CameraIntrinsics, PhotoPose
-from simulator.camera_view import render_nadir
-from simulator.ground import ARUCO_DICTIONARY, Ground
+from simulator.sensors.camera import render_nadir
+from simulator.world.ground import ARUCO_DICTIONARY, Ground
 
 HOME = (-35.363261, 149.165230, 584.0)  # ArduPilot's SITL home, as the simulator's
 

@@ -24,34 +24,35 @@ from protocol.messages import (
     encode,
 )
 from vehicle_agents import __version__
-from vehicle_agents.available_modes import AvailableModes
-from vehicle_agents.commands import CommandExecutor
 from vehicle_agents.config import AgentSettings, default_vehicle_id, hub_http_base
-from vehicle_agents.fcu_events import FcuLinkEvents
-from vehicle_agents.fcu_link import FcuLink, MavMessage
-from vehicle_agents.formation import FormationRunner
-from vehicle_agents.forwarding import MavlinkForwarder
+from vehicle_agents.control.executor import CommandExecutor
+from vehicle_agents.control.formation import FormationRunner
+from vehicle_agents.control.hub_failsafe import HubLinkFailsafe, reconnect_backoff
+from vehicle_agents.control.manual import ManualPilot
+from vehicle_agents.fcu.available_modes import AvailableModes
+from vehicle_agents.fcu.events import FcuLinkEvents
+from vehicle_agents.fcu.link import FcuLink
+from vehicle_agents.fcu.messages import MavMessage
+from vehicle_agents.fcu.missions import mission_number
+from vehicle_agents.fcu.modes import is_armed
+from vehicle_agents.fcu.param_metadata import ParamMetadata
+from vehicle_agents.fcu.streams import StreamRequester
+from vehicle_agents.forwarding.forwarder import MavlinkForwarder
 from vehicle_agents.health import HealthFile
-from vehicle_agents.hub_failsafe import HubLinkFailsafe, reconnect_backoff
-from vehicle_agents.hub_link import HubLink, HubTimeouts, ModeReport, VehicleIdInUse
-from vehicle_agents.manual import ManualPilot
-from vehicle_agents.mission_progress import ReachedItems
-from vehicle_agents.missions import mission_number
-from vehicle_agents.modes import is_armed
-from vehicle_agents.outbox import Outbox, SpillFile
-from vehicle_agents.param_metadata import ParamMetadata
+from vehicle_agents.hub.link import HubLink, HubTimeouts, ModeReport, VehicleIdInUse
+from vehicle_agents.hub.outbox import Outbox, SpillFile
 from vehicle_agents.sensors.fcu_time import FcuClock, PoseHistory, ask_timesync
 from vehicle_agents.sensors.relay import DiskBacklog, ScanOutbox, ScanRelay, parse_mount
 from vehicle_agents.sensors.ros2 import SCHEME as ROS2_SCHEME
 from vehicle_agents.sensors.ros2 import LaserScanSource
 from vehicle_agents.sensors.sources import MavlinkRangeSource, ScanSource, SerialLidarSource
-from vehicle_agents.shutters import ShutterMatcher, captured_alt_rel, from_autopilot
-from vehicle_agents.statustext import StatusTextJoiner
-from vehicle_agents.streams import StreamRequester
-from vehicle_agents.telemetry import link_snapshot
-from vehicle_agents.tlog import TlogRecorder
-from vehicle_agents.tlog_pruning import MIB, TlogRetention
-from vehicle_agents.tlog_uploads import TlogUploader
+from vehicle_agents.telemetry.mission_progress import ReachedItems
+from vehicle_agents.telemetry.shutters import ShutterMatcher, captured_alt_rel, from_autopilot
+from vehicle_agents.telemetry.snapshot import link_snapshot
+from vehicle_agents.telemetry.statustext import StatusTextJoiner
+from vehicle_agents.tlog.pruning import MIB, TlogRetention
+from vehicle_agents.tlog.recorder import TlogRecorder
+from vehicle_agents.tlog.uploads import TlogUploader
 
 log = logging.getLogger(__name__)
 SEVERITY_NOTICE = 5  # MAV_SEVERITY_NOTICE: normal but significant

@@ -157,7 +157,7 @@ def run(args: argparse.Namespace, prog: str = "gcs-agent") -> int:
     if args.health:
         return report_health(settings, prog)
     from vehicle_agents.agent import run_agent
-    from vehicle_agents.hub_link import VehicleIdInUse
+    from vehicle_agents.hub.link import VehicleIdInUse
 
     # What the agent writes (the outbox's telemetry, onboard .tlogs) is for its own user
     # only, on a companion computer that others may log in to.
@@ -175,7 +175,7 @@ def print_id(settings: AgentSettings, prog: str) -> int:
     if settings.vehicle_id is not None:
         print(settings.vehicle_id)
         return 0
-    from vehicle_agents.identity import identify
+    from vehicle_agents.hub.identity import identify
 
     try:
         vehicle_id = asyncio.run(identify(settings, PRINT_ID_TIMEOUT_S))

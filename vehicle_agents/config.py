@@ -194,7 +194,7 @@ class AgentSettings(BaseSettings):
     @field_validator("stream_rates_hz")
     @classmethod
     def _known_messages(cls, rates: dict[str, float]) -> dict[str, float]:
-        from vehicle_agents.streams import stream_plan
+        from vehicle_agents.fcu.stream_plan import stream_plan
 
         stream_plan(rates)  # names MAVLink knows, rates >= 0: refused here, before flight
         return rates

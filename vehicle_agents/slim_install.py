@@ -2,7 +2,7 @@
 
 pymavlink's wheel carries every dialect generated twice (MAVLink 1 and 2), and pip
 compiles each to bytecode: 88 of the 92 MB it takes once installed. The agent loads one,
-ardupilotmega (which holds common and minimal) over MAVLink 2 (`mavlink_dialect.py`).
+ardupilotmega (which holds common and minimal) over MAVLink 2 (`fcu/dialect.py`).
 pip cannot leave parts of a package out, so this deletes them after the install:
 
     sudo /opt/gcs/.venv/bin/python -m vehicle_agents.slim_install
@@ -23,7 +23,7 @@ import sys
 from collections.abc import Iterable, Iterator
 from pathlib import Path
 
-from vehicle_agents.mavlink_dialect import DIALECT
+from vehicle_agents.fcu.dialect import DIALECT
 
 KEPT_DIALECTS = frozenset({DIALECT, "common", "minimal"})
 WIRE_VERSIONS = ("v10", "v20")

@@ -1,6 +1,6 @@
 """Formations in flight: the hub hands each member its slot and relays the leader's state.
 
-The followers' control runs in their agents (vehicle_agents/formation.py), close to the
+The followers' control runs in their agents (vehicle_agents/control/formation.py), close to the
 aircraft; the hub only moves data. At ``rate_hz`` it sends every follower the newest
 leader state (newest wins, nothing queues behind a slow link) with the other members'
 positions for the separation check.

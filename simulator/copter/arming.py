@@ -4,8 +4,8 @@ from __future__ import annotations
 
 from simulator.copter.state import POSITION_MODES, CopterState
 from simulator.mavconst import CopterMode, MavResult, Severity
-from simulator.physics import Setpoint
 from simulator.vehicle import DT, AutoPhase
+from simulator.vehicle.physics import Setpoint
 
 
 class Arming(CopterState):

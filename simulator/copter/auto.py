@@ -6,9 +6,9 @@ import math
 
 from simulator.copter.state import CopterState
 from simulator.mavconst import MavCmd, Severity
-from simulator.mission import MissionItem
-from simulator.physics import Setpoint
 from simulator.vehicle import DT, AutoPhase
+from simulator.vehicle.physics import Setpoint
+from simulator.vehicle.stored_mission import MissionItem
 
 TAKEOFF_DONE_M = 0.1  # a take-off is complete this close to its altitude
 WAYPOINT_ALT_TOLERANCE_M = 1.0

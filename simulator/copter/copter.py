@@ -6,7 +6,6 @@ import math
 from typing import Self
 
 from common.geodesy import GeoPoint
-from simulator.battery import current_draw
 from simulator.copter.arming import Arming
 from simulator.copter.auto import Auto
 from simulator.copter.failsafes import Failsafes
@@ -15,8 +14,9 @@ from simulator.copter.landing import ReturnAndLand
 from simulator.copter.modes import Modes
 from simulator.copter.state import BRAKE_DECEL, BRAKE_SPEED_Z
 from simulator.mavconst import CopterMode
-from simulator.physics import Setpoint, wrap_2pi
 from simulator.vehicle import DT, AutoPhase
+from simulator.vehicle.battery import current_draw
+from simulator.vehicle.physics import Setpoint, wrap_2pi
 
 # ArduCopter's THR_DZ default, 100 of 1000 either side of mid stick.
 THROTTLE_DEADZONE = 0.1

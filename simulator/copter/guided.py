@@ -6,10 +6,10 @@ import math
 
 from simulator.copter.state import CopterState
 from simulator.mavconst import CopterMode, MavFrame, MavResult
-from simulator.params import CopterParams
-from simulator.personality import PX4_TAKEOFF_ALT_M
-from simulator.physics import Setpoint
+from simulator.params.values import CopterParams
+from simulator.personality.base import PX4_TAKEOFF_ALT_M
 from simulator.vehicle import DT
+from simulator.vehicle.physics import Setpoint
 
 # Modes that accept MAV_CMD_NAV_TAKEOFF on the ground (Mode::has_user_takeoff).
 _USER_TAKEOFF = frozenset({CopterMode.GUIDED, CopterMode.LOITER})

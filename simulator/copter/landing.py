@@ -5,8 +5,8 @@ from __future__ import annotations
 import math
 
 from simulator.copter.state import CopterState, RtlStage
-from simulator.physics import Setpoint, sqrt_controller
 from simulator.vehicle import DT
+from simulator.vehicle.physics import Setpoint, sqrt_controller
 
 
 class ReturnAndLand(CopterState):

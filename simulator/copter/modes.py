@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from simulator.copter.state import BRAKE_DECEL, POSITION_MODES, CopterState
 from simulator.mavconst import SUPPORTED_MODES, CopterMode, MavResult, Severity
-from simulator.personality import PX4_TAKEOFF_ALT_M, Declined, ModeRequest
+from simulator.personality.base import PX4_TAKEOFF_ALT_M, Declined, ModeRequest
 from simulator.vehicle import AutoPhase
 
 

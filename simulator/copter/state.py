@@ -8,11 +8,12 @@ from enum import Enum
 
 from common.geodesy import GeoPoint
 from simulator.mavconst import CopterMode, LandedState, MavResult, MavState, MavType
-from simulator.param_table import ParamTable
-from simulator.params import CopterParams
-from simulator.personality import ArduCopterPersonality, Personality
-from simulator.physics import Setpoint
+from simulator.params.table import ParamTable
+from simulator.params.values import CopterParams
+from simulator.personality.ardupilot import ArduCopterPersonality
+from simulator.personality.base import Personality
 from simulator.vehicle import AutoPhase, Vehicle
+from simulator.vehicle.physics import Setpoint
 
 BRAKE_DECEL = 7.5  # BRAKE_MODE_DECEL_RATE, m/s/s
 BRAKE_SPEED_Z = 2.5  # BRAKE_MODE_SPEED_Z, m/s

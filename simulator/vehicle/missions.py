@@ -6,11 +6,11 @@ from __future__ import annotations
 from abc import abstractmethod
 
 from simulator.mavconst import MavCmd, MavFrame, MissionState
-from simulator.mission import ABSOLUTE_FRAMES, MissionItem
 from simulator.vehicle.camera import Camera
 from simulator.vehicle.events import ItemReached
 from simulator.vehicle.gcs_interface import GcsCommands
 from simulator.vehicle.state import AutoPhase
+from simulator.vehicle.stored_mission import ABSOLUTE_FRAMES, MissionItem
 
 
 class MissionRunner(Camera, GcsCommands):

@@ -10,13 +10,13 @@ from enum import Enum, IntEnum
 from typing import TypeVar
 
 from common.geodesy import GeoPoint, LocalFrame
-from simulator.battery import Battery
 from simulator.mavconst import LandedState, MavResult, MavState, Severity
-from simulator.mission import MissionItem
-from simulator.param_table import ParamTable, SetOutcome
-from simulator.params import CopterParams
-from simulator.physics import Airframe
+from simulator.params.table import ParamTable, SetOutcome
+from simulator.params.values import CopterParams
+from simulator.vehicle.battery import Battery
 from simulator.vehicle.events import Event, StatusText
+from simulator.vehicle.physics import Airframe
+from simulator.vehicle.stored_mission import MissionItem
 
 DT = 0.02  # physics step, sim seconds
 GPS_PERIOD_STEPS = 10  # a GPS fix every 0.2 s (5 Hz), each with fresh noise

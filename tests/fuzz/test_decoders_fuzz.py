@@ -7,7 +7,7 @@ the decoder's own clear error (counted by the hub: tests/integration/test_hostil
 - the agent's side of its socket (`hub_to_agent`: commands, manual frames, formation);
 - the binary scan frame, as the agent sends it and as a subscriber gets it;
 - the agent's MAVLink intake from the flight controller, through its real path: a real
-  UDP link opened the way the agent opens it, `_read_available` (pymavlink's robust
+  UDP link opened the way the agent opens it, `read_available` (pymavlink's robust
   parser), `FcuLink._on_message` and the telemetry snapshot built from it; also the
   forwarding endpoints' parser (frames from a third-party GCS).
 
@@ -57,9 +57,10 @@ from tests.support.frames import (
     any_frames,
     scan_frames,
 )
-from vehicle_agents.fcu_link import FcuLink, _read_available
-from vehicle_agents.forwarding import Endpoint, EndpointAddress
-from vehicle_agents.telemetry import link_snapshot
+from vehicle_agents.fcu.link import FcuLink
+from vehicle_agents.fcu.messages import read_available
+from vehicle_agents.forwarding.endpoints import Endpoint, EndpointAddress
+from vehicle_agents.telemetry.snapshot import link_snapshot
 
 # About 30 s for the module on a busy 2-core machine; the deadline is per example, far
 # above a decode's cost, so only a decoder that loops or blows up trips it.
@@ -256,7 +257,7 @@ def _read_all(connection: Any, sent: int) -> list[Any]:
     """Every message of the datagrams just sent (each arrives whole, on loopback)."""
     messages: list[Any] = []
     for _ in range(sent):
-        messages += _read_available(connection, 2.0)
+        messages += read_available(connection, 2.0)
     return messages
 
 

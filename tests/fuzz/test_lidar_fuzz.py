@@ -12,10 +12,10 @@ from functools import cache
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from simulator.lidar import Lidar, LidarSpec, Pose
-from simulator.lidar_stream import wire_format
-from simulator.lidar_wire import LIDAR_FORMATS
-from simulator.world import default_scene
+from simulator.outputs.lidar import wire_format
+from simulator.sensors.lidar import Lidar, LidarSpec, Pose
+from simulator.wire.formats import LIDAR_FORMATS
+from simulator.world.obstacles import default_scene
 from vehicle_agents.sensors.lidar.common import MAX_BUFFER, StreamParser
 from vehicle_agents.sensors.lidar.ldlidar import LdlidarParser
 from vehicle_agents.sensors.lidar.rplidar import (

@@ -33,8 +33,8 @@ from tests.conftest import hub_settings
 from tests.helpers import FleetWatcher, agent_process, api_client, connected, running_hub
 from tests.mavlink_peer import HOME_ALT_MSL, Answer, Script, ScriptedFlightController
 from tests.support.executors import with_executor
-from vehicle_agents.commands import CommandExecutor
-from vehicle_agents.fcu_link import MavMessage
+from vehicle_agents.control.executor import CommandExecutor
+from vehicle_agents.fcu.messages import MavMessage
 
 pytestmark = pytest.mark.integration
 

@@ -25,10 +25,11 @@ from protocol.messages import VehicleState
 from tests.helpers import FleetWatcher, agent_process, api_client, poll_until, state_of
 from tests.mavlink_peer import ScriptedFlightController, _is_command
 from vehicle_agents.agent import EventSource
-from vehicle_agents.available_modes import AvailableModes
-from vehicle_agents.fcu_link import FcuLink, MavMessage
-from vehicle_agents.outbox import Outbox
-from vehicle_agents.telemetry import link_snapshot
+from vehicle_agents.fcu.available_modes import AvailableModes
+from vehicle_agents.fcu.link import FcuLink
+from vehicle_agents.fcu.messages import MavMessage
+from vehicle_agents.hub.outbox import Outbox
+from vehicle_agents.telemetry.snapshot import link_snapshot
 
 pytestmark = pytest.mark.integration
 

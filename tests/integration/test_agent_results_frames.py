@@ -17,9 +17,9 @@ from simulator.config import DEFAULT_HOME, Autopilot
 from simulator.copter import Copter
 from tests.mavlink_peer import Answer, ScriptedFlightController
 from tests.support.fcu import fcu_url, on_link, simulated
-from vehicle_agents.commands import CommandExecutor
-from vehicle_agents.fcu_link import MavMessage
-from vehicle_agents.mav_results import result_name
+from vehicle_agents.control.executor import CommandExecutor
+from vehicle_agents.fcu.messages import MavMessage
+from vehicle_agents.fcu.results import result_name
 
 pytestmark = pytest.mark.integration
 

@@ -27,8 +27,8 @@ from tests.helpers import agent_process, poll_until_async
 from tests.mavlink_peer import Answer, ScriptedFlightController
 from tests.support.executors import with_executor
 from tests.support.scripted_hub import ScriptedHub, _command
-from vehicle_agents.commands import CommandExecutor
-from vehicle_agents.manual import ManualPilot
+from vehicle_agents.control.executor import CommandExecutor
+from vehicle_agents.control.manual import ManualPilot
 
 pytestmark = pytest.mark.integration
 

@@ -17,7 +17,7 @@ from tests.conftest import ADMIN_PASSWORD, hub_settings
 from tests.helpers import access_token, api_client, running_hub
 from tests.support.agents import close_code, scripted_agent, websocket
 from tests.support.flights import OPERATOR_TOKEN, _heartbeat, _recorded_flight
-from vehicle_agents.tlog_uploads import UPLOAD_BACKOFF, TlogUploader
+from vehicle_agents.tlog.uploads import UPLOAD_BACKOFF, TlogUploader
 
 LATER_TOKEN = "field-kit-alpha-rotated-9876543210"
 FAST_RETRIES = Backoff(initial_s=0.05, max_s=0.2)

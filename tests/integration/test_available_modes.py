@@ -12,8 +12,8 @@ from gcs.launcher import LocalFleet
 from simulator import ListenAddress, SimulatorConfig
 from tests.helpers import FleetWatcher, api_client, ready
 from tests.support.simulators import serving
-from vehicle_agents.available_modes import AvailableModes
-from vehicle_agents.fcu_link import FcuLink
+from vehicle_agents.fcu.available_modes import AvailableModes
+from vehicle_agents.fcu.link import FcuLink
 
 pytestmark = pytest.mark.integration
 

@@ -29,7 +29,7 @@ from tests.helpers import (
 )
 from tests.support.photos import CAMERA_MODEL, camera_vehicle
 from tests.support.simulators import serving
-from vehicle_agents.fcu_link import FcuLink
+from vehicle_agents.fcu.link import FcuLink
 
 pytestmark = pytest.mark.integration
 

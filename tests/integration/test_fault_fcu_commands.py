@@ -21,7 +21,7 @@ from tests.helpers import FleetWatcher, agent_process, api_client, connected
 from tests.support.fcu import FcuTap, sim_config, state_of
 from tests.support.silent_fcu import SilentFlightController
 from tests.support.simulators import serving
-from vehicle_agents.commands import CommandTimeouts
+from vehicle_agents.fcu.commands import CommandTimeouts
 
 pytestmark = pytest.mark.integration
 

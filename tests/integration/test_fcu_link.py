@@ -24,7 +24,7 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 from gcs.launcher import free_port
 from simulator import SimulatorServer
 from simulator.config import MessageIntervalSupport
-from simulator.telemetry import SecondGps
+from simulator.mavlink.telemetry import SecondGps
 from tests.helpers import FleetWatcher, agent_process, api_client, poll_until
 from tests.support.fcu import (
     SET_MESSAGE_INTERVAL,
@@ -34,10 +34,11 @@ from tests.support.fcu import (
     state_of,
 )
 from tests.support.simulators import serving
-from vehicle_agents.fcu_link import FcuLink
-from vehicle_agents.forwarding import MavlinkForwarder
-from vehicle_agents.stream_watch import RateWatchSettings
-from vehicle_agents.streams import DEFAULT_RATES_HZ, StreamRequester, StreamTimeouts
+from vehicle_agents.fcu.link import FcuLink
+from vehicle_agents.fcu.stream_plan import DEFAULT_RATES_HZ
+from vehicle_agents.fcu.stream_watch import RateWatchSettings
+from vehicle_agents.fcu.streams import StreamRequester, StreamTimeouts
+from vehicle_agents.forwarding.forwarder import MavlinkForwarder
 
 pytestmark = pytest.mark.integration
 
@@ -337,7 +338,7 @@ def test_rates_another_gcs_lowers_are_restored(
         finally:
             gcs.close()
 
-    caplog.set_level(logging.INFO, "vehicle_agents.stream_watch")
+    caplog.set_level(logging.INFO, "vehicle_agents.fcu.stream_watch")
     with serving(sim_config()) as (_server, address):
         asyncio.run(run(address.port))
     assert "GLOBAL_POSITION_INT arrives at" in caplog.text

@@ -21,7 +21,7 @@ pytestmark = [pytest.mark.integration, pytest.mark.slow]
 
 LEADER, FOLLOWER = "sim_1", "sim_2"
 ALTITUDE_M = 3.0
-# The yard's building (simulator.world.default_scene) stands 7 to 11 m east of the
+# The yard's building (simulator.world.obstacles.default_scene) stands 7 to 11 m east of the
 # leader's home and 1 m south to 5 m north: this slot is just inside its west face.
 SLOT = {"x": 2.0, "y": 7.5, "up": 0.0, "frame": "ne"}
 CLEARANCE_M = 2.5

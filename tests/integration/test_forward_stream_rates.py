@@ -30,10 +30,11 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 from gcs.launcher import free_port
 from simulator import ListenAddress, SimulatorConfig
 from tests.support.simulators import serving
-from vehicle_agents.fcu_link import FcuLink, MavMessage
-from vehicle_agents.forwarding import MavlinkForwarder
-from vehicle_agents.stream_watch import RateWatchSettings
-from vehicle_agents.streams import StreamRequester, StreamTimeouts
+from vehicle_agents.fcu.link import FcuLink
+from vehicle_agents.fcu.messages import MavMessage
+from vehicle_agents.fcu.stream_watch import RateWatchSettings
+from vehicle_agents.fcu.streams import StreamRequester, StreamTimeouts
+from vehicle_agents.forwarding.forwarder import MavlinkForwarder
 
 pytestmark = [pytest.mark.integration, pytest.mark.slow]
 

@@ -15,7 +15,7 @@ import pytest
 
 from common.geodesy import LocalFrame
 from gcs.demo_lidars import DEMO_LIDARS
-from simulator.world import default_scene
+from simulator.world.obstacles import default_scene
 from tests.helpers import access_token, poll_until, running_fleet
 
 pytestmark = pytest.mark.integration

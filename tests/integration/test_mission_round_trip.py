@@ -16,8 +16,8 @@ from protocol.messages import MissionItem
 from simulator import ListenAddress, SimulatorConfig
 from simulator.config import Autopilot
 from tests.support.simulators import SYSID, serving
-from vehicle_agents.fcu_link import FcuLink
-from vehicle_agents.missions import MissionClient
+from vehicle_agents.fcu.link import FcuLink
+from vehicle_agents.fcu.missions import MissionClient
 
 pytestmark = pytest.mark.integration
 

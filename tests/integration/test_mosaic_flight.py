@@ -38,7 +38,7 @@ from common.geodesy import LocalFrame
 from common.opencv import cv2
 from gcs.launcher import FleetPlan, LocalFleet, free_port
 from protocol.photos import CameraIntrinsics, PhotoPose
-from simulator.ground import Ground
+from simulator.world.ground import Ground
 from tests.helpers import FleetWatcher, access_token, api_client, on_the_ground, poll_until
 from tests.mosaic_photos import NO_RTK, Noise, marker_errors_m, mosaic_of, target_errors_m
 from tests.support.hubs import TEST_HUB_ENV

@@ -21,7 +21,7 @@ from pmtiles.reader import Reader
 from backend.mosaic.georef import TMS
 from backend.mosaic.service import MosaicService
 from protocol.photos import CameraIntrinsics
-from simulator.ground import Ground
+from simulator.world.ground import Ground
 from tests.conftest import ADMIN_PASSWORD, hub_settings
 from tests.helpers import access_token, api_client, running_hub
 from tests.mosaic_photos import HOME, mosaic_of, survey_photos

@@ -22,8 +22,8 @@ from protocol.messages import (
 )
 from simulator.config import Autopilot
 from tests.support.fcu import fcu_url, on_link, simulated
-from vehicle_agents.commands import CommandExecutor
-from vehicle_agents.param_encoding import ParamEncoding, decode, encode
+from vehicle_agents.control.executor import CommandExecutor
+from vehicle_agents.fcu.param_encoding import ParamEncoding, decode, encode
 
 pytestmark = pytest.mark.integration
 T = TypeVar("T")

@@ -14,8 +14,9 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from simulator.config import ListenAddress, SimulatorConfig
 from tests.support.simulators import serving
-from vehicle_agents.fcu_link import FcuLink, MavMessage
-from vehicle_agents.streams import StreamRequester, StreamTimeouts
+from vehicle_agents.fcu.link import FcuLink
+from vehicle_agents.fcu.messages import MavMessage
+from vehicle_agents.fcu.streams import StreamRequester, StreamTimeouts
 
 pytestmark = pytest.mark.integration
 

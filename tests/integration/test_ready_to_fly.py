@@ -13,9 +13,9 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from protocol.messages import CommandOutcome, TakeoffCommand, VehicleState
 from tests.support.fcu import fcu_url, on_link, simulated
-from vehicle_agents.commands import CommandExecutor
-from vehicle_agents.fcu_link import FcuLink
-from vehicle_agents.telemetry import link_snapshot
+from vehicle_agents.control.executor import CommandExecutor
+from vehicle_agents.fcu.link import FcuLink
+from vehicle_agents.telemetry.snapshot import link_snapshot
 
 pytestmark = pytest.mark.integration
 

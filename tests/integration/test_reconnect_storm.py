@@ -25,8 +25,8 @@ from gcs.launcher import FleetPlan, LocalFleet, free_port
 from protocol.messages import CommandOutcome, Telemetry, VehicleState, encode
 from tests.helpers import agent_hello, poll_until_async
 from tests.support.hubs import TEST_HUB_ENV
-from vehicle_agents.hub_link import HubLink, HubTimeouts
-from vehicle_agents.outbox import Outbox
+from vehicle_agents.hub.link import HubLink, HubTimeouts
+from vehicle_agents.hub.outbox import Outbox
 
 pytestmark = [pytest.mark.integration, pytest.mark.slow]
 

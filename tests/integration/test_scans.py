@@ -24,7 +24,7 @@ from common.geodesy import LocalFrame
 from gcs.launcher import LocalFleet
 from protocol.messages import CLIENT_WS_PATH
 from protocol.scans import ScanFrame, split_client_scan_frame
-from simulator.world import default_scene
+from simulator.world.obstacles import default_scene
 from tests.helpers import FleetWatcher, access_token, api_client, poll_until, running_fleet
 from tests.support.hubs import TEST_HUB_ENV
 

@@ -14,8 +14,8 @@ from tests.conftest import ADMIN_PASSWORD, hub_settings
 from tests.helpers import access_token, api_client, poll_until_async, running_hub
 from tests.support.agents import scripted_agent
 from tests.support.flights import OPERATOR_TOKEN, _heartbeat, _recorded_flight
-from vehicle_agents.tlog_pruning import DAY_S, UPLOADED_DIR, TlogRetention
-from vehicle_agents.tlog_uploads import TlogUploader
+from vehicle_agents.tlog.pruning import DAY_S, UPLOADED_DIR, TlogRetention
+from vehicle_agents.tlog.uploads import TlogUploader
 
 pytestmark = pytest.mark.integration
 

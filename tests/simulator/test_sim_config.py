@@ -17,7 +17,7 @@ from simulator import (
     main,
 )
 from simulator.config import parse_args
-from simulator.streams import StreamSchedule
+from simulator.mavlink.streams import StreamSchedule
 
 
 def test_defaults() -> None:

@@ -8,7 +8,7 @@ from pymavlink import mavutil
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from simulator import ListenAddress, SimulatorConfig
-from simulator.param_table import PARAM_DEFS
+from simulator.params.table import PARAM_DEFS
 from tests.support.simulators import SYSID, mavlink_client, serving, wait_for
 
 

@@ -8,9 +8,9 @@ from typing import Any
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from simulator import DEFAULT_HOME, Copter, CopterMode, MavResult
-from simulator.commands import MessageHandler, Reply
-from simulator.streams import StreamSchedule
-from simulator.telemetry import DEFAULT_RATES_HZ, TelemetryBuilder
+from simulator.mavlink.commands import MessageHandler, Reply
+from simulator.mavlink.streams import StreamSchedule
+from simulator.mavlink.telemetry import DEFAULT_RATES_HZ, TelemetryBuilder
 
 
 def texts(copter: Copter) -> list[str]:

@@ -8,8 +8,9 @@ from collections.abc import Awaitable, Callable
 from typing import TypeVar
 
 from tests.mavlink_peer import ScriptedFlightController
-from vehicle_agents.commands import CommandExecutor, CommandTimeouts
-from vehicle_agents.fcu_link import FcuLink
+from vehicle_agents.control.executor import CommandExecutor
+from vehicle_agents.fcu.commands import CommandTimeouts
+from vehicle_agents.fcu.link import FcuLink
 
 # Short enough that a case takes a second or two, long enough for a loaded machine.
 TIMEOUTS = CommandTimeouts(ack_s=0.5, attempts=3, in_progress_s=1.5)

@@ -15,8 +15,9 @@ from simulator import ListenAddress, SimulatorConfig, SimulatorServer
 from simulator.config import Autopilot
 from tests.support.simulators import serving
 from tests.tcp_proxy import CuttableProxy, Filter
-from vehicle_agents.commands import CommandExecutor, CommandTimeouts
-from vehicle_agents.fcu_link import FcuLink
+from vehicle_agents.control.executor import CommandExecutor
+from vehicle_agents.fcu.commands import CommandTimeouts
+from vehicle_agents.fcu.link import FcuLink
 
 TIMEOUTS = CommandTimeouts(ack_s=0.5, attempts=3, in_progress_s=1.5)
 

@@ -7,7 +7,7 @@ from typing import Any
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
-from vehicle_agents.tlog import TlogRecorder
+from vehicle_agents.tlog.recorder import TlogRecorder
 
 # Tokens as an operator writes them into a compose file: no gcs_v_ prefix.
 OPERATOR_TOKEN = "field-kit-alpha-0123456789abcdef"

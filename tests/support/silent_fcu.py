@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from tests.mavlink_peer import ScriptedFlightController
-from vehicle_agents.fcu_link import MavMessage
+from vehicle_agents.fcu.messages import MavMessage
 
 
 class SilentFlightController(ScriptedFlightController):

@@ -1,6 +1,6 @@
 """Importing our code changes nothing of the process: no environment variable is set and no
 MAVLink dialect is picked as a side effect of an import (the agent picks its dialect where
-it builds its link, `vehicle_agents/mavlink_dialect.py`). A tool that embeds the agent, the
+it builds its link, `vehicle_agents/fcu/dialect.py`). A tool that embeds the agent, the
 simulator or the hub keeps the environment it had."""
 
 from __future__ import annotations

@@ -46,7 +46,7 @@ UPWARD = {
     "storage imports the api": ("backend/storage/upward.py", "backend.api.security"),
     "realtime imports the hub": ("backend/realtime/upward.py", "backend.hub"),
     "the domain imports the fleet": ("backend/safety/upward.py", "backend.fleet.registry"),
-    "the hub imports the agent": ("backend/fleet/upward.py", "vehicle_agents.missions"),
+    "the hub imports the agent": ("backend/fleet/upward.py", "vehicle_agents.fcu.missions"),
     "the agent imports the hub": ("vehicle_agents/upward.py", "backend.errors"),
     "the simulator imports the agent": ("simulator/upward.py", "vehicle_agents.config"),
     "the protocol imports common": ("protocol/upward.py", "common.retry"),
@@ -55,6 +55,22 @@ UPWARD = {
     "the registry imports the store": ("backend/fleet/registry.py", "backend.storage.models"),
     "the client imports the protocol": ("gcs_client/upward.py", "protocol.messages"),
     "the client imports the web framework": ("gcs_client/upward.py", "fastapi"),
+    "the flight controller link imports the hub link": (
+        "vehicle_agents/fcu/upward.py",
+        "vehicle_agents.hub.link",
+    ),
+    "an agent feature imports the wiring": (
+        "vehicle_agents/control/upward.py",
+        "vehicle_agents.agent",
+    ),
+    "the simulated vehicle imports the transport": (
+        "simulator/vehicle/upward.py",
+        "simulator.server",
+    ),
+    "the simulator's parameters import a vehicle": (
+        "simulator/params/upward.py",
+        "simulator.copter",
+    ),
 }
 
 

@@ -31,7 +31,7 @@ from backend.storage.photos import PhotoRepository
 from backend.surveys.service import new_run
 from common.geodesy import GeoPoint, LocalFrame
 from protocol.photos import CameraIntrinsics, PhotoMeta, PhotoPose
-from simulator.photo_server import nadir_renderer
+from simulator.outputs.photos import nadir_renderer
 
 LAT, LON = 47.0, 8.0
 FRAME = LocalFrame(LAT, LON)

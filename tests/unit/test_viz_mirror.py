@@ -27,8 +27,8 @@ from backend.viz3d.scene import FleetScene
 from backend.viz3d.server import VizServer
 from common.geodesy import GeoPoint, LocalFrame
 from protocol.scans import NO_RETURN, ScanFrame, ScanPose, encode_scan
-from simulator.lidar import Lidar, LidarSpec, Pose
-from simulator.world import default_scene
+from simulator.sensors.lidar import Lidar, LidarSpec, Pose
+from simulator.world.obstacles import default_scene
 from tests.support.scenes import HOME, _node, _summary
 
 INTERVAL_S = 0.1

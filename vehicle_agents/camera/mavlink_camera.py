@@ -27,7 +27,7 @@ import urllib.parse
 
 from protocol.photos import MAX_PHOTO_BYTES, CameraIntrinsics
 from vehicle_agents.camera.sources import Capture, CaptureError, Shot
-from vehicle_agents.hub_http import HttpError, TooLarge, send
+from vehicle_agents.hub.http import HttpError, TooLarge, send
 
 MAVLINK_SCHEME = "mavlink"  # --camera mavlink
 FETCH_TIMEOUT_S = 30.0  # a whole 40 MiB file over a companion computer's Wi-Fi

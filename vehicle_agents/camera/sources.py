@@ -23,7 +23,7 @@ from dataclasses import dataclass
 from typing import Any, Protocol
 
 from protocol.photos import CameraIntrinsics, PhotoPose
-from vehicle_agents.hub_http import HttpError, send
+from vehicle_agents.hub.http import HttpError, send
 
 SIM_SCHEME = "sim+"  # sim+http://HOST:PORT: the simulator's camera endpoint
 OPENCV_SCHEME = "opencv:"  # opencv:0, opencv:/dev/video2, opencv:<GStreamer pipeline>

@@ -36,7 +36,7 @@ from vehicle_agents.camera.geotag import NotAJpeg, geotag
 from vehicle_agents.camera.queue import PhotoQueue
 from vehicle_agents.camera.sources import CameraSource, Capture, CaptureError, Shot
 from vehicle_agents.sensors.fcu_time import PoseHistory
-from vehicle_agents.shutters import (
+from vehicle_agents.telemetry.shutters import (
     MATCH_WINDOW_S,
     ShutterMatcher,
     captured_alt_rel,

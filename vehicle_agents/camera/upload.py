@@ -34,7 +34,7 @@ from dataclasses import dataclass
 
 from common.retry import Backoff, Retries
 from vehicle_agents.camera.queue import PhotoQueue, QueuedPhoto
-from vehicle_agents.hub_http import HttpError, send
+from vehicle_agents.hub.http import HttpError, send
 
 log = logging.getLogger(__name__)
 

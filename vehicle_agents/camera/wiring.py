@@ -13,7 +13,7 @@ from vehicle_agents.camera.sources import open_source
 from vehicle_agents.camera.trigger import CameraTrigger
 from vehicle_agents.camera.upload import PhotoUploader
 from vehicle_agents.config import AgentSettings, hub_http_base
-from vehicle_agents.fcu_link import FcuLink
+from vehicle_agents.fcu.link import FcuLink
 from vehicle_agents.sensors.fcu_time import FcuClock, PoseHistory
 
 log = logging.getLogger(__name__)

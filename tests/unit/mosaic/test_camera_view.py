@@ -1,4 +1,4 @@
-"""The simulated camera's nadir view (simulator/camera_view.py) over the synthetic ground:
+"""The simulated camera's nadir view (simulator/sensors/camera.py) over the synthetic ground:
 targets appear where the pinhole geometry puts them, for a level camera, a rolled one and
 a turned one."""
 
@@ -12,8 +12,8 @@ import pytest
 
 from common.camera_geometry import focal_px
 from protocol.photos import CameraIntrinsics, PhotoPose
-from simulator.camera_view import BelowGround, render_nadir
-from simulator.ground import ARUCO_DICTIONARY, Ground, GroundTarget
+from simulator.sensors.camera import BelowGround, render_nadir
+from simulator.world.ground import ARUCO_DICTIONARY, Ground, GroundTarget
 
 HOME = (-35.363261, 149.165230, 584.0)
 CAMERA = CameraIntrinsics(

@@ -14,7 +14,7 @@ import pytest
 
 from backend.mosaic.service import MosaicService
 from protocol.photos import CameraIntrinsics
-from simulator.ground import Ground
+from simulator.world.ground import Ground
 from tests.mosaic_photos import (
     EXACT,
     HOME,

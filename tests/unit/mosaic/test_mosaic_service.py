@@ -16,7 +16,7 @@ from backend.mosaic.georef import TMS, to_mercator
 from backend.mosaic.photo import StoredPhoto
 from backend.mosaic.service import MosaicService
 from protocol.photos import CameraIntrinsics
-from simulator.ground import Ground
+from simulator.world.ground import Ground
 from tests.mosaic_photos import HOME, mosaic_of, survey_photos
 
 CAMERA = CameraIntrinsics(

@@ -1,9 +1,0 @@
-"""Incoming MAVLink to vehicle calls, and the replies the autopilot would send: one
-module per family of messages (arming and modes, navigation, parameters, missions,
-requested messages), dispatched by `MessageHandler`."""
-
-from simulator.commands.base import Command, Reply
-from simulator.commands.handler import MessageHandler
-from simulator.commands.requests import StreamControl
-
-__all__ = ["Command", "MessageHandler", "Reply", "StreamControl"]

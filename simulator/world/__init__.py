@@ -1,0 +1,2 @@
+"""The simulated world: obstacles a LIDAR sees (`obstacles`) and the ground texture a
+camera photographs (`ground`)."""

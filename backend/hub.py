@@ -5,7 +5,7 @@ from __future__ import annotations
 import asyncio
 import logging
 import time
-from collections.abc import Collection
+from collections.abc import Callable, Collection, Coroutine
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -25,7 +25,6 @@ from backend.control.lease import LeaseBook
 from backend.errors import NotFound
 from backend.fleet.command_service import carry_out_routed
 from backend.fleet.commands import CommandDispatcher
-from backend.fleet.formations import FormationService, ScanPoints
 from backend.fleet.param_catalog import ParamCatalog
 from backend.fleet.registry import FleetRegistry, VehicleRecord
 from backend.fleet.safety_gate import SafetyGate
@@ -45,12 +44,10 @@ from backend.realtime.routing import AgentRoutes
 from backend.realtime.vehicle_fanout import VehicleFanout
 from backend.scans.obstacles import describe as describe_obstacle
 from backend.scans.pointmap import MapObstacle
-from backend.scans.points import in_frame
 from backend.scans.service import ScanService
 from backend.scans.views import obstacle_views, point_map_view, site_origin
 from backend.settings import HubSettings
 from backend.storage.database import make_engine, migrate
-from backend.storage.formations import FormationRepository
 from backend.storage.lease_claims import LeaseClaimStore
 from backend.storage.logbook import Logbook
 from backend.storage.models import AuditRow, CommandRow
@@ -67,15 +64,13 @@ from backend.storage.writer import StorageWriter
 from backend.surveys.ownership import SurveyOwnership
 from backend.surveys.service import SurveyService
 from backend.viz3d.frame import SceneFrame, parse_origin
-from backend.viz3d.mirror import SceneMirror
+from backend.viz3d.mirror import SceneLayer, SceneMirror
 from backend.viz3d.replay import ReplayPanels
 from backend.viz3d.scene import FleetScene
 from backend.viz3d.server import VizServer
 from backend.viz3d.viewers import Viewers
-from common.geodesy import LocalFrame
 from protocol.messages import (
     MAX_MAP_POINTS_SENT,
-    MAX_SCAN_POINTS,
     CloseCode,
     CommandOutcome,
     HubEventKind,
@@ -88,11 +83,6 @@ from protocol.routing import RoutedCommand, RoutedSender
 
 SEVERITY_INFO = 6  # MAV_SEVERITY_INFO: an obstacle found or gone
 POINT_MAP_PUBLISH_S = 2.0
-# A formation's followers get the leader's scans thinned to one point per cell this wide.
-SCAN_CELL_M = 0.2
-# ...and without the returns this close above the leader's home: the ground, reached by a
-# scan tilted as the leader accelerates, is not an obstacle.
-SCAN_GROUND_M = 0.3
 log = logging.getLogger(__name__)
 
 
@@ -115,7 +105,6 @@ class Hub:
     passwords: PasswordWork
     safety: SafetyGate
     scans: ScanService
-    formations: FormationService
     # Audit and command-log rows waiting out a database outage.
     spool: RowSpool
     # The offline tile sets in the tiles folder.
@@ -150,6 +139,10 @@ class Hub:
     # Survey photos from the agents' uploads; each stored photo of a survey goes on to
     # the mosaic (``photos.sink``).
     photos: PhotoIngest = field(init=False)
+    # The features app.py wires onto the hub (backend/formation/): their long-running
+    # work, run with the hub's, and their layers of the 3D view.
+    background: list[Callable[[], Coroutine[Any, Any, None]]] = field(default_factory=list)
+    scene_layers: list[tuple[str, SceneLayer]] = field(default_factory=list)
 
     @classmethod
     async def start(cls, settings: HubSettings) -> Hub:
@@ -205,13 +198,7 @@ class Hub:
             passwords=PasswordWork(
                 settings.password_hash_threads, settings.password_hash_max_pending
             ),
-            safety=(safety := SafetyGate(RailsRepository(engine), settings)),
-            formations=FormationService(
-                registry,
-                safety,
-                repository=FormationRepository(engine),
-                join_timeout_s=settings.formation_join_timeout_s,
-            ),
+            safety=SafetyGate(RailsRepository(engine), settings),
             scans=ScanService(
                 ScanRepository(engine),
                 bus,
@@ -233,7 +220,6 @@ class Hub:
         hub.fanout = VehicleFanout(
             bus, settings.ui_vehicle_interval_s, settings.ui_batch_interval_s
         )
-        hub.formations.scan_source = hub.leader_scan
         hub.surveys = SurveyService(hub, bus, SurveyRepository(engine), settings)
         if fleet_link is not None:
             hub.surveys.ownership = SurveyOwnership(LeaseClaimStore(engine), fleet_link.hub_id)
@@ -253,7 +239,6 @@ class Hub:
             sink=MosaicSink(hub.mosaic),
         )
         await manual_control.revoke_left_open(hub, engine)
-        await hub.formations.close_left_open()
         if settings.viz_enabled:
             hub.viz = await asyncio.to_thread(VizServer.start)
             hub.viz_http = httpx.AsyncClient(timeout=httpx.Timeout(10.0))
@@ -274,7 +259,6 @@ class Hub:
                 tasks.create_task(self.scans.run())
                 tasks.create_task(self._watch_obstacles())
                 tasks.create_task(self._publish_point_map())
-                tasks.create_task(self.formations.run())
                 tasks.create_task(self._apply_retention())
                 tasks.create_task(self._drain_spool())
                 tasks.create_task(self._flush_denials())
@@ -282,6 +266,8 @@ class Hub:
                 tasks.create_task(self.mosaic.run())
                 tasks.create_task(self.photos.run())
                 tasks.create_task(manual_control.watch_expiry(self))
+                for work in self.background:
+                    tasks.create_task(work())
                 if self.fleet_link is not None:
                     tasks.create_task(self.fleet_link.run())
                 if self.scene is not None:
@@ -292,9 +278,9 @@ class Hub:
                         self.settings.viz_update_interval_s,
                         scans=self.scans,
                         surveys=self.surveys,
-                        formations=self.formations,
                         mosaics=self.mosaic,
                         mosaic_surveys=lambda: [run.id for run in self.surveys.known()],
+                        layers=self.scene_layers,
                     )
                     tasks.create_task(mirror.run())
         finally:
@@ -310,23 +296,6 @@ class Hub:
             self.passwords.close()
             self.tiles.close()
             self.engine.dispose()
-
-    def leader_scan(
-        self, vehicle_id: str, frame: LocalFrame, after_seq: int | None
-    ) -> ScanPoints | None:
-        """A formation leader's newest live scan on the formation's plane, if it is not
-        the one numbered ``after_seq`` (the formations' relay, backend/fleet)."""
-        latest = self.scans.latest.get(vehicle_id)
-        site = self.scans.site
-        if latest is None or site is None or latest.frame.seq == after_seq:
-            return None
-        state = self.registry.get(vehicle_id).state
-        home = state.home_alt_msl if state is not None else None
-        ground = None if home is None else home + SCAN_GROUND_M
-        north, east = in_frame(
-            latest.points, site, frame, SCAN_CELL_M, MAX_SCAN_POINTS, above_msl=ground
-        )
-        return ScanPoints(latest.frame.utc_time, latest.frame.seq, north, east)
 
     async def survey_area(self, survey_id: str) -> dict[str, Any] | None:
         """A survey's area as GeoJSON, for its mosaic's coverage (None: no such survey)."""

@@ -20,21 +20,21 @@ from backend.auth.password_work import PasswordWork
 from backend.auth.policy import Principal
 from backend.auth.principal_cache import PrincipalCache
 from backend.auth.rate_limit import Limit, RateLimiter
-from backend.control.claims import LeaseClaims
-from backend.control.lease import LeaseBook
 from backend.errors import NotFound
 from backend.fleet.command_service import carry_out_routed
 from backend.fleet.commands import CommandDispatcher
 from backend.fleet.param_catalog import ParamCatalog
 from backend.fleet.registry import FleetRegistry, VehicleRecord
 from backend.fleet.safety_gate import SafetyGate
+from backend.manual_control.claims import LeaseClaims
+from backend.manual_control.service import ManualControl
+from backend.manual_control.store import LeaseClaimStore
 from backend.mapping.tiles import TileLibrary
 from backend.mosaic.photo import StoredPhoto as MosaicPhoto
 from backend.mosaic.service import MosaicService
 from backend.photos.ingest import PhotoIngest
 from backend.photos.partials import PartialLimits
 from backend.photos.stored import StoredPhoto
-from backend.realtime import manual_control
 from backend.realtime.bus import InProcessBus, ReliableSubscription, Topic
 from backend.realtime.collaborators import AgentConnection, ClientConnection
 from backend.realtime.fleet_link import FleetLink
@@ -48,7 +48,6 @@ from backend.scans.service import ScanService
 from backend.scans.views import obstacle_views, point_map_view, site_origin
 from backend.settings import HubSettings
 from backend.storage.database import make_engine, migrate
-from backend.storage.lease_claims import LeaseClaimStore
 from backend.storage.logbook import Logbook
 from backend.storage.models import AuditRow, CommandRow
 from backend.storage.photos import PhotoRepository
@@ -119,8 +118,8 @@ class Hub:
     agent_admissions: dict[str, asyncio.Lock] = field(default_factory=dict)
     # Live client feeds, so a revoked token or disabled user stops seeing the fleet.
     client_feeds: set[ClientConnection] = field(default_factory=set)
-    # Manual-control leases: in memory only, so a restart leaves every lease revoked.
-    leases: LeaseBook = field(default_factory=LeaseBook)
+    # Manual control: the leases (in memory only) and their life (backend/manual_control/).
+    manual_control: ManualControl = field(init=False)
     # The 3D view: viser on loopback, and the client that passes its page on (None when
     # GCS_VIZ_ENABLED is false).
     viz: VizServer | None = None
@@ -210,9 +209,10 @@ class Hub:
             ),
             fleet_link=fleet_link,
         )
+        hub.manual_control = ManualControl(registry, hub.dispatcher, hub.client_feeds, hub.record)
         if fleet_link is not None:
             claims = LeaseClaims(LeaseClaimStore(engine), fleet_link.hub_id, fleet_link.lease_ttl_s)
-            hub.leases.claims = claims
+            hub.manual_control.leases.claims = claims
             fleet_link.on_manual_ended = hub.manual_ended_elsewhere
             fleet_link.routes.check_sender = hub.routed_sender
             fleet_link.routes.carry_out = hub.carry_out_routed
@@ -238,7 +238,7 @@ class Hub:
             ),
             sink=MosaicSink(hub.mosaic),
         )
-        await manual_control.revoke_left_open(hub, engine)
+        await hub.manual_control.revoke_left_open(engine)
         if settings.viz_enabled:
             hub.viz = await asyncio.to_thread(VizServer.start)
             hub.viz_http = httpx.AsyncClient(timeout=httpx.Timeout(10.0))
@@ -265,7 +265,7 @@ class Hub:
                 tasks.create_task(self.surveys.run())
                 tasks.create_task(self.mosaic.run())
                 tasks.create_task(self.photos.run())
-                tasks.create_task(manual_control.watch_expiry(self))
+                tasks.create_task(self.manual_control.watch_expiry())
                 for work in self.background:
                     tasks.create_task(work())
                 if self.fleet_link is not None:
@@ -308,7 +308,7 @@ class Hub:
 
     async def manual_ended_elsewhere(self, vehicle_id: str, why: str) -> None:
         """Browser control ended on a vehicle whose agent another hub holds."""
-        await manual_control.end_on_vehicle(self, vehicle_id, why)
+        await self.manual_control.end_on_vehicle(vehicle_id, why)
 
     async def routed_sender(self, sender: RoutedSender) -> Principal | None:
         """The user a command routed from another hub names, per the shared database."""

@@ -18,16 +18,16 @@ from backend.auth.policy import (
     authorize,
     authorize_message,
 )
-from backend.control.lease import Lease, LeaseRefused
 from backend.errors import Forbidden, VehicleNotFound
+from backend.manual_control.lease import Lease, LeaseRefused
+from backend.manual_control.relay import ManualRelay
+from backend.manual_control.service import lease_state
 from backend.observability import metrics
 from backend.observability.metrics import Surface, count_rejected
-from backend.realtime import manual_control
 from backend.realtime.bus import LatestSubscription, Topic
 from backend.realtime.collaborators import FeedServices
 from backend.realtime.frames import FrameTooLarge, PeerConnection
 from backend.realtime.live_events import EventSubscription
-from backend.realtime.manual_relay import ManualRelay
 from backend.realtime.scan_feed import ScanSubscription
 from backend.realtime.vehicle_fanout import (
     Broadcast,
@@ -169,7 +169,9 @@ class ClientFeed(PeerConnection):
         self.user = ""
         self.token_id: int | None = None
         self._manual = ManualRelay(
-            hub.registry, hub.leases.limits.max_rate_hz, on_collapse=self._count_collapse
+            hub.registry,
+            hub.manual_control.leases.limits.max_rate_hz,
+            on_collapse=self._count_collapse,
         )
         self.scans = ScanSubscription()
         self.map = LatestSubscription()  # newest per layer, never a queue
@@ -220,7 +222,7 @@ class ClientFeed(PeerConnection):
             await self.send(FleetSnapshot(vehicles=fleet))
             # Who flies what by hand, and how the last leases ended (a hub restart's
             # revocations among them).
-            for state in list(self.hub.leases.last_states.values()):
+            for state in list(self.hub.manual_control.leases.last_states.values()):
                 await self.send(state)
             sent.update({summary.id: vehicle_info(summary) for summary in fleet})
             async with asyncio.TaskGroup() as tasks:
@@ -393,7 +395,7 @@ class ClientFeed(PeerConnection):
     async def _manual_input(self, message: ManualInput) -> None:
         """Forward the lease holder's input, newest first; refuse and count the rest."""
         try:
-            self.hub.leases.admit(message.vehicle_id, self.user, message.seq)
+            self.hub.manual_control.leases.admit(message.vehicle_id, self.user, message.seq)
         except LeaseRefused as refusal:
             count_rejected("client_manual")
             # Never forwarded. Old or too-fast frames are a client's jitter: counted
@@ -447,18 +449,19 @@ class ClientFeed(PeerConnection):
         return True
 
     def _count_collapse(self) -> None:
-        self.hub.leases.refused.too_fast += 1
+        self.hub.manual_control.leases.refused.too_fast += 1
 
     async def _control(self, message: ControlRequest) -> None:
         vehicle_id = message.vehicle_id
-        leases = self.hub.leases
+        manual = self.hub.manual_control
+        leases = manual.leases
         outcome, reason = "ok", ""
         ended: Lease | None = None
         try:
             if self.hub.registry.get(vehicle_id).channel is None:
                 raise LeaseRefused(f"{vehicle_id} is offline")
             if message.action == "acquire":
-                lease = await manual_control.acquire(self.hub, vehicle_id, self.principal)
+                lease = await manual.acquire(vehicle_id, self.principal)
             elif message.action == "release":
                 ended = leases.release(vehicle_id, self.principal)
                 reason = f"released by {self.user}"
@@ -485,6 +488,6 @@ class ClientFeed(PeerConnection):
         if outcome != "ok":
             return
         if message.action == "acquire":
-            await manual_control.announce(self.hub, manual_control.lease_state(lease))
+            await manual.announce(lease_state(lease))
         elif ended is not None:
-            await manual_control.end(self.hub, ended, reason, stop_vehicle=True)
+            await manual.end(ended, reason, stop_vehicle=True)

@@ -105,7 +105,8 @@ def check_name(name: str) -> str:
 
 def flip_row(z: int, row: int) -> int:
     """An XYZ row (counted from the north) as a TMS row (from the south), or back."""
-    return WEB_MERCATOR.matrix(z).matrixHeight - 1 - row
+    height: int = WEB_MERCATOR.matrix(z).matrixHeight
+    return height - 1 - row
 
 
 def _version(path: Path) -> str:

@@ -7,9 +7,11 @@ browser, and what input reaches it.
   compare-and-set row per vehicle, also used by the surveys' ownership).
 - `service`: ``ManualControl``, the lease's life (granted once the agent opened browser
   control, ended however it ends, told to every feed, audited, revoked after a restart).
-- `relay`: a holder's stick frames to the vehicle's agent, newest wins.
+- `pilot`: one live feed's lease requests and sticks (``PilotChannel``), the refusals told
+  to the pilot and the event feed, and `relay`: the sticks to the vehicle's agent, newest
+  wins.
 
-The live sessions reach it through the hub (``Hub.manual_control``): the client feed for
-a pilot's lease and sticks, the agent gateway for the agent's word. Nothing of it is a
-REST route: leases and sticks travel on the live feed's WebSocket.
+The live sessions reach it through the hub (``Hub.manual_control``): the client feed hands
+a pilot's messages to its ``PilotChannel``, the agent gateway the agent's word to the
+service. Nothing of it is a REST route: leases and sticks travel on the live feed.
 """

@@ -20,7 +20,6 @@ from backend.api import (
     admin,
     auth,
     fleet_commands,
-    formations,
     logs,
     metrics,
     missions,
@@ -52,6 +51,8 @@ from backend.errors import (
     SafetyViolation,
     Unauthenticated,
 )
+from backend.formation import routes as formations
+from backend.formation import wiring as formation_wiring
 from backend.hub import Hub
 from backend.observability.logs import use_json_logs
 from backend.settings import REPO_ROOT, HubSettings
@@ -107,6 +108,8 @@ def create_app(settings: HubSettings | None = None) -> FastAPI:
             use_json_logs()
         hub = await Hub.start(settings)
         app.state.hub = hub
+        # The features, each on the started hub before it runs (their routes read them).
+        app.state.formation = await formation_wiring.attach(hub)
         runner = asyncio.create_task(hub.run(), name="hub")
         try:
             yield

@@ -5,7 +5,7 @@ from __future__ import annotations
 import asyncio
 import logging
 import time
-from collections.abc import Collection
+from collections.abc import Callable, Collection, Coroutine
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -20,22 +20,21 @@ from backend.auth.password_work import PasswordWork
 from backend.auth.policy import Principal
 from backend.auth.principal_cache import PrincipalCache
 from backend.auth.rate_limit import Limit, RateLimiter
-from backend.control.claims import LeaseClaims
-from backend.control.lease import LeaseBook
 from backend.errors import NotFound
 from backend.fleet.command_service import carry_out_routed
 from backend.fleet.commands import CommandDispatcher
-from backend.fleet.formations import FormationService, ScanPoints
 from backend.fleet.param_catalog import ParamCatalog
 from backend.fleet.registry import FleetRegistry, VehicleRecord
 from backend.fleet.safety_gate import SafetyGate
+from backend.manual_control.claims import LeaseClaims
+from backend.manual_control.service import ManualControl
+from backend.manual_control.store import LeaseClaimStore
 from backend.mapping.tiles import TileLibrary
 from backend.mosaic.photo import StoredPhoto as MosaicPhoto
 from backend.mosaic.service import MosaicService
 from backend.photos.ingest import PhotoIngest
 from backend.photos.partials import PartialLimits
 from backend.photos.stored import StoredPhoto
-from backend.realtime import manual_control
 from backend.realtime.bus import InProcessBus, ReliableSubscription, Topic
 from backend.realtime.collaborators import AgentConnection, ClientConnection
 from backend.realtime.fleet_link import FleetLink
@@ -45,13 +44,10 @@ from backend.realtime.routing import AgentRoutes
 from backend.realtime.vehicle_fanout import VehicleFanout
 from backend.scans.obstacles import describe as describe_obstacle
 from backend.scans.pointmap import MapObstacle
-from backend.scans.points import in_frame
 from backend.scans.service import ScanService
 from backend.scans.views import obstacle_views, point_map_view, site_origin
 from backend.settings import HubSettings
 from backend.storage.database import make_engine, migrate
-from backend.storage.formations import FormationRepository
-from backend.storage.lease_claims import LeaseClaimStore
 from backend.storage.logbook import Logbook
 from backend.storage.models import AuditRow, CommandRow
 from backend.storage.photos import PhotoRepository
@@ -67,15 +63,13 @@ from backend.storage.writer import StorageWriter
 from backend.surveys.ownership import SurveyOwnership
 from backend.surveys.service import SurveyService
 from backend.viz3d.frame import SceneFrame, parse_origin
-from backend.viz3d.mirror import SceneMirror
+from backend.viz3d.mirror import SceneLayer, SceneMirror
 from backend.viz3d.replay import ReplayPanels
 from backend.viz3d.scene import FleetScene
 from backend.viz3d.server import VizServer
 from backend.viz3d.viewers import Viewers
-from common.geodesy import LocalFrame
 from protocol.messages import (
     MAX_MAP_POINTS_SENT,
-    MAX_SCAN_POINTS,
     CloseCode,
     CommandOutcome,
     HubEventKind,
@@ -88,11 +82,6 @@ from protocol.routing import RoutedCommand, RoutedSender
 
 SEVERITY_INFO = 6  # MAV_SEVERITY_INFO: an obstacle found or gone
 POINT_MAP_PUBLISH_S = 2.0
-# A formation's followers get the leader's scans thinned to one point per cell this wide.
-SCAN_CELL_M = 0.2
-# ...and without the returns this close above the leader's home: the ground, reached by a
-# scan tilted as the leader accelerates, is not an obstacle.
-SCAN_GROUND_M = 0.3
 log = logging.getLogger(__name__)
 
 
@@ -115,7 +104,6 @@ class Hub:
     passwords: PasswordWork
     safety: SafetyGate
     scans: ScanService
-    formations: FormationService
     # Audit and command-log rows waiting out a database outage.
     spool: RowSpool
     # The offline tile sets in the tiles folder.
@@ -130,8 +118,8 @@ class Hub:
     agent_admissions: dict[str, asyncio.Lock] = field(default_factory=dict)
     # Live client feeds, so a revoked token or disabled user stops seeing the fleet.
     client_feeds: set[ClientConnection] = field(default_factory=set)
-    # Manual-control leases: in memory only, so a restart leaves every lease revoked.
-    leases: LeaseBook = field(default_factory=LeaseBook)
+    # Manual control: the leases (in memory only) and their life (backend/manual_control/).
+    manual_control: ManualControl = field(init=False)
     # The 3D view: viser on loopback, and the client that passes its page on (None when
     # GCS_VIZ_ENABLED is false).
     viz: VizServer | None = None
@@ -150,6 +138,10 @@ class Hub:
     # Survey photos from the agents' uploads; each stored photo of a survey goes on to
     # the mosaic (``photos.sink``).
     photos: PhotoIngest = field(init=False)
+    # The features app.py wires onto the hub (backend/formation/): their long-running
+    # work, run with the hub's, and their layers of the 3D view.
+    background: list[Callable[[], Coroutine[Any, Any, None]]] = field(default_factory=list)
+    scene_layers: list[tuple[str, SceneLayer]] = field(default_factory=list)
 
     @classmethod
     async def start(cls, settings: HubSettings) -> Hub:
@@ -205,13 +197,7 @@ class Hub:
             passwords=PasswordWork(
                 settings.password_hash_threads, settings.password_hash_max_pending
             ),
-            safety=(safety := SafetyGate(RailsRepository(engine), settings)),
-            formations=FormationService(
-                registry,
-                safety,
-                repository=FormationRepository(engine),
-                join_timeout_s=settings.formation_join_timeout_s,
-            ),
+            safety=SafetyGate(RailsRepository(engine), settings),
             scans=ScanService(
                 ScanRepository(engine),
                 bus,
@@ -223,9 +209,10 @@ class Hub:
             ),
             fleet_link=fleet_link,
         )
+        hub.manual_control = ManualControl(registry, hub.dispatcher, hub.client_feeds, hub.record)
         if fleet_link is not None:
             claims = LeaseClaims(LeaseClaimStore(engine), fleet_link.hub_id, fleet_link.lease_ttl_s)
-            hub.leases.claims = claims
+            hub.manual_control.leases.claims = claims
             fleet_link.on_manual_ended = hub.manual_ended_elsewhere
             fleet_link.routes.check_sender = hub.routed_sender
             fleet_link.routes.carry_out = hub.carry_out_routed
@@ -233,7 +220,6 @@ class Hub:
         hub.fanout = VehicleFanout(
             bus, settings.ui_vehicle_interval_s, settings.ui_batch_interval_s
         )
-        hub.formations.scan_source = hub.leader_scan
         hub.surveys = SurveyService(hub, bus, SurveyRepository(engine), settings)
         if fleet_link is not None:
             hub.surveys.ownership = SurveyOwnership(LeaseClaimStore(engine), fleet_link.hub_id)
@@ -252,8 +238,7 @@ class Hub:
             ),
             sink=MosaicSink(hub.mosaic),
         )
-        await manual_control.revoke_left_open(hub, engine)
-        await hub.formations.close_left_open()
+        await hub.manual_control.revoke_left_open(engine)
         if settings.viz_enabled:
             hub.viz = await asyncio.to_thread(VizServer.start)
             hub.viz_http = httpx.AsyncClient(timeout=httpx.Timeout(10.0))
@@ -274,14 +259,15 @@ class Hub:
                 tasks.create_task(self.scans.run())
                 tasks.create_task(self._watch_obstacles())
                 tasks.create_task(self._publish_point_map())
-                tasks.create_task(self.formations.run())
                 tasks.create_task(self._apply_retention())
                 tasks.create_task(self._drain_spool())
                 tasks.create_task(self._flush_denials())
                 tasks.create_task(self.surveys.run())
                 tasks.create_task(self.mosaic.run())
                 tasks.create_task(self.photos.run())
-                tasks.create_task(manual_control.watch_expiry(self))
+                tasks.create_task(self.manual_control.watch_expiry())
+                for work in self.background:
+                    tasks.create_task(work())
                 if self.fleet_link is not None:
                     tasks.create_task(self.fleet_link.run())
                 if self.scene is not None:
@@ -292,9 +278,9 @@ class Hub:
                         self.settings.viz_update_interval_s,
                         scans=self.scans,
                         surveys=self.surveys,
-                        formations=self.formations,
                         mosaics=self.mosaic,
                         mosaic_surveys=lambda: [run.id for run in self.surveys.known()],
+                        layers=self.scene_layers,
                     )
                     tasks.create_task(mirror.run())
         finally:
@@ -311,23 +297,6 @@ class Hub:
             self.tiles.close()
             self.engine.dispose()
 
-    def leader_scan(
-        self, vehicle_id: str, frame: LocalFrame, after_seq: int | None
-    ) -> ScanPoints | None:
-        """A formation leader's newest live scan on the formation's plane, if it is not
-        the one numbered ``after_seq`` (the formations' relay, backend/fleet)."""
-        latest = self.scans.latest.get(vehicle_id)
-        site = self.scans.site
-        if latest is None or site is None or latest.frame.seq == after_seq:
-            return None
-        state = self.registry.get(vehicle_id).state
-        home = state.home_alt_msl if state is not None else None
-        ground = None if home is None else home + SCAN_GROUND_M
-        north, east = in_frame(
-            latest.points, site, frame, SCAN_CELL_M, MAX_SCAN_POINTS, above_msl=ground
-        )
-        return ScanPoints(latest.frame.utc_time, latest.frame.seq, north, east)
-
     async def survey_area(self, survey_id: str) -> dict[str, Any] | None:
         """A survey's area as GeoJSON, for its mosaic's coverage (None: no such survey)."""
         try:
@@ -339,7 +308,7 @@ class Hub:
 
     async def manual_ended_elsewhere(self, vehicle_id: str, why: str) -> None:
         """Browser control ended on a vehicle whose agent another hub holds."""
-        await manual_control.end_on_vehicle(self, vehicle_id, why)
+        await self.manual_control.end_on_vehicle(vehicle_id, why)
 
     async def routed_sender(self, sender: RoutedSender) -> Principal | None:
         """The user a command routed from another hub names, per the shared database."""

@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
-from backend.missions.formation.route import LeaderRoute
+from backend.formation.route import LeaderRoute
 from common.formation import (
     ConsensusGains,
     Controller,

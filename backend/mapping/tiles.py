@@ -6,8 +6,9 @@ is noticed at the next listing or tile read (its size and modification time are 
 so dropping a file in the folder is enough, with no restart.
 
 MBTiles is SQLite with rows in TMS order (y counted from the south), so a request's XYZ
-``y`` is flipped: ``tile_row = 2**z - 1 - y`` (the MBTiles 1.3 specification). PMTiles is
-read with the ``pmtiles`` package, already in XYZ order.
+``y`` is flipped, against the height of web Mercator's tile matrix at its zoom (the
+MBTiles 1.3 specification). PMTiles is read with the ``pmtiles`` package, already in XYZ
+order. The grid is morecantile's WebMercatorQuad, as the mosaic's (backend/mosaic/georef.py).
 """
 
 from __future__ import annotations
@@ -15,7 +16,6 @@ from __future__ import annotations
 import gzip
 import hashlib
 import logging
-import math
 import mmap
 import re
 import sqlite3
@@ -25,6 +25,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Protocol
 
+import morecantile
+import pyproj
 from pmtiles.reader import Reader
 from pmtiles.tile import Compression, TileType
 
@@ -36,6 +38,14 @@ SUFFIXES = (".mbtiles", ".pmtiles")
 # What a set may be called: its file name without the suffix, safe in a URL and a path.
 NAME_PATTERN = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,63}$")
 MAX_ZOOM = 30
+# morecantile's WebMercatorQuad stops at zoom 24 and makes each deeper matrix again, with a
+# warning, at every call: the same grid, down to the deepest zoom the routes accept.
+WEB_MERCATOR = morecantile.TileMatrixSet.custom(
+    list(morecantile.tms.get("WebMercatorQuad").xy_bbox),
+    pyproj.CRS.from_epsg(3857),
+    maxzoom=MAX_ZOOM,
+    id="WebMercatorQuad",
+)
 RESCAN_S = 1.0
 # Raster formats a browser draws as an <img>; vector tiles (pbf/MVT) need a renderer the
 # dashboard does not have, so such a set is refused with that reason.
@@ -93,15 +103,10 @@ def check_name(name: str) -> str:
     return name
 
 
-def tile_in_range(z: int, x: int, y: int) -> bool:
-    return 0 <= z <= MAX_ZOOM and 0 <= x < 2**z and 0 <= y < 2**z
-
-
-def tile_corner(z: int, x: int, y: int) -> tuple[float, float]:
-    """Longitude and latitude of an XYZ tile's north-west corner (web Mercator)."""
-    n = 1 << z
-    lat = math.degrees(math.atan(math.sinh(math.pi * (1 - 2 * y / n))))
-    return x / n * 360.0 - 180.0, lat
+def flip_row(z: int, row: int) -> int:
+    """An XYZ row (counted from the north) as a TMS row (from the south), or back."""
+    height: int = WEB_MERCATOR.matrix(z).matrixHeight
+    return height - 1 - row
 
 
 def _version(path: Path) -> str:
@@ -157,13 +162,13 @@ class MBTilesSource:
         ).fetchone()
         if row is None or row[0] is None:
             return None
-        n = 1 << zoom
-        west, north = tile_corner(zoom, row[0], n - 1 - row[3])  # TMS rows count up north
-        east, south = tile_corner(zoom, row[1] + 1, n - row[2])
-        return west, south, east, north
+        # TMS rows count up north: the highest is the northern edge
+        north_west = WEB_MERCATOR.bounds(morecantile.Tile(row[0], flip_row(zoom, row[3]), zoom))
+        south_east = WEB_MERCATOR.bounds(morecantile.Tile(row[1], flip_row(zoom, row[2]), zoom))
+        return north_west.left, south_east.bottom, south_east.right, north_west.top
 
     def tile(self, z: int, x: int, y: int) -> bytes | None:
-        tms_row = (1 << z) - 1 - y  # MBTiles counts rows from the south (TMS)
+        tms_row = flip_row(z, y)  # MBTiles counts rows from the south (TMS)
         with self._lock:
             row = self._db.execute(
                 "SELECT tile_data FROM tiles WHERE zoom_level=? AND tile_column=? AND tile_row=?",

@@ -17,7 +17,6 @@ from backend.fleet.commands import AgentChannel
 from backend.fleet.registry import FleetRegistry
 from backend.observability import metrics
 from backend.observability.metrics import Surface, count_rejected
-from backend.realtime import manual_control
 from backend.realtime.agent_admission import Clash, judge
 from backend.realtime.bus import Topic
 from backend.realtime.collaborators import GatewayServices
@@ -390,7 +389,7 @@ class AgentSession(PeerConnection):
             case Pong():
                 pass  # its arrival answered answers_within()
             case ManualApplied(seq=seq, sent_ms=sent_ms):
-                await manual_control.echo(self.hub, hello.vehicle_id, seq, sent_ms)
+                await self.hub.manual_control.echo(hello.vehicle_id, seq, sent_ms)
             case ScanSourceStats(source=source, counts=counts):
                 self.hub.scans.source_reported(hello.vehicle_id, source, dict(counts))
             case ModeList(modes=modes):
@@ -415,7 +414,7 @@ class AgentSession(PeerConnection):
 
     async def _end_manual_control(self, vehicle_id: str, why: str) -> None:
         """The agent ended browser control (deadman hold, the RC pilot's mode change)."""
-        await manual_control.end_on_vehicle(self.hub, vehicle_id, why)
+        await self.hub.manual_control.end_on_vehicle(vehicle_id, why)
 
     async def _ingest_scan(self, hello: Hello, data: bytes) -> None:
         """A binary frame is a LIDAR scan. A refused one is counted in the vehicle's scan

@@ -10,7 +10,6 @@ import time
 from starlette.requests import HTTPConnection
 from starlette.websockets import WebSocket, WebSocketDisconnect
 
-from backend.audit import AuditAction, principal_audit_entry
 from backend.auth.credentials import presented_principal, presented_token
 from backend.auth.policy import (
     CLIENT_MESSAGE_PERMISSIONS,
@@ -18,16 +17,14 @@ from backend.auth.policy import (
     authorize,
     authorize_message,
 )
-from backend.control.lease import Lease, LeaseRefused
-from backend.errors import Forbidden, VehicleNotFound
+from backend.errors import Forbidden
+from backend.manual_control.pilot import PilotChannel
 from backend.observability import metrics
-from backend.observability.metrics import Surface, count_rejected
-from backend.realtime import manual_control
+from backend.observability.metrics import Surface
 from backend.realtime.bus import LatestSubscription, Topic
 from backend.realtime.collaborators import FeedServices
 from backend.realtime.frames import FrameTooLarge, PeerConnection
 from backend.realtime.live_events import EventSubscription
-from backend.realtime.manual_relay import ManualRelay
 from backend.realtime.scan_feed import ScanSubscription
 from backend.realtime.vehicle_fanout import (
     Broadcast,
@@ -42,12 +39,9 @@ from protocol.messages import (
     ControlRequest,
     ErrorReply,
     FleetSnapshot,
-    LeaseRefusal,
-    ManualFrame,
     ManualInput,
     MapLayer,
     MapSubscriptions,
-    ParamFix,
     Ping,
     PointMapUpdate,
     Pong,
@@ -63,13 +57,6 @@ from protocol.messages import (
 )
 
 log = logging.getLogger(__name__)
-
-REFUSAL_SEVERITY = 4  # MAV_SEVERITY_WARNING: a lease refused, in every event feed
-# A pilot clicking "Take control" again gets the refusal again, but the flight log and the
-# other dashboards have it: the same refusal from one connection is stored once a window.
-REFUSAL_EVENT_WINDOW_S = 60.0
-MAX_REFUSALS_REMEMBERED = 64
-CONTROL_VERBS = {"acquire": "take", "release": "give back", "revoke": "revoke"}
 
 
 def origin_allowed(connection: HTTPConnection, allowed_origins: list[str]) -> bool:
@@ -168,15 +155,12 @@ class ClientFeed(PeerConnection):
         self.hub = hub
         self.user = ""
         self.token_id: int | None = None
-        self._manual = ManualRelay(
-            hub.registry, hub.leases.limits.max_rate_hz, on_collapse=self._count_collapse
-        )
+        # Its manual-control messages: the lease and the sticks (backend/manual_control/).
+        self._pilot = PilotChannel(hub, self.send, self.peer)
         self.scans = ScanSubscription()
         self.map = LatestSubscription()  # newest per layer, never a queue
         self.map_layers: set[MapLayer] = set()
         self.vehicles = VehicleFeed({})
-        # (vehicle, action, reason) -> when this connection last stored that refusal
-        self._refusals_stored: dict[tuple[str, str, str], float] = {}
 
     async def serve(self) -> None:
         await self.websocket.accept()
@@ -220,7 +204,7 @@ class ClientFeed(PeerConnection):
             await self.send(FleetSnapshot(vehicles=fleet))
             # Who flies what by hand, and how the last leases ended (a hub restart's
             # revocations among them).
-            for state in list(self.hub.leases.last_states.values()):
+            for state in list(self.hub.manual_control.leases.last_states.values()):
                 await self.send(state)
             sent.update({summary.id: vehicle_info(summary) for summary in fleet})
             async with asyncio.TaskGroup() as tasks:
@@ -229,7 +213,7 @@ class ClientFeed(PeerConnection):
                 scan_pusher = tasks.create_task(self._push_scans())
                 survey_pusher = tasks.create_task(self._push_surveys(surveys))
                 map_pusher = tasks.create_task(self._push_map())
-                relay = tasks.create_task(self._manual.run())
+                relay = tasks.create_task(self._pilot.relay.run())
                 expiry = tasks.create_task(
                     self._end_at_expiry(
                         principal.expires_at,
@@ -382,109 +366,10 @@ class ClientFeed(PeerConnection):
             if isinstance(message, Ping):
                 await self.send(Pong(nonce=message.nonce))
             elif isinstance(message, ManualInput):
-                await self._manual_input(message)
+                await self._pilot.input(message, self.user)
             elif isinstance(message, ControlRequest):
-                await self._control(message)
+                await self._pilot.control(message, self.principal)
             elif isinstance(message, SubscribeScans | UnsubscribeScans):
                 await self._scan_subscription(message)
             elif isinstance(message, SubscribeMap | UnsubscribeMap):
                 await self._map_subscription(message)
-
-    async def _manual_input(self, message: ManualInput) -> None:
-        """Forward the lease holder's input, newest first; refuse and count the rest."""
-        try:
-            self.hub.leases.admit(message.vehicle_id, self.user, message.seq)
-        except LeaseRefused as refusal:
-            count_rejected("client_manual")
-            # Never forwarded. Old or too-fast frames are a client's jitter: counted
-            # silently; input without the lease is said, since the pilot must know.
-            if "lease" in refusal.message:
-                await self.send(ErrorReply(code="forbidden", message=refusal.message))
-            return
-        self._manual.put(
-            message.vehicle_id,
-            # Its fields were validated as the ManualInput arrived: the hot path (25 Hz
-            # per pilot) builds the relayed frame without validating them again.
-            ManualFrame.model_construct(
-                type="manual",
-                seq=message.seq,
-                axes=message.axes,
-                source=message.source,
-                sent_ms=message.sent_ms,
-            ),
-        )
-
-    async def _refused(
-        self, message: ControlRequest, reason: str, fix: ParamFix | None, *, known: bool
-    ) -> None:
-        """Tell the pilot at once (the pilot view shows it, and offers ``fix`` to whoever
-        may make it), and every dashboard in its event feed: a lease that silently never
-        comes looks like a hub that hangs."""
-        vehicle_id = message.vehicle_id
-        # Said beside the vehicle's name, about manual control: those need no repeating.
-        text = reason.removeprefix(f"{vehicle_id}: ").removeprefix("manual control: ")
-        await self.send(
-            LeaseRefusal(vehicle_id=vehicle_id, action=message.action, reason=text, fix=fix)
-        )
-        if known and self._first_in_window((vehicle_id, message.action, text)):
-            # An unknown vehicle gets no event row of its own.
-            await self.hub.store_event(
-                vehicle_id,
-                "manual",
-                f"{self.user} may not {CONTROL_VERBS[message.action]} manual control: {text}",
-                REFUSAL_SEVERITY,
-            )
-
-    def _first_in_window(self, key: tuple[str, str, str]) -> bool:
-        """Whether this refusal is the first of its window on this connection."""
-        now = time.monotonic()
-        last = self._refusals_stored.get(key)
-        if last is not None and now - last < REFUSAL_EVENT_WINDOW_S:
-            return False
-        if len(self._refusals_stored) >= MAX_REFUSALS_REMEMBERED:
-            self._refusals_stored.clear()  # a bound, not a policy: forgetting says again
-        self._refusals_stored[key] = now
-        return True
-
-    def _count_collapse(self) -> None:
-        self.hub.leases.refused.too_fast += 1
-
-    async def _control(self, message: ControlRequest) -> None:
-        vehicle_id = message.vehicle_id
-        leases = self.hub.leases
-        outcome, reason = "ok", ""
-        ended: Lease | None = None
-        try:
-            if self.hub.registry.get(vehicle_id).channel is None:
-                raise LeaseRefused(f"{vehicle_id} is offline")
-            if message.action == "acquire":
-                lease = await manual_control.acquire(self.hub, vehicle_id, self.principal)
-            elif message.action == "release":
-                ended = leases.release(vehicle_id, self.principal)
-                reason = f"released by {self.user}"
-            else:
-                ended = leases.revoke(vehicle_id, self.principal)
-                reason = f"revoked by {self.user}"
-        except (Forbidden, VehicleNotFound) as refusal:
-            outcome = "refused"
-            reason = refusal.message
-            fix = refusal.fix if isinstance(refusal, LeaseRefused) else None
-            await self._refused(
-                message, reason, fix, known=not isinstance(refusal, VehicleNotFound)
-            )
-        await self.hub.record(
-            principal_audit_entry(
-                self.principal,
-                self.peer,
-                AuditAction.CONTROL_LEASE,
-                vehicle_id,
-                outcome,
-                {"action": message.action, "reason": reason},
-            )
-        )
-        if outcome != "ok":
-            return
-        if message.action == "acquire":
-            await manual_control.announce(self.hub, manual_control.lease_state(lease))
-        elif ended is not None:
-            await manual_control.end(self.hub, ended, reason, stop_vehicle=True)

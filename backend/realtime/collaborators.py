@@ -10,13 +10,13 @@ from __future__ import annotations
 
 import asyncio
 from collections.abc import Collection
-from typing import Protocol, runtime_checkable
+from typing import Protocol
 
 from backend.audit import AuditEntry
 from backend.auth.accounts import Accounts
-from backend.control.lease import LeaseBook
 from backend.fleet.commands import CommandDispatcher
 from backend.fleet.registry import FleetRegistry, VehicleRecord
+from backend.manual_control.service import ManualControl
 from backend.realtime.bus import Bus
 from backend.realtime.routing import AgentRoutes
 from backend.realtime.vehicle_fanout import VehicleFanout
@@ -27,7 +27,6 @@ from backend.storage.sequences import Gap, StreamKey
 from protocol.messages import (
     HubEventKind,
     MapLayer,
-    Message,
     ObstaclesUpdate,
     PointMapUpdate,
 )
@@ -70,14 +69,6 @@ class ClientConnection(Protocol):
     async def close(self, code: int, reason: str) -> None: ...
 
 
-@runtime_checkable
-class LeaseListener(Protocol):
-    """A client connection that is told who flies each vehicle by hand (the live feed;
-    the 3D view's relay is not)."""
-
-    async def send(self, message: Message) -> None: ...
-
-
 class FeedServices(Protocol):
     """What a client feed uses of the hub."""
 
@@ -100,7 +91,7 @@ class FeedServices(Protocol):
     def client_feeds(self) -> set[ClientConnection]: ...
 
     @property
-    def leases(self) -> LeaseBook: ...
+    def manual_control(self) -> ManualControl: ...
 
     @property
     def dispatcher(self) -> CommandDispatcher: ...
@@ -144,7 +135,7 @@ class GatewayServices(Protocol):
     def agent_admissions(self) -> dict[str, asyncio.Lock]: ...
 
     @property
-    def leases(self) -> LeaseBook: ...
+    def manual_control(self) -> ManualControl: ...
 
     @property
     def client_feeds(self) -> set[ClientConnection]: ...

@@ -31,7 +31,7 @@ log = logging.getLogger(__name__)
 # A lease claim outlives its last renewal by this much beyond the lease's own expiry, so
 # a renewal late by a busy database does not hand the vehicle to someone else.
 LEASE_CLAIM_MARGIN_S = 2.0
-LEASE_EXPIRY_S = 2.0  # backend.control.lease.LeaseLimits' default
+LEASE_EXPIRY_S = 2.0  # backend.manual_control.lease.LeaseLimits' default
 # An agent's "manual" event this severe (WARNING) or worse: browser control has ended on
 # the vehicle (backend/realtime/agent_gateway.py says the same of its own agents).
 MANUAL_ENDED_SEVERITY = 4

@@ -18,7 +18,7 @@ from collections.abc import Callable
 
 from sqlalchemy.exc import SQLAlchemyError
 
-from backend.storage.lease_claims import LeaseClaimStore
+from backend.manual_control.store import LeaseClaimStore
 
 log = logging.getLogger(__name__)
 

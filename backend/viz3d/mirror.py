@@ -5,9 +5,10 @@ The mirror takes them newest-wins per vehicle, and at most once per period appli
 has changed as one atomic scene update: the browser gets a bounded number of updates a
 second whatever the fleet's size and rate, and never a stale state before a newer one.
 Scans are taken the same way (each vehicle's newest, at most once per period), and the
-accumulated point map, which only grows slowly, less often. Surveys' lanes, formations
-and mosaics have a layer module each (survey_layer, formation_layer, mosaic_layer),
-which the mirror runs beside its own work.
+accumulated point map, which only grows slowly, less often. Surveys' lanes and mosaics
+have a layer module each (survey_layer, mosaic_layer), and a feature package may bring
+its own (``SceneLayer``: the formation's, backend/formation/scene_layer.py); the mirror
+runs them beside its own work.
 """
 
 from __future__ import annotations
@@ -18,14 +19,13 @@ import time
 from collections.abc import Awaitable, Callable, Iterable, Iterator
 
 from backend.errors import VehicleNotFound
-from backend.fleet.formations import FormationService
 from backend.fleet.registry import FleetRegistry
 from backend.mosaic.service import MosaicService
 from backend.realtime.bus import Bus, LatestSubscription, Topic
 from backend.scans.pointmap import Array, find_obstacles
 from backend.scans.service import ScanDelivery, ScanService
 from backend.surveys.service import SurveyService
-from backend.viz3d.formation_layer import FormationLayer
+from backend.viz3d.frame import HomeAltitude
 from backend.viz3d.mosaic_layer import MosaicLayer
 from backend.viz3d.scene import FleetScene
 from backend.viz3d.survey_layer import SurveyLanes
@@ -41,6 +41,11 @@ POINT_MAP_INTERVAL_S = 2.0
 POINT_MAP_MAX_POINTS = 100_000
 POINT_MAP_SHARE = 10.0
 
+# A feature's own layer: given the scene, each vehicle's home altitude and the mirror's
+# interval, the loop that draws it. Made once per mirror, as the mirror's own layers
+# are, so a restarted loop still knows what its layer drew.
+SceneLayer = Callable[[FleetScene, HomeAltitude, float], Callable[[], Awaitable[None]]]
+
 
 class SceneMirror:
     def __init__(
@@ -51,9 +56,9 @@ class SceneMirror:
         interval_s: float,
         scans: ScanService | None = None,
         surveys: SurveyService | None = None,
-        formations: FormationService | None = None,
         mosaics: MosaicService | None = None,
         mosaic_surveys: Callable[[], Iterable[str]] | None = None,
+        layers: Iterable[tuple[str, SceneLayer]] = (),
     ) -> None:
         """``mosaic_surveys``: the surveys whose mosaics are drawn (the hub gives those it
         has followed since it started, flying or ended)."""
@@ -63,7 +68,7 @@ class SceneMirror:
         self.interval_s = interval_s
         self.scans = scans
         self.surveys = surveys
-        self.formations = formations
+        self.layers = list(layers)
         self.mosaics = mosaics
         self.mosaic_surveys = mosaic_surveys
 
@@ -82,9 +87,8 @@ class SceneMirror:
         if self.surveys is not None:
             surveys, lanes = self.surveys, SurveyLanes(self.scene, self.home_alt)
             yield "survey lanes", lambda: lanes.follow(self.bus, surveys, self.interval_s)
-        if self.formations is not None:
-            formations, formation = self.formations, FormationLayer(self.scene)
-            yield "formations", lambda: formation.follow(formations, self.home_alt, self.interval_s)
+        for name, layer in self.layers:
+            yield name, layer(self.scene, self.home_alt, self.interval_s)
         if self.mosaics is not None and self.mosaic_surveys is not None:
             # Made once, as the other layers are: a restarted loop still knows what its
             # layer drew, so it can take those pictures away again.

@@ -16,7 +16,7 @@ from typing import Any
 import httpx
 import pytest
 
-from backend.missions.formation.route import LeaderRoute
+from backend.formation.route import LeaderRoute
 from common.formation import LeaderState, Offset, OffsetFrame, slot_target
 from common.geodesy import LocalFrame
 from gcs.launcher import LocalFleet

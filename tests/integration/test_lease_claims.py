@@ -7,8 +7,8 @@ import threading
 
 from sqlalchemy import Engine
 
+from backend.manual_control.store import LeaseClaimStore
 from backend.storage.database import migrate
-from backend.storage.lease_claims import LeaseClaimStore
 
 TTL_S = 4.0
 

@@ -11,8 +11,8 @@ from sqlalchemy import Engine, text
 from sqlalchemy.exc import DBAPIError
 
 from backend.audit import AuditEntry, AuditLog, AuditQuery
+from backend.formation.store import FormationRepository, StoredFormation
 from backend.storage.database import migrate
-from backend.storage.formations import FormationRepository, StoredFormation
 from backend.storage.models import Base
 from backend.storage.records import TelemetryEnvelope
 from backend.storage.repository import Repository

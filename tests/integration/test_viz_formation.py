@@ -1,5 +1,5 @@
 """A running formation in the hub's 3D view, read off the view's own WebSocket: the hub's
-formation service feeds the layer (backend/viz3d/formation_layer.py), its slot lines
+formation service feeds the layer (backend/formation/scene_layer.py), its slot lines
 and separation spheres appear while the formation runs and go when it is stopped."""
 
 from __future__ import annotations

@@ -34,3 +34,9 @@ def _summary(vehicle: str, t: float, connected: bool = True, **state: Any) -> Ve
 
 def _node(server: viser.ViserServer, name: str) -> Any:
     return server.scene._handle_from_node_name.get(name)
+
+
+def _under(server: viser.ViserServer, root: str) -> list[str]:
+    """The nodes at or under ``root``: viser's own parent frames included."""
+    names = server.scene._handle_from_node_name
+    return [name for name in names if name == root or name.startswith(root + "/")]

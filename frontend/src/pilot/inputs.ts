@@ -5,7 +5,7 @@
 import nipplejs from "nipplejs";
 import { type Axes, type AxisName, CENTRED, clampUnit } from "./shaping";
 
-/** MANUAL_CONTROL button bits the agent acts on (vehicle_agents/manual.py). */
+/** MANUAL_CONTROL button bits the agent acts on (vehicle_agents/control/manual.py). */
 export const BUTTON_SELECT = 1 << 0;
 export const BUTTON_HOLD = 1 << 1;
 

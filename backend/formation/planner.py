@@ -12,8 +12,8 @@ from collections.abc import Collection, Mapping
 from dataclasses import dataclass, field
 
 from backend.errors import InvalidRequest
-from backend.missions.formation.route import LeaderRoute
-from backend.missions.formation.schemas import FormationRequest
+from backend.formation.route import LeaderRoute
+from backend.formation.schemas import FormationRequest
 from backend.missions.rails import evaluate_plan
 from backend.missions.waypoints import Waypoint
 from backend.safety.rails import SafetyRails

@@ -5,7 +5,7 @@ changes. The hub forwards a manual-input frame only when ``admit`` says so: the 
 holder's own frame, newer than the last (newest wins); the relay caps the rate.
 Leases live only in memory, so a hub restart leaves none active; the audit log tells
 the restarted hub which were open, and it reports those as revoked
-(backend/realtime/manual_control.py).
+(backend/manual_control/service.py).
 """
 
 from __future__ import annotations
@@ -20,7 +20,7 @@ from backend.errors import Forbidden
 from protocol.messages import LeaseState, ParamFix
 
 if TYPE_CHECKING:
-    from backend.control.claims import LeaseClaims
+    from backend.manual_control.claims import LeaseClaims
 
 
 @dataclass(frozen=True)
@@ -78,7 +78,7 @@ class LeaseBook:
     # The last lease state said of each vehicle, for dashboards that connect later.
     last_states: dict[str, LeaseState] = field(default_factory=dict)
     # Several hubs: the claims in the shared database that make a lease exclusive
-    # across them (backend/control/claims.py); None for a hub alone.
+    # across them (backend/manual_control/claims.py); None for a hub alone.
     claims: LeaseClaims | None = None
     _leases: dict[str, Lease] = field(default_factory=dict)
 
@@ -160,7 +160,7 @@ class LeaseBook:
             self.refused.old_seq += 1
             raise LeaseRefused(f"seq: {seq} is not newer than {lease.last_seq}")
         # Input faster than max_rate_hz is admitted here and collapses to its newest
-        # frame in the relay (backend/realtime/manual_relay.py), which counts the rest
+        # frame in the relay (backend/manual_control/relay.py), which counts the rest
         # in refused.too_fast: a refusal here would keep a burst's oldest frame instead.
         now = self.clock()
         lease.last_seq = seq

@@ -6,7 +6,7 @@ import asyncio
 
 from backend.fleet.commands import AgentChannel
 from backend.fleet.registry import FleetRegistry
-from backend.realtime.manual_relay import ManualRelay
+from backend.manual_control.relay import ManualRelay
 from protocol.messages import ManualAxes, ManualFrame, Message
 from tests.helpers import agent_hello
 

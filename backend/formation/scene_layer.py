@@ -14,15 +14,17 @@ from __future__ import annotations
 
 import asyncio
 import time
-from collections.abc import Callable, Iterable
+from collections.abc import Awaitable, Callable, Iterable
 from dataclasses import dataclass, field
 
 import numpy as np
 import viser
 
-from backend.fleet.formations import ActiveFormation, FormationService
+from backend.formation.active import ActiveFormation
+from backend.formation.service import FormationService
 from backend.viz3d.colours import rgb, vehicle_colour
 from backend.viz3d.frame import HomeAltitude, SceneFrame, Vector
+from backend.viz3d.mirror import SceneLayer
 from backend.viz3d.scene import FORMATIONS, FleetScene
 from common.formation import LeaderState, slot_target
 
@@ -168,3 +170,15 @@ class FormationLayer:
                     views.append(view)
             await asyncio.to_thread(self.sync, views, [f.id for f in running])
             await asyncio.sleep(interval_s)
+
+
+def formation_scene_layer(formations: FormationService) -> SceneLayer:
+    """The running formations as a layer of the 3D view's mirror."""
+
+    def make(
+        scene: FleetScene, home_alt: HomeAltitude, interval_s: float
+    ) -> Callable[[], Awaitable[None]]:
+        layer = FormationLayer(scene)
+        return lambda: layer.follow(formations, home_alt, interval_s)
+
+    return make

@@ -1,6 +1,7 @@
 """Formation missions: start one, change its shape or spacing in flight, stop it.
 
-The checks and the relay are `backend.fleet.formations`; a refusal names its reason (422)."""
+The checks are `backend.formation.planner`, the relay `backend.formation.relay`; a refusal
+names its reason (422). The routes reach the service through `FormationServiceDep`."""
 
 from __future__ import annotations
 
@@ -13,15 +14,14 @@ from typing import Annotated, Any
 from fastapi import Path, Query, Request
 from pydantic import BaseModel, Field
 
-from backend.api.deps import HubDep
 from backend.api.security import CurrentPrincipal, SecuredRouter, audit_entry, requires
-from backend.audit import AuditAction
+from backend.audit import AuditAction, AuditLog
 from backend.auth.policy import Permission, Principal
 from backend.errors import GcsError
-from backend.fleet.formation_metrics import ErrorStats, FollowerTracking
-from backend.fleet.formations import ActiveFormation
-from backend.hub import Hub
-from backend.missions.formation.schemas import FormationRequest, OffsetModel, ShapeChange
+from backend.formation.active import ActiveFormation
+from backend.formation.deps import AuditLogDep, FormationServiceDep
+from backend.formation.metrics import ErrorStats, FollowerTracking
+from backend.formation.schemas import FormationRequest, OffsetModel, ShapeChange
 from common.formation import Controller
 
 router = SecuredRouter(prefix="/formations", tags=["formations"])
@@ -102,7 +102,11 @@ class FormationStatus(BaseModel):
 
 @router.post("", response_model=FormationStatus, openapi_extra=requires(Permission.COMMAND))
 async def start_formation(
-    body: FormationRequest, request: Request, principal: CurrentPrincipal, hub: HubDep
+    body: FormationRequest,
+    request: Request,
+    principal: CurrentPrincipal,
+    formations: FormationServiceDep,
+    audit: AuditLogDep,
 ) -> FormationStatus:
     """Check the formation (separation of every slot, roles, readiness, speed, and the
     route with every slot around it against the rails) and start it: each member gets its
@@ -116,8 +120,8 @@ async def start_formation(
     not all in their slots within the hub's join time limit (GCS_FORMATION_JOIN_TIMEOUT_S,
     60 s) ends with the reason in `stopped`, and every member holds."""
     target = body.leader_id or "virtual leader"
-    async with _audited(request, principal, hub, AuditAction.FORMATION_START, target) as note:
-        formation = await hub.formations.start(body, by=principal.name)
+    async with _audited(request, principal, audit, AuditAction.FORMATION_START, target) as note:
+        formation = await formations.start(body, by=principal.name)
         note.update(
             formation_id=formation.id,
             followers=formation.followers,
@@ -149,11 +153,11 @@ class StoredFormations(BaseModel):
 
 @router.get("", response_model=StoredFormations, openapi_extra=requires(Permission.READ))
 async def list_formations(
-    hub: HubDep, limit: Annotated[int, Query(ge=1, le=500)] = 50
+    formations: FormationServiceDep, limit: Annotated[int, Query(ge=1, le=500)] = 50
 ) -> StoredFormations:
     """The latest formations as stored, newest first: who started and stopped each, what
     it flew, and its tracking figures."""
-    stored = await asyncio.to_thread(hub.formations.stored, limit)
+    stored = await asyncio.to_thread(formations.stored, limit)
     return StoredFormations(
         formations=[
             StoredFormationModel(
@@ -175,8 +179,10 @@ async def list_formations(
 @router.get(
     "/{formation_id}", response_model=FormationStatus, openapi_extra=requires(Permission.READ)
 )
-async def get_formation(formation_id: FormationIdPath, hub: HubDep) -> FormationStatus:
-    return FormationStatus.of(hub.formations.get(formation_id))
+async def get_formation(
+    formation_id: FormationIdPath, formations: FormationServiceDep
+) -> FormationStatus:
+    return FormationStatus.of(formations.get(formation_id))
 
 
 @router.patch(
@@ -187,13 +193,14 @@ async def change_formation(
     body: ShapeChange,
     request: Request,
     principal: CurrentPrincipal,
-    hub: HubDep,
+    formations: FormationServiceDep,
+    audit: AuditLogDep,
 ) -> FormationStatus:
     """A new shape or spacing in flight; the followers glide to their new slots."""
     action = AuditAction.FORMATION_CHANGE
-    async with _audited(request, principal, hub, action, formation_id) as note:
+    async with _audited(request, principal, audit, action, formation_id) as note:
         note.update(body.model_dump(exclude_none=True, mode="json"))
-        formation = await hub.formations.change_shape(formation_id, body)
+        formation = await formations.change_shape(formation_id, body)
     return FormationStatus.of(formation)
 
 
@@ -203,17 +210,21 @@ async def change_formation(
     openapi_extra=requires(Permission.COMMAND),
 )
 async def stop_formation(
-    formation_id: FormationIdPath, request: Request, principal: CurrentPrincipal, hub: HubDep
+    formation_id: FormationIdPath,
+    request: Request,
+    principal: CurrentPrincipal,
+    formations: FormationServiceDep,
+    audit: AuditLogDep,
 ) -> FormationStatus:
     """Every member leaves the formation and holds where it is."""
-    async with _audited(request, principal, hub, AuditAction.FORMATION_STOP, formation_id):
-        await hub.formations.stop(formation_id, by=principal.name)
-    return FormationStatus.of(hub.formations.get(formation_id))
+    async with _audited(request, principal, audit, AuditAction.FORMATION_STOP, formation_id):
+        await formations.stop(formation_id, by=principal.name)
+    return FormationStatus.of(formations.get(formation_id))
 
 
 @asynccontextmanager
 async def _audited(
-    request: Request, principal: Principal, hub: Hub, action: AuditAction, target: str
+    request: Request, principal: Principal, audit: AuditLog, action: AuditAction, target: str
 ) -> AsyncIterator[dict[str, Any]]:
     """Record who did ``action`` on ``target`` and how it ended: ok, or refused with the
     reason (the refusal still reaches the caller)."""
@@ -221,10 +232,11 @@ async def _audited(
     try:
         yield detail
     except GcsError as refusal:
-        await hub.record(
-            audit_entry(
-                request, principal, action, target, "refused", reason=refusal.message, **detail
-            )
+        entry = audit_entry(
+            request, principal, action, target, "refused", reason=refusal.message, **detail
         )
+        await asyncio.to_thread(audit.record, entry)
         raise
-    await hub.record(audit_entry(request, principal, action, target, "ok", **detail))
+    await asyncio.to_thread(
+        audit.record, audit_entry(request, principal, action, target, "ok", **detail)
+    )

@@ -7,9 +7,9 @@ import json
 import pytest
 
 from backend.auth.policy import Principal, Role, user_principal
-from backend.control.lease import Lease, LeaseBook, LeaseLimits, LeaseRefused
 from backend.errors import Forbidden
-from backend.realtime.manual_control import leases_left_open
+from backend.manual_control.lease import Lease, LeaseBook, LeaseLimits, LeaseRefused
+from backend.manual_control.service import leases_left_open
 from backend.storage.models import AuditRow
 
 
@@ -72,7 +72,7 @@ def test_old_sequence_numbers_are_refused() -> None:
     leases.admit("copter-1", "alice", 6)
     with pytest.raises(LeaseRefused, match="not newer"):
         leases.admit("copter-1", "alice", 2)
-    # Floods are the relay's to collapse (tests/unit/test_manual_relay.py).
+    # Floods are the relay's to collapse (tests/unit/manual_control/test_relay.py).
     assert leases.refused.old_seq == 2
 
 

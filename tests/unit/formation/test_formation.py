@@ -9,9 +9,9 @@ from typing import Any
 import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
-from backend.missions.formation import FormationRefused, plan_formation
-from backend.missions.formation.route import LeaderRoute
-from backend.missions.formation.schemas import FormationRequest
+from backend.formation import FormationRefused, plan_formation
+from backend.formation.route import LeaderRoute
+from backend.formation.schemas import FormationRequest
 from backend.safety.geofence import Geofence
 from backend.safety.rails import SafetyRails
 from backend.safety.snapshot import VehicleSnapshot

@@ -17,8 +17,8 @@ from collections.abc import Callable, Iterable
 
 from sqlalchemy.exc import SQLAlchemyError
 
-from backend.control.lease import Lease, LeaseRefused
-from backend.storage.lease_claims import LeaseClaimStore
+from backend.manual_control.lease import Lease, LeaseRefused
+from backend.manual_control.store import LeaseClaimStore
 
 log = logging.getLogger(__name__)
 

@@ -6,7 +6,7 @@ import math
 
 import pytest
 
-from backend.fleet.formation_metrics import TrackingMetrics
+from backend.formation.metrics import TrackingMetrics
 
 
 def test_errors_are_kept_per_leg_and_over_the_mission_legs_only() -> None:

@@ -27,7 +27,6 @@ from backend.api import (
     mosaics,
     params,
     photos,
-    safety,
     scans,
     surveys,
     system,
@@ -54,6 +53,7 @@ from backend.errors import (
 )
 from backend.hub import Hub
 from backend.observability.logs import use_json_logs
+from backend.safety import routes as safety
 from backend.settings import REPO_ROOT, HubSettings
 from common.log_escaping import escape_control_characters_in_logs
 from protocol.messages import AGENT_WS_PATH, CLIENT_WS_PATH

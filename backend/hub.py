@@ -28,7 +28,6 @@ from backend.fleet.commands import CommandDispatcher
 from backend.fleet.formations import FormationService, ScanPoints
 from backend.fleet.param_catalog import ParamCatalog
 from backend.fleet.registry import FleetRegistry, VehicleRecord
-from backend.fleet.safety_gate import SafetyGate
 from backend.mapping.tiles import TileLibrary
 from backend.mosaic.photo import StoredPhoto as MosaicPhoto
 from backend.mosaic.service import MosaicService
@@ -43,6 +42,8 @@ from backend.realtime.live_events import live_event
 from backend.realtime.nats_bus import NatsBus
 from backend.realtime.routing import AgentRoutes
 from backend.realtime.vehicle_fanout import VehicleFanout
+from backend.safety.rails_store import RailsRepository
+from backend.safety.service import SafetyService
 from backend.scans.obstacles import describe as describe_obstacle
 from backend.scans.pointmap import MapObstacle
 from backend.scans.points import in_frame
@@ -55,7 +56,6 @@ from backend.storage.lease_claims import LeaseClaimStore
 from backend.storage.logbook import Logbook
 from backend.storage.models import AuditRow, CommandRow
 from backend.storage.photos import PhotoRepository
-from backend.storage.rails import RailsRepository
 from backend.storage.records import StoredEvent
 from backend.storage.repository import Repository
 from backend.storage.retention import RetentionPolicy
@@ -113,7 +113,7 @@ class Hub:
     login_address_limiter: RateLimiter
     command_limiter: RateLimiter
     passwords: PasswordWork
-    safety: SafetyGate
+    safety: SafetyService
     scans: ScanService
     formations: FormationService
     # Audit and command-log rows waiting out a database outage.
@@ -205,7 +205,7 @@ class Hub:
             passwords=PasswordWork(
                 settings.password_hash_threads, settings.password_hash_max_pending
             ),
-            safety=(safety := SafetyGate(RailsRepository(engine), settings)),
+            safety=(safety := SafetyService(RailsRepository(engine), settings)),
             formations=FormationService(
                 registry,
                 safety,

@@ -29,10 +29,11 @@ from backend.errors import Conflict, NotFound
 from backend.fleet.airborne import not_airborne
 from backend.fleet.formation_metrics import TrackingMetrics, tracking_summary
 from backend.fleet.registry import FleetRegistry
-from backend.fleet.safety_gate import SafetyGate, snapshot_of
 from backend.missions.formation import FormationPlan, plan_formation
 from backend.missions.formation.planner import check_separation, follower_offsets
 from backend.missions.formation.schemas import FormationRequest, ShapeChange
+from backend.safety.service import SafetyService
+from backend.safety.snapshot import snapshot_of
 from backend.storage.formations import FormationRepository, StoredFormation
 from common.formation import LeaderState, Offset, slot_target
 from common.geodesy import LocalFrame
@@ -108,7 +109,7 @@ class FormationService:
     def __init__(
         self,
         registry: FleetRegistry,
-        safety: SafetyGate,
+        safety: SafetyService,
         rate_hz: float = 10.0,
         clock: Callable[[], float] = time.time,
         repository: FormationRepository | None = None,

@@ -5,8 +5,7 @@ from __future__ import annotations
 
 import math
 
-from backend.missions import Waypoint
-from backend.safety import Geofence, GeoPoint, VehicleSnapshot
+from backend.safety import Geofence, GeoPoint, VehicleSnapshot, Waypoint
 from common.geodesy import EARTH_MEAN_RADIUS_M, LocalFrame
 
 ORIGIN = (47.0, 8.0)

@@ -4,8 +4,6 @@ import math
 
 import pytest
 
-from backend.missions import check_plan, evaluate_plan
-from backend.missions.waypoints import Waypoint
 from backend.safety import (
     RULES,
     Geofence,
@@ -15,9 +13,12 @@ from backend.safety import (
     Violation,
     check_arm,
     check_goto,
+    check_plan,
     check_takeoff,
+    evaluate_plan,
     haversine_m,
 )
+from backend.safety.mission_waypoints import Waypoint
 from tests.unit.safety.shapes import UNKNOWN, geo, north_of, u_fence, vehicle, wp
 
 

@@ -1,4 +1,4 @@
-"""Sending one command to one vehicle, the whole way: the safety gate, the dispatch to
+"""Sending one command to one vehicle, the whole way: the safety service, the dispatch to
 its agent, the audit log and the command log. The REST routes for one vehicle and for a
 group both go through here, so every command is checked and recorded the same way."""
 

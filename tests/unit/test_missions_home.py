@@ -1,5 +1,6 @@
-"""Missions have one home on the hub, `backend.missions`: pure domain logic that knows
-nothing of HTTP, storage or the agent, so that planners can land there and be tested alone."""
+"""The mission planners (`backend.missions`) and the safety rules they are checked by
+(`backend.safety`'s rule modules) are pure domain logic that knows nothing of HTTP, storage
+or the agent, so that planners can land there and be tested alone."""
 
 from __future__ import annotations
 

@@ -26,7 +26,6 @@ from backend.api import (
     mosaics,
     params,
     photos,
-    safety,
     scans,
     surveys,
     system,
@@ -55,6 +54,7 @@ from backend.formation import routes as formations
 from backend.formation import wiring as formation_wiring
 from backend.hub import Hub
 from backend.observability.logs import use_json_logs
+from backend.safety import routes as safety
 from backend.settings import REPO_ROOT, HubSettings
 from common.log_escaping import escape_control_characters_in_logs
 from protocol.messages import AGENT_WS_PATH, CLIENT_WS_PATH

@@ -25,7 +25,6 @@ from backend.fleet.command_service import carry_out_routed
 from backend.fleet.commands import CommandDispatcher
 from backend.fleet.param_catalog import ParamCatalog
 from backend.fleet.registry import FleetRegistry, VehicleRecord
-from backend.fleet.safety_gate import SafetyGate
 from backend.manual_control.claims import LeaseClaims
 from backend.manual_control.service import ManualControl
 from backend.manual_control.store import LeaseClaimStore
@@ -42,6 +41,8 @@ from backend.realtime.live_events import live_event
 from backend.realtime.nats_bus import NatsBus
 from backend.realtime.routing import AgentRoutes
 from backend.realtime.vehicle_fanout import VehicleFanout
+from backend.safety.rails_store import RailsRepository
+from backend.safety.service import SafetyService
 from backend.scans.obstacles import describe as describe_obstacle
 from backend.scans.pointmap import MapObstacle
 from backend.scans.service import ScanService
@@ -51,7 +52,6 @@ from backend.storage.database import make_engine, migrate
 from backend.storage.logbook import Logbook
 from backend.storage.models import AuditRow, CommandRow
 from backend.storage.photos import PhotoRepository
-from backend.storage.rails import RailsRepository
 from backend.storage.records import StoredEvent
 from backend.storage.repository import Repository
 from backend.storage.retention import RetentionPolicy
@@ -102,7 +102,7 @@ class Hub:
     login_address_limiter: RateLimiter
     command_limiter: RateLimiter
     passwords: PasswordWork
-    safety: SafetyGate
+    safety: SafetyService
     scans: ScanService
     # Audit and command-log rows waiting out a database outage.
     spool: RowSpool
@@ -197,7 +197,7 @@ class Hub:
             passwords=PasswordWork(
                 settings.password_hash_threads, settings.password_hash_max_pending
             ),
-            safety=SafetyGate(RailsRepository(engine), settings),
+            safety=SafetyService(RailsRepository(engine), settings),
             scans=ScanService(
                 ScanRepository(engine),
                 bus,

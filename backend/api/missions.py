@@ -13,7 +13,7 @@ from backend.api.security import CurrentPrincipal, SecuredRouter, client_address
 from backend.api.vehicle_budget import spend_vehicle_budget
 from backend.auth.policy import Permission
 from backend.fleet.command_service import execute_expecting_acceptance
-from backend.missions.schemas import Mission
+from backend.safety.mission_schemas import Mission
 from protocol.messages import (
     Command,
     CommandOutcome,

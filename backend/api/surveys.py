@@ -22,8 +22,6 @@ from backend.api.responses import ErrorMessage
 from backend.api.security import CurrentPrincipal, SecuredRouter, requires
 from backend.auth.policy import Permission
 from backend.errors import Conflict, InvalidRequest, RequestTooLarge
-from backend.fleet.safety_gate import snapshot_of
-from backend.missions.schemas import Mission, MissionCheckResponse
 from backend.missions.survey.camera import PRESETS
 from backend.missions.survey.interop import (
     MAX_FILE_BYTES,
@@ -34,7 +32,8 @@ from backend.missions.survey.interop import (
 from backend.missions.survey.run import HandoverOffer, SurveyRun
 from backend.missions.survey.schemas import SurveyPart, SurveyPreview, SurveyRequest
 from backend.missions.survey.service import Fleet, percent
-from backend.safety.snapshot import home, position
+from backend.safety.mission_schemas import Mission, MissionCheckResponse
+from backend.safety.snapshot import home, position, snapshot_of
 from protocol.messages import SurveyUpdate, VehicleId
 
 router = SecuredRouter(tags=["surveys"])

@@ -13,23 +13,19 @@ from backend.audit import AuditEntry
 from backend.fleet.commands import CommandDispatcher
 from backend.fleet.param_catalog import ParamCatalog
 from backend.fleet.registry import FleetRegistry
-from backend.fleet.safety_gate import SafetyGate
+from backend.safety.service import SafetyService
 from backend.storage.spool import RowSpool
 from protocol.messages import HubEventKind
 
 
-class MissionServices(Protocol):
-    """What the checks against the mission on board use (``backend.fleet.mission_gate``)."""
+class CommandServices(Protocol):
+    """What sending one command uses (``backend.fleet.command_service``)."""
 
     @property
     def dispatcher(self) -> CommandDispatcher: ...
 
     @property
-    def safety(self) -> SafetyGate: ...
-
-
-class CommandServices(MissionServices, Protocol):
-    """What sending one command uses (``backend.fleet.command_service``)."""
+    def safety(self) -> SafetyService: ...
 
     @property
     def registry(self) -> FleetRegistry: ...

@@ -1,4 +1,4 @@
-"""Sending one command to one vehicle, the whole way: the safety gate, the dispatch to
+"""Sending one command to one vehicle, the whole way: the safety service, the dispatch to
 its agent, the audit log and the command log. The REST routes for one vehicle and for a
 group both go through here, so every command is checked and recorded the same way."""
 
@@ -23,8 +23,7 @@ from backend.errors import (
 )
 from backend.fleet.collaborators import CommandServices
 from backend.fleet.commands import Sender
-from backend.fleet.mission_gate import check_current_item, unchecked_mission
-from backend.missions.gate import starts_mission
+from backend.safety.mission_on_board import MissionReader, starts_mission
 from backend.storage.logbook import command_row
 from backend.storage.models import CommandRow
 from protocol.messages import (
@@ -32,6 +31,8 @@ from protocol.messages import (
     CommandOutcome,
     ManualStartCommand,
     ManualStopCommand,
+    MissionDownloadCommand,
+    MissionItem,
     ParamGetCommand,
     ParamSetCommand,
     lease_only,
@@ -62,7 +63,8 @@ async def execute_command(
             # tracks; a bare command would leave the vehicle in a pilot mode nobody flies.
             raise InvalidRequest("name", lease_only(command.name))
         record = hub.registry.get(vehicle_id)
-        critical = hub.safety.check_authority(principal, record, command)
+        read_on_board = _mission_reader(hub, vehicle_id, principal)
+        critical = hub.safety.check_param_write(principal, record, command)
         if critical is not None:
             details["safety_critical"] = critical
         file_meta = None
@@ -87,7 +89,7 @@ async def execute_command(
         if starts_mission(command):
             # AUTO flies whatever is on board, perhaps loaded by another GCS: it flies
             # only after the same check as an upload (or an admin's audited override).
-            found, count = await unchecked_mission(hub, record, principal)
+            found, count = await hub.safety.check_mission_on_board(record, read_on_board)
             details["mission_checked"] = {"items": count, "ok": not found}
             violations += found
         if violations:
@@ -99,7 +101,7 @@ async def execute_command(
                 "reason": override_reason,
                 "violations": [violation.rule for violation in violations],
             }
-        await check_current_item(hub, record, command, principal)
+        await hub.safety.check_current_item(record, command, read_on_board)
         # An agent on another hub: that hub checks the principal again and records the
         # command itself (carry_out_routed); this one records only what never got there.
         elsewhere = record.channel is not None and record.channel.remote
@@ -131,6 +133,20 @@ async def execute_command(
             "could not record %s to %s (%s): %s", command.name, vehicle_id, outcome.message, error
         )
     return outcome
+
+
+def _mission_reader(hub: CommandServices, vehicle_id: str, principal: Principal) -> MissionReader:
+    """The vehicle's own mission for the AUTO gate, read (downloaded) for ``principal``:
+    another GCS may have loaded one the hub never sent."""
+
+    async def read() -> list[MissionItem]:
+        sender = Sender(principal, "mission_check")
+        outcome = await hub.dispatcher.execute(vehicle_id, MissionDownloadCommand(), sender)
+        if outcome.status != "accepted" or outcome.items is None:
+            raise VehicleRefused(f"mission download: {outcome.message}")
+        return list(outcome.items[1:])  # without home: item 1 first
+
+    return read
 
 
 async def carry_out_routed(

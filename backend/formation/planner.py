@@ -14,8 +14,8 @@ from dataclasses import dataclass, field
 from backend.errors import InvalidRequest
 from backend.formation.route import LeaderRoute
 from backend.formation.schemas import FormationRequest
-from backend.missions.rails import evaluate_plan
-from backend.missions.waypoints import Waypoint
+from backend.safety.mission_rails import evaluate_plan
+from backend.safety.mission_waypoints import Waypoint
 from backend.safety.rails import SafetyRails
 from backend.safety.snapshot import VehicleSnapshot
 from backend.safety.violations import Violation

@@ -16,7 +16,6 @@ from starlette.websockets import WebSocketDisconnect
 from backend.errors import Conflict, NotFound
 from backend.fleet.airborne import not_airborne
 from backend.fleet.registry import FleetRegistry
-from backend.fleet.safety_gate import SafetyGate, snapshot_of
 from backend.formation.active import ActiveFormation
 from backend.formation.metrics import tracking_summary
 from backend.formation.planner import check_separation, follower_offsets, plan_formation
@@ -24,6 +23,8 @@ from backend.formation.relay import FormationRelay, ScanSource
 from backend.formation.schemas import FormationRequest, ShapeChange
 from backend.formation.slots import slot_messages
 from backend.formation.store import FormationRepository, StoredFormation
+from backend.safety.service import SafetyService
+from backend.safety.snapshot import snapshot_of
 from common.formation import LeaderState
 from protocol.messages import FormationEnd, Message
 
@@ -38,7 +39,7 @@ class FormationService:
     def __init__(
         self,
         registry: FleetRegistry,
-        safety: SafetyGate,
+        safety: SafetyService,
         rate_hz: float = 10.0,
         clock: Callable[[], float] = time.time,
         repository: FormationRepository | None = None,

@@ -1,5 +1,5 @@
 """Geometry for the safety rails: polygon tests on a local plane (common/geodesy.py's
-LocalFrame, tangent to the Earth).
+LocalFrame, tangent to the Earth), computed by shapely (GEOS) in metres on that plane.
 
 Geofences are small (at most MAX_POLYGON_RADIUS_M from their centre), so every polygon test
 runs on a plane tangent to the Earth at the polygon's centre, in metres. On that plane a
@@ -11,10 +11,13 @@ Numbers in error messages (edges, vertices) count from 1, as a person reading a 
 
 from __future__ import annotations
 
-import itertools
 import math
 from collections.abc import Sequence
 from typing import Final
+
+import numpy as np
+import shapely
+from shapely.geometry import LineString, Point, Polygon
 
 from common.geodesy import LocalFrame, centre_of, haversine_m
 
@@ -40,16 +43,11 @@ class InvalidGeofence(ValueError):
         self.message = message
 
 
-# --- Plane geometry -------------------------------------------------------------------------
+# --- Plane geometry (shapely, in metres on the plane) ----------------------------------------
 
 
-def _point_segment_distance(p: XY, a: XY, b: XY) -> float:
-    ax, ay = a
-    dx, dy = b[0] - ax, b[1] - ay
-    length2 = dx * dx + dy * dy
-    t = 0.0 if length2 == 0 else ((p[0] - ax) * dx + (p[1] - ay) * dy) / length2
-    t = max(0.0, min(1.0, t))
-    return math.hypot(p[0] - (ax + t * dx), p[1] - (ay + t * dy))
+def _segment(a: XY, b: XY) -> LineString:
+    return LineString([a, b])
 
 
 def _side(a: XY, b: XY, p: XY) -> int:
@@ -64,138 +62,55 @@ def _side(a: XY, b: XY, p: XY) -> int:
 def segment_relation(p1: XY, p2: XY, q1: XY, q2: XY) -> str | None:
     """How two segments meet: "cross" (interiors cross), "overlap" (collinear with a shared
     stretch), "touch" (an end lies on the other segment) or None (apart)."""
-    s1, s2 = _side(q1, q2, p1), _side(q1, q2, p2)
-    s3, s4 = _side(p1, p2, q1), _side(p1, p2, q2)
-    if s1 == s2 == s3 == s4 == 0:
-        dx, dy = p2[0] - p1[0], p2[1] - p1[1]
-        length = math.hypot(dx, dy)
-        if length == 0:
-            return "touch" if _point_segment_distance(p1, q1, q2) <= TOLERANCE_M else None
-        # Positions of q's ends along p, in metres from p1.
-        t1 = ((q1[0] - p1[0]) * dx + (q1[1] - p1[1]) * dy) / length
-        t2 = ((q2[0] - p1[0]) * dx + (q2[1] - p1[1]) * dy) / length
-        shared = min(length, max(t1, t2)) - max(0.0, min(t1, t2))
-        if shared > TOLERANCE_M:
-            return "overlap"
-        return "touch" if shared >= -TOLERANCE_M else None
-    if s1 * s2 < 0 and s3 * s4 < 0:
-        return "cross"
-    touching = (
-        (s1 == 0 and _point_segment_distance(p1, q1, q2) <= TOLERANCE_M)
-        or (s2 == 0 and _point_segment_distance(p2, q1, q2) <= TOLERANCE_M)
-        or (s3 == 0 and _point_segment_distance(q1, p1, p2) <= TOLERANCE_M)
-        or (s4 == 0 and _point_segment_distance(q2, p1, p2) <= TOLERANCE_M)
+    p, q = _segment(p1, p2), _segment(q1, q2)
+    if not shapely.dwithin(p, q, TOLERANCE_M):
+        return None
+    if p.intersection(q).length > TOLERANCE_M:
+        return "overlap"
+    ends = [(Point(p1), q), (Point(p2), q), (Point(q1), p), (Point(q2), p)]
+    return (
+        "touch" if any(shapely.dwithin(end, other, TOLERANCE_M) for end, other in ends) else "cross"
     )
-    return "touch" if touching else None
 
 
 def _edges(ring: Sequence[XY]) -> list[tuple[XY, XY]]:
     return [(ring[i], ring[(i + 1) % len(ring)]) for i in range(len(ring))]
 
 
-Edge = tuple[XY, XY]
-
-
 class PlanarPolygon:
-    """A polygon on the plane, indexed for repeated tests.
+    """A polygon on the plane, prepared (indexed by shapely) for repeated tests.
 
-    Edges are filed into horizontal bands by the span of y they cover, so a point test looks
-    only at the edges level with the point: a 1000-vertex fence checked against a
-    2000-waypoint mission stays well under a second.
+    Points within TOLERANCE_M of the polygon count as in it, so it is tested as the
+    polygon grown by that much: a fence line drawn through a waypoint, or a leg flown
+    along an edge, is within the fence.
     """
 
-    __slots__ = ("_band_h", "_bands", "_edges", "_y0", "ring")
+    __slots__ = ("_boundary", "_covered", "ring")
 
     def __init__(self, ring: Sequence[XY]) -> None:
         self.ring = tuple(ring)
-        self._edges = _edges(self.ring)
-        ys = [p[1] for p in self.ring]
-        self._y0 = min(ys)
-        count = max(1, len(self.ring) // 4)
-        self._band_h = max((max(ys) - self._y0) / count, TOLERANCE_M)
-        self._bands: list[list[Edge]] = [[] for _ in range(count)]
-        for edge in self._edges:
-            lo, hi = sorted((edge[0][1], edge[1][1]))
-            for band in range(self._band(lo), self._band(hi) + 1):
-                self._bands[band].append(edge)
-
-    def _band(self, y: float) -> int:
-        return max(0, min(len(self._bands) - 1, int((y - self._y0) // self._band_h)))
-
-    def _edges_between(self, lo_y: float, hi_y: float) -> list[Edge]:
-        first, last = self._band(lo_y), self._band(hi_y)
-        if first == last:
-            return self._bands[first]
-        # An edge spanning several bands is filed in each; keep one copy.
-        return list(dict.fromkeys(e for band in self._bands[first : last + 1] for e in band))
+        polygon = Polygon(self.ring)
+        self._boundary = polygon.exterior
+        # Mitred, so that the corners stay corners (at most 5 tolerances out at a spike).
+        self._covered = polygon.buffer(TOLERANCE_M, join_style="mitre")
+        shapely.prepare(self._covered)
 
     def distance_to_boundary(self, p: XY) -> float:
-        return min(_point_segment_distance(p, a, b) for a, b in self._edges)
-
-    def _on_boundary(self, p: XY) -> bool:
-        x, y = p
-        for a, b in self._edges_between(y - TOLERANCE_M, y + TOLERANCE_M):
-            if min(a[0], b[0]) - TOLERANCE_M <= x <= max(a[0], b[0]) + TOLERANCE_M and (
-                _point_segment_distance(p, a, b) <= TOLERANCE_M
-            ):
-                return True
-        return False
+        return float(self._boundary.distance(Point(p)))
 
     def contains(self, p: XY) -> bool:
-        """Ray casting (even-odd). Points on the boundary count as inside: a fence line drawn
-        through a waypoint, or a leg flown along an edge, is within the fence."""
-        x, y = p
-        inside = False
-        for (xi, yi), (xj, yj) in self._bands[self._band(y)]:
-            if (yi > y) != (yj > y) and x < (xj - xi) * (y - yi) / (yj - yi) + xi:
-                inside = not inside
-        return inside or self._on_boundary(p)
+        """Points on the boundary (within TOLERANCE_M) count as inside."""
+        return bool(shapely.intersects_xy(self._covered, p[0], p[1]))
 
     def segment_leaves(self, a: XY, b: XY) -> bool:
-        """True when any part of the straight segment a→b lies outside the polygon.
-
-        Both ends inside is not enough for a concave polygon: the segment can cut across a
-        notch. The segment is split wherever it meets the boundary; between two such points
-        it is wholly inside or wholly outside, so testing each piece's midpoint settles it.
-        Extra split points cost a little time but never a wrong answer, so near-misses are
-        kept.
-        """
+        """True when any part of the straight segment a→b lies outside the polygon. Both
+        ends inside is not enough for a concave polygon: the segment can cut across a
+        notch."""
         if not (self.contains(a) and self.contains(b)):
             return True
-        dx, dy = b[0] - a[0], b[1] - a[1]
-        length = math.hypot(dx, dy)
-        if length <= TOLERANCE_M:
+        if math.dist(a, b) <= TOLERANCE_M:
             return False
-        slack = TOLERANCE_M / length
-        lo_x, hi_x = min(a[0], b[0]) - TOLERANCE_M, max(a[0], b[0]) + TOLERANCE_M
-        lo_y, hi_y = min(a[1], b[1]) - TOLERANCE_M, max(a[1], b[1]) + TOLERANCE_M
-        cuts = [0.0, 1.0]
-        for c, d in self._edges_between(lo_y, hi_y):
-            if max(c[0], d[0]) < lo_x or min(c[0], d[0]) > hi_x:
-                continue
-            if max(c[1], d[1]) < lo_y or min(c[1], d[1]) > hi_y:
-                continue
-            ex, ey = d[0] - c[0], d[1] - c[1]
-            denom = dx * ey - dy * ex
-            if denom != 0:
-                t = ((c[0] - a[0]) * ey - (c[1] - a[1]) * ex) / denom
-                u = ((c[0] - a[0]) * dy - (c[1] - a[1]) * dx) / denom
-                edge_slack = TOLERANCE_M / max(math.hypot(ex, ey), TOLERANCE_M)
-                if -slack <= t <= 1 + slack and -edge_slack <= u <= 1 + edge_slack:
-                    cuts.append(min(1.0, max(0.0, t)))
-            # Vertices on the segment: where it grazes a corner or runs along an edge.
-            for v in (c, d):
-                if _point_segment_distance(v, a, b) <= TOLERANCE_M:
-                    t = ((v[0] - a[0]) * dx + (v[1] - a[1]) * dy) / (length * length)
-                    cuts.append(min(1.0, max(0.0, t)))
-        cuts.sort()
-        for t0, t1 in itertools.pairwise(cuts):
-            if (t1 - t0) * length <= TOLERANCE_M:
-                continue
-            mid = (t0 + t1) / 2
-            if not self.contains((a[0] + mid * dx, a[1] + mid * dy)):
-                return True
-        return False
+        return not self._covered.covers(_segment(a, b))
 
 
 def distance_to_boundary(p: XY, ring: Sequence[XY]) -> float:
@@ -212,10 +127,6 @@ def segment_leaves_polygon(a: XY, b: XY, ring: Sequence[XY]) -> bool:
     return PlanarPolygon(ring).segment_leaves(a, b)
 
 
-def signed_area(ring: Sequence[XY]) -> float:
-    return sum(a[0] * b[1] - b[0] * a[1] for a, b in _edges(ring)) / 2
-
-
 # --- Polygon validation ---------------------------------------------------------------------
 
 
@@ -230,32 +141,23 @@ def _check_coordinates(vertices: Sequence[LatLon]) -> None:
 
 
 def _check_simple(ring: Sequence[XY]) -> None:
-    """No two edges may meet except neighbours at their shared vertex.
-
-    Edges are swept in order of their west end, so only edges whose east-west extents
-    overlap are compared: about n log n for the shapes people draw, rather than n².
-    """
+    """No two edges may meet except neighbours at their shared vertex. Only the pairs of
+    edges an R-tree finds within TOLERANCE_M of each other are compared."""
     n = len(ring)
     for i in range(n):
         _check_neighbours(ring, i, (i + 1) % n)
     edges = _edges(ring)
-    order = sorted(range(n), key=lambda i: min(edges[i][0][0], edges[i][1][0]))
-    for pos, i in enumerate(order):
-        a, b = edges[i]
-        east_end = max(a[0], b[0]) + TOLERANCE_M
-        lo_y, hi_y = min(a[1], b[1]) - TOLERANCE_M, max(a[1], b[1]) + TOLERANCE_M
-        for j in order[pos + 1 :]:
-            c, d = edges[j]
-            if min(c[0], d[0]) > east_end:
-                break
-            if max(c[1], d[1]) < lo_y or min(c[1], d[1]) > hi_y:
-                continue
-            first, second = sorted((i, j))
-            if (second - first) in (1, n - 1):
-                continue  # neighbours, checked above
-            relation = segment_relation(a, b, c, d)
-            if relation is not None:
-                raise InvalidGeofence(f"edges {first + 1} and {second + 1} {relation}")
+    segments = shapely.linestrings(np.asarray(edges, dtype=float))  # one per edge, at once
+    assert isinstance(segments, np.ndarray)  # an array for an array of edges
+    tree = shapely.STRtree(segments)
+    near = tree.query(tree.geometries, predicate="dwithin", distance=TOLERANCE_M)
+    pairs = sorted({(min(i, j), max(i, j)) for i, j in near.T.tolist() if i != j})
+    for first, second in pairs:
+        if (second - first) in (1, n - 1):
+            continue  # neighbours, checked above
+        relation = segment_relation(*edges[first], *edges[second])
+        if relation is not None:
+            raise InvalidGeofence(f"edges {first + 1} and {second + 1} {relation}")
 
 
 def _check_neighbours(ring: Sequence[XY], first: int, second: int) -> None:
@@ -321,7 +223,7 @@ class FencePolygon:
             )
         frame = LocalFrame(*centre)
         ring = [frame.to_local(lat, lon) for lat, lon in points]
-        area = abs(signed_area(ring))
+        area = float(Polygon(ring).area)
         # Checked before crossings so that a line reads as a line, not as a fold; but only
         # with no area, as a symmetric bow-tie also sums to zero.
         if area < MIN_POLYGON_AREA_M2 and _collinear(ring):

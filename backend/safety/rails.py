@@ -2,7 +2,7 @@
 (a site's, and a vehicle's own laid over them). The checks live beside this module, one
 job each: `violations` (rule names and the report), `snapshot` (what is known of the
 vehicle), `limits` (one value against one limit), `geofence`, and `commands` (the command
-rails); the mission rails are the missions module's (`backend.missions.rails`).
+rails); and the mission rails, `mission_rails`.
 
 Altitudes are metres above home.
 """

@@ -1,5 +1,5 @@
 """REST bodies for safety rails and their violations, with conversions to the rails'
-dataclasses (the mission bodies are `backend.missions.schemas`).
+dataclasses (the mission bodies are `mission_schemas`).
 
 Unknown fields are rejected: a misspelt limit that was silently ignored would leave a vehicle
 without the rail its operator thinks it has. NaN and infinities are rejected for the same

@@ -6,8 +6,13 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Final, Protocol
 
 from common.geodesy import GeoPoint
+from protocol.messages import VehicleState
+
+# Below this height a vehicle counts as on the ground for the launch rules.
+LANDED_BELOW_M: Final = 0.5
 
 
 @dataclass(frozen=True)
@@ -23,6 +28,41 @@ class VehicleSnapshot:
     armed: bool
     landed: bool
     home_alt_msl: float | None = None
+
+
+class ReportedVehicle(Protocol):
+    """What the rules read of the fleet's record of a vehicle (``backend.fleet.registry``'s
+    ``VehicleRecord``), declared here so that the rules never import the fleet."""
+
+    @property
+    def id(self) -> str: ...
+
+    @property
+    def autopilot(self) -> str: ...
+
+    @property
+    def vehicle_type(self) -> str: ...
+
+    @property
+    def state(self) -> VehicleState | None: ...
+
+
+def snapshot_of(record: ReportedVehicle) -> VehicleSnapshot:
+    state = record.state
+    if state is None:
+        return VehicleSnapshot(None, None, None, None, None, None, armed=False, landed=True)
+    landed = not state.armed or (state.alt_rel is not None and state.alt_rel < LANDED_BELOW_M)
+    return VehicleSnapshot(
+        lat=state.lat,
+        lon=state.lon,
+        alt_rel=state.alt_rel,
+        home_lat=state.home_lat,
+        home_lon=state.home_lon,
+        battery_remaining_pct=state.battery_remaining,
+        armed=state.armed,
+        landed=landed,
+        home_alt_msl=state.home_alt_msl,
+    )
 
 
 def known(value: float | None) -> float | None:

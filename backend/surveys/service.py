@@ -36,7 +36,6 @@ from backend.errors import Conflict, GcsError, InvalidRequest, NotFound, SafetyV
 from backend.fleet.collaborators import CommandServices
 from backend.fleet.command_service import execute_command
 from backend.fleet.registry import VehicleRecord
-from backend.fleet.safety_gate import snapshot_of
 from backend.missions.survey.run import (
     ACTIVE_STATES,
     LEAVING_MODES,
@@ -54,7 +53,7 @@ from backend.missions.survey.run import (
 from backend.missions.survey.schemas import SurveyRequest
 from backend.missions.survey.service import Fleet, SurveyPlan
 from backend.realtime.bus import Bus, LatestSubscription, ReliableSubscription, Topic
-from backend.safety.snapshot import home, position
+from backend.safety.snapshot import home, position, snapshot_of
 from backend.settings import HubSettings
 from backend.storage.surveys import StoredSurvey, SurveyRepository
 from backend.surveys.ownership import SurveyOwnership

@@ -1,5 +1,6 @@
-"""Missions have one home on the hub, `backend.missions`: pure domain logic that knows
-nothing of HTTP, storage or the agent, so that planners can land there and be tested alone."""
+"""The mission planners (`backend.missions`) and the safety rules they are checked by
+(`backend.safety`'s rule modules) are pure domain logic that knows nothing of HTTP, storage
+or the agent, so that planners can land there and be tested alone."""
 
 from __future__ import annotations
 
@@ -12,7 +13,7 @@ import importlib, pkgutil, sys
 import backend.missions
 for module in pkgutil.iter_modules(backend.missions.__path__):
     importlib.import_module("backend.missions." + module.name)
-import backend.safety.commands, backend.fleet.safety_gate
+import backend.safety.commands, backend.safety.service
 print("\\n".join(sorted(sys.modules)))
 """
 _DOMAIN_MAY_NOT_IMPORT = ("fastapi", "starlette", "sqlalchemy", "vehicle_agents", "simulator")
@@ -27,9 +28,9 @@ def _loaded(probe: str) -> list[str]:
 
 
 def test_the_missions_module_knows_nothing_of_http_storage_or_the_agent() -> None:
-    probe = _PROBE.replace("import backend.safety.commands, backend.fleet.safety_gate\n", "")
+    probe = _PROBE.replace("import backend.safety.commands, backend.safety.service\n", "")
     loaded = _loaded(probe)
-    assert "backend.missions.check" in loaded
+    assert "backend.safety.mission_check" in loaded
     wrong = [
         name
         for name in loaded
@@ -40,5 +41,5 @@ def test_the_missions_module_knows_nothing_of_http_storage_or_the_agent() -> Non
 
 def test_the_hub_checks_missions_without_importing_the_agent() -> None:
     loaded = _loaded(_PROBE)
-    assert "backend.fleet.safety_gate" in loaded
+    assert "backend.safety.service" in loaded
     assert [name for name in loaded if name.split(".")[0] == "vehicle_agents"] == []

@@ -10,7 +10,7 @@ from typing import Annotated, Any, Literal
 from pydantic import BaseModel, ConfigDict, Discriminator, Field, Tag, model_validator
 from pydantic.config import JsonDict
 
-from backend.missions.schemas import Mission, MissionCheckResponse
+from backend.safety.mission_schemas import Mission, MissionCheckResponse
 from protocol.messages import Boolean, Integer, Number, VehicleId
 
 

@@ -5,8 +5,7 @@ from __future__ import annotations
 
 import math
 
-from backend.missions import Waypoint
-from backend.safety import Geofence, GeoPoint, VehicleSnapshot
+from backend.safety import Geofence, GeoPoint, VehicleSnapshot, Violation, Waypoint
 from common.geodesy import EARTH_MEAN_RADIUS_M, LocalFrame
 
 ORIGIN = (47.0, 8.0)
@@ -80,3 +79,13 @@ UNKNOWN = VehicleSnapshot(
     armed=False,
     landed=True,
 )
+
+
+def rules(violations: list[Violation]) -> list[str]:
+    return [v.rule for v in violations]
+
+
+def only(violations: list[Violation], rule: str) -> Violation:
+    matching = [v for v in violations if v.rule == rule]
+    assert len(matching) == 1, violations
+    return matching[0]

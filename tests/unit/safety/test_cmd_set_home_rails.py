@@ -9,11 +9,11 @@ from dataclasses import replace
 import pytest
 
 from backend.fleet.registry import VehicleRecord
-from backend.fleet.safety_gate import SafetyGate
 from backend.safety import SafetyRails, check_set_home
+from backend.safety.rails_store import vehicle_scope
 from backend.safety.schemas import SafetyRailsModel
+from backend.safety.service import SafetyService
 from backend.settings import HubSettings
-from backend.storage.rails import vehicle_scope
 from protocol.messages import HoldCommand, SetHomeCommand, VehicleState
 from tests.unit.safety.shapes import UNKNOWN, geo, north_of, u_fence, vehicle
 
@@ -86,7 +86,7 @@ class _Rails:
         return self.stored if scope == vehicle_scope("v1") else None
 
 
-def gate_with_fence() -> tuple[SafetyGate, _Rails, VehicleRecord]:
+def gate_with_fence() -> tuple[SafetyService, _Rails, VehicleRecord]:
     fence = {"polygon": [{"lat": p.lat, "lon": p.lon} for p in u_fence().polygon]}
     rails = _Rails(SafetyRailsModel.model_validate({"geofence": fence}).model_dump_json())
     settings = HubSettings(environment="development", admin_password="x" * 12)
@@ -102,7 +102,7 @@ def gate_with_fence() -> tuple[SafetyGate, _Rails, VehicleRecord]:
         battery_remaining=80,
     )
     record = VehicleRecord("v1", "ardupilot", "multirotor", [], state=state)
-    return SafetyGate(rails, settings), rails, record  # type: ignore[arg-type]
+    return SafetyService(rails, settings), rails, record  # type: ignore[arg-type]
 
 
 def test_the_gate_checks_a_new_home_and_never_holds_back_hold() -> None:

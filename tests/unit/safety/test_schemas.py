@@ -6,9 +6,8 @@ from typing import Any
 import pytest
 from pydantic import ValidationError
 
-from backend.missions import evaluate_plan
-from backend.missions.schemas import Mission, MissionCheckResponse
-from backend.safety import SafetyRails
+from backend.safety import SafetyRails, evaluate_plan
+from backend.safety.mission_schemas import Mission, MissionCheckResponse
 from backend.safety.schemas import GeofenceModel, SafetyRailsModel
 from protocol.messages import MissionItem
 from tests.unit.safety.shapes import U_SHAPE, geo, u_fence, vehicle, wp

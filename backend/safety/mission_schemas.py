@@ -8,8 +8,8 @@ from __future__ import annotations
 
 from pydantic import BaseModel, ConfigDict, Field
 
-from backend.missions.battery import BatteryEstimate
-from backend.missions.rails import PlanCheck
+from backend.safety.mission_battery import BatteryEstimate
+from backend.safety.mission_rails import PlanCheck
 from backend.safety.schemas import ViolationModel
 from backend.safety.violations import Violation
 from protocol.messages import MissionItem

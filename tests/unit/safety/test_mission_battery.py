@@ -4,8 +4,7 @@ from dataclasses import replace
 
 import pytest
 
-from backend.missions import BatteryModel, Waypoint, check_plan, estimate_plan
-from backend.safety import SafetyRails
+from backend.safety import BatteryModel, SafetyRails, Waypoint, check_plan, estimate_plan
 from tests.unit.safety.shapes import UNKNOWN, geo, north_of, vehicle
 
 HOME = geo(0, 0)

@@ -7,8 +7,8 @@ import math
 from collections.abc import Sequence
 from dataclasses import dataclass, fields
 
-from backend.missions.waypoints import Waypoint
 from backend.safety.limits import require_target
+from backend.safety.mission_waypoints import Waypoint
 from backend.safety.snapshot import VehicleSnapshot, altitude, home, known, position
 from backend.safety.violations import and_join
 from common.geodesy import haversine_m

@@ -8,14 +8,6 @@ import itertools
 from collections.abc import Sequence
 from dataclasses import dataclass
 
-from backend.missions.battery import (
-    DEFAULT_BATTERY_MODEL,
-    BatteryEstimate,
-    BatteryModel,
-    estimate_plan,
-    missing_for_estimate,
-)
-from backend.missions.waypoints import Waypoint
 from backend.safety.geofence import Geofence, outside_message
 from backend.safety.limits import (
     check_altitudes,
@@ -23,6 +15,14 @@ from backend.safety.limits import (
     check_launch_battery,
     require_target,
 )
+from backend.safety.mission_battery import (
+    DEFAULT_BATTERY_MODEL,
+    BatteryEstimate,
+    BatteryModel,
+    estimate_plan,
+    missing_for_estimate,
+)
+from backend.safety.mission_waypoints import Waypoint
 from backend.safety.rails import SafetyRails
 from backend.safety.snapshot import VehicleSnapshot, home, position
 from backend.safety.violations import (

@@ -7,8 +7,8 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Callable, Sequence
 
-from backend.missions.rails import PlanCheck, evaluate_plan
-from backend.missions.waypoints import mission_waypoints
+from backend.safety.mission_rails import PlanCheck, evaluate_plan
+from backend.safety.mission_waypoints import mission_waypoints
 from backend.safety.rails import SafetyRails
 from backend.safety.snapshot import VehicleSnapshot
 from backend.safety.violations import MISSION_ITEM, Violation

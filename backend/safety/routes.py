@@ -1,4 +1,5 @@
-"""Safety rails: the site's, per-vehicle overrides, and pre-flight mission checks."""
+"""The safety routes: the site's rails, per-vehicle overrides, and the pre-flight checks
+of a mission and of a go-to. They reach the hub's parts through `dependencies` only."""
 
 from __future__ import annotations
 
@@ -8,15 +9,14 @@ from typing import Annotated
 from fastapi import Path, Request, Response, status
 from pydantic import BaseModel, ConfigDict, Field
 
-from backend.api.deps import HubDep
 from backend.api.security import CurrentPrincipal, SecuredRouter, audit_entry, requires
 from backend.audit import AuditAction
 from backend.auth.policy import Permission
-from backend.fleet.safety_gate import snapshot_of
-from backend.missions.schemas import Mission, MissionCheckResponse
+from backend.safety.dependencies import AuditLogDep, SafetyDep, VehiclesDep
+from backend.safety.mission_schemas import Mission, MissionCheckResponse
+from backend.safety.rails_store import SITE
 from backend.safety.schemas import SafetyRailsModel, ViolationModel
-from backend.safety.snapshot import position
-from backend.storage.rails import SITE, vehicle_scope
+from backend.safety.snapshot import position, snapshot_of
 from common.geodesy import haversine_m
 from protocol.messages import GotoCommand, Number, VehicleId
 
@@ -28,19 +28,23 @@ VehicleIdPath = Annotated[VehicleId, Path()]
 @router.get(
     "/safety/rails", response_model=SafetyRailsModel, openapi_extra=requires(Permission.READ)
 )
-async def site_rails(hub: HubDep) -> SafetyRailsModel:
+async def site_rails(safety: SafetyDep) -> SafetyRailsModel:
     """The site's rails, which apply to every vehicle unless narrowed per vehicle."""
-    return SafetyRailsModel.from_rails(await asyncio.to_thread(hub.safety.site_rails))
+    return SafetyRailsModel.from_rails(await asyncio.to_thread(safety.site_rails))
 
 
 @router.put(
     "/safety/rails", response_model=SafetyRailsModel, openapi_extra=requires(Permission.ADMIN)
 )
 async def set_site_rails(
-    body: SafetyRailsModel, request: Request, principal: CurrentPrincipal, hub: HubDep
+    body: SafetyRailsModel,
+    request: Request,
+    principal: CurrentPrincipal,
+    safety: SafetyDep,
+    audit: AuditLogDep,
 ) -> SafetyRailsModel:
-    await asyncio.to_thread(hub.safety.repository.put, SITE, body.model_dump_json(), principal.name)
-    await hub.record(
+    await asyncio.to_thread(safety.store_site_rails, body, principal.name)
+    await audit.record(
         audit_entry(
             request, principal, AuditAction.RAILS_UPDATE, SITE, "ok", rails=body.model_dump()
         )
@@ -53,12 +57,12 @@ async def set_site_rails(
     response_model=SafetyRailsModel,
     openapi_extra=requires(Permission.READ),
 )
-async def effective_vehicle_rails(vehicle_id: VehicleIdPath, hub: HubDep) -> SafetyRailsModel:
+async def effective_vehicle_rails(
+    vehicle_id: VehicleIdPath, safety: SafetyDep, vehicles: VehiclesDep
+) -> SafetyRailsModel:
     """The rails in force for this vehicle: the site's, with its own overrides applied."""
-    hub.registry.get(vehicle_id)
-    return SafetyRailsModel.from_rails(
-        await asyncio.to_thread(hub.safety.effective_rails, vehicle_id)
-    )
+    vehicles.get(vehicle_id)
+    return SafetyRailsModel.from_rails(await asyncio.to_thread(safety.effective_rails, vehicle_id))
 
 
 @router.put(
@@ -71,17 +75,14 @@ async def set_vehicle_rails(
     body: SafetyRailsModel,
     request: Request,
     principal: CurrentPrincipal,
-    hub: HubDep,
+    safety: SafetyDep,
+    vehicles: VehiclesDep,
+    audit: AuditLogDep,
 ) -> SafetyRailsModel:
     """Per-vehicle rails: each value set here replaces the site's for this vehicle."""
-    hub.registry.get(vehicle_id)
-    await asyncio.to_thread(
-        hub.safety.repository.put,
-        vehicle_scope(vehicle_id),
-        body.model_dump_json(),
-        principal.name,
-    )
-    await hub.record(
+    vehicles.get(vehicle_id)
+    await asyncio.to_thread(safety.store_vehicle_rails, vehicle_id, body, principal.name)
+    await audit.record(
         audit_entry(
             request, principal, AuditAction.RAILS_UPDATE, vehicle_id, "ok", rails=body.model_dump()
         )
@@ -95,11 +96,16 @@ async def set_vehicle_rails(
     openapi_extra=requires(Permission.ADMIN),
 )
 async def clear_vehicle_rails(
-    vehicle_id: VehicleIdPath, request: Request, principal: CurrentPrincipal, hub: HubDep
+    vehicle_id: VehicleIdPath,
+    request: Request,
+    principal: CurrentPrincipal,
+    safety: SafetyDep,
+    vehicles: VehiclesDep,
+    audit: AuditLogDep,
 ) -> Response:
-    hub.registry.get(vehicle_id)
-    await asyncio.to_thread(hub.safety.repository.delete, vehicle_scope(vehicle_id))
-    await hub.record(audit_entry(request, principal, AuditAction.RAILS_CLEAR, vehicle_id, "ok"))
+    vehicles.get(vehicle_id)
+    await asyncio.to_thread(safety.clear_vehicle_rails, vehicle_id)
+    await audit.record(audit_entry(request, principal, AuditAction.RAILS_CLEAR, vehicle_id, "ok"))
     return Response(status_code=status.HTTP_204_NO_CONTENT)
 
 
@@ -109,14 +115,14 @@ async def clear_vehicle_rails(
     openapi_extra=requires(Permission.COMMAND),
 )
 async def check_mission(
-    vehicle_id: VehicleIdPath, body: Mission, hub: HubDep
+    vehicle_id: VehicleIdPath, body: Mission, safety: SafetyDep, vehicles: VehiclesDep
 ) -> MissionCheckResponse:
     """Check a mission before it flies: what each item's command needs (rule
     `mission_item`), every rail its places break, and the battery estimate. The body is
     the upload's; upload and a switch to AUTO run the same check and refuse on any
     violation (422)."""
-    record = hub.registry.get(vehicle_id)
-    check = await asyncio.to_thread(hub.safety.check_mission, record, body.items)
+    record = vehicles.get(vehicle_id)
+    check = await asyncio.to_thread(safety.check_mission, record, body.items)
     return MissionCheckResponse.from_plan_check(check)
 
 
@@ -144,12 +150,14 @@ class GotoCheckResponse(BaseModel):
     response_model=GotoCheckResponse,
     openapi_extra=requires(Permission.COMMAND),
 )
-async def check_goto(vehicle_id: VehicleIdPath, body: GotoCheck, hub: HubDep) -> GotoCheckResponse:
+async def check_goto(
+    vehicle_id: VehicleIdPath, body: GotoCheck, safety: SafetyDep, vehicles: VehiclesDep
+) -> GotoCheckResponse:
     """Check a go-to without sending it: the same rails the `goto` command is held to
     (the geofence, the way there, the altitude limits, the range from home)."""
-    record = hub.registry.get(vehicle_id)
+    record = vehicles.get(vehicle_id)
     command = GotoCommand(lat=body.lat, lon=body.lon, altitude=body.altitude)
-    violations = await asyncio.to_thread(hub.safety.check_command, record, command)
+    violations = await asyncio.to_thread(safety.check_command, record, command)
     here = position(snapshot_of(record))
     return GotoCheckResponse(
         ok=not violations,

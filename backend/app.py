@@ -29,7 +29,6 @@ from backend.api import (
     photos,
     safety,
     scans,
-    surveys,
     system,
     tiles,
     vehicles,
@@ -55,6 +54,7 @@ from backend.errors import (
 from backend.hub import Hub
 from backend.observability.logs import use_json_logs
 from backend.settings import REPO_ROOT, HubSettings
+from backend.survey import routes as surveys
 from common.log_escaping import escape_control_characters_in_logs
 from protocol.messages import AGENT_WS_PATH, CLIENT_WS_PATH
 

@@ -6,7 +6,7 @@ has changed as one atomic scene update: the browser gets a bounded number of upd
 second whatever the fleet's size and rate, and never a stale state before a newer one.
 Scans are taken the same way (each vehicle's newest, at most once per period), and the
 accumulated point map, which only grows slowly, less often. Surveys' lanes, formations
-and mosaics have a layer module each (survey_layer, formation_layer, mosaic_layer),
+and mosaics have a layer module each (backend/survey/viz_layer.py, formation_layer, mosaic_layer),
 which the mirror runs beside its own work.
 """
 
@@ -24,11 +24,11 @@ from backend.mosaic.service import MosaicService
 from backend.realtime.bus import Bus, LatestSubscription, Topic
 from backend.scans.pointmap import Array, find_obstacles
 from backend.scans.service import ScanDelivery, ScanService
-from backend.surveys.service import SurveyService
+from backend.survey.service import SurveyService
+from backend.survey.viz_layer import SurveyLanes
 from backend.viz3d.formation_layer import FormationLayer
 from backend.viz3d.mosaic_layer import MosaicLayer
 from backend.viz3d.scene import FleetScene
-from backend.viz3d.survey_layer import SurveyLanes
 from common.geodesy import LocalFrame
 
 log = logging.getLogger(__name__)

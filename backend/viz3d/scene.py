@@ -61,7 +61,7 @@ MISSIONS = Layer("missions", "Missions")
 # Layers of the sensors' and the operations' data: each appears in the panel when its
 # first data is drawn (a vehicle's latest scan, the accumulated point map, the obstacles
 # found in it, a survey's lanes, a formation, a mosaic), never before. The last three are
-# drawn by their own modules (survey_layer, formation_layer, mosaic_layer).
+# drawn by their own modules (backend/survey/viz_layer.py, formation_layer, mosaic_layer).
 SCANS = Layer("scans", "LIDAR scans")
 POINT_MAP = Layer("point_map", "Point map")
 OBSTACLES = Layer("obstacles", "Obstacles")

@@ -2,10 +2,10 @@
 
 from __future__ import annotations
 
-from backend.missions.survey.run import DroneState, SurveyRun, SurveyState
-from backend.missions.survey.schemas import SurveyRequest
-from backend.missions.survey.service import Fleet, plan_survey, summary
-from backend.surveys.service import new_run
+from backend.survey.flight.run import DroneState, SurveyRun, SurveyState
+from backend.survey.planning.schemas import SurveyRequest
+from backend.survey.planning.survey import Fleet, plan_survey, summary
+from backend.survey.service import new_run
 from common.geodesy import GeoPoint, LocalFrame
 
 LAT, LON = 47.0, 8.0

@@ -28,7 +28,8 @@ from pydantic import TypeAdapter
 from backend.errors import GcsError, InvalidRequest
 from backend.observability import metrics
 from backend.settings import HubSettings
-from backend.survey.files.interop import InteropError, TooManyVertices, read_area_file
+from backend.survey.files.areas import read_area_file
+from backend.survey.files.items import InteropError, TooManyVertices
 from backend.survey.planning.camera import CameraError
 from backend.survey.planning.limits import SurveyLimits
 from backend.survey.planning.planner import PlanError

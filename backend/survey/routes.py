@@ -25,12 +25,10 @@ from backend.errors import Conflict, InvalidRequest, RequestTooLarge
 from backend.fleet.safety_gate import snapshot_of
 from backend.missions.schemas import Mission, MissionCheckResponse
 from backend.safety.snapshot import home, position
-from backend.survey.files.interop import (
-    MAX_FILE_BYTES,
-    mission_path_geojson,
-    to_qgc_plan,
-    to_wpl,
-)
+from backend.survey.files.areas import mission_path_geojson
+from backend.survey.files.items import MAX_FILE_BYTES
+from backend.survey.files.qgc_plan import to_qgc_plan
+from backend.survey.files.wpl import to_wpl
 from backend.survey.flight.run import HandoverOffer, SurveyRun
 from backend.survey.planning.camera import PRESETS
 from backend.survey.planning.schemas import SurveyPart, SurveyPreview, SurveyRequest

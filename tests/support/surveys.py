@@ -1,12 +1,20 @@
-"""Surveys in flight without a hub: a planned run whose drones are all flying."""
+"""Surveys in flight without a hub: a planned run whose drones are all flying; and a
+drone's exported `QGC WPL 110` mission read back by pymavlink's own reader."""
 
 from __future__ import annotations
 
+import tempfile
+from pathlib import Path
+
+from pymavlink import mavwp
+
+from backend.survey.files.items import params_to_item
 from backend.survey.flight.run import DroneState, SurveyRun, SurveyState
 from backend.survey.planning.schemas import SurveyRequest
 from backend.survey.planning.survey import Fleet, plan_survey, summary
 from backend.survey.service import new_run
 from common.geodesy import GeoPoint, LocalFrame
+from protocol.messages import MissionItem
 
 LAT, LON = 47.0, 8.0
 FRAME = LocalFrame(LAT, LON)
@@ -37,3 +45,23 @@ def flying_run(vehicles: int = 3) -> SurveyRun:
     for drone in run.drones:
         drone.state = DroneState.FLYING
     return run
+
+
+def read_wpl(text: str) -> tuple[tuple[float, float, float] | None, list[MissionItem]]:
+    """(home, items after home) from a `QGC WPL 110` file, as MAVProxy loads one (mavwp): the
+    hub only writes these files, so they are checked with a reader that is not ours. mavwp
+    reads a file by name, numbers the lines in order, and line 0 is home."""
+    with tempfile.TemporaryDirectory() as folder:
+        path = Path(folder) / "mission.waypoints"
+        path.write_text(text)
+        loader = mavwp.MAVWPLoader()
+        loader.load(str(path))
+    home = None
+    items = []
+    for point in loader.wpoints:
+        params = [point.param1, point.param2, point.param3, point.param4, point.x, point.y, point.z]
+        if point.seq == 0:
+            home = (point.x, point.y, point.z)
+            continue
+        items.append(params_to_item(point.command, point.frame, params, bool(point.autocontinue)))
+    return home, items

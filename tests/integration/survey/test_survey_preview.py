@@ -12,10 +12,11 @@ import httpx
 import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
-from backend.survey.files.interop import read_qgc_plan_items, read_wpl
+from backend.survey.files.qgc_plan import read_qgc_plan_items
 from backend.survey.planning.camera import PRESETS
 from gcs.launcher import LocalFleet
 from tests.helpers import FleetWatcher, api_client, ready
+from tests.support.surveys import read_wpl
 
 pytestmark = pytest.mark.integration
 

@@ -15,22 +15,20 @@ import pytest
 from pydantic import ValidationError
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
-from backend.survey.files.interop import (
-    InteropError,
+from backend.survey.files.areas import (
     mission_path_geojson,
     read_geojson_polygon,
     read_kml_polygon,
-    read_qgc_plan_items,
-    read_qgc_survey,
-    read_wpl,
-    to_qgc_plan,
-    to_wpl,
 )
+from backend.survey.files.items import InteropError
+from backend.survey.files.qgc_plan import read_qgc_plan_items, read_qgc_survey, to_qgc_plan
+from backend.survey.files.wpl import to_wpl
 from backend.survey.planning.camera import calculate
 from backend.survey.planning.schemas import SurveyRequest
 from backend.survey.planning.survey import Fleet, _camera, plan_survey
 from common.geodesy import GeoPoint
 from protocol.messages import MissionItem
+from tests.support.surveys import read_wpl
 
 DATA = Path(__file__).resolve().parents[3] / "data" / "qgc"
 HOME = (47.3977, 8.5456, 488.0)

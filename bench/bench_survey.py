@@ -29,7 +29,8 @@ from shapely.geometry import Polygon
 
 from backend.survey.planning.bound import lower_bound_m
 from backend.survey.planning.camera import calculate, preset
-from backend.survey.planning.planner import coverage, plan_lanes
+from backend.survey.planning.coverage import coverage
+from backend.survey.planning.planner import plan_lanes
 from backend.survey.planning.report import best_angle
 from backend.survey.planning.split import Drone, split
 from tests.survey_shapes import SHAPES, shape

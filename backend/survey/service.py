@@ -40,6 +40,7 @@ from backend.fleet.safety_gate import snapshot_of
 from backend.realtime.bus import Bus, LatestSubscription, ReliableSubscription, Topic
 from backend.safety.snapshot import home, position
 from backend.settings import HubSettings
+from backend.survey.flight.handover import accept_offer, flyer_of, handover_missions
 from backend.survey.flight.run import (
     ACTIVE_STATES,
     LEAVING_MODES,
@@ -48,11 +49,8 @@ from backend.survey.flight.run import (
     LaneRecord,
     SurveyRun,
     SurveyState,
-    accept_offer,
     covered_fraction,
-    flyer_of,
     geometry,
-    handover_missions,
 )
 from backend.survey.ownership import SurveyOwnership
 from backend.survey.plan_workers import ClientWatch, SurveyPlanner

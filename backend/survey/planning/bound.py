@@ -11,7 +11,7 @@ any order; and nothing enters a hole (a no-fly area). So a lane against a hole e
 least a turnaround short of it, and what it must cover there ends max(0, turnaround - t/2)
 short of the hole (planner.hole_margin_m; t is the trigger distance): the pieces are cut
 there. The plan covers the pieces at the requested overlaps: every point lies in some
-photo's footprint shrunk to one lane spacing by t (planner.coverage's second figure).
+photo's footprint shrunk to one lane spacing by t (coverage.coverage's second figure).
 
 The bound is the sum of three parts, each no more than what any such plan flies:
 
@@ -57,13 +57,8 @@ import shapely
 from shapely.geometry import LinearRing, Polygon
 
 from backend.survey.planning.camera import CameraCalc
-from backend.survey.planning.planner import (
-    Piece,
-    crossings,
-    hole_margin_m,
-    rotated_area,
-    row_pieces,
-)
+from backend.survey.planning.holes import crossings
+from backend.survey.planning.planner import Piece, hole_margin_m, rotated_area, row_pieces
 
 _FORCED = 1e7  # minus this on a lane's own edge keeps it in every spanning tree
 _SUBGRADIENT_STEPS = 150

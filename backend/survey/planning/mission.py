@@ -27,7 +27,7 @@ from dataclasses import dataclass
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
-from backend.survey.planning.planner import LanePlan
+from backend.survey.planning.lanes import LanePlan
 from common.geodesy import GeoPoint, LocalFrame
 from protocol.messages import MissionItem
 

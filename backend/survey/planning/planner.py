@@ -24,70 +24,25 @@ area) at both ends.
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
-from dataclasses import dataclass
 
 import numpy as np
 import shapely
 from shapely import affinity
-from shapely.geometry import LineString, MultiPolygon, Polygon
+from shapely.geometry import LineString, Polygon
 from shapely.geometry.base import BaseGeometry
 from shapely.validation import explain_validity
 
 from backend.survey.planning.camera import CameraCalc
+from backend.survey.planning.holes import crossings
+from backend.survey.planning.lanes import Grid, Lane, LanePlan, Point
 from backend.survey.planning.sequence import Step, improve
 
 MAX_VERTICES = 10_000
 DEFAULT_TURNAROUND_M = 10.0  # QGC's default for multirotors
 
 
-Point = tuple[float, float]
-
-
 class PlanError(ValueError):
     """An area or setting no survey can be planned for; the message says what to change."""
-
-
-@dataclass(frozen=True, slots=True)
-class Grid:
-    """A fleet's common lane grid: lanes at y0 + k * spacing and photos at x0 + j * trigger
-    distance, in the frame rotated by the grid angle about (cx, cy)."""
-
-    cx: float
-    cy: float
-    x0: float
-    y0: float
-
-
-@dataclass(frozen=True, slots=True)
-class Lane:
-    """One lane in the local frame: photos are taken from start to end."""
-
-    start: tuple[float, float]
-    end: tuple[float, float]
-    photos: tuple[tuple[float, float], ...]
-
-    @property
-    def length_m(self) -> float:
-        return math.dist(self.start, self.end)
-
-
-@dataclass(frozen=True, slots=True)
-class LanePlan:
-    lanes: tuple[Lane, ...]
-    path: tuple[tuple[float, float], ...]  # turnaround-in, start, end, turnaround-out per lane
-    angle_deg: float
-    lane_spacing_m: float
-    trigger_distance_m: float
-    turnaround_m: float
-
-    @property
-    def path_length_m(self) -> float:
-        return sum(math.dist(a, b) for a, b in zip(self.path, self.path[1:], strict=False))
-
-    @property
-    def photo_count(self) -> int:
-        return sum(len(lane.photos) for lane in self.lanes)
 
 
 def validate_area(area: Polygon) -> Polygon:
@@ -411,104 +366,3 @@ def _point_lane(
         if not legs.intersects(keep_out):
             return x
     return middle
-
-
-def crossings(
-    froms: np.ndarray, tos: np.ndarray, holes: BaseGeometry, *, pairwise: bool = False
-) -> np.ndarray:
-    """Which straight transits from each of `froms` to each of `tos` ((n, 2) arrays) would
-    fly into a hole, not merely touch its edge, where a lane may end: (n_from, n_to), or
-    with `pairwise` from each of `froms` to the same row of `tos`: (n,)."""
-    if not pairwise and froms is tos:  # a transit crosses a hole either way: test once
-        i, j = np.triu_indices(len(froms), 1)
-        both = np.zeros((len(froms), len(froms)), dtype=bool)
-        both[i, j] = crossings(froms[i], froms[j], holes, pairwise=True)
-        return both | both.T
-    if pairwise:
-        pairs = np.stack([froms, tos], axis=1)
-    else:
-        pairs = np.stack(np.broadcast_arrays(froms[:, None, :], tos[None, :, :]), axis=2)
-        pairs = pairs.reshape(-1, 2, 2)
-    inner = holes.buffer(-0.01)
-    shapely.prepare(inner)
-    # Only a transit whose box meets a hole's box can cross it: test those alone.
-    lo, hi = pairs.min(axis=1), pairs.max(axis=1)
-    near = np.zeros(len(pairs), dtype=bool)
-    for part in getattr(inner, "geoms", [inner]):
-        x0, y0, x1, y1 = part.bounds
-        near |= (lo[:, 0] <= x1) & (hi[:, 0] >= x0) & (lo[:, 1] <= y1) & (hi[:, 1] >= y0)
-    hit = np.zeros(len(pairs), dtype=bool)
-    hit[near] = shapely.intersects(shapely.linestrings(pairs[near]), inner)
-    return hit if pairwise else hit.reshape(len(froms), len(tos))
-
-
-def _rectangles(
-    centres: np.ndarray, along_m: np.ndarray | float, across_m: float, angle_deg: float
-) -> np.ndarray:
-    """Rectangles `along_m` long in the lanes' direction and `across_m` wide, one per centre
-    (an (n, 2) array), as an array of polygons built in one call."""
-    u = np.array([math.cos(math.radians(angle_deg)), math.sin(math.radians(angle_deg))])
-    v = np.array([-u[1], u[0]])
-    half_along = np.broadcast_to(np.asarray(along_m, dtype=float) / 2, (len(centres),))
-    corners = [(-1, -1), (1, -1), (1, 1), (-1, 1), (-1, -1)]
-    coords = np.stack(
-        [centres + (i * half_along)[:, None] * u + (j * across_m / 2) * v for i, j in corners],
-        axis=1,
-    )
-    return np.asarray(shapely.polygons(coords))
-
-
-def footprints(plan: LanePlan, side_m: float, frontal_m: float) -> list[Polygon]:
-    """Each photo's footprint (nadir, camera across the lanes), `side_m` x `frontal_m`."""
-    # the plan's angle, not each lane's own heading: a lane may be a single point
-    photos = np.array([p for lane in plan.lanes for p in lane.photos], dtype=float).reshape(-1, 2)
-    return list(_rectangles(photos, frontal_m, side_m, plan.angle_deg))
-
-
-def swaths(plan: LanePlan, side_m: float, frontal_m: float) -> list[Polygon]:
-    """The union of the photos' footprints, lane by lane: a lane's photos lie on one line
-    and their footprints share that axis and width, so a run of photos at most one
-    footprint length apart covers exactly the rectangle from the first one's footprint to
-    the last one's. A few rectangles per lane instead of one per photo make the coverage
-    check a union of lanes, not of thousands of photos."""
-    u = np.array([math.cos(math.radians(plan.angle_deg)), math.sin(math.radians(plan.angle_deg))])
-    v = np.array([-u[1], u[0]])
-    centres, lengths = [], []
-    for lane in plan.lanes:
-        photos = np.asarray(lane.photos, dtype=float).reshape(-1, 2)
-        if not len(photos):
-            continue
-        along = np.sort(photos @ u)
-        across = float(np.mean(photos @ v))
-        breaks = np.flatnonzero(np.diff(along) > frontal_m) + 1
-        for run in np.split(along, breaks):
-            lo, hi = float(run[0]) - frontal_m / 2, float(run[-1]) + frontal_m / 2
-            centres.append((lo + hi) / 2 * u + across * v)
-            lengths.append(hi - lo)
-    if not centres:
-        return []
-    return list(_rectangles(np.array(centres), np.array(lengths), side_m, plan.angle_deg))
-
-
-def covered_fraction(area: Polygon, shapes: Sequence[Polygon]) -> float:
-    """The share of `area` (holes excluded) that the union of `shapes` covers."""
-    union = shapely.union_all(shapes)
-    return float(area.intersection(union).area) / float(area.area)
-
-
-def coverage(plan: LanePlan, area: Polygon, calc: CameraCalc) -> tuple[float, float]:
-    """(footprint coverage, coverage at the requested overlaps), each 0..1, from the photos.
-
-    The second uses each photo's footprint shrunk to one lane spacing by one trigger
-    distance: if those cover a point, the real footprints around it overlap by at least the
-    requested side and front overlaps. Both union the footprints lane by lane (swaths).
-    """
-    real = swaths(plan, calc.footprint_side_m, calc.footprint_frontal_m)
-    adjusted = swaths(plan, calc.lane_spacing_m * 1.0001, calc.trigger_distance_m * 1.0001)
-    return covered_fraction(area, real), covered_fraction(area, adjusted)
-
-
-def as_polygon(shape: Polygon | MultiPolygon) -> Polygon:
-    if isinstance(shape, Polygon):
-        return shape
-    raise PlanError("the area must be one polygon, not several")

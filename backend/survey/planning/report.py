@@ -14,7 +14,8 @@ from shapely.geometry import Polygon
 
 from backend.survey.planning.bound import lower_bound
 from backend.survey.planning.camera import CameraCalc
-from backend.survey.planning.planner import LanePlan, plan_lanes
+from backend.survey.planning.lanes import LanePlan
+from backend.survey.planning.planner import plan_lanes
 
 DEFAULT_ACCEL_MS2 = 2.5  # ArduCopter's WPNAV_ACCEL default, 250 cm/s²
 

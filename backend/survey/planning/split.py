@@ -22,11 +22,9 @@ from shapely.geometry import Polygon, box
 from shapely.geometry.base import BaseGeometry
 
 from backend.survey.planning.camera import CameraCalc
+from backend.survey.planning.lanes import Grid, Lane, LanePlan
 from backend.survey.planning.planner import (
     DEFAULT_TURNAROUND_M,
-    Grid,
-    Lane,
-    LanePlan,
     PlanError,
     plan_lanes,
     validate_area,

@@ -10,10 +10,11 @@ from dataclasses import dataclass
 import shapely
 
 from backend.survey.planning.camera import Camera, CameraCalc, calculate, manual, preset
+from backend.survey.planning.coverage import covered_fraction, swaths
 from backend.survey.planning.geo import polygon_from_geojson
 from backend.survey.planning.limits import SurveyLimits, check_estimate, check_missions, estimate
 from backend.survey.planning.mission import survey_mission
-from backend.survey.planning.planner import PlanError, covered_fraction, swaths
+from backend.survey.planning.planner import PlanError
 from backend.survey.planning.report import best_angle
 from backend.survey.planning.schemas import ManualCamera, SurveyRequest
 from backend.survey.planning.split import Drone, Part, split

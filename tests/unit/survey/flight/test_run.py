@@ -8,18 +8,14 @@ import math
 import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
-from backend.survey.flight.run import (
-    DroneState,
+from backend.survey.flight.handover import (
     Flyer,
-    SurveyRun,
-    SurveyState,
     accept_offer,
-    covered_fraction,
     flyer_of,
-    geometry,
     handover_missions,
     split_orphans,
 )
+from backend.survey.flight.run import DroneState, SurveyRun, SurveyState, covered_fraction, geometry
 from backend.survey.planning.camera import CameraCalc, calculate, preset
 from backend.survey.planning.mission import survey_mission
 from backend.survey.planning.planner import plan_lanes

@@ -15,17 +15,11 @@ from shapely.geometry import LineString, Polygon, box
 
 from backend.survey.planning.bound import lower_bound_m
 from backend.survey.planning.camera import calculate, preset
+from backend.survey.planning.coverage import coverage, covered_fraction, footprints, swaths
 from backend.survey.planning.geo import polygon_from_geojson
+from backend.survey.planning.lanes import Lane
 from backend.survey.planning.mission import mission_items
-from backend.survey.planning.planner import (
-    Lane,
-    PlanError,
-    coverage,
-    covered_fraction,
-    footprints,
-    plan_lanes,
-    swaths,
-)
+from backend.survey.planning.planner import PlanError, plan_lanes
 from backend.survey.planning.report import best_angle, flight_time_s
 from common.geodesy import GeoPoint
 from tests.survey_shapes import SHAPES, shape

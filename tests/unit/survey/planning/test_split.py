@@ -11,7 +11,8 @@ import shapely
 from shapely.geometry import Polygon, box
 
 from backend.survey.planning.camera import calculate, preset
-from backend.survey.planning.planner import PlanError, covered_fraction, footprints
+from backend.survey.planning.coverage import covered_fraction, footprints
+from backend.survey.planning.planner import PlanError
 from backend.survey.planning.split import Drone, split
 
 CALC = calculate(

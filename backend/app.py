@@ -54,6 +54,7 @@ from backend.errors import (
 from backend.hub import Hub
 from backend.observability.logs import use_json_logs
 from backend.settings import REPO_ROOT, HubSettings
+from backend.survey import deps as survey_deps
 from backend.survey import routes as surveys
 from common.log_escaping import escape_control_characters_in_logs
 from protocol.messages import AGENT_WS_PATH, CLIENT_WS_PATH
@@ -107,6 +108,7 @@ def create_app(settings: HubSettings | None = None) -> FastAPI:
             use_json_logs()
         hub = await Hub.start(settings)
         app.state.hub = hub
+        survey_deps.provide(app.state, hub.surveys)  # the survey's routes take its service
         runner = asyncio.create_task(hub.run(), name="hub")
         try:
             yield

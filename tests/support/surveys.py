@@ -9,10 +9,10 @@ from pathlib import Path
 from pymavlink import mavwp
 
 from backend.survey.files.items import params_to_item
+from backend.survey.flight.progress import new_run
 from backend.survey.flight.run import DroneState, SurveyRun, SurveyState
 from backend.survey.planning.schemas import SurveyRequest
 from backend.survey.planning.survey import Fleet, plan_survey, summary
-from backend.survey.service import new_run
 from common.geodesy import GeoPoint, LocalFrame
 from protocol.messages import MissionItem
 

@@ -25,10 +25,10 @@ from backend.photos.partials import PartialLimits
 from backend.photos.stored import PhotoSink, StoredPhoto
 from backend.storage.database import make_engine, migrate
 from backend.storage.photos import PhotoRepository
+from backend.survey.flight.progress import new_run
 from backend.survey.flight.run import DroneState, SurveyRun, SurveyState
 from backend.survey.planning.schemas import SurveyRequest
 from backend.survey.planning.survey import Fleet, plan_survey, summary
-from backend.survey.service import new_run
 from common.geodesy import GeoPoint, LocalFrame
 from protocol.photos import CameraIntrinsics, PhotoMeta, PhotoPose
 from simulator.photo_server import nadir_renderer

@@ -24,11 +24,12 @@ from backend.mosaic.store import TileStore
 from backend.realtime.bus import InProcessBus
 from backend.settings import HubSettings
 from backend.storage.database import make_engine, migrate
+from backend.survey.flight.progress import new_run
 from backend.survey.flight.run import DroneState, SurveyRun, SurveyState
 from backend.survey.planning.schemas import SurveyRequest
 from backend.survey.planning.survey import Fleet, plan_survey, summary
 from backend.survey.repository import StoredSurvey, SurveyRepository
-from backend.survey.service import SurveyService, new_run
+from backend.survey.service import SurveyService
 from backend.survey.viz_layer import PlannedLanes, SurveyLanes
 from backend.viz3d.colours import rgb, vehicle_colour
 from backend.viz3d.formation_layer import SPHERE_OPACITY, FormationLayer, formation_view

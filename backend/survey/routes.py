@@ -48,16 +48,7 @@ class CameraPreset(BaseModel):
 async def camera_presets() -> list[CameraPreset]:
     """The camera presets, so a client offers exactly the hub's (the dashboard does)."""
     return [
-        CameraPreset(
-            id=key,
-            name=camera.name,
-            sensor_width_mm=camera.sensor_width_mm,
-            sensor_height_mm=camera.sensor_height_mm,
-            image_width_px=camera.image_width_px,
-            image_height_px=camera.image_height_px,
-            focal_length_mm=camera.focal_length_mm,
-            distance_trigger=camera.distance_trigger,
-        )
+        CameraPreset(id=key, **camera.model_dump(exclude={"landscape"}))
         for key, camera in PRESETS.items()
     ]
 

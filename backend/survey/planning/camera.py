@@ -16,7 +16,12 @@ distance are given as they are (`manual`), and no GSD, footprint or overlap is k
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Final
+from typing import Any, Final
+
+from pydantic import ValidationError
+
+from common.camera_geometry import gsd_m, height_for_gsd_m
+from protocol.photos import CameraIntrinsics
 
 
 class CameraError(ValueError):
@@ -24,39 +29,57 @@ class CameraError(ValueError):
     to change."""
 
 
-@dataclass(frozen=True, slots=True)
-class Camera:
+class Camera(CameraIntrinsics):
+    """A survey's camera: the pinhole camera its photos carry (protocol.photos, so the plan,
+    the photos' checks, the mosaic and the agent read one model and one GSD formula,
+    common/camera_geometry.py's), with a name, how it is mounted and how it triggers."""
+
     name: str
-    sensor_width_mm: float
-    sensor_height_mm: float
-    image_width_px: int
-    image_height_px: int
-    focal_length_mm: float
     landscape: bool = True
     # Cameras that cannot trigger on distance get DO_DIGICAM_CONTROL at each photo instead.
     distance_trigger: bool = True
 
-    def __post_init__(self) -> None:
-        for field in (
-            "sensor_width_mm",
-            "sensor_height_mm",
-            "image_width_px",
-            "image_height_px",
-            "focal_length_mm",
-        ):
-            value = getattr(self, field)
-            if not value > 0:
-                raise CameraError(f"camera {field} must be greater than 0, got {value}")
-
     def gsd_cm(self, altitude_m: float) -> float:
         """Ground sample distance in cm per pixel at this height above the ground."""
-        return (
-            altitude_m * self.sensor_width_mm * 100.0 / (self.image_width_px * self.focal_length_mm)
-        )
+        return gsd_m(self, altitude_m) * 100.0
 
     def altitude_m(self, gsd_cm: float) -> float:
         """The height above the ground that gives this ground sample distance."""
-        return self.image_width_px * gsd_cm * self.focal_length_mm / (self.sensor_width_mm * 100.0)
+        return height_for_gsd_m(self, gsd_cm / 100.0)
+
+    def with_figures(self, **changes: Any) -> Camera:
+        """This camera with some of its figures changed, checked as camera_of checks."""
+        return camera_of(**{**self.model_dump(), **changes})
+
+
+def camera_of(**fields: Any) -> Camera:
+    """A camera from its fields; a CameraError names the first that no camera can have."""
+    try:
+        return Camera.model_validate(fields)
+    except ValidationError as error:
+        first = error.errors()[0]
+        field = ".".join(str(part) for part in first["loc"])
+        said = first["msg"].removeprefix("Input should be ")
+        raise CameraError(f"camera {field} must be {said}, got {first.get('input')}") from None
+
+
+def _preset(
+    name: str,
+    sensor_mm: tuple[float, float],
+    image_px: tuple[int, int],
+    focal_length_mm: float,
+    *,
+    distance_trigger: bool = True,
+) -> Camera:
+    return camera_of(
+        name=name,
+        sensor_width_mm=sensor_mm[0],
+        sensor_height_mm=sensor_mm[1],
+        image_width_px=image_px[0],
+        image_height_px=image_px[1],
+        focal_length_mm=focal_length_mm,
+        distance_trigger=distance_trigger,
+    )
 
 
 # Presets: figures from the makers' specification sheets (sensor size in mm, still image
@@ -64,14 +87,14 @@ class Camera:
 # cameras.
 PRESETS: Final[dict[str, Camera]] = {
     # Sony a6000 with the 16 mm kit lens: APS-C 23.5 x 15.6 mm, 6000 x 4000 px.
-    "sony_a6000_16mm": Camera("Sony a6000 16mm", 23.5, 15.6, 6000, 4000, 16.0),
+    "sony_a6000_16mm": _preset("Sony a6000 16mm", (23.5, 15.6), (6000, 4000), 16.0),
     # DJI Phantom 4 Pro/Advanced FC6310: 1" 13.2 x 8.8 mm, 5472 x 3648 px, 8.8 mm.
-    "dji_phantom4_pro": Camera("DJI Phantom 4 Pro", 13.2, 8.8, 5472, 3648, 8.8),
+    "dji_phantom4_pro": _preset("DJI Phantom 4 Pro", (13.2, 8.8), (5472, 3648), 8.8),
     # DJI Mavic 3 Enterprise wide: 4/3" 17.3 x 13.0 mm, 5280 x 3956 px, 12.29 mm.
-    "dji_mavic3e_wide": Camera("DJI Mavic 3E wide", 17.3, 13.0, 5280, 3956, 12.29),
+    "dji_mavic3e_wide": _preset("DJI Mavic 3E wide", (17.3, 13.0), (5280, 3956), 12.29),
     # MicaSense RedEdge-MX: 4.8 x 3.6 mm, 1280 x 960 px, 5.4 mm (triggered per photo).
-    "micasense_rededge_mx": Camera(
-        "MicaSense RedEdge-MX", 4.8, 3.6, 1280, 960, 5.4, distance_trigger=False
+    "micasense_rededge_mx": _preset(
+        "MicaSense RedEdge-MX", (4.8, 3.6), (1280, 960), 5.4, distance_trigger=False
     ),
 }
 

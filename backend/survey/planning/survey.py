@@ -9,7 +9,7 @@ from dataclasses import dataclass
 
 import shapely
 
-from backend.survey.planning.camera import Camera, CameraCalc, calculate, manual, preset
+from backend.survey.planning.camera import Camera, CameraCalc, calculate, camera_of, manual, preset
 from backend.survey.planning.coverage import covered_fraction, swaths
 from backend.survey.planning.geo import polygon_from_geojson
 from backend.survey.planning.limits import SurveyLimits, check_estimate, check_missions, estimate
@@ -113,7 +113,7 @@ def _camera(request: SurveyRequest) -> Camera:
     if isinstance(request.camera, str):
         return preset(request.camera)
     assert not isinstance(request.camera, ManualCamera)
-    return Camera(name="custom", **request.camera.model_dump())
+    return camera_of(name="custom", **request.camera.model_dump())
 
 
 def camera_calc(request: SurveyRequest) -> CameraCalc:

@@ -3,8 +3,6 @@
 
 from __future__ import annotations
 
-import dataclasses
-
 import pytest
 
 from backend.survey.planning.camera import CameraError, calculate, preset
@@ -41,7 +39,7 @@ def test_gsd_gives_qgc_altitude() -> None:
 
 
 def test_portrait_swaps_side_and_frontal() -> None:
-    portrait = dataclasses.replace(SONY, landscape=False)
+    portrait = SONY.model_copy(update={"landscape": False})
     calc = calculate(portrait, altitude_m=100, side_overlap_pct=0, front_overlap_pct=0)
     # portrait: side = imageH * GSD = 97.91666 m, frontal = imageW * GSD = 146.875 m
     assert calc.footprint_side_m == pytest.approx(97.9166667)
@@ -80,4 +78,4 @@ def test_unknown_preset_names_the_known_ones() -> None:
 
 def test_a_camera_without_a_sensor_is_refused() -> None:
     with pytest.raises(CameraError, match="sensor_width_mm must be greater than 0"):
-        dataclasses.replace(SONY, sensor_width_mm=0)
+        SONY.with_figures(sensor_width_mm=0)

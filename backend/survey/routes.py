@@ -24,6 +24,7 @@ from backend.survey.files.items import MAX_FILE_BYTES
 from backend.survey.flight.run import HandoverOffer, SurveyRun
 from backend.survey.planning.camera import PRESETS
 from backend.survey.planning.schemas import SurveyPreview, SurveyRequest
+from backend.survey.service import MissionFormat
 from protocol.messages import SurveyUpdate, VehicleId
 
 router = SecuredRouter(tags=["surveys"])
@@ -261,7 +262,7 @@ async def export_survey_mission(
     survey_id: SurveyIdPath,
     vehicle_id: Annotated[VehicleId, Path()],
     surveys: SurveysDep,
-    format: Annotated[Literal["plan", "wpl", "geojson"], Query()] = "plan",
+    format: Annotated[MissionFormat, Query()] = "plan",
 ) -> Response:
     """One drone's survey mission as a file other tools open: a QGroundControl `.plan`,
     a `QGC WPL 110` waypoint file (Mission Planner, MAVProxy), or its path as GeoJSON."""

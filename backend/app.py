@@ -27,7 +27,6 @@ from backend.api import (
     params,
     photos,
     scans,
-    surveys,
     system,
     tiles,
     vehicles,
@@ -56,6 +55,8 @@ from backend.hub import Hub
 from backend.observability.logs import use_json_logs
 from backend.safety import routes as safety
 from backend.settings import REPO_ROOT, HubSettings
+from backend.survey import deps as survey_deps
+from backend.survey import routes as surveys
 from common.log_escaping import escape_control_characters_in_logs
 from protocol.messages import AGENT_WS_PATH, CLIENT_WS_PATH
 
@@ -110,6 +111,7 @@ def create_app(settings: HubSettings | None = None) -> FastAPI:
         app.state.hub = hub
         # The features, each on the started hub before it runs (their routes read them).
         app.state.formation = await formation_wiring.attach(hub)
+        survey_deps.provide(app.state, hub.surveys)  # the survey's routes take its service
         runner = asyncio.create_task(hub.run(), name="hub")
         try:
             yield

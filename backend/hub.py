@@ -58,10 +58,10 @@ from backend.storage.retention import RetentionPolicy
 from backend.storage.scans import ScanRepository
 from backend.storage.sequences import Gap, StreamKey
 from backend.storage.spool import RowSpool
-from backend.storage.surveys import SurveyRepository
 from backend.storage.writer import StorageWriter
-from backend.surveys.ownership import SurveyOwnership
-from backend.surveys.service import SurveyService
+from backend.survey.ownership import SurveyOwnership
+from backend.survey.repository import SurveyRepository
+from backend.survey.service import SurveyService
 from backend.viz3d.frame import SceneFrame, parse_origin
 from backend.viz3d.mirror import SceneLayer, SceneMirror
 from backend.viz3d.replay import ReplayPanels

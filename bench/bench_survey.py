@@ -27,11 +27,12 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from shapely.geometry import Polygon
 
-from backend.missions.survey.bound import lower_bound_m
-from backend.missions.survey.camera import calculate, preset
-from backend.missions.survey.planner import coverage, plan_lanes
-from backend.missions.survey.report import best_angle
-from backend.missions.survey.split import Drone, split
+from backend.survey.planning.bound import lower_bound_m
+from backend.survey.planning.camera import calculate, preset
+from backend.survey.planning.coverage import coverage
+from backend.survey.planning.planner import plan_lanes
+from backend.survey.planning.report import best_angle
+from backend.survey.planning.split import Drone, split
 from tests.survey_shapes import SHAPES, shape
 
 CALC = calculate(preset("sony_a6000_16mm"), gsd_cm=2.0, side_overlap_pct=70, front_overlap_pct=80)

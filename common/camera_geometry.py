@@ -44,8 +44,15 @@ def principal_point(camera: CameraIntrinsics) -> tuple[float, float]:
 
 
 def gsd_m(camera: CameraIntrinsics, height_m: float) -> float:
-    """Metres of ground per pixel straight below a level camera ``height_m`` above it."""
+    """Metres of ground per pixel straight below a level camera ``height_m`` above it: the
+    ground sample distance (QGC's, CameraCalc.cc: height * sensor width / (image width *
+    focal length)), the one formula the survey planner, the mosaic and the simulator use."""
     return height_m / focal_px(camera)
+
+
+def height_for_gsd_m(camera: CameraIntrinsics, gsd: float) -> float:
+    """The height above the ground at which a level camera sees ``gsd`` metres per pixel."""
+    return gsd * focal_px(camera)
 
 
 def camera_to_enu(pose: PhotoPose) -> Matrix:

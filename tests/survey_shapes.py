@@ -1,5 +1,6 @@
-"""The survey planner's test areas (metres), shared by tests/unit/survey/test_planner.py and
-bench/bench_survey.py, so the benchmark's path ratios are the tested shapes'."""
+"""The survey planner's test areas (metres), shared by
+tests/unit/survey/planning/test_planner.py and bench/bench_survey.py, so the benchmark's
+path ratios are the tested shapes'."""
 
 from __future__ import annotations
 
@@ -7,7 +8,7 @@ from typing import Any
 
 from shapely.geometry import Polygon, box
 
-from backend.missions.survey.geo import polygon_from_geojson
+from backend.survey.planning.geo import polygon_from_geojson
 from common.geodesy import LocalFrame
 
 SHAPES = {

@@ -28,13 +28,13 @@ from starlette.responses import Response
 from backend.api.deps import HubDep, get_hub
 from backend.api.finite_json import FiniteJsonRoute
 from backend.api.security import SecuredRouter, requires
-from backend.api.surveys import SurveyIdPath
 from backend.auth.policy import Permission
 from backend.errors import Forbidden
 from backend.photos.checks import Refusal, Refused
 from backend.photos.export import write_zip
 from backend.photos.ingest import OffsetMismatch
 from backend.storage.photos import PhotoCount
+from backend.survey.routes import SurveyIdPath
 from protocol.messages import VehicleId
 from protocol.photos import MAX_PHOTO_BYTES, PhotoId
 

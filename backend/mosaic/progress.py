@@ -2,7 +2,7 @@
 how much of the survey's area the photos' footprints cover, as a percentage and an outline.
 
 Footprints are unioned on the survey's own tangent plane (the planner's frame,
-backend/missions/survey/geo.py), in metres, so the percentage is of true area. Saved as
+backend/survey/planning/geo.py), in metres, so the percentage is of true area. Saved as
 ``progress.json`` beside the tiles, so a restarted hub reports what it had.
 """
 
@@ -19,9 +19,9 @@ from shapely import to_geojson, transform
 from shapely.geometry import Point, Polygon, mapping, shape
 from shapely.geometry.base import BaseGeometry
 
-from backend.missions.survey.geo import polygon_from_geojson
-from backend.missions.survey.planner import PlanError
 from backend.mosaic.store import atomic_write
+from backend.survey.planning.geo import polygon_from_geojson
+from backend.survey.planning.planner import PlanError
 from common.geodesy import LocalFrame
 
 MAX_FAILURES_KEPT = 200  # the latest reasons; the counts go on

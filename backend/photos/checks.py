@@ -13,9 +13,9 @@ from pathlib import Path
 from PIL import Image, UnidentifiedImageError
 from shapely.geometry import Point
 
-from backend.missions.survey.camera import preset
-from backend.missions.survey.run import SurveyRun, geometry
-from backend.missions.survey.schemas import ManualCamera
+from backend.survey.flight.run import SurveyRun, geometry
+from backend.survey.planning.camera import preset
+from backend.survey.planning.schemas import ManualCamera
 from protocol.photos import CameraIntrinsics, PhotoPose
 
 

@@ -26,11 +26,11 @@ from typing import Any
 from pydantic import ValidationError
 
 from backend.errors import NotFound
-from backend.missions.survey.run import CLOCK_SLACK_S, SurveyRun
 from backend.photos.checks import Refusal, Refused, check_against_survey, check_image
 from backend.photos.partials import PartialLimits, in_progress, stale
 from backend.photos.stored import PhotoSink, StoredPhoto
 from backend.storage.photos import PhotoRecord, PhotoRepository
+from backend.survey.flight.run import CLOCK_SLACK_S, SurveyRun
 from protocol.photos import MAX_PHOTO_BYTES, PhotoMeta
 
 log = logging.getLogger(__name__)

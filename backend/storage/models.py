@@ -287,7 +287,7 @@ class TlogRow(Base):
 
 class SurveyRow(Base):
     """One area survey: its plan, its drones' missions and progress, as validated JSON
-    (backend.missions.survey.run.SurveyRun), so a restarted hub carries on with it."""
+    (backend.survey.flight.run.SurveyRun), so a restarted hub carries on with it."""
 
     __tablename__ = "surveys"
     __table_args__ = (Index("ix_surveys_state", "state"),)

@@ -21,7 +21,7 @@ import httpx
 import pytest
 from PIL import Image
 
-from backend.missions.survey.interop import MAX_FILE_BYTES
+from backend.survey.files.items import MAX_FILE_BYTES
 from tests.conftest import ADMIN_PASSWORD, hub_settings
 from tests.helpers import access_token, api_client, running_hub
 from tests.map_tiles import png_tile, write_mbtiles

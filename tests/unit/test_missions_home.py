@@ -1,6 +1,7 @@
-"""The mission planners (`backend.missions`) and the safety rules they are checked by
-(`backend.safety`'s rule modules) are pure domain logic that knows nothing of HTTP, storage
-or the agent, so that planners can land there and be tested alone."""
+"""The mission planners (the survey's `backend.survey.planning`, the formation's planner,
+route and schemas) and the safety rules they are checked by (`backend.safety`'s rule
+modules) are pure domain logic that knows nothing of HTTP, storage or the agent, so that
+planners can be tested alone."""
 
 from __future__ import annotations
 
@@ -10,9 +11,10 @@ import sys
 # Imported in a fresh interpreter: this test process has long since loaded all of these.
 _PROBE = """
 import importlib, pkgutil, sys
-import backend.missions
-for module in pkgutil.iter_modules(backend.missions.__path__):
-    importlib.import_module("backend.missions." + module.name)
+import backend.survey.planning
+for module in pkgutil.iter_modules(backend.survey.planning.__path__):
+    importlib.import_module("backend.survey.planning." + module.name)
+import backend.formation.planner, backend.formation.route, backend.formation.schemas
 import backend.safety.commands, backend.safety.service
 print("\\n".join(sorted(sys.modules)))
 """

@@ -17,9 +17,6 @@ from PIL import Image
 
 from backend.errors import NotFound
 from backend.hub import MosaicSink
-from backend.missions.survey.run import DroneState, SurveyRun, SurveyState
-from backend.missions.survey.schemas import SurveyRequest
-from backend.missions.survey.service import Fleet, plan_survey, summary
 from backend.mosaic.service import MosaicService
 from backend.photos.checks import Refusal, Refused
 from backend.photos.export import write_zip
@@ -28,7 +25,10 @@ from backend.photos.partials import PartialLimits
 from backend.photos.stored import PhotoSink, StoredPhoto
 from backend.storage.database import make_engine, migrate
 from backend.storage.photos import PhotoRepository
-from backend.surveys.service import new_run
+from backend.survey.flight.progress import new_run
+from backend.survey.flight.run import DroneState, SurveyRun, SurveyState
+from backend.survey.planning.schemas import SurveyRequest
+from backend.survey.planning.survey import Fleet, plan_survey, summary
 from common.geodesy import GeoPoint, LocalFrame
 from protocol.photos import CameraIntrinsics, PhotoMeta, PhotoPose
 from simulator.outputs.photos import nadir_renderer

@@ -14,23 +14,24 @@ import pytest
 import viser
 
 from backend.auth.policy import Principal
-from backend.missions.survey.run import DroneState, SurveyRun, SurveyState
-from backend.missions.survey.schemas import SurveyRequest
-from backend.missions.survey.service import Fleet, plan_survey, summary
 from backend.mosaic.georef import TILE_PX, pixel_to_lonlat
 from backend.mosaic.service import MosaicService
 from backend.mosaic.store import TileStore
 from backend.realtime.bus import InProcessBus
 from backend.settings import HubSettings
 from backend.storage.database import make_engine, migrate
-from backend.storage.surveys import StoredSurvey, SurveyRepository
-from backend.surveys.service import SurveyService, new_run
+from backend.survey.flight.progress import new_run
+from backend.survey.flight.run import DroneState, SurveyRun, SurveyState
+from backend.survey.planning.schemas import SurveyRequest
+from backend.survey.planning.survey import Fleet, plan_survey, summary
+from backend.survey.repository import StoredSurvey, SurveyRepository
+from backend.survey.service import SurveyService
+from backend.survey.viz_layer import PlannedLanes, SurveyLanes
 from backend.viz3d.colours import rgb, vehicle_colour
 from backend.viz3d.frame import SceneFrame
 from backend.viz3d.mosaic_layer import GROUND_LIFT_M, MAX_TEXTURE_PX, MosaicLayer
 from backend.viz3d.scene import FleetScene
 from backend.viz3d.server import VizServer
-from backend.viz3d.survey_layer import PlannedLanes, SurveyLanes
 from common.geodesy import GeoPoint, LocalFrame
 from tests.helpers import poll_until_async
 from tests.survey_shapes import geojson_area

@@ -1,4 +1,4 @@
-// The hub's survey endpoints (backend/api/surveys.py), typed with the generated REST types.
+// The hub's survey endpoints (backend/survey/routes.py), typed with the generated REST types.
 import { ApiError, request } from "../api";
 import type { components } from "../generated/api";
 

@@ -10,12 +10,12 @@ import dataclasses
 import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
-from backend.missions.survey.schemas import SurveyRequest
-from backend.missions.survey.service import Fleet, plan_survey
 from backend.safety import SafetyRails, VehicleSnapshot, check_mission
 from backend.safety.rails import DEFAULT_MIN_HEIGHT_ABOVE_HOME_M
 from backend.safety.schemas import SafetyRailsModel
 from backend.settings import HubSettings
+from backend.survey.planning.schemas import SurveyRequest
+from backend.survey.planning.survey import Fleet, plan_survey
 from protocol.messages import MissionItem
 from tests.unit.safety.shapes import geo, north_of, vehicle
 

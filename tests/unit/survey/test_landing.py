@@ -9,8 +9,8 @@ from pathlib import Path
 import pytest
 
 from backend.errors import GcsError
-from backend.missions.survey.run import DroneState, SurveyRun
-from backend.surveys.service import SurveyService
+from backend.survey.flight.run import DroneState, SurveyRun
+from backend.survey.service import SurveyService
 from protocol.messages import VehicleState, VehicleSummary
 from tests.support.hubs import hub_settings
 from tests.support.surveys import flying_run

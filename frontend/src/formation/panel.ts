@@ -8,7 +8,7 @@ import * as L from "leaflet";
 import { droneColour } from "../map/droneColours";
 import { FoldingPanel, MapClicks } from "../map/foldingPanel";
 import { button, el, errorText, numberField, say } from "../map/panelDom";
-import type { VehicleSummary } from "../types";
+import type { VehicleSummary } from "../hub/types";
 import {
   CONTROLLER_NAMES,
   type FormationBody,

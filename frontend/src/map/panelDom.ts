@@ -1,7 +1,7 @@
 // The DOM pieces the map's folding panels (survey, formation) build their forms from:
 // elements with a class and a `data-field` tests and people read, buttons with a
 // `data-action`, labelled number inputs, and a refusal put into words.
-import { ApiError, describeErrorBody } from "../api";
+import { ApiError, describeErrorBody } from "../hub/api";
 
 export function el<K extends keyof HTMLElementTagNameMap>(tag: K, className: string, field?: string): HTMLElementTagNameMap[K] {
   const made = document.createElement(tag);

@@ -10,8 +10,8 @@
 // A speed is MAVLink's own: a DO_CHANGE_SPEED item before the item it applies to, shown
 // folded into that item's row, so the list is always the mission that is sent.
 import * as L from "leaflet";
-import { ApiError, violationsOf } from "../api";
-import type { VehicleSummary } from "../types";
+import { ApiError, violationsOf } from "../hub/api";
+import type { VehicleSummary } from "../hub/types";
 import { checkMission, downloadMission, uploadMission } from "./api";
 import { MissionLayer } from "./missionLayer";
 import {

@@ -1,6 +1,6 @@
 // The dashboard's mission tools: the mission panel and editor, and "fly here".
 import type * as L from "leaflet";
-import type { VehicleSummary } from "../types";
+import type { VehicleSummary } from "../hub/types";
 import { MissionEditor } from "./editor";
 import { GoHere } from "./goHere";
 import "./missions.css";

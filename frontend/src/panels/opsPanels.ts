@@ -4,11 +4,11 @@
 // warning count in the header, and the drawers that hold the panels on small screens.
 // It decorates the row and marker elements by their data-vehicle-id, so the table and
 // the map need not know about warnings.
-import { element } from "../dom";
+import { element } from "../ui/dom";
 import { type IncomingEvent, EventLog, type LogEvent, CRITICAL_SEVERITY, effectiveSeverity } from "../events/eventLog";
 import { EventFeed } from "../events/eventFeed";
 import type { EventBatch } from "../generated/protocol";
-import type { VehicleSummary } from "../types";
+import type { VehicleSummary } from "../hub/types";
 import { type Runner, SelectedVehiclePanel } from "./selectedVehicle";
 import {
   LEVEL_ICONS,

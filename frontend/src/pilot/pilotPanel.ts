@@ -9,11 +9,11 @@
 // through the hub's audited parameter write, and control is asked for again.
 import type { Runner } from "../panels/selectedVehicle";
 import { AttitudeIndicator } from "../panels/attitude";
-import { ApiError, setParam } from "../api";
-import { actionButton, element, field, setText } from "../dom";
-import { MISSING, formatAltitude, formatBattery, formatSpeed } from "../format";
+import { ApiError, setParam } from "../hub/api";
+import { actionButton, element, field, setText } from "../ui/dom";
+import { MISSING, formatAltitude, formatBattery, formatSpeed } from "../ui/format";
 import type { LeaseRefusal, LeaseState, ManualEcho, ManualInput } from "../generated/protocol";
-import type { ClientToHub, CurrentUser, VehicleSummary } from "../types";
+import type { ClientToHub, CurrentUser, VehicleSummary } from "../hub/types";
 import {
   BUTTON_HOLD,
   BUTTON_SELECT,

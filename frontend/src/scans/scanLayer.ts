@@ -3,8 +3,8 @@
 // (the hub sends scans to no one who did not ask), draws at most a few times a second on
 // a canvas, and keeps only the newest scan.
 import * as L from "leaflet";
-import { apiUrl } from "../api";
-import type { ClientToHub } from "../types";
+import { apiUrl } from "../hub/api";
+import type { ClientToHub } from "../hub/types";
 import { decodeScan } from "./scanFrame";
 
 const DRAW_EVERY_MS = 200;

@@ -9,7 +9,7 @@ import { droneColour } from "../map/droneColours";
 import { FoldingPanel, MapClicks } from "../map/foldingPanel";
 import { button, el, errorText, numberField, say } from "../map/panelDom";
 import type { SurveyUpdate } from "../generated/protocol";
-import type { VehicleSummary } from "../types";
+import type { VehicleSummary } from "../hub/types";
 import {
   type GeoJsonPolygon,
   type SurveyDetail,

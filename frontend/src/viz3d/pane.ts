@@ -4,7 +4,7 @@
 // The two views select the same vehicle: the viewer's page tells us its id and a secret
 // (backend/viz3d/viewers.py), with which we turn its camera to our selection; a click on
 // a vehicle in 3D comes back as a message naming it.
-import { selectInViewer } from "../api";
+import { selectInViewer } from "../hub/api";
 
 export const VIZ_URL = "/viz/";
 

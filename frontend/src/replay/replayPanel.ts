@@ -6,19 +6,19 @@
 // value, the charts' x axis and the time display all use it. Playback advances it
 // by (real time elapsed × speed) each animation frame, and the marker's position
 // and heading are interpolated between the samples around it.
-import { apiUrl, fetchEvents, fetchFlightTelemetry, flightExportUrl } from "./api";
-import { formatAuditTime } from "./auditPanel";
-import { actionButton, element, field, setText } from "./dom";
+import { apiUrl, fetchEvents, fetchFlightTelemetry, flightExportUrl } from "../hub/api";
+import { formatAuditTime } from "../audit/auditPanel";
+import { actionButton, element, field, setText } from "../ui/dom";
 import { FlightList } from "./flightList";
-import { MISSING, formatAltitude, formatSpeed } from "./format";
-import type { FleetMap } from "./map";
+import { MISSING, formatAltitude, formatSpeed } from "../ui/format";
+import type { FleetMap } from "../map/fleetMap";
 import { ReplayCharts } from "./replayCharts";
 import { ReplayLayer, eventTone } from "./replayMap";
 import { ReplayScans } from "./replayScans";
-import { EventFeed } from "./events/eventFeed";
-import { EventLog } from "./events/eventLog";
+import { EventFeed } from "../events/eventFeed";
+import { EventLog } from "../events/eventLog";
 import { FlightTrack, formatClock, type ReplayState } from "./replayTrack";
-import type { Flight, FlightEvent, FlightExportFormat } from "./types";
+import type { Flight, FlightEvent, FlightExportFormat } from "../hub/types";
 
 /** Samples asked of the hub per flight (it keeps each bucket's extremes). */
 const TELEMETRY_POINTS = 2000;

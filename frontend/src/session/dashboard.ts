@@ -1,26 +1,26 @@
 // One logged-in session of the dashboard: config -> map, WebSocket -> store ->
 // views. Built at login and torn down at logout or when the session ends, so the
 // next user starts clean (and gets the controls their role allows).
-import { checkSession, fetchConfig, fetchHealth } from "./api";
-import { AuditPanel } from "./auditPanel";
-import { runCommand } from "./commands";
-import { FleetSocket } from "./connection";
-import { FleetStore } from "./fleet";
-import { FleetTable } from "./fleetTable";
-import { FormationPanel } from "./formation";
-import { linkState } from "./format";
-import { PROTOCOL_VERSION } from "./generated/protocol";
-import type { Header } from "./header";
-import { FleetMap } from "./map";
-import { OpsPanels } from "./panels/opsPanels";
-import { PilotPanel } from "./pilot/pilotPanel";
-import { MissionTools } from "./missions";
-import { ReplayPanel } from "./replayPanel";
-import { type CurrentUser, type HubConfig, type HubToClient, can } from "./types";
-import { ScanLayer } from "./scans/scanLayer";
-import { StoreHealth } from "./storeHealth";
-import { SurveyPanel } from "./survey";
-import { Viz3dPane } from "./viz3d/pane";
+import { checkSession, fetchConfig, fetchHealth } from "../hub/api";
+import { AuditPanel } from "../audit/auditPanel";
+import { runCommand } from "../hub/commands";
+import { FleetSocket } from "../hub/connection";
+import { FleetStore } from "../store/fleetBatch";
+import { FleetTable } from "../fleet/fleetTable";
+import { FormationPanel } from "../formation";
+import { linkState } from "../ui/format";
+import { PROTOCOL_VERSION } from "../generated/protocol";
+import type { Header } from "../header/header";
+import { FleetMap } from "../map/fleetMap";
+import { OpsPanels } from "../panels/opsPanels";
+import { PilotPanel } from "../pilot/pilotPanel";
+import { MissionTools } from "../missions";
+import { ReplayPanel } from "../replay/replayPanel";
+import { type CurrentUser, type HubConfig, type HubToClient, can } from "../hub/types";
+import { ScanLayer } from "../scans/scanLayer";
+import { StoreHealth } from "../header/storeHealth";
+import { SurveyPanel } from "../survey";
+import { Viz3dPane } from "../viz3d/pane";
 
 // Without the hub's config there is no protocol version to compare: assume ours.
 const OFFLINE_CONFIG: HubConfig = {

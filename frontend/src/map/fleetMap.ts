@@ -2,13 +2,13 @@
 // of them on canvases (map/trails.ts, map/vehicleLayer.ts).
 import * as L from "leaflet";
 import "leaflet/dist/leaflet.css";
-import { BaseMaps } from "./map/baseLayers";
-import { CursorPosition } from "./map/cursorPosition";
-import { GeofenceLayer } from "./map/geofence";
-import "./map/map.css";
-import { TrailLayer } from "./map/trails";
-import { VehicleLayer } from "./map/vehicleLayer";
-import type { HubConfig, VehicleSummary } from "./types";
+import { BaseMaps } from "./baseLayers";
+import { CursorPosition } from "./cursorPosition";
+import { GeofenceLayer } from "./geofence";
+import "./map.css";
+import { TrailLayer } from "./trails";
+import { VehicleLayer } from "./vehicleLayer";
+import type { HubConfig, VehicleSummary } from "../hub/types";
 
 const GRID_PX = [320, 64]; // major and minor lines, in the order of style.css
 const FIT_MAX_ZOOM = 19; // close enough to tell apart vehicles a few metres apart

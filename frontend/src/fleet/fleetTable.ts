@@ -1,5 +1,5 @@
 // The fleet list: one VehicleRow per vehicle, kept sorted by id, never rebuilt.
-import type { VehicleSummary } from "./types";
+import type { VehicleSummary } from "../hub/types";
 import { type CommandRunner, VehicleRow } from "./vehicleRow";
 
 const byId = new Intl.Collator(undefined, { numeric: true }).compare; // drone-2 before drone-10

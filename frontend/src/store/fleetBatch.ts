@@ -1,6 +1,6 @@
 // The dashboard's copy of the fleet. Changes are batched and handed to the views
 // once per animation frame, so dozens of vehicles at 10 Hz cost one render pass.
-import type { VehicleChange, VehicleSummary } from "./types";
+import type { VehicleChange, VehicleSummary } from "../hub/types";
 
 export interface FleetChanges {
   changed: VehicleSummary[];

@@ -26,34 +26,14 @@ import {
   speedItem,
 } from "./model";
 import { PlanError, readPlan, writePlan } from "./plan";
+import { button, el } from "../ui/dom";
 
 const CHECK_DELAY_MS = 400;
 const DEFAULT_ALT_M = 20;
 const GROUND_TYPES = new Set(["rover", "boat", "submarine"]);
 
-function button(action: string, text: string, title = ""): HTMLButtonElement {
-  const element = document.createElement("button");
-  element.type = "button";
-  element.className = "mission-button";
-  element.dataset.action = action;
-  element.textContent = text;
-  if (title) element.title = title;
-  return element;
-}
-
-function element<K extends keyof HTMLElementTagNameMap>(
-  tag: K,
-  className: string,
-  field?: string,
-): HTMLElementTagNameMap[K] {
-  const created = document.createElement(tag);
-  created.className = className;
-  if (field) created.dataset.field = field;
-  return created;
-}
-
 function numberInput(field: string, value: number | null, title: string, min = 0): HTMLInputElement {
-  const input = element("input", "mission-number", field);
+  const input = el("input", "mission-number", field);
   input.type = "number";
   input.step = "any";
   input.min = String(min);
@@ -107,15 +87,15 @@ export class MissionEditor {
       pick: (index) => this.focusRow(index),
     });
 
-    this.element = element("div", "mission-panel");
+    this.element = el("div", "mission-panel");
     const toggle = button("mission-toggle", "Mission", "Show or edit the selected vehicle's mission");
-    this.body = element("div", "mission-body");
+    this.body = el("div", "mission-body");
     this.body.hidden = true;
     toggle.addEventListener("click", () => {
       this.body.hidden = !this.body.hidden;
       toggle.setAttribute("aria-expanded", String(!this.body.hidden));
     });
-    this.title = element("div", "mission-title", "mission-vehicle");
+    this.title = el("div", "mission-title", "mission-vehicle");
 
     this.editButton = button("mission-edit", "Edit", "Edit this mission on the map (click the map to add waypoints)");
     this.editButton.addEventListener("click", () => (this.draft ? this.stopEditing() : this.startEditing()));
@@ -123,11 +103,11 @@ export class MissionEditor {
     download.addEventListener("click", () => void this.download());
     const upload = button("mission-upload", "Upload", "Send this mission to the vehicles ticked below");
     upload.addEventListener("click", () => void this.upload());
-    this.targets = element("div", "mission-targets", "mission-targets");
+    this.targets = el("div", "mission-targets", "mission-targets");
     this.targets.setAttribute("role", "group");
     this.targets.setAttribute("aria-label", "Upload to");
     const open = button("mission-open", "Open .plan", "Open a QGroundControl .plan file");
-    this.fileInput = element("input", "mission-file", "mission-file");
+    this.fileInput = el("input", "mission-file", "mission-file");
     this.fileInput.type = "file";
     this.fileInput.accept = ".plan,application/json";
     this.fileInput.hidden = true;
@@ -136,7 +116,7 @@ export class MissionEditor {
     const save = button("mission-save", "Save .plan", "Save as a QGroundControl .plan file");
     save.addEventListener("click", () => this.save());
 
-    const add = element("div", "mission-add");
+    const add = el("div", "mission-add");
     for (const [command, text] of [
       [CMD.TAKEOFF, "+ Take-off"],
       [CMD.LOITER_TIME, "+ Loiter"],
@@ -151,19 +131,19 @@ export class MissionEditor {
     clear.addEventListener("click", () => this.edit((items) => items.splice(0)));
     add.append(clear);
 
-    const tools = element("div", "mission-toolbar");
+    const tools = el("div", "mission-toolbar");
     tools.append(this.editButton, download, open, save);
     if (canCommand) tools.append(upload);
-    const uploadTo = element("div", "mission-upload-to");
-    const uploadLabel = element("span", "mission-upload-label");
+    const uploadTo = el("div", "mission-upload-to");
+    const uploadLabel = el("span", "mission-upload-label");
     uploadLabel.textContent = "Upload to";
     uploadTo.append(uploadLabel, this.targets);
     uploadTo.hidden = !canCommand;
-    this.list = element("ol", "mission-items", "mission-items");
-    this.verdict = element("div", "mission-check", "mission-check");
-    this.status = element("div", "mission-status", "mission-status");
+    this.list = el("ol", "mission-items", "mission-items");
+    this.verdict = el("div", "mission-check", "mission-check");
+    this.status = el("div", "mission-status", "mission-status");
     this.status.setAttribute("role", "status");
-    const hint = element("p", "mission-hint");
+    const hint = el("p", "mission-hint");
     hint.textContent = "Editing: click the map to add a waypoint, drag one to move it, click a leg to insert one.";
     this.body.append(this.title, tools, uploadTo, add, hint, this.list, this.verdict, this.status, this.fileInput);
     this.element.append(toggle, this.body);
@@ -353,14 +333,14 @@ export class MissionEditor {
     this.verdict.dataset.state = problem ? "error" : check === null ? "" : check.ok ? "ok" : "refused";
     if (problem) this.verdict.textContent = problem;
     else if (check) {
-      const head = element("div", "mission-verdict", "mission-verdict");
+      const head = el("div", "mission-verdict", "mission-verdict");
       const estimate = check.estimate;
       const battery = estimate ? ` · needs about ${Math.round(estimate.required_pct)}% battery` : "";
       head.textContent = check.ok ? `Rails: OK${battery}` : "Refused by the rails:";
       this.verdict.append(head);
-      const list = element("ul", "mission-violations");
+      const list = el("ul", "mission-violations");
       for (const violation of check.violations) {
-        const line = element("li", "mission-violation");
+        const line = el("li", "mission-violation");
         line.dataset.rule = violation.rule;
         line.textContent = `${violation.rule}: ${violation.message}`;
         list.append(line);
@@ -544,7 +524,7 @@ export class MissionEditor {
       }
       const seq = index + 1;
       const folded = speedIndexFor(items, index);
-      const row = element("li", "mission-row");
+      const row = el("li", "mission-row");
       row.dataset.seq = String(seq);
       row.dataset.command = String(item.command);
       const refusals = [
@@ -554,19 +534,19 @@ export class MissionEditor {
       row.classList.toggle("refused", refusals.length > 0);
       row.classList.toggle("active", current === seq);
 
-      const number = element("span", "mission-seq");
+      const number = el("span", "mission-seq");
       number.textContent = String(seq);
       row.append(number);
 
       if (editing && (EDITABLE_COMMANDS as readonly number[]).includes(item.command)) {
-        const kind = element("select", "mission-kind", "command");
+        const kind = el("select", "mission-kind", "command");
         for (const command of EDITABLE_COMMANDS) {
           kind.append(new Option(commandName(command), String(command), false, command === item.command));
         }
         kind.addEventListener("change", () => this.setCommand(index, Number(kind.value)));
         row.append(kind);
       } else {
-        const name = element("span", "mission-kind", "command");
+        const name = el("span", "mission-kind", "command");
         name.textContent = commandName(item.command);
         row.append(name);
       }
@@ -579,7 +559,7 @@ export class MissionEditor {
           const value = Number.parseFloat(alt.value);
           if (Number.isFinite(value)) this.edit((list) => (list[index].alt = value));
         });
-        const frame = element("span", "mission-frame", "frame");
+        const frame = el("span", "mission-frame", "frame");
         frame.textContent = `m ${frameName(item.frame)}`;
         row.append(alt, frame);
       }
@@ -590,7 +570,7 @@ export class MissionEditor {
           const value = Number.parseFloat(time.value);
           if (Number.isFinite(value)) this.edit((list) => (list[index].param1 = value));
         });
-        row.append(time, Object.assign(element("span", "mission-unit"), { textContent: "s" }));
+        row.append(time, Object.assign(el("span", "mission-unit"), { textContent: "s" }));
       }
       const speedable =
         item.command === CMD.WAYPOINT || item.command === CMD.LOITER_TIME || item.command === CMD.TAKEOFF;
@@ -606,7 +586,7 @@ export class MissionEditor {
           const value = Number.parseFloat(speed.value);
           this.setSpeed(index, Number.isFinite(value) ? value : null);
         });
-        row.append(speed, Object.assign(element("span", "mission-unit"), { textContent: "m/s" }));
+        row.append(speed, Object.assign(el("span", "mission-unit"), { textContent: "m/s" }));
       }
       if (item.lat !== 0 || item.lon !== 0) {
         row.dataset.lat = String(item.lat);
@@ -618,14 +598,14 @@ export class MissionEditor {
         row.append(remove);
       }
       if (refusals.length > 0) {
-        const why = element("div", "mission-row-refusal", "refusal");
+        const why = el("div", "mission-row-refusal", "refusal");
         why.textContent = refusals.join("; ");
         row.append(why);
       }
       this.list.append(row);
     });
     if (items.length === 0) {
-      const empty = element("li", "mission-empty");
+      const empty = el("li", "mission-empty");
       empty.textContent = editing
         ? "No items yet: click the map to add a waypoint."
         : "No mission known for this vehicle.";
@@ -646,8 +626,8 @@ export class MissionEditor {
     const ids = [...this.vehicles.keys()].sort().sort((a, b) => +(b === this.selectedId) - +(a === this.selectedId));
     const boxes: HTMLElement[] = ids.map((id) => {
       const edited = id === this.selectedId;
-      const label = element("label", edited ? "mission-target edited" : "mission-target");
-      const box = element("input", "mission-target-box");
+      const label = el("label", edited ? "mission-target edited" : "mission-target");
+      const box = el("input", "mission-target-box");
       box.type = "checkbox";
       box.value = id;
       box.checked = edited || this.extraTargets.has(id);
@@ -656,13 +636,13 @@ export class MissionEditor {
         if (box.checked) this.extraTargets.add(id);
         else this.extraTargets.delete(id);
       });
-      const name = element("span", "mission-target-name");
+      const name = el("span", "mission-target-name");
       name.textContent = edited ? `${id} (this plan's)` : id;
       label.append(box, name);
       return label;
     });
     if (boxes.length === 0) {
-      const none = element("span", "mission-target-none");
+      const none = el("span", "mission-target-none");
       none.textContent = "no vehicle";
       boxes.push(none);
     }

@@ -7,7 +7,8 @@
 import * as L from "leaflet";
 import { droneColour } from "../map/droneColours";
 import { FoldingPanel, MapClicks } from "../map/foldingPanel";
-import { button, el, errorText, numberField, say } from "../map/panelDom";
+import { errorText } from "../hub/api";
+import { button, el, numberField, say } from "../ui/dom";
 import type { SurveyUpdate } from "../generated/protocol";
 import type { VehicleSummary } from "../hub/types";
 import {

@@ -10,6 +10,7 @@ import { FoldingPanel, MapClicks } from "../map/foldingPanel";
 import { errorText } from "../hub/api";
 import { button, el, numberField, say } from "../ui/dom";
 import type { VehicleSummary } from "../hub/types";
+import type { DashboardStore } from "../store/dashboardStore";
 import {
   CONTROLLER_NAMES,
   type FormationBody,
@@ -79,7 +80,9 @@ export class FormationPanel {
   constructor(
     map: L.Map,
     private readonly canCommand: boolean,
+    store: DashboardStore,
   ) {
+    store.followFleet(this);
     this.layer = new FormationLayer(map);
     this.panel = new FoldingPanel(map, "formation", "Formation", "Fly vehicles in formation behind a leader");
     this.element = this.panel.element;

@@ -14,6 +14,8 @@ import { actionButton, element, field, setText } from "../ui/dom";
 import { MISSING, formatAltitude, formatBattery, formatSpeed } from "../ui/format";
 import type { LeaseRefusal, LeaseState, ManualEcho, ManualInput } from "../generated/protocol";
 import type { ClientToHub, CurrentUser, VehicleSummary } from "../hub/types";
+import type { DashboardStore } from "../store/dashboardStore";
+import { changedValues } from "../store/store";
 import {
   BUTTON_HOLD,
   BUTTON_SELECT,
@@ -35,9 +37,6 @@ export type Send = (message: ClientToHub) => boolean;
 
 export class PilotPanel {
   readonly element: HTMLElement;
-  private readonly leases = new Map<string, LeaseState>();
-  /** The last refusal of each vehicle, until control is asked for again or granted. */
-  private readonly refusals = new Map<string, LeaseRefusal>();
   /** Control asked for, no answer yet. */
   private asking = false;
   /** What the fix button is doing or why it failed; shown in the status line. */
@@ -81,6 +80,7 @@ export class PilotPanel {
     private readonly send: Send,
     private readonly runCommand: Runner | null,
     private readonly notify: (text: string) => void,
+    private readonly store: DashboardStore,
   ) {
     this.mapping = loadMapping(user.username);
     const value = (name: string) => field("dd", name, { className: "stat-value", textContent: MISSING });
@@ -171,12 +171,36 @@ export class PilotPanel {
     window.addEventListener("blur", () => ((this.windowFocused = false), this.check()), options);
     window.addEventListener("focus", () => (this.windowFocused = true), options);
     window.addEventListener("gamepaddisconnected", () => this.check(), options);
+    store.subscribe((state) => state.selection.id, (id) => id && this.select(id));
+    store.subscribe((state) => state.fleet, ({ changed }) => this.update(changed));
+    // Every lease and refusal the hub sends is news, whichever vehicle it is about.
+    store.subscribe(
+      (state) => state.leases,
+      (now, before) => {
+        for (const lease of changedValues(now, before)) this.onLease(lease);
+      },
+    );
+    store.subscribe(
+      (state) => state.refusals,
+      (now, before) => {
+        for (const refusal of changedValues(now, before)) this.onRefusal(refusal);
+      },
+    );
     this.render();
   }
 
-  // -- what the dashboard feeds in ----------------------------------------------------
+  private get leases(): ReadonlyMap<string, LeaseState> {
+    return this.store.state.leases;
+  }
 
-  select(vehicleId: string): void {
+  /** The last refusal of each vehicle, until control is asked for again or granted. */
+  private get refusals(): ReadonlyMap<string, LeaseRefusal> {
+    return this.store.state.refusals;
+  }
+
+  // -- what the store and the dashboard feed in -------------------------------------
+
+  private select(vehicleId: string): void {
     if (vehicleId === this.vehicleId) return;
     if (this.sending) this.stop("another vehicle selected"); // its lease ends by the deadman
     this.vehicleId = vehicleId;
@@ -188,18 +212,17 @@ export class PilotPanel {
     this.render();
   }
 
-  update(changed: Iterable<VehicleSummary>): void {
+  private update(changed: Iterable<VehicleSummary>): void {
     for (const vehicle of changed) if (vehicle.id === this.vehicleId) this.vehicle = vehicle;
     this.renderVehicle();
   }
 
-  onLease(state: LeaseState): void {
-    this.leases.set(state.vehicle_id, state);
+  private onLease(state: LeaseState): void {
     if (state.vehicle_id !== this.vehicleId) return;
     const mine = state.holder === this.user.username;
     if (mine) {
       this.asking = false;
-      this.refusals.delete(state.vehicle_id);
+      this.store.clearRefusal(state.vehicle_id);
     }
     if (mine && !this.sending && this.stoppedWhy === null) this.startSending();
     if (!mine && this.sending) this.stop(`lease ended: ${state.reason || "no reason given"}`);
@@ -210,8 +233,7 @@ export class PilotPanel {
   }
 
   /** The hub refused a `control` request of ours, with the reason (and maybe a fix). */
-  onRefusal(refusal: LeaseRefusal): void {
-    this.refusals.set(refusal.vehicle_id, refusal);
+  private onRefusal(refusal: LeaseRefusal): void {
     if (refusal.vehicle_id !== this.vehicleId) return;
     this.asking = false;
     this.fixNote = null;
@@ -244,7 +266,7 @@ export class PilotPanel {
     if (!this.vehicleId) return;
     this.stoppedWhy = null;
     this.fixNote = null;
-    this.refusals.delete(this.vehicleId);
+    this.store.clearRefusal(this.vehicleId);
     this.asking = true;
     this.control("acquire");
     this.render();

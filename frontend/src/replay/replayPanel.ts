@@ -12,6 +12,7 @@ import { actionButton, element, field, setText } from "../ui/dom";
 import { FlightList } from "./flightList";
 import { MISSING, formatAltitude, formatSpeed } from "../ui/format";
 import type { FleetMap } from "../map/fleetMap";
+import type { DashboardStore } from "../store/dashboardStore";
 import { ReplayCharts } from "./replayCharts";
 import { ReplayLayer, eventTone } from "./replayMap";
 import { ReplayScans } from "./replayScans";
@@ -107,7 +108,10 @@ export class ReplayPanel {
   constructor(
     private readonly map: FleetMap,
     onClose: () => void,
+    store: DashboardStore,
   ) {
+    // New vehicles join the flight list's vehicle filter while it is open.
+    store.subscribe((state) => state.fleet, ({ all }) => this.isOpen && this.list.suggestVehicles(all.keys()));
     this.list = new FlightList((flight) => void this.load(flight));
     this.layer = new ReplayLayer(map.leaflet, (t) => this.seek(t));
     this.charts = new ReplayCharts((t) => this.seek(t));
@@ -235,10 +239,6 @@ export class ReplayPanel {
     this.unload();
     this.element.hidden = true;
     this.map.setReplaying(false);
-  }
-
-  suggestVehicles(ids: Iterable<string>): void {
-    this.list.suggestVehicles(ids);
   }
 
   destroy(): void {

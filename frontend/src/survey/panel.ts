@@ -11,6 +11,8 @@ import { errorText } from "../hub/api";
 import { button, el, numberField, say } from "../ui/dom";
 import type { SurveyUpdate } from "../generated/protocol";
 import type { VehicleSummary } from "../hub/types";
+import type { DashboardStore } from "../store/dashboardStore";
+import { changedValues } from "../store/store";
 import {
   type GeoJsonPolygon,
   type SurveyDetail,
@@ -93,7 +95,15 @@ export class SurveyPanel {
   constructor(
     private readonly map: L.Map,
     private readonly canCommand: boolean,
+    store: DashboardStore,
   ) {
+    store.followFleet(this);
+    store.subscribe(
+      (state) => state.surveys,
+      (now, before) => {
+        for (const update of changedValues(now, before)) this.onSurvey(update);
+      },
+    );
     this.layer = new SurveyLayer(map);
     this.panel = new FoldingPanel(map, "survey", "Survey", "Plan and fly an area survey");
     this.element = this.panel.element;
@@ -203,7 +213,7 @@ export class SurveyPanel {
   }
 
   /** A `survey` message from the live feed. */
-  onSurvey(update: SurveyUpdate): void {
+  private onSurvey(update: SurveyUpdate): void {
     // A dashboard opened mid-survey follows the one that is flying.
     if (!this.surveyIsLive() && !ENDED.has(update.state)) this.surveyId = update.survey_id;
     if (update.survey_id !== this.surveyId) return;

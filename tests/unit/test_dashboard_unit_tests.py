@@ -18,7 +18,7 @@ def test_dashboard_unit_tests_pass() -> None:
     node = shutil.which("node")
     assert node, "node is required to build and test the dashboard"
     # Not a skip: a skipped run would let a failing TypeScript test pass the suite unseen.
-    assert VITEST.is_file(), "vitest is not installed: run scripts/setup.sh --dev (npm ci in frontend/)"
+    assert VITEST.is_file(), "vitest is missing: run scripts/setup.sh (npm ci in frontend/)"
     run = subprocess.run(
         [node, str(VITEST), "run", "--reporter=dot"],
         capture_output=True,

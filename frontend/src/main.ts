@@ -1,12 +1,12 @@
 // Entry point: asks the hub who is logged in, then shows either the login screen
 // or the dashboard. Any 401 (REST) or 4401 (WebSocket) ends the dashboard and
 // brings the login screen back; that is handled here, in `endSession`.
-import { fetchCurrentUser, logout, onUnauthorized } from "./api";
-import { Dashboard } from "./dashboard";
-import { Header } from "./header";
-import { LoginScreen } from "./login";
-import type { CurrentUser } from "./types";
-// Last, so the theme overrides Leaflet's stylesheet (imported by ./map).
+import { fetchCurrentUser, logout, onUnauthorized } from "./hub/api";
+import { Dashboard } from "./session/dashboard";
+import { Header } from "./header/header";
+import { LoginScreen } from "./session/login";
+import type { CurrentUser } from "./hub/types";
+// Last, so the theme overrides Leaflet's stylesheet (imported by ./map/fleetMap).
 import "./style.css";
 
 const header = new Header();

@@ -2,7 +2,7 @@
 // The same view serves the live dashboard and the flight replay (where `showUntil`
 // hides what had not yet happened at the replay's time). All vehicle text goes in with
 // textContent: a STATUSTEXT is 50 bytes from a radio link, never markup.
-import { element } from "../dom";
+import { element } from "../ui/dom";
 import { type LogEvent, SEVERITY_NAMES, effectiveSeverity, severityName } from "./eventLog";
 
 /** Rows kept in the DOM; the log itself holds more. */

@@ -1,5 +1,5 @@
 // The hub's formation endpoints (backend/api/formations.py), typed with the generated REST types.
-import { request } from "../api";
+import { request } from "../hub/api";
 import type { components } from "../generated/api";
 
 type Schemas = components["schemas"];

@@ -7,8 +7,10 @@
 import * as L from "leaflet";
 import { droneColour } from "../map/droneColours";
 import { FoldingPanel, MapClicks } from "../map/foldingPanel";
-import { button, el, errorText, numberField, say } from "../map/panelDom";
-import type { VehicleSummary } from "../types";
+import { errorText } from "../hub/api";
+import { button, el, numberField, say } from "../ui/dom";
+import type { VehicleSummary } from "../hub/types";
+import type { DashboardStore } from "../store/dashboardStore";
 import {
   CONTROLLER_NAMES,
   type FormationBody,
@@ -78,7 +80,9 @@ export class FormationPanel {
   constructor(
     map: L.Map,
     private readonly canCommand: boolean,
+    store: DashboardStore,
   ) {
+    store.followFleet(this);
     this.layer = new FormationLayer(map);
     this.panel = new FoldingPanel(map, "formation", "Formation", "Fly vehicles in formation behind a leader");
     this.element = this.panel.element;

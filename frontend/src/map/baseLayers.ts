@@ -5,7 +5,7 @@
 import * as L from "leaflet";
 import { fetchTileSets } from "./tileSets";
 import type { TileSet } from "./tileSets";
-import type { HubConfig } from "../types";
+import type { HubConfig } from "../hub/types";
 
 const FAILURES_BEFORE_FALLBACK = 4;
 const MAX_ZOOM = 22;

@@ -3,7 +3,7 @@
 // the map is the panel's and the cursor is a crosshair.
 import * as L from "leaflet";
 import "./foldingPanel.css";
-import { button, el } from "./panelDom";
+import { button, el } from "../ui/dom";
 
 export class FoldingPanel {
   readonly element: HTMLElement;

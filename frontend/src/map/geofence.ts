@@ -3,7 +3,7 @@
 // inside; the hub refuses any command that would take it out. Read again on each
 // selection and every REFRESH_MS, since another operator may change the rails.
 import * as L from "leaflet";
-import { request } from "../api";
+import { request } from "../hub/api";
 import type { components } from "../generated/api";
 
 type Rails = components["schemas"]["SafetyRailsModel"];

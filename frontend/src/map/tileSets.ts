@@ -1,5 +1,5 @@
 // The hub's offline tile sets (GET /api/v1/tiles).
-import { apiUrl } from "../api";
+import { apiUrl } from "../hub/api";
 import type { components } from "../generated/api";
 
 export type TileSet = components["schemas"]["TileSet"];

@@ -5,8 +5,8 @@
 // that would overlap another is hidden and counted on that one ("+3"); clicking the
 // count zooms in on the group. Clicking a symbol (or a label) selects the vehicle.
 import * as L from "leaflet";
-import { linkState } from "../format";
-import type { VehicleSummary } from "../types";
+import { linkState } from "../ui/format";
+import type { VehicleSummary } from "../hub/types";
 import { CanvasOverlay } from "./canvasOverlay";
 import { type LabelBox, placeLabels } from "./labels";
 import { TRAIL_COLOUR, SELECTED_TRAIL_COLOUR, TrailLayer } from "./trails";

@@ -1,5 +1,5 @@
 // The hub's mission and go-to endpoints, typed with the generated REST types.
-import { request } from "../api";
+import { request } from "../hub/api";
 import type { GotoCheck, MissionCheck, MissionItem, MissionResult } from "./model";
 
 function post<T>(path: string, body: unknown, method = "POST"): Promise<T> {

@@ -3,8 +3,8 @@
 // distance and the rails' verdict on that go-to (`goto-check`, the same rails the `goto`
 // command is held to) before anything is sent; a refused go-to cannot be confirmed.
 import * as L from "leaflet";
-import { runCommand } from "../commands";
-import type { VehicleSummary } from "../types";
+import { runCommand } from "../hub/commands";
+import type { VehicleSummary } from "../hub/types";
 import { checkGoto } from "./api";
 
 const LONG_PRESS_MS = 600;

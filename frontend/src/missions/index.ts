@@ -1,6 +1,7 @@
 // The dashboard's mission tools: the mission panel and editor, and "fly here".
 import type * as L from "leaflet";
-import type { VehicleSummary } from "../types";
+import type { VehicleSummary } from "../hub/types";
+import type { DashboardStore } from "../store/dashboardStore";
 import { MissionEditor } from "./editor";
 import { GoHere } from "./goHere";
 import "./missions.css";
@@ -11,11 +12,13 @@ export class MissionTools {
   private readonly vehicles = new Map<string, VehicleSummary>();
   private selectedId: string | null = null;
 
-  constructor(map: L.Map, canCommand: boolean) {
+  constructor(map: L.Map, canCommand: boolean, store: DashboardStore) {
     this.editor = new MissionEditor(map, canCommand);
     this.goHere = canCommand
       ? new GoHere(map, () => (this.selectedId ? this.vehicles.get(this.selectedId) : undefined))
       : null;
+    store.followFleet(this);
+    store.subscribe((state) => state.selection.id, (id) => this.select(id));
   }
 
   update(vehicles: Iterable<VehicleSummary>): void {

@@ -4,11 +4,11 @@
 // warning count in the header, and the drawers that hold the panels on small screens.
 // It decorates the row and marker elements by their data-vehicle-id, so the table and
 // the map need not know about warnings.
-import { element } from "../dom";
-import { type IncomingEvent, EventLog, type LogEvent, CRITICAL_SEVERITY, effectiveSeverity } from "../events/eventLog";
+import { element } from "../ui/dom";
+import { type IncomingEvent, type LogEvent, CRITICAL_SEVERITY, effectiveSeverity } from "../events/eventLog";
 import { EventFeed } from "../events/eventFeed";
-import type { EventBatch } from "../generated/protocol";
-import type { VehicleSummary } from "../types";
+import type { VehicleSummary } from "../hub/types";
+import type { DashboardStore } from "../store/dashboardStore";
 import { type Runner, SelectedVehiclePanel } from "./selectedVehicle";
 import {
   LEVEL_ICONS,
@@ -41,7 +41,8 @@ export class OpsPanels {
   readonly element: HTMLElement;
   private readonly selected: SelectedVehiclePanel;
   private readonly feed: EventFeed;
-  private readonly log = new EventLog();
+  /** The newest event of the store's log already looked at. */
+  private lastEventId = 0;
   private readonly tracked = new Map<string, Tracked>();
   private readonly count: HTMLElement;
   private readonly toggles: HTMLElement;
@@ -54,6 +55,7 @@ export class OpsPanels {
   constructor(
     private readonly layout: HTMLElement,
     runCommand: Runner | null,
+    private readonly store: DashboardStore,
   ) {
     this.selected = new SelectedVehiclePanel(runCommand);
     this.feed = new EventFeed({ title: "Events", vehicleFilter: true, name: "live" });
@@ -82,10 +84,14 @@ export class OpsPanels {
     layout.append(this.toggles);
     this.renderCount();
     this.timer = window.setInterval(() => this.refreshAll(), TICK_MS);
+    store.subscribe((state) => state.fleet, ({ changed, removed }) => this.update(changed, removed));
+    store.subscribe((state) => state.events, (events) => this.onEvents(events));
+    // Every pick, even of the selected vehicle again: it brings the feed back to it.
+    store.subscribe((state) => state.selection, ({ id }) => this.select(id));
   }
 
   /** The store's changes, once per animation frame. */
-  update(changed: Iterable<VehicleSummary>, removed: Iterable<string>): void {
+  private update(changed: Iterable<VehicleSummary>, removed: Iterable<string>): void {
     const nowS = Date.now() / 1000;
     for (const id of removed) this.tracked.delete(id);
     const derived: IncomingEvent[] = [];
@@ -104,21 +110,11 @@ export class OpsPanels {
       entry.airborneSinceS = airborneSince(entry.airborneSinceS, vehicle, nowS);
       this.refresh(entry, nowS);
     }
-    if (derived.length > 0) this.addEvents(derived);
+    if (derived.length > 0) this.store.addEvents(derived);
     this.renderCount();
   }
 
-  /** A batch of the live feed's events. */
-  onEvents(batch: EventBatch): void {
-    this.addEvents(batch.events);
-    if (batch.dropped > 0) {
-      this.addEvents([
-        { vehicle_id: "hub", time: Date.now() / 1000, kind: "dropped", severity: 4, text: `${batch.dropped} less severe events were not sent: this dashboard fell behind` },
-      ]);
-    }
-  }
-
-  select(id: string | null): void {
+  private select(id: string | null): void {
     const entry = id ? this.tracked.get(id) : undefined;
     this.selected.select(entry?.vehicle ?? null);
     if (entry) this.selected.update(entry.vehicle, entry.warnings, entry.airborneSinceS, Date.now() / 1000);
@@ -136,9 +132,10 @@ export class OpsPanels {
     this.layout.classList.remove("drawer-fleet", "drawer-ops");
   }
 
-  private addEvents(events: Iterable<IncomingEvent>): void {
-    const added = this.log.add(events);
-    if (added.length === 0) return;
+  /** The store's event log changed: alerts from the events not yet looked at. */
+  private onEvents(events: readonly LogEvent[]): void {
+    const added = events.filter((event) => event.id > this.lastEventId);
+    for (const event of added) this.lastEventId = Math.max(this.lastEventId, event.id);
     const nowS = Date.now() / 1000;
     for (const event of added) {
       const entry = this.tracked.get(event.vehicleId);
@@ -149,7 +146,7 @@ export class OpsPanels {
       }
       this.refresh(entry, nowS);
     }
-    this.feed.setEvents(this.log.all);
+    this.feed.setEvents(events);
     this.renderCount();
   }
 

@@ -1,9 +1,9 @@
 // The selected vehicle at a glance: attitude, altitude, ground speed, climb rate,
 // distance from home, time in flight, its warnings, and the flight-mode picker.
-import type { CommandFeedback } from "../commands";
-import { element, field, setText } from "../dom";
-import { MISSING, formatAltitude, formatSpeed } from "../format";
-import type { Command, VehicleSummary } from "../types";
+import type { CommandFeedback } from "../hub/commands";
+import { element, field, setText } from "../ui/dom";
+import { MISSING, formatAltitude, formatSpeed } from "../ui/format";
+import type { Command, VehicleSummary } from "../hub/types";
 import { AttitudeIndicator } from "./attitude";
 import { distanceM } from "./geo";
 import { LEVEL_ICONS, type VehicleWarnings } from "./warnings";

@@ -1,7 +1,7 @@
 // What needs the operator's eye, per vehicle: battery, link age, GPS fix and the
 // autopilot's estimator (EKF) health. Pure: the state, the clock and the levels in,
 // a level and its reasons out; the views draw them on the row, the marker and the header.
-import type { VehicleSummary } from "../types";
+import type { VehicleSummary } from "../hub/types";
 
 export type WarningLevel = "ok" | "warning" | "critical";
 export type WarningKind = "battery" | "link" | "gps" | "ekf";

@@ -244,3 +244,17 @@ export class GamepadInput implements InputSource {
 
   destroy(): void {}
 }
+
+/** What the pilot picks from, in words. */
+export const SOURCE_LABELS: Record<SourceName, string> = {
+  touch: "On-screen sticks",
+  keyboard: "Keyboard (WASD, arrows)",
+  gamepad: "Gamepad",
+};
+
+/** Starts reading the named input (the touch sticks in the two zones given). */
+export function openSource(name: SourceName, zones: readonly [HTMLElement, HTMLElement], keyboard: KeyboardSettings, mapping: GamepadMapping): InputSource {
+  if (name === "touch") return new TouchSticks(zones[0], zones[1]);
+  if (name === "keyboard") return new KeyboardInput(keyboard);
+  return new GamepadInput(mapping);
+}

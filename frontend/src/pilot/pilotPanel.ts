@@ -8,36 +8,28 @@
 // COM_RC_IN_MODE), an admin may make the change the refusal names, after confirming it,
 // through the hub's audited parameter write, and control is asked for again.
 import type { Runner } from "../panels/selectedVehicle";
-import { AttitudeIndicator } from "../panels/attitude";
-import { ApiError, setParam } from "../api";
-import { actionButton, element, field, setText } from "../dom";
-import { MISSING, formatAltitude, formatBattery, formatSpeed } from "../format";
+import { actionButton, element, field, setText } from "../ui/dom";
 import type { LeaseRefusal, LeaseState, ManualEcho, ManualInput } from "../generated/protocol";
-import type { ClientToHub, CurrentUser, VehicleSummary } from "../types";
-import {
-  BUTTON_HOLD,
-  BUTTON_SELECT,
-  GamepadInput,
-  type InputSource,
-  KeyboardInput,
-  type SourceName,
-  TouchSticks,
-} from "./inputs";
-import { type PilotSettings, loadMapping, loadSettings, saveMapping, saveSettings } from "./settings";
-import { AXES, type AxisName, Shaper, toManualAxes } from "./shaping";
+import type { ClientToHub, CurrentUser, VehicleSummary } from "../hub/types";
+import type { DashboardStore } from "../store/dashboardStore";
+import { changedValues } from "../store/store";
+import { BUTTON_HOLD, BUTTON_SELECT, type InputSource, SOURCE_LABELS, type SourceName, TouchSticks, openSource } from "./inputs";
+import { type PilotSettings, loadMapping, loadSettings } from "./settings";
+import { HubPing } from "./hubPing";
+import { PilotStats } from "./pilotStats";
+import { confirmFix, writeFix } from "./refusalFix";
+import { settingsFormParts } from "./settingsForm";
+import { statusLine } from "./statusLine";
+import { Shaper, toManualAxes } from "./shaping";
 import "./pilot.css";
 
 /** 25 Hz: what browser GCSs send, and the hub's floor for a lease's stream. */
 export const SEND_INTERVAL_MS = 40;
-const PING_EVERY_MS = 1000;
 
 export type Send = (message: ClientToHub) => boolean;
 
 export class PilotPanel {
   readonly element: HTMLElement;
-  private readonly leases = new Map<string, LeaseState>();
-  /** The last refusal of each vehicle, until control is asked for again or granted. */
-  private readonly refusals = new Map<string, LeaseRefusal>();
   /** Control asked for, no answer yet. */
   private asking = false;
   /** What the fix button is doing or why it failed; shown in the status line. */
@@ -54,16 +46,11 @@ export class PilotPanel {
   private seq = 0;
   private lastTickMs = 0;
   private timer: number | undefined;
-  private pingTimer: number | undefined;
-  private pingNonce = 0;
-  private pingSentAt = new Map<string, number>();
+  private readonly hubPing: HubPing;
   private windowFocused = true;
   private readonly listeners = new AbortController();
-  private readonly attitude = new AttitudeIndicator();
-  private readonly ui: Record<
-    "title" | "holder" | "status" | "delay" | "rtt" | "alt" | "speed" | "battery" | "position" | "mode" | "axes",
-    HTMLElement
-  >;
+  private readonly stats = new PilotStats();
+  private readonly ui: Record<"title" | "holder" | "status" | "axes", HTMLElement>;
   private readonly take: HTMLButtonElement;
   private readonly release: HTMLButtonElement;
   private readonly revoke: HTMLButtonElement;
@@ -81,20 +68,14 @@ export class PilotPanel {
     private readonly send: Send,
     private readonly runCommand: Runner | null,
     private readonly notify: (text: string) => void,
+    private readonly store: DashboardStore,
   ) {
     this.mapping = loadMapping(user.username);
-    const value = (name: string) => field("dd", name, { className: "stat-value", textContent: MISSING });
+    this.hubPing = new HubPing(send, (ms) => this.stats.showHubRoundTrip(ms));
     this.ui = {
       title: element("h2", { className: "panel-title", textContent: "Fly by hand" }),
       holder: field("p", "lease-holder", { className: "pilot-holder", textContent: "Select a vehicle" }),
       status: field("output", "pilot-status", { className: "pilot-status", textContent: "not flying" }),
-      delay: value("pilot-delay"),
-      rtt: value("pilot-hub-rtt"),
-      alt: value("pilot-alt"),
-      speed: value("pilot-speed"),
-      battery: value("pilot-battery"),
-      position: value("pilot-position"),
-      mode: value("pilot-mode"),
       axes: field("code", "pilot-axes", { className: "pilot-axes" }),
     };
     this.ui.status.setAttribute("aria-live", "assertive");
@@ -107,7 +88,7 @@ export class PilotPanel {
     this.fix = actionButton("apply-fix", "", () => void this.applyFix());
     this.fix.hidden = true;
     this.sourcePicker = field("select", "pilot-source", { className: "pilot-source" });
-    for (const [name, label] of [["touch", "On-screen sticks"], ["keyboard", "Keyboard (WASD, arrows)"], ["gamepad", "Gamepad"]]) {
+    for (const [name, label] of Object.entries(SOURCE_LABELS)) {
       this.sourcePicker.append(element("option", { value: name, textContent: label }));
     }
     this.sourcePicker.setAttribute("aria-label", "Input");
@@ -129,8 +110,6 @@ export class PilotPanel {
       actionButton("pilot-hold", "Hold", () => this.press(BUTTON_HOLD)),
     );
     this.settingsForm = element("details", { className: "pilot-settings" });
-    const stat = (label: string, node: HTMLElement) =>
-      element("div", { className: "stat" }, element("dt", { textContent: label }), node);
     this.element = element(
       "section",
       { className: "pilot-panel" },
@@ -144,39 +123,47 @@ export class PilotPanel {
       canFly && this.isAdmin ? element("div", { className: "pilot-fix" }, this.fix) : element("span"),
       this.sticks,
       this.buttons,
-      element(
-        "div",
-        { className: "selected-body" },
-        this.attitude.element,
-        element(
-          "dl",
-          { className: "stats" },
-          stat("Mode", this.ui.mode),
-          stat("Altitude", this.ui.alt),
-          stat("Speed", this.ui.speed),
-          stat("Battery", this.ui.battery),
-          stat("Position", this.ui.position),
-          stat("Input → vehicle (round trip)", this.ui.delay),
-          stat("Hub round trip", this.ui.rtt),
-        ),
-      ),
+      this.stats.element,
       this.ui.axes,
       canFly ? this.settingsForm : element("span"),
     );
     this.element.dataset.panel = "pilot";
-    this.attitude.element.dataset.field = "pilot-attitude";
 
     const options = { signal: this.listeners.signal };
     document.addEventListener("visibilitychange", () => this.check(), options);
     window.addEventListener("blur", () => ((this.windowFocused = false), this.check()), options);
     window.addEventListener("focus", () => (this.windowFocused = true), options);
     window.addEventListener("gamepaddisconnected", () => this.check(), options);
+    store.subscribe((state) => state.selection.id, (id) => id && this.select(id));
+    store.subscribe((state) => state.fleet, ({ changed }) => this.update(changed));
+    // Every lease and refusal the hub sends is news, whichever vehicle it is about.
+    store.subscribe(
+      (state) => state.leases,
+      (now, before) => {
+        for (const lease of changedValues(now, before)) this.onLease(lease);
+      },
+    );
+    store.subscribe(
+      (state) => state.refusals,
+      (now, before) => {
+        for (const refusal of changedValues(now, before)) this.onRefusal(refusal);
+      },
+    );
     this.render();
   }
 
-  // -- what the dashboard feeds in ----------------------------------------------------
+  private get leases(): ReadonlyMap<string, LeaseState> {
+    return this.store.state.leases;
+  }
 
-  select(vehicleId: string): void {
+  /** The last refusal of each vehicle, until control is asked for again or granted. */
+  private get refusals(): ReadonlyMap<string, LeaseRefusal> {
+    return this.store.state.refusals;
+  }
+
+  // -- what the store and the dashboard feed in -------------------------------------
+
+  private select(vehicleId: string): void {
     if (vehicleId === this.vehicleId) return;
     if (this.sending) this.stop("another vehicle selected"); // its lease ends by the deadman
     this.vehicleId = vehicleId;
@@ -188,18 +175,17 @@ export class PilotPanel {
     this.render();
   }
 
-  update(changed: Iterable<VehicleSummary>): void {
+  private update(changed: Iterable<VehicleSummary>): void {
     for (const vehicle of changed) if (vehicle.id === this.vehicleId) this.vehicle = vehicle;
     this.renderVehicle();
   }
 
-  onLease(state: LeaseState): void {
-    this.leases.set(state.vehicle_id, state);
+  private onLease(state: LeaseState): void {
     if (state.vehicle_id !== this.vehicleId) return;
     const mine = state.holder === this.user.username;
     if (mine) {
       this.asking = false;
-      this.refusals.delete(state.vehicle_id);
+      this.store.clearRefusal(state.vehicle_id);
     }
     if (mine && !this.sending && this.stoppedWhy === null) this.startSending();
     if (!mine && this.sending) this.stop(`lease ended: ${state.reason || "no reason given"}`);
@@ -210,8 +196,7 @@ export class PilotPanel {
   }
 
   /** The hub refused a `control` request of ours, with the reason (and maybe a fix). */
-  onRefusal(refusal: LeaseRefusal): void {
-    this.refusals.set(refusal.vehicle_id, refusal);
+  private onRefusal(refusal: LeaseRefusal): void {
     if (refusal.vehicle_id !== this.vehicleId) return;
     this.asking = false;
     this.fixNote = null;
@@ -219,17 +204,13 @@ export class PilotPanel {
   }
 
   onPong(nonce: string | null | undefined): void {
-    if (!nonce) return;
-    const sentAt = this.pingSentAt.get(nonce);
-    if (sentAt === undefined) return;
-    this.pingSentAt.delete(nonce);
-    setText(this.ui.rtt, `${Math.round(performance.now() - sentAt)} ms`);
+    this.hubPing.onPong(nonce);
   }
 
   /** The agent flew our frame: its send time against now is input to vehicle and back. */
   onEcho(echo: ManualEcho): void {
     if (echo.vehicle_id !== this.vehicleId || typeof echo.sent_ms !== "number" || !this.sending) return;
-    setText(this.ui.delay, `${Math.round(performance.now() - echo.sent_ms)} ms`);
+    this.stats.showDelay(performance.now() - echo.sent_ms);
   }
 
   destroy(): void {
@@ -244,7 +225,7 @@ export class PilotPanel {
     if (!this.vehicleId) return;
     this.stoppedWhy = null;
     this.fixNote = null;
-    this.refusals.delete(this.vehicleId);
+    this.store.clearRefusal(this.vehicleId);
     this.asking = true;
     this.control("acquire");
     this.render();
@@ -256,28 +237,19 @@ export class PilotPanel {
     const vehicleId = this.vehicleId;
     const refusal = vehicleId ? this.refusals.get(vehicleId) : undefined;
     const fix = refusal?.fix;
-    if (!vehicleId || !refusal || !fix) return;
-    const question =
-      `Set ${fix.param} to ${fix.value} on ${vehicleId}?\n\n` +
-      `Manual control was refused: ${refusal.reason}.\n\n` +
-      "This changes a parameter on the flight controller (recorded in the audit log); control is then asked for again.";
-    if (!window.confirm(question)) return;
+    if (!vehicleId || !refusal || !fix || !confirmFix(vehicleId, refusal, fix)) return;
     this.fix.disabled = true;
     this.fixNote = `setting ${fix.param} to ${fix.value}…`;
     this.render();
-    try {
-      await setParam(vehicleId, fix.param, fix.value);
-    } catch (error) {
-      const why = error instanceof ApiError ? error.message : String(error);
-      if (this.vehicleId === vehicleId) {
-        this.fixNote = `could not set ${fix.param}: ${why}`;
-        this.render();
-      }
-      return;
-    } finally {
-      this.fix.disabled = false;
+    const failed = await writeFix(vehicleId, fix);
+    this.fix.disabled = false;
+    if (this.vehicleId !== vehicleId) return;
+    if (failed === null) {
+      this.requestLease();
+    } else {
+      this.fixNote = failed;
+      this.render();
     }
-    if (this.vehicleId === vehicleId) this.requestLease();
   }
 
   private control(action: "acquire" | "release" | "revoke"): void {
@@ -302,9 +274,7 @@ export class PilotPanel {
     const settings = this.settings ?? loadSettings(this.user.username, this.vehicleId ?? "");
     this.sticks.hidden = this.sourceName !== "touch";
     this.buttons.hidden = false;
-    if (this.sourceName === "touch") this.source = new TouchSticks(this.stickZones[0], this.stickZones[1]);
-    else if (this.sourceName === "keyboard") this.source = new KeyboardInput(settings.keyboard);
-    else this.source = new GamepadInput(this.mapping);
+    this.source = openSource(this.sourceName, this.stickZones, settings.keyboard, this.mapping);
     this.shaper = new Shaper(settings.shaping);
   }
 
@@ -314,8 +284,7 @@ export class PilotPanel {
     this.startSource();
     this.lastTickMs = performance.now();
     this.timer = window.setInterval(() => this.tick(), SEND_INTERVAL_MS);
-    this.pingTimer = window.setInterval(() => this.ping(), PING_EVERY_MS);
-    this.ping();
+    this.hubPing.start();
     this.tick();
   }
 
@@ -365,7 +334,7 @@ export class PilotPanel {
     }
     this.sending = false;
     window.clearInterval(this.timer);
-    window.clearInterval(this.pingTimer);
+    this.hubPing.stop();
     this.source?.destroy();
     this.source = null;
     this.sticks.hidden = true;
@@ -378,12 +347,6 @@ export class PilotPanel {
     if (source instanceof TouchSticks) source.presses.press(bit);
   }
 
-  private ping(): void {
-    const nonce = `pilot-${++this.pingNonce}`;
-    this.pingSentAt.clear();
-    this.pingSentAt.set(nonce, performance.now());
-    this.send({ type: "ping", nonce });
-  }
 
   // -- drawing --------------------------------------------------------------------------
 
@@ -404,27 +367,16 @@ export class PilotPanel {
     this.resume.hidden = !(lease?.resume_mode && !holder);
     if (lease?.resume_mode) this.resume.textContent = `Resume mission (${lease.resume_mode})`;
     const refusal = this.vehicleId ? this.refusals.get(this.vehicleId) : undefined;
-    let status = "not flying";
-    let state = "idle";
-    if (this.sending) {
-      status = `flying with ${this.sourcePicker.selectedOptions[0]?.textContent ?? this.sourceName}, 25 Hz`;
-      state = "sending";
-    } else if (this.asking) {
-      status = "asking for control…";
-      state = "asking";
-    } else if (this.fixNote) {
-      status = this.fixNote;
-      state = "refused";
-    } else if (refusal) {
-      status = `control refused: ${refusal.reason}`;
-      if (refusal.fix && !this.isAdmin) status += " — an admin can make this change from this panel";
-      state = "refused";
-    } else if (this.stoppedWhy) {
-      status = `stopped: ${this.stoppedWhy} — the vehicle holds`;
-      state = "stopped";
-    }
-    setText(this.ui.status, status);
-    this.ui.status.dataset.state = state;
+    const status = statusLine({
+      sendingWith: this.sending ? SOURCE_LABELS[this.sourceName] : null,
+      asking: this.asking,
+      fixNote: this.fixNote,
+      refusal,
+      isAdmin: this.isAdmin,
+      stoppedWhy: this.stoppedWhy,
+    });
+    setText(this.ui.status, status.text);
+    this.ui.status.dataset.state = status.state;
     const fix = !this.sending && !this.asking ? refusal?.fix : undefined;
     this.fix.hidden = !fix || !this.isAdmin;
     if (fix) setText(this.fix, `Set ${fix.param} to ${fix.value}`);
@@ -432,96 +384,12 @@ export class PilotPanel {
   }
 
   private renderVehicle(): void {
-    const state = this.vehicle?.state ?? null;
-    setText(this.ui.mode, state?.mode ?? MISSING);
-    setText(this.ui.alt, formatAltitude(state?.alt_rel));
-    setText(this.ui.speed, formatSpeed(state?.groundspeed));
-    setText(this.ui.battery, formatBattery(state));
-    const lat = state?.lat;
-    const lon = state?.lon;
-    setText(this.ui.position, typeof lat === "number" && typeof lon === "number" ? `${lat.toFixed(6)}, ${lon.toFixed(6)}` : MISSING);
-    this.attitude.update(state?.roll_deg ?? 0, state?.pitch_deg ?? 0, state?.heading_deg ?? null);
+    this.stats.show(this.vehicle);
   }
 
   private renderSettings(): void {
     const settings = this.settings;
     if (!settings || !this.vehicleId) return;
-    const vehicleId = this.vehicleId;
-    const save = () => saveSettings(this.user.username, vehicleId, settings);
-    const number = (name: string, value: number, step: number, set: (v: number) => void) => {
-      const input = field("input", name, { type: "number", value: String(value), step: String(step), className: "pilot-number" });
-      input.addEventListener("change", () => {
-        const parsed = Number(input.value);
-        if (!Number.isFinite(parsed)) return;
-        set(parsed);
-        save();
-      });
-      return input;
-    };
-    const rows = AXES.map((axis: AxisName) => {
-      const shape = settings.shaping[axis];
-      return element(
-        "tr",
-        {},
-        element("th", { textContent: axis }),
-        element("td", {}, number(`shape-${axis}-deadzone`, shape.deadzone, 0.01, (v) => (shape.deadzone = Math.min(0.5, Math.max(0, v))))),
-        element("td", {}, number(`shape-${axis}-expo`, shape.expo, 0.05, (v) => (shape.expo = Math.min(1, Math.max(0, v))))),
-        element("td", {}, number(`shape-${axis}-slew`, shape.slewPerS, 0.5, (v) => (shape.slewPerS = Math.min(20, Math.max(0.1, v))))),
-        element("td", {}, number(`shape-${axis}-max`, shape.max, 0.05, (v) => (shape.max = Math.min(1, Math.max(0, v))))),
-      );
-    });
-    const header = element("tr", {}, ...["", "dead zone", "expo", "slew /s", "max"].map((t) => element("th", { textContent: t })));
-    const keyboard = element(
-      "p",
-      { className: "pilot-keyboard" },
-      "Keyboard step ",
-      number("keyboard-step", settings.keyboard.step, 0.05, (v) => (settings.keyboard.step = Math.min(1, Math.max(0.01, v)))),
-      " sensitivity ",
-      number("keyboard-sensitivity", settings.keyboard.sensitivity, 0.05, (v) => (settings.keyboard.sensitivity = Math.min(1, Math.max(0.05, v)))),
-    );
-    this.settingsForm.replaceChildren(
-      element("summary", { textContent: `Stick shaping for ${vehicleId}, keyboard, gamepad mapping` }),
-      element("table", { className: "pilot-shaping" }, header, ...rows),
-      keyboard,
-      this.mappingForm(),
-    );
-  }
-
-  /** The gamepad mapping screen: which axis (and which way) is which, which buttons act. */
-  private mappingForm(): HTMLElement {
-    const mapping = this.mapping;
-    const save = () => saveMapping(this.user.username, mapping);
-    const indexPicker = (name: string, current: number, count: number, set: (v: number) => void) => {
-      const picker = field("select", name);
-      for (let i = 0; i < count; i++) picker.append(element("option", { value: String(i), textContent: String(i), selected: i === current }));
-      picker.addEventListener("change", () => (set(Number(picker.value)), save()));
-      return picker;
-    };
-    const rows = AXES.map((axis: AxisName) => {
-      const map = mapping.axes[axis];
-      const invert = field("input", `map-${axis}-invert`, { type: "checkbox", checked: map.invert });
-      invert.addEventListener("change", () => ((map.invert = invert.checked), save()));
-      return element(
-        "tr",
-        {},
-        element("th", { textContent: axis }),
-        element("td", {}, indexPicker(`map-${axis}-axis`, map.axis, 8, (v) => (map.axis = v))),
-        element("td", {}, element("label", {}, invert, " invert")),
-      );
-    });
-    const live = field("code", "gamepad-live", { textContent: "move a stick to see its axis" });
-    const poll = window.setInterval(() => {
-      if (!live.isConnected) return window.clearInterval(poll);
-      const pad = navigator.getGamepads?.().find((p) => p?.connected);
-      setText(live, pad ? pad.axes.map((v, i) => `${i}: ${v.toFixed(2)}`).join("  ") : "no gamepad connected");
-    }, 200);
-    return element(
-      "fieldset",
-      { className: "pilot-mapping" },
-      element("legend", { textContent: "Gamepad mapping" }),
-      element("table", {}, ...rows),
-      element("p", {}, "Select button ", indexPicker("map-select", mapping.select, 16, (v) => (mapping.select = v)), " hold button ", indexPicker("map-hold", mapping.hold, 16, (v) => (mapping.hold = v))),
-      live,
-    );
+    this.settingsForm.replaceChildren(...settingsFormParts(this.user.username, this.vehicleId, settings, this.mapping));
   }
 }

@@ -3,8 +3,9 @@
 // (the hub sends scans to no one who did not ask), draws at most a few times a second on
 // a canvas, and keeps only the newest scan.
 import * as L from "leaflet";
-import { apiUrl } from "../api";
-import type { ClientToHub } from "../types";
+import { apiUrl } from "../hub/api";
+import type { ClientToHub } from "../hub/types";
+import type { DashboardStore } from "../store/dashboardStore";
 import { decodeScan } from "./scanFrame";
 
 const DRAW_EVERY_MS = 200;
@@ -28,9 +29,11 @@ export class ScanLayer {
   constructor(
     private readonly map: L.Map,
     private readonly send: (message: ClientToHub) => void,
+    store: DashboardStore,
   ) {
     this.points = L.layerGroup().addTo(map);
     this.obstacles = L.layerGroup().addTo(map);
+    store.subscribe((state) => state.selection.id, (id) => this.follow(id));
   }
 
   /** Shows this vehicle's scans (null: none). */

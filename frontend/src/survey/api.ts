@@ -1,5 +1,5 @@
 // The hub's survey endpoints (backend/survey/routes.py), typed with the generated REST types.
-import { ApiError, request } from "../api";
+import { ApiError, request } from "../hub/api";
 import type { components } from "../generated/api";
 
 type Schemas = components["schemas"];

@@ -4,7 +4,8 @@
 // The two views select the same vehicle: the viewer's page tells us its id and a secret
 // (backend/viz3d/viewers.py), with which we turn its camera to our selection; a click on
 // a vehicle in 3D comes back as a message naming it.
-import { selectInViewer } from "../api";
+import { selectInViewer } from "../hub/api";
+import type { DashboardStore } from "../store/dashboardStore";
 
 export const VIZ_URL = "/viz/";
 
@@ -30,8 +31,9 @@ export class Viz3dPane {
 
   constructor(
     private readonly map: HTMLElement,
-    private readonly onSelect: (id: string) => void,
+    private readonly store: DashboardStore,
   ) {
+    store.subscribe((state) => state.selection.id, (id) => id && this.select(id));
     window.addEventListener("message", this.onMessage);
     this.button = document.createElement("button");
     this.button.type = "button";
@@ -110,7 +112,7 @@ export class Viz3dPane {
       this.turnViewer();
     } else if (data?.type === "gcs-viz-select" && typeof data.vehicle === "string") {
       this.selected = data.vehicle; // already shown there: no need to turn the camera back
-      this.onSelect(data.vehicle);
+      this.store.select(data.vehicle, true);
     }
   }
 

@@ -2,13 +2,14 @@
 // of them on canvases (map/trails.ts, map/vehicleLayer.ts).
 import * as L from "leaflet";
 import "leaflet/dist/leaflet.css";
-import { BaseMaps } from "./map/baseLayers";
-import { CursorPosition } from "./map/cursorPosition";
-import { GeofenceLayer } from "./map/geofence";
-import "./map/map.css";
-import { TrailLayer } from "./map/trails";
-import { VehicleLayer } from "./map/vehicleLayer";
-import type { HubConfig, VehicleSummary } from "./types";
+import { BaseMaps } from "./baseLayers";
+import { CursorPosition } from "./cursorPosition";
+import { GeofenceLayer } from "./geofence";
+import "./map.css";
+import { TrailLayer } from "./trails";
+import { VehicleLayer } from "./vehicleLayer";
+import type { HubConfig, VehicleSummary } from "../hub/types";
+import type { DashboardStore } from "../store/dashboardStore";
 
 const GRID_PX = [320, 64]; // major and minor lines, in the order of style.css
 const FIT_MAX_ZOOM = 19; // close enough to tell apart vehicles a few metres apart
@@ -27,7 +28,7 @@ export class FleetMap {
   constructor(
     private readonly container: HTMLElement,
     config: HubConfig,
-    onSelect: (id: string) => void,
+    store: DashboardStore,
   ) {
     this.map = L.map(container, { maxZoom: 22, worldCopyJump: true }).setView([20, 0], 2);
     L.control.scale({ imperial: false }).addTo(this.map);
@@ -38,7 +39,7 @@ export class FleetMap {
     this.map.createPane("vehicles").style.zIndex = "620";
     this.trails = new TrailLayer();
     this.trails.addTo(this.map);
-    this.vehicles = new VehicleLayer(onSelect, this.trails);
+    this.vehicles = new VehicleLayer((id) => store.select(id, false), this.trails);
     this.vehicles.addTo(this.map);
 
     // Without tiles nothing is fetched: a CSS grid that moves with the map instead.
@@ -53,6 +54,9 @@ export class FleetMap {
     this.geofence.layer.addTo(this.map);
     this.geofence.show(null);
     void this.baseMaps.start();
+    store.followFleet(this);
+    // Every pick, even of the selected vehicle again: a pick from the list pans to it.
+    store.subscribe((state) => state.selection, ({ id, pan }) => this.select(id, pan));
   }
 
   /** Adds, moves or restyles the vehicles' markers. */

@@ -1,9 +1,9 @@
 // The audit log drawer: who did what, with which token, when, from where and how it
 // ended, newest first, a page at a time ("Load older" follows the hub's `next_before_id`).
-import { fetchAudit } from "./api";
-import { actionButton, element } from "./dom";
-import { Pager } from "./pager";
-import type { AuditAction, AuditEntry } from "./types";
+import { fetchAudit } from "../hub/api";
+import { actionButton, element } from "../ui/dom";
+import { Pager } from "../ui/pager";
+import type { AuditAction, AuditEntry } from "../hub/types";
 
 const PAGE_SIZE = 50;
 const COLUMNS = ["time", "actor", "token", "role", "source", "action", "target", "outcome", "detail"] as const;

@@ -6,67 +6,26 @@
 // value, the charts' x axis and the time display all use it. Playback advances it
 // by (real time elapsed × speed) each animation frame, and the marker's position
 // and heading are interpolated between the samples around it.
-import { apiUrl, fetchEvents, fetchFlightTelemetry, flightExportUrl } from "./api";
-import { formatAuditTime } from "./auditPanel";
-import { actionButton, element, field, setText } from "./dom";
+import { formatAuditTime } from "../audit/auditPanel";
+import { actionButton, element, field, setText } from "../ui/dom";
 import { FlightList } from "./flightList";
-import { MISSING, formatAltitude, formatSpeed } from "./format";
-import type { FleetMap } from "./map";
+import { MISSING, formatAltitude, formatSpeed } from "../ui/format";
+import type { FleetMap } from "../map/fleetMap";
+import type { DashboardStore } from "../store/dashboardStore";
 import { ReplayCharts } from "./replayCharts";
 import { ReplayLayer, eventTone } from "./replayMap";
 import { ReplayScans } from "./replayScans";
-import { EventFeed } from "./events/eventFeed";
-import { EventLog } from "./events/eventLog";
+import { EventFeed } from "../events/eventFeed";
+import { EventLog } from "../events/eventLog";
 import { FlightTrack, formatClock, type ReplayState } from "./replayTrack";
-import type { Flight, FlightEvent, FlightExportFormat } from "./types";
+import type { Flight, FlightEvent } from "../hub/types";
+import { EXPORTS, type LoadedFlight, loadFlight } from "./flightData";
 
-/** Samples asked of the hub per flight (it keeps each bucket's extremes). */
-const TELEMETRY_POINTS = 2000;
-const EVENT_PAGE = 500;
-const MAX_EVENT_PAGES = 4;
 export const REPLAY_SPEEDS = [1, 2, 5, 10, 30] as const;
 /** A frame later than this (a background tab) does not jump the replay ahead. */
 const MAX_FRAME_S = 0.25;
 
-interface FlightExport {
-  format: FlightExportFormat | "ply";
-  label: string;
-  title: string;
-  url: (id: number) => string;
-}
-
-const EXPORTS: FlightExport[] = [
-  { format: "csv", label: "CSV", title: "Samples as CSV", url: (id) => flightExportUrl(id, "csv") },
-  { format: "geojson", label: "GeoJSON", title: "Track as GeoJSON", url: (id) => flightExportUrl(id, "geojson") },
-  { format: "tlog", label: "tlog", title: "MAVLink telemetry log", url: (id) => flightExportUrl(id, "tlog") },
-  // The LIDAR's world points of the flight, for CloudCompare or PDAL (none without scans).
-  {
-    format: "ply",
-    label: "Points",
-    title: "LIDAR world points as PLY",
-    url: (id) => apiUrl(`flights/${id}/points.ply`).toString(),
-  },
-];
-
 type ReplayViewState = "empty" | "loading" | "ready" | "error";
-
-async function flightEvents(flight: Flight): Promise<FlightEvent[]> {
-  const events: FlightEvent[] = [];
-  let beforeId: number | undefined;
-  for (let page = 0; page < MAX_EVENT_PAGES; page++) {
-    const answer = await fetchEvents({
-      vehicleId: flight.vehicle_id,
-      start: flight.start_time,
-      end: flight.end_time ?? Date.now() / 1000,
-      limit: EVENT_PAGE,
-      beforeId,
-    });
-    events.push(...answer.events);
-    if (answer.next_before_id === null || answer.next_before_id === undefined) break;
-    beforeId = answer.next_before_id;
-  }
-  return events.sort((a, b) => a.time - b.time || a.id - b.id);
-}
 
 function formatBatteryAt(state: ReplayState): string {
   const parts: string[] = [];
@@ -107,7 +66,10 @@ export class ReplayPanel {
   constructor(
     private readonly map: FleetMap,
     onClose: () => void,
+    store: DashboardStore,
   ) {
+    // New vehicles join the flight list's vehicle filter while it is open.
+    store.subscribe((state) => state.fleet, ({ all }) => this.isOpen && this.list.suggestVehicles(all.keys()));
     this.list = new FlightList((flight) => void this.load(flight));
     this.layer = new ReplayLayer(map.leaflet, (t) => this.seek(t));
     this.charts = new ReplayCharts((t) => this.seek(t));
@@ -237,10 +199,6 @@ export class ReplayPanel {
     this.map.setReplaying(false);
   }
 
-  suggestVehicles(ids: Iterable<string>): void {
-    this.list.suggestVehicles(ids);
-  }
-
   destroy(): void {
     this.unload();
     this.element.remove();
@@ -260,18 +218,10 @@ export class ReplayPanel {
     }
     this.setViewState("loading", "Loading the flight…");
 
-    let events: FlightEvent[] = [];
-    let eventsFailed = "";
-    const eventsLoaded = flightEvents(flight).then(
-      (loaded) => (events = loaded),
-      (error: unknown) => (eventsFailed = error instanceof Error ? error.message : String(error)),
-    );
-    let track: FlightTrack;
+    let loaded: LoadedFlight;
     try {
-      const telemetry = await fetchFlightTelemetry(flight.id, TELEMETRY_POINTS);
-      await eventsLoaded;
+      loaded = await loadFlight(flight);
       if (generation !== this.generation) return;
-      track = new FlightTrack(flight, telemetry.samples);
     } catch (error) {
       if (generation !== this.generation) return;
       this.setViewState(
@@ -280,6 +230,7 @@ export class ReplayPanel {
       );
       return;
     }
+    const { track, events, eventsFailed } = loaded;
 
     this.track = track;
     this.scrubber.max = String(track.duration);

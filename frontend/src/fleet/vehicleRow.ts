@@ -1,6 +1,6 @@
 // One vehicle's row in the fleet table. Built once; `update` only touches the
 // cells whose text changed, so 10 Hz updates stay cheap.
-import type { CommandFeedback } from "./commands";
+import type { CommandFeedback } from "../hub/commands";
 import {
   LINK_LABELS,
   formatAltitude,
@@ -14,8 +14,8 @@ import {
   linkState,
   MISSING,
   readinessTitle,
-} from "./format";
-import type { Command, VehicleSummary } from "./types";
+} from "../ui/format";
+import type { Command, VehicleSummary } from "../hub/types";
 
 export type CommandRunner = (vehicleId: string, command: Command) => Promise<CommandFeedback>;
 

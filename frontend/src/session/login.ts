@@ -1,7 +1,7 @@
 // The login screen. The password goes straight from the form to the hub, which
 // answers with an HttpOnly session cookie; nothing is kept in JS or storage.
-import { ApiError, login } from "./api";
-import type { CurrentUser } from "./types";
+import { ApiError, login } from "../hub/api";
+import type { CurrentUser } from "../hub/types";
 
 export class LoginScreen {
   private readonly screen = document.getElementById("login-screen")!;

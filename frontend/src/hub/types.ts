@@ -1,8 +1,8 @@
 // Friendlier names for the generated types: the WebSocket protocol's
 // (generated/protocol.ts, from protocol/messages.py) and the REST API's (generated/api.ts,
 // from the hub's OpenAPI document). Only the dashboard's own shapes are written here.
-import type { components, paths } from "./generated/api";
-import type { Event } from "./generated/protocol";
+import type { components, paths } from "../generated/api";
+import type { Event } from "../generated/protocol";
 
 export type {
   ClientToHub,
@@ -16,7 +16,7 @@ export type {
   VehicleChange,
   VehicleState,
   VehicleSummary,
-} from "./generated/protocol";
+} from "../generated/protocol";
 
 type Schemas = components["schemas"];
 

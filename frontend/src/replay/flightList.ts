@@ -1,12 +1,12 @@
 // The stored flights, newest first, a page at a time ("Load older" asks for the
 // flights before the hub's `next_before_id`), optionally of one vehicle only.
-import { fetchFlights } from "./api";
-import { formatAuditTime } from "./auditPanel";
-import { actionButton, element, field } from "./dom";
-import { MISSING } from "./format";
-import { Pager } from "./pager";
+import { fetchFlights } from "../hub/api";
+import { formatAuditTime } from "../audit/auditPanel";
+import { actionButton, element, field } from "../ui/dom";
+import { MISSING } from "../ui/format";
+import { Pager } from "../ui/pager";
 import { formatClock } from "./replayTrack";
-import type { Flight } from "./types";
+import type { Flight } from "../hub/types";
 
 const PAGE_SIZE = 50;
 const COLUMNS = [

@@ -1,5 +1,6 @@
 // The fleet list: one VehicleRow per vehicle, kept sorted by id, never rebuilt.
-import type { VehicleSummary } from "./types";
+import type { VehicleSummary } from "../hub/types";
+import type { DashboardStore } from "../store/dashboardStore";
 import { type CommandRunner, VehicleRow } from "./vehicleRow";
 
 const byId = new Intl.Collator(undefined, { numeric: true }).compare; // drone-2 before drone-10
@@ -14,9 +15,12 @@ export class FleetTable {
   constructor(
     private readonly body: HTMLTableSectionElement,
     private readonly runCommand: CommandRunner | null,
-    onSelect: (id: string) => void,
+    store: DashboardStore,
   ) {
     this.emptyRow = body.querySelector("tr.empty-row");
+    store.followFleet(this);
+    store.subscribe((state) => state.selection.id, (id) => this.select(id));
+    const onSelect = (id: string) => store.select(id, true);
     const { signal } = this.listeners;
     body.addEventListener("click", (event) => {
       const target = event.target as HTMLElement;

@@ -2,7 +2,7 @@
 // back and what was lost. The live view goes on without the store (commands too), so
 // an operator may not notice a database outage or a full disk any other way; the flight
 // log and the exports will miss what is lost.
-import type { HubHealth } from "./types";
+import type { HubHealth } from "../hub/types";
 
 const POLL_MS = 5_000;
 

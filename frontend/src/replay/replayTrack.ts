@@ -1,7 +1,7 @@
 // The replay's model of one flight: its samples on a clock that counts seconds
 // from the start of the flight, and what the vehicle was doing at any moment of
 // it (position and heading interpolated between samples). No DOM, no Leaflet.
-import type { Flight, FlightSample } from "./types";
+import type { Flight, FlightSample } from "../hub/types";
 
 export interface ReplayPoint {
   /** Seconds since the flight's start. */

@@ -1,7 +1,7 @@
 // The header: connection status, vehicle count, a transient notice line, and who
 // is logged in (with the flights, audit-log and logout buttons).
-import type { ConnectionState } from "./connection";
-import { type CurrentUser, can } from "./types";
+import type { ConnectionState } from "../hub/connection";
+import { type CurrentUser, can } from "../hub/types";
 
 const NOTICE_MS = 10_000;
 

@@ -1,19 +1,21 @@
-// The dashboard's copy of the fleet. Changes are batched and handed to the views
+// The dashboard's copy of the fleet. Changes are batched and handed on (to the store)
 // once per animation frame, so dozens of vehicles at 10 Hz cost one render pass.
-import type { VehicleChange, VehicleSummary } from "./types";
+import type { VehicleChange, VehicleSummary } from "../hub/types";
 
-export interface FleetChanges {
-  changed: VehicleSummary[];
-  removed: string[];
+export interface FleetFrame {
+  /** Added or updated since the last frame. */
+  changed: readonly VehicleSummary[];
+  removed: readonly string[];
+  /** The whole fleet now (the batcher's own map: read it, never change it). */
   all: ReadonlyMap<string, VehicleSummary>;
 }
 
-export class FleetStore {
+export class FleetBatch {
   private readonly vehicles = new Map<string, VehicleSummary>();
   private readonly dirty = new Set<string>();
   private frame: number | null = null;
 
-  constructor(private readonly onFlush: (changes: FleetChanges) => void) {}
+  constructor(private readonly onFlush: (frame: FleetFrame) => void) {}
 
   get(id: string): VehicleSummary | undefined {
     return this.vehicles.get(id);

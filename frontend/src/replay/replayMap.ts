@@ -3,11 +3,11 @@
 // along the track. The replay marker's element is
 // `<div class="replay-marker" data-lat data-lon data-heading>`.
 import * as L from "leaflet";
-import { formatAuditTime } from "./auditPanel";
-import { element } from "./dom";
+import { formatAuditTime } from "../audit/auditPanel";
+import { element } from "../ui/dom";
 import type { FlightTrack, ReplayPoint } from "./replayTrack";
-import type { FlightEvent } from "./types";
-import { ICON_SIZE, vehicleSymbol } from "./vehicleMarker";
+import type { FlightEvent } from "../hub/types";
+import { ICON_SIZE, vehicleSymbol } from "../map/vehicleMarker";
 
 const FIT_MAX_ZOOM = 18;
 

@@ -67,6 +67,12 @@ export function describeErrorBody(body: unknown, status: number): string {
   return `HTTP ${status}`;
 }
 
+/** The hub's reason for a refusal (a 422's message, a rails violation), else the error's. */
+export function errorText(error: unknown): string {
+  if (error instanceof ApiError) return describeErrorBody(error.body, error.status) || error.message;
+  return (error as Error).message;
+}
+
 // ---------------------------------------------------------------- session end
 
 type UnauthorizedHandler = (message: string) => void;

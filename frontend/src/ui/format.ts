@@ -1,5 +1,5 @@
 // Display formatting for telemetry values. Missing values show as an em dash.
-import type { VehicleState, VehicleSummary } from "./types";
+import type { VehicleState, VehicleSummary } from "../hub/types";
 
 export const MISSING = "—";
 

@@ -1,26 +1,27 @@
 // One logged-in session of the dashboard: config -> map, WebSocket -> store ->
-// views. Built at login and torn down at logout or when the session ends, so the
+// views (each view subscribes to the slices of the store it draws). Built at login and torn down at logout or when the session ends, so the
 // next user starts clean (and gets the controls their role allows).
-import { checkSession, fetchConfig, fetchHealth } from "./api";
-import { AuditPanel } from "./auditPanel";
-import { runCommand } from "./commands";
-import { FleetSocket } from "./connection";
-import { FleetStore } from "./fleet";
-import { FleetTable } from "./fleetTable";
-import { FormationPanel } from "./formation";
-import { linkState } from "./format";
-import { PROTOCOL_VERSION } from "./generated/protocol";
-import type { Header } from "./header";
-import { FleetMap } from "./map";
-import { OpsPanels } from "./panels/opsPanels";
-import { PilotPanel } from "./pilot/pilotPanel";
-import { MissionTools } from "./missions";
-import { ReplayPanel } from "./replayPanel";
-import { type CurrentUser, type HubConfig, type HubToClient, can } from "./types";
-import { ScanLayer } from "./scans/scanLayer";
-import { StoreHealth } from "./storeHealth";
-import { SurveyPanel } from "./survey";
-import { Viz3dPane } from "./viz3d/pane";
+import { checkSession, fetchConfig, fetchHealth } from "../hub/api";
+import { AuditPanel } from "../audit/auditPanel";
+import { runCommand } from "../hub/commands";
+import { FleetSocket } from "../hub/connection";
+import { DashboardStore } from "../store/dashboardStore";
+import { FleetBatch } from "../store/fleetBatch";
+import { FleetTable } from "../fleet/fleetTable";
+import { FormationPanel } from "../formation";
+import { linkState } from "../ui/format";
+import { PROTOCOL_VERSION } from "../generated/protocol";
+import type { Header } from "../header/header";
+import { FleetMap } from "../map/fleetMap";
+import { OpsPanels } from "../panels/opsPanels";
+import { PilotPanel } from "../pilot/pilotPanel";
+import { MissionTools } from "../missions";
+import { ReplayPanel } from "../replay/replayPanel";
+import { type CurrentUser, type HubConfig, type HubToClient, can } from "../hub/types";
+import { ScanLayer } from "../scans/scanLayer";
+import { StoreHealth } from "../header/storeHealth";
+import { SurveyPanel } from "../survey";
+import { Viz3dPane } from "../viz3d/pane";
 
 // Without the hub's config there is no protocol version to compare: assume ours.
 const OFFLINE_CONFIG: HubConfig = {
@@ -48,7 +49,8 @@ export class Dashboard {
   private scans: ScanLayer | null = null;
   private audit: AuditPanel | null = null;
   private replay: ReplayPanel | null = null;
-  private store: FleetStore | null = null;
+  private store: DashboardStore | null = null;
+  private fleet: FleetBatch | null = null;
   private ops: OpsPanels | null = null;
   private viz3d: Viz3dPane | null = null;
   private missions: MissionTools | null = null;
@@ -93,24 +95,16 @@ export class Dashboard {
       );
     }
 
-    const select = (id: string, pan: boolean) => {
-      table.select(id);
-      map.select(id, pan);
-      ops.select(id);
-      missions.select(id);
-      scans.follow(id);
-      pilot.select(id);
-      this.viz3d?.select(id);
-    };
-    const map = new FleetMap(document.getElementById("map")!, config, (id) => select(id, false));
-    const table = new FleetTable(
+    const store = new DashboardStore();
+    this.store = store;
+    const map = new FleetMap(document.getElementById("map")!, config, store);
+    this.map = map;
+    this.table = new FleetTable(
       document.querySelector<HTMLTableSectionElement>("#fleet-table tbody")!,
       can(user, "command") ? runCommand : null,
-      (id) => select(id, true),
+      store,
     );
-    this.map = map;
-    this.table = table;
-    const ops = new OpsPanels(document.querySelector<HTMLElement>(".layout")!, can(user, "command") ? runCommand : null);
+    const ops = new OpsPanels(document.querySelector<HTMLElement>(".layout")!, can(user, "command") ? runCommand : null, store);
     this.ops = ops;
     // The pilot view sits under the selected vehicle's panel; it sends on this socket.
     const pilot = new PilotPanel(
@@ -118,67 +112,54 @@ export class Dashboard {
       (message) => this.socket?.send(message) ?? false,
       can(user, "command") ? runCommand : null,
       (text) => header.showNotice(text),
+      store,
     );
     ops.element.firstElementChild?.after(pilot.element);
     this.pilot = pilot;
-    this.viz3d = new Viz3dPane(document.getElementById("map")!, (id) => select(id, true));
-    const missions = new MissionTools(map.leaflet, can(user, "command"));
-    this.missions = missions;
-    const survey = new SurveyPanel(map.leaflet, can(user, "command"));
-    this.survey = survey;
-    const formation = new FormationPanel(map.leaflet, can(user, "command"));
-    this.formation = formation;
-    const scans = new ScanLayer(map.leaflet, (message) => this.socket?.send(message));
+    this.viz3d = new Viz3dPane(document.getElementById("map")!, store);
+    this.missions = new MissionTools(map.leaflet, can(user, "command"), store);
+    this.survey = new SurveyPanel(map.leaflet, can(user, "command"), store);
+    this.formation = new FormationPanel(map.leaflet, can(user, "command"), store);
+    const scans = new ScanLayer(map.leaflet, (message) => this.socket?.send(message), store);
     this.scans = scans;
-
-    const store = new FleetStore(({ changed, removed, all }) => {
-      if (this.stopped) return;
-      for (const id of removed) {
-        table.remove(id);
-        map.remove(id);
-        missions.remove(id);
-        survey.remove(id);
-        formation.remove(id);
-      }
-      table.update(changed);
-      map.update(changed);
-      ops.update(changed, removed);
-      pilot.update(changed);
-      missions.update(changed);
-      survey.update(changed);
-      formation.update(changed);
-      let online = 0;
-      for (const vehicle of all.values()) if (linkState(vehicle) !== "offline") online++;
-      header.setCounts(all.size, online);
-      if (this.replay?.isOpen) this.replay.suggestVehicles(all.keys());
+    store.subscribe(
+      (state) => state.fleet,
+      ({ all }) => {
+        let online = 0;
+        for (const vehicle of all.values()) if (linkState(vehicle) !== "offline") online++;
+        header.setCounts(all.size, online);
+      },
+    );
+    const fleet = new FleetBatch((frame) => {
+      if (!this.stopped) store.setFleet(frame);
     });
-    this.store = store;
+    this.fleet = fleet;
 
     const onMessage = (message: HubToClient) => {
       switch (message.type) {
         case "fleet":
-          store.replaceAll(message.vehicles);
+          fleet.replaceAll(message.vehicles);
           break;
         case "vehicles":
-          for (const vehicle of message.vehicles) store.upsert(vehicle);
+          for (const vehicle of message.vehicles) fleet.upsert(vehicle);
           break;
         case "events":
-          ops.onEvents(message);
+          store.onEventBatch(message);
           break;
         case "error":
           header.showNotice(`Hub: ${message.message}`);
           break;
         case "survey":
-          survey.onSurvey(message);
+          store.putSurvey(message);
           break;
         case "pong":
           pilot.onPong(message.nonce);
           break;
         case "lease":
-          pilot.onLease(message);
+          store.putLease(message);
           break;
         case "lease_refused":
-          pilot.onRefusal(message);
+          store.putRefusal(message);
           break;
         case "manual_echo":
           pilot.onEcho(message);
@@ -216,7 +197,9 @@ export class Dashboard {
     this.replay?.destroy();
     this.replay = null;
     document.querySelector(".layout")?.classList.remove("flights-open");
+    this.store?.close();
     this.store = null;
+    this.fleet = null;
     this.pilot?.destroy();
     this.pilot = null;
     this.ops?.destroy();
@@ -258,11 +241,11 @@ export class Dashboard {
     if (this.stopped || !map || !can(this.user, "read")) return;
     const layout = document.querySelector(".layout")!;
     if (!this.replay) {
-      this.replay = new ReplayPanel(map, () => this.toggleFlights());
+      this.replay = new ReplayPanel(map, () => this.toggleFlights(), this.store!);
       layout.append(this.replay.element);
     }
     if (this.replay.isOpen) this.replay.close();
-    else this.replay.open(this.store?.ids() ?? []);
+    else this.replay.open(this.fleet?.ids() ?? []);
     layout.classList.toggle("flights-open", this.replay.isOpen);
     this.header.setFlightsOpen(this.replay.isOpen);
   }

@@ -4,7 +4,7 @@
 import uPlot from "uplot";
 import "uplot/dist/uPlot.min.css";
 import { formatClock, type FlightTrack } from "./replayTrack";
-import type { FlightSample } from "./types";
+import type { FlightSample } from "../hub/types";
 
 interface ChartSpec {
   key: "altitude" | "groundspeed" | "battery";

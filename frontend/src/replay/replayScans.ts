@@ -5,7 +5,7 @@
 // the last answer covered; an answer for an older instant or flight is thrown away.
 // The map's element carries `data-replay-scan-points` (points drawn) for the page's tests.
 import * as L from "leaflet";
-import { apiUrl } from "./api";
+import { apiUrl } from "../hub/api";
 
 const FETCH_EVERY_MS = 200;
 const WINDOW_S = 0.5; // look this far back for the scan in force (a 6-12 Hz sensor)

@@ -1,4 +1,4 @@
-// The hub's formation endpoints (backend/api/formations.py), typed with the generated REST types.
+// The hub's formation endpoints (backend/formation/routes.py), typed with the generated REST types.
 import { request } from "../hub/api";
 import type { components } from "../generated/api";
 

@@ -1,7 +1,7 @@
 // Where the followers' slots are on the map: each slot's offset (common/formation.py's
 // Offset: forward and right of the leader's heading, or north and east) around where the
 // leader is. A vehicle leader is where it reports; a virtual leader is where its route
-// puts it, timed as the hub's LeaderRoute (backend/missions/formation/route.py): straight
+// puts it, timed as the hub's LeaderRoute (backend/formation/route.py): straight
 // legs at the speed, a pause at each waypoint, the clock started once the followers formed.
 import { offsetLatLon } from "../panels/geo";
 import type { Offset, RoutePoint } from "./api";

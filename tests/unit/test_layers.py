@@ -55,6 +55,12 @@ UPWARD = {
     "the registry imports the store": ("backend/fleet/registry.py", "backend.storage.models"),
     "the client imports the protocol": ("gcs_client/upward.py", "protocol.messages"),
     "the client imports the web framework": ("gcs_client/upward.py", "fastapi"),
+    "the settings import auth": ("backend/settings/production.py", "backend.auth.password_policy"),
+    "a message imports the decoders": ("protocol/messages/base.py", "protocol.messages.codec"),
+    "one domain's messages import another's": (
+        "protocol/messages/manual.py",
+        "protocol.messages.commands",
+    ),
 }
 
 

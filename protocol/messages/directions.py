@@ -38,8 +38,6 @@ from protocol.messages.surveys import SurveyUpdate
 from protocol.messages.telemetry import Hello, LiveState, ModeList, ScanSourceStats, Telemetry
 from protocol.scans import scan_frame_schema
 
-# The hub pings an agent to learn whether it is still there (another agent wants its
-# vehicle id); the agent answers with a pong.
 AgentToHub: TypeAlias = Annotated[
     Hello
     | Telemetry

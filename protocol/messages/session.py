@@ -43,6 +43,8 @@ class ErrorReply(Message):
     message: MessageText
 
 
+# The hub pings an agent to learn whether it is still there (another agent wants its
+# vehicle id); the agent answers with a pong. Clients ping the hub alike.
 class Ping(Message):
     type: Literal["ping"] = "ping"
     nonce: str | None = Field(default=None, max_length=64)

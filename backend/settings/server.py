@@ -9,6 +9,7 @@ from pydantic import AliasChoices, BaseModel, Field
 
 from common.addresses import is_loopback
 
+# The checkout the hub runs from (this file is backend/settings/server.py).
 REPO_ROOT = Path(__file__).resolve().parents[2]
 
 

@@ -80,7 +80,7 @@ OAuth2 scheme lists them; each operation names the one it needs), which expires 
 - `{AGENT_WS_PATH}`, the link of the vehicle agents (an agent token).
 
 Every message, field and close code of both is in the repository's `docs/websockets.md`,
-written from the wire protocol (`protocol/messages.py`; `python -m protocol.messages`
+written from the wire protocol (`protocol/messages/`; `python -m protocol.messages`
 prints its JSON Schema).
 
 **From Python**, the client package `gcs_client` (its own wheel, built from the

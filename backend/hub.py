@@ -16,6 +16,7 @@ from sqlalchemy.exc import SQLAlchemyError
 from backend.audit import AuditAction, AuditEntry, AuditLog
 from backend.audit_denials import DenialCoalescer
 from backend.auth.accounts import PROVISIONING, Accounts
+from backend.auth.password_policy import password_problem
 from backend.auth.password_work import PasswordWork
 from backend.auth.policy import Principal
 from backend.auth.principal_cache import PrincipalCache
@@ -503,6 +504,12 @@ class MosaicSink:
 
 def _bootstrap_accounts(accounts: Accounts, audit: AuditLog, settings: HubSettings) -> None:
     admin_password = settings.admin_password.get_secret_value() if settings.admin_password else None
+    if admin_password is not None and settings.environment == "production":
+        # The settings refuse the defaults that ship in examples; how guessable the rest
+        # is, the account policy says, as it does for every account's password.
+        weakness = password_problem(admin_password, settings.admin_username)
+        if weakness:
+            raise ValueError(f"refusing a weak secret in production: GCS_ADMIN_PASSWORD {weakness}")
     generated = accounts.ensure_first_admin(settings.admin_username, admin_password)
     if generated is not None:
         # Shown once, on the console and never in the log, as the issue of a secret.

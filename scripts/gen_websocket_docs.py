@@ -1,4 +1,4 @@
-"""Write docs/websockets.md from the wire protocol (protocol/messages.py) and the hub's
+"""Write docs/websockets.md from the wire protocol (protocol/messages/) and the hub's
 settings: the two sockets, how each authenticates, every message with its fields, the
 keep-alive and the close codes.
 
@@ -51,7 +51,7 @@ RFC6455_MEANINGS = {
 
 
 def close_code_meanings() -> dict[CloseCode, str]:
-    """Each close code's meaning: the comment on its line in protocol/messages.py."""
+    """Each close code's meaning: the comment on its line in protocol/messages/."""
     meanings: dict[CloseCode, str] = {}
     source = inspect.getsource(CloseCode)
     line_comments: dict[int, str] = {}
@@ -238,7 +238,7 @@ def render() -> str:
     out = [
         "# The WebSockets: the live feed and the agent link",
         "",
-        "<!-- Written by scripts/gen_websocket_docs.py from protocol/messages.py; do not edit.",
+        "<!-- Written by scripts/gen_websocket_docs.py from protocol/messages/; do not edit.",
         "     After changing the protocol, run: .venv/bin/python scripts/gen_websocket_docs.py -->",
         "",
         "The hub has two WebSockets besides its REST API (which `/docs` describes):",

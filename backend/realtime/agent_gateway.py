@@ -45,7 +45,6 @@ from protocol.messages import (
     Unavailable,
     Welcome,
     agent_to_hub,
-    decode,
     state_out_of_range,
 )
 
@@ -197,7 +196,7 @@ class AgentSession(PeerConnection):
         if frame is None:
             return None
         try:
-            message = decode(agent_to_hub, frame)
+            message = agent_to_hub.decode(frame)
         except ProtocolError as error:
             count_rejected(self.surface)
             await self.close(CloseCode.BAD_HELLO, f"first frame must be a hello: {error.message}")
@@ -333,7 +332,7 @@ class AgentSession(PeerConnection):
             await self._ingest_scan(hello, frame)
             return
         try:
-            message = decode(agent_to_hub, frame)
+            message = agent_to_hub.decode(frame)
         except ProtocolError as error:
             await self.reject(error.reply())
             return

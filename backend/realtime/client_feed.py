@@ -53,7 +53,6 @@ from protocol.messages import (
     UnsubscribeScans,
     VehicleSummary,
     client_to_hub,
-    decode,
 )
 
 log = logging.getLogger(__name__)
@@ -354,7 +353,7 @@ class ClientFeed(PeerConnection):
     async def _listen(self) -> None:
         while (frame := await self.receive()) is not None:
             try:
-                message = decode(client_to_hub, frame)
+                message = client_to_hub.decode(frame)
             except ProtocolError as error:
                 await self.reject(error.reply())
                 continue

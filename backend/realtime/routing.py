@@ -56,7 +56,6 @@ from protocol.messages import (
     ManualFrame,
     Message,
     ProtocolError,
-    decode,
     encode,
     hub_to_agent,
 )
@@ -300,7 +299,7 @@ class AgentRoutes:
     def _frame_forwarder(self, vehicle_id: str) -> Callable[[Msg], Awaitable[None]]:
         async def forward(msg: Msg) -> None:
             try:
-                frame = decode(hub_to_agent, msg.data)
+                frame = hub_to_agent.decode(msg.data)
                 channel = self._registry.get(vehicle_id).channel
             except (ProtocolError, GcsError) as error:
                 log.info("frame for %s not forwarded: %s", vehicle_id, error)

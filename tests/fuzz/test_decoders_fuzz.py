@@ -2,8 +2,8 @@
 frames never crash a decoder nor hang it (a deadline per example), and each refusal is
 the decoder's own clear error (counted by the hub: tests/integration/test_hostile_frames.py).
 
-- the hub's agent socket and the dashboard socket (`protocol.messages.decode` with the
-  agent's and the browser's message unions), the manual-control frames among them;
+- the hub's agent socket and the dashboard socket (the `agent_to_hub` and `client_to_hub`
+  decoders of `protocol.messages`), the manual-control frames among them;
 - the agent's side of its socket (`hub_to_agent`: commands, manual frames, formation);
 - the binary scan frame, as the agent sends it and as a subscriber gets it;
 - the agent's MAVLink intake from the flight controller, through its real path: a real
@@ -31,14 +31,13 @@ from typing import Any
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
-from pydantic import TypeAdapter
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from protocol.messages import (
+    Decoder,
     ProtocolError,
     agent_to_hub,
     client_to_hub,
-    decode,
     encode,
     hub_to_agent,
 )
@@ -98,10 +97,10 @@ def _check_refusal(refusal: ProtocolError) -> None:
     json.dumps(refusal.reply().model_dump())  # the error reply itself can be sent
 
 
-def _decodes_or_refuses(name: str, adapter: TypeAdapter[Any], frame: str | bytes) -> None:
+def _decodes_or_refuses(name: str, decoder: Decoder[Any], frame: str | bytes) -> None:
     EXAMPLES_TAKEN[name] += 1
     try:
-        message = decode(adapter, frame)
+        message = decoder.decode(frame)
     except ProtocolError as refusal:
         REFUSED[name] += 1
         _check_refusal(refusal)
@@ -109,7 +108,7 @@ def _decodes_or_refuses(name: str, adapter: TypeAdapter[Any], frame: str | bytes
     # What is taken can be sent on and read back as the same message: no NaN, no value
     # the encoder writes and the decoder refuses.
     again = encode(message)
-    assert decode(adapter, again) == message
+    assert decoder.decode(again) == message
 
 
 @fuzz("json")

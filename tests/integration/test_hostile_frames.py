@@ -22,10 +22,10 @@ from protocol.messages import (
     AGENT_WS_PATH,
     CLIENT_WS_PATH,
     CloseCode,
+    Decoder,
     ProtocolError,
     agent_to_hub,
     client_to_hub,
-    decode,
 )
 from tests.helpers import api_client
 from tests.support.agents import (
@@ -48,10 +48,10 @@ def rejected(surface: Surface) -> float:
     return value or 0.0
 
 
-def _refused_by(adapter: Any) -> Callable[[str | bytes], bool]:
+def _refused_by(decoder: Decoder[Any]) -> Callable[[str | bytes], bool]:
     def refused(frame: str | bytes) -> bool:
         try:
-            decode(adapter, frame)
+            decoder.decode(frame)
         except ProtocolError:
             return True
         return False

@@ -9,7 +9,7 @@ from collections.abc import Callable
 
 import pytest
 
-from protocol.messages import CLIENT_WS_PATH, ProtocolError, agent_to_hub, decode
+from protocol.messages import CLIENT_WS_PATH, ProtocolError, agent_to_hub
 from tests.helpers import api_client
 from tests.support.agents import scripted_agent, telemetry_frame, wait_stored, websocket, ws_url
 
@@ -24,7 +24,7 @@ UNPARSABLE = {
 @pytest.mark.parametrize("frame", UNPARSABLE.values(), ids=UNPARSABLE.keys())
 def test_decode_reports_every_unparsable_frame_as_bad(frame: str) -> None:
     with pytest.raises(ProtocolError) as refused:
-        decode(agent_to_hub, frame)
+        agent_to_hub.decode(frame)
     assert refused.value.code == "bad_frame"
 
 

@@ -14,7 +14,11 @@ from pydantic import ValidationError
 from sqlalchemy import create_engine, text
 from websockets.sync.client import ClientConnection
 
+from backend.audit import AuditLog
+from backend.auth.accounts import Accounts
+from backend.hub import _bootstrap_accounts
 from backend.settings import HubSettings
+from backend.storage.database import make_engine, migrate
 from protocol.messages import (
     CommandOutcome,
     CommandResult,
@@ -231,6 +235,23 @@ def test_production_refuses_default_secrets(tmp_path: Path) -> None:
             database_url="postgresql+psycopg://gcs:gcs@db/gcs",
         )
     HubSettings(data_dir=tmp_path, environment="development", admin_password="admin")
+
+
+def test_production_refuses_a_guessable_admin_password(tmp_path: Path) -> None:
+    """Not a default the settings know, so the account policy's to judge: the hub refuses
+    it where it creates the first admin, and creates no one."""
+    settings = HubSettings(
+        data_dir=tmp_path, environment="production", admin_password="password1234"
+    )
+    engine = make_engine(settings.sqlalchemy_url)
+    try:
+        migrate(engine)
+        accounts = Accounts(engine)
+        with pytest.raises(ValueError, match="GCS_ADMIN_PASSWORD is too common"):
+            _bootstrap_accounts(accounts, AuditLog(engine), settings)
+        assert list(accounts.users()) == []
+    finally:
+        engine.dispose()
 
 
 def test_secrets_can_come_from_files(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:

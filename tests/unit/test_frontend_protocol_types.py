@@ -1,4 +1,4 @@
-"""The dashboard's TypeScript types are generated from protocol/messages.py and kept in step."""
+"""The dashboard's TypeScript types are generated from protocol/messages/ and kept in step."""
 
 from __future__ import annotations
 

@@ -71,6 +71,12 @@ UPWARD = {
         "simulator/params/upward.py",
         "simulator.copter",
     ),
+    "the settings import auth": ("backend/settings/production.py", "backend.auth.password_policy"),
+    "a message imports the decoders": ("protocol/messages/base.py", "protocol.messages.codec"),
+    "one domain's messages import another's": (
+        "protocol/messages/manual.py",
+        "protocol.messages.commands",
+    ),
 }
 
 

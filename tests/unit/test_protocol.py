@@ -12,7 +12,6 @@ from protocol.messages import (
     VehicleState,
     agent_to_hub,
     command_adapter,
-    decode,
     encode,
     hub_to_agent,
     json_schema,
@@ -21,9 +20,9 @@ from protocol.messages import (
 
 def test_round_trip_keeps_every_field() -> None:
     telemetry = Telemetry(seq=7, time=12.5, state=VehicleState(lat=1.5, armed=True, mode="LAND"))
-    assert decode(agent_to_hub, encode(telemetry)) == telemetry
+    assert agent_to_hub.decode(encode(telemetry)) == telemetry
     request = CommandRequest(request_id="r", command=TakeoffCommand(altitude=12), timeout_s=5)
-    assert decode(hub_to_agent, encode(request)) == request
+    assert hub_to_agent.decode(encode(request)) == request
 
 
 @pytest.mark.parametrize(
@@ -47,7 +46,7 @@ def test_round_trip_keeps_every_field() -> None:
 )
 def test_bad_frames_raise_errors_that_name_the_problem(frame: str, code: str, names: str) -> None:
     with pytest.raises(ProtocolError) as raised:
-        decode(agent_to_hub, frame)
+        agent_to_hub.decode(frame)
     assert raised.value.code == code
     assert names in raised.value.message
 

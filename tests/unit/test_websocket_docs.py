@@ -1,4 +1,4 @@
-"""docs/websockets.md is written from protocol/messages.py (scripts/gen_websocket_docs.py):
+"""docs/websockets.md is written from protocol/messages/ (scripts/gen_websocket_docs.py):
 the page must say what the protocol module says, message for message and code for code."""
 
 from __future__ import annotations

@@ -3,11 +3,11 @@
 from __future__ import annotations
 
 import asyncio
-import json
 import logging
 import time
 from collections.abc import Awaitable, Callable, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 from pydantic import TypeAdapter, ValidationError
 from websockets.asyncio.client import ClientConnection, connect
@@ -40,7 +40,6 @@ from protocol.messages import (
     ScanSourceStats,
     VehicleState,
     Welcome,
-    decode,
     encode,
     hub_to_agent,
 )
@@ -203,7 +202,7 @@ class HubLink:
                 reply = await asyncio.wait_for(websocket.recv(), self.timeouts.welcome_s)
             except ConnectionClosed:
                 raise HubClosed(websocket.close_code, websocket.close_reason or "") from None
-            welcome = decode(hub_to_agent, reply)
+            welcome = hub_to_agent.decode(reply)
             if not isinstance(welcome, Welcome):
                 raise HubRefused(f"expected welcome, got {welcome.type}")
             log.info(
@@ -290,10 +289,10 @@ class HubLink:
         self, frame: str | bytes, websocket: ClientConnection, tasks: asyncio.TaskGroup
     ) -> None:
         try:
-            message = decode(hub_to_agent, frame)
+            message = hub_to_agent.decode(frame)
         except ProtocolError as error:
             log.warning("unusable frame from hub: %s", error.message)
-            request_id = _command_request_id(frame)
+            request_id = _command_request_id(error.parsed)
             if request_id is not None:
                 # The hub is waiting for this answer; nothing reached the vehicle.
                 outcome = CommandOutcome(
@@ -376,16 +375,13 @@ class HubLink:
 _request_id: TypeAdapter[str] = TypeAdapter(RequestId)
 
 
-def _command_request_id(frame: str | bytes) -> str | None:
-    """The request_id of a command frame that failed validation, so that it can still be
-    answered; None for anything else, or for an id that could not be echoed back."""
-    try:
-        raw = json.loads(frame)
-    except (ValueError, RecursionError):
-        return None
-    if not isinstance(raw, dict) or raw.get("type") != "command":
+def _command_request_id(parsed: dict[str, Any] | None) -> str | None:
+    """The request_id of a command frame that failed validation (the decoder's parse of
+    it), so that it can still be answered; None for anything else, or for an id that
+    could not be echoed back."""
+    if parsed is None or parsed.get("type") != "command":
         return None
     try:
-        return _request_id.validate_python(raw.get("request_id"))
+        return _request_id.validate_python(parsed.get("request_id"))
     except ValidationError:
         return None

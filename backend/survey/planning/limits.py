@@ -41,7 +41,7 @@ class PlanTooLarge(PlanError):
 
 @dataclass(frozen=True, slots=True)
 class SurveyLimits:
-    """The hub's settings of the same names (backend/settings.py)."""
+    """The hub's settings of the same names (backend/settings/surveys.py)."""
 
     survey_max_lanes: int
     survey_max_photos: int

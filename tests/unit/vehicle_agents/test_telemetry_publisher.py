@@ -10,7 +10,7 @@ from typing import Any
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
-from protocol.messages import Telemetry, agent_to_hub, decode
+from protocol.messages import Telemetry, agent_to_hub
 from vehicle_agents.agent import TelemetryPublisher
 from vehicle_agents.fcu.link import FcuLink
 from vehicle_agents.hub.outbox import Outbox
@@ -49,7 +49,7 @@ async def _published(armed_in_one_read: list[bool], component: int = 1) -> list[
     link._deliver_inbox()
     outbox.link_up()
     frames = [await asyncio.wait_for(outbox.next_frame(), 5) for _ in range(len(outbox))]
-    snapshots = [decode(agent_to_hub, frame) for frame in frames]
+    snapshots = [agent_to_hub.decode(frame) for frame in frames]
     assert all(isinstance(snapshot, Telemetry) for snapshot in snapshots), snapshots
     return snapshots  # type: ignore[return-value]
 

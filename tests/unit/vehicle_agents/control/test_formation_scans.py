@@ -16,7 +16,7 @@ import pytest
 from backend.scans.points import in_frame, world_points
 from common.formation import LeaderState, Offset
 from common.geodesy import LocalFrame
-from protocol.messages import LeaderScan, decode, encode, hub_to_agent
+from protocol.messages import LeaderScan, encode, hub_to_agent
 from protocol.scans import ScanFrame, ScanPose, decode_scan, encode_scan
 from vehicle_agents.control.formation import Action, Follower
 from vehicle_agents.control.formation_obstacles import ScanObstacles
@@ -60,7 +60,7 @@ def _relayed(data: bytes) -> LeaderScan:
     sent = LeaderScan(
         formation_id="formation-1", time=frame.utc_time, seq=frame.seq, north=north, east=east
     )
-    received = decode(hub_to_agent, encode(sent))
+    received = hub_to_agent.decode(encode(sent))
     assert isinstance(received, LeaderScan)
     return received
 

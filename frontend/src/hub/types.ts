@@ -1,5 +1,5 @@
 // Friendlier names for the generated types: the WebSocket protocol's
-// (generated/protocol.ts, from protocol/messages.py) and the REST API's (generated/api.ts,
+// (generated/protocol.ts, from protocol/messages/) and the REST API's (generated/api.ts,
 // from the hub's OpenAPI document). Only the dashboard's own shapes are written here.
 import type { components, paths } from "../generated/api";
 import type { Event } from "../generated/protocol";

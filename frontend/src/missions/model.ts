@@ -1,5 +1,5 @@
 // The one mission model in the browser: the hub's REST `MissionItem` (generated from
-// protocol/messages.py through the OpenAPI document), plus the few MAV_CMD and MAV_FRAME
+// protocol/messages/ through the OpenAPI document), plus the few MAV_CMD and MAV_FRAME
 // values (pymavlink's, through generated/mavlink.ts) and helpers the map and the editor
 // need. No second mission type, and no number typed by hand.
 import type { components } from "../generated/api";

@@ -211,6 +211,7 @@ class Hub:
                 safety,
                 repository=FormationRepository(engine),
                 join_timeout_s=settings.formation_join_timeout_s,
+                speedup=settings.fleet_speedup,
             ),
             scans=ScanService(
                 ScanRepository(engine),

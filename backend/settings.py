@@ -134,6 +134,14 @@ class HubSettings(BaseSettings):
         description="a formation whose followers are not all in their slots this long "
         "after its start ends, and every member holds",
     )
+    fleet_speedup: float = Field(
+        default=1.0,
+        ge=1.0,
+        le=100.0,
+        description="a simulated fleet's speed-up (the simulators' --speedup, one for the "
+        "fleet): formations fly their routes in the vehicles' seconds; 1 for aircraft, and "
+        "only in development",
+    )
     principal_cache_s: float = Field(
         default=10.0, ge=0, le=300, description="a resolved token answers without the database"
     )
@@ -405,6 +413,9 @@ class HubSettings(BaseSettings):
 
     @model_validator(mode="after")
     def _no_default_secrets_in_production(self) -> HubSettings:
+        if self.fleet_speedup != 1.0 and self.environment != "development":
+            # a real aircraft asked to fly a route four times as fast as planned
+            raise ValueError("GCS_FLEET_SPEEDUP is for simulated fleets, in development only")
         if self.environment == "development":
             if not self.on_loopback and not self.allow_development_on_network:
                 raise ValueError(

@@ -39,6 +39,7 @@ from vehicle_agents.mission_progress import ReachedItems
 from vehicle_agents.missions import mission_number
 from vehicle_agents.modes import is_armed
 from vehicle_agents.outbox import Outbox, SpillFile
+from vehicle_agents.paced_clock import PacedClock
 from vehicle_agents.param_metadata import ParamMetadata
 from vehicle_agents.sensors.fcu_time import FcuClock, PoseHistory, ask_timesync
 from vehicle_agents.sensors.relay import DiskBacklog, ScanOutbox, ScanRelay, parse_mount
@@ -113,9 +114,15 @@ async def _run(settings: AgentSettings) -> None:
         if link.modes.autopilot == "px4":  # the autopilot that publishes its metadata
             executor.params.metadata = ParamMetadata(link)
             tasks.create_task(executor.params.metadata.run())
-        pilot = ManualPilot(link, executor, events.emit, source_system=settings.source_system)
+        # The autopilot's pace, for everything that waits on the aircraft's behalf (the
+        # deadman, the formation follower, the hub-link failsafe and its reconnects).
+        paced = PacedClock()
+        link.listeners.append(paced.on_message)
+        pilot = ManualPilot(
+            link, executor, events.emit, clock=paced, source_system=settings.source_system
+        )
         tasks.create_task(pilot.run())
-        formation = FormationRunner(link, executor, events.emit)
+        formation = FormationRunner(link, executor, events.emit, clock=paced)
         tasks.create_task(formation.run())
         scans = None
         scan_stats = None
@@ -145,6 +152,7 @@ async def _run(settings: AgentSettings) -> None:
                     HubTimeouts().reconnect,
                 )
             ),
+            reconnect_sleep=paced.sleep,
         )
         tasks.create_task(TelemetryPublisher(link, outbox).run(settings.telemetry_rate_hz))
         tasks.create_task(hub.run())
@@ -156,6 +164,7 @@ async def _run(settings: AgentSettings) -> None:
             events.emit,
             settings.hub_failsafe_action,
             settings.hub_failsafe_timeout_s,
+            paced,
         )
         tasks.create_task(failsafe.run())
         if settings.health_file is not None:

@@ -113,12 +113,18 @@ class FormationService:
         clock: Callable[[], float] = time.time,
         repository: FormationRepository | None = None,
         join_timeout_s: float = JOIN_TIMEOUT_S,
+        speedup: float = 1.0,
     ) -> None:
         self._registry = registry
+        # A simulated fleet's speed-up (its seconds per wall second, one for the whole
+        # fleet; 1 for aircraft): the route, the relay's rate and the ages the hub
+        # reckons run in the vehicles' seconds, as their agents' followers do. The stamps
+        # stay Unix time, the one clock every member shares.
+        self._speedup = speedup
         self._join_timeout_s = join_timeout_s
         self._safety = safety
         self._repository = repository
-        self._period = 1.0 / rate_hz
+        self._period = 1.0 / (rate_hz * speedup)
         self._clock = clock
         self._formations: dict[str, ActiveFormation] = {}
         self.scan_source: ScanSource | None = None
@@ -323,7 +329,9 @@ class FormationService:
         record = self._registry.get(formation.plan.leader_id)
         state, seen = record.state, record.last_seen
         here = self._local(formation, formation.plan.leader_id)
-        if state is None or seen is None or here is None or now - seen > MAX_RELAY_AGE_S:
+        if state is None or seen is None or here is None:
+            return None
+        if (now - seen) * self._speedup > MAX_RELAY_AGE_S:  # in the vehicles' seconds
             return None
         heading = math.radians(state.heading_deg or 0.0)
         return LeaderState(
@@ -338,7 +346,9 @@ class FormationService:
         )
 
     def _route_time(self, formation: ActiveFormation, now: float) -> float:
-        return 0.0 if formation.formed_at is None else now - formation.formed_at
+        if formation.formed_at is None:
+            return 0.0
+        return (now - formation.formed_at) * self._speedup
 
     def _formed(self, formation: ActiveFormation, leader: LeaderState) -> bool:
         """Every follower within FORM_UP_M of its slot around the leader."""
@@ -405,7 +415,7 @@ class FormationService:
             here = self._local(formation, follower)
             if seen is None or here is None:
                 continue
-            dt = max(-1.0, min(1.0, seen - leader.time_s))
+            dt = max(-1.0, min(1.0, (seen - leader.time_s) * self._speedup))
             then = LeaderState(
                 leader.north + leader.vn * dt,
                 leader.east + leader.ve * dt,

@@ -2,8 +2,11 @@
 
 The leader (a vehicle) flies a square; the hub relays its state at 10 Hz to the
 followers' agents, which send SET_POSITION_TARGET_GLOBAL_INT with velocity feed-forward.
-The simulators run at real time: the leader's samples are stamped and predicted on the
-wall clock, as they would be in the field.
+The simulators run at 4x: the hub flies the route in their seconds (GCS_FLEET_SPEEDUP,
+set by the launcher) and each follower ages the leader's Unix stamps on its agent's
+paced clock (vehicle_agents/paced_clock.py); the agents' telemetry at 40 Hz is the
+field's 10 Hz of flight. The test's own figures carry the stamps' wall seconds into the
+vehicles' seconds the same way.
 """
 
 from __future__ import annotations
@@ -44,10 +47,17 @@ from tests.support.formations import (
 
 pytestmark = [pytest.mark.integration, pytest.mark.slow]
 
+SPEEDUP = 4.0
+
 
 @pytest.fixture(scope="module")
 def airborne(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[LocalFleet, str]]:
-    with running_fleet(tmp_path_factory.mktemp("formation"), vehicles=3, speedup=1.0) as fleet:
+    with running_fleet(
+        tmp_path_factory.mktemp("formation"),
+        vehicles=3,
+        speedup=SPEEDUP,
+        telemetry_rate_hz=10.0 * SPEEDUP,
+    ) as fleet:
         base = fleet.plan.hub_http
         token = access_token(base, "admin", fleet.plan.admin_password)
         with FleetWatcher(base, token) as watcher, api_client(base, token) as api:
@@ -152,8 +162,8 @@ def test_a_second_formation_on_the_same_agents_and_an_rc_leave(
                 "the follower leaving",
             )
             # it stays where the pilot put it: the agent sends no more targets nor modes
-            deadline = time.monotonic() + 2.0
-            watcher.wait_until(lambda v: time.monotonic() > deadline, 5, "two seconds")
+            deadline = time.monotonic() + 2.0 / SPEEDUP
+            watcher.wait_until(lambda v: time.monotonic() > deadline, 5, "two seconds of flight")
             assert watcher.state(LEFT)["mode"] == "LOITER"
             # the others fly on in the second formation
             assert watcher.state(RIGHT)["mode"] == "GUIDED"
@@ -273,7 +283,7 @@ def _fly_and_measure(
         closest = min(
             [closest] + [math.dist(a, b) for i, a in enumerate(pts) for b in pts[i + 1 :]]
         )
-        t = now - formed_at
+        t = (now - formed_at) * SPEEDUP  # the route's seconds are the vehicles'
         if route.leg_at(t) is not None:
             leader = states[LEADER]
             north, east, up = places[LEADER]
@@ -285,11 +295,12 @@ def _fly_and_measure(
                 # each vehicle's sample has its own time: the leader's is carried to
                 # the follower's, so the figure is the tracking, not the sampling
                 seen = vehicles[follower]["last_seen"]
-                slot, _ = slot_target(state.predicted(seen), slots[follower])
+                lead_s = (seen - state.time_s) * SPEEDUP
+                slot, _ = slot_target(state.predicted(state.time_s + lead_s), slots[follower])
                 errors[follower].append(math.dist(slot[:2], places[follower][:2]))
         return t > route.duration_s
 
-    watcher.wait_until(sample, route.duration_s + 30, "the square flown")
+    watcher.wait_until(sample, route.duration_s / SPEEDUP + 30, "the square flown")
     rms = {f: math.sqrt(sum(e * e for e in es) / len(es)) for f, es in errors.items()}
     print(f"formation through the hub: RMS {rms}, closest pair {closest:.2f} m")
     assert all(len(es) > 50 for es in errors.values()), errors

@@ -39,9 +39,7 @@ OUTAGE_S = 10.0  # of the vehicles' flight
 
 @pytest.fixture
 def airborne(tmp_path: Path) -> Iterator[LocalFleet]:
-    with running_fleet(
-        tmp_path, vehicles=3, speedup=SPEEDUP, telemetry_rate_hz=10.0 * SPEEDUP
-    ) as fleet:
+    with running_fleet(tmp_path, vehicles=3, speedup=SPEEDUP) as fleet:
         yield fleet
 
 

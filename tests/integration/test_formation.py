@@ -44,20 +44,24 @@ from tests.support.formations import (
     _request,
     take_off_all,
 )
+from tests.support.paced import streams_at
 
-pytestmark = [pytest.mark.integration, pytest.mark.slow]
+pytestmark = [pytest.mark.integration]
 
 SPEEDUP = 4.0
 
 
 @pytest.fixture(scope="module")
 def airborne(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[LocalFleet, str]]:
-    with running_fleet(
-        tmp_path_factory.mktemp("formation"),
-        vehicles=3,
-        speedup=SPEEDUP,
-        telemetry_rate_hz=10.0 * SPEEDUP,
-    ) as fleet:
+    with (
+        streams_at(SPEEDUP),
+        running_fleet(
+            tmp_path_factory.mktemp("formation"),
+            vehicles=3,
+            speedup=SPEEDUP,
+            telemetry_rate_hz=10.0 * SPEEDUP,
+        ) as fleet,
+    ):
         base = fleet.plan.hub_http
         token = access_token(base, "admin", fleet.plan.admin_password)
         with FleetWatcher(base, token) as watcher, api_client(base, token) as api:

@@ -310,8 +310,8 @@ def _fly_and_measure(
     assert all(len(es) > 50 for es in errors.values()), errors
     # The design's 0.5 m bar is held in the sped-up simulator (0.26 m there,
     # tests/simulator/test_formation_flight.py). Here the same flight measured 0.37-0.50 m
-    # in eight runs (0.503 once, beside a benchmark) on the shared machine: the leader's
-    # state travels agent -> hub -> agent at 10 Hz and the figure pairs 10 Hz reports, so
-    # 0.6 m leaves room for load.
+    # in eight runs (0.503 once, beside a benchmark) on the shared machine at real time,
+    # and 0.49-0.52 m at 4x: the leader's state travels agent -> hub -> agent at 10 Hz of
+    # the flight's and the figure pairs 10 Hz reports, so 0.6 m leaves room for load.
     assert max(rms.values()) <= 0.6, rms
     assert closest >= MIN_SEPARATION_M

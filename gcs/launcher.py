@@ -221,6 +221,8 @@ class LocalFleet:
             env["GCS_ALLOW_DEVELOPMENT_ON_NETWORK"] = "true"
         if tokens:  # a hub alone (no vehicles) has none to enrol
             env["GCS_AGENT_TOKENS"] = tokens
+        if plan.speedup > 1.0:  # formations fly in the simulators' seconds
+            env["GCS_FLEET_SPEEDUP"] = str(plan.speedup)
         self.spawn(
             "hub",
             [

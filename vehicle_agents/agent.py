@@ -24,6 +24,7 @@ from protocol.messages import (
     encode,
 )
 from vehicle_agents import __version__
+from vehicle_agents.sensors.paced_clock import PacedClock
 from vehicle_agents.config import AgentSettings, default_vehicle_id, hub_http_base
 from vehicle_agents.control.executor import CommandExecutor
 from vehicle_agents.control.formation import FormationRunner
@@ -114,9 +115,15 @@ async def _run(settings: AgentSettings) -> None:
         if link.modes.autopilot == "px4":  # the autopilot that publishes its metadata
             executor.params.metadata = ParamMetadata(link)
             tasks.create_task(executor.params.metadata.run())
-        pilot = ManualPilot(link, executor, events.emit, source_system=settings.source_system)
+        # The autopilot's pace, for everything that waits on the aircraft's behalf (the
+        # deadman, the formation follower, the hub-link failsafe and its reconnects).
+        paced = PacedClock()
+        link.listeners.append(paced.on_message)
+        pilot = ManualPilot(
+            link, executor, events.emit, clock=paced, source_system=settings.source_system
+        )
         tasks.create_task(pilot.run())
-        formation = FormationRunner(link, executor, events.emit)
+        formation = FormationRunner(link, executor, events.emit, clock=paced)
         tasks.create_task(formation.run())
         scans = None
         scan_stats = None
@@ -146,6 +153,7 @@ async def _run(settings: AgentSettings) -> None:
                     HubTimeouts().reconnect,
                 )
             ),
+            reconnect_sleep=paced.sleep,
         )
         tasks.create_task(TelemetryPublisher(link, outbox).run(settings.telemetry_rate_hz))
         tasks.create_task(hub.run())
@@ -157,6 +165,7 @@ async def _run(settings: AgentSettings) -> None:
             events.emit,
             settings.hub_failsafe_action,
             settings.hub_failsafe_timeout_s,
+            paced,
         )
         tasks.create_task(failsafe.run())
         if settings.health_file is not None:

@@ -58,9 +58,14 @@ Send = Callable[[str, Message], Awaitable[None]]
 
 class FormationRelay:
     def __init__(
-        self, registry: FleetRegistry, send: Send, scan_source: ScanSource | None = None
+        self,
+        registry: FleetRegistry,
+        send: Send,
+        scan_source: ScanSource | None = None,
+        speedup: float = 1.0,
     ) -> None:
         self._registry = registry
+        self._speedup = speedup  # the vehicles' seconds per wall second (FormationService)
         self._send = send
         self.scan_source = scan_source
 
@@ -86,12 +91,14 @@ class FormationRelay:
     def leader_state(self, formation: ActiveFormation, now: float) -> LeaderState | None:
         """The route's state now (a virtual leader), or the leader vehicle's last report."""
         if formation.plan.leader_id is None:
-            v = formation.plan.route.state_at(route_time(formation, now))
+            v = formation.plan.route.state_at(route_time(formation, now, self._speedup))
             return LeaderState(v.north, v.east, v.up, v.vn, v.ve, v.vu, v.heading_rad, now)
         record = self._registry.get(formation.plan.leader_id)
         state, seen = record.state, record.last_seen
         here = self.local(formation, formation.plan.leader_id)
-        if state is None or seen is None or here is None or now - seen > MAX_RELAY_AGE_S:
+        if state is None or seen is None or here is None:
+            return None
+        if (now - seen) * self._speedup > MAX_RELAY_AGE_S:  # in the vehicles' seconds
             return None
         heading = math.radians(state.heading_deg or 0.0)
         return LeaderState(
@@ -125,7 +132,7 @@ class FormationRelay:
         """One tick: the route to a leader vehicle, the leader's state to the followers
         (the route's clock started once they are all in their slots), their tracking
         measured, and the leader's newest scan."""
-        route = formation.plan.route.state_at(route_time(formation, now))
+        route = formation.plan.route.state_at(route_time(formation, now, self._speedup))
         if formation.plan.leader_id is not None:
             # the leader vehicle flies the route itself, at a zero offset
             await self._send(formation.plan.leader_id, _update(formation, route, now, []))
@@ -147,14 +154,14 @@ class FormationRelay:
         leader carried there at its velocity (at most a second either way)."""
         leg = None
         if formation.formed_at is not None:
-            index = formation.plan.route.leg_at(route_time(formation, now))
+            index = formation.plan.route.leg_at(route_time(formation, now, self._speedup))
             leg = None if index is None else index + 1
         for follower, offset in formation.offsets.items():
             seen = self._registry.get(follower).last_seen
             here = self.local(formation, follower)
             if seen is None or here is None:
                 continue
-            dt = max(-1.0, min(1.0, seen - leader.time_s))
+            dt = max(-1.0, min(1.0, (seen - leader.time_s) * self._speedup))
             then = LeaderState(
                 leader.north + leader.vn * dt,
                 leader.east + leader.ve * dt,
@@ -197,9 +204,12 @@ class FormationRelay:
             await self._send(follower, message)
 
 
-def route_time(formation: ActiveFormation, now: float) -> float:
-    """Seconds along the leader's route: none until every follower is in its slot."""
-    return 0.0 if formation.formed_at is None else now - formation.formed_at
+def route_time(formation: ActiveFormation, now: float, speedup: float = 1.0) -> float:
+    """Seconds along the leader's route (the vehicles' seconds): none until every follower
+    is in its slot."""
+    if formation.formed_at is None:
+        return 0.0
+    return (now - formation.formed_at) * speedup
 
 
 def _update(

@@ -45,15 +45,20 @@ class FormationService:
         repository: FormationRepository | None = None,
         join_timeout_s: float = JOIN_TIMEOUT_S,
         scan_source: ScanSource | None = None,
+        speedup: float = 1.0,
     ) -> None:
         self._registry = registry
         self._join_timeout_s = join_timeout_s
         self._safety = safety
         self._repository = repository
-        self._period = 1.0 / rate_hz
+        # A simulated fleet's speed-up (its seconds per wall second, one for the whole
+        # fleet; 1 for aircraft): the route, the relay's rate and the ages the hub
+        # reckons run in the vehicles' seconds, as their agents' followers do. The stamps
+        # stay Unix time, the one clock every member shares.
+        self._period = 1.0 / (rate_hz * speedup)
         self._clock = clock
         self._formations: dict[str, ActiveFormation] = {}
-        self._relay = FormationRelay(registry, self._send, scan_source)
+        self._relay = FormationRelay(registry, self._send, scan_source, speedup)
 
     def busy(self) -> set[str]:
         return {v for f in self.active() for v in f.members}

@@ -18,6 +18,7 @@ async def attach(hub: Hub) -> FormationService:
         repository=FormationRepository(hub.engine),
         join_timeout_s=hub.settings.formation_join_timeout_s,
         scan_source=leader_scans(hub.scans, hub.registry),
+        speedup=hub.settings.fleet_speedup,
     )
     await service.close_left_open()
     hub.background.append(service.run)

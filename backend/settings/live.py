@@ -19,6 +19,14 @@ class LiveSettings(BaseModel):
         description="a formation whose followers are not all in their slots this long "
         "after its start ends, and every member holds",
     )
+    fleet_speedup: float = Field(
+        default=1.0,
+        ge=1.0,
+        le=100.0,
+        description="a simulated fleet's speed-up (the simulators' --speedup, one for the "
+        "fleet): formations fly their routes in the vehicles' seconds; 1 for aircraft, and "
+        "only in development",
+    )
 
     telemetry_batch_size: int = Field(default=500, ge=1)
     telemetry_flush_interval_s: float = Field(default=0.25, gt=0)

@@ -41,6 +41,9 @@ def with_secret_files(values: Any) -> Any:
 def refuse_unsafe(settings: HubSettings) -> None:
     """Raise ValueError naming every default secret of a production hub, or a development
     hub's exposure to the network."""
+    if settings.fleet_speedup != 1.0 and settings.environment != "development":
+        # a real aircraft asked to fly a route four times as fast as planned
+        raise ValueError("GCS_FLEET_SPEEDUP is for simulated fleets, in development only")
     if settings.environment == "development":
         if not settings.on_loopback and not settings.allow_development_on_network:
             raise ValueError(

@@ -5,6 +5,10 @@ proxy the test cuts (connections dropped, new ones refused, as an unplugged mode
 Guaranteed: the configured failsafe runs once the link has been gone for its timeout
 (and not on a short flap), the backlog is replayed in order when the link is back, and
 every sample is stored exactly once.
+
+The simulator runs at 4x and the agent's failsafe and reconnect waits on its clock
+(vehicle_agents/sensors/paced_clock.py), so the flaps and the cut are the autopilot's seconds
+too: a 30 s cut of the simulated flight lasts 7.5 s of the test's.
 """
 
 from __future__ import annotations
@@ -34,10 +38,13 @@ from tests.tcp_proxy import CuttableProxy
 pytestmark = [pytest.mark.integration, pytest.mark.slow]
 
 VEHICLE = "sim_1"
+SPEEDUP = 4.0
+# In the autopilot's seconds, as the agent counts them; the test waits them out in its own.
 FAILSAFE_S = 5
 FLAPS = 5
 FLAP_DOWN_S, FLAP_UP_S = 1.0, 2.0
 OUTAGE_S = 30.0
+OUTAGE_WALL_S = OUTAGE_S / SPEEDUP  # the telemetry is sampled and stamped on the wall clock
 
 
 @pytest.fixture
@@ -47,7 +54,7 @@ def proxied_fleet(
     # The agent reads these from its environment, as from a systemd unit.
     monkeypatch.setenv("GCS_AGENT_HUB_FAILSAFE_ACTION", "rtl")
     monkeypatch.setenv("GCS_AGENT_HUB_FAILSAFE_TIMEOUT_S", str(FAILSAFE_S))
-    plan = FleetPlan(vehicles=1, port=free_port(), data_dir=tmp_path, speedup=4.0)
+    plan = FleetPlan(vehicles=1, port=free_port(), data_dir=tmp_path, speedup=SPEEDUP)
     with LocalFleet(plan) as fleet:
         plan.data_dir.mkdir(parents=True, exist_ok=True)
         fleet.log_dir.mkdir(parents=True, exist_ok=True)
@@ -79,9 +86,9 @@ def test_a_flapping_link_then_a_30_s_cut_runs_the_failsafe_and_replays_in_order_
         # Flapping: short drops, each shorter than the failsafe's timeout.
         for _ in range(FLAPS):
             proxy.cut()
-            time.sleep(FLAP_DOWN_S)  # the drop itself, not a sync
+            time.sleep(FLAP_DOWN_S / SPEEDUP)  # the drop itself, not a sync
             proxy.start()
-            time.sleep(FLAP_UP_S)  # the link's up time, not a sync
+            time.sleep(FLAP_UP_S / SPEEDUP)  # the link's up time, not a sync
         watcher.wait_until(connected(VEHICLE), 30, "the agent back after the flaps")
         watcher.wait_until(
             lambda v: v[VEHICLE]["state"]["mode"] == "GUIDED" and v[VEHICLE]["state"]["armed"],
@@ -100,7 +107,7 @@ def test_a_flapping_link_then_a_30_s_cut_runs_the_failsafe_and_replays_in_order_
         FAILSAFE_S + 20,
         "the agent to command RTL on the lost link",
     )
-    time.sleep(max(0.0, cut_at + OUTAGE_S - time.time()))  # the outage itself, not a sync
+    time.sleep(max(0.0, cut_at + OUTAGE_WALL_S - time.time()))  # the outage, not a sync
     proxy.start()
 
     target = int((time.time() - cut_at + 3) * fleet.plan.telemetry_rate_hz)
@@ -132,8 +139,8 @@ def test_a_flapping_link_then_a_30_s_cut_runs_the_failsafe_and_replays_in_order_
     ]
     assert arrival == numbers, "the backlog was stored out of order"
     times = [when for _, when in rows]
-    during = [when for when in times if cut_at + 1 < when < cut_at + OUTAGE_S - 1]
-    assert len(during) >= (OUTAGE_S - 2) * fleet.plan.telemetry_rate_hz * 0.9
+    during = [when for when in times if cut_at + 1 < when < cut_at + OUTAGE_WALL_S - 1]
+    assert len(during) >= (OUTAGE_WALL_S - 2) * fleet.plan.telemetry_rate_hz * 0.9
     texts = [text for (text,) in _stored(fleet, "SELECT text FROM events WHERE kind = 'failsafe'")]
     assert sum(f"hub link lost for {FAILSAFE_S} s: commanded RTL" in t for t in texts) == 1, texts
     assert any("on losing it the agent commanded RTL" in text for text in texts), texts

@@ -1,5 +1,6 @@
 """The hub killed (SIGKILL) and restarted while a formation flies: real hub, simulators
-and agents; the simulators at real time, as formations are flown on the wall clock.
+and agents; the simulators at 4x, the formation flown in their seconds (the hub's
+GCS_FLEET_SPEEDUP, the followers' paced clocks: vehicle_agents/sensors/paced_clock.py).
 
 Guaranteed: the followers hold where they are once the leader's relayed state goes stale
 (their agents do it, with no hub), the restarted hub does not resume the formation but
@@ -32,12 +33,13 @@ from tests.support.hubs import TEST_HUB_ENV
 
 pytestmark = [pytest.mark.integration, pytest.mark.slow]
 
-OUTAGE_S = 10.0
+SPEEDUP = 4.0
+OUTAGE_S = 10.0  # of the vehicles' flight
 
 
 @pytest.fixture
 def airborne(tmp_path: Path) -> Iterator[LocalFleet]:
-    with running_fleet(tmp_path, vehicles=3, speedup=1.0) as fleet:
+    with running_fleet(tmp_path, vehicles=3, speedup=SPEEDUP) as fleet:
         yield fleet
 
 
@@ -78,7 +80,7 @@ def test_a_hub_killed_mid_formation_leaves_followers_holding_and_records_it_stop
             15,
             f"{follower} to hold on its own",
         )
-    time.sleep(max(0.0, killed_at + OUTAGE_S - time.time()))  # the outage, not a sync
+    time.sleep(max(0.0, killed_at + OUTAGE_S / SPEEDUP - time.time()))  # the outage, not a sync
     fleet.start_hub(TEST_HUB_ENV)
     fleet.wait_until_ready()
 

@@ -29,7 +29,6 @@ formation at once: it stops sending, so the pilot's mode rules.
 
 from __future__ import annotations
 
-import asyncio
 import logging
 import math
 import time
@@ -61,6 +60,7 @@ from protocol.messages import (
     LeaderScan,
     LeaderUpdate,
 )
+from vehicle_agents.sensors.paced_clock import PacedClock
 from vehicle_agents.control.executor import CommandExecutor
 from vehicle_agents.control.formation_obstacles import ScanObstacles
 from vehicle_agents.fcu.link import FcuLink
@@ -369,13 +369,22 @@ class FormationRunner:
         executor: CommandExecutor,
         emit: EmitEvent,
         settings: FollowerSettings | None = None,
-        clock: Callable[[], float] = time.time,
+        clock: PacedClock | None = None,
+        wall: Callable[[], float] = time.time,
     ) -> None:
         self._link = link
         self._executor = executor
         self._emit = emit
         self.settings = settings or FollowerSettings()
-        self._clock = clock  # Unix time: the leader's samples are stamped with it
+        # The follower's clock is the agent's paced one (the autopilot's seconds, never
+        # slower than the wall's): its ticks, its pre-stream and the ages of what the hub
+        # relays. The relayed stamps are Unix time (each member's agent stamps its
+        # telemetry, the hub a virtual leader's state): comparable across the fleet on
+        # synchronised clocks, and the only stamps every member and the hub share. See
+        # `_stamped` for how a stamp's age is carried onto the paced clock.
+        self._clock = clock or PacedClock()
+        self._wall = wall
+        self._leader_stamp = -math.inf  # the newest leader stamp taken (Unix)
         self.formation_id: str | None = None
         self.follower: Follower | None = None
         self._neighbours: dict[str, tuple[float, float, float]] = {}
@@ -394,6 +403,9 @@ class FormationRunner:
                 self._on_slot(message)
             case LeaderUpdate() if message.formation_id == self.formation_id:
                 assert self.follower is not None
+                if message.time < self._leader_stamp:
+                    return  # overtaken on the way (newest wins, by the sender's stamp)
+                self._leader_stamp = message.time
                 self.follower.on_leader(
                     LeaderState(
                         message.north,
@@ -403,7 +415,7 @@ class FormationRunner:
                         message.ve,
                         message.vu,
                         math.radians(message.heading_deg),
-                        message.time,
+                        self._stamped(message.time),
                     )
                 )
                 self._neighbours = {
@@ -411,7 +423,9 @@ class FormationRunner:
                 }
                 self.follower.neighbours = {
                     n.vehicle_id: NeighbourReport(
-                        (n.north, n.east, n.up), (n.vn, n.ve, n.vu), n.time or message.time
+                        (n.north, n.east, n.up),
+                        (n.vn, n.ve, n.vu),
+                        self._stamped(n.time or message.time),
                     )
                     for n in message.neighbours
                 }
@@ -448,6 +462,7 @@ class FormationRunner:
         self.follower.clearance_m = slot.obstacle_clearance_m
         self._face_heading = slot.face_heading
         self._started_at = self._clock()
+        self._leader_stamp = -math.inf
         self._mode_asked = False
         heartbeat = self._link.latest.get("HEARTBEAT")
         self._modes = ModeWatch(
@@ -551,10 +566,21 @@ class FormationRunner:
                 self._emit("formation", f"hold at the end refused: {outcome.message}", 2)
 
     async def run(self) -> None:
-        period = 1.0 / self.settings.rate_hz
+        period = 1.0 / self.settings.rate_hz  # setpoints a second of the autopilot's
         while True:
             await self.tick()
-            await asyncio.sleep(period)
+            await self._clock.sleep(period)
+
+    def _stamped(self, unix_s: float) -> float:
+        """A relayed Unix stamp as an instant of the follower's paced clock: its age on
+        arrival (the wall's, times the autopilot's pace) before now. From there it ages
+        on the paced clock, so every age the follower reckons is at least the wall's
+        (a stalled autopilot clock never keeps a stale leader fresh) and, when the fleet's
+        simulators share one speed-up, the age in the leader's seconds, which is what its
+        velocity is predicted over. A stamp ahead of this agent's wall clock (clocks
+        out of step) counts as just sent, never as a future one."""
+        age_s = max(0.0, self._wall() - unix_s) * self._clock.pace
+        return self._clock() - age_s
 
 
 def _describe(offset: Offset) -> str:

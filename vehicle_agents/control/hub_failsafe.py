@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import asyncio
 import logging
-import time
 from collections.abc import Callable
 from typing import Literal
 
@@ -18,6 +17,7 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from common.retry import Backoff
 from protocol.messages import EventKind, HoldCommand, ReturnToLaunchCommand
+from vehicle_agents.sensors.paced_clock import PacedClock
 from vehicle_agents.control.executor import CommandExecutor
 from vehicle_agents.fcu.link import FcuLink
 from vehicle_agents.fcu.modes import is_armed, mode_name
@@ -61,7 +61,8 @@ EmitEvent = Callable[[EventKind, str, int | None], None]
 # jittered backoff grows to 10 s, so after a few drops in a row it could sleep through
 # the whole up-time of a flapping field link, and the failsafe would fire on a hub that
 # had been back for seconds. Capped at a quarter of the timeout, no up-time longer than
-# that cap is missed.
+# that cap is missed. Both the timeout and the waits are on the agent's `PacedClock`
+# (the autopilot's seconds), so the cap holds at a simulator's speed-up too.
 ATTEMPTS_PER_TIMEOUT = 4
 
 
@@ -84,7 +85,12 @@ class HubLinkFailsafe:
         emit: EmitEvent,
         action: FailsafeAction,
         timeout_s: float,
+        clock: PacedClock | None = None,
     ) -> None:
+        # The timeout is counted on the autopilot's clock, never slower than the wall's:
+        # a simulator at 4x is failsafed after timeout_s of its flight, and an autopilot
+        # whose clock stalls (link lost, board frozen) still after timeout_s of ours.
+        self._clock = clock or PacedClock()
         self._connected = connected
         self._disconnected = disconnected
         self._executor = executor
@@ -96,15 +102,12 @@ class HubLinkFailsafe:
     async def run(self) -> None:
         while True:
             await self._disconnected.wait()
-            lost_at = time.monotonic()
-            try:
-                async with asyncio.timeout(self.timeout_s):
-                    await self._connected.wait()
+            lost_at = self._clock()
+            if await self._clock.wait(self._connected, self.timeout_s):
                 continue  # a blip, shorter than the timeout: nothing to do or report
-            except TimeoutError:
-                done = await self._act()
+            done = await self._act()
             await self._connected.wait()
-            outage = time.monotonic() - lost_at
+            outage = self._clock() - lost_at
             self._emit(
                 "failsafe",
                 f"hub link restored after {outage:.0f} s; on losing it the agent {done}",

@@ -130,12 +130,19 @@ class ManualPilot:
         timeouts: ManualTimeouts | None = None,
         clock: Callable[[], float] = time.monotonic,
         source_system: int = 254,
+        wall: Callable[[], float] = time.monotonic,
     ) -> None:
         self._link = link
         self._executor = executor
         self._emit = emit
         self.timeouts = timeouts or ManualTimeouts()
+        # The deadman and the frozen-input watch count the autopilot's seconds (the agent's
+        # `PacedClock`: a simulator at 4x flies four times as far on a stale stick in a
+        # wall second), never fewer than the wall's; the first frame's grace is the wall's,
+        # as the hub's lease expiry it outlasts.
         self._clock = clock
+        self._wall = wall
+        self._first_frame_by = 0.0
         self._source_system = source_system
         self.active = False  # browser control is open (a lease started it)
         self._last_at = 0.0  # the last fresh frame (or the start, plus its grace)
@@ -181,7 +188,8 @@ class ManualPilot:
         now = self._clock()
         # The deadman's clock starts with a grace for the stream's first frame (longer
         # than the hub's lease expiry, which ends a lease that never streams first).
-        self._last_at = now + self.timeouts.first_frame_s - self.timeouts.deadman_s
+        self._last_at = now
+        self._first_frame_by = self._wall() + self.timeouts.first_frame_s
         self._changed_at = now
         self.active = True
         self._start_centring()
@@ -373,7 +381,8 @@ class ManualPilot:
             return
         now = self._clock()
         silence = now - self._last_at
-        if silence > self.timeouts.deadman_s:
+        first_frame_due = self._last_seq >= 0 or self._wall() > self._first_frame_by
+        if silence > self.timeouts.deadman_s and first_frame_due:
             await self._hold(f"manual input stopped for {silence:.2f} s: holding")
             return
         if self._frozen_source and now - self._changed_at > self.timeouts.frozen_s:

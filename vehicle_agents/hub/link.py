@@ -13,7 +13,7 @@ from pydantic import TypeAdapter, ValidationError
 from websockets.asyncio.client import ClientConnection, connect
 from websockets.exceptions import ConnectionClosed, InvalidHandshake
 
-from common.retry import Backoff, Retries
+from common.retry import Backoff, Retries, Sleep
 from protocol.messages import (
     MAX_FRAME_BYTES,
     Ack,
@@ -118,6 +118,7 @@ class HubLink:
         | None = None,
         fallback_urls: Sequence[str] = (),
         modes: ModeReport | None = None,
+        reconnect_sleep: Sleep = asyncio.sleep,
     ) -> None:
         # Several hubs (README "Several hubs"): after a failed or ended session the next
         # attempt goes to the next URL, round the list, still after a jittered wait, so
@@ -139,10 +140,13 @@ class HubLink:
         self.disconnected = asyncio.Event()
         self.disconnected.set()
         self._ever_welcomed = False
+        # The agent's paced clock: the reconnect waits are capped to fit the hub-link
+        # failsafe's timeout, which is counted on it (vehicle_agents/control/hub_failsafe.py).
+        self._reconnect_sleep = reconnect_sleep
 
     async def run(self) -> None:
         # Jittered, so a fleet that lost its hub does not knock again all at once.
-        unreachable = Retries(self.timeouts.reconnect)
+        unreachable = Retries(self.timeouts.reconnect, self._reconnect_sleep)
         refused = Retries(self.timeouts.unauthorized)
         attempt = 0
         while True:

@@ -4,12 +4,15 @@ autopilot that is already landing or returning, nor a pilot flying by hand."""
 from __future__ import annotations
 
 import asyncio
+import time
 
 import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from common.retry import Backoff
 from protocol.messages import EventKind
+from tests.support.paced import paced_at
+from vehicle_agents.sensors.paced_clock import PacedClock
 from vehicle_agents.control.executor import CommandExecutor
 from vehicle_agents.control.hub_failsafe import HubLinkFailsafe, reconnect_backoff
 from vehicle_agents.fcu.link import FcuLink
@@ -78,3 +81,44 @@ def test_an_armed_failsafe_caps_the_reconnect_wait_below_a_flaps_up_time() -> No
 def test_a_failsafe_that_does_nothing_keeps_the_fleet_wide_backoff() -> None:
     usual = Backoff(initial_s=0.5, max_s=10.0)
     assert reconnect_backoff("continue", 5.0, usual) == usual
+
+
+def _fires_after(clock: PacedClock, timeout_s: float) -> float:
+    """Wall seconds from the hub link's loss to the failsafe's action (configured to
+    continue, so it only reports), on ``clock``."""
+    link = FcuLink("tcp:127.0.0.1:1")
+    fired = asyncio.Event()
+
+    def emit(kind: EventKind, text: str, severity: int | None) -> None:
+        fired.set()
+
+    async def run() -> float:
+        failsafe = HubLinkFailsafe(
+            asyncio.Event(),
+            asyncio.Event(),
+            CommandExecutor(link),
+            link,
+            emit,
+            "continue",
+            timeout_s,
+            clock,
+        )
+        failsafe._disconnected.set()
+        started = time.monotonic()
+        task = asyncio.create_task(failsafe.run())
+        await asyncio.wait_for(fired.wait(), timeout_s + 5.0)
+        task.cancel()
+        return time.monotonic() - started
+
+    return asyncio.run(run())
+
+
+def test_the_timeout_runs_on_a_sped_up_autopilots_clock() -> None:
+    took = _fires_after(paced_at(4.0), 2.0)
+    assert 0.4 <= took < 2.0  # 2 s of a 4x simulator: 0.5 s of ours
+
+
+def test_a_stalled_autopilot_clock_still_trips_the_failsafe_in_wall_time() -> None:
+    # the board's clock stopped counting (frozen), or its link is gone: the wall paces
+    took = _fires_after(paced_at(0.0), 0.6)
+    assert 0.55 <= took < 2.0

@@ -126,9 +126,9 @@ def test_udp_answers_whoever_writes() -> None:
         assert home.altitude == 584_000
 
 
-def test_stream_rates_are_wall_clock_whatever_the_speedup() -> None:
+def test_stream_rates_are_per_sim_second_so_a_speedup_multiplies_them() -> None:
     config = SimulatorConfig(
-        listen=ListenAddress("tcp", "127.0.0.1", 0), system_id=SYSID, speedup=100.0
+        listen=ListenAddress("tcp", "127.0.0.1", 0), system_id=SYSID, speedup=10.0
     )
     with (
         serving(config) as (_server, address),
@@ -143,9 +143,11 @@ def test_stream_rates_are_wall_clock_whatever_the_speedup() -> None:
             if message is not None:
                 count += 1
                 last = message
-        assert 7 <= count <= 13  # 10 Hz of wall time
-        # ... while sim time ran 100 times faster
-        assert last.time_boot_ms - first.time_boot_ms > 50_000
+        assert 70 <= count <= 130  # 10 Hz of sim time: 100 a wall second
+        # ... as sim time ran 10 times faster, and by the messages' own clock, 10 Hz
+        sim_s = (last.time_boot_ms - first.time_boot_ms) / 1000.0
+        assert sim_s > 7.0
+        assert count / sim_s == pytest.approx(10.0, rel=0.1)
 
 
 def test_cannot_listen_exits_1(capfd: pytest.CaptureFixture[str]) -> None:

@@ -300,7 +300,10 @@ class SimulatorServer:
     def _until_next_tick(self) -> float:
         """Wall seconds to sleep: until the next stream is due in sim time, so that a
         speed-up multiplies the rates per wall second (as SITL's SIM_SPEEDUP does) rather
-        than capping them at one message a tick; TICK_S at most, for the physics."""
+        than capping them at one message a tick; TICK_S at most, for the physics, and
+        through a reboot's silence (the streams wait, late, for its end)."""
+        if self._wall() < self._silent_until:
+            return TICK_S
         dues = [due for link in self.links if (due := link.streams.next_due()) is not None]
         if not dues:
             return TICK_S

@@ -269,33 +269,6 @@ def settle_fleet(
         assert not low, f"packs below {SETTLED_BATTERY_PCT:g} %, too low to fly on: {low}"
 
 
-def reboot_autopilots(
-    base_url: str, token: str, vehicles: Sequence[str], timeout_s: float = 60
-) -> None:
-    """Restart the flight controllers of settled (landed, disarmed) ``vehicles`` at once,
-    and wait until each has gone quiet and come back ready: what a test left on an
-    autopilot that settling does not undo (a speed set in flight, a home set by hand)
-    goes with the restart, as on a real one."""
-    with api_client(base_url, token) as api, FleetWatcher(base_url, token) as watcher:
-        for vehicle in vehicles:
-            answer = send_command(api, vehicle, name="reboot")
-            assert answer["status"] == "accepted", (vehicle, answer)
-        gone_quiet: set[str] = set()
-
-        def all_back(states: Vehicles) -> bool:
-            gone_quiet.update(
-                vehicle
-                for vehicle in vehicles
-                if not state_of(states, vehicle).get("fcu_connected", True)
-            )
-            return gone_quiet == set(vehicles) and all(
-                ready(vehicle)(states) and state_of(states, vehicle).get("fcu_connected")
-                for vehicle in vehicles
-            )
-
-        watcher.wait_until(all_back, timeout_s, f"{', '.join(vehicles)} restarted and back")
-
-
 # -- processes -------------------------------------------------------------------------
 
 

@@ -1,10 +1,8 @@
 """The operator's command set through the hub's REST API, against simulated copters:
 hold, change speed, set home (and the geofence on it), reboot, and the forced disarm.
 
-On the session's fleet (hub, three simulators, three agents as processes on loopback),
-settled before and after each test, one vehicle per story so that the stories do not
-disturb each other. What the stories leave that settling does not undo is undone at the
-end (`given_back`), so that the tests after these find the fleet as they would have.
+A fleet of its own (hub, three simulators, three agents as processes on loopback), one
+vehicle per story so that the stories do not disturb each other.
 """
 
 from __future__ import annotations
@@ -20,49 +18,42 @@ import pytest
 from gcs.launcher import FleetPlan, LocalFleet
 from tests.helpers import (
     FleetWatcher,
+    access_token,
     api_client,
     ready,
-    reboot_autopilots,
+    running_fleet,
     send_command,
-    settle_fleet,
     speed_of,
     state_of,
 )
 
 pytestmark = pytest.mark.integration
 
+SPEEDUP = 5.0
 NORTH = 1 / 111_320  # degrees of latitude per metre, near enough
 
 
 @pytest.fixture(scope="module")
-def given_back(fleet: LocalFleet, fleet_admin_token: str) -> Iterator[LocalFleet]:
-    """The session's fleet (a fleet of their own took 15-20 s to start), given back as
-    these tests found it: sim_2's geofence removed, and sim_1's speed set in flight and
-    sim_2's home set by hand (both kept by the autopilot until it restarts, as
-    ArduCopter's are) gone with a restart of each. sim_3's own story restarts it."""
-    yield fleet
-    base_url = fleet.plan.hub_http
-    vehicles = [fleet.vehicle_id(index) for index in range(fleet.plan.vehicles)]
-    settle_fleet(base_url, fleet_admin_token, vehicles)
-    with api_client(base_url, fleet_admin_token) as api:
-        cleared = api.delete("/api/v1/vehicles/sim_2/safety-rails")
-        assert cleared.status_code == 204, cleared.text
-    reboot_autopilots(base_url, fleet_admin_token, ["sim_1", "sim_2"])
+def fleet(tmp_path_factory: pytest.TempPathFactory) -> Iterator[LocalFleet]:
+    data_dir = tmp_path_factory.mktemp("operator-commands")
+    with running_fleet(data_dir, vehicles=3, speedup=SPEEDUP) as local_fleet:
+        yield local_fleet
+
+
+@pytest.fixture(scope="module")
+def token(fleet: LocalFleet) -> str:
+    return access_token(fleet.plan.hub_http, "admin", fleet.plan.admin_password)
 
 
 @pytest.fixture
-def watcher(
-    given_back: LocalFleet, settled_fleet: LocalFleet, fleet_admin_token: str
-) -> Iterator[FleetWatcher]:
-    with FleetWatcher(given_back.plan.hub_http, fleet_admin_token) as fleet_watcher:
+def watcher(fleet: LocalFleet, token: str) -> Iterator[FleetWatcher]:
+    with FleetWatcher(fleet.plan.hub_http, token) as fleet_watcher:
         yield fleet_watcher
 
 
 @pytest.fixture
-def api(
-    given_back: LocalFleet, settled_fleet: LocalFleet, fleet_admin_token: str
-) -> Iterator[httpx.Client]:
-    with api_client(given_back.plan.hub_http, fleet_admin_token) as client:
+def api(fleet: LocalFleet, token: str) -> Iterator[httpx.Client]:
+    with api_client(fleet.plan.hub_http, token) as client:
         yield client
 
 

@@ -37,7 +37,10 @@ log = logging.getLogger(__name__)
 
 COMPONENT_ID = 1  # MAV_COMP_ID_AUTOPILOT1
 CAMERA_COMPONENT_ID = mavlink2.MAV_COMP_ID_CAMERA  # a MAVLink camera (--camera-component)
-TICK_S = 0.01  # wall seconds between physics catch-ups and stream checks
+TICK_S = 0.01  # wall seconds between physics catch-ups and stream checks, at most
+# ... and at least: a stream due sooner in sim time (a speed-up) brings the tick forward,
+# down to this, and so does one running late, to catch up
+MIN_TICK_S = 0.001
 MAX_PENDING_BYTES = 256 * 1024  # a client this far behind loses messages, not memory
 READ_SIZE = 4096
 
@@ -287,19 +290,36 @@ class SimulatorServer:
     async def _tick_forever(self) -> None:
         while True:
             self.tick()
-            await asyncio.sleep(TICK_S)
+            await asyncio.sleep(self._until_next_tick())
+
+    def _until_next_tick(self) -> float:
+        """Wall seconds to sleep: until the next stream is due in sim time, so that a
+        speed-up multiplies the rates per wall second (as SITL's SIM_SPEEDUP does) rather
+        than capping them at one message a tick; TICK_S at most, for the physics, and
+        through a reboot's silence (the streams wait, late, for its end)."""
+        if self._wall() < self._silent_until:
+            return TICK_S
+        dues = [due for link in self.links if (due := link.streams.next_due()) is not None]
+        if not dues:
+            return TICK_S
+        wait = (min(dues) - self.clock.now()) / self.config.speedup
+        return min(TICK_S, max(MIN_TICK_S, wait))
 
     def tick(self) -> None:
-        """Catch the physics up with the clock and send whatever streams are due."""
-        now = self._wall()
-        self.copter.advance_to(self.clock.now())
+        """Catch the physics up with the clock and send whatever streams are due.
+
+        The streams are timed in sim time; the silence of a reboot and the camera
+        component's heartbeat in wall time (what the agent's link timeouts measure)."""
+        wall = self._wall()
+        now = self.clock.now()
+        self.copter.advance_to(now)
         if self.lidar is not None:  # the sensor has its own power: it turns through a reboot
             self.lidar.advance(self.copter)
-        if now < self._silent_until:
+        if wall < self._silent_until:
             return
         self._publish_changes(now)
-        if self.camera_component is not None and now >= self._next_camera_heartbeat:
-            self._next_camera_heartbeat = now + 1.0  # a MAVLink component's 1 Hz
+        if self.camera_component is not None and wall >= self._next_camera_heartbeat:
+            self._next_camera_heartbeat = wall + 1.0  # a MAVLink component's 1 Hz
             self._broadcast(self.camera_component.heartbeat(), CAMERA_COMPONENT_ID)
         built: dict[int, MavMessage] = {}
         for link in list(self.links):
@@ -380,11 +400,12 @@ class SimulatorServer:
         copter = self.copter
         return copter.custom_mode(), copter.armed, int(copter.system_status())
 
-    def _reboot(self, now: float) -> None:
-        """The flight controller restarts: silence, then a fresh boot of the same vehicle,
-        with every link back on the default streams."""
-        self._silent_until = now + REBOOT_SILENCE_S
-        self.copter = self.copter.rebooted(boot_at=self.clock.now())
+    def _reboot(self, wall: float) -> None:
+        """The flight controller restarts: silence (wall seconds), then a fresh boot of the
+        same vehicle, with every link back on the default streams."""
+        self._silent_until = wall + REBOOT_SILENCE_S
+        now = self.clock.now()
+        self.copter = self.copter.rebooted(boot_at=now)
         self.telemetry = TelemetryBuilder(
             self.copter, boot_epoch_s=time.time(), gps2=self.telemetry.gps2
         )
@@ -393,7 +414,8 @@ class SimulatorServer:
             self.config.message_interval,
         )
         for link in self.links:
-            link.streams = StreamSchedule(DEFAULT_RATES_HZ, self._silent_until)
+            # all due when the silence ends (the first tick after it finds them late)
+            link.streams = StreamSchedule(DEFAULT_RATES_HZ, now)
         if self.photos is not None:
             self.photos.restart(self.telemetry.boot_epoch_s)
         if self.camera_component is not None:
@@ -408,10 +430,11 @@ class SimulatorServer:
     # -- receiving -------------------------------------------------------------
 
     def _receive(self, link: Link, data: bytes) -> None:
-        now = self._wall()
-        if now < self._silent_until:
+        wall = self._wall()
+        if wall < self._silent_until:
             return
-        self.copter.advance_to(self.clock.now())  # commands act on the current state
+        now = self.clock.now()
+        self.copter.advance_to(now)  # commands act on the current state
         for message in link.decode(data):
             for reply in self.handler.handle(message, link.streams, now):
                 if reply.to_sender_only:
@@ -420,7 +443,7 @@ class SimulatorServer:
                     self._broadcast(reply.message)
         self._publish_changes(now)
         if self.copter.reboot_requested:  # acknowledged above; now it restarts
-            self._reboot(now)
+            self._reboot(wall)
 
     async def _on_tcp_client(
         self, reader: asyncio.StreamReader, writer: asyncio.StreamWriter
@@ -429,7 +452,7 @@ class SimulatorServer:
         if task is not None:
             self._client_tasks.add(task)
         peer = writer.get_extra_info("peername")
-        link = TcpLink(f"tcp client {peer}", self.config.system_id, self._wall(), writer)
+        link = TcpLink(f"tcp client {peer}", self.config.system_id, self.clock.now(), writer)
         self.links.append(link)
         log.info("client connected: %s", peer)
         try:
@@ -454,7 +477,7 @@ class SimulatorServer:
             link = UdpLink(
                 f"udp peer {address}",
                 self.config.system_id,
-                self._wall(),
+                self.clock.now(),
                 self._udp_transport,
                 address,
             )

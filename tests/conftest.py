@@ -1,14 +1,12 @@
 from __future__ import annotations
 
 import os
-import uuid
+import shutil
 from collections.abc import Callable, Iterator
 from contextlib import ExitStack, contextmanager
 from pathlib import Path
-from typing import Any
 
 import httpx
-import psycopg
 import pytest
 from sqlalchemy import Engine
 
@@ -22,9 +20,11 @@ from tests.helpers import (
     running_hub,
     settle_fleet,
 )
-from tests.support.hubs import ADMIN_PASSWORD, hub_settings
+from tests.support.hubs import ADMIN_PASSWORD, hub_settings, migrated_template
+from tests.support.postgres import POSTGRES_ADDRESS, scratch_postgres
 
-__all__ = ["ADMIN_PASSWORD", "hub_settings"]  # imported from here by many test modules
+# imported from here by many test modules
+__all__ = ["ADMIN_PASSWORD", "POSTGRES_ADDRESS", "hub_settings", "scratch_postgres"]
 
 # The slow-test budget: an unmarked test over 20 s fails (tests/support/budget.py).
 pytest_plugins = ["tests.support.budget"]
@@ -130,41 +130,13 @@ def settled_fleet(fleet: LocalFleet, fleet_admin_token: str) -> Iterator[LocalFl
     settle_fleet(fleet.plan.hub_http, fleet_admin_token, vehicles)
 
 
-# The PostgreSQL server the storage tests use (trust auth); GCS_TEST_POSTGRES_ADDRESS
-# points them elsewhere, as host:port.
-POSTGRES_ADDRESS = os.environ.get("GCS_TEST_POSTGRES_ADDRESS", "127.0.0.1:5432")
-POSTGRES_ADMIN = f"postgresql://postgres@{POSTGRES_ADDRESS}/postgres"
-
-
-def _postgres_admin() -> psycopg.Connection[Any]:
-    """A connection to the server. Where it cannot be reached, the test is skipped,
-    saying why; except in CI (CI=true), where the server must be there and a test that
-    needs it fails loudly instead of passing as a skip."""
-    try:
-        return psycopg.connect(POSTGRES_ADMIN, autocommit=True, connect_timeout=5)
-    except psycopg.OperationalError as error:
-        if os.environ.get("CI", "").lower() == "true":
-            raise
-        pytest.skip(f"PostgreSQL is not reachable at {POSTGRES_ADDRESS}: {error}".strip())
-
-
-@contextmanager
-def scratch_postgres() -> Iterator[str]:
-    """A new, empty database on the real PostgreSQL server; yields its SQLAlchemy URL."""
-    name = f"gcs_test_{uuid.uuid4().hex[:10]}"
-    with _postgres_admin() as admin:
-        admin.execute(f"CREATE DATABASE {name}")
-    try:
-        yield f"postgresql+psycopg://postgres@{POSTGRES_ADDRESS}/{name}"
-    finally:
-        with psycopg.connect(POSTGRES_ADMIN, autocommit=True) as admin:
-            admin.execute(f"DROP DATABASE {name} WITH (FORCE)")
-
-
 @contextmanager
 def _database_of_kind(kind: str, folder: Path) -> Iterator[str]:
+    """A migrated database of ``kind``: a copy of the migrated template of each kind."""
     if kind == "sqlite":
-        yield f"sqlite:///{folder}/store.sqlite3"
+        path = folder / "store.sqlite3"
+        shutil.copyfile(migrated_template(), path)
+        yield f"sqlite:///{path}"
         return
     with scratch_postgres() as url:
         yield url
@@ -172,7 +144,8 @@ def _database_of_kind(kind: str, folder: Path) -> Iterator[str]:
 
 @pytest.fixture(params=["sqlite", "postgresql"])
 def database_url(request: pytest.FixtureRequest, tmp_path: Path) -> Iterator[str]:
-    """The same storage test on the embedded default and on PostgreSQL."""
+    """The same storage test on the embedded default and on PostgreSQL, each database
+    already migrated (a test's own `migrate` finds nothing to do)."""
     with _database_of_kind(request.param, tmp_path) as url:
         yield url
 

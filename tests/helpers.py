@@ -26,7 +26,7 @@ from backend.app import create_app
 from backend.settings import HubSettings
 from gcs.launcher import FleetPlan, LocalFleet, end_with_parent, free_port
 from protocol.messages import CLIENT_WS_PATH, PROTOCOL_VERSION, Hello
-from tests.support.hubs import TEST_HUB_ENV
+from tests.support.hubs import TEST_HUB_ENV, seed_database
 
 T = TypeVar("T")
 
@@ -275,7 +275,10 @@ def settle_fleet(
 @contextmanager
 def running_fleet(data_dir: Path, **plan: Any) -> Iterator[LocalFleet]:
     """Hub, simulators and agents as real processes on loopback, started and ready;
-    ``plan`` is what differs from `FleetPlan`'s defaults (vehicles, speedup, frames...)."""
+    ``plan`` is what differs from `FleetPlan`'s defaults (vehicles, speedup, frames...).
+    The hub starts on a copy of the migrated template database (its migration then finds
+    nothing to do)."""
+    seed_database(data_dir)
     with LocalFleet(FleetPlan(port=free_port(), data_dir=data_dir, **plan)) as fleet:
         fleet.start(TEST_HUB_ENV)
         fleet.wait_until_ready()

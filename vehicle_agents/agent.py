@@ -24,7 +24,6 @@ from protocol.messages import (
     encode,
 )
 from vehicle_agents import __version__
-from vehicle_agents.sensors.paced_clock import PacedClock
 from vehicle_agents.config import AgentSettings, default_vehicle_id, hub_http_base
 from vehicle_agents.control.executor import CommandExecutor
 from vehicle_agents.control.formation import FormationRunner
@@ -43,6 +42,7 @@ from vehicle_agents.health import HealthFile
 from vehicle_agents.hub.link import HubLink, HubTimeouts, ModeReport, VehicleIdInUse
 from vehicle_agents.hub.outbox import Outbox, SpillFile
 from vehicle_agents.sensors.fcu_time import FcuClock, PoseHistory, ask_timesync
+from vehicle_agents.sensors.paced_clock import PacedClock
 from vehicle_agents.sensors.relay import DiskBacklog, ScanOutbox, ScanRelay, parse_mount
 from vehicle_agents.sensors.ros2 import SCHEME as ROS2_SCHEME
 from vehicle_agents.sensors.ros2 import LaserScanSource

@@ -1,6 +1,8 @@
-"""Per-connection telemetry schedule, in wall-clock seconds, and the requests that change it.
+"""Per-connection telemetry schedule, in sim seconds, and the requests that change it.
 
-Rates are wall-clock so a speed-up does not flood the link; what each message says is
+Rates are per sim second, as ArduPilot SITL's with SIM_SPEEDUP: at a speed-up of N a
+10 Hz stream sends 10 N messages a wall second, and a client that times the stream by
+the messages' own time_boot_ms finds 10 Hz at any speed-up. What each message says is
 the sim state at the moment it is sent. Clients set rates per message with
 SET_MESSAGE_INTERVAL (handled in ``commands``) or per group with REQUEST_DATA_STREAM.
 """
@@ -18,6 +20,11 @@ from simulator.mavlink.commands import MessageHandler, Reply
 from simulator.mavlink.telemetry import GPS2_RAW
 
 MIN_INTERVAL_S = 0.01  # 100 Hz at most per message
+# A message late by less than this (a tick held up a moment, which at a speed-up is that
+# many times longer in sim time) keeps its rhythm: it is sent at the next ticks until it
+# has caught up. Later than that (a stall, a reboot's silence), it resumes from now
+# rather than sending a burst.
+CATCH_UP_S = 1.0
 
 
 class StreamSchedule:
@@ -53,6 +60,10 @@ class StreamSchedule:
         if msg_id in self._next_due:
             self._next_due[msg_id] = min(self._next_due[msg_id], now)
 
+    def next_due(self) -> float | None:
+        """When the next message is due, or None if nothing is streamed."""
+        return min(self._next_due.values(), default=None)
+
     def due(self, now: float) -> list[int]:
         """Ids due at ``now``, in a stable order; each is rescheduled one interval on."""
         ready: list[int] = []
@@ -63,7 +74,8 @@ class StreamSchedule:
             interval = self._intervals[msg_id]
             following = due_at + interval
             # after a stall, resume the rhythm from now rather than sending a burst
-            self._next_due[msg_id] = following if following > now else now + interval
+            caught_up = following > now - CATCH_UP_S
+            self._next_due[msg_id] = following if caught_up else now + interval
         return ready
 
 

@@ -27,7 +27,7 @@ MavMessage = Any  # pymavlink message classes are generated and untyped
 
 GPS2_RAW = mavlink2.MAVLINK_MSG_ID_GPS2_RAW  # the second receiver, when there is one
 
-# Streams every client gets without asking, in messages per wall-clock second.
+# Streams every client gets without asking, in messages per sim second.
 DEFAULT_RATES_HZ: dict[int, float] = {
     MsgId.HEARTBEAT: 1.0,
     MsgId.SYS_STATUS: 2.0,

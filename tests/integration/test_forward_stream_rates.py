@@ -6,12 +6,13 @@ highest rate each stream needs, once: the agent's position rate holds within 5 %
 10 Hz all along, the agent logs no rate warning and never asks again, and the GCS has an
 answer to every SET_MESSAGE_INTERVAL it sent (issue #35).
 
-The simulator sends its streams by the wall clock (its --speedup runs the physics, not
-the telemetry, faster), so here one clock, 2.5 times the wall's, drives everything that
-times the rates: the simulator's physics and streams, the agent's rate watch and the
-second GCS's cadence; the agent's parts run in-process (FcuLink, StreamRequester,
-MavlinkForwarder) to read it. Five simulated minutes take two. The rates are measured
-from GLOBAL_POSITION_INT's own time_boot_ms.
+The simulator times its streams in sim time (as SITL with SIM_SPEEDUP), so here one
+clock, SPEEDUP times the wall's, drives everything that times the rates: the simulator's
+physics and streams, the agent's rate watch and the second GCS's cadence; the agent's
+parts run in-process (FcuLink, StreamRequester, MavlinkForwarder) to read it. The clock
+holds through a stall of the process (``max_step_s``), as SITL's lockstep does, so a busy
+machine slows the flight down instead of losing its messages. Five simulated minutes
+take 25 s. The rates are measured from GLOBAL_POSITION_INT's own time_boot_ms.
 """
 
 from __future__ import annotations
@@ -19,7 +20,6 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import logging
-import time
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -28,7 +28,7 @@ from pymavlink import mavutil
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from gcs.launcher import free_port
-from simulator import ListenAddress, SimulatorConfig
+from simulator import ListenAddress, SimClock, SimulatorConfig
 from tests.support.simulators import serving
 from vehicle_agents.fcu.link import FcuLink
 from vehicle_agents.fcu.messages import MavMessage
@@ -38,7 +38,11 @@ from vehicle_agents.forwarding.forwarder import MavlinkForwarder
 
 pytestmark = [pytest.mark.integration, pytest.mark.slow]
 
-SPEEDUP = 2.5  # a busy machine stalls a thread for tenths of a second, 2.5 x that in sim time
+SPEEDUP = 12.0
+# Of the wall time between two readings of the clock (the simulator reads it every tick,
+# 10 ms at most), no more than this counts: a longer stall is lost, not flown.
+MAX_STEP_S = 0.05
+ACK_WAIT_S = 0.4  # wall: the agent waits for its acknowledgements on the wall clock
 DURATION_S = 300.0  # simulated
 SETTLE_S = 20.0  # the agent's own requests, before the rates are held to account
 WINDOW_S = 20.0
@@ -48,22 +52,12 @@ POSITION_HZ = 10.0  # the agent's default for GLOBAL_POSITION_INT
 GCS_POSITION_HZ = 4.0  # the second GCS's own, lower
 
 
-class FastClock:
-    """Seconds since it was made, SPEEDUP times faster than the wall's."""
-
-    def __init__(self) -> None:
-        self._start = time.monotonic()
-
-    def now(self) -> float:
-        return (time.monotonic() - self._start) * SPEEDUP
-
-
 @dataclass
 class SecondGcs:
     """MAVProxy's habit, played by pymavlink through the forward's udpin endpoint."""
 
     port: int
-    clock: FastClock
+    clock: SimClock
     requests: int = 0
     acks: list[Any] = field(default_factory=list)
 
@@ -112,8 +106,8 @@ def test_a_second_gcs_asking_lower_rates_for_five_minutes_changes_nothing(
 ) -> None:
     caplog.set_level(logging.INFO, logger="vehicle_agents")
     config = SimulatorConfig(listen=ListenAddress("tcp", "127.0.0.1", 0), speedup=SPEEDUP)
-    clock = FastClock()
-    with serving(config, clock=clock, wall_clock=clock.now) as (_, address):
+    clock = SimClock(SPEEDUP, max_step_s=MAX_STEP_S)
+    with serving(config, clock=clock) as (_, address):
         positions: list[int] = []  # time_boot_ms of each GLOBAL_POSITION_INT at the agent
 
         def count(message: MavMessage) -> None:
@@ -126,7 +120,7 @@ def test_a_second_gcs_asking_lower_rates_for_five_minutes_changes_nothing(
             streams = StreamRequester(
                 link,
                 {},
-                timeouts=StreamTimeouts(ack_s=1.0 / SPEEDUP, watch_every_s=1.0 / SPEEDUP),
+                timeouts=StreamTimeouts(ack_s=ACK_WAIT_S, watch_every_s=1.0 / SPEEDUP),
                 watch=RateWatchSettings(),
                 clock=clock.now,
             )

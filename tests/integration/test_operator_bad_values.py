@@ -1,12 +1,13 @@
 """An operator's out-of-range number never reaches, let alone ends, a vehicle's agent.
 
-Against real processes (hub, simulator, agent), an operator sends 1e300, -1e300, NaN and
-Infinity in every number of every route that ends up in a MAVLink field: each command
-with a number, to one vehicle and to a group (take-off, go-to, speed, set home, parameter
-set, mission upload, set current), the parameter route, the mission routes, and stick
-input on the dashboard's socket. Each one is refused naming the field (a 422 on REST, an
-error reply on the socket); afterwards the agent is still running, still connected, and
-still carries a good command there and back (and the vehicle's parameter is unchanged).
+Against real processes (the session's fleet: hub, simulators, agents), an operator sends
+1e300, -1e300, NaN and Infinity in every number of every route that ends up in a MAVLink
+field: each command with a number, to one vehicle and to a group (take-off, go-to,
+speed, set home, parameter set, mission upload, set current), the parameter route, the
+mission routes, and stick input on the dashboard's socket. Each one is refused naming
+the field (a 422 on REST, an error reply on the socket); afterwards the agent is still
+running, still connected, and still carries a good command there and back (and the
+vehicle's parameter is unchanged).
 """
 
 from __future__ import annotations
@@ -15,7 +16,7 @@ import json
 import math
 import secrets
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 from typing import Annotated, Any, get_args, get_origin
 
 import httpx
@@ -25,14 +26,12 @@ from websockets.sync.client import ClientConnection, connect
 
 from gcs.launcher import LocalFleet
 from protocol.messages import CLIENT_WS_PATH, Command, ManualAxes, MissionItem
-from tests.conftest import FLEET_SPEEDUP
 from tests.helpers import (
     FleetWatcher,
     access_token,
     api_client,
     connected,
     poll_until,
-    running_fleet,
 )
 
 pytestmark = pytest.mark.integration
@@ -131,19 +130,20 @@ def _requests(bad: float | str) -> list[tuple[str, Request]]:
     return requests
 
 
-@pytest.fixture(scope="module")
-def one_vehicle(tmp_path_factory: pytest.TempPathFactory) -> Iterator[LocalFleet]:
-    with running_fleet(
-        tmp_path_factory.mktemp("bounds"), vehicles=1, speedup=FLEET_SPEEDUP
-    ) as fleet:
-        yield fleet
+@pytest.fixture
+def one_vehicle(settled_fleet: LocalFleet) -> LocalFleet:
+    """The session's fleet, of which these tests use VEHICLE alone: what they send is
+    refused before it reaches the agent, and what does reach it (a parameter read, the
+    same value written back, a lease taken and given back) leaves the vehicle as it was,
+    so no fleet of their own is needed (one took 10-20 s to start)."""
+    return settled_fleet
 
 
 @pytest.fixture(scope="module")
-def operator(one_vehicle: LocalFleet) -> str:
+def operator(fleet: LocalFleet) -> str:
     """An operator's bearer token: the role that may command, below the admin."""
-    base = one_vehicle.plan.hub_http
-    admin = access_token(base, "admin", one_vehicle.plan.admin_password)
+    base = fleet.plan.hub_http
+    admin = access_token(base, "admin", fleet.plan.admin_password)
     password = secrets.token_urlsafe(18)
     with api_client(base, admin) as api:
         created = api.post(

@@ -12,7 +12,8 @@ from collections.abc import Iterator
 import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
-from simulator import ListenAddress, SimulatorConfig
+from simulator import ListenAddress, ManualClock, SimulatorConfig
+from simulator.server import MIN_TICK_S, TICK_S, Link, SimulatorServer
 from tests.support.simulators import (
     REPO_ROOT,
     SYSID,
@@ -126,9 +127,9 @@ def test_udp_answers_whoever_writes() -> None:
         assert home.altitude == 584_000
 
 
-def test_stream_rates_are_wall_clock_whatever_the_speedup() -> None:
+def test_stream_rates_are_per_sim_second_so_a_speedup_multiplies_them() -> None:
     config = SimulatorConfig(
-        listen=ListenAddress("tcp", "127.0.0.1", 0), system_id=SYSID, speedup=100.0
+        listen=ListenAddress("tcp", "127.0.0.1", 0), system_id=SYSID, speedup=10.0
     )
     with (
         serving(config) as (_server, address),
@@ -143,9 +144,37 @@ def test_stream_rates_are_wall_clock_whatever_the_speedup() -> None:
             if message is not None:
                 count += 1
                 last = message
-        assert 7 <= count <= 13  # 10 Hz of wall time
-        # ... while sim time ran 100 times faster
-        assert last.time_boot_ms - first.time_boot_ms > 50_000
+        assert 70 <= count <= 130  # 10 Hz of sim time: 100 a wall second
+        # ... as sim time ran 10 times faster, and by the messages' own clock, 10 Hz
+        sim_s = (last.time_boot_ms - first.time_boot_ms) / 1000.0
+        assert sim_s > 7.0
+        assert count / sim_s == pytest.approx(10.0, rel=0.1)
+
+
+class _Nowhere(Link):
+    """A client that hears nothing: the schedule is what counts."""
+
+    def _write(self, frame: bytes) -> None:
+        pass
+
+    def close(self) -> None:
+        pass
+
+
+def test_the_tick_comes_when_the_next_stream_is_due() -> None:
+    clock, wall = ManualClock(), [0.0]
+    server = SimulatorServer(SimulatorConfig(speedup=10.0), clock=clock, wall_clock=lambda: wall[0])
+    assert server._until_next_tick() == TICK_S  # no client: the physics' pace
+    server.links.append(_Nowhere("gcs", SYSID, clock.now()))
+    assert server._until_next_tick() == MIN_TICK_S  # everything due on connect
+    server.tick()
+    clock.advance(0.05)
+    # GLOBAL_POSITION_INT (10 Hz) next, 0.05 sim s away: 5 ms of wall time at 10x
+    assert server._until_next_tick() == pytest.approx(0.005)
+    clock.advance(0.5)
+    assert server._until_next_tick() == MIN_TICK_S  # late: caught up at once
+    server._silent_until = 4.0
+    assert server._until_next_tick() == TICK_S  # a reboot's silence: nothing to send
 
 
 def test_cannot_listen_exits_1(capfd: pytest.CaptureFixture[str]) -> None:

@@ -3,8 +3,8 @@ autopilot clock already heard at a given pace."""
 
 from __future__ import annotations
 
-from vehicle_agents.sensors.paced_clock import PacedClock
 from vehicle_agents.sensors.fcu_time import FcuClock
+from vehicle_agents.sensors.paced_clock import PacedClock
 
 
 class FakeWall:

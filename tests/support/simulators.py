@@ -134,14 +134,10 @@ def serving(
     config: SimulatorConfig,
     *,
     clock: Clock | None = None,
-    wall_clock: Callable[[], float] | None = None,
 ) -> Iterator[tuple[SimulatorServer, ListenAddress]]:
     """A SimulatorServer on its own event loop thread; yields it and its bound address.
-    ``clock`` and ``wall_clock`` replace its clocks (a test runs its streams faster)."""
-    if wall_clock is None:
-        server = SimulatorServer(config, clock=clock)
-    else:
-        server = SimulatorServer(config, clock=clock, wall_clock=wall_clock)
+    ``clock`` replaces its sim clock (which times its physics and its streams)."""
+    server = SimulatorServer(config, clock=clock)
     loop = asyncio.new_event_loop()
     started: queue.Queue[ListenAddress | BaseException] = queue.Queue()
 

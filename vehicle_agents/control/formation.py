@@ -60,12 +60,12 @@ from protocol.messages import (
     LeaderScan,
     LeaderUpdate,
 )
-from vehicle_agents.sensors.paced_clock import PacedClock
 from vehicle_agents.control.executor import CommandExecutor
 from vehicle_agents.control.formation_obstacles import ScanObstacles
 from vehicle_agents.fcu.link import FcuLink
 from vehicle_agents.fcu.messages import MavMessage
 from vehicle_agents.fcu.modes import mode_name
+from vehicle_agents.sensors.paced_clock import PacedClock
 
 log = logging.getLogger(__name__)
 

@@ -17,10 +17,10 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from common.retry import Backoff
 from protocol.messages import EventKind, HoldCommand, ReturnToLaunchCommand
-from vehicle_agents.sensors.paced_clock import PacedClock
 from vehicle_agents.control.executor import CommandExecutor
 from vehicle_agents.fcu.link import FcuLink
 from vehicle_agents.fcu.modes import is_armed, mode_name
+from vehicle_agents.sensors.paced_clock import PacedClock
 
 log = logging.getLogger(__name__)
 

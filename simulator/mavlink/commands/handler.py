@@ -37,7 +37,7 @@ class MessageHandler(ArmingAndModes, Navigation, Parameters, Missions, Requests)
     _ftp_server: FtpServer | None = None  # made on the first FTP request
 
     def handle(self, msg: Any, streams: StreamControl, now: float) -> list[Reply]:
-        """Replies to ``msg``; ``now`` is the wall clock, for stream scheduling."""
+        """Replies to ``msg``; ``now`` is sim time, for stream scheduling."""
         kind = msg.get_type()
         if kind == "COMMAND_LONG":
             if not self._for_us(msg.target_system):

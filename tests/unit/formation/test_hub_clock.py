@@ -8,12 +8,12 @@ from typing import Any, cast
 import pytest
 from pydantic import ValidationError
 
-from backend.formation.active import ActiveFormation
-from backend.formation.service import FormationService
 from backend.fleet.registry import FleetRegistry, VehicleRecord
+from backend.formation.active import ActiveFormation
 from backend.formation.planner import FormationPlan
 from backend.formation.route import LeaderRoute
 from backend.formation.schemas import FormationRequest
+from backend.formation.service import FormationService
 from backend.settings import HubSettings
 from common.geodesy import LocalFrame
 from protocol.messages import VehicleState

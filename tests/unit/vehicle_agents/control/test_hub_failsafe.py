@@ -12,10 +12,10 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 from common.retry import Backoff
 from protocol.messages import EventKind
 from tests.support.paced import paced_at
-from vehicle_agents.sensors.paced_clock import PacedClock
 from vehicle_agents.control.executor import CommandExecutor
 from vehicle_agents.control.hub_failsafe import HubLinkFailsafe, reconnect_backoff
 from vehicle_agents.fcu.link import FcuLink
+from vehicle_agents.sensors.paced_clock import PacedClock
 
 COPTER_MODES = {"STABILIZE": 0, "GUIDED": 4, "RTL": 6, "LAND": 9}
 

@@ -9,8 +9,8 @@ import asyncio
 from protocol.messages import EventKind
 from tests.support.paced import FakeWall, paced_at
 from vehicle_agents.control.executor import CommandExecutor
-from vehicle_agents.fcu.link import FcuLink
 from vehicle_agents.control.manual import ManualPilot
+from vehicle_agents.fcu.link import FcuLink
 
 
 def _pilot(rate: float) -> tuple[ManualPilot, FakeWall, list[str]]:

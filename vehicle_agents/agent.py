@@ -34,10 +34,12 @@ from vehicle_agents.hub.outbox import Outbox, SpillFile
 from vehicle_agents.publishing.events import EventSource
 from vehicle_agents.publishing.telemetry import TelemetryPublisher, current_state
 from vehicle_agents.sensors.fcu_time import FcuClock, PoseHistory, ask_timesync
+from vehicle_agents.sensors.mavlink_ranges import MavlinkRangeSource
 from vehicle_agents.sensors.relay import DiskBacklog, ScanOutbox, ScanRelay, parse_mount
 from vehicle_agents.sensors.ros2 import SCHEME as ROS2_SCHEME
 from vehicle_agents.sensors.ros2 import LaserScanSource
-from vehicle_agents.sensors.sources import MavlinkRangeSource, ScanSource, SerialLidarSource
+from vehicle_agents.sensors.serial_lidar import SerialLidarSource
+from vehicle_agents.sensors.turn import ScanSource
 from vehicle_agents.tlog.pruning import MIB, TlogRetention
 from vehicle_agents.tlog.recorder import TlogRecorder
 from vehicle_agents.tlog.uploads import TlogUploader

@@ -27,7 +27,7 @@ sys.path.insert(0, str(ROOT))
 from backend.api.auth import API_TOKEN_DAYS  # noqa: E402
 from backend.auth.credentials import SESSION_COOKIE  # noqa: E402
 from backend.auth.policy import AGENT_MESSAGE_PERMISSIONS, CLIENT_MESSAGE_PERMISSIONS  # noqa: E402
-from backend.realtime.agent_gateway import HELLO_TIMEOUT_S  # noqa: E402
+from backend.realtime.agent_gateway.handshake import HELLO_TIMEOUT_S  # noqa: E402
 from backend.realtime.live_events import DEFAULT_QUEUE_EVENTS  # noqa: E402
 from backend.settings import HubSettings  # noqa: E402
 from protocol import messages  # noqa: E402

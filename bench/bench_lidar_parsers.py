@@ -21,7 +21,7 @@ from simulator.outputs.lidar import wire_format
 from simulator.sensors.lidar import Lidar, LidarSpec, Pose
 from simulator.world.obstacles import default_scene
 from vehicle_agents.sensors.lidar.models import MODELS, make_parser
-from vehicle_agents.sensors.sources import TurnAssembler
+from vehicle_agents.sensors.turn_assembly import TurnAssembler
 
 READ = 4096
 POINTS_PER_S = 7200  # 720 points at 10 Hz

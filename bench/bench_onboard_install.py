@@ -35,11 +35,9 @@ import time
 import urllib.request
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from bench_agent import cpu_and_rss, spawn, stop, wait_for_hub
-
+from bench.agent_footprint.processes import cpu_and_rss, spawn, stop, wait_for_hub
 from gcs.launcher import free_port
 
 ROOT = Path(__file__).resolve().parent.parent

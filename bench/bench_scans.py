@@ -46,7 +46,8 @@ from simulator.sensors.lidar import Lidar, Pose
 from simulator.wire.ydlidar import encode_beams
 from simulator.world.obstacles import default_scene
 from vehicle_agents.sensors.lidar.ydlidar import YdlidarParser
-from vehicle_agents.sensors.sources import Turn, TurnAssembler
+from vehicle_agents.sensors.turn import Turn
+from vehicle_agents.sensors.turn_assembly import TurnAssembler
 
 SITE = LocalFrame(-35.363262, 149.165237, 584.0)
 WORLD = default_scene()

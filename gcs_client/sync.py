@@ -19,7 +19,7 @@ from typing import Any, TypeVar
 
 import httpx
 
-from gcs_client.hub import ExportFormat, Hub
+from gcs_client.hub import Hub
 from gcs_client.models import (
     AccessToken,
     AuditPage,
@@ -34,6 +34,7 @@ from gcs_client.models import (
     IssuedApiToken,
     VehicleSummary,
 )
+from gcs_client.resources import ExportFormat
 
 T = TypeVar("T")
 

@@ -12,14 +12,8 @@ The prose is here; every name, number, field and close code comes from the code.
 from __future__ import annotations
 
 import argparse
-import inspect
-import io
-import json
 import sys
-import tokenize
-import typing
 from pathlib import Path
-from typing import Any
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
@@ -27,190 +21,28 @@ sys.path.insert(0, str(ROOT))
 from backend.api.auth import API_TOKEN_DAYS  # noqa: E402
 from backend.auth.credentials import SESSION_COOKIE  # noqa: E402
 from backend.auth.policy import AGENT_MESSAGE_PERMISSIONS, CLIENT_MESSAGE_PERMISSIONS  # noqa: E402
-from backend.realtime.agent_gateway import HELLO_TIMEOUT_S  # noqa: E402
+from backend.realtime.agent_gateway.handshake import HELLO_TIMEOUT_S  # noqa: E402
 from backend.realtime.live_events import DEFAULT_QUEUE_EVENTS  # noqa: E402
 from backend.settings import HubSettings  # noqa: E402
 from protocol import messages  # noqa: E402
 from protocol.messages import CloseCode  # noqa: E402
+from scripts.websocket_docs.close_codes import close_code_meanings  # noqa: E402
+from scripts.websocket_docs.schema_markdown import (  # noqa: E402
+    all_definitions,
+    anchor,
+    cell,
+    description_of,
+    field_table,
+    message_section,
+    type_section,
+    union_members,
+)
 
 PAGE = ROOT / "docs" / "websockets.md"
 # uvicorn's defaults, which `gcs hub` keeps: a WebSocket ping every 20 s, and a peer
 # that has not answered one within 20 s is gone.
 HUB_PING_INTERVAL_S = 20
 HUB_PING_TIMEOUT_S = 20
-
-Schema = dict[str, Any]
-
-# The standard codes of RFC 6455 (section 7.4.1), for those the protocol module leaves
-# uncommented; the application's own (4xxx) must say what they mean there.
-RFC6455_MEANINGS = {
-    1000: "normal closure: the connection has done its job",
-    1008: "policy violation",
-    1009: "a frame over the size limit",
-}
-
-
-def close_code_meanings() -> dict[CloseCode, str]:
-    """Each close code's meaning: the comment on its line in protocol/messages/."""
-    meanings: dict[CloseCode, str] = {}
-    source = inspect.getsource(CloseCode)
-    line_comments: dict[int, str] = {}
-    names: dict[int, str] = {}
-    for token in tokenize.generate_tokens(io.StringIO(source).readline):
-        row = token.start[0]
-        if token.type == tokenize.COMMENT:
-            line_comments[row] = token.string.lstrip("# ").strip()
-        elif token.type == tokenize.NAME and token.start[1] == 4 and row not in names:
-            names[row] = token.string
-    for row, name in names.items():
-        if name in CloseCode.__members__ and row in line_comments:
-            meanings[CloseCode[name]] = line_comments[row]
-    for code in CloseCode:
-        if code not in meanings and code in RFC6455_MEANINGS:
-            meanings[code] = RFC6455_MEANINGS[code]
-    missing = [code.name for code in CloseCode if code not in meanings]
-    if missing:
-        raise SystemExit(
-            f"CloseCode members without a comment saying what they mean: {', '.join(missing)}"
-        )
-    return meanings
-
-
-def union_members(alias: Any) -> list[str]:
-    """The message classes of a direction's discriminated union, in declaration order."""
-    union = typing.get_args(alias)[0]
-    return [member.__name__ for member in typing.get_args(union) or (union,)]
-
-
-def all_definitions() -> dict[str, Schema]:
-    definitions: dict[str, Schema] = {}
-    for adapter in (
-        messages.agent_to_hub,
-        messages.hub_to_agent,
-        messages.client_to_hub,
-        messages.hub_to_client,
-        messages.command_adapter,
-    ):
-        definitions.update(adapter.json_schema()["$defs"])
-    return definitions
-
-
-def anchor(name: str) -> str:
-    return name.lower()
-
-
-def type_of(schema: Schema) -> str:
-    if "$ref" in schema:
-        name = schema["$ref"].rsplit("/", 1)[1]
-        return f"[{name}](#{anchor(name)})"
-    if "const" in schema:
-        return f"`{json.dumps(schema['const'])}`"
-    if "enum" in schema:
-        return " or ".join(f"`{json.dumps(value)}`" for value in schema["enum"])
-    if "anyOf" in schema:
-        return " or ".join(type_of(option) for option in schema["anyOf"])
-    if "oneOf" in schema:
-        mapping = schema.get("discriminator", {}).get("mapping", {})
-        key = schema.get("discriminator", {}).get("propertyName", "type")
-        return f"one of the [commands](#commands), by `{key}`" if mapping else "one of several"
-    kind = schema.get("type")
-    if kind == "array" and "prefixItems" in schema:  # a tuple: (east, north, up), say
-        return "[" + ", ".join(type_of(item) for item in schema["prefixItems"]) + "]"
-    if kind == "array":
-        return f"list of {type_of(schema['items'])}"
-    if kind == "object" and isinstance(schema.get("additionalProperties"), dict):
-        return f"object of {type_of(schema['additionalProperties'])}"
-    return str(kind)
-
-
-def number(value: float) -> str:
-    return str(value) if isinstance(value, int) else f"{value:g}"
-
-
-def limits_of(schema: Schema) -> list[str]:
-    """The constraints a value must meet, in words."""
-    limits: list[str] = []
-    for option in schema.get("anyOf", [schema]):
-        bounds = []
-        for key, word in (
-            ("minimum", "≥"),
-            ("exclusiveMinimum", ">"),
-            ("maximum", "≤"),
-            ("exclusiveMaximum", "<"),
-        ):
-            if key in option:
-                bounds.append(f"{word} {number(option[key])}")
-        if bounds:
-            limits.append(" and ".join(bounds))
-        for unit, low_key, high_key in (
-            ("chars", "minLength", "maxLength"),
-            ("items", "minItems", "maxItems"),
-        ):
-            low, high = option.get(low_key, 0), option.get(high_key)
-            if low and high is not None:
-                limits.append(f"{low} to {high} {unit}")
-            elif low:
-                limits.append(f"at least {low} {unit}")
-            elif high is not None:
-                limits.append(f"at most {high} {unit}")
-        if "pattern" in option:
-            limits.append(f"matches `{option['pattern']}`")
-    return limits
-
-
-def cell(text: str) -> str:
-    return text.replace("|", "\\|").replace("\n", " ")
-
-
-def field_table(schema: Schema) -> list[str]:
-    properties: dict[str, Schema] = schema.get("properties", {})
-    if not properties:
-        return ["No fields."]
-    required = set(schema.get("required", []))
-    lines = ["| field | type | required or default | meaning |", "| --- | --- | --- | --- |"]
-    for name, prop in properties.items():
-        if name in required:
-            presence = "required"
-        elif "default" in prop:
-            presence = f"`{json.dumps(prop['default'])}`"
-        else:
-            presence = "optional"
-        description = " ".join(prop.get("description", "").split())
-        if not description.endswith("..."):  # "multirotor, rover, ..." keeps its dots
-            description = description.removesuffix(".")
-        meaning = "; ".join(part for part in (description, ", ".join(limits_of(prop))) if part)
-        lines.append(f"| `{name}` | {cell(type_of(prop))} | {presence} | {cell(meaning)} |")
-    return lines
-
-
-def description_of(schema: Schema) -> list[str]:
-    text = schema.get("description")
-    return [" ".join(text.split()), ""] if text else []
-
-
-def message_section(
-    name: str, schema: Schema, direction: str, anchored: set[str] | None = None
-) -> list[str]:
-    """A message's heading and fields; its anchor once per page (``anchored`` holds those
-    already written: ping and pong go both ways, and links lead to the first)."""
-    tag = schema["properties"]["type"]["const"]
-    target = anchor(name)
-    if anchored is not None:
-        if target in anchored:
-            target = ""
-        anchored.add(target)
-    return [
-        *([f'<a id="{target}"></a>'] if target else []),
-        f"#### `{tag}` ({direction})",
-        "",
-        *description_of(schema),
-        *field_table(schema),
-        "",
-    ]
-
-
-def type_section(name: str, schema: Schema) -> list[str]:
-    return [f"### {name}", "", *description_of(schema), *field_table(schema), ""]
 
 
 def render() -> str:

@@ -5,7 +5,7 @@ from __future__ import annotations
 from fastapi import APIRouter, WebSocket
 
 from backend.api.deps import HubDep
-from backend.realtime.agent_gateway import AgentSession
+from backend.realtime.agent_gateway.session import AgentSession
 from backend.realtime.client_feed import ClientFeed
 from protocol.messages import AGENT_WS_PATH, CLIENT_WS_PATH
 

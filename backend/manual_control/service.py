@@ -6,13 +6,13 @@ How a lease ends, and who tells the vehicle:
   ``manual_stop`` and the agent holds the vehicle;
 - ended on the vehicle (the deadman, frozen input, the hold button, a mode change the
   agent did not make, such as the RC transmitter's switch): the agent has held or
-  yielded already and says so in a "manual" event (backend/realtime/agent_gateway.py);
+  yielded already and says so in a "manual" event (backend/realtime/agent_gateway/inbound.py);
 - the hub restarted: leases live only in memory, so none survives; at start the hub
   finds in the audit log the ones that were open and reports them revoked.
 
 ``ManualControl`` is the service: the hub holds one (``Hub.manual_control``), and the live
 sessions reach it through it (``backend/realtime/client_feed.py`` for the pilot's lease
-and sticks, ``agent_gateway.py`` for the agent's word).
+and sticks, ``agent_gateway/inbound.py`` for the agent's word).
 """
 
 from __future__ import annotations

@@ -33,7 +33,7 @@ log = logging.getLogger(__name__)
 LEASE_CLAIM_MARGIN_S = 2.0
 LEASE_EXPIRY_S = 2.0  # backend.manual_control.lease.LeaseLimits' default
 # An agent's "manual" event this severe (WARNING) or worse: browser control has ended on
-# the vehicle (backend/realtime/agent_gateway.py says the same of its own agents).
+# the vehicle (backend/realtime/agent_gateway/inbound.py says the same of its own agents).
 MANUAL_ENDED_SEVERITY = 4
 # A vehicle of another hub not heard of for this long is asked after; if no hub answers
 # for it (its hub died, and its agent has not reconnected elsewhere yet), it is shown

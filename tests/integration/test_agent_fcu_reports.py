@@ -24,11 +24,11 @@ from pymavlink.dialects.v20 import development
 from protocol.messages import VehicleState
 from tests.helpers import FleetWatcher, agent_process, api_client, poll_until, state_of
 from tests.mavlink_peer import ScriptedFlightController, _is_command
-from vehicle_agents.agent import EventSource
 from vehicle_agents.fcu.available_modes import AvailableModes
 from vehicle_agents.fcu.link import FcuLink
 from vehicle_agents.fcu.messages import MavMessage
 from vehicle_agents.hub.outbox import Outbox
+from vehicle_agents.publishing.events import EventSource
 from vehicle_agents.telemetry.snapshot import link_snapshot
 
 pytestmark = pytest.mark.integration

@@ -25,7 +25,7 @@ from common.retry import Backoff, Retries
 from protocol.messages import MAX_SOURCE_COUNTS, ScanSourceStats
 from protocol.scans import FLAG_REPLAYED, Mount, ScanFrame, encode_scan, with_flags
 from vehicle_agents.sensors.fcu_time import PoseHistory
-from vehicle_agents.sensors.sources import ScanSource, Turn
+from vehicle_agents.sensors.turn import ScanSource, Turn
 
 log = logging.getLogger(__name__)
 

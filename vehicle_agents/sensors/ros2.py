@@ -24,7 +24,7 @@ from array import array
 from collections.abc import AsyncIterator, Callable
 from typing import Any
 
-from vehicle_agents.sensors.sources import SNAPSHOT_S, Turn
+from vehicle_agents.sensors.turn import SNAPSHOT_S, Turn
 
 SCHEME = "ros2:"
 MAX_RANGE_MM = 65535

@@ -18,7 +18,8 @@ from simulator.server import SimulatorServer
 from simulator.world.obstacles import default_scene
 from vehicle_agents.sensors.lidar.models import MODELS, make_parser
 from vehicle_agents.sensors.lidar.probe import probe
-from vehicle_agents.sensors.sources import SerialLidarSource, Turn
+from vehicle_agents.sensors.serial_lidar import SerialLidarSource
+from vehicle_agents.sensors.turn import Turn
 
 # formats whose decoder moves each sample by a range-dependent angle: the simulator puts
 # in each sample the range of the beam that angle points at, found on the 0.5-degree grid

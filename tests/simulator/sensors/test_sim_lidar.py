@@ -16,7 +16,8 @@ from simulator.sensors.lidar import Lidar, LidarSpec, Pose
 from simulator.wire.ydlidar import encode_beams, health
 from simulator.world.obstacles import Cylinder, World, box, load_scene, wall
 from vehicle_agents.sensors.lidar.ydlidar import GET_HEALTH, START_SCAN, YdlidarParser
-from vehicle_agents.sensors.sources import Turn, TurnAssembler
+from vehicle_agents.sensors.turn import Turn
+from vehicle_agents.sensors.turn_assembly import TurnAssembler
 
 EXACT = LidarSpec(noise_sigma_m=0.0, dropout=0.0)
 

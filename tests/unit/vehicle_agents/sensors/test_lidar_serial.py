@@ -19,7 +19,8 @@ from simulator.outputs.lidar import wire_format
 from simulator.sensors.lidar import Lidar, LidarSpec, Pose
 from simulator.wire.formats import Reply, Start, Stop
 from simulator.world.obstacles import default_scene
-from vehicle_agents.sensors.sources import SerialLidarSource, Turn
+from vehicle_agents.sensors.serial_lidar import SerialLidarSource
+from vehicle_agents.sensors.turn import Turn
 
 
 @contextmanager

@@ -16,8 +16,9 @@ from backend.scans.points import world_points
 from common.geodesy import LocalFrame
 from protocol.scans import decode_scan, encode_scan
 from vehicle_agents.sensors.fcu_time import FcuClock, PoseHistory
+from vehicle_agents.sensors.mavlink_ranges import MavlinkRangeSource
 from vehicle_agents.sensors.relay import ScanOutbox, ScanRelay
-from vehicle_agents.sensors.sources import MavlinkRangeSource, Turn
+from vehicle_agents.sensors.turn import Turn
 
 SITE = LocalFrame(-35.363262, 149.165237, 584.0)
 YAW = math.pi / 2  # the nose points east

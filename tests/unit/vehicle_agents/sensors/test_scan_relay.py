@@ -21,7 +21,7 @@ from tests.support.scans import _frame
 from vehicle_agents.sensors.fcu_time import FcuClock, PoseHistory, ask_timesync
 from vehicle_agents.sensors.lidar.ydlidar import YdlidarParser
 from vehicle_agents.sensors.relay import DiskBacklog, ScanOutbox
-from vehicle_agents.sensors.sources import TurnAssembler
+from vehicle_agents.sensors.turn_assembly import TurnAssembler
 
 
 def _message(kind: str, boot_s: float, **fields: float) -> SimpleNamespace:

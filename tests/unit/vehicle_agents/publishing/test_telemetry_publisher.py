@@ -11,9 +11,9 @@ from typing import Any
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from protocol.messages import Telemetry, agent_to_hub
-from vehicle_agents.agent import TelemetryPublisher
 from vehicle_agents.fcu.link import FcuLink
 from vehicle_agents.hub.outbox import Outbox
+from vehicle_agents.publishing.telemetry import TelemetryPublisher
 
 VEHICLE = 1
 GUIDED = 4

@@ -1,0 +1,1 @@
+"""The pieces scripts/gen_websocket_docs.py writes docs/websockets.md from."""

@@ -20,14 +20,14 @@ from collections.abc import Awaitable, Callable, Iterable, Iterator
 
 from backend.errors import VehicleNotFound
 from backend.fleet.registry import FleetRegistry
-from backend.mosaic.service import MosaicService
+from backend.imagery.mosaic.service import MosaicService
+from backend.imagery.mosaic.viz_layer import MosaicLayer
 from backend.realtime.bus import Bus, LatestSubscription, Topic
 from backend.scans.pointmap import Array, find_obstacles
 from backend.scans.service import ScanDelivery, ScanService
 from backend.survey.service import SurveyService
 from backend.survey.viz_layer import SurveyLanes
 from backend.viz3d.frame import HomeAltitude
-from backend.viz3d.mosaic_layer import MosaicLayer
 from backend.viz3d.scene import FleetScene
 from common.geodesy import LocalFrame
 

@@ -6,9 +6,9 @@ has changed as one atomic scene update: the browser gets a bounded number of upd
 second whatever the fleet's size and rate, and never a stale state before a newer one.
 Scans are taken the same way (each vehicle's newest, at most once per period), and the
 accumulated point map, which only grows slowly, less often. Surveys' lanes and mosaics
-have a layer module each (backend/survey/viz_layer.py, mosaic_layer), and a feature package
-may bring its own (``SceneLayer``: the formation's, backend/formation/scene_layer.py); the
-mirror runs them beside its own work.
+have a layer module each (backend/survey/viz_layer.py, backend/imagery/mosaic/viz_layer.py),
+and a feature package may bring its own (``SceneLayer``: the formation's,
+backend/formation/scene_layer.py); the mirror runs them beside its own work.
 """
 
 from __future__ import annotations

@@ -8,6 +8,9 @@ follow. After the last chunk the image is checked (a whole JPEG of the camera's 
 moved to ``<photos>/<vehicle>/<photo id>.jpg``, recorded, and handed to the sink (the
 live mosaic). A refusal is recorded too, with its reason, so it is counted once per
 photo however often the agent retries, and asked again it answers the same.
+
+An upload's files are ``uploads.py``'s; the first chunk's metadata and the survey a photo
+belongs to, ``metadata.py``'s; this module keeps the order of the steps and the locks.
 """
 
 from __future__ import annotations

@@ -29,8 +29,8 @@ from backend.api.finite_json import FiniteJsonRoute
 from backend.api.security import SecuredRouter, requires
 from backend.auth.policy import Permission
 from backend.errors import Forbidden
-from backend.imagery.photos.deps import PhotosDep, VehiclesDep, get_photos
 from backend.imagery.photos.checks import Refusal, Refused
+from backend.imagery.photos.deps import PhotosDep, VehiclesDep, get_photos
 from backend.imagery.photos.export import write_zip
 from backend.imagery.photos.repository import PhotoCount
 from backend.imagery.photos.uploads import OffsetMismatch

@@ -23,9 +23,7 @@ from backend.api import (
     logs,
     metrics,
     missions,
-    mosaics,
     params,
-    photos,
     scans,
     system,
     tiles,
@@ -52,6 +50,10 @@ from backend.errors import (
 from backend.formation import routes as formations
 from backend.formation import wiring as formation_wiring
 from backend.hub import Hub
+from backend.imagery.mosaic import deps as mosaic_deps
+from backend.imagery.mosaic import routes as mosaics
+from backend.imagery.photos import deps as photo_deps
+from backend.imagery.photos import routes as photos
 from backend.observability.logs import use_json_logs
 from backend.safety import routes as safety
 from backend.settings import REPO_ROOT, HubSettings
@@ -112,6 +114,8 @@ def create_app(settings: HubSettings | None = None) -> FastAPI:
         # The features, each on the started hub before it runs (their routes read them).
         app.state.formation = await formation_wiring.attach(hub)
         survey_deps.provide(app.state, hub.surveys)  # the survey's routes take its service
+        photo_deps.provide(app.state, hub.photos, hub.registry)  # the imagery's routes too
+        mosaic_deps.provide(app.state, hub.mosaic, hub.tiles)
         runner = asyncio.create_task(hub.run(), name="hub")
         try:
             yield

@@ -26,15 +26,15 @@ from backend.fleet.command_service import carry_out_routed
 from backend.fleet.commands import CommandDispatcher
 from backend.fleet.param_catalog import ParamCatalog
 from backend.fleet.registry import FleetRegistry, VehicleRecord
+from backend.imagery.mosaic.service import MosaicService
+from backend.imagery.photos.ingest import PhotoIngest
+from backend.imagery.photos.partials import PartialLimits
+from backend.imagery.photos.repository import PhotoRepository
+from backend.imagery.sink import MosaicSink
 from backend.manual_control.claims import LeaseClaims
 from backend.manual_control.service import ManualControl
 from backend.manual_control.store import LeaseClaimStore
 from backend.mapping.tiles import TileLibrary
-from backend.mosaic.photo import StoredPhoto as MosaicPhoto
-from backend.mosaic.service import MosaicService
-from backend.photos.ingest import PhotoIngest
-from backend.photos.partials import PartialLimits
-from backend.photos.stored import StoredPhoto
 from backend.realtime.bus import InProcessBus, ReliableSubscription, Topic
 from backend.realtime.collaborators import AgentConnection, ClientConnection
 from backend.realtime.fleet_link import FleetLink
@@ -52,7 +52,6 @@ from backend.settings import HubSettings
 from backend.storage.database import make_engine, migrate
 from backend.storage.logbook import Logbook
 from backend.storage.models import AuditRow, CommandRow
-from backend.storage.photos import PhotoRepository
 from backend.storage.records import StoredEvent
 from backend.storage.repository import Repository
 from backend.storage.retention import RetentionPolicy
@@ -134,7 +133,7 @@ class Hub:
     fleet_link: FleetLink | None = None
     # Area surveys: created in start(), as they send commands through the hub itself.
     surveys: SurveyService = field(init=False)
-    # The live orthomosaic of each survey's photos (backend/mosaic/).
+    # The live orthomosaic of each survey's photos (backend/imagery/mosaic/).
     mosaic: MosaicService = field(init=False)
     # Survey photos from the agents' uploads; each stored photo of a survey goes on to
     # the mosaic (``photos.sink``).
@@ -478,28 +477,6 @@ class Hub:
         session = self.agent_sessions.get(vehicle_id)
         if session is not None and session.token_id == token_id:
             await session.close(CloseCode.UNAUTHORIZED, "agent token revoked")
-
-
-class MosaicSink:
-    """The photo ingest's sink: each stored photo of a survey into that survey's mosaic
-    (photos/ and mosaic/ are siblings that know nothing of each other; the hub joins them)."""
-
-    def __init__(self, mosaic: MosaicService) -> None:
-        self._mosaic = mosaic
-
-    async def add_photo(self, photo: StoredPhoto) -> None:
-        if photo.survey_id is None:  # no survey, no mosaic to put it in
-            return
-        await self._mosaic.add_photo(
-            MosaicPhoto(
-                photo.photo_id,
-                photo.vehicle_id,
-                photo.survey_id,
-                photo.path,
-                photo.pose,
-                photo.camera,
-            )
-        )
 
 
 def _bootstrap_accounts(accounts: Accounts, audit: AuditLog, settings: HubSettings) -> None:

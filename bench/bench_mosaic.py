@@ -27,9 +27,9 @@ import tempfile
 import time
 from pathlib import Path
 
-from backend.mosaic.engine import Applied
-from backend.mosaic.photo import StoredPhoto
-from backend.mosaic.service import MosaicService
+from backend.imagery.mosaic.engine import Applied
+from backend.imagery.mosaic.photo import StoredPhoto
+from backend.imagery.mosaic.service import MosaicService
 from protocol.photos import CameraIntrinsics
 from simulator.world.ground import Ground
 from tests.mosaic_photos import HOME, lane_poses, survey_photos

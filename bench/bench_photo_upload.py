@@ -23,7 +23,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from backend.photos.checks import check_image
+from backend.imagery.photos.checks import check_image
 from common.geodesy import GeoPoint
 from protocol.photos import CameraIntrinsics, PhotoMeta, PhotoPose
 from simulator.outputs.photos import nadir_renderer

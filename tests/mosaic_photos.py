@@ -15,9 +15,9 @@ import cv2
 import numpy as np
 import numpy.typing as npt
 
-from backend.mosaic.georef import TILE_PX, pixel_to_lonlat
-from backend.mosaic.photo import StoredPhoto
-from backend.mosaic.service import MosaicService
+from backend.imagery.mosaic.georef import TILE_PX, pixel_to_lonlat
+from backend.imagery.mosaic.photo import StoredPhoto
+from backend.imagery.mosaic.service import MosaicService
 from common.camera_geometry import gsd_m
 from common.geodesy import LocalFrame
 from protocol.photos import CameraIntrinsics, PhotoPose

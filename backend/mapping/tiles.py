@@ -8,7 +8,8 @@ so dropping a file in the folder is enough, with no restart.
 MBTiles is SQLite with rows in TMS order (y counted from the south), so a request's XYZ
 ``y`` is flipped, against the height of web Mercator's tile matrix at its zoom (the
 MBTiles 1.3 specification). PMTiles is read with the ``pmtiles`` package, already in XYZ
-order. The grid is morecantile's WebMercatorQuad, as the mosaic's (backend/mosaic/georef.py).
+order. The grid is morecantile's WebMercatorQuad, as the mosaic's
+(backend/imagery/mosaic/georef.py).
 """
 
 from __future__ import annotations

@@ -6,9 +6,9 @@ has changed as one atomic scene update: the browser gets a bounded number of upd
 second whatever the fleet's size and rate, and never a stale state before a newer one.
 Scans are taken the same way (each vehicle's newest, at most once per period), and the
 accumulated point map, which only grows slowly, less often. Surveys' lanes and mosaics
-have a layer module each (backend/survey/viz_layer.py, mosaic_layer), and a feature package
-may bring its own (``SceneLayer``: the formation's, backend/formation/scene_layer.py); the
-mirror runs them beside its own work.
+have a layer module each (backend/survey/viz_layer.py, backend/imagery/mosaic/viz_layer.py),
+and a feature package may bring its own (``SceneLayer``: the formation's,
+backend/formation/scene_layer.py); the mirror runs them beside its own work.
 """
 
 from __future__ import annotations
@@ -20,14 +20,14 @@ from collections.abc import Awaitable, Callable, Iterable, Iterator
 
 from backend.errors import VehicleNotFound
 from backend.fleet.registry import FleetRegistry
-from backend.mosaic.service import MosaicService
+from backend.imagery.mosaic.service import MosaicService
+from backend.imagery.mosaic.viz_layer import MosaicLayer
 from backend.realtime.bus import Bus, LatestSubscription, Topic
 from backend.scans.pointmap import Array, find_obstacles
 from backend.scans.service import ScanDelivery, ScanService
 from backend.survey.service import SurveyService
 from backend.survey.viz_layer import SurveyLanes
 from backend.viz3d.frame import HomeAltitude
-from backend.viz3d.mosaic_layer import MosaicLayer
 from backend.viz3d.scene import FleetScene
 from common.geodesy import LocalFrame
 

@@ -14,9 +14,10 @@ import pytest
 import viser
 
 from backend.auth.policy import Principal
-from backend.mosaic.georef import TILE_PX, pixel_to_lonlat
-from backend.mosaic.service import MosaicService
-from backend.mosaic.store import TileStore
+from backend.imagery.mosaic.georef import TILE_PX, pixel_to_lonlat
+from backend.imagery.mosaic.service import MosaicService
+from backend.imagery.mosaic.store import TileStore
+from backend.imagery.mosaic.viz_layer import GROUND_LIFT_M, MAX_TEXTURE_PX, MosaicLayer
 from backend.realtime.bus import InProcessBus
 from backend.settings import HubSettings
 from backend.storage.database import make_engine, migrate
@@ -29,7 +30,6 @@ from backend.survey.service import SurveyService
 from backend.survey.viz_layer import PlannedLanes, SurveyLanes
 from backend.viz3d.colours import rgb, vehicle_colour
 from backend.viz3d.frame import SceneFrame
-from backend.viz3d.mosaic_layer import GROUND_LIFT_M, MAX_TEXTURE_PX, MosaicLayer
 from backend.viz3d.scene import FleetScene
 from backend.viz3d.server import VizServer
 from common.geodesy import GeoPoint, LocalFrame

@@ -1,6 +1,6 @@
 """The queued photos to the hub over HTTP, resumable, and never at telemetry's expense.
 
-Per photo (the hub's side is backend/api/photos.py):
+Per photo (the hub's side is backend/imagery/photos/routes.py):
 
 1. ``GET /api/v1/vehicles/{vehicle_id}/photos/{photo_id}``: how many bytes the hub has
    committed (404: none). A cut upload resumes there, not from the start.

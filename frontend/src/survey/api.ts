@@ -61,7 +61,7 @@ export function importArea(format: SurveyFileFormat, content: string): Promise<P
   return post<Partial<SurveyRequest>>("surveys/import", { format, content });
 }
 
-/** The survey's live orthomosaic (backend/api/mosaics.py); null until a photo reaches it. */
+/** The survey's live orthomosaic (backend/imagery/mosaic/routes.py); null until a photo reaches it. */
 export async function getMosaic(id: string): Promise<MosaicDetail | null> {
   try {
     return await request<MosaicDetail>(`mosaics/${encodeURIComponent(id)}`);

@@ -30,8 +30,8 @@ from pmtiles.writer import Writer
 from rasterio import Affine
 from rasterio.windows import Window
 
-from backend.mosaic.georef import TILE_PX, WORLD_M
-from backend.mosaic.store import TileKey, TileSpan, TileStore
+from backend.imagery.mosaic.georef import TILE_PX, WORLD_M
+from backend.imagery.mosaic.store import TileKey, TileSpan, TileStore
 
 FORMATS = {
     "tif": "image/tiff",

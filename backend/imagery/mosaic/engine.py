@@ -24,8 +24,8 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
-from backend.mosaic.georef import TILE_PX, Footprint
-from backend.mosaic.store import Rgba, TileKey, TileStore
+from backend.imagery.mosaic.georef import TILE_PX, Footprint
+from backend.imagery.mosaic.store import Rgba, TileKey, TileStore
 from common.opencv import cv2
 
 FEATHER_PX = 6.0

@@ -31,9 +31,9 @@ import numpy as np
 import numpy.typing as npt
 import pytest
 
-from backend.mosaic.georef import TILE_PX, TMS
-from backend.mosaic.photo import StoredPhoto
-from backend.mosaic.service import MosaicService
+from backend.imagery.mosaic.georef import TILE_PX, TMS
+from backend.imagery.mosaic.photo import StoredPhoto
+from backend.imagery.mosaic.service import MosaicService
 from common.geodesy import LocalFrame
 from common.opencv import cv2
 from gcs.launcher import FleetPlan, LocalFleet, free_port

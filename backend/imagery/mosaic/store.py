@@ -36,7 +36,7 @@ from pathlib import Path
 import numpy as np
 import numpy.typing as npt
 
-from backend.mosaic.georef import TILE_PX, pixel_to_lonlat
+from backend.imagery.mosaic.georef import TILE_PX, pixel_to_lonlat
 from common.opencv import cv2
 
 Rgba = npt.NDArray[np.uint8]

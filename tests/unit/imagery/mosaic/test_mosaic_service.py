@@ -12,9 +12,9 @@ import morecantile
 import numpy as np
 import pytest
 
-from backend.mosaic.georef import TMS, to_mercator
-from backend.mosaic.photo import StoredPhoto
-from backend.mosaic.service import MosaicService
+from backend.imagery.mosaic.georef import TMS, to_mercator
+from backend.imagery.mosaic.photo import StoredPhoto
+from backend.imagery.mosaic.service import MosaicService
 from protocol.photos import CameraIntrinsics
 from simulator.world.ground import Ground
 from tests.mosaic_photos import HOME, mosaic_of, survey_photos

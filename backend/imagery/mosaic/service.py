@@ -21,18 +21,18 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from backend.mosaic.engine import Applied, PhotoError, apply_photo, decode
-from backend.mosaic.export import ExportError, export
-from backend.mosaic.georef import GeorefError, footprint, native_zoom, pixel_to_lonlat
-from backend.mosaic.photo import StoredPhoto
-from backend.mosaic.progress import (
+from backend.imagery.mosaic.engine import Applied, PhotoError, apply_photo, decode
+from backend.imagery.mosaic.export import ExportError, export
+from backend.imagery.mosaic.georef import GeorefError, footprint, native_zoom, pixel_to_lonlat
+from backend.imagery.mosaic.photo import StoredPhoto
+from backend.imagery.mosaic.progress import (
     MAX_FAILURES_KEPT,
     Coverage,
     MosaicProgress,
     PhotoFailure,
     VehicleCounts,
 )
-from backend.mosaic.store import TileKey, TileStore, atomic_write
+from backend.imagery.mosaic.store import TileKey, TileStore, atomic_write
 
 log = logging.getLogger(__name__)
 

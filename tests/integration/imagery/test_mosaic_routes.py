@@ -18,8 +18,8 @@ import pytest
 import rasterio
 from pmtiles.reader import Reader
 
-from backend.mosaic.georef import TMS
-from backend.mosaic.service import MosaicService
+from backend.imagery.mosaic.georef import TMS
+from backend.imagery.mosaic.service import MosaicService
 from protocol.photos import CameraIntrinsics
 from simulator.world.ground import Ground
 from tests.conftest import ADMIN_PASSWORD, hub_settings

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import pytest
 
-from backend.mosaic.service import MosaicService
+from backend.imagery.mosaic.service import MosaicService
 from protocol.photos import CameraIntrinsics
 from simulator.world.ground import Ground
 from tests.mosaic_photos import (

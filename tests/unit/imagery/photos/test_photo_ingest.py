@@ -17,14 +17,14 @@ from PIL import Image
 
 from backend.errors import NotFound
 from backend.hub import MosaicSink
-from backend.mosaic.service import MosaicService
-from backend.photos.checks import Refusal, Refused
-from backend.photos.export import write_zip
-from backend.photos.ingest import OffsetMismatch, PhotoIngest
-from backend.photos.partials import PartialLimits
-from backend.photos.stored import PhotoSink, StoredPhoto
+from backend.imagery.mosaic.service import MosaicService
+from backend.imagery.photos.checks import Refusal, Refused
+from backend.imagery.photos.export import write_zip
+from backend.imagery.photos.ingest import OffsetMismatch, PhotoIngest
+from backend.imagery.photos.partials import PartialLimits
+from backend.imagery.photos.repository import PhotoRepository
+from backend.imagery.photos.stored import PhotoSink, StoredPhoto
 from backend.storage.database import make_engine, migrate
-from backend.storage.photos import PhotoRepository
 from backend.survey.flight.progress import new_run
 from backend.survey.flight.run import DroneState, SurveyRun, SurveyState
 from backend.survey.planning.schemas import SurveyRequest

@@ -17,16 +17,16 @@ from fastapi import Path, Request, Response
 from fastapi.responses import FileResponse, JSONResponse
 from pydantic import Field
 
-from backend.api.deps import HubDep
 from backend.api.responses import ErrorMessage
 from backend.api.security import SecuredRouter, requires
-from backend.api.tiles import TileSet, tile_sets
+from backend.api.tiles import TileSet
 from backend.auth.policy import Permission
 from backend.errors import Conflict, InvalidRequest, NotFound
+from backend.imagery.mosaic.deps import MosaicsDep, TileLibraryDep
+from backend.imagery.mosaic.export import FORMATS, ExportError
+from backend.imagery.mosaic.progress import MosaicProgress
+from backend.imagery.mosaic.service import SURVEY_ID, MosaicService, UnknownMosaic
 from backend.mapping.tiles import MAX_ZOOM
-from backend.mosaic.export import FORMATS, ExportError
-from backend.mosaic.progress import MosaicProgress
-from backend.mosaic.service import SURVEY_ID, MosaicService, UnknownMosaic
 
 router = SecuredRouter(tags=["mosaics"])
 
@@ -50,9 +50,9 @@ def _progress(mosaic: MosaicService, survey_id: str) -> MosaicDetail:
 
 
 @router.get("/mosaics", response_model=list[MosaicDetail], openapi_extra=requires(Permission.READ))
-async def list_mosaics(hub: HubDep) -> list[MosaicDetail]:
+async def list_mosaics(mosaics: MosaicsDep) -> list[MosaicDetail]:
     """Every survey mosaic the hub holds, with its progress."""
-    return [_progress(hub.mosaic, survey_id) for survey_id in hub.mosaic.surveys()]
+    return [_progress(mosaics, survey_id) for survey_id in mosaics.surveys()]
 
 
 @router.get(
@@ -61,10 +61,10 @@ async def list_mosaics(hub: HubDep) -> list[MosaicDetail]:
     openapi_extra=requires(Permission.READ),
     responses={404: {"description": "No photo of this survey has reached the mosaic"}},
 )
-async def get_mosaic(survey_id: SurveyIdPath, hub: HubDep) -> MosaicDetail:
+async def get_mosaic(survey_id: SurveyIdPath, mosaics: MosaicsDep) -> MosaicDetail:
     """Photos processed and failed (each failure's reason), per vehicle too; the coverage
     of the survey's area in percent and as a GeoJSON outline; the zoom range and bounds."""
-    return _progress(hub.mosaic, survey_id)
+    return _progress(mosaics, survey_id)
 
 
 @router.get(
@@ -78,13 +78,13 @@ async def get_mosaic(survey_id: SurveyIdPath, hub: HubDep) -> MosaicDetail:
     },
 )
 async def export_mosaic(
-    survey_id: SurveyIdPath, kind: Literal["tif", "mbtiles", "pmtiles"], hub: HubDep
+    survey_id: SurveyIdPath, kind: Literal["tif", "mbtiles", "pmtiles"], mosaics: MosaicsDep
 ) -> FileResponse:
     """The mosaic as a file: `tif` a Cloud-Optimised GeoTIFF (EPSG:3857, RGBA, at the
     native zoom), `mbtiles` or `pmtiles` every zoom's tiles as PNG (drop either in the
     hub's tiles folder to use it as an offline base map)."""
     try:
-        path = await asyncio.to_thread(hub.mosaic.export, survey_id, kind)
+        path = await asyncio.to_thread(mosaics.export, survey_id, kind)
     except UnknownMosaic:
         raise NotFound(f"no photo of survey {survey_id} has reached the mosaic") from None
     except ExportError as error:
@@ -101,23 +101,23 @@ async def export_mosaic(
         409: {"description": "The mosaic has no tiles yet", "model": ErrorMessage},
     },
 )
-async def install_basemap(survey_id: SurveyIdPath, hub: HubDep) -> TileSet:
+async def install_basemap(
+    survey_id: SurveyIdPath, mosaics: MosaicsDep, tiles: TileLibraryDep
+) -> TileSet:
     """Put the mosaic in the hub's offline tiles folder as `mosaic-<survey_id>.pmtiles`:
     the dashboard then offers it as a base map, with no internet (done again, it is
     replaced by the mosaic as it is now)."""
     try:
-        name = await asyncio.to_thread(
-            hub.mosaic.install_basemap, survey_id, hub.settings.tiles_folder
-        )
+        name = await asyncio.to_thread(mosaics.install_basemap, survey_id, tiles.folder)
     except UnknownMosaic:
         raise NotFound(f"no photo of survey {survey_id} has reached the mosaic") from None
     except ExportError as error:
         raise Conflict(str(error)) from None
-    sets = await tile_sets(hub)
-    installed = next((s for s in sets if s.name == name), None)
+    sets = await asyncio.to_thread(tiles.sets)
+    installed = next((info for info in sets if info.name == name), None)
     if installed is None:
         raise Conflict(f"the tiles folder did not take {name}.pmtiles; see the hub's log")
-    return installed
+    return TileSet.of(installed)
 
 
 @router.get(
@@ -131,7 +131,7 @@ async def install_basemap(survey_id: SurveyIdPath, hub: HubDep) -> TileSet:
     },
 )
 async def get_mosaic_tile(
-    hub: HubDep,
+    mosaics: MosaicsDep,
     request: Request,
     survey_id: SurveyIdPath,
     z: Annotated[int, Path(ge=0, le=MAX_ZOOM)],
@@ -144,7 +144,7 @@ async def get_mosaic_tile(
         if value >= 2**z:
             raise InvalidRequest(field, f"{field} must be below 2**z ({2**z})", location="path")
     try:
-        served = await asyncio.to_thread(hub.mosaic.tile, survey_id, z, x, y)
+        served = await asyncio.to_thread(mosaics.tile, survey_id, z, x, y)
     except UnknownMosaic:
         raise NotFound(f"no photo of survey {survey_id} has reached the mosaic") from None
     if served is None:

@@ -17,7 +17,7 @@ import zipfile
 from collections.abc import Sequence
 from pathlib import Path
 
-from backend.storage.photos import PhotoRecord
+from backend.imagery.photos.repository import PhotoRecord
 
 IMAGES = "images"
 

@@ -21,9 +21,9 @@ import numpy as np
 import numpy.typing as npt
 import viser
 
-from backend.mosaic.georef import TILE_PX
-from backend.mosaic.service import MosaicService, UnknownMosaic
-from backend.mosaic.store import TileSpan, TileStore
+from backend.imagery.mosaic.georef import TILE_PX
+from backend.imagery.mosaic.service import MosaicService, UnknownMosaic
+from backend.imagery.mosaic.store import TileSpan, TileStore
 from backend.viz3d.scene import MOSAIC, FleetScene
 
 MAX_TEXTURE_PX = 1024

@@ -25,15 +25,16 @@ from pydantic import AfterValidator, BaseModel, Field
 from starlette.background import BackgroundTask
 from starlette.responses import Response
 
-from backend.api.deps import HubDep, get_hub
 from backend.api.finite_json import FiniteJsonRoute
 from backend.api.security import SecuredRouter, requires
 from backend.auth.policy import Permission
 from backend.errors import Forbidden
-from backend.photos.checks import Refusal, Refused
-from backend.photos.export import write_zip
-from backend.photos.ingest import OffsetMismatch
-from backend.storage.photos import PhotoCount
+from backend.imagery.photos.checks import Refusal, Refused
+from backend.imagery.photos.deps import PhotosDep, VehiclesDep, get_photos
+from backend.imagery.photos.export import write_zip
+from backend.imagery.photos.repository import PhotoCount
+from backend.imagery.photos.uploads import OffsetMismatch
+from backend.survey.deps import SurveysDep
 from backend.survey.routes import SurveyIdPath
 from protocol.messages import VehicleId
 from protocol.photos import MAX_PHOTO_BYTES, PhotoId
@@ -63,7 +64,7 @@ class _CountsOtherVehicleTokens(FiniteJsonRoute):
                 principal = getattr(request.state, "principal", None)
                 vehicle_id = request.path_params.get("vehicle_id")
                 if principal is not None and principal.is_agent and vehicle_id is not None:
-                    get_hub(request).photos.count_unrecorded(vehicle_id, Refusal.OTHER_VEHICLE)
+                    get_photos(request).count_unrecorded(vehicle_id, Refusal.OTHER_VEHICLE)
                 raise
 
         return counting_handler
@@ -100,15 +101,16 @@ async def upload_photo_chunk(
     vehicle_id: Annotated[VehicleId, Path()],
     photo_id: PhotoIdPath,
     request: Request,
-    hub: HubDep,
+    photos: PhotosDep,
+    vehicles: VehiclesDep,
     offset: Annotated[int, Query(ge=0, le=MAX_PHOTO_BYTES)] = 0,
     x_photo_meta: Annotated[str | None, Header(max_length=8192)] = None,
 ) -> Response:
     """One chunk of a photo at byte ``offset`` (the body: raw JPEG bytes)."""
-    hub.registry.get(vehicle_id)
+    vehicles.get(vehicle_id)
     chunk = await request.body()
     try:
-        state = await hub.photos.put_chunk(vehicle_id, photo_id, offset, chunk, x_photo_meta)
+        state = await photos.put_chunk(vehicle_id, photo_id, offset, chunk, x_photo_meta)
     except OffsetMismatch as mismatch:
         return JSONResponse(
             {"detail": str(mismatch), "received": mismatch.received},
@@ -127,11 +129,14 @@ async def upload_photo_chunk(
     openapi_extra=requires(Permission.AGENT),
 )
 async def photo_upload_status(
-    vehicle_id: Annotated[VehicleId, Path()], photo_id: PhotoIdPath, hub: HubDep
+    vehicle_id: Annotated[VehicleId, Path()],
+    photo_id: PhotoIdPath,
+    photos: PhotosDep,
+    vehicles: VehiclesDep,
 ) -> UploadStatus:
     """How much of the photo the hub has (404: nothing yet), to resume a cut upload."""
-    hub.registry.get(vehicle_id)
-    return UploadStatus(**(await hub.photos.state(vehicle_id, photo_id)).body())
+    vehicles.get(vehicle_id)
+    return UploadStatus(**(await photos.state(vehicle_id, photo_id)).body())
 
 
 class DronePhotos(BaseModel):
@@ -154,23 +159,24 @@ class SurveyPhotos(BaseModel):
 )
 async def survey_photos(
     survey_id: SurveyIdPath,
-    hub: HubDep,
+    photos: PhotosDep,
+    surveys: SurveysDep,
     limit: Annotated[int, Query(ge=0, le=100_000)] = 1000,
 ) -> SurveyPhotos:
     """Photos received and refused per drone (with the reasons), and the stored ones."""
-    run = await hub.surveys.find(survey_id)
-    counts = await asyncio.to_thread(hub.photos.repository.counts, survey_id)
-    by_drone = _tally(counts, hub.photos.unrecorded)
+    run = await surveys.find(survey_id)
+    counts = await asyncio.to_thread(photos.repository.counts, survey_id)
+    by_drone = _tally(counts, photos.unrecorded)
     vehicles = [d.vehicle_id for d in run.drones]
     vehicles += sorted({row.vehicle_id for row in counts} - set(vehicles))
-    stored = await asyncio.to_thread(hub.photos.repository.of_survey, survey_id)
+    stored = await asyncio.to_thread(photos.repository.of_survey, survey_id)
     return SurveyPhotos(
         survey_id=survey_id,
         drones=[
             by_drone.get(v, DronePhotos(vehicle_id=v, received=0, failed=0, reasons={}))
             for v in vehicles
         ],
-        photos=[hub.photos.summary(record) for record in stored[:limit]],
+        photos=[photos.summary(record) for record in stored[:limit]],
     )
 
 
@@ -187,20 +193,21 @@ class VehiclePhotos(DronePhotos):
 )
 async def vehicle_photos(
     vehicle_id: Annotated[VehicleId, Path()],
-    hub: HubDep,
+    photos: PhotosDep,
+    vehicles: VehiclesDep,
     limit: Annotated[int, Query(ge=0, le=10_000)] = 100,
 ) -> VehiclePhotos:
     """One vehicle's photos, whatever their survey: counts with reasons, the newest."""
-    hub.registry.get(vehicle_id)
-    counts = await asyncio.to_thread(hub.photos.repository.vehicle_counts, vehicle_id)
-    tally = _tally(counts, hub.photos.unrecorded).get(vehicle_id)
-    records = await asyncio.to_thread(hub.photos.repository.of_vehicle, vehicle_id, limit)
+    vehicles.get(vehicle_id)
+    counts = await asyncio.to_thread(photos.repository.vehicle_counts, vehicle_id)
+    tally = _tally(counts, photos.unrecorded).get(vehicle_id)
+    records = await asyncio.to_thread(photos.repository.of_vehicle, vehicle_id, limit)
     return VehiclePhotos(
         vehicle_id=vehicle_id,
         received=tally.received if tally else 0,
         failed=tally.failed if tally else 0,
         reasons=tally.reasons if tally else {},
-        photos=[hub.photos.summary(record) for record in records],
+        photos=[photos.summary(record) for record in records],
     )
 
 
@@ -236,12 +243,14 @@ def _tally(
     openapi_extra=requires(Permission.READ),
     responses={200: {"content": {"application/zip": {}}}},
 )
-async def export_survey_photos(survey_id: SurveyIdPath, hub: HubDep) -> FileResponse:
+async def export_survey_photos(
+    survey_id: SurveyIdPath, photos: PhotosDep, surveys: SurveysDep
+) -> FileResponse:
     """The survey's geotagged photos for OpenDroneMap: ``images/``, ``image_list.txt``
     and ``geo.txt`` in one zip."""
-    await hub.surveys.find(survey_id)
-    records = await asyncio.to_thread(hub.photos.repository.of_survey, survey_id)
-    folder = hub.settings.photos_folder / ".exports"
+    await surveys.find(survey_id)
+    records = await asyncio.to_thread(photos.repository.of_survey, survey_id)
+    folder = photos.root / ".exports"  # the ingest's root is the hub's photos folder
     path = await asyncio.to_thread(write_zip, records, folder)
     return FileResponse(
         path,

@@ -12,9 +12,9 @@ from pathlib import Path
 import numpy as np
 import numpy.typing as npt
 
-from backend.mosaic.engine import EDGE_RAMP_PX, FEATHER_PX, apply_photo, with_edge_ramp
-from backend.mosaic.georef import TILE_PX, Footprint, footprint
-from backend.mosaic.store import TileStore
+from backend.imagery.mosaic.engine import EDGE_RAMP_PX, FEATHER_PX, apply_photo, with_edge_ramp
+from backend.imagery.mosaic.georef import TILE_PX, Footprint, footprint
+from backend.imagery.mosaic.store import TileStore
 from protocol.photos import CameraIntrinsics, PhotoPose
 
 ZOOM = 22

@@ -8,6 +8,9 @@ follow. After the last chunk the image is checked (a whole JPEG of the camera's 
 moved to ``<photos>/<vehicle>/<photo id>.jpg``, recorded, and handed to the sink (the
 live mosaic). A refusal is recorded too, with its reason, so it is counted once per
 photo however often the agent retries, and asked again it answers the same.
+
+An upload's files are ``uploads.py``'s; the first chunk's metadata and the survey a photo
+belongs to, ``metadata.py``'s; this module keeps the order of the steps and the locks.
 """
 
 from __future__ import annotations
@@ -18,55 +21,35 @@ import logging
 import os
 import time
 from collections import Counter
-from collections.abc import Awaitable, Callable
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 from pydantic import ValidationError
 
 from backend.errors import NotFound
-from backend.photos.checks import Refusal, Refused, check_against_survey, check_image
-from backend.photos.partials import PartialLimits, in_progress, stale
-from backend.photos.stored import PhotoSink, StoredPhoto
-from backend.storage.photos import PhotoRecord, PhotoRepository
-from backend.survey.flight.run import CLOCK_SLACK_S, SurveyRun
-from protocol.photos import MAX_PHOTO_BYTES, PhotoMeta
+from backend.imagery.photos.checks import Refusal, Refused, check_against_survey, check_image
+from backend.imagery.photos.metadata import ActiveSurveys, FindSurvey, SurveyOfPhoto, parse_meta
+from backend.imagery.photos.partials import PartialLimits, in_progress, stale
+from backend.imagery.photos.repository import PhotoRecord, PhotoRepository
+from backend.imagery.photos.stored import PhotoSink, StoredPhoto
+from backend.imagery.photos.uploads import (
+    PARTIAL_DIR,
+    REFUSED,
+    STORED,
+    OffsetMismatch,
+    UploadState,
+    append,
+    discard,
+    final_path,
+    partial_paths,
+    size_of,
+)
+from backend.survey.flight.run import SurveyRun
+from protocol.photos import PhotoMeta
+
+__all__ = ["OffsetMismatch", "PhotoIngest", "UploadState"]
 
 log = logging.getLogger(__name__)
-
-PARTIAL_DIR = ".partial"
-STORED, REFUSED = "stored", "refused"
-ActiveSurveys = Callable[[], list[SurveyRun]]
-FindSurvey = Callable[[str], Awaitable[SurveyRun]]
-
-
-@dataclass(frozen=True)
-class UploadState:
-    """What the hub has of one photo: ``received`` bytes of ``size``; ``state`` is
-    "receiving", "stored" or "refused" (with the reason)."""
-
-    received: int
-    size: int | None
-    state: str
-    reason: str | None = None
-
-    def body(self) -> dict[str, Any]:
-        return {k: v for k, v in self.__dict__.items() if v is not None}
-
-
-class OffsetMismatch(Exception):
-    def __init__(self, received: int) -> None:
-        super().__init__(f"the upload goes on at byte {received}")
-        self.received = received
-
-
-def safe_name(identifier: str) -> str:
-    """An id as a file or folder name: the protocol's patterns allow only
-    [A-Za-z0-9_.-], which leaves the dot names to refuse."""
-    if identifier in ("", ".", "..") or "/" in identifier or "\\" in identifier:
-        raise ValueError(f"{identifier!r} cannot name a file")
-    return identifier
 
 
 class PhotoIngest:
@@ -84,8 +67,7 @@ class PhotoIngest:
     ) -> None:
         self.repository = repository
         self.root = root
-        self._active_surveys = active_surveys
-        self._find_survey = find_survey
+        self._survey_of = SurveyOfPhoto(active_surveys, find_survey)
         self.margin_m = margin_m
         self.quota_bytes = quota_bytes
         self.partials = partials or PartialLimits()
@@ -99,12 +81,7 @@ class PhotoIngest:
         self.unrecorded: Counter[tuple[str, str]] = Counter()
 
     def _partial(self, vehicle_id: str, photo_id: str) -> tuple[Path, Path]:
-        folder = self.root / PARTIAL_DIR / safe_name(vehicle_id)
-        name = safe_name(photo_id)
-        return folder / f"{name}.part", folder / f"{name}.json"
-
-    def _final(self, vehicle_id: str, photo_id: str) -> Path:
-        return self.root / safe_name(vehicle_id) / f"{safe_name(photo_id)}.jpg"
+        return partial_paths(self.root, vehicle_id, photo_id)
 
     def _lock(self, vehicle_id: str, photo_id: str) -> asyncio.Lock:
         return self._locks.setdefault((vehicle_id, photo_id), asyncio.Lock())
@@ -154,7 +131,7 @@ class PhotoIngest:
                     )
                 except (OSError, ValidationError):
                     raise OffsetMismatch(0) from None  # nothing here: start again
-            received = await asyncio.to_thread(_size, part)
+            received = await asyncio.to_thread(size_of, part)
             if offset != received:
                 raise OffsetMismatch(received)
             if received + len(chunk) > meta.size_bytes:
@@ -167,7 +144,7 @@ class PhotoIngest:
                     "the metadata declared",
                     status=413,
                 )
-            await asyncio.to_thread(_append, part, chunk)
+            await asyncio.to_thread(append, part, chunk)
             received += len(chunk)
             if received < meta.size_bytes:
                 return UploadState(received, meta.size_bytes, "receiving")
@@ -185,7 +162,7 @@ class PhotoIngest:
         meta: PhotoMeta | None = None
         run: SurveyRun | None = None
         try:
-            meta = self._meta(photo_id, meta_json)
+            meta = parse_meta(photo_id, meta_json)
             run = await self.survey_of(vehicle_id, meta)
             if run is not None:
                 check_against_survey(meta.pose, meta.camera, run, self.margin_m)
@@ -261,67 +238,16 @@ class PhotoIngest:
             return False
         async with lock:
             part, meta_path = self._partial(vehicle_id, photo_id)
-            await asyncio.to_thread(_discard, part, meta_path)
+            await asyncio.to_thread(discard, part, meta_path)
         self._locks.pop((vehicle_id, photo_id), None)
         log.info("photo upload %s from %s expired unfinished", photo_id, vehicle_id)
         return True
 
-    @staticmethod
-    def _meta(photo_id: str, meta_json: str | None) -> PhotoMeta:
-        if meta_json is None:
-            raise Refused(
-                Refusal.BAD_METADATA,
-                "the first chunk (offset 0) must carry the photo's metadata as "
-                "JSON in the X-Photo-Meta header",
-            )
-        try:
-            meta = PhotoMeta.model_validate_json(meta_json)
-        except ValidationError as error:
-            problems = error.errors()
-            fields = {str(p["loc"][0]) for p in problems if p["loc"]}
-            text = "; ".join(
-                f"{'.'.join(str(part) for part in p['loc'])}: {p['msg']}" for p in problems[:5]
-            )
-            if "pose" in fields:
-                code = Refusal.NO_POSE
-            elif fields == {"size_bytes"} and any(p["type"] == "less_than_equal" for p in problems):
-                code = Refusal.TOO_LARGE
-                text = f"the photo is larger than the {MAX_PHOTO_BYTES} bytes a photo may be"
-            else:
-                code = Refusal.BAD_METADATA
-            raise Refused(
-                code, f"{code.value}: {text}", 413 if code is Refusal.TOO_LARGE else 422
-            ) from None
-        if meta.photo_id != photo_id:
-            raise Refused(
-                Refusal.BAD_METADATA,
-                f"the metadata names photo {meta.photo_id}, the address {photo_id}",
-            )
-        return meta
-
     async def survey_of(
         self, vehicle_id: str, meta: PhotoMeta, now: float | None = None
     ) -> SurveyRun | None:
-        """The survey named in the metadata, else the one the vehicle was flying when the
-        photo was taken, else the one it is flying as the photo arrives. The photo's time
-        is the flight controller's clock, which a simulator sped up runs ahead of the hub's
-        (and a board without GPS time has wrong); the arrival covers those, the photo's own
-        time the photos that arrive late, after an outage."""
-        if meta.survey_id is not None:
-            try:
-                return await self._find_survey(meta.survey_id)
-            except NotFound:
-                raise Refused(Refusal.UNKNOWN_SURVEY, f"no survey {meta.survey_id}") from None
-        runs = [run for run in self._active_surveys() if run.drone(vehicle_id) is not None]
-        for instant in (meta.pose.time, time.time() if now is None else now):
-            for run in runs:
-                drone = run.drone(vehicle_id)
-                assert drone is not None
-                if run.started is None or instant < run.started - CLOCK_SLACK_S:
-                    continue
-                if drone.finished is None or instant <= drone.finished + CLOCK_SLACK_S:
-                    return run
-        return None
+        """The survey the photo belongs to (``metadata.SurveyOfPhoto``)."""
+        return await self._survey_of(vehicle_id, meta, now)
 
     async def _finish(self, vehicle_id: str, meta: PhotoMeta, part: Path) -> None:
         try:
@@ -335,7 +261,7 @@ class PhotoIngest:
                 refusal.reason,
                 survey_id=meta.survey_id,
             )
-        final = self._final(vehicle_id, meta.photo_id)
+        final = final_path(self.root, vehicle_id, meta.photo_id)
         await asyncio.to_thread(final.parent.mkdir, parents=True, exist_ok=True)
         await asyncio.to_thread(os.replace, part, final)
         record = PhotoRecord(
@@ -350,7 +276,7 @@ class PhotoIngest:
             meta.model_dump_json(),
         )
         await asyncio.to_thread(self.repository.add, record)
-        await asyncio.to_thread(_discard, part.with_suffix(".json"))
+        await asyncio.to_thread(discard, part.with_suffix(".json"))
         log.info("photo %s from %s stored (%d bytes)", meta.photo_id, vehicle_id, meta.size_bytes)
         if self.sink is not None and meta.survey_id is not None:
             photo = StoredPhoto(
@@ -388,7 +314,7 @@ class PhotoIngest:
         )
         await asyncio.to_thread(self.repository.add, record)
         part, meta_path = self._partial(vehicle_id, photo_id)
-        await asyncio.to_thread(_discard, part, meta_path)
+        await asyncio.to_thread(discard, part, meta_path)
         self._locks.pop((vehicle_id, photo_id), None)
         log.info("photo %s from %s refused: %s", photo_id, vehicle_id, text)
         raise Refused(code, text, status)
@@ -411,20 +337,3 @@ class PhotoIngest:
             "received_at": record.received_at,
             "pose": meta.get("pose"),
         }
-
-
-def _size(path: Path) -> int:
-    try:
-        return path.stat().st_size
-    except FileNotFoundError:
-        return 0
-
-
-def _append(path: Path, chunk: bytes) -> None:
-    with path.open("ab") as file:
-        file.write(chunk)
-
-
-def _discard(*paths: Path) -> None:
-    for path in paths:
-        path.unlink(missing_ok=True)

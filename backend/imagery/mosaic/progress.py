@@ -19,7 +19,7 @@ from shapely import to_geojson, transform
 from shapely.geometry import Point, Polygon, mapping, shape
 from shapely.geometry.base import BaseGeometry
 
-from backend.mosaic.store import atomic_write
+from backend.imagery.mosaic.store import atomic_write
 from backend.survey.planning.geo import polygon_from_geojson
 from backend.survey.planning.planner import PlanError
 from common.geodesy import LocalFrame

@@ -26,7 +26,6 @@ from backend.api import (
     mosaics,
     params,
     photos,
-    scans,
     system,
     tiles,
     vehicles,
@@ -54,6 +53,9 @@ from backend.formation import wiring as formation_wiring
 from backend.hub import Hub
 from backend.observability.logs import use_json_logs
 from backend.safety import routes as safety
+from backend.scans import deps as scan_deps
+from backend.scans import routes as scans
+from backend.scans.scene_layer import scan_scene_layers
 from backend.settings import REPO_ROOT, HubSettings
 from backend.survey import deps as survey_deps
 from backend.survey import routes as surveys
@@ -112,6 +114,13 @@ def create_app(settings: HubSettings | None = None) -> FastAPI:
         # The features, each on the started hub before it runs (their routes read them).
         app.state.formation = await formation_wiring.attach(hub)
         survey_deps.provide(app.state, hub.surveys)  # the survey's routes take its service
+        scan_deps.provide(
+            app.state,
+            scan_deps.ScanRouteServices(
+                hub.scans, hub.registry, hub.logbook, hub.refresh_obstacles
+            ),
+        )
+        hub.scene_layers.extend(scan_scene_layers(hub.scans, hub.bus))
         runner = asyncio.create_task(hub.run(), name="hub")
         try:
             yield

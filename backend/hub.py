@@ -45,6 +45,7 @@ from backend.safety.rails_store import RailsRepository
 from backend.safety.service import SafetyService
 from backend.scans.obstacles import describe as describe_obstacle
 from backend.scans.pointmap import MapObstacle
+from backend.scans.repository import ScanRepository
 from backend.scans.service import ScanService
 from backend.scans.views import obstacle_views, point_map_view, site_origin
 from backend.settings import HubSettings
@@ -55,7 +56,6 @@ from backend.storage.photos import PhotoRepository
 from backend.storage.records import StoredEvent
 from backend.storage.repository import Repository
 from backend.storage.retention import RetentionPolicy
-from backend.storage.scans import ScanRepository
 from backend.storage.sequences import Gap, StreamKey
 from backend.storage.spool import RowSpool
 from backend.storage.writer import StorageWriter
@@ -276,7 +276,6 @@ class Hub:
                         self.bus,
                         self.registry,
                         self.settings.viz_update_interval_s,
-                        scans=self.scans,
                         surveys=self.surveys,
                         mosaics=self.mosaic,
                         mosaic_surveys=lambda: [run.id for run in self.surveys.known()],

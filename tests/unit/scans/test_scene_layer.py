@@ -1,6 +1,7 @@
-"""The hub's scene mirror, driven through the real bus and scan service and read back
-through the viser server's own API: batches at a bounded rate, and scans whose points
-land on the simulator's obstacles in the scene's local frame."""
+"""The scans' layers of the 3D view, run by the hub's scene mirror through the real bus
+and scan service and read back through the viser server's own API: scans whose points
+land on the simulator's obstacles in the scene's local frame, and the point map with its
+obstacles."""
 
 from __future__ import annotations
 
@@ -11,7 +12,6 @@ import time
 from array import array
 from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
-from typing import Any
 
 import numpy as np
 import pytest
@@ -19,8 +19,9 @@ import sqlalchemy
 
 from backend.fleet.registry import FleetRegistry
 from backend.realtime.bus import InProcessBus, Topic
+from backend.scans.repository import ScanRepository
+from backend.scans.scene_layer import scan_scene_layers
 from backend.scans.service import ScanService
-from backend.storage.scans import ScanRepository
 from backend.viz3d.frame import SceneFrame, reframe
 from backend.viz3d.mirror import SceneMirror
 from backend.viz3d.scene import FleetScene
@@ -29,7 +30,7 @@ from common.geodesy import GeoPoint, LocalFrame
 from protocol.scans import NO_RETURN, ScanFrame, ScanPose, encode_scan
 from simulator.sensors.lidar import Lidar, LidarSpec, Pose
 from simulator.world.obstacles import default_scene
-from tests.support.scenes import HOME, _node, _summary
+from tests.support.scenes import HOME, _node, until
 
 INTERVAL_S = 0.1
 WORLD = default_scene()
@@ -58,24 +59,16 @@ async def running(scene: FleetScene) -> AsyncIterator[Running]:
     bus = InProcessBus()
     # The store is only written by the service's own run(), which is not started here.
     scans = ScanService(ScanRepository(sqlalchemy.create_engine("sqlite://")), bus, site=SITE)
-    mirror = SceneMirror(scene, bus, FleetRegistry(), INTERVAL_S, scans=scans)
+    layers = scan_scene_layers(scans, bus)
+    mirror = SceneMirror(scene, bus, FleetRegistry(), INTERVAL_S, layers=layers)
     task = asyncio.create_task(mirror.run())
     try:
-        await _until(lambda: len(bus._subscriptions[Topic.SCANS]) == 1, "the mirror subscribed")
+        await until(lambda: len(bus._subscriptions[Topic.SCANS]) == 1, "the mirror subscribed")
         yield Running(bus, scans, mirror)
     finally:
         task.cancel()
         with contextlib.suppress(asyncio.CancelledError):
             await task
-
-
-async def _until(condition: Any, what: str, within: float = 10.0) -> Any:
-    deadline = time.monotonic() + within
-    while time.monotonic() < deadline:
-        if result := condition():
-            return result
-        await asyncio.sleep(0.02)
-    raise AssertionError(f"timed out waiting for {what}")
 
 
 def _simulated_scan(east: float, north: float, up: float, yaw: float, roll: float) -> ScanFrame:
@@ -118,7 +111,7 @@ async def _scan_points_land(viz: VizServer, scene: FleetScene) -> None:
         frame = _simulated_scan(*sensor_site, yaw=math.radians(35.0), roll=math.radians(4.0))
         await hub.scans.ingest("alpha", "s1", encode_scan(frame))
 
-        cloud = await _until(lambda: _node(viz.viser, "/scans/alpha"), "the scan in the scene")
+        cloud = await until(lambda: _node(viz.viser, "/scans/alpha"), "the scan in the scene")
         shown = np.asarray(cloud.points, dtype=np.float64)
         returns = sum(1 for r in frame.ranges if r != NO_RETURN)
         assert returns > 300  # the yard's walls and masts, and the ground where it rolls
@@ -140,12 +133,12 @@ async def _scan_points_land(viz: VizServer, scene: FleetScene) -> None:
         assert "scans" in scene.layers_shown
 
         # The accumulated map and the obstacles found in it appear as their own layers.
-        points = await _until(lambda: _node(viz.viser, "/point_map/all"), "the point map", 15)
+        points = await until(lambda: _node(viz.viser, "/point_map/all"), "the point map", 15)
         in_world = reframe(np.asarray(points.points, dtype=np.float64), scene_frame, SITE)
         error = np.minimum(WORLD.distance_to_surface(in_world), np.abs(in_world[:, 2]))
         assert float(np.percentile(error, 99)) < 0.15  # voxel centres, 10 cm voxels
         # (the boxes follow the points in the same batch: wait for the whole of it)
-        await _until(lambda: "obstacles" in scene.layers_shown, "the obstacles layer")
+        await until(lambda: "obstacles" in scene.layers_shown, "the obstacles layer")
         assert "point_map" in scene.layers_shown
         boxes = [
             handle
@@ -156,42 +149,3 @@ async def _scan_points_land(viz: VizServer, scene: FleetScene) -> None:
         # The building east of home (centre 9, 2 in the simulator's frame) is one of them.
         centres = reframe(np.array([np.asarray(b.position) for b in boxes]), scene_frame, SITE)
         assert np.min(np.linalg.norm(centres[:, :2] - (9.0, 2.0), axis=1)) < 2.5
-
-
-def test_fifty_vehicles_at_a_high_rate_reach_the_scene_in_bounded_batches(
-    viz: VizServer, scene: FleetScene
-) -> None:
-    asyncio.run(_fifty_vehicles(viz, scene))
-
-
-async def _fifty_vehicles(viz: VizServer, scene: FleetScene) -> None:
-    async with running(scene) as hub:
-        vehicles = [f"v{i:02d}" for i in range(50)]
-        steps = 60
-        started = time.monotonic()
-        for step in range(steps):
-            for i, vehicle in enumerate(vehicles):
-                lat = HOME[0] + step * 1e-6
-                lon = HOME[1] + i * 1e-4
-                summary = _summary(vehicle, float(step), lat=lat, lon=lon, alt_msl=HOME[2] + 10)
-                await hub.bus.publish(Topic.VEHICLE_STATE, vehicle, summary)
-            await asyncio.sleep(0.01)  # 50 vehicles at up to 100 Hz: 5,000 changes a second
-        local = scene.frame.local
-        assert local is not None
-
-        def newest_drawn() -> bool:
-            for i, vehicle in enumerate(vehicles):
-                node = _node(viz.viser, f"/vehicles/{vehicle}")
-                want = local.to_enu(HOME[0] + (steps - 1) * 1e-6, HOME[1] + i * 1e-4, HOME[2] + 10)
-                if node is None or not np.allclose(node.position, want, atol=1e-3):
-                    return False
-            return True
-
-        await _until(newest_drawn, "every vehicle's newest position")
-        elapsed = time.monotonic() - started
-        # 3,000 changes arrived; the browser got at most one batch a period (and the first).
-        assert hub.mirror.scene.batches <= elapsed / INTERVAL_S + 2, (
-            hub.mirror.scene.batches,
-            elapsed,
-        )
-        assert hub.mirror.scene.batches < steps

@@ -43,6 +43,7 @@ from backend.realtime.routing import AgentRoutes
 from backend.realtime.vehicle_fanout import VehicleFanout
 from backend.safety.rails_store import RailsRepository
 from backend.safety.service import SafetyService
+from backend.scans.feed import ScanSubscription
 from backend.scans.obstacles import describe as describe_obstacle
 from backend.scans.pointmap import MapObstacle
 from backend.scans.repository import ScanRepository
@@ -398,6 +399,10 @@ class Hub:
     def _obstacles_now(self, current: list[MapObstacle]) -> ObstaclesUpdate:
         site = self.scans.site
         return ObstaclesUpdate(site=site_origin(site), obstacles=obstacle_views(current, site))
+
+    def scan_subscription(self) -> ScanSubscription:
+        """A live feed's scan subscription (the feed's ``FeedServices`` asks for it)."""
+        return ScanSubscription()
 
     async def map_now(self, layers: Collection[MapLayer]) -> list[PointMapUpdate | ObstaclesUpdate]:
         now: list[PointMapUpdate | ObstaclesUpdate] = []

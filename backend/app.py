@@ -24,7 +24,6 @@ from backend.api import (
     metrics,
     missions,
     params,
-    scans,
     system,
     tiles,
     vehicles,
@@ -56,6 +55,9 @@ from backend.imagery.photos import deps as photo_deps
 from backend.imagery.photos import routes as photos
 from backend.observability.logs import use_json_logs
 from backend.safety import routes as safety
+from backend.scans import deps as scan_deps
+from backend.scans import routes as scans
+from backend.scans.scene_layer import scan_scene_layers
 from backend.settings import REPO_ROOT, HubSettings
 from backend.survey import deps as survey_deps
 from backend.survey import routes as surveys
@@ -116,6 +118,13 @@ def create_app(settings: HubSettings | None = None) -> FastAPI:
         survey_deps.provide(app.state, hub.surveys)  # the survey's routes take its service
         photo_deps.provide(app.state, hub.photos, hub.registry)  # the imagery's routes too
         mosaic_deps.provide(app.state, hub.mosaic, hub.tiles)
+        scan_deps.provide(
+            app.state,
+            scan_deps.ScanRouteServices(
+                hub.scans, hub.registry, hub.logbook, hub.refresh_obstacles
+            ),
+        )
+        hub.scene_layers.extend(scan_scene_layers(hub.scans, hub.bus))
         runner = asyncio.create_task(hub.run(), name="hub")
         try:
             yield

@@ -44,8 +44,10 @@ from backend.realtime.routing import AgentRoutes
 from backend.realtime.vehicle_fanout import VehicleFanout
 from backend.safety.rails_store import RailsRepository
 from backend.safety.service import SafetyService
+from backend.scans.feed import ScanSubscription
 from backend.scans.obstacles import describe as describe_obstacle
 from backend.scans.pointmap import MapObstacle
+from backend.scans.repository import ScanRepository
 from backend.scans.service import ScanService
 from backend.scans.views import obstacle_views, point_map_view, site_origin
 from backend.settings import HubSettings
@@ -55,7 +57,6 @@ from backend.storage.models import AuditRow, CommandRow
 from backend.storage.records import StoredEvent
 from backend.storage.repository import Repository
 from backend.storage.retention import RetentionPolicy
-from backend.storage.scans import ScanRepository
 from backend.storage.sequences import Gap, StreamKey
 from backend.storage.spool import RowSpool
 from backend.storage.writer import StorageWriter
@@ -276,7 +277,6 @@ class Hub:
                         self.bus,
                         self.registry,
                         self.settings.viz_update_interval_s,
-                        scans=self.scans,
                         surveys=self.surveys,
                         mosaics=self.mosaic,
                         mosaic_surveys=lambda: [run.id for run in self.surveys.known()],
@@ -399,6 +399,10 @@ class Hub:
     def _obstacles_now(self, current: list[MapObstacle]) -> ObstaclesUpdate:
         site = self.scans.site
         return ObstaclesUpdate(site=site_origin(site), obstacles=obstacle_views(current, site))
+
+    def scan_subscription(self) -> ScanSubscription:
+        """A live feed's scan subscription (the feed's ``FeedServices`` asks for it)."""
+        return ScanSubscription()
 
     async def map_now(self, layers: Collection[MapLayer]) -> list[PointMapUpdate | ObstaclesUpdate]:
         now: list[PointMapUpdate | ObstaclesUpdate] = []

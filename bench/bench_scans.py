@@ -36,9 +36,9 @@ import numpy as np
 from backend.realtime.bus import InProcessBus
 from backend.scans.pointmap import PointMap
 from backend.scans.points import world_points
+from backend.scans.repository import ScanRepository, StoredScan
 from backend.scans.service import ScanService
 from backend.storage.database import make_engine, migrate
-from backend.storage.scans import ScanRepository, StoredScan
 from common.geodesy import LocalFrame
 from gcs.launcher import FleetPlan, LocalFleet, free_port
 from protocol.scans import ScanFrame, ScanPose, decode_scan, encode_scan

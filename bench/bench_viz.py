@@ -42,8 +42,9 @@ from websockets.typing import Subprotocol
 
 from backend.fleet.registry import FleetRegistry
 from backend.realtime.bus import InProcessBus, Topic
+from backend.scans.repository import ScanRepository
+from backend.scans.scene_layer import scan_scene_layers
 from backend.scans.service import ScanService
-from backend.storage.scans import ScanRepository
 from backend.viz3d.frame import SceneFrame
 from backend.viz3d.mirror import SceneMirror
 from backend.viz3d.scene import FleetScene
@@ -204,7 +205,8 @@ def run_case(vehicles: int, rate_hz: float, seconds: float, lidar: bool) -> None
     scene = FleetScene(viz.viser, SceneFrame(), trail_s=60.0)
     bus = InProcessBus()
     scans = ScanService(ScanRepository(sqlalchemy.create_engine("sqlite://")), bus, site=site)
-    mirror = SceneMirror(scene, bus, FleetRegistry(), INTERVAL_S, scans=scans)
+    layers = scan_scene_layers(scans, bus)
+    mirror = SceneMirror(scene, bus, FleetRegistry(), INTERVAL_S, layers=layers)
     counter = Counter()
     loop = asyncio.new_event_loop()
     stop = asyncio.Event()

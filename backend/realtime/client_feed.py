@@ -25,7 +25,6 @@ from backend.realtime.bus import LatestSubscription, Topic
 from backend.realtime.collaborators import FeedServices
 from backend.realtime.frames import FrameTooLarge, PeerConnection
 from backend.realtime.live_events import EventSubscription
-from backend.realtime.scan_feed import ScanSubscription
 from backend.realtime.vehicle_fanout import (
     Broadcast,
     VehicleInfo,
@@ -156,7 +155,7 @@ class ClientFeed(PeerConnection):
         self.token_id: int | None = None
         # Its manual-control messages: the lease and the sticks (backend/manual_control/).
         self._pilot = PilotChannel(hub, self.send, self.peer)
-        self.scans = ScanSubscription()
+        self.scans = hub.scan_subscription()
         self.map = LatestSubscription()  # newest per layer, never a queue
         self.map_layers: set[MapLayer] = set()
         self.vehicles = VehicleFeed({})

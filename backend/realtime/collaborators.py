@@ -10,14 +10,14 @@ from __future__ import annotations
 
 import asyncio
 from collections.abc import Collection
-from typing import Protocol
+from typing import Any, Protocol
 
 from backend.audit import AuditEntry
 from backend.auth.accounts import Accounts
 from backend.fleet.commands import CommandDispatcher
 from backend.fleet.registry import FleetRegistry, VehicleRecord
 from backend.manual_control.service import ManualControl
-from backend.realtime.bus import Bus
+from backend.realtime.bus import Bus, Subscription
 from backend.realtime.routing import AgentRoutes
 from backend.realtime.vehicle_fanout import VehicleFanout
 from backend.settings import HubSettings
@@ -60,6 +60,18 @@ class ScanIngest(Protocol):
         ...
 
 
+class ScanFeedSubscription(Subscription, Protocol):
+    """A client feed's scans on the bus (backend.scans.feed.ScanSubscription): newest wins
+    per vehicle, for the vehicles in ``vehicles``, which the feed edits as its client
+    subscribes and unsubscribes."""
+
+    vehicles: set[str]
+
+    async def drain(self) -> list[Any]:
+        """The scans waiting, one per vehicle, waiting until there is one."""
+        ...
+
+
 class ClientConnection(Protocol):
     """A dashboard's or integration's live feed, as the hub keeps it (to revoke)."""
 
@@ -97,6 +109,10 @@ class FeedServices(Protocol):
     def dispatcher(self) -> CommandDispatcher: ...
 
     async def record(self, entry: AuditEntry) -> None: ...
+
+    def scan_subscription(self) -> ScanFeedSubscription:
+        """A new feed's scan subscription, for no vehicle yet."""
+        ...
 
     async def store_event(
         self, vehicle_id: str, kind: HubEventKind, text: str, severity: int | None = None

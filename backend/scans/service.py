@@ -40,7 +40,7 @@ from backend.realtime.bus import Bus, Topic
 from backend.scans.obstacles import ObstacleChanges, ObstacleTracker
 from backend.scans.pointmap import PointMap
 from backend.scans.points import WorldPoints, world_points
-from backend.storage.scans import ScanRepository, StoredScan
+from backend.scans.repository import ScanRepository, StoredScan
 from common.geodesy import LocalFrame
 from protocol.scans import NO_RETURN, ScanFrame, ScanFrameError, client_scan_frame, decode_scan
 

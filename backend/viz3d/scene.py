@@ -19,10 +19,8 @@ import numpy.typing as npt
 import viser
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
-from backend.scans.pointmap import MapObstacle
 from backend.viz3d.colours import rgb, vehicle_colour
-from backend.viz3d.frame import SceneFrame, Vector, attitude_wxyz, reframe
-from common.geodesy import LocalFrame
+from backend.viz3d.frame import SceneFrame, Vector, attitude_wxyz
 from protocol.messages import MissionItem, VehicleSummary
 
 # A flat arrowhead, 2 m long, pointing along the body's forward (x) axis.
@@ -60,8 +58,9 @@ HOMES = Layer("homes", "Homes")
 MISSIONS = Layer("missions", "Missions")
 # Layers of the sensors' and the operations' data: each appears in the panel when its
 # first data is drawn (a vehicle's latest scan, the accumulated point map, the obstacles
-# found in it, a survey's lanes, a formation, a mosaic), never before. The last three are
-# drawn by their own modules (survey_layer, mosaic_layer, backend/formation/scene_layer).
+# found in it, a survey's lanes, a formation, a mosaic), never before. They are drawn by
+# their own modules (backend/scans/scene_layer, survey/viz_layer, formation/scene_layer,
+# mosaic_layer) through ``show_points``, ``show_layer`` and the server's scene.
 SCANS = Layer("scans", "LIDAR scans")
 POINT_MAP = Layer("point_map", "Point map")
 OBSTACLES = Layer("obstacles", "Obstacles")
@@ -81,9 +80,6 @@ ALL_LAYERS = (
     FORMATIONS,
     MOSAIC,
 )
-POINT_MAP_COLOUR = (150, 150, 150)
-OBSTACLE_COLOUR = (255, 80, 0)
-MAX_OBSTACLES = 200
 
 
 @dataclass
@@ -120,7 +116,6 @@ class FleetScene:
         self._follow: dict[int, str] = {}  # viser client id -> vehicle id
         # Called (on viser's thread) with the vehicle and the viewer that clicked it.
         self.on_vehicle_click: Callable[[str, viser.ClientHandle], None] | None = None
-        self._obstacles: list[viser.BoxHandle] = []
         self.batches = 0
         server.scene.set_up_direction("+z")
         server.scene.configure_environment_map(hdri=None)  # no CDN: the scene is lit plainly
@@ -331,51 +326,6 @@ class FleetScene:
                 f"/{layer.key}/{key}", points, colors=colour, point_size=point_size
             )
             self.show_layer(layer)
-
-    def show_scan(
-        self, vehicle_id: str, points: npt.NDArray[np.floating], site: LocalFrame
-    ) -> bool:
-        """A vehicle's latest scan: its world points as the scans feature placed them
-        (``backend.scans.points``, each beam from the pose of its instant) in the site's
-        frame, moved into the scene's, in the vehicle's colour. False, and nothing drawn,
-        while the scene has no origin yet."""
-        if self.frame.local is None:
-            return False
-        local = reframe(points, site, self.frame.local)
-        self.show_points(SCANS, vehicle_id, local, rgb(vehicle_colour(vehicle_id)))
-        return True
-
-    def show_point_map(
-        self, points: npt.NDArray[np.floating], obstacles: Sequence[MapObstacle], site: LocalFrame
-    ) -> bool:
-        """The site's accumulated point map and the obstacles found in it, both in the
-        site's frame (``site``), moved into the scene's. False while it has no origin."""
-        if self.frame.local is None:
-            return False
-        local = self.frame.local
-        with self._lock, self.server.atomic():
-            if len(points):
-                self.show_points(POINT_MAP, "all", reframe(points, site, local), POINT_MAP_COLOUR)
-            for handle in self._obstacles:
-                handle.remove()
-            self._obstacles = []
-            # The largest first, and a bounded number: one box is one scene message.
-            for obstacle in sorted(obstacles, key=lambda o: -o.voxels)[:MAX_OBSTACLES]:
-                low = (obstacle.east_min, obstacle.north_min, obstacle.up_min)
-                high = (obstacle.east_max, obstacle.north_max, obstacle.up_max)
-                corners = reframe(np.array([low, high]), site, local)
-                self._obstacles.append(
-                    self.server.scene.add_box(
-                        f"/{OBSTACLES.key}/{obstacle.id}",
-                        color=OBSTACLE_COLOUR,
-                        dimensions=tuple(np.abs(corners[1] - corners[0]).tolist()),
-                        wireframe=True,
-                        position=corners.mean(axis=0),
-                    )
-                )
-            if obstacles:
-                self.show_layer(OBSTACLES)
-        return True
 
     # -- the panel ---------------------------------------------------------------
 

@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import asyncio
+import time
+from collections.abc import Callable
 from typing import Any
 
 import viser
@@ -40,3 +43,13 @@ def _under(server: viser.ViserServer, root: str) -> list[str]:
     """The nodes at or under ``root``: viser's own parent frames included."""
     names = server.scene._handle_from_node_name
     return [name for name in names if name == root or name.startswith(root + "/")]
+
+
+async def until(condition: Callable[[], Any], what: str, within: float = 10.0) -> Any:
+    """Polls ``condition`` (a scene read back) until it is truthy, and returns it."""
+    deadline = time.monotonic() + within
+    while time.monotonic() < deadline:
+        if result := condition():
+            return result
+        await asyncio.sleep(0.02)
+    raise AssertionError(f"timed out waiting for {what}")

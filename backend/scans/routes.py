@@ -1,4 +1,6 @@
-"""LIDAR scans: the latest, by time range, the site's point map and its obstacles."""
+"""LIDAR scans: the latest, by time range, the site's point map and its obstacles. The
+routes reach the scan service and what they read beside it through the typed
+dependencies of ``deps.py``."""
 
 from __future__ import annotations
 
@@ -10,17 +12,19 @@ from fastapi import Query
 from fastapi.responses import Response
 from pydantic import BaseModel, Field
 
-from backend.api.deps import HubDep
 from backend.api.logs.common import FlightIdPath, flight_end
 from backend.api.security import SecuredRouter, requires
 from backend.api.time_ranges import Moment, time_query, time_range
 from backend.api.vehicles import VehicleIdPath
 from backend.auth.policy import Permission
 from backend.errors import NotFound
+from backend.scans.deps import FleetDep, LogbookDep, RefreshObstaclesDep, ScansDep
 from backend.scans.export import ply_bytes
 from backend.scans.pointmap import PointMap
 from backend.scans.points import WorldPoints, world_points
+from backend.scans.service import ScanService
 from backend.scans.views import obstacle_views, point_map_view, site_origin
+from backend.storage.logbook import Logbook
 from common.geodesy import LocalFrame
 from protocol.messages import MAX_MAP_POINTS, Obstacle, PointMapView, SiteOrigin
 from protocol.scans import decode_scan
@@ -76,9 +80,9 @@ class ScanDiagnosticsBody(BaseModel):
     )
 
 
-def _body(hub: HubDep, vehicle_id: str, data: bytes) -> ScanPoints:
+def _body(scans: ScanService, vehicle_id: str, data: bytes) -> ScanPoints:
     frame = decode_scan(data)
-    site = hub.scans.site_for(frame)
+    site = scans.site_for(frame)
     points: WorldPoints = world_points(frame, site)
     return ScanPoints(
         vehicle_id=vehicle_id,
@@ -98,16 +102,16 @@ def _body(hub: HubDep, vehicle_id: str, data: bytes) -> ScanPoints:
     openapi_extra=requires(Permission.READ),
     responses={404: {"description": "Unknown vehicle, or no scan from it yet"}},
 )
-async def latest_scan(vehicle_id: VehicleIdPath, hub: HubDep) -> ScanPoints:
+async def latest_scan(vehicle_id: VehicleIdPath, scans: ScansDep, fleet: FleetDep) -> ScanPoints:
     """The vehicle's newest scan as world points (live, else the newest stored)."""
-    hub.registry.get(vehicle_id)
-    row = await asyncio.to_thread(hub.scans.repository.latest, vehicle_id)
-    latest = hub.scans.latest.get(vehicle_id)
+    fleet.get(vehicle_id)
+    row = await asyncio.to_thread(scans.repository.latest, vehicle_id)
+    latest = scans.latest.get(vehicle_id)
     if latest is None and row is None:
         raise NotFound(f"no scan from {vehicle_id!r} yet")
     if latest is not None and (row is None or latest.frame.utc_time >= row.time):
         frame = latest.frame
-        site = hub.scans.site_for(frame)
+        site = scans.site_for(frame)
         return ScanPoints(
             vehicle_id=vehicle_id,
             seq=frame.seq,
@@ -119,7 +123,7 @@ async def latest_scan(vehicle_id: VehicleIdPath, hub: HubDep) -> ScanPoints:
             geodetic=[tuple(p) for p in latest.points.geodetic(site).round(8).tolist()],
         )
     assert row is not None
-    return _body(hub, vehicle_id, row.frame)
+    return _body(scans, vehicle_id, row.frame)
 
 
 @router.get(
@@ -129,26 +133,27 @@ async def latest_scan(vehicle_id: VehicleIdPath, hub: HubDep) -> ScanPoints:
 )
 async def scans_between(
     vehicle_id: VehicleIdPath,
-    hub: HubDep,
+    scans: ScansDep,
+    fleet: FleetDep,
     start: Annotated[Moment | None, time_query("end - 1 min")] = None,
     end: Annotated[Moment | None, time_query("now")] = None,
     limit: Annotated[int, Query(ge=1, le=MAX_SCANS_PAGE)] = 20,
 ) -> ScanPage:
     """Stored scans in a time range, oldest first, as world points."""
-    hub.registry.get(vehicle_id)
+    fleet.get(vehicle_id)
     start_at, end_at = time_range(start, end, DEFAULT_SCAN_HISTORY_S)
     rows = await asyncio.to_thread(
-        hub.scans.repository.between, vehicle_id, start_at, end_at, limit + 1
+        scans.repository.between, vehicle_id, start_at, end_at, limit + 1
     )
-    scans = [_body(hub, vehicle_id, row.frame) for row in rows[:limit]]
-    site = hub.scans.site
+    bodies = [_body(scans, vehicle_id, row.frame) for row in rows[:limit]]
+    site = scans.site
     return ScanPage(
         vehicle_id=vehicle_id,
         start=start_at,
         end=end_at,
         limit=limit,
         site=None if site is None else site_origin(site),
-        scans=scans,
+        scans=bodies,
         truncated=len(rows) > limit,
     )
 
@@ -158,11 +163,13 @@ async def scans_between(
     response_model=ScanDiagnosticsBody,
     openapi_extra=requires(Permission.READ),
 )
-async def scan_diagnostics(vehicle_id: VehicleIdPath, hub: HubDep) -> ScanDiagnosticsBody:
+async def scan_diagnostics(
+    vehicle_id: VehicleIdPath, scans: ScansDep, fleet: FleetDep
+) -> ScanDiagnosticsBody:
     """What the hub made of this vehicle's scans (received, stored, refused by reason), and
     what the agent's LIDAR parser decoded and dropped by reason, as the agent last said."""
-    hub.registry.get(vehicle_id)
-    counts = hub.scans.diagnostics_of(vehicle_id)
+    fleet.get(vehicle_id)
+    counts = scans.diagnostics_of(vehicle_id)
     return ScanDiagnosticsBody(
         vehicle_id=vehicle_id,
         received=counts.received,
@@ -183,13 +190,12 @@ async def scan_diagnostics(vehicle_id: VehicleIdPath, hub: HubDep) -> ScanDiagno
     responses={200: {"content": {"application/octet-stream": {}}}},
 )
 async def point_map(
-    hub: HubDep,
+    scans: ScansDep,
     format: Annotated[Literal["json", "ply"], Query(description="json, or a PLY file")] = "json",
     limit: Annotated[int, Query(ge=1, le=MAX_MAP_POINTS)] = 100_000,
 ) -> PointMapView | Response:
     """The site's voxel point map (the most recently seen voxels, up to ``limit``); the
     live feed sends the same as ``point_map`` to a ``subscribe_map``."""
-    scans = hub.scans
     if format == "ply":
         site = site_origin(scans.site)
         origin = "unset" if site is None else f"{site.lat},{site.lon},{site.alt_msl}"
@@ -208,27 +214,29 @@ async def point_map(
     response_model=list[Obstacle],
     openapi_extra=requires(Permission.READ),
 )
-async def obstacles(hub: HubDep) -> list[Obstacle]:
+async def obstacles(scans: ScansDep, refresh: RefreshObstaclesDep) -> list[Obstacle]:
     """Clusters in the point map (above the ground), with their extents in site ENU; an
     obstacle keeps its id while it is seen (found and gone are events, kind "obstacle")."""
-    return obstacle_views(await hub.refresh_obstacles(), hub.scans.site)
+    return obstacle_views(await refresh(), scans.site)
 
 
 FLIGHT_SCAN_PAGE = 500
 
 
-def _flight_points(hub: HubDep, flight_id: int) -> tuple[str, PointMap, LocalFrame | None]:
+def _flight_points(
+    scans: ScanService, logbook: Logbook, flight_id: int
+) -> tuple[str, PointMap, LocalFrame | None]:
     """A flight's scans as one point map at the site map's voxel size: bounded by the
     surfaces the flight saw, however long it was."""
-    flight = hub.logbook.flight(flight_id)
+    flight = logbook.flight(flight_id)
     end = flight_end(flight)
-    points = PointMap(hub.scans.point_map.voxel_m, hub.scans.point_map.max_voxels)
-    start, site = flight.start_time, hub.scans.site
+    points = PointMap(scans.point_map.voxel_m, scans.point_map.max_voxels)
+    start, site = flight.start_time, scans.site
     while True:
-        rows = hub.scans.repository.between(flight.vehicle_id, start, end, FLIGHT_SCAN_PAGE)
+        rows = scans.repository.between(flight.vehicle_id, start, end, FLIGHT_SCAN_PAGE)
         for row in rows:
             frame = decode_scan(row.frame)
-            site = hub.scans.site_for(frame)
+            site = scans.site_for(frame)
             points.add(world_points(frame, site).enu, row.time)
         if len(rows) < FLIGHT_SCAN_PAGE:
             return f"{flight.vehicle_id}_flight{flight.id}", points, site
@@ -244,10 +252,10 @@ def _flight_points(hub: HubDep, flight_id: int) -> tuple[str, PointMap, LocalFra
         404: {"description": "No such flight"},
     },
 )
-async def flight_points(flight_id: FlightIdPath, hub: HubDep) -> Response:
+async def flight_points(flight_id: FlightIdPath, scans: ScansDep, logbook: LogbookDep) -> Response:
     """The world points of a flight's scans (site east/north/up metres, voxel-downsampled
     like the point map) as a PLY file, for CloudCompare, PDAL or MeshLab."""
-    name, points, site = await asyncio.to_thread(_flight_points, hub, flight_id)
+    name, points, site = await asyncio.to_thread(_flight_points, scans, logbook, flight_id)
     shown = site_origin(site)
     origin = "unset" if shown is None else ",".join(str(v) for v in shown.model_dump().values())
     return Response(

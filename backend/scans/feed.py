@@ -1,4 +1,8 @@
-"""A client's scan subscription: newest wins per vehicle, for the vehicles it asked for."""
+"""A client's scan subscription: newest wins per vehicle, for the vehicles it asked for.
+
+The live feed (``backend.realtime.client_feed``) holds one per client; it asks the hub
+for it (``FeedServices.scan_subscription``) and uses it as the ``ScanFeedSubscription``
+it declares, so realtime never imports the scans feature."""
 
 from __future__ import annotations
 

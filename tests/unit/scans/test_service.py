@@ -6,9 +6,9 @@ import asyncio
 import dataclasses
 
 from backend.realtime.bus import InProcessBus
+from backend.scans.repository import ScanRepository
 from backend.scans.service import ScanRejected, ScanService
 from backend.storage.database import make_engine
-from backend.storage.scans import ScanRepository
 from protocol.scans import encode_scan
 from tests.support.scans import _frame
 

@@ -51,7 +51,8 @@ from backend.errors import (
 )
 from backend.formation import routes as formations
 from backend.formation import wiring as formation_wiring
-from backend.hub import Hub
+from backend.hub.start import start_hub
+from backend.hub.work import run_hub
 from backend.observability.logs import use_json_logs
 from backend.safety import routes as safety
 from backend.settings import REPO_ROOT, HubSettings
@@ -107,12 +108,12 @@ def create_app(settings: HubSettings | None = None) -> FastAPI:
         escape_control_characters_in_logs()
         if settings.log_format == "json":
             use_json_logs()
-        hub = await Hub.start(settings)
+        hub = await start_hub(settings)
         app.state.hub = hub
         # The features, each on the started hub before it runs (their routes read them).
         app.state.formation = await formation_wiring.attach(hub)
         survey_deps.provide(app.state, hub.surveys)  # the survey's routes take its service
-        runner = asyncio.create_task(hub.run(), name="hub")
+        runner = asyncio.create_task(run_hub(hub), name="hub")
         try:
             yield
         finally:

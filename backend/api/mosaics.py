@@ -17,12 +17,12 @@ from fastapi import Path, Request, Response
 from fastapi.responses import FileResponse, JSONResponse
 from pydantic import Field
 
-from backend.api.deps import HubDep
 from backend.api.responses import ErrorMessage
 from backend.api.security import SecuredRouter, requires
 from backend.api.tiles import TileSet, tile_sets
 from backend.auth.policy import Permission
 from backend.errors import Conflict, InvalidRequest, NotFound
+from backend.hub.route_access import HubDep
 from backend.mapping.tiles import MAX_ZOOM
 from backend.mosaic.export import FORMATS, ExportError
 from backend.mosaic.progress import MosaicProgress
@@ -113,7 +113,7 @@ async def install_basemap(survey_id: SurveyIdPath, hub: HubDep) -> TileSet:
         raise NotFound(f"no photo of survey {survey_id} has reached the mosaic") from None
     except ExportError as error:
         raise Conflict(str(error)) from None
-    sets = await tile_sets(hub)
+    sets = await tile_sets(hub.tiles)
     installed = next((s for s in sets if s.name == name), None)
     if installed is None:
         raise Conflict(f"the tiles folder did not take {name}.pmtiles; see the hub's log")

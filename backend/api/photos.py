@@ -25,11 +25,11 @@ from pydantic import AfterValidator, BaseModel, Field
 from starlette.background import BackgroundTask
 from starlette.responses import Response
 
-from backend.api.deps import HubDep, get_hub
 from backend.api.finite_json import FiniteJsonRoute
 from backend.api.security import SecuredRouter, requires
 from backend.auth.policy import Permission
 from backend.errors import Forbidden
+from backend.hub.route_access import HubDep, get_hub
 from backend.photos.checks import Refusal, Refused
 from backend.photos.export import write_zip
 from backend.photos.ingest import OffsetMismatch

@@ -10,13 +10,13 @@ from fastapi import Query
 from fastapi.responses import Response
 from pydantic import BaseModel, Field
 
-from backend.api.deps import HubDep
 from backend.api.logs.common import FlightIdPath, flight_end
 from backend.api.security import SecuredRouter, requires
 from backend.api.time_ranges import Moment, time_query, time_range
 from backend.api.vehicles import VehicleIdPath
 from backend.auth.policy import Permission
 from backend.errors import NotFound
+from backend.hub.route_access import HubDep
 from backend.scans.export import ply_bytes
 from backend.scans.pointmap import PointMap
 from backend.scans.points import WorldPoints, world_points

@@ -16,7 +16,7 @@ import pytest
 from PIL import Image
 
 from backend.errors import NotFound
-from backend.hub import MosaicSink
+from backend.hub.start import MosaicSink
 from backend.mosaic.service import MosaicService
 from backend.photos.checks import Refusal, Refused
 from backend.photos.export import write_zip

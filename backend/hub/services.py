@@ -1,0 +1,253 @@
+"""The hub's services, wired once per process (``start.py`` builds them, ``work.py``
+runs their background work); the routes reach them through ``backend/api/deps.py``."""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+import time
+from collections.abc import Callable, Collection, Coroutine
+from dataclasses import dataclass, field
+from typing import Any
+
+import httpx
+from sqlalchemy import Engine
+from sqlalchemy.exc import SQLAlchemyError
+
+from backend.audit import AuditEntry, AuditLog
+from backend.audit_denials import DenialCoalescer
+from backend.auth.accounts import Accounts
+from backend.auth.password_work import PasswordWork
+from backend.auth.policy import Principal
+from backend.auth.rate_limit import RateLimiter
+from backend.errors import NotFound
+from backend.fleet.command_service import carry_out_routed
+from backend.fleet.commands import CommandDispatcher
+from backend.fleet.param_catalog import ParamCatalog
+from backend.fleet.registry import FleetRegistry, VehicleRecord
+from backend.manual_control.service import ManualControl
+from backend.mapping.tiles import TileLibrary
+from backend.mosaic.service import MosaicService
+from backend.photos.ingest import PhotoIngest
+from backend.realtime.bus import InProcessBus, Topic
+from backend.realtime.collaborators import AgentConnection, ClientConnection
+from backend.realtime.fleet_link import FleetLink
+from backend.realtime.live_events import live_event
+from backend.realtime.nats_bus import NatsBus
+from backend.realtime.routing import AgentRoutes
+from backend.realtime.vehicle_fanout import VehicleFanout
+from backend.safety.service import SafetyService
+from backend.scans.obstacles import describe as describe_obstacle
+from backend.scans.pointmap import MapObstacle
+from backend.scans.service import ScanService
+from backend.scans.views import obstacle_views, point_map_view, site_origin
+from backend.settings import HubSettings
+from backend.storage.logbook import Logbook
+from backend.storage.records import StoredEvent
+from backend.storage.repository import Repository
+from backend.storage.sequences import Gap, StreamKey
+from backend.storage.spool import RowSpool
+from backend.storage.writer import StorageWriter
+from backend.survey.service import SurveyService
+from backend.viz3d.mirror import SceneLayer
+from backend.viz3d.replay import ReplayPanels
+from backend.viz3d.scene import FleetScene
+from backend.viz3d.server import VizServer
+from backend.viz3d.viewers import Viewers
+from protocol.messages import (
+    MAX_MAP_POINTS_SENT,
+    CloseCode,
+    CommandOutcome,
+    HubEventKind,
+    MapLayer,
+    MissionItem,
+    ObstaclesUpdate,
+    PointMapUpdate,
+)
+from protocol.routing import RoutedCommand, RoutedSender
+
+log = logging.getLogger(__name__)
+SEVERITY_INFO = 6  # MAV_SEVERITY_INFO: an obstacle found or gone
+
+
+@dataclass
+class Hub:
+    settings: HubSettings
+    engine: Engine
+    repository: Repository
+    registry: FleetRegistry
+    bus: InProcessBus | NatsBus
+    dispatcher: CommandDispatcher
+    writer: StorageWriter
+    logbook: Logbook
+    accounts: Accounts
+    audit: AuditLog
+    # Failed logins per (address, user name), and per address whatever the name.
+    login_limiter: RateLimiter
+    login_address_limiter: RateLimiter
+    command_limiter: RateLimiter
+    passwords: PasswordWork
+    safety: SafetyService
+    scans: ScanService
+    # Audit and command-log rows waiting out a database outage.
+    spool: RowSpool
+    # The offline tile sets in the tiles folder.
+    tiles: TileLibrary
+    # ArduPilot's parameter metadata files (PX4 serves its own through the agent).
+    param_catalog: ParamCatalog
+    # Refused requests, one audit row per principal, route and reason per interval.
+    denials: DenialCoalescer
+    # Live agent connections by vehicle, so revoking a token can drop its connection.
+    agent_sessions: dict[str, AgentConnection] = field(default_factory=dict)
+    # Held while an agent's hello is judged against the one holding its vehicle id.
+    agent_admissions: dict[str, asyncio.Lock] = field(default_factory=dict)
+    # Live client feeds, so a revoked token or disabled user stops seeing the fleet.
+    client_feeds: set[ClientConnection] = field(default_factory=set)
+    # Manual control: the leases (in memory only) and their life (backend/manual_control/).
+    manual_control: ManualControl = field(init=False)
+    # The 3D view: viser on loopback, and the client that passes its page on (None when
+    # GCS_VIZ_ENABLED is false).
+    viz: VizServer | None = None
+    viz_http: httpx.AsyncClient | None = None
+    scene: FleetScene | None = None
+    replays: ReplayPanels | None = None
+    viewers: Viewers | None = None
+    # Vehicle states to the client feeds, batched and encoded once per tick.
+    fanout: VehicleFanout = field(init=False)
+    # Several hubs (GCS_BUS_URL): the NATS link, and the routes to agents on other hubs.
+    fleet_link: FleetLink | None = None
+    # Area surveys: created in start(), as they send commands through the hub itself.
+    surveys: SurveyService = field(init=False)
+    # The live orthomosaic of each survey's photos (backend/mosaic/).
+    mosaic: MosaicService = field(init=False)
+    # Survey photos from the agents' uploads; each stored photo of a survey goes on to
+    # the mosaic (``photos.sink``).
+    photos: PhotoIngest = field(init=False)
+    # The features app.py wires onto the hub (backend/formation/): their long-running
+    # work, run with the hub's, and their layers of the 3D view.
+    background: list[Callable[[], Coroutine[Any, Any, None]]] = field(default_factory=list)
+    scene_layers: list[tuple[str, SceneLayer]] = field(default_factory=list)
+
+    async def survey_area(self, survey_id: str) -> dict[str, Any] | None:
+        """A survey's area as GeoJSON, for its mosaic's coverage (None: no such survey)."""
+        try:
+            run = await self.surveys.find(survey_id)
+        except NotFound:
+            return None
+        area: dict[str, Any] = run.request.area.model_dump()
+        return area
+
+    async def manual_ended_elsewhere(self, vehicle_id: str, why: str) -> None:
+        """Browser control ended on a vehicle whose agent another hub holds."""
+        await self.manual_control.end_on_vehicle(vehicle_id, why)
+
+    async def routed_sender(self, sender: RoutedSender) -> Principal | None:
+        """The user a command routed from another hub names, per the shared database."""
+        try:
+            return await asyncio.to_thread(
+                self.accounts.principal_of_token,
+                sender.token_id,
+                sender.name,
+                sender.role,
+                sender.token_kind,
+            )
+        except SQLAlchemyError as error:
+            # Unverifiable is unknown: refused (the agent's own failsafes stand meanwhile).
+            log.warning("routed command's sender %s not checked: %s", sender.name, error)
+            return None
+
+    async def carry_out_routed(
+        self, principal: Principal, vehicle_id: str, routed: RoutedCommand
+    ) -> CommandOutcome:
+        return await carry_out_routed(self, principal, vehicle_id, routed)
+
+    @property
+    def routes(self) -> AgentRoutes | None:
+        return None if self.fleet_link is None else self.fleet_link.routes
+
+    def deliver_sequence_news(self, acks: dict[StreamKey, int], gaps: list[Gap]) -> None:
+        """Tell each agent what is now stored and which of its frames never arrived."""
+        for key, seq in acks.items():
+            if (session := self.agent_sessions.get(key.vehicle_id)) is not None:
+                session.acknowledge(key, seq)
+        for gap in gaps:
+            if (session := self.agent_sessions.get(gap.key.vehicle_id)) is not None:
+                session.request_resend(gap)
+
+    async def publish_state(self, record: VehicleRecord) -> None:
+        await self.bus.publish(Topic.VEHICLE_STATE, record.id, record.summary())
+
+    async def mission_known(self, vehicle_id: str, items: list[MissionItem]) -> None:
+        """The mission a vehicle now has (items after home), as the hub uploaded or read
+        it: the 3D view draws its path."""
+        if self.scene is None:
+            return
+        record = self.registry.get(vehicle_id)
+        home_alt = record.state.home_alt_msl if record.state else None
+        await asyncio.to_thread(self.scene.show_mission, vehicle_id, items, home_alt)
+
+    async def refresh_obstacles(self) -> list[MapObstacle]:
+        """The point map's obstacles now, with lasting ids; the changes since the last
+        look are published as events of the vehicle whose scan last went into the map,
+        and the new list to the feeds that subscribed to the map's obstacles."""
+        changes = await self.scans.refresh_obstacles()
+        vehicle_id = self.scans.mapped_by
+        if vehicle_id is not None:
+            for change, obstacles in (("found", changes.appeared), ("gone", changes.gone)):
+                for obstacle in obstacles:
+                    text = describe_obstacle(obstacle, change)
+                    await self.store_event(vehicle_id, "obstacle", text, severity=SEVERITY_INFO)
+        if changes.appeared or changes.gone:
+            update = self._obstacles_now(changes.current)
+            await self.bus.publish(Topic.MAP, update.type, update)
+        return changes.current
+
+    def _obstacles_now(self, current: list[MapObstacle]) -> ObstaclesUpdate:
+        site = self.scans.site
+        return ObstaclesUpdate(site=site_origin(site), obstacles=obstacle_views(current, site))
+
+    async def map_now(self, layers: Collection[MapLayer]) -> list[PointMapUpdate | ObstaclesUpdate]:
+        now: list[PointMapUpdate | ObstaclesUpdate] = []
+        if "points" in layers:
+            view = await asyncio.to_thread(point_map_view, self.scans, MAX_MAP_POINTS_SENT)
+            now.append(PointMapUpdate(map=view))
+        if "obstacles" in layers:
+            now.append(self._obstacles_now(self.scans.obstacles.current))
+        return now
+
+    async def store_event(
+        self, vehicle_id: str, kind: HubEventKind, text: str, severity: int | None = None
+    ) -> None:
+        """An event the hub itself observed (a link coming up or going down, a refused
+        second agent); ``severity`` is a MAV_SEVERITY."""
+        event = StoredEvent(vehicle_id, "hub", None, time.time(), kind, severity, text)
+        await self.bus.publish(Topic.STORAGE, vehicle_id, event)
+        await self.publish_event(event)
+
+    async def publish_event(self, event: StoredEvent) -> None:
+        """To the dashboards' live feeds (whether or not it is stored)."""
+        await self.bus.publish(Topic.VEHICLE_EVENT, event.vehicle_id, live_event(event))
+
+    async def record(self, entry: AuditEntry) -> None:
+        await asyncio.to_thread(self.audit.record, entry)
+
+    async def record_denial(self, entry: AuditEntry, route: str, reason: str) -> None:
+        """A refused request, coalesced with the same principal's same refusals
+        (backend/audit_denials.py): a flood leaves a bounded trace."""
+        await self.record_all(self.denials.admit(entry, route, reason))
+
+    async def record_all(self, entries: list[AuditEntry]) -> None:
+        for entry in entries:
+            await self.record(entry)
+
+    async def drop_user_feeds(self, token_id: int | None = None, user: str | None = None) -> None:
+        """Close the live feeds of a revoked token, or of every session of a user."""
+        for feed in list(self.client_feeds):
+            if (token_id is not None and feed.token_id == token_id) or feed.user == user:
+                await feed.close(CloseCode.UNAUTHORIZED, "session ended or revoked")
+
+    async def drop_agent_token(self, token_id: int, vehicle_id: str) -> None:
+        """A revoked agent token ends its live connection at once."""
+        session = self.agent_sessions.get(vehicle_id)
+        if session is not None and session.token_id == token_id:
+            await session.close(CloseCode.UNAUTHORIZED, "agent token revoked")

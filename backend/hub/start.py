@@ -1,0 +1,209 @@
+"""Building the hub: the store (migrated), the bus, the accounts and every service, and
+the features' collaborators joined."""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+
+import httpx
+
+from backend.audit import AuditAction, AuditEntry, AuditLog
+from backend.audit_denials import DenialCoalescer
+from backend.auth.accounts import PROVISIONING, Accounts
+from backend.auth.password_work import PasswordWork
+from backend.auth.principal_cache import PrincipalCache
+from backend.auth.rate_limit import Limit, RateLimiter
+from backend.fleet.commands import CommandDispatcher
+from backend.fleet.param_catalog import ParamCatalog
+from backend.fleet.registry import FleetRegistry
+from backend.hub.services import Hub
+from backend.manual_control.claims import LeaseClaims
+from backend.manual_control.service import ManualControl
+from backend.manual_control.store import LeaseClaimStore
+from backend.mapping.tiles import TileLibrary
+from backend.mosaic.photo import StoredPhoto as MosaicPhoto
+from backend.mosaic.service import MosaicService
+from backend.photos.ingest import PhotoIngest
+from backend.photos.partials import PartialLimits
+from backend.photos.stored import StoredPhoto
+from backend.realtime.bus import InProcessBus, ReliableSubscription, Topic
+from backend.realtime.fleet_link import FleetLink
+from backend.realtime.nats_bus import NatsBus
+from backend.realtime.vehicle_fanout import VehicleFanout
+from backend.safety.rails_store import RailsRepository
+from backend.safety.service import SafetyService
+from backend.scans.service import ScanService
+from backend.settings import HubSettings
+from backend.storage.database import make_engine, migrate
+from backend.storage.logbook import Logbook
+from backend.storage.models import AuditRow, CommandRow
+from backend.storage.photos import PhotoRepository
+from backend.storage.repository import Repository
+from backend.storage.scans import ScanRepository
+from backend.storage.spool import RowSpool
+from backend.storage.writer import StorageWriter
+from backend.survey.ownership import SurveyOwnership
+from backend.survey.repository import SurveyRepository
+from backend.survey.service import SurveyService
+from backend.viz3d.frame import SceneFrame, parse_origin
+from backend.viz3d.replay import ReplayPanels
+from backend.viz3d.scene import FleetScene
+from backend.viz3d.server import VizServer
+from backend.viz3d.viewers import Viewers
+
+log = logging.getLogger(__name__)
+
+
+async def start_hub(settings: HubSettings) -> Hub:
+    """Open the store (migrating it) and load the vehicles it knows."""
+    engine = make_engine(settings.sqlalchemy_url)
+    await asyncio.to_thread(migrate, engine)
+    repository = Repository(engine)
+    registry = FleetRegistry()
+    registry.load(await asyncio.to_thread(repository.vehicles))
+    fleet_link = None
+    bus: InProcessBus | NatsBus = InProcessBus()
+    if settings.bus_url is not None:
+        fleet_link = await FleetLink.connect(settings, registry)
+        bus = fleet_link.bus
+    stored = ReliableSubscription(settings.telemetry_queue_limit)
+    bus.subscribe(Topic.STORAGE, stored)
+    logbook = Logbook(engine)
+    writer = await asyncio.to_thread(
+        StorageWriter,
+        repository,
+        logbook,
+        stored,
+        settings.telemetry_batch_size,
+        settings.telemetry_flush_interval_s,
+    )
+    log.info("hub store: %s", engine.url.render_as_string(hide_password=True))
+    cache = PrincipalCache(settings.principal_cache_s, settings.principal_cache_outage_s)
+    accounts = Accounts(engine, cache, settings.password_hash_cost)
+    await asyncio.to_thread(settings.spool_file.parent.mkdir, 0o700, True, True)
+    spool = RowSpool(settings.spool_file, engine, [AuditRow, CommandRow])
+    audit = AuditLog(engine, spool)
+    await asyncio.to_thread(_bootstrap_accounts, accounts, audit, settings)
+    hub = Hub(
+        settings=settings,
+        engine=engine,
+        repository=repository,
+        registry=registry,
+        bus=bus,
+        dispatcher=CommandDispatcher(registry, settings.command_timeout_s),
+        writer=writer,
+        logbook=logbook,
+        accounts=accounts,
+        audit=audit,
+        spool=spool,
+        tiles=TileLibrary(settings.tiles_folder),
+        param_catalog=ParamCatalog(settings.param_metadata_dir),
+        denials=DenialCoalescer(settings.audit_denial_interval_s),
+        login_limiter=RateLimiter(Limit(settings.login_attempts_per_minute, 60.0)),
+        login_address_limiter=RateLimiter(
+            Limit(settings.login_attempts_per_address_per_minute, 60.0)
+        ),
+        command_limiter=RateLimiter(Limit(settings.commands_per_second, 1.0)),
+        passwords=PasswordWork(settings.password_hash_threads, settings.password_hash_max_pending),
+        safety=SafetyService(RailsRepository(engine), settings),
+        scans=ScanService(
+            ScanRepository(engine),
+            bus,
+            site=settings.site_frame(),
+            voxel_m=settings.scan_voxel_m,
+            max_voxels=settings.scan_map_max_voxels,
+            max_rate_hz=settings.scan_max_rate_hz,
+            queue_limit=settings.scan_queue_limit,
+        ),
+        fleet_link=fleet_link,
+    )
+    hub.manual_control = ManualControl(registry, hub.dispatcher, hub.client_feeds, hub.record)
+    if fleet_link is not None:
+        claims = LeaseClaims(LeaseClaimStore(engine), fleet_link.hub_id, fleet_link.lease_ttl_s)
+        hub.manual_control.leases.claims = claims
+        fleet_link.on_manual_ended = hub.manual_ended_elsewhere
+        fleet_link.routes.check_sender = hub.routed_sender
+        fleet_link.routes.carry_out = hub.carry_out_routed
+    writer.on_sequences = hub.deliver_sequence_news
+    hub.fanout = VehicleFanout(bus, settings.ui_vehicle_interval_s, settings.ui_batch_interval_s)
+    hub.surveys = SurveyService(hub, bus, SurveyRepository(engine), settings)
+    if fleet_link is not None:
+        hub.surveys.ownership = SurveyOwnership(LeaseClaimStore(engine), fleet_link.hub_id)
+    await hub.surveys.load()
+    hub.mosaic = MosaicService(settings.data_dir / "mosaics", hub.survey_area)
+    await hub.mosaic.load()
+    hub.photos = PhotoIngest(
+        PhotoRepository(engine),
+        settings.photos_folder,
+        hub.surveys.known,
+        hub.surveys.find,
+        margin_m=settings.photo_survey_margin_m,
+        quota_bytes=settings.max_photo_bytes_per_vehicle,
+        partials=PartialLimits(settings.photo_uploads_per_vehicle, settings.photo_upload_expiry_s),
+        sink=MosaicSink(hub.mosaic),
+    )
+    await hub.manual_control.revoke_left_open(engine)
+    if settings.viz_enabled:
+        hub.viz = await asyncio.to_thread(VizServer.start)
+        hub.viz_http = httpx.AsyncClient(timeout=httpx.Timeout(10.0))
+        frame = SceneFrame(parse_origin(settings.viz_origin))
+        hub.scene = await asyncio.to_thread(FleetScene, hub.viz.viser, frame, settings.viz_trail_s)
+        hub.replays = ReplayPanels(hub.viz.viser, frame, logbook)
+        hub.viewers = Viewers(hub.viz.viser, hub.scene)
+    return hub
+
+
+class MosaicSink:
+    """The photo ingest's sink: each stored photo of a survey into that survey's mosaic
+    (photos/ and mosaic/ are siblings that know nothing of each other; the hub joins them)."""
+
+    def __init__(self, mosaic: MosaicService) -> None:
+        self._mosaic = mosaic
+
+    async def add_photo(self, photo: StoredPhoto) -> None:
+        if photo.survey_id is None:  # no survey, no mosaic to put it in
+            return
+        await self._mosaic.add_photo(
+            MosaicPhoto(
+                photo.photo_id,
+                photo.vehicle_id,
+                photo.survey_id,
+                photo.path,
+                photo.pose,
+                photo.camera,
+            )
+        )
+
+
+def _bootstrap_accounts(accounts: Accounts, audit: AuditLog, settings: HubSettings) -> None:
+    admin_password = settings.admin_password.get_secret_value() if settings.admin_password else None
+    generated = accounts.ensure_first_admin(settings.admin_username, admin_password)
+    if generated is not None:
+        # Shown once, on the console and never in the log, as the issue of a secret.
+        print(
+            f"\nCreated the first admin account: user {settings.admin_username!r}, "
+            f"password {generated}\n"
+            "It is not shown again. Set GCS_ADMIN_PASSWORD to choose it instead.\n",
+            flush=True,
+        )
+    configured = settings.enrolment_tokens()
+    for vehicle_id, token in configured.items():
+        if accounts.provision_agent_token(vehicle_id, token):
+            log.info("enrolled vehicle %s from GCS_AGENT_TOKENS", vehicle_id)
+    # A token rotated or removed in the configuration must stop working, not linger.
+    for row in accounts.revoke_unprovisioned(configured):
+        log.warning(
+            "revoked agent token %d of %s: no longer in GCS_AGENT_TOKENS", row.id, row.vehicle_id
+        )
+        audit.record(
+            AuditEntry(
+                actor=PROVISIONING,
+                role="system",
+                source="GCS_AGENT_TOKENS",
+                action=AuditAction.AGENT_TOKEN_REVOKE,
+                target=row.vehicle_id,
+                outcome="ok",
+                detail={"id": row.id, "reason": "no longer in GCS_AGENT_TOKENS"},
+            )
+        )

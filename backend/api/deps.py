@@ -166,7 +166,8 @@ def get_mission_views(connection: HTTPConnection) -> MissionViews:
 
 
 def get_command_services(connection: HTTPConnection) -> CommandServices:
-    services: CommandServices = _wiring(connection)
+    """What sending a command uses (the hub's ``CommandPath``)."""
+    services: CommandServices = _wiring(connection).commands
     return services
 
 

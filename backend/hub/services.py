@@ -4,27 +4,22 @@ runs their background work); the routes reach them through ``backend/api/deps.py
 from __future__ import annotations
 
 import asyncio
-import logging
-import time
 from collections.abc import Callable, Collection, Coroutine
 from dataclasses import dataclass, field
 from typing import Any
 
 import httpx
 from sqlalchemy import Engine
-from sqlalchemy.exc import SQLAlchemyError
 
 from backend.audit import AuditEntry, AuditLog
 from backend.audit_denials import DenialCoalescer
 from backend.auth.accounts import Accounts
 from backend.auth.password_work import PasswordWork
-from backend.auth.policy import Principal
 from backend.auth.rate_limit import RateLimiter
-from backend.errors import NotFound
-from backend.fleet.command_service import carry_out_routed
 from backend.fleet.commands import CommandDispatcher
 from backend.fleet.param_catalog import ParamCatalog
 from backend.fleet.registry import FleetRegistry, VehicleRecord
+from backend.hub.collaborators import CommandPath
 from backend.manual_control.service import ManualControl
 from backend.mapping.tiles import TileLibrary
 from backend.mosaic.service import MosaicService
@@ -32,7 +27,6 @@ from backend.photos.ingest import PhotoIngest
 from backend.realtime.bus import InProcessBus, Topic
 from backend.realtime.collaborators import AgentConnection, ClientConnection
 from backend.realtime.fleet_link import FleetLink
-from backend.realtime.live_events import live_event
 from backend.realtime.nats_bus import NatsBus
 from backend.realtime.routing import AgentRoutes
 from backend.realtime.vehicle_fanout import VehicleFanout
@@ -45,7 +39,6 @@ from backend.settings import HubSettings
 from backend.storage.logbook import Logbook
 from backend.storage.records import StoredEvent
 from backend.storage.repository import Repository
-from backend.storage.sequences import Gap, StreamKey
 from backend.storage.spool import RowSpool
 from backend.storage.writer import StorageWriter
 from backend.survey.service import SurveyService
@@ -57,16 +50,13 @@ from backend.viz3d.viewers import Viewers
 from protocol.messages import (
     MAX_MAP_POINTS_SENT,
     CloseCode,
-    CommandOutcome,
     HubEventKind,
     MapLayer,
     MissionItem,
     ObstaclesUpdate,
     PointMapUpdate,
 )
-from protocol.routing import RoutedCommand, RoutedSender
 
-log = logging.getLogger(__name__)
 SEVERITY_INFO = 6  # MAV_SEVERITY_INFO: an obstacle found or gone
 
 
@@ -77,6 +67,8 @@ class Hub:
     repository: Repository
     registry: FleetRegistry
     bus: InProcessBus | NatsBus
+    # What sending a command uses; the surveys and the routed commands send through it.
+    commands: CommandPath
     dispatcher: CommandDispatcher
     writer: StorageWriter
     logbook: Logbook
@@ -97,14 +89,23 @@ class Hub:
     param_catalog: ParamCatalog
     # Refused requests, one audit row per principal, route and reason per interval.
     denials: DenialCoalescer
+    # Manual control: the leases (in memory only) and their life (backend/manual_control/).
+    manual_control: ManualControl
+    # Vehicle states to the client feeds, batched and encoded once per tick.
+    fanout: VehicleFanout
+    # Area surveys, which send their commands through ``commands``.
+    surveys: SurveyService
+    # The live orthomosaic of each survey's photos (backend/mosaic/).
+    mosaic: MosaicService
+    # Survey photos from the agents' uploads; each stored photo of a survey goes on to
+    # the mosaic (``photos.sink``).
+    photos: PhotoIngest
     # Live agent connections by vehicle, so revoking a token can drop its connection.
     agent_sessions: dict[str, AgentConnection] = field(default_factory=dict)
     # Held while an agent's hello is judged against the one holding its vehicle id.
     agent_admissions: dict[str, asyncio.Lock] = field(default_factory=dict)
     # Live client feeds, so a revoked token or disabled user stops seeing the fleet.
     client_feeds: set[ClientConnection] = field(default_factory=set)
-    # Manual control: the leases (in memory only) and their life (backend/manual_control/).
-    manual_control: ManualControl = field(init=False)
     # The 3D view: viser on loopback, and the client that passes its page on (None when
     # GCS_VIZ_ENABLED is false).
     viz: VizServer | None = None
@@ -112,67 +113,16 @@ class Hub:
     scene: FleetScene | None = None
     replays: ReplayPanels | None = None
     viewers: Viewers | None = None
-    # Vehicle states to the client feeds, batched and encoded once per tick.
-    fanout: VehicleFanout = field(init=False)
     # Several hubs (GCS_BUS_URL): the NATS link, and the routes to agents on other hubs.
     fleet_link: FleetLink | None = None
-    # Area surveys: created in start(), as they send commands through the hub itself.
-    surveys: SurveyService = field(init=False)
-    # The live orthomosaic of each survey's photos (backend/mosaic/).
-    mosaic: MosaicService = field(init=False)
-    # Survey photos from the agents' uploads; each stored photo of a survey goes on to
-    # the mosaic (``photos.sink``).
-    photos: PhotoIngest = field(init=False)
     # The features app.py wires onto the hub (backend/formation/): their long-running
     # work, run with the hub's, and their layers of the 3D view.
     background: list[Callable[[], Coroutine[Any, Any, None]]] = field(default_factory=list)
     scene_layers: list[tuple[str, SceneLayer]] = field(default_factory=list)
 
-    async def survey_area(self, survey_id: str) -> dict[str, Any] | None:
-        """A survey's area as GeoJSON, for its mosaic's coverage (None: no such survey)."""
-        try:
-            run = await self.surveys.find(survey_id)
-        except NotFound:
-            return None
-        area: dict[str, Any] = run.request.area.model_dump()
-        return area
-
-    async def manual_ended_elsewhere(self, vehicle_id: str, why: str) -> None:
-        """Browser control ended on a vehicle whose agent another hub holds."""
-        await self.manual_control.end_on_vehicle(vehicle_id, why)
-
-    async def routed_sender(self, sender: RoutedSender) -> Principal | None:
-        """The user a command routed from another hub names, per the shared database."""
-        try:
-            return await asyncio.to_thread(
-                self.accounts.principal_of_token,
-                sender.token_id,
-                sender.name,
-                sender.role,
-                sender.token_kind,
-            )
-        except SQLAlchemyError as error:
-            # Unverifiable is unknown: refused (the agent's own failsafes stand meanwhile).
-            log.warning("routed command's sender %s not checked: %s", sender.name, error)
-            return None
-
-    async def carry_out_routed(
-        self, principal: Principal, vehicle_id: str, routed: RoutedCommand
-    ) -> CommandOutcome:
-        return await carry_out_routed(self, principal, vehicle_id, routed)
-
     @property
     def routes(self) -> AgentRoutes | None:
         return None if self.fleet_link is None else self.fleet_link.routes
-
-    def deliver_sequence_news(self, acks: dict[StreamKey, int], gaps: list[Gap]) -> None:
-        """Tell each agent what is now stored and which of its frames never arrived."""
-        for key, seq in acks.items():
-            if (session := self.agent_sessions.get(key.vehicle_id)) is not None:
-                session.acknowledge(key, seq)
-        for gap in gaps:
-            if (session := self.agent_sessions.get(gap.key.vehicle_id)) is not None:
-                session.request_resend(gap)
 
     async def publish_state(self, record: VehicleRecord) -> None:
         await self.bus.publish(Topic.VEHICLE_STATE, record.id, record.summary())
@@ -218,18 +168,13 @@ class Hub:
     async def store_event(
         self, vehicle_id: str, kind: HubEventKind, text: str, severity: int | None = None
     ) -> None:
-        """An event the hub itself observed (a link coming up or going down, a refused
-        second agent); ``severity`` is a MAV_SEVERITY."""
-        event = StoredEvent(vehicle_id, "hub", None, time.time(), kind, severity, text)
-        await self.bus.publish(Topic.STORAGE, vehicle_id, event)
-        await self.publish_event(event)
+        await self.commands.store_event(vehicle_id, kind, text, severity)
 
     async def publish_event(self, event: StoredEvent) -> None:
-        """To the dashboards' live feeds (whether or not it is stored)."""
-        await self.bus.publish(Topic.VEHICLE_EVENT, event.vehicle_id, live_event(event))
+        await self.commands.publish_event(event)
 
     async def record(self, entry: AuditEntry) -> None:
-        await asyncio.to_thread(self.audit.record, entry)
+        await self.commands.record(entry)
 
     async def record_denial(self, entry: AuditEntry, route: str, reason: str) -> None:
         """A refused request, coalesced with the same principal's same refusals

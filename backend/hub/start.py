@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import asyncio
 import logging
+from dataclasses import dataclass
 
 import httpx
 
@@ -17,10 +18,10 @@ from backend.auth.rate_limit import Limit, RateLimiter
 from backend.fleet.commands import CommandDispatcher
 from backend.fleet.param_catalog import ParamCatalog
 from backend.fleet.registry import FleetRegistry
+from backend.hub.collaborators import CommandPath, RoutedSenders, SequenceNews, SurveyAreas
+from backend.hub.multi_hub import link_hubs
 from backend.hub.services import Hub
-from backend.manual_control.claims import LeaseClaims
 from backend.manual_control.service import ManualControl
-from backend.manual_control.store import LeaseClaimStore
 from backend.mapping.tiles import TileLibrary
 from backend.mosaic.photo import StoredPhoto as MosaicPhoto
 from backend.mosaic.service import MosaicService
@@ -28,6 +29,7 @@ from backend.photos.ingest import PhotoIngest
 from backend.photos.partials import PartialLimits
 from backend.photos.stored import StoredPhoto
 from backend.realtime.bus import InProcessBus, ReliableSubscription, Topic
+from backend.realtime.collaborators import AgentConnection, ClientConnection
 from backend.realtime.fleet_link import FleetLink
 from backend.realtime.nats_bus import NatsBus
 from backend.realtime.vehicle_fanout import VehicleFanout
@@ -43,7 +45,6 @@ from backend.storage.repository import Repository
 from backend.storage.scans import ScanRepository
 from backend.storage.spool import RowSpool
 from backend.storage.writer import StorageWriter
-from backend.survey.ownership import SurveyOwnership
 from backend.survey.repository import SurveyRepository
 from backend.survey.service import SurveyService
 from backend.viz3d.frame import SceneFrame, parse_origin
@@ -85,20 +86,60 @@ async def start_hub(settings: HubSettings) -> Hub:
     spool = RowSpool(settings.spool_file, engine, [AuditRow, CommandRow])
     audit = AuditLog(engine, spool)
     await asyncio.to_thread(_bootstrap_accounts, accounts, audit, settings)
-    hub = Hub(
+    dispatcher = CommandDispatcher(registry, settings.command_timeout_s)
+    safety = SafetyService(RailsRepository(engine), settings)
+    param_catalog = ParamCatalog(settings.param_metadata_dir)
+    commands = CommandPath(dispatcher, safety, registry, spool, param_catalog, audit, bus)
+    scans = ScanService(
+        ScanRepository(engine),
+        bus,
+        site=settings.site_frame(),
+        voxel_m=settings.scan_voxel_m,
+        max_voxels=settings.scan_map_max_voxels,
+        max_rate_hz=settings.scan_max_rate_hz,
+        queue_limit=settings.scan_queue_limit,
+    )
+    # Live agent connections and client feeds, as they come and go: the services that
+    # reach them hold the collections themselves.
+    agent_sessions: dict[str, AgentConnection] = {}
+    client_feeds: set[ClientConnection] = set()
+    writer.on_sequences = SequenceNews(agent_sessions)
+    manual_control = ManualControl(registry, dispatcher, client_feeds, commands.record)
+    fanout = VehicleFanout(bus, settings.ui_vehicle_interval_s, settings.ui_batch_interval_s)
+    surveys = SurveyService(commands, bus, SurveyRepository(engine), settings)
+    if fleet_link is not None:
+        senders = RoutedSenders(accounts)
+        link_hubs(fleet_link, engine, commands, senders, manual_control, surveys)
+    await surveys.load()
+    mosaic = MosaicService(settings.data_dir / "mosaics", SurveyAreas(surveys))
+    await mosaic.load()
+    photos = PhotoIngest(
+        PhotoRepository(engine),
+        settings.photos_folder,
+        surveys.known,
+        surveys.find,
+        margin_m=settings.photo_survey_margin_m,
+        quota_bytes=settings.max_photo_bytes_per_vehicle,
+        partials=PartialLimits(settings.photo_uploads_per_vehicle, settings.photo_upload_expiry_s),
+        sink=MosaicSink(mosaic),
+    )
+    await manual_control.revoke_left_open(engine)
+    view = await View3D.start(settings, logbook) if settings.viz_enabled else View3D()
+    return Hub(
         settings=settings,
         engine=engine,
         repository=repository,
         registry=registry,
         bus=bus,
-        dispatcher=CommandDispatcher(registry, settings.command_timeout_s),
+        commands=commands,
+        dispatcher=dispatcher,
         writer=writer,
         logbook=logbook,
         accounts=accounts,
         audit=audit,
         spool=spool,
         tiles=TileLibrary(settings.tiles_folder),
-        param_catalog=ParamCatalog(settings.param_metadata_dir),
+        param_catalog=param_catalog,
         denials=DenialCoalescer(settings.audit_denial_interval_s),
         login_limiter=RateLimiter(Limit(settings.login_attempts_per_minute, 60.0)),
         login_address_limiter=RateLimiter(
@@ -106,52 +147,47 @@ async def start_hub(settings: HubSettings) -> Hub:
         ),
         command_limiter=RateLimiter(Limit(settings.commands_per_second, 1.0)),
         passwords=PasswordWork(settings.password_hash_threads, settings.password_hash_max_pending),
-        safety=SafetyService(RailsRepository(engine), settings),
-        scans=ScanService(
-            ScanRepository(engine),
-            bus,
-            site=settings.site_frame(),
-            voxel_m=settings.scan_voxel_m,
-            max_voxels=settings.scan_map_max_voxels,
-            max_rate_hz=settings.scan_max_rate_hz,
-            queue_limit=settings.scan_queue_limit,
-        ),
+        safety=safety,
+        scans=scans,
+        agent_sessions=agent_sessions,
+        client_feeds=client_feeds,
+        manual_control=manual_control,
+        fanout=fanout,
         fleet_link=fleet_link,
+        surveys=surveys,
+        mosaic=mosaic,
+        photos=photos,
+        viz=view.server,
+        viz_http=view.http,
+        scene=view.scene,
+        replays=view.replays,
+        viewers=view.viewers,
     )
-    hub.manual_control = ManualControl(registry, hub.dispatcher, hub.client_feeds, hub.record)
-    if fleet_link is not None:
-        claims = LeaseClaims(LeaseClaimStore(engine), fleet_link.hub_id, fleet_link.lease_ttl_s)
-        hub.manual_control.leases.claims = claims
-        fleet_link.on_manual_ended = hub.manual_ended_elsewhere
-        fleet_link.routes.check_sender = hub.routed_sender
-        fleet_link.routes.carry_out = hub.carry_out_routed
-    writer.on_sequences = hub.deliver_sequence_news
-    hub.fanout = VehicleFanout(bus, settings.ui_vehicle_interval_s, settings.ui_batch_interval_s)
-    hub.surveys = SurveyService(hub, bus, SurveyRepository(engine), settings)
-    if fleet_link is not None:
-        hub.surveys.ownership = SurveyOwnership(LeaseClaimStore(engine), fleet_link.hub_id)
-    await hub.surveys.load()
-    hub.mosaic = MosaicService(settings.data_dir / "mosaics", hub.survey_area)
-    await hub.mosaic.load()
-    hub.photos = PhotoIngest(
-        PhotoRepository(engine),
-        settings.photos_folder,
-        hub.surveys.known,
-        hub.surveys.find,
-        margin_m=settings.photo_survey_margin_m,
-        quota_bytes=settings.max_photo_bytes_per_vehicle,
-        partials=PartialLimits(settings.photo_uploads_per_vehicle, settings.photo_upload_expiry_s),
-        sink=MosaicSink(hub.mosaic),
-    )
-    await hub.manual_control.revoke_left_open(engine)
-    if settings.viz_enabled:
-        hub.viz = await asyncio.to_thread(VizServer.start)
-        hub.viz_http = httpx.AsyncClient(timeout=httpx.Timeout(10.0))
+
+
+@dataclass(frozen=True)
+class View3D:
+    """The 3D view: viser on loopback, the client that passes its page on, the fleet's
+    scene, the replay panels and the viewers (all None when GCS_VIZ_ENABLED is false)."""
+
+    server: VizServer | None = None
+    http: httpx.AsyncClient | None = None
+    scene: FleetScene | None = None
+    replays: ReplayPanels | None = None
+    viewers: Viewers | None = None
+
+    @classmethod
+    async def start(cls, settings: HubSettings, logbook: Logbook) -> View3D:
+        server = await asyncio.to_thread(VizServer.start)
         frame = SceneFrame(parse_origin(settings.viz_origin))
-        hub.scene = await asyncio.to_thread(FleetScene, hub.viz.viser, frame, settings.viz_trail_s)
-        hub.replays = ReplayPanels(hub.viz.viser, frame, logbook)
-        hub.viewers = Viewers(hub.viz.viser, hub.scene)
-    return hub
+        scene = await asyncio.to_thread(FleetScene, server.viser, frame, settings.viz_trail_s)
+        return cls(
+            server=server,
+            http=httpx.AsyncClient(timeout=httpx.Timeout(10.0)),
+            scene=scene,
+            replays=ReplayPanels(server.viser, frame, logbook),
+            viewers=Viewers(server.viser, scene),
+        )
 
 
 class MosaicSink:

@@ -48,7 +48,8 @@ from backend.errors import (
 )
 from backend.formation import routes as formations
 from backend.formation import wiring as formation_wiring
-from backend.hub import Hub
+from backend.hub.start import start_hub
+from backend.hub.work import run_hub
 from backend.imagery.mosaic import deps as mosaic_deps
 from backend.imagery.mosaic import routes as mosaics
 from backend.imagery.photos import deps as photo_deps
@@ -111,7 +112,7 @@ def create_app(settings: HubSettings | None = None) -> FastAPI:
         escape_control_characters_in_logs()
         if settings.log_format == "json":
             use_json_logs()
-        hub = await Hub.start(settings)
+        hub = await start_hub(settings)
         app.state.hub = hub
         # The features, each on the started hub before it runs (their routes read them).
         app.state.formation = await formation_wiring.attach(hub)
@@ -125,7 +126,7 @@ def create_app(settings: HubSettings | None = None) -> FastAPI:
             ),
         )
         hub.scene_layers.extend(scan_scene_layers(hub.scans, hub.bus))
-        runner = asyncio.create_task(hub.run(), name="hub")
+        runner = asyncio.create_task(run_hub(hub), name="hub")
         try:
             yield
         finally:

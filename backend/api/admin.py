@@ -10,7 +10,7 @@ from fastapi import Depends, Path, Query, Request, Response, status
 from pydantic import BaseModel, Field, ValidationInfo, field_validator
 from pydantic_core import PydanticCustomError
 
-from backend.api.deps import HubDep
+from backend.api.deps import AccountsDep, AuditDep, AuditLogDep, PasswordsDep, SessionsDep
 from backend.api.security import CurrentPrincipal, SecuredRouter, audit_entry, requires
 from backend.audit import AuditAction, AuditQuery
 from backend.auth.password_policy import MIN_LENGTH, password_problem
@@ -148,8 +148,8 @@ def _user(row: UserRow) -> User:
 
 
 @router.get("/users", response_model=list[User], openapi_extra=requires(Permission.ADMIN))
-async def list_users(hub: HubDep) -> list[User]:
-    return [_user(row) for row in await asyncio.to_thread(hub.accounts.users)]
+async def list_users(accounts: AccountsDep) -> list[User]:
+    return [_user(row) for row in await asyncio.to_thread(accounts.users)]
 
 
 @router.post(
@@ -159,11 +159,16 @@ async def list_users(hub: HubDep) -> list[User]:
     openapi_extra=requires(Permission.ADMIN),
 )
 async def create_user(
-    body: UserCreate, request: Request, principal: CurrentPrincipal, hub: HubDep
+    body: UserCreate,
+    request: Request,
+    principal: CurrentPrincipal,
+    passwords: PasswordsDep,
+    accounts: AccountsDep,
+    audit: AuditDep,
 ) -> User:
     # Hashing runs on the password threads, bounded like a login.
-    row = await hub.passwords.run(hub.accounts.create_user, body.username, body.password, body.role)
-    await hub.record(
+    row = await passwords.run(accounts.create_user, body.username, body.password, body.role)
+    await audit.record(
         audit_entry(
             request, principal, AuditAction.USER_CREATE, body.username, "ok", role=body.role
         )
@@ -177,17 +182,20 @@ async def update_user(
     body: UserUpdate,
     request: Request,
     principal: CurrentPrincipal,
-    hub: HubDep,
+    passwords: PasswordsDep,
+    accounts: AccountsDep,
+    sessions: SessionsDep,
+    audit: AuditDep,
 ) -> User:
     """Change a role, disable an account (ends its sessions) or reset a password."""
-    run = asyncio.to_thread if body.password is None else hub.passwords.run
-    row = await run(hub.accounts.update_user, username, body.role, body.disabled, body.password)
+    run = asyncio.to_thread if body.password is None else passwords.run
+    row = await run(accounts.update_user, username, body.role, body.disabled, body.password)
     if body.disabled or body.password is not None:
-        await hub.drop_user_feeds(user=username)  # their sessions were just revoked
+        await sessions.drop_user_feeds(user=username)  # their sessions were just revoked
     changes = body.model_dump(exclude_none=True, exclude={"password"})
     if body.password is not None:
         changes["password"] = "changed"
-    await hub.record(
+    await audit.record(
         audit_entry(request, principal, AuditAction.USER_UPDATE, username, "ok", **changes)
     )
     return _user(row)
@@ -203,11 +211,12 @@ async def enrol_vehicle(
     vehicle_id: Annotated[VehicleId, Path()],
     request: Request,
     principal: CurrentPrincipal,
-    hub: HubDep,
+    accounts: AccountsDep,
+    audit: AuditDep,
 ) -> IssuedAgentToken:
     """Enrol a vehicle (new or known): a token its agent presents. Stored only as a hash."""
-    issued = await asyncio.to_thread(hub.accounts.enrol_vehicle, vehicle_id, principal.name)
-    await hub.record(
+    issued = await asyncio.to_thread(accounts.enrol_vehicle, vehicle_id, principal.name)
+    await audit.record(
         audit_entry(
             request, principal, AuditAction.AGENT_TOKEN_CREATE, vehicle_id, "ok", id=issued.id
         )
@@ -226,9 +235,9 @@ async def enrol_vehicle(
     "/agent-tokens", response_model=list[AgentToken], openapi_extra=requires(Permission.ADMIN)
 )
 async def list_agent_tokens(
-    hub: HubDep, vehicle_id: Annotated[str | None, Query(max_length=64)] = None
+    accounts: AccountsDep, vehicle_id: Annotated[str | None, Query(max_length=64)] = None
 ) -> list[AgentToken]:
-    rows = await asyncio.to_thread(hub.accounts.agent_tokens, vehicle_id)
+    rows = await asyncio.to_thread(accounts.agent_tokens, vehicle_id)
     return [
         AgentToken(
             id=row.id,
@@ -250,12 +259,14 @@ async def revoke_agent_token(
     token_id: Annotated[int, Path(ge=1, le=2**62)],
     request: Request,
     principal: CurrentPrincipal,
-    hub: HubDep,
+    accounts: AccountsDep,
+    sessions: SessionsDep,
+    audit: AuditDep,
 ) -> Response:
     """Revoke an agent token; a live connection using it is closed at once."""
-    row = await asyncio.to_thread(hub.accounts.revoke_agent_token, token_id)
-    await hub.drop_agent_token(row.id, row.vehicle_id)
-    await hub.record(
+    row = await asyncio.to_thread(accounts.revoke_agent_token, token_id)
+    await sessions.drop_agent_token(row.id, row.vehicle_id)
+    await audit.record(
         audit_entry(
             request, principal, AuditAction.AGENT_TOKEN_REVOKE, row.vehicle_id, "ok", id=row.id
         )
@@ -270,7 +281,7 @@ async def revoke_agent_token(
     dependencies=[Depends(_known_filters_only)],
 )
 async def audit_log(
-    hub: HubDep,
+    trail: AuditLogDep,
     actor: Annotated[str | None, Query(max_length=80)] = None,
     action: Annotated[AuditAction | None, Query(description="One of the actions listed")] = None,
     target: Annotated[str | None, Query(max_length=128)] = None,
@@ -284,7 +295,7 @@ async def audit_log(
     """Audit entries, newest first, a page at a time (``next_before_id``). An unknown
     filter or action is refused (422, naming the valid ones)."""
     query = AuditQuery(actor, action, target, since, until, before_id, limit)
-    rows = await asyncio.to_thread(hub.audit.query, query)
+    rows = await asyncio.to_thread(trail.query, query)
     return AuditPage(
         entries=[
             AuditRecord(

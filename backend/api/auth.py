@@ -3,13 +3,23 @@
 from __future__ import annotations
 
 import asyncio
+from dataclasses import dataclass
 from typing import Annotated
 
 from fastapi import Depends, Path, Request, Response, status
 from fastapi.security import OAuth2PasswordRequestForm
 from pydantic import BaseModel, BeforeValidator, Field, Strict
 
-from backend.api.deps import HubDep
+from backend.api.deps import (
+    AccountsDep,
+    AuditDep,
+    AuditRecorder,
+    LoginAddressLimiterDep,
+    LoginLimiterDep,
+    PasswordsDep,
+    SessionsDep,
+    SettingsDep,
+)
 from backend.api.security import (
     CurrentPrincipal,
     SecuredRouter,
@@ -18,7 +28,9 @@ from backend.api.security import (
     requires,
 )
 from backend.audit import AuditAction
+from backend.auth.accounts import Accounts
 from backend.auth.credentials import SESSION_COOKIE
+from backend.auth.password_work import PasswordWork
 from backend.auth.policy import (
     PUBLIC,
     ROLE_PERMISSIONS,
@@ -29,8 +41,8 @@ from backend.auth.policy import (
     scope_list,
     user_principal,
 )
+from backend.auth.rate_limit import RateLimiter
 from backend.errors import Forbidden, InvalidRequest, RateLimited, Unauthenticated
-from backend.hub import Hub
 from backend.storage.models import UserRow
 from protocol.messages import whole_number
 
@@ -91,7 +103,32 @@ class IssuedApiToken(ApiToken):
     token: str = Field(description="Shown once; store it now")
 
 
-async def _login(hub: Hub, request: Request, username: str, password: str) -> UserRow:
+@dataclass(frozen=True)
+class PasswordCheck:
+    """What checking a login's password uses: its rate limits, the hashing capacity,
+    the accounts, and the audit log that records a refusal."""
+
+    login_limiter: RateLimiter
+    login_address_limiter: RateLimiter
+    passwords: PasswordWork
+    accounts: Accounts
+    audit: AuditRecorder
+
+
+def _password_check(
+    login_limiter: LoginLimiterDep,
+    login_address_limiter: LoginAddressLimiterDep,
+    passwords: PasswordsDep,
+    accounts: AccountsDep,
+    audit: AuditDep,
+) -> PasswordCheck:
+    return PasswordCheck(login_limiter, login_address_limiter, passwords, accounts, audit)
+
+
+PasswordCheckDep = Annotated[PasswordCheck, Depends(_password_check)]
+
+
+async def _login(check: PasswordCheck, request: Request, username: str, password: str) -> UserRow:
     """Check a password under the login rate limits, auditing the attempt.
 
     Failures count per (address, user name) and per address. Not per user name alone:
@@ -101,27 +138,27 @@ async def _login(hub: Hub, request: Request, username: str, password: str) -> Us
     """
     address = client_address(request)
     pair = f"{address}|{username[:MAX_USERNAME]}"
-    hub.login_limiter.check(pair, "login attempts")
-    hub.login_address_limiter.check(address, "login attempts")
+    check.login_limiter.check(pair, "login attempts")
+    check.login_address_limiter.check(address, "login attempts")
     # Counted before the (slow) password check, so concurrent guesses cannot all slip
     # in under the limit; a success, or a check that never ran, takes its attempt back.
-    hub.login_limiter.hit(pair)
-    hub.login_address_limiter.hit(address)
+    check.login_limiter.hit(pair)
+    check.login_address_limiter.hit(address)
     user = None
     if len(username) <= MAX_USERNAME and len(password) <= MAX_PASSWORD:
         try:
-            user = await hub.passwords.run(hub.accounts.authenticate, username, password)
+            user = await check.passwords.run(check.accounts.authenticate, username, password)
         except RateLimited:
-            hub.login_limiter.forget_one(pair)
-            hub.login_address_limiter.forget_one(address)
+            check.login_limiter.forget_one(pair)
+            check.login_address_limiter.forget_one(address)
             raise
     if user is None:
-        await hub.record(
+        await check.audit.record(
             audit_entry(request, None, AuditAction.LOGIN, username[:MAX_USERNAME], "denied")
         )
         raise Unauthenticated(WRONG_CREDENTIALS)
-    hub.login_limiter.reset(pair)
-    hub.login_address_limiter.forget_one(address)
+    check.login_limiter.reset(pair)
+    check.login_address_limiter.forget_one(address)
     return user
 
 
@@ -133,12 +170,19 @@ def _identity(user: UserRow, expires_at: float | None) -> Identity:
 
 
 @router.post("/login", response_model=Identity, openapi_extra=requires(PUBLIC))
-async def login(body: LoginRequest, request: Request, response: Response, hub: HubDep) -> Identity:
+async def login(
+    body: LoginRequest,
+    request: Request,
+    response: Response,
+    check: PasswordCheckDep,
+    settings: SettingsDep,
+    accounts: AccountsDep,
+    audit: AuditDep,
+) -> Identity:
     """Dashboard login: sets an HTTP-only session cookie."""
-    user = await _login(hub, request, body.username, body.password)
-    settings = hub.settings
+    user = await _login(check, request, body.username, body.password)
     issued = await asyncio.to_thread(
-        hub.accounts.issue_user_token, user, "session", settings.session_ttl_s
+        accounts.issue_user_token, user, "session", settings.session_ttl_s
     )
     response.set_cookie(
         SESSION_COOKIE,
@@ -150,7 +194,7 @@ async def login(body: LoginRequest, request: Request, response: Response, hub: H
         path="/",
     )
     who = user_principal(user.username, Role(user.role), None, issued.id, token_kind="session")
-    await hub.record(
+    await audit.record(
         audit_entry(request, who, AuditAction.LOGIN, user.username, "ok", kind="session")
     )
     return _identity(user, issued.expires_at)
@@ -180,18 +224,23 @@ def _form_only(request: Request) -> None:
     dependencies=[Depends(_form_only)],
 )
 async def token(
-    form: Annotated[OAuth2PasswordRequestForm, Depends()], request: Request, hub: HubDep
+    form: Annotated[OAuth2PasswordRequestForm, Depends()],
+    request: Request,
+    check: PasswordCheckDep,
+    settings: SettingsDep,
+    accounts: AccountsDep,
+    audit: AuditDep,
 ) -> AccessToken:
     """OAuth2 password flow for integrations: returns a bearer access token.
 
     ``scope`` may narrow the token to some of the role's permissions (space-separated).
     """
-    user = await _login(hub, request, form.username, form.password)
+    user = await _login(check, request, form.username, form.password)
     scopes = _requested_scopes(form.scopes, Role(user.role))
-    ttl = hub.settings.access_token_ttl_s
-    issued = await asyncio.to_thread(hub.accounts.issue_user_token, user, "access", ttl, scopes)
+    ttl = settings.access_token_ttl_s
+    issued = await asyncio.to_thread(accounts.issue_user_token, user, "access", ttl, scopes)
     who = user_principal(user.username, Role(user.role), scopes, issued.id, token_kind="access")
-    await hub.record(
+    await audit.record(
         audit_entry(request, who, AuditAction.LOGIN, user.username, "ok", kind="access")
     )
     return AccessToken(access_token=issued.token, expires_in=int(ttl))
@@ -221,12 +270,18 @@ def _requested_scopes(requested: list[str], role: Role) -> frozenset[Permission]
 @router.post(
     "/logout", status_code=status.HTTP_204_NO_CONTENT, openapi_extra=requires(Permission.READ)
 )
-async def logout(request: Request, principal: CurrentPrincipal, hub: HubDep) -> Response:
+async def logout(
+    request: Request,
+    principal: CurrentPrincipal,
+    accounts: AccountsDep,
+    sessions: SessionsDep,
+    audit: AuditDep,
+) -> Response:
     """Ends the session (or revokes the bearer token used)."""
     if principal.token_id is not None:
-        await asyncio.to_thread(hub.accounts.revoke_user_token, principal.token_id, None)
-        await hub.drop_user_feeds(token_id=principal.token_id)
-    await hub.record(audit_entry(request, principal, AuditAction.LOGOUT, principal.name, "ok"))
+        await asyncio.to_thread(accounts.revoke_user_token, principal.token_id, None)
+        await sessions.drop_user_feeds(token_id=principal.token_id)
+    await audit.record(audit_entry(request, principal, AuditAction.LOGOUT, principal.name, "ok"))
     response = Response(status_code=status.HTTP_204_NO_CONTENT)
     response.delete_cookie(SESSION_COOKIE, path="/")
     return response
@@ -243,9 +298,9 @@ async def me(principal: CurrentPrincipal) -> Identity:
 
 
 @router.get("/api-tokens", response_model=list[ApiToken], openapi_extra=requires(Permission.READ))
-async def list_api_tokens(principal: CurrentPrincipal, hub: HubDep) -> list[ApiToken]:
+async def list_api_tokens(principal: CurrentPrincipal, accounts: AccountsDep) -> list[ApiToken]:
     """The caller's own API tokens (never their values)."""
-    rows = await asyncio.to_thread(hub.accounts.api_tokens, principal.name)
+    rows = await asyncio.to_thread(accounts.api_tokens, principal.name)
     return [
         ApiToken(
             id=row.id,
@@ -266,11 +321,15 @@ async def list_api_tokens(principal: CurrentPrincipal, hub: HubDep) -> list[ApiT
     openapi_extra=requires(Permission.READ),
 )
 async def create_api_token(
-    body: ApiTokenRequest, request: Request, principal: CurrentPrincipal, hub: HubDep
+    body: ApiTokenRequest,
+    request: Request,
+    principal: CurrentPrincipal,
+    accounts: AccountsDep,
+    audit: AuditDep,
 ) -> IssuedApiToken:
     """A bearer token for an integration, scoped to some of the caller's rights. It expires
     after ``expires_in_days`` (90 by default; 1 to 3,650), or never when that is null."""
-    user = await asyncio.to_thread(hub.accounts.user, principal.name)
+    user = await asyncio.to_thread(accounts.user, principal.name)
     role_scopes = ROLE_PERMISSIONS[Role(user.role)]
     scopes = (
         frozenset(Permission(scope) for scope in body.scopes)
@@ -285,10 +344,8 @@ async def create_api_token(
             f"({scope_list(principal.permissions)})"
         )
     ttl = body.expires_in_days * 86400 if body.expires_in_days else None
-    issued = await asyncio.to_thread(
-        hub.accounts.issue_user_token, user, "api", ttl, scopes, body.name
-    )
-    await hub.record(
+    issued = await asyncio.to_thread(accounts.issue_user_token, user, "api", ttl, scopes, body.name)
+    await audit.record(
         audit_entry(
             request, principal, AuditAction.TOKEN_CREATE, body.name, "ok", scopes=sorted(scopes)
         )
@@ -313,9 +370,13 @@ async def revoke_api_token(
     token_id: Annotated[int, Path(ge=1, le=2**62)],
     request: Request,
     principal: CurrentPrincipal,
-    hub: HubDep,
+    accounts: AccountsDep,
+    sessions: SessionsDep,
+    audit: AuditDep,
 ) -> Response:
-    await asyncio.to_thread(hub.accounts.revoke_user_token, token_id, principal.name)
-    await hub.drop_user_feeds(token_id=token_id)
-    await hub.record(audit_entry(request, principal, AuditAction.TOKEN_REVOKE, str(token_id), "ok"))
+    await asyncio.to_thread(accounts.revoke_user_token, token_id, principal.name)
+    await sessions.drop_user_feeds(token_id=token_id)
+    await audit.record(
+        audit_entry(request, principal, AuditAction.TOKEN_REVOKE, str(token_id), "ok")
+    )
     return Response(status_code=status.HTTP_204_NO_CONTENT)

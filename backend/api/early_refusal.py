@@ -19,10 +19,11 @@ from starlette.requests import HTTPConnection
 from starlette.responses import JSONResponse
 from starlette.types import ASGIApp, Receive, Scope, Send
 
-from backend.api.deps import get_hub
+from backend.api.deps import get_login_address_limiter, get_passwords
 from backend.api.security import client_address, principal_of
 from backend.auth.rate_limit import whole_seconds
 from backend.errors import RateLimited
+from backend.survey.deps import get_surveys
 
 EarlyCheck = Callable[[HTTPConnection], Awaitable[None]]
 
@@ -30,15 +31,14 @@ EarlyCheck = Callable[[HTTPConnection], Awaitable[None]]
 async def _import_rate(connection: HTTPConnection) -> None:
     principal = await principal_of(connection)
     if principal is not None:  # no caller: the route answers 401 as usual
-        surveys = get_hub(connection).surveys
+        surveys = get_surveys(connection)
         surveys.import_limiter.check(principal.name, "survey imports")
         surveys.planner.import_pool.check_room()  # its worker's queue is full
 
 
 async def _login_rate(connection: HTTPConnection) -> None:
-    hub = get_hub(connection)
-    hub.login_address_limiter.check(client_address(connection), "login attempts")
-    hub.passwords.check_room()  # as many password checks as allowed are under way
+    get_login_address_limiter(connection).check(client_address(connection), "login attempts")
+    get_passwords(connection).check_room()  # as many password checks as allowed are under way
 
 
 def early_checks(api_prefix: str) -> dict[tuple[str, str], EarlyCheck]:

@@ -8,13 +8,14 @@ from typing import Annotated, Any
 from fastapi import Query, Request
 from pydantic import BaseModel, Field
 
-from backend.api.deps import HubDep
+from backend.api.deps import CommandServicesDep
 from backend.api.security import CurrentPrincipal, SecuredRouter, client_address, requires
-from backend.api.vehicle_budget import check_vehicle_budget, spend_vehicle_budget
+from backend.api.vehicle_budget import VehicleBudgetDep
 from backend.auth.policy import Permission, Principal, authorize
 from backend.errors import GcsError, InvalidRequest, SafetyViolation
+from backend.fleet.collaborators import CommandServices
 from backend.fleet.command_service import execute_command
-from backend.hub import Hub
+from backend.fleet.registry import FleetRegistry
 from protocol.messages import ClientCommand, Command, CommandOutcome, VehicleId
 
 router = SecuredRouter(prefix="/fleet", tags=["vehicles"])
@@ -55,7 +56,8 @@ async def send_group_command(
     body: GroupCommandRequest,
     request: Request,
     principal: CurrentPrincipal,
-    hub: HubDep,
+    commands: CommandServicesDep,
+    budget: VehicleBudgetDep,
     override_reason: Annotated[
         str | None,
         Query(min_length=10, max_length=500, description="Admins only, as for one vehicle"),
@@ -69,27 +71,27 @@ async def send_group_command(
     Each vehicle reached counts as one command in the caller's rate limit; a call is
     accepted while the caller has budget left, so a fleet-wide RTL is never split.
     """
-    check_vehicle_budget(hub, principal)
+    budget.check(principal)
     if body.vehicle_ids is not None:
         targets = list(dict.fromkeys(body.vehicle_ids))
-        _refuse_unknown(hub, targets)
+        _refuse_unknown(commands.registry, targets)
     else:
-        targets = [r.id for r in hub.registry.all() if r.connected]
-    spend_vehicle_budget(hub, principal, len(targets))
+        targets = [r.id for r in commands.registry.all() if r.connected]
+    budget.spend(principal, len(targets))
     source = client_address(request)
     results = await asyncio.gather(
         *(
-            _one(hub, principal, source, vehicle, body.command, override_reason)
+            _one(commands, principal, source, vehicle, body.command, override_reason)
             for vehicle in targets
         )
     )
     return GroupCommandResponse(command=body.command, results=list(results))
 
 
-def _refuse_unknown(hub: Hub, targets: list[str]) -> None:
+def _refuse_unknown(registry: FleetRegistry, targets: list[str]) -> None:
     """One answer for the whole selection, instead of a refusal and an audit entry per
     made-up id."""
-    known = {record.id for record in hub.registry.all()}
+    known = {record.id for record in registry.all()}
     unknown = [vehicle for vehicle in targets if vehicle not in known]
     if unknown:
         named = ", ".join(unknown[:NAMED_UNKNOWN])
@@ -98,7 +100,7 @@ def _refuse_unknown(hub: Hub, targets: list[str]) -> None:
 
 
 async def _one(
-    hub: Hub,
+    commands: CommandServices,
     principal: Principal,
     source: str,
     vehicle_id: str,
@@ -109,7 +111,7 @@ async def _one(
         # Per vehicle: a rule such as a control lease applies to each one separately.
         authorize(principal, Permission.COMMAND, vehicle_id)
         outcome = await execute_command(
-            hub, principal, source, vehicle_id, command, override_reason
+            commands, principal, source, vehicle_id, command, override_reason
         )
     except SafetyViolation as refusal:
         return VehicleCommandResult(

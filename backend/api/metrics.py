@@ -22,13 +22,13 @@ from prometheus_client import CONTENT_TYPE_LATEST, CollectorRegistry, generate_l
 from prometheus_client.core import GaugeMetricFamily
 from prometheus_client.registry import Collector
 
-from backend.api.deps import HubDep
+from backend.api.deps import ClientFeedsDep, RegistryDep, WriterDep
 from backend.api.security import SecuredRouter, requires
 from backend.auth.policy import Permission
-from backend.fleet.registry import VehicleRecord
-from backend.hub import Hub
+from backend.fleet.registry import FleetRegistry, VehicleRecord
 from backend.observability import metrics
 from backend.realtime.client_feed import ClientFeed
+from backend.storage.writer import StorageWriter
 
 router = SecuredRouter(tags=["system"])
 
@@ -44,18 +44,20 @@ MAX_VEHICLE_SERIES = 500
     # types generated from it).
     include_in_schema=False,
 )
-async def prometheus_metrics(hub: HubDep) -> Response:
+async def prometheus_metrics(
+    registry: RegistryDep, writer: WriterDep, feeds: ClientFeedsDep
+) -> Response:
     """The hub's counters and gauges in Prometheus's text format."""
     # Depths are read now rather than kept up to date on every message.
-    metrics.QUEUE_DEPTH.labels(queue="storage").set(hub.writer.backlog)
+    metrics.QUEUE_DEPTH.labels(queue="storage").set(writer.backlog)
     metrics.QUEUE_DEPTH.labels(queue="dashboard_max").set(
         max(
-            (feed.pending for feed in hub.client_feeds if isinstance(feed, ClientFeed)),
+            (feed.pending for feed in feeds if isinstance(feed, ClientFeed)),
             default=0,
         )
     )
     per_vehicle = CollectorRegistry(auto_describe=False)
-    per_vehicle.register(VehicleSeries(hub))
+    per_vehicle.register(VehicleSeries(registry, writer))
     body = generate_latest() + generate_latest(per_vehicle)
     return Response(body, media_type=CONTENT_TYPE_LATEST)
 
@@ -63,8 +65,9 @@ async def prometheus_metrics(hub: HubDep) -> Response:
 class VehicleSeries(Collector):
     """Each vehicle's link, freshness, battery, telemetry rate and storage lag, now."""
 
-    def __init__(self, hub: Hub) -> None:
-        self._hub = hub
+    def __init__(self, registry: FleetRegistry, writer: StorageWriter) -> None:
+        self._registry = registry
+        self._writer = writer
 
     def collect(self) -> Iterator[GaugeMetricFamily]:
         labels = ["vehicle"]
@@ -100,14 +103,14 @@ class VehicleSeries(Collector):
             "writer committed, at the commit.",
             labels=labels,
         )
-        vehicles = self._hub.registry.all()
+        vehicles = self._registry.all()
         # Connected vehicles first (what an operator watches), then by id: stable order.
         shown = sorted(vehicles, key=lambda record: (not record.connected, record.id))
         shown = shown[:MAX_VEHICLE_SERIES]
         now, monotonic = time.time(), time.monotonic()
         for record in shown:
             add_vehicle(record, now, monotonic, link, age, percent, volts, rate)
-            if (written := self._hub.writer.vehicle_lag_s.get(record.id)) is not None:
+            if (written := self._writer.vehicle_lag_s.get(record.id)) is not None:
                 lag.add_metric([record.id], written)
         omitted = GaugeMetricFamily(
             "gcs_vehicle_series_omitted",

@@ -8,9 +8,9 @@ from typing import Annotated
 from fastapi import Path, Query, Request
 from pydantic import BaseModel, Field
 
-from backend.api.deps import HubDep
+from backend.api.deps import CommandServicesDep, MissionViewsDep
 from backend.api.security import CurrentPrincipal, SecuredRouter, client_address, requires
-from backend.api.vehicle_budget import spend_vehicle_budget
+from backend.api.vehicle_budget import VehicleBudget, VehicleBudgetDep
 from backend.auth.policy import Permission
 from backend.fleet.command_service import execute_expecting_acceptance
 from backend.safety.mission_schemas import Mission
@@ -46,16 +46,17 @@ class MissionResult(BaseModel):
 
 
 async def _run(
-    hub: HubDep,
+    commands: CommandServicesDep,
+    budget: VehicleBudget,
     request: Request,
     principal: CurrentPrincipal,
     vehicle_id: str,
     command: Command,
     override_reason: str | None = None,
 ) -> MissionResult:
-    spend_vehicle_budget(hub, principal)
+    budget.spend(principal)
     outcome = await execute_expecting_acceptance(
-        hub, principal, client_address(request), vehicle_id, command, override_reason
+        commands, principal, client_address(request), vehicle_id, command, override_reason
     )
     return MissionResult(vehicle_id=vehicle_id, outcome=outcome, items=outcome.items)
 
@@ -66,7 +67,9 @@ async def upload_mission(
     body: Mission,
     request: Request,
     principal: CurrentPrincipal,
-    hub: HubDep,
+    commands: CommandServicesDep,
+    budget: VehicleBudgetDep,
+    missions: MissionViewsDep,
     override_reason: OverrideQuery = None,
 ) -> MissionResult:
     """Replace the vehicle's mission. The mission check runs first (the body and the
@@ -74,28 +77,38 @@ async def upload_mission(
     listed (422) before anything reaches the vehicle; a vehicle that rejects an item keeps
     its previous mission (409)."""
     command = MissionUploadCommand(items=body.items)
-    result = await _run(hub, request, principal, vehicle_id, command, override_reason)
-    await hub.mission_known(vehicle_id, body.items)
+    result = await _run(commands, budget, request, principal, vehicle_id, command, override_reason)
+    await missions.mission_known(vehicle_id, body.items)
     return result
 
 
 @router.get("", response_model=MissionResult, openapi_extra=requires(Permission.READ))
 async def download_mission(
-    vehicle_id: VehicleIdPath, request: Request, principal: CurrentPrincipal, hub: HubDep
+    vehicle_id: VehicleIdPath,
+    request: Request,
+    principal: CurrentPrincipal,
+    commands: CommandServicesDep,
+    budget: VehicleBudgetDep,
+    missions: MissionViewsDep,
 ) -> MissionResult:
     """The mission on the vehicle now (item 0 is home)."""
-    result = await _run(hub, request, principal, vehicle_id, MissionDownloadCommand())
+    result = await _run(commands, budget, request, principal, vehicle_id, MissionDownloadCommand())
     if result.items is not None:
-        await hub.mission_known(vehicle_id, result.items[1:])
+        await missions.mission_known(vehicle_id, result.items[1:])
     return result
 
 
 @router.delete("", response_model=MissionResult, openapi_extra=requires(Permission.COMMAND))
 async def clear_mission(
-    vehicle_id: VehicleIdPath, request: Request, principal: CurrentPrincipal, hub: HubDep
+    vehicle_id: VehicleIdPath,
+    request: Request,
+    principal: CurrentPrincipal,
+    commands: CommandServicesDep,
+    budget: VehicleBudgetDep,
+    missions: MissionViewsDep,
 ) -> MissionResult:
-    result = await _run(hub, request, principal, vehicle_id, MissionClearCommand())
-    await hub.mission_known(vehicle_id, [])
+    result = await _run(commands, budget, request, principal, vehicle_id, MissionClearCommand())
+    await missions.mission_known(vehicle_id, [])
     return result
 
 
@@ -105,9 +118,10 @@ async def set_current_item(
     body: CurrentItem,
     request: Request,
     principal: CurrentPrincipal,
-    hub: HubDep,
+    commands: CommandServicesDep,
+    budget: VehicleBudgetDep,
 ) -> MissionResult:
     """Fly on from item ``seq`` (1 is the first after home). An item beyond the mission
     on board is refused at once (422, naming the mission's length)."""
     command = MissionSetCurrentCommand(seq=body.seq)
-    return await _run(hub, request, principal, vehicle_id, command)
+    return await _run(commands, budget, request, principal, vehicle_id, command)

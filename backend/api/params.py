@@ -7,9 +7,9 @@ from typing import Annotated
 from fastapi import Path, Request
 from pydantic import BaseModel, Field
 
-from backend.api.deps import HubDep
+from backend.api.deps import CommandServicesDep
 from backend.api.security import CurrentPrincipal, SecuredRouter, client_address, requires
-from backend.api.vehicle_budget import spend_vehicle_budget
+from backend.api.vehicle_budget import VehicleBudget, VehicleBudgetDep
 from backend.auth.policy import Permission
 from backend.fleet.command_service import execute_expecting_acceptance
 from protocol.messages import (
@@ -53,11 +53,16 @@ class ParamUpdate(BaseModel):
 
 
 async def _ask(
-    hub: HubDep, request: Request, principal: CurrentPrincipal, vehicle_id: str, command: Command
+    commands: CommandServicesDep,
+    budget: VehicleBudget,
+    request: Request,
+    principal: CurrentPrincipal,
+    vehicle_id: str,
+    command: Command,
 ) -> ParamValues:
-    spend_vehicle_budget(hub, principal)
+    budget.spend(principal)
     outcome = await execute_expecting_acceptance(
-        hub, principal, client_address(request), vehicle_id, command
+        commands, principal, client_address(request), vehicle_id, command
     )
     checked = (outcome.param_meta is not None) if isinstance(command, ParamSetCommand) else None
     return ParamValues(
@@ -70,10 +75,14 @@ async def _ask(
 
 @router.get("", response_model=ParamValues, openapi_extra=requires(Permission.READ))
 async def list_params(
-    vehicle_id: VehicleIdPath, request: Request, principal: CurrentPrincipal, hub: HubDep
+    vehicle_id: VehicleIdPath,
+    request: Request,
+    principal: CurrentPrincipal,
+    commands: CommandServicesDep,
+    budget: VehicleBudgetDep,
 ) -> ParamValues:
     """Every parameter of the vehicle, read from its flight controller."""
-    return await _ask(hub, request, principal, vehicle_id, ParamListCommand())
+    return await _ask(commands, budget, request, principal, vehicle_id, ParamListCommand())
 
 
 @router.get("/{param}", response_model=ParamValues, openapi_extra=requires(Permission.READ))
@@ -82,9 +91,12 @@ async def get_param(
     param: ParamPath,
     request: Request,
     principal: CurrentPrincipal,
-    hub: HubDep,
+    commands: CommandServicesDep,
+    budget: VehicleBudgetDep,
 ) -> ParamValues:
-    return await _ask(hub, request, principal, vehicle_id, ParamGetCommand(param=param))
+    return await _ask(
+        commands, budget, request, principal, vehicle_id, ParamGetCommand(param=param)
+    )
 
 
 @router.put("/{param}", response_model=ParamValues, openapi_extra=requires(Permission.COMMAND))
@@ -94,11 +106,12 @@ async def set_param(
     body: ParamUpdate,
     request: Request,
     principal: CurrentPrincipal,
-    hub: HubDep,
+    commands: CommandServicesDep,
+    budget: VehicleBudgetDep,
 ) -> ParamValues:
     """Set a parameter; succeeds only when the flight controller echoes the new value
     (409 with the value it kept otherwise, e.g. out of its range). Where the autopilot
     publishes parameter metadata (PX4), a value outside its range or its values is a 409
     naming them, and is never sent; `range_checked` says whether that check was made."""
     command = ParamSetCommand(param=param, value=body.value)
-    return await _ask(hub, request, principal, vehicle_id, command)
+    return await _ask(commands, budget, request, principal, vehicle_id, command)

@@ -15,7 +15,7 @@ from fastapi.params import Depends as DependsParam
 from fastapi.security import OAuth2PasswordBearer
 from starlette.requests import HTTPConnection
 
-from backend.api.deps import get_hub
+from backend.api.deps import get_accounts, get_denials
 from backend.api.finite_json import FiniteJsonRoute
 from backend.audit import AuditAction, AuditEntry, principal_audit_entry
 from backend.auth.credentials import presented_principal, presented_token
@@ -43,7 +43,7 @@ def client_address(connection: HTTPConnection) -> str:
 
 
 async def principal_of(connection: HTTPConnection) -> Principal | None:
-    return await presented_principal(connection, get_hub(connection).accounts)
+    return await presented_principal(connection, get_accounts(connection))
 
 
 async def get_principal(
@@ -76,7 +76,7 @@ def _authorizer(permission: Permission) -> Callable[..., Any]:
                 # is one principal's one refusal, not a row per request.
                 route = getattr(request.scope.get("route"), "path", request.url.path)
                 key = f"{request.method} {route}"
-                await get_hub(request).record_denial(entry, key, str(refusal))
+                await get_denials(request).record_denial(entry, key, str(refusal))
             raise refusal
 
     return check

@@ -15,11 +15,11 @@ from typing import Annotated
 from fastapi import Path, Query, Request, Response
 from pydantic import BaseModel, Field
 
-from backend.api.deps import HubDep
+from backend.api.deps import TilesDep
 from backend.api.security import SecuredRouter, requires
 from backend.auth.policy import Permission
 from backend.errors import InvalidRequest, NotFound
-from backend.mapping.tiles import MAX_ZOOM, TileSetInfo, UnknownTileSet
+from backend.mapping.tiles import MAX_ZOOM, TileLibrary, TileSetInfo, UnknownTileSet
 
 # Under /api/v1: the list of sets. At the root: the tiles, a path every tile client knows.
 router = SecuredRouter(tags=["tiles"])
@@ -58,14 +58,14 @@ class TileSet(BaseModel):
         )
 
 
-async def tile_sets(hub: HubDep) -> list[TileSet]:
-    return [TileSet.of(info) for info in await asyncio.to_thread(hub.tiles.sets)]
+async def tile_sets(tiles: TileLibrary) -> list[TileSet]:
+    return [TileSet.of(info) for info in await asyncio.to_thread(tiles.sets)]
 
 
 @router.get("/tiles", response_model=list[TileSet], openapi_extra=requires(Permission.READ))
-async def list_tile_sets(hub: HubDep) -> list[TileSet]:
+async def list_tile_sets(tiles: TilesDep) -> list[TileSet]:
     """The offline tile sets in the hub's tiles folder (``<data dir>/tiles``)."""
-    return await tile_sets(hub)
+    return await tile_sets(tiles)
 
 
 @tile_router.get(
@@ -76,7 +76,7 @@ async def list_tile_sets(hub: HubDep) -> list[TileSet]:
     include_in_schema=False,
 )
 async def get_tile(
-    hub: HubDep,
+    tiles: TilesDep,
     request: Request,
     name: Annotated[str, Path(pattern=r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,63}$")],
     z: Annotated[int, Path(ge=0, le=MAX_ZOOM)],
@@ -89,7 +89,7 @@ async def get_tile(
         if value >= 2**z:
             raise InvalidRequest(field, f"{field} must be below 2**z ({2**z})", location="path")
     try:
-        info, data = await asyncio.to_thread(hub.tiles.tile, name, z, x, y)
+        info, data = await asyncio.to_thread(tiles.tile, name, z, x, y)
     except UnknownTileSet:
         raise NotFound(f"no tile set named {name!r}") from None
     if data is None:

@@ -7,11 +7,11 @@ from typing import Annotated
 
 from fastapi import Body, Path, Query, Request
 
-from backend.api.deps import HubDep
+from backend.api.deps import CommandServicesDep, RegistryDep, RepositoryDep
 from backend.api.schemas import CommandResponse, TelemetryPage, TelemetrySample
 from backend.api.security import CurrentPrincipal, SecuredRouter, client_address, requires
 from backend.api.time_ranges import Moment, time_query, time_range
-from backend.api.vehicle_budget import spend_vehicle_budget
+from backend.api.vehicle_budget import VehicleBudgetDep
 from backend.auth.policy import Permission
 from backend.fleet.command_service import execute_command
 from protocol.messages import ClientCommand, VehicleSummary
@@ -24,14 +24,14 @@ DEFAULT_HISTORY_S = 600.0
 
 
 @router.get("", response_model=list[VehicleSummary], openapi_extra=requires(Permission.READ))
-async def list_vehicles(hub: HubDep) -> list[VehicleSummary]:
+async def list_vehicles(registry: RegistryDep) -> list[VehicleSummary]:
     """Every known vehicle with its live state (connected or not)."""
-    return [record.summary() for record in hub.registry.all()]
+    return [record.summary() for record in registry.all()]
 
 
 @router.get("/{vehicle_id}", response_model=VehicleSummary, openapi_extra=requires(Permission.READ))
-async def get_vehicle(vehicle_id: VehicleIdPath, hub: HubDep) -> VehicleSummary:
-    return hub.registry.get(vehicle_id).summary()
+async def get_vehicle(vehicle_id: VehicleIdPath, registry: RegistryDep) -> VehicleSummary:
+    return registry.get(vehicle_id).summary()
 
 
 @router.post(
@@ -51,7 +51,8 @@ async def send_command(
     command: Annotated[ClientCommand, Body()],
     request: Request,
     principal: CurrentPrincipal,
-    hub: HubDep,
+    commands: CommandServicesDep,
+    budget: VehicleBudgetDep,
     override_reason: Annotated[
         str | None,
         Query(
@@ -71,9 +72,9 @@ async def send_command(
     flight controller is an answer (status ``refused``, with its reason), so it comes back
     as 200; a missing answer is 504.
     """
-    spend_vehicle_budget(hub, principal)
+    budget.spend(principal)
     outcome = await execute_command(
-        hub, principal, client_address(request), vehicle_id, command, override_reason
+        commands, principal, client_address(request), vehicle_id, command, override_reason
     )
     return CommandResponse(vehicle_id=vehicle_id, command=command, outcome=outcome)
 
@@ -85,17 +86,16 @@ async def send_command(
 )
 async def telemetry_history(
     vehicle_id: VehicleIdPath,
-    hub: HubDep,
+    registry: RegistryDep,
+    repository: RepositoryDep,
     start: Annotated[Moment | None, time_query("end - 10 min")] = None,
     end: Annotated[Moment | None, time_query("now")] = None,
     limit: Annotated[int, Query(ge=1, le=MAX_TELEMETRY_PAGE)] = 1000,
 ) -> TelemetryPage:
     """Stored telemetry samples in a time range, oldest first."""
-    hub.registry.get(vehicle_id)
+    registry.get(vehicle_id)
     start_at, end_at = time_range(start, end, DEFAULT_HISTORY_S)
-    rows = await asyncio.to_thread(
-        hub.repository.telemetry, vehicle_id, start_at, end_at, limit + 1
-    )
+    rows = await asyncio.to_thread(repository.telemetry, vehicle_id, start_at, end_at, limit + 1)
     return TelemetryPage(
         vehicle_id=vehicle_id,
         start=start_at,

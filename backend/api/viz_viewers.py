@@ -10,7 +10,7 @@ from typing import Annotated
 from fastapi import Path
 from pydantic import BaseModel, Field
 
-from backend.api.deps import HubDep
+from backend.api.deps import RegistryDep, ViewersDep
 from backend.api.security import SecuredRouter, requires
 from backend.auth.policy import Permission
 from backend.errors import Conflict
@@ -35,14 +35,16 @@ class ViewerLooksAt(BaseModel):
     openapi_extra=requires(Permission.READ),
 )
 async def select_in_viewer(
-    viewer_id: Annotated[int, Path(ge=0, le=2**31)], body: ViewerSelection, hub: HubDep
+    viewer_id: Annotated[int, Path(ge=0, le=2**31)],
+    body: ViewerSelection,
+    registry: RegistryDep,
+    viewers: ViewersDep,
 ) -> ViewerLooksAt:
     """Turn this 3D viewer's camera to the vehicle, which it then follows. 404 for an
     unknown viewer or a wrong secret (one answer for both); 409 while the vehicle has no
     position in the view, or when the 3D view is off."""
-    if hub.viewers is None:
+    if viewers is None:
         raise Conflict("the 3D view is off (GCS_VIZ_ENABLED=false)")
-    hub.registry.get(body.vehicle_id)  # 404 for an unknown vehicle
-    viewers = hub.viewers
+    registry.get(body.vehicle_id)  # 404 for an unknown vehicle
     look_at = await asyncio.to_thread(viewers.select, viewer_id, body.secret, body.vehicle_id)
     return ViewerLooksAt(vehicle_id=body.vehicle_id, look_at=look_at)

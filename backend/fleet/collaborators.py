@@ -1,6 +1,6 @@
 """What the command path needs of the hub, as a structural type.
 
-The hub (``backend.hub.Hub``) wires these collaborators once per process and sits above
+The hub (``backend.hub.services.Hub``) wires these collaborators once per process and sits above
 this layer, so the fleet's services never import it: they declare here what they use, and
 the API layer hands them the hub, which provides all of it.
 """

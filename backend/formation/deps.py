@@ -1,5 +1,5 @@
-"""The formation routes' typed dependencies: the formation service app.py wired, and the
-audit log they record in."""
+"""The formation routes' typed dependency: the formation service app.py wired (the audit
+log they record in is the API's ``AuditLogDep``)."""
 
 from __future__ import annotations
 
@@ -8,8 +8,6 @@ from typing import Annotated
 from fastapi import Depends
 from starlette.requests import HTTPConnection
 
-from backend.api.deps import HubDep
-from backend.audit import AuditLog
 from backend.formation.service import FormationService
 
 
@@ -18,9 +16,4 @@ def formation_service(connection: HTTPConnection) -> FormationService:
     return service
 
 
-def audit_log(hub: HubDep) -> AuditLog:
-    return hub.audit
-
-
 FormationServiceDep = Annotated[FormationService, Depends(formation_service)]
-AuditLogDep = Annotated[AuditLog, Depends(audit_log)]

@@ -14,12 +14,13 @@ from typing import Annotated, Any
 from fastapi import Path, Query, Request
 from pydantic import BaseModel, Field
 
+from backend.api.deps import AuditLogDep
 from backend.api.security import CurrentPrincipal, SecuredRouter, audit_entry, requires
 from backend.audit import AuditAction, AuditLog
 from backend.auth.policy import Permission, Principal
 from backend.errors import GcsError
 from backend.formation.active import ActiveFormation
-from backend.formation.deps import AuditLogDep, FormationServiceDep
+from backend.formation.deps import FormationServiceDep
 from backend.formation.metrics import ErrorStats, FollowerTracking
 from backend.formation.schemas import FormationRequest, OffsetModel, ShapeChange
 from common.formation import Controller

@@ -8,7 +8,7 @@ from backend.formation.leader_scans import leader_scans
 from backend.formation.scene_layer import formation_scene_layer
 from backend.formation.service import FormationService
 from backend.formation.store import FormationRepository
-from backend.hub import Hub
+from backend.hub.services import Hub
 
 
 async def attach(hub: Hub) -> FormationService:

@@ -1,6 +1,6 @@
 """What the live sessions and the hub need of each other, as structural types.
 
-The hub (``backend.hub.Hub``) wires the sessions' collaborators once per process and sits
+The hub (``backend.hub.services.Hub``) wires the sessions' collaborators once per process and sits
 above this layer, so the sessions never import it: each declares here what it uses, and the
 API layer hands them the hub, which provides all of it. The hub, in turn, keeps the live
 sessions by the two connection types, so it never imports the sessions either.

@@ -68,7 +68,7 @@ log = logging.getLogger(__name__)
 ONE_WAY_FRAMES = (ManualFrame, FormationSlot, FormationEnd, LeaderUpdate, LeaderScan)
 
 
-# The hub's side of a routed command (wired by backend/hub.py): who the sender is, per
+# The hub's side of a routed command (wired by backend/hub/start.py): who the sender is, per
 # the database (None: unknown, revoked, or not as the message says), and carrying the
 # command out for them (backend/fleet/command_service.py's carry_out_routed).
 SenderCheck = Callable[[RoutedSender], Awaitable[Principal | None]]

@@ -25,7 +25,7 @@ class AuditLog(Protocol):
 
 
 class _SafetyHost(AuditLog, Protocol):
-    """What the routes use of the process's wiring (``backend.hub.Hub`` provides it)."""
+    """What the routes use of the process's wiring (``backend.hub.services.Hub`` provides it)."""
 
     @property
     def safety(self) -> SafetyService: ...

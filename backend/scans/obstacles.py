@@ -1,6 +1,6 @@
 """Obstacles as objects that last: each extraction from the point map is matched to the
 previous one, so an obstacle keeps its id while it is seen, and its appearing and going
-are events (published by the hub, backend/hub.py).
+are events (published by the hub, backend/hub/services.py).
 
 Matching is by overlap of the outlines on the ground: a cluster that overlaps a tracked
 obstacle is that obstacle, grown or shrunk; one that overlaps none is new; a tracked one

@@ -8,7 +8,7 @@ from pathlib import Path
 import httpx
 import pytest
 
-import backend.hub
+import backend.hub.start
 from backend.auth.rate_limit import Limit, RateLimiter
 from tests.conftest import ADMIN_PASSWORD, hub_settings
 from tests.helpers import access_token, api_client, running_hub
@@ -36,7 +36,7 @@ def frozen_limits(monkeypatch: pytest.MonkeyPatch) -> None:
     def frozen(limit: Limit) -> RateLimiter:
         return RateLimiter(limit, clock=lambda: 1000.0)
 
-    monkeypatch.setattr(backend.hub, "RateLimiter", frozen)
+    monkeypatch.setattr(backend.hub.start, "RateLimiter", frozen)
 
 
 def _call(api: httpx.Client, route: Route) -> httpx.Response:

@@ -53,6 +53,9 @@ UPWARD = {
     "the hub imports the command line": ("backend/api/upward.py", "gcs.launcher"),
     "the agent imports the database": ("vehicle_agents/upward.py", "sqlalchemy"),
     "the registry imports the store": ("backend/fleet/registry.py", "backend.storage.models"),
+    "a route imports the hub": ("backend/api/system.py", "backend.hub.services"),
+    "a route takes the whole hub": ("backend/api/vehicles.py", "backend.hub.services"),
+    "a feature's route imports the hub": ("backend/formation/routes.py", "backend.hub.start"),
     "the client imports the protocol": ("gcs_client/upward.py", "protocol.messages"),
     "the client imports the web framework": ("gcs_client/upward.py", "fastapi"),
     "the flight controller link imports the hub link": (

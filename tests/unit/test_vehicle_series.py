@@ -26,9 +26,9 @@ class Row:
     last_seen: float = 0.0
 
 
-def scrape(hub: Any) -> str:
+def scrape(fleet: FleetRegistry, writer: Any) -> str:
     registry = CollectorRegistry(auto_describe=False)
-    registry.register(metrics_route.VehicleSeries(hub))
+    registry.register(metrics_route.VehicleSeries(fleet, writer))
     return generate_latest(registry).decode()
 
 
@@ -36,9 +36,9 @@ def test_only_vehicles_in_the_registry_and_at_most_the_cap(monkeypatch: pytest.M
     registry = FleetRegistry()
     registry.load([Row("a"), Row("b"), Row("c")])
     registry.get("c").channel = SimpleNamespace()  # type: ignore[assignment]  # c is online
-    hub = SimpleNamespace(registry=registry, writer=SimpleNamespace(vehicle_lag_s={"zz": 1.0}))
+    writer = SimpleNamespace(vehicle_lag_s={"zz": 1.0})
     monkeypatch.setattr(metrics_route, "MAX_VEHICLE_SERIES", 2)
-    text = scrape(hub)
+    text = scrape(registry, writer)
     # The connected vehicle first, then by id; the third is counted, not shown.
     assert 'gcs_vehicle_link_up{vehicle="c"} 1.0' in text
     assert 'gcs_vehicle_link_up{vehicle="a"} 0.0' in text

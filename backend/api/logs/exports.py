@@ -10,7 +10,7 @@ from typing import Any, Literal
 
 from fastapi.responses import StreamingResponse
 
-from backend.api.deps import HubDep
+from backend.api.deps import LogbookDep, RegistryDep
 from backend.api.logs.common import MAX_PAGE, FlightIdPath, flight_end
 from backend.api.security import SecuredRouter, requires
 from backend.auth.policy import Permission
@@ -23,7 +23,8 @@ from backend.exports import (
     geojson_chunks,
     tlog_chunks,
 )
-from backend.hub import Hub
+from backend.fleet.registry import FleetRegistry
+from backend.storage.logbook import Logbook
 from backend.storage.models import FlightRow
 
 router = SecuredRouter(tags=["flight log"])
@@ -31,9 +32,9 @@ log = logging.getLogger(__name__)
 
 
 def _export_parts(
-    hub: Hub, flight: FlightRow
+    registry: FleetRegistry, logbook: Logbook, flight: FlightRow
 ) -> tuple[ExportFlight, Iterator[ExportSample], Iterator[ExportEvent]]:
-    record = hub.registry.get(flight.vehicle_id)
+    record = registry.get(flight.vehicle_id)
     end = flight_end(flight)
     export_flight = ExportFlight(
         id=flight.id,
@@ -46,12 +47,12 @@ def _export_parts(
     )
     samples = (
         ExportSample(**row)
-        for row in hub.logbook.iter_series(flight.vehicle_id, flight.start_time, end)
+        for row in logbook.iter_series(flight.vehicle_id, flight.start_time, end)
     )
     events = (
         ExportEvent(time=row.time, kind=row.kind, severity=row.severity, text=row.text)
         for row in reversed(
-            hub.logbook.events(flight.vehicle_id, None, flight.start_time, end, None, MAX_PAGE)
+            logbook.events(flight.vehicle_id, None, flight.start_time, end, None, MAX_PAGE)
         )
     )
     return export_flight, samples, events
@@ -101,12 +102,15 @@ EXPORT_TYPES = {
     responses={200: {"content": {media: {} for media in EXPORT_TYPES.values()}}},
 )
 async def export_flight(
-    flight_id: FlightIdPath, format: Literal["csv", "geojson", "tlog"], hub: HubDep
+    flight_id: FlightIdPath,
+    format: Literal["csv", "geojson", "tlog"],
+    registry: RegistryDep,
+    logbook: LogbookDep,
 ) -> StreamingResponse:
     """A flight as CSV, GeoJSON or a MAVLink .tlog (pymavlink, QGroundControl, MAVProxy),
     streamed from the database cursor; nothing is buffered whole."""
-    flight = await asyncio.to_thread(hub.logbook.flight, flight_id)
-    export, samples, events = await asyncio.to_thread(_export_parts, hub, flight)
+    flight = await asyncio.to_thread(logbook.flight, flight_id)
+    export, samples, events = await asyncio.to_thread(_export_parts, registry, logbook, flight)
     samples = await asyncio.to_thread(_not_empty, samples, flight)
     chunks: Iterator[str] | Iterator[bytes]
     if format == "csv":

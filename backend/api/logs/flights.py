@@ -8,7 +8,7 @@ from typing import Annotated
 from fastapi import Query
 from pydantic import BaseModel, ConfigDict
 
-from backend.api.deps import HubDep
+from backend.api.deps import LogbookDep, RegistryDep
 from backend.api.logs.common import (
     MAX_ID,
     MAX_PAGE,
@@ -52,15 +52,16 @@ class FlightTelemetry(BaseModel):
 
 @router.get("/flights", response_model=FlightPage, openapi_extra=requires(Permission.READ))
 async def list_flights(
-    hub: HubDep,
+    registry: RegistryDep,
+    logbook: LogbookDep,
     vehicle_id: Annotated[str | None, Query(max_length=64)] = None,
     before_id: Annotated[int | None, Query(ge=1, le=MAX_ID)] = None,
     limit: Annotated[int, Query(ge=1, le=MAX_PAGE)] = 50,
 ) -> FlightPage:
     """Flights (arm to disarm) with their summaries, newest first."""
     if vehicle_id is not None:
-        hub.registry.get(vehicle_id)
-    rows = list(await asyncio.to_thread(hub.logbook.flights, vehicle_id, before_id, limit))
+        registry.get(vehicle_id)
+    rows = list(await asyncio.to_thread(logbook.flights, vehicle_id, before_id, limit))
     return FlightPage(
         flights=[Flight.model_validate(row) for row in rows],
         next_before_id=next_before_id(rows, limit),
@@ -68,8 +69,8 @@ async def list_flights(
 
 
 @router.get("/flights/{flight_id}", response_model=Flight, openapi_extra=requires(Permission.READ))
-async def get_flight(flight_id: FlightIdPath, hub: HubDep) -> Flight:
-    return Flight.model_validate(await asyncio.to_thread(hub.logbook.flight, flight_id))
+async def get_flight(flight_id: FlightIdPath, logbook: LogbookDep) -> Flight:
+    return Flight.model_validate(await asyncio.to_thread(logbook.flight, flight_id))
 
 
 @router.get(
@@ -79,14 +80,14 @@ async def get_flight(flight_id: FlightIdPath, hub: HubDep) -> Flight:
 )
 async def flight_telemetry(
     flight_id: FlightIdPath,
-    hub: HubDep,
+    logbook: LogbookDep,
     points: Annotated[int, Query(ge=2, le=MAX_POINTS)] = 2000,
     metric: Metric = "alt_rel",
 ) -> FlightTelemetry:
     """A flight's telemetry for replay and charts, min/max-preserving downsampled."""
-    flight = await asyncio.to_thread(hub.logbook.flight, flight_id)
+    flight = await asyncio.to_thread(logbook.flight, flight_id)
     rows = await asyncio.to_thread(
-        hub.logbook.series,
+        logbook.series,
         flight.vehicle_id,
         flight.start_time,
         flight_end(flight),

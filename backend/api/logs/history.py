@@ -9,7 +9,7 @@ from typing import Annotated, Any
 from fastapi import Query
 from pydantic import BaseModel, ConfigDict, Field, field_validator
 
-from backend.api.deps import HubDep
+from backend.api.deps import LogbookDep, RegistryDep
 from backend.api.logs.common import MAX_ID, MAX_PAGE, next_before_id
 from backend.api.security import SecuredRouter, requires
 from backend.api.time_ranges import TimeQuery, optional_time_range
@@ -71,7 +71,8 @@ class CommandPage(BaseModel):
 
 @router.get("/events", response_model=EventPage, openapi_extra=requires(Permission.READ))
 async def list_events(
-    hub: HubDep,
+    registry: RegistryDep,
+    logbook: LogbookDep,
     vehicle_id: Annotated[str | None, Query(max_length=64)] = None,
     kind: Annotated[StoredEventKind | None, Query(description="One of the kinds listed")] = None,
     start: TimeQuery = None,
@@ -81,11 +82,11 @@ async def list_events(
 ) -> EventPage:
     """STATUSTEXTs, mode changes, arming, failsafes and link changes, newest first."""
     if vehicle_id is not None:
-        hub.registry.get(vehicle_id)
+        registry.get(vehicle_id)
     start_at, end_at = optional_time_range(start, end)
     rows = list(
         await asyncio.to_thread(
-            hub.logbook.events, vehicle_id, kind, start_at, end_at, before_id, limit
+            logbook.events, vehicle_id, kind, start_at, end_at, before_id, limit
         )
     )
     return EventPage(
@@ -96,7 +97,8 @@ async def list_events(
 
 @router.get("/commands", response_model=CommandPage, openapi_extra=requires(Permission.READ))
 async def list_commands(
-    hub: HubDep,
+    registry: RegistryDep,
+    logbook: LogbookDep,
     vehicle_id: Annotated[str | None, Query(max_length=64)] = None,
     actor: Annotated[str | None, Query(max_length=80)] = None,
     start: TimeQuery = None,
@@ -106,11 +108,11 @@ async def list_commands(
 ) -> CommandPage:
     """Commands sent, who sent them and what the vehicle answered, newest first."""
     if vehicle_id is not None:
-        hub.registry.get(vehicle_id)
+        registry.get(vehicle_id)
     start_at, end_at = optional_time_range(start, end)
     rows = list(
         await asyncio.to_thread(
-            hub.logbook.commands, vehicle_id, actor, start_at, end_at, before_id, limit
+            logbook.commands, vehicle_id, actor, start_at, end_at, before_id, limit
         )
     )
     return CommandPage(

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from pydantic import BaseModel
 
-from backend.api.deps import HubDep
+from backend.api.deps import RegistryDep, WriterDep
 from backend.api.security import SecuredRouter, requires
 from backend.auth.policy import Permission
 
@@ -24,17 +24,17 @@ class Metrics(BaseModel):
 
 
 @router.get("/metrics", response_model=Metrics, openapi_extra=requires(Permission.READ))
-async def metrics(hub: HubDep) -> Metrics:
+async def metrics(registry: RegistryDep, writer: WriterDep) -> Metrics:
     """The storage path's health: backlog against capacity shows backpressure building."""
-    stats = hub.writer.stats
+    stats = writer.stats
     return Metrics(
         telemetry_written=stats.written,
         events_written=stats.events_written,
         batches=stats.batches,
         write_retries=stats.retries,
         database_available=stats.database_available,
-        writer_backlog=hub.writer.backlog,
-        writer_capacity=hub.writer.capacity,
+        writer_backlog=writer.backlog,
+        writer_capacity=writer.capacity,
         last_batch_s=stats.last_batch_s,
-        connected_agents=sum(record.connected for record in hub.registry.all()),
+        connected_agents=sum(record.connected for record in registry.all()),
     )

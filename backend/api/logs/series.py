@@ -8,7 +8,7 @@ from typing import Annotated
 from fastapi import Query
 from pydantic import BaseModel
 
-from backend.api.deps import HubDep
+from backend.api.deps import LogbookDep, RegistryDep
 from backend.api.logs.common import MAX_POINTS, Metric
 from backend.api.schemas import Sample
 from backend.api.security import SecuredRouter, requires
@@ -32,7 +32,8 @@ class Series(BaseModel):
 
 @router.get("/telemetry/series", response_model=Series, openapi_extra=requires(Permission.READ))
 async def telemetry_series(
-    hub: HubDep,
+    registry: RegistryDep,
+    logbook: LogbookDep,
     vehicle_id: Annotated[list[str] | None, Query(description="repeat; all if unset")] = None,
     start: Annotated[Moment | None, time_query("end - 1 h")] = None,
     end: Annotated[Moment | None, time_query("now")] = None,
@@ -49,13 +50,11 @@ async def telemetry_series(
             f"the range is over {MAX_SERIES_SPAN_S / 86400:.0f} days; ask for less",
             "query",
         )
-    vehicles = list(dict.fromkeys(vehicle_id or [r.id for r in hub.registry.all()]))
+    vehicles = list(dict.fromkeys(vehicle_id or [r.id for r in registry.all()]))
     for requested in vehicles:
-        hub.registry.get(requested)
+        registry.get(requested)
     series = {}
     for vehicle in vehicles:
-        rows = await asyncio.to_thread(
-            hub.logbook.series, vehicle, start_at, end_at, points, metric
-        )
+        rows = await asyncio.to_thread(logbook.series, vehicle, start_at, end_at, points, metric)
         series[vehicle] = [Sample(**row) for row in rows]
     return Series(start=start_at, end=end_at, points=points, metric=metric, series=series)

@@ -12,7 +12,7 @@ from fastapi import Path, Request, status
 from fastapi.responses import FileResponse
 from pydantic import BaseModel, ConfigDict
 
-from backend.api.deps import HubDep
+from backend.api.deps import LogbookDep, RegistryDep, SettingsDep
 from backend.api.logs.common import MAX_ID
 from backend.api.security import SecuredRouter, requires
 from backend.auth.policy import Permission
@@ -44,20 +44,22 @@ class Tlog(BaseModel):
 async def upload_tlog(
     vehicle_id: Annotated[VehicleId, Path()],
     request: Request,
-    hub: HubDep,
+    registry: RegistryDep,
+    logbook: LogbookDep,
+    settings: SettingsDep,
 ) -> Tlog:
     """An agent uploads the .tlog it recorded on board (body: the raw file).
 
     The body must be a .tlog (timestamped MAVLink frames: 422 otherwise, at the first
     record that is not), and fit the vehicle's quota (``max_tlog_bytes_per_vehicle``
     over all its files: 413 otherwise; ``max_tlog_bytes`` bounds one file)."""
-    hub.registry.get(vehicle_id)
-    quota = hub.settings.max_tlog_bytes_per_vehicle
-    stored = sum(row.size for row in await asyncio.to_thread(hub.logbook.tlogs, vehicle_id))
+    registry.get(vehicle_id)
+    quota = settings.max_tlog_bytes_per_vehicle
+    stored = sum(row.size for row in await asyncio.to_thread(logbook.tlogs, vehicle_id))
     if stored >= quota:
         raise QuotaExceeded(_quota_used(vehicle_id, stored, quota))
     name = SAFE_FILENAME.sub("_", request.headers.get("x-filename", "flight.tlog"))[:100]
-    folder = hub.settings.data_dir / "tlogs" / vehicle_id
+    folder = settings.data_dir / "tlogs" / vehicle_id
     await asyncio.to_thread(folder.mkdir, parents=True, exist_ok=True)
     target = folder / f"{time.time_ns()}_{name}"
     size = 0
@@ -76,8 +78,8 @@ async def upload_tlog(
     except BaseException:
         target.unlink(missing_ok=True)  # no half files from a cut upload
         raise
-    tlog_id = await asyncio.to_thread(hub.logbook.add_tlog, vehicle_id, name, str(target), size)
-    return Tlog.model_validate(await asyncio.to_thread(hub.logbook.tlog, tlog_id))
+    tlog_id = await asyncio.to_thread(logbook.add_tlog, vehicle_id, name, str(target), size)
+    return Tlog.model_validate(await asyncio.to_thread(logbook.tlog, tlog_id))
 
 
 def _check_and_write(checker: TlogChecker, file: BinaryIO, chunk: bytes) -> None:
@@ -97,11 +99,11 @@ def _quota_used(vehicle_id: str, stored: int, quota: int) -> str:
     response_model=list[Tlog],
     openapi_extra=requires(Permission.READ),
 )
-async def list_tlogs(vehicle_id: Annotated[VehicleId, Path()], hub: HubDep) -> list[Tlog]:
-    hub.registry.get(vehicle_id)
-    return [
-        Tlog.model_validate(row) for row in await asyncio.to_thread(hub.logbook.tlogs, vehicle_id)
-    ]
+async def list_tlogs(
+    vehicle_id: Annotated[VehicleId, Path()], registry: RegistryDep, logbook: LogbookDep
+) -> list[Tlog]:
+    registry.get(vehicle_id)
+    return [Tlog.model_validate(row) for row in await asyncio.to_thread(logbook.tlogs, vehicle_id)]
 
 
 @router.get(
@@ -111,9 +113,9 @@ async def list_tlogs(vehicle_id: Annotated[VehicleId, Path()], hub: HubDep) -> l
     responses={200: {"content": {"application/octet-stream": {}}}},
 )
 async def download_tlog(
-    tlog_id: Annotated[int, Path(ge=1, le=MAX_ID)], hub: HubDep
+    tlog_id: Annotated[int, Path(ge=1, le=MAX_ID)], logbook: LogbookDep
 ) -> FileResponse:
-    row = await asyncio.to_thread(hub.logbook.tlog, tlog_id)
+    row = await asyncio.to_thread(logbook.tlog, tlog_id)
     return FileResponse(
         FilePath(row.path), filename=row.filename, media_type="application/octet-stream"
     )

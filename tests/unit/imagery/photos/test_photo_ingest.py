@@ -16,7 +16,6 @@ import pytest
 from PIL import Image
 
 from backend.errors import NotFound
-from backend.hub import MosaicSink
 from backend.imagery.mosaic.service import MosaicService
 from backend.imagery.photos.checks import Refusal, Refused
 from backend.imagery.photos.export import write_zip
@@ -24,6 +23,7 @@ from backend.imagery.photos.ingest import OffsetMismatch, PhotoIngest
 from backend.imagery.photos.partials import PartialLimits
 from backend.imagery.photos.repository import PhotoRepository
 from backend.imagery.photos.stored import PhotoSink, StoredPhoto
+from backend.imagery.sink import MosaicSink
 from backend.storage.database import make_engine, migrate
 from backend.survey.flight.progress import new_run
 from backend.survey.flight.run import DroneState, SurveyRun, SurveyState

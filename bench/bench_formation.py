@@ -21,7 +21,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from common.formation import ConsensusGains, Controller
 from tests.formation_sim import FormationRun, fly_formation
-from vehicle_agents.control.formation import FollowerSettings
+from vehicle_agents.control.formation_follower import FollowerSettings
 
 CONTROLLERS = {
     "leader-following": {"feed_forward": True},

@@ -1,9 +1,8 @@
 """The simulator's MAVLink transport: a TCP server or a UDP socket, on asyncio.
 
 Like SITL's port 5760, the TCP server takes any number of clients; each gets its own
-stream and its own sequence numbers. The UDP socket answers every address it has heard
-from. pymavlink serves only as a codec here (never ``mavutil``): one parser and one
-encoder per peer.
+stream and its own sequence numbers (`simulator/mavlink/peer_links.py`). The UDP socket
+answers every address it has heard from.
 """
 
 from __future__ import annotations
@@ -12,119 +11,32 @@ import asyncio
 import contextlib
 import logging
 import time
-from abc import ABC, abstractmethod
 from collections.abc import Callable
 from dataclasses import replace
 from typing import TYPE_CHECKING, Any
-
-from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from simulator.clock import Clock, SimClock
 from simulator.config import ListenAddress, SimulatorConfig
 from simulator.mavconst import MsgId
 from simulator.mavlink.commands import MessageHandler
+from simulator.mavlink.message_context import MavMessage, SecondGps
+from simulator.mavlink.peer_links import COMPONENT_ID, Link, TcpLink, UdpLink
 from simulator.mavlink.streams import StreamRequests, StreamSchedule
-from simulator.mavlink.telemetry import DEFAULT_RATES_HZ, MavMessage, SecondGps, TelemetryBuilder
+from simulator.mavlink.telemetry import DEFAULT_RATES_HZ, TelemetryBuilder
+from simulator.outputs.camera_outputs import CameraOutputs
 from simulator.vehicle import ItemReached, PhotoTaken, Vehicle
 from simulator.vehicles import REBOOT_SILENCE_S, build_vehicle
 
 if TYPE_CHECKING:
-    from simulator.outputs.cameras import CameraComponent, FolderCamera
     from simulator.outputs.lidar import LidarStream
-    from simulator.outputs.photos import PhotoServer
 
 log = logging.getLogger(__name__)
 
-COMPONENT_ID = 1  # MAV_COMP_ID_AUTOPILOT1
-CAMERA_COMPONENT_ID = mavlink2.MAV_COMP_ID_CAMERA  # a MAVLink camera (--camera-component)
 TICK_S = 0.01  # wall seconds between physics catch-ups and stream checks, at most
 # ... and at least: a stream due sooner in sim time (a speed-up) brings the tick forward,
 # down to this, and so does one running late, to catch up
 MIN_TICK_S = 0.001
-MAX_PENDING_BYTES = 256 * 1024  # a client this far behind loses messages, not memory
 READ_SIZE = 4096
-
-
-class Link(ABC):
-    """One MAVLink peer: its parser, its encoder (sequence numbers) and its streams."""
-
-    def __init__(self, name: str, system_id: int, now: float) -> None:
-        self.name = name
-        self._parser: Any = mavlink2.MAVLink(None, srcSystem=system_id, srcComponent=COMPONENT_ID)
-        self._parser.robust_parsing = True
-        self._system_id = system_id
-        # One encoder (sequence numbers) per component that speaks on this link: the
-        # autopilot, and the camera where it is a MAVLink camera component.
-        self._encoders: dict[int, Any] = {}
-        self.streams = StreamSchedule(DEFAULT_RATES_HZ, now)
-        self.bad_frames = 0
-
-    def decode(self, data: bytes) -> list[Any]:
-        try:
-            messages = self._parser.parse_buffer(data) or []
-        except Exception as error:  # pymavlink raises on a few malformed frames
-            log.debug("%s: undecodable bytes: %s", self.name, error)
-            self.bad_frames += 1
-            return []
-        good = [m for m in messages if m.get_type() != "BAD_DATA"]
-        self.bad_frames += len(messages) - len(good)
-        return good
-
-    def send(self, message: MavMessage, component: int = COMPONENT_ID) -> None:
-        encoder = self._encoders.get(component)
-        if encoder is None:
-            encoder = mavlink2.MAVLink(None, srcSystem=self._system_id, srcComponent=component)
-            self._encoders[component] = encoder
-        frame: bytes = message.pack(encoder)
-        encoder.seq = (encoder.seq + 1) % 256
-        self._write(frame)
-
-    @abstractmethod
-    def _write(self, frame: bytes) -> None: ...
-
-    @abstractmethod
-    def close(self) -> None:
-        """Release the peer."""
-
-
-class TcpLink(Link):
-    def __init__(self, name: str, system_id: int, now: float, writer: asyncio.StreamWriter):
-        super().__init__(name, system_id, now)
-        self.writer = writer
-        self.dropped = 0
-
-    def _write(self, frame: bytes) -> None:
-        transport = self.writer.transport
-        if transport.is_closing():
-            return
-        if transport.get_write_buffer_size() > MAX_PENDING_BYTES:
-            self.dropped += 1
-            return
-        self.writer.write(frame)
-
-    def close(self) -> None:
-        self.writer.close()
-
-
-class UdpLink(Link):
-    def __init__(
-        self,
-        name: str,
-        system_id: int,
-        now: float,
-        transport: asyncio.DatagramTransport,
-        address: Any,
-    ) -> None:
-        super().__init__(name, system_id, now)
-        self.transport = transport
-        self.address = address
-
-    def _write(self, frame: bytes) -> None:
-        if not self.transport.is_closing():
-            self.transport.sendto(frame, self.address)
-
-    def close(self) -> None:
-        """UDP peers share the server's socket: nothing of their own to close."""
 
 
 class _UdpProtocol(asyncio.DatagramProtocol):
@@ -171,15 +83,7 @@ class SimulatorServer:
         self._silent_until = 0.0  # a rebooting flight controller neither hears nor sends
         self.lidar: LidarStream | None = None
         self.lidar_address: ListenAddress | None = None
-        self.photos: PhotoServer | None = None
-        self.camera_component: CameraComponent | None = None
-        self.camera_folder: FolderCamera | None = None
-        self._renderer: Callable[..., bytes] | None = None
-        self._next_camera_heartbeat = 0.0
-        # Shots for the camera folder, written one after another (a camera's card
-        # fills in order) by one task.
-        self._folder_shots: asyncio.Queue[PhotoTaken] = asyncio.Queue()
-        self._folder_writer: asyncio.Task[None] | None = None
+        self.cameras = CameraOutputs(config, self._broadcast)
 
     # -- lifecycle -------------------------------------------------------------
 
@@ -211,31 +115,7 @@ class SimulatorServer:
                 wire=self.config.lidar_format,
             )
             self.lidar_address = await self.lidar.start()
-        if self.config.camera is not None or self.config.camera_folder is not None:
-            # numpy and OpenCV are imported only by a simulator that renders photos
-            from simulator.outputs.photos import PhotoServer, nadir_renderer
-
-            ground = self.config.ground or self.config.home
-            render = await asyncio.to_thread(nadir_renderer, ground)  # the texture: a second
-            self._renderer = render
-            if self.config.camera is not None:
-                self.photos = PhotoServer(self.config.camera, render, self.telemetry.boot_epoch_s)
-                photos_at = await self.photos.start()
-                if self.config.camera_component:
-                    from simulator.outputs.cameras import CameraComponent
-
-                    assert self.config.camera_model is not None  # SimulatorConfig checks
-                    self.camera_component = CameraComponent(photos_at, self.config.camera_model)
-            if self.config.camera_folder is not None:
-                from simulator.outputs.cameras import FolderCamera
-
-                assert self.config.camera_model is not None
-                self.camera_folder = FolderCamera(
-                    self.config.camera_folder, self.config.camera_model
-                )
-                self._folder_writer = asyncio.create_task(
-                    self._write_to_folder(), name="simulator-camera-folder"
-                )
+        await self.cameras.start(self.telemetry.boot_epoch_s)
         self._ticker = asyncio.create_task(self._tick_forever(), name="simulator-tick")
         log.info(
             "simulator sysid=%d listening on %s speedup=%g",
@@ -256,13 +136,7 @@ class SimulatorServer:
             self._tcp_server.close()
         if self.lidar is not None:
             await self.lidar.stop()
-        if self.photos is not None:
-            await self.photos.stop()
-        if self._folder_writer is not None:
-            self._folder_writer.cancel()
-            with contextlib.suppress(asyncio.CancelledError):
-                await self._folder_writer
-            self._folder_writer = None
+        await self.cameras.stop()
         for link in list(self.links):
             link.close()
         if self._client_tasks:
@@ -318,9 +192,7 @@ class SimulatorServer:
         if wall < self._silent_until:
             return
         self._publish_changes(now)
-        if self.camera_component is not None and wall >= self._next_camera_heartbeat:
-            self._next_camera_heartbeat = wall + 1.0  # a MAVLink component's 1 Hz
-            self._broadcast(self.camera_component.heartbeat(), CAMERA_COMPONENT_ID)
+        self.cameras.tick(wall)
         built: dict[int, MavMessage] = {}
         for link in list(self.links):
             for msg_id in link.streams.due(now):
@@ -356,8 +228,7 @@ class SimulatorServer:
         px4 = self.telemetry.sends_camera_trigger
         if px4:
             photo = replace(photo, index=photo.index - 1)  # PX4's sequence starts at 0
-        if self.photos is not None:  # before the feedback: the agent fetches on it
-            self.photos.taken(photo)
+        self.cameras.serve_photo(photo)  # before the feedback: the agent fetches on it
         if not px4:
             self._broadcast(self.telemetry.camera_feedback(photo))
         else:
@@ -366,35 +237,7 @@ class SimulatorServer:
                 if link.streams.interval(MsgId.CAMERA_TRIGGER) is not None:
                     link.send(trigger)
             self._broadcast(self.telemetry.camera_image_captured(photo))
-        if self.camera_component is not None:
-            from simulator.outputs.photos import pose_of
-
-            pose = pose_of(photo, self.telemetry.boot_epoch_s)
-            self._broadcast(
-                self.camera_component.image_captured(photo, pose, self.telemetry.boot_epoch_s),
-                CAMERA_COMPONENT_ID,
-            )
-        if self.camera_folder is not None:
-            self._folder_shots.put_nowait(photo)
-
-    async def _write_to_folder(self) -> None:
-        """Render each shot and write it to the camera's folder, off the event loop: the
-        file lands a moment after the autopilot's message, as a real camera's does."""
-        from simulator.outputs.photos import pose_of
-
-        assert self.camera_folder is not None
-        assert self._renderer is not None
-        folder = self.camera_folder
-        number = 0
-        while True:
-            photo = await self._folder_shots.get()
-            number += 1  # the card's own count: DSC00001 first
-            pose = pose_of(photo, self.telemetry.boot_epoch_s)
-            try:
-                jpeg = await asyncio.to_thread(self._renderer, pose, folder.camera)
-                await asyncio.to_thread(folder.write, number, jpeg)
-            except (ValueError, OSError) as error:
-                log.warning("camera folder: shot %d not written: %s", photo.index, error)
+        self.cameras.camera_shot(photo)
 
     def _state_signature(self) -> tuple[int, bool, int]:
         copter = self.copter
@@ -416,10 +259,7 @@ class SimulatorServer:
         for link in self.links:
             # all due when the silence ends (the first tick after it finds them late)
             link.streams = StreamSchedule(DEFAULT_RATES_HZ, now)
-        if self.photos is not None:
-            self.photos.restart(self.telemetry.boot_epoch_s)
-        if self.camera_component is not None:
-            self.camera_component.restart()
+        self.cameras.restart(self.telemetry.boot_epoch_s)
         self._signature = self._state_signature()
         log.info("simulator sysid=%d rebooting", self.config.system_id)
 

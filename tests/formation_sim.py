@@ -34,14 +34,8 @@ from simulator.mavconst import CopterMode
 from simulator.mavlink.commands import MessageHandler
 from simulator.mavlink.streams import StreamSchedule
 from simulator.mavlink.telemetry import DEFAULT_RATES_HZ, TelemetryBuilder
-from vehicle_agents.control.formation import (
-    Action,
-    Follower,
-    FollowerSettings,
-    NeighbourReport,
-    Setpoint,
-    position_target,
-)
+from vehicle_agents.control.formation_follower import Follower, FollowerSettings, NeighbourReport
+from vehicle_agents.control.formation_setpoint import Action, Setpoint, position_target
 
 TICK_S = 0.1  # the follower's 10 Hz
 GCS_SYSID, GCS_COMPID = 255, 190

@@ -19,7 +19,7 @@ from protocol.messages import (
 from vehicle_agents import __version__
 from vehicle_agents.config import AgentSettings, default_vehicle_id, hub_http_base
 from vehicle_agents.control.executor import CommandExecutor
-from vehicle_agents.control.formation import FormationRunner
+from vehicle_agents.control.formation_runner import FormationRunner
 from vehicle_agents.control.hub_failsafe import HubLinkFailsafe, reconnect_backoff
 from vehicle_agents.control.manual import ManualPilot
 from vehicle_agents.fcu.available_modes import AvailableModes

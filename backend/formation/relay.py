@@ -1,9 +1,9 @@
 """A running formation's relay: the leader's state to every follower, with the other
 members' positions for the separation check, and the leader's scans.
 
-The followers' control runs in their agents (vehicle_agents/control/formation.py), close to the
-aircraft; the hub only moves data. Each tick sends every follower the newest leader state
-(newest wins, nothing queues behind a slow link).
+The followers' control runs in their agents (vehicle_agents/control/formation_runner.py),
+close to the aircraft; the hub only moves data. Each tick sends every follower the newest
+leader state (newest wins, nothing queues behind a slow link).
 
 A virtual leader is the route's clock on the hub. A vehicle leader is itself a member:
 its agent follows the virtual route at a zero offset, facing along it, and the followers

@@ -25,7 +25,8 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from protocol.photos import CameraIntrinsics, PhotoPose
 from simulator.config import ListenAddress
-from simulator.mavlink.telemetry import MavMessage, quaternion
+from simulator.mavlink.camera_messages import quaternion
+from simulator.mavlink.message_context import MavMessage
 from simulator.vehicle import PhotoTaken
 
 log = logging.getLogger(__name__)

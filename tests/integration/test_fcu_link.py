@@ -24,7 +24,7 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 from gcs.launcher import free_port
 from simulator import SimulatorServer
 from simulator.config import MessageIntervalSupport
-from simulator.mavlink.telemetry import SecondGps
+from simulator.mavlink.message_context import SecondGps
 from tests.helpers import FleetWatcher, agent_process, api_client, poll_until
 from tests.support.fcu import (
     SET_MESSAGE_INTERVAL,

@@ -10,7 +10,8 @@ from common.formation import ConsensusGains, Controller
 from common.geodesy import LocalFrame
 from simulator import DEFAULT_HOME
 from tests.formation_sim import SimVehicle, fly_formation
-from vehicle_agents.control.formation import Action, Follower
+from vehicle_agents.control.formation_follower import Follower
+from vehicle_agents.control.formation_setpoint import Action
 
 MIN_SEPARATION_M = 2.0
 

@@ -13,7 +13,8 @@ import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from simulator import ListenAddress, ManualClock, SimulatorConfig
-from simulator.server import MIN_TICK_S, TICK_S, Link, SimulatorServer
+from simulator.mavlink.peer_links import Link
+from simulator.server import MIN_TICK_S, TICK_S, SimulatorServer
 from tests.support.simulators import (
     REPO_ROOT,
     SYSID,

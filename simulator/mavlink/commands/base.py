@@ -9,7 +9,8 @@ from dataclasses import dataclass
 from typing import Any
 
 from simulator.mavconst import MavCmd, MavFrame, MavResult
-from simulator.mavlink.telemetry import MavMessage, TelemetryBuilder
+from simulator.mavlink.message_context import MavMessage
+from simulator.mavlink.telemetry import TelemetryBuilder
 from simulator.vehicle import Vehicle
 
 log = logging.getLogger("simulator.mavlink.commands")

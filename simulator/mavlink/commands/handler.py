@@ -28,7 +28,7 @@ from simulator.mavlink.commands.navigation import POSITION_COMMANDS, Navigation
 from simulator.mavlink.commands.params import Parameters
 from simulator.mavlink.commands.requests import Requests, StreamControl
 from simulator.mavlink.ftp_server import FtpServer
-from simulator.mavlink.telemetry import MavMessage
+from simulator.mavlink.message_context import MavMessage
 
 
 class MessageHandler(ArmingAndModes, Navigation, Parameters, Missions, Requests):

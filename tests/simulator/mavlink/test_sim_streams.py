@@ -12,13 +12,14 @@ from simulator import DEFAULT_HOME, Copter, ListenAddress, SimulatorConfig
 from simulator.config import MessageIntervalSupport, parse_args
 from simulator.mavconst import MavCmd, MavResult, MsgId
 from simulator.mavlink.commands import MessageHandler, Reply
+from simulator.mavlink.message_context import SecondGps
 from simulator.mavlink.streams import (
     DataStream,
     StreamRequests,
     StreamSchedule,
     request_data_stream,
 )
-from simulator.mavlink.telemetry import DEFAULT_RATES_HZ, GPS2_RAW, SecondGps, TelemetryBuilder
+from simulator.mavlink.telemetry import DEFAULT_RATES_HZ, GPS2_RAW, TelemetryBuilder
 from tests.support.simulators import mavlink_client, serving, wait_for
 
 SYSID = 7  # the system id tests.simulator.test_sim_server's helpers expect

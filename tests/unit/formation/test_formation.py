@@ -31,13 +31,9 @@ from common.geodesy import GeoPoint, LocalFrame
 from simulator import DEFAULT_HOME
 from simulator.mavconst import CopterMode
 from tests.formation_sim import SimVehicle, take_off
-from vehicle_agents.control.formation import (
-    POSVEL_TYPE_MASK,
-    Action,
-    Follower,
-    ModeWatch,
-    NeighbourReport,
-)
+from vehicle_agents.control.formation_follower import Follower, NeighbourReport
+from vehicle_agents.control.formation_modes import ModeWatch
+from vehicle_agents.control.formation_setpoint import POSVEL_TYPE_MASK, Action
 
 HOME = LocalFrame(DEFAULT_HOME.lat, DEFAULT_HOME.lon)
 

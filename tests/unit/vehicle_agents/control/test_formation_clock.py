@@ -7,7 +7,8 @@ from __future__ import annotations
 from protocol.messages import EventKind, FormationSlot, LeaderUpdate, Neighbour
 from tests.support.paced import FakeWall, paced_at
 from vehicle_agents.control.executor import CommandExecutor
-from vehicle_agents.control.formation import Action, FormationRunner
+from vehicle_agents.control.formation_runner import FormationRunner
+from vehicle_agents.control.formation_setpoint import Action
 from vehicle_agents.fcu.link import FcuLink
 
 UNIX = 1_800_000_000.0

@@ -18,8 +18,9 @@ from common.formation import LeaderState, Offset
 from common.geodesy import LocalFrame
 from protocol.messages import LeaderScan, encode, hub_to_agent
 from protocol.scans import ScanFrame, ScanPose, decode_scan, encode_scan
-from vehicle_agents.control.formation import Action, Follower
+from vehicle_agents.control.formation_follower import Follower
 from vehicle_agents.control.formation_obstacles import ScanObstacles
+from vehicle_agents.control.formation_setpoint import Action
 
 HOME = LocalFrame(-35.363262, 149.165237, 584.0)  # the site and the formation's origin
 BEAMS = 720

@@ -7,7 +7,14 @@ import { Header } from "./header/header";
 import { LoginScreen } from "./session/login";
 import type { CurrentUser } from "./hub/types";
 // Last, so the theme overrides Leaflet's stylesheet (imported by ./map/fleetMap).
-import "./style.css";
+// The page's own styles, in cascade order (each panel's beside its code).
+import "./styles/base.css";
+import "./styles/map.css";
+import "./styles/fleet.css";
+import "./styles/login.css";
+import "./styles/audit.css";
+import "./styles/replay.css";
+import "./styles/viz3d.css";
 
 const header = new Header();
 const appParts = [document.querySelector<HTMLElement>(".app-header")!, document.querySelector<HTMLElement>(".layout")!];

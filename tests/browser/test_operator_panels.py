@@ -20,7 +20,7 @@ from tests.helpers import access_token, api_client, running_fleet
 pytestmark = [pytest.mark.browser, pytest.mark.integration]
 
 OUTPUT = Path(__file__).resolve().parents[2] / "test-output" / "panels"
-WARN_COLOUR = "rgb(245, 185, 66)"  # --warn in style.css
+WARN_COLOUR = "rgb(245, 185, 66)"  # --warn in frontend/src/styles/base.css
 
 
 @pytest.fixture(scope="module")

@@ -11,7 +11,7 @@ import { VehicleLayer } from "./vehicleLayer";
 import type { HubConfig, VehicleSummary } from "../hub/types";
 import type { DashboardStore } from "../store/dashboardStore";
 
-const GRID_PX = [320, 64]; // major and minor lines, in the order of style.css
+const GRID_PX = [320, 64]; // major and minor lines, in the order of styles/map.css
 const FIT_MAX_ZOOM = 19; // close enough to tell apart vehicles a few metres apart
 
 export class FleetMap {

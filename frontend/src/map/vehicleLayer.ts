@@ -15,7 +15,7 @@ import { vehicleColour } from "../viz3d/colours";
 const SYMBOL_PX = 28;
 const DRAW_EVERY_MS = 50; // 20 Hz: twice the telemetry rate, a third of the frames
 const HIT_PX = 16;
-const LABEL_OFFSET = L.point(16, -9); // the label's top-left from the symbol's centre (style.css)
+const LABEL_OFFSET = L.point(16, -9); // the label's top-left from the symbol's centre (styles/map.css)
 const LABEL_HEIGHT = 20;
 const COUNT_ROOM_PX = 30;
 const LABEL_FONT = "600 12px system-ui, sans-serif";

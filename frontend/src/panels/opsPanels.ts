@@ -21,6 +21,7 @@ import {
   validLevels,
 } from "./warnings";
 import "./panels.css";
+import "./drawers.css"; // after panels.css: the smaller screens override it
 
 /** Link age changes with the clock, not with messages: look again this often. */
 const TICK_MS = 500;

@@ -11,8 +11,8 @@ from backend.fleet.command_service import carry_out_routed
 from backend.hub.collaborators import RoutedSenders
 from backend.manual_control.claims import LeaseClaims
 from backend.manual_control.service import ManualControl
-from backend.manual_control.store import LeaseClaimStore
 from backend.realtime.fleet_link import FleetLink
+from backend.storage.claims import LeaseClaimStore
 from backend.survey.ownership import SurveyOwnership
 from backend.survey.service import SurveyService
 from protocol.messages import CommandOutcome

@@ -346,7 +346,7 @@ class PhotoRow(Base):
 class LeaseClaimRow(Base):
     """Who flies a vehicle by hand, for every hub to see (several hubs): a claim holds
     until ``expires_at`` unless its hub renews it, so a hub that dies releases its
-    pilots' vehicles within seconds (backend/manual_control/store.py)."""
+    pilots' vehicles within seconds (backend/storage/claims.py)."""
 
     __tablename__ = "lease_claims"
 

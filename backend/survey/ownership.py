@@ -18,7 +18,7 @@ from collections.abc import Callable
 
 from sqlalchemy.exc import SQLAlchemyError
 
-from backend.manual_control.store import LeaseClaimStore
+from backend.storage.claims import LeaseClaimStore
 
 log = logging.getLogger(__name__)
 

@@ -7,7 +7,7 @@ import threading
 
 from sqlalchemy import Engine
 
-from backend.manual_control.store import LeaseClaimStore
+from backend.storage.claims import LeaseClaimStore
 from backend.storage.database import migrate
 
 TTL_S = 4.0

@@ -56,6 +56,8 @@ UPWARD = {
     "a route imports the hub": ("backend/api/system.py", "backend.hub.services"),
     "a route takes the whole hub": ("backend/api/vehicles.py", "backend.hub.services"),
     "a feature's route imports the hub": ("backend/formation/routes.py", "backend.hub.start"),
+    "one feature imports another": ("backend/formation/upward.py", "backend.survey.service"),
+    "manual control imports the scans": ("backend/manual_control/upward.py", "backend.scans.views"),
     "the client imports the protocol": ("gcs_client/upward.py", "protocol.messages"),
     "the client imports the web framework": ("gcs_client/upward.py", "fastapi"),
     "the flight controller link imports the hub link": (

@@ -1,4 +1,6 @@
-"""Lease claims in the shared database: a compare-and-set on one row per vehicle.
+"""Claims in the shared database: a compare-and-set on one row per vehicle, which makes
+a pilot's lease exclusive across hubs (backend/manual_control/claims.py) and says which
+hub drives a survey (backend/survey/ownership.py); in storage because both features use it.
 
 A claim is granted when the row is absent, expired, or already the same holder's (a
 renewal); otherwise it names who holds it. The conditional UPDATE is atomic in both

@@ -47,9 +47,9 @@ import httpx
 from common.geodesy import LocalFrame
 from gcs.launcher import FleetPlan, LocalFleet, free_port
 from protocol.photos import MAX_PHOTO_BYTES, PhotoMeta
-from tests.helpers import access_token
 from tests.integration.test_hub_bad_input import scripted_agent
 from tests.integration.test_photo_routes import CAMERA, POSE
+from tests.support.api import access_token
 from tests.survey_shapes import kml_polygon
 
 PROBE_EVERY_S = 0.05

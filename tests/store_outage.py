@@ -10,9 +10,9 @@ from contextlib import contextmanager
 
 import httpx
 
-from tests.helpers import poll_until
 from tests.support.agents import ScriptedAgent, telemetry_frame
 from tests.support.databases import answering
+from tests.support.waiting import poll_until
 
 VEHICLE = "v1"
 

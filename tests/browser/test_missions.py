@@ -22,14 +22,15 @@ from common.geodesy import LocalFrame, haversine_m
 from gcs.launcher import DEFAULT_HOME, FleetPlan, LocalFleet, free_port
 from tests.browser.conftest import SIZES, checked_page, log_in
 from tests.conftest import FLEET_SPEEDUP
-from tests.helpers import access_token, api_client, poll_until
 from tests.map_tiles import farmland_tiles, write_mbtiles
+from tests.support.api import access_token, api_client
 from tests.support.hubs import TEST_HUB_ENV
 from tests.support.maps import (
     PixelMap,
     _assert_on_open_map,
     _box,
 )
+from tests.support.waiting import poll_until
 
 pytestmark = [pytest.mark.browser, pytest.mark.integration]
 

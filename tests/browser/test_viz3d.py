@@ -12,7 +12,7 @@ from playwright.sync_api import Frame, Page, expect
 from backend.viz3d.colours import rgb, vehicle_colour
 from gcs.launcher import LocalFleet
 from tests.browser.conftest import log_in
-from tests.helpers import poll_until
+from tests.support.waiting import poll_until
 
 pytestmark = [pytest.mark.browser, pytest.mark.integration]
 

@@ -30,9 +30,12 @@ from protocol.messages import (
     TakeoffCommand,
 )
 from tests.conftest import hub_settings
-from tests.helpers import FleetWatcher, agent_process, api_client, connected, running_hub
 from tests.mavlink_peer import HOME_ALT_MSL, Answer, Script, ScriptedFlightController
+from tests.support.api import api_client
 from tests.support.executors import with_executor
+from tests.support.hub_server import running_hub
+from tests.support.processes import agent_process
+from tests.support.watcher import FleetWatcher, connected
 from vehicle_agents.control.executor import CommandExecutor
 from vehicle_agents.fcu.messages import MavMessage
 

@@ -22,8 +22,11 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 from pymavlink.dialects.v20 import development
 
 from protocol.messages import VehicleState
-from tests.helpers import FleetWatcher, agent_process, api_client, poll_until, state_of
 from tests.mavlink_peer import ScriptedFlightController, _is_command
+from tests.support.api import api_client
+from tests.support.processes import agent_process
+from tests.support.waiting import poll_until
+from tests.support.watcher import FleetWatcher, state_of
 from vehicle_agents.agent import EventSource
 from vehicle_agents.fcu.available_modes import AvailableModes
 from vehicle_agents.fcu.link import FcuLink

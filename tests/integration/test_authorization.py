@@ -28,7 +28,7 @@ from backend.auth.policy import (
     Role,
 )
 from protocol.messages import AGENT_WS_PATH, CLIENT_WS_PATH, AgentToHub, ClientToHub, CloseCode
-from tests.helpers import access_token
+from tests.support.api import access_token
 
 PASSWORD = "correct horse battery"
 

@@ -17,17 +17,13 @@ from typing import Any
 import pytest
 
 from gcs.launcher import FleetPlan, LocalFleet, free_port
-from tests.helpers import (
-    FleetWatcher,
-    access_token,
-    api_client,
-    poll_until,
-    ready,
-    take_off,
-)
+from tests.support.api import access_token, api_client
 from tests.support.fcu import FcuTap
 from tests.support.hubs import TEST_HUB_ENV
 from tests.support.pilots import Pilot
+from tests.support.settling import take_off
+from tests.support.waiting import poll_until
+from tests.support.watcher import FleetWatcher, ready
 
 pytestmark = [pytest.mark.integration, pytest.mark.slow]
 

@@ -26,7 +26,6 @@ import pytest
 
 from gcs.launcher import free_port
 from tests.conftest import ADMIN_PASSWORD, hub_settings
-from tests.helpers import access_token, api_client, poll_until, running_hub
 from tests.store_outage import (
     degraded,
     everything_stored,
@@ -35,7 +34,10 @@ from tests.store_outage import (
     streaming,
 )
 from tests.support.agents import scripted_agent, telemetry_frame
+from tests.support.api import access_token, api_client
 from tests.support.databases import answering
+from tests.support.hub_server import running_hub
+from tests.support.waiting import poll_until
 
 pytestmark = pytest.mark.integration
 

@@ -19,19 +19,13 @@ import httpx
 import pytest
 
 from gcs.launcher import LocalFleet
-from tests.helpers import (
-    FleetWatcher,
-    access_token,
-    api_client,
-    poll_until,
-    ready,
-    running_fleet,
-    send_command,
-    speed_of,
-    take_off,
-)
+from tests.support.api import access_token, api_client, send_command
 from tests.support.hubs import TEST_HUB_ENV
 from tests.support.pilots import VEHICLE, Pilot
+from tests.support.processes import running_fleet
+from tests.support.settling import take_off
+from tests.support.waiting import poll_until
+from tests.support.watcher import FleetWatcher, ready, speed_of
 
 pytestmark = [pytest.mark.integration, pytest.mark.slow]
 

@@ -13,7 +13,7 @@ from fastapi import FastAPI
 
 from backend.api.docs import ASSETS, REDOC_VENDOR_LOGO, asset_dir, install_docs
 from tests.conftest import hub_settings
-from tests.helpers import running_hub
+from tests.support.hub_server import running_hub
 
 
 @pytest.fixture

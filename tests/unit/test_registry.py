@@ -8,7 +8,7 @@ from backend.errors import VehicleNotFound, VehicleOffline
 from backend.fleet.commands import AgentChannel, CommandDispatcher
 from backend.fleet.registry import FleetRegistry
 from protocol.messages import ArmCommand, CommandRequest, Telemetry, VehicleState
-from tests.helpers import agent_hello
+from tests.support.hellos import agent_hello
 
 
 def _sample(seq: int, time: float, alt: float) -> Telemetry:

@@ -6,7 +6,7 @@ from __future__ import annotations
 from backend.fleet.commands import AgentChannel
 from backend.fleet.registry import FleetRegistry
 from protocol.messages import Message, VehicleState, VehicleSummary
-from tests.helpers import agent_hello
+from tests.support.hellos import agent_hello
 
 
 class _Remote(AgentChannel):

@@ -20,7 +20,7 @@ from backend.viz3d.frame import SceneFrame
 from backend.viz3d.replay import NONE, FlightReplay, ReplayPanels, flight_label
 from backend.viz3d.server import VizServer
 from common.geodesy import GeoPoint, LocalFrame
-from tests.helpers import poll_until
+from tests.support.waiting import poll_until
 from tests.viz_wire import scene_socket, viewer_camera
 
 HOME = (47.397742, 8.545594, 488.0)

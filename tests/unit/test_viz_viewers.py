@@ -16,8 +16,8 @@ from backend.viz3d.frame import SceneFrame
 from backend.viz3d.scene import FleetScene
 from backend.viz3d.server import VizServer
 from backend.viz3d.viewers import MAX_VIEW_DISTANCE_M, Viewers
-from tests.helpers import poll_until
 from tests.support.scenes import HOME, _summary
+from tests.support.waiting import poll_until
 from tests.viz_wire import scene_messages, scene_socket, viewer_camera
 
 POSTED = re.compile(r"window\.parent\.postMessage\((\{.*?\}), window\.location\.origin\)")

@@ -21,7 +21,7 @@ import pytest
 
 from backend.errors import RateLimited
 from backend.worker_pool import WORKER_NICENESS, JobStopped, WorkerPool
-from tests.helpers import poll_until
+from tests.support.waiting import poll_until
 
 T = TypeVar("T")
 FOREVER_S = 60.0  # a job that would outlast every test

@@ -15,7 +15,7 @@ import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from gcs.launcher import free_port
-from tests.helpers import poll_until_async
+from tests.support.waiting import poll_until_async
 from vehicle_agents.fcu.messages import MavMessage
 from vehicle_agents.forwarding.endpoints import NO_TARGET, Endpoint, EndpointAddress, Heard, targets
 from vehicle_agents.forwarding.forwarder import MavlinkForwarder

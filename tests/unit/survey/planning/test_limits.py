@@ -1,6 +1,6 @@
 """A survey plan's size is estimated before it is planned: never above what the planner
 makes (so nothing that fits is refused), refused past the limits naming each one. (A plan's
-time is bounded by killing its worker process: tests/unit/test_worker_pool.py.)"""
+time is bounded by killing its worker process: tests/unit/worker_pool/test_worker_pool.py.)"""
 
 from __future__ import annotations
 

@@ -7,7 +7,7 @@ from pathlib import Path
 
 from vehicle_agents.cli import EXIT_VEHICLE_ID_IN_USE
 
-ROOT = Path(__file__).parents[2]
+ROOT = Path(__file__).parents[3]
 
 
 def _settings(unit: Path) -> dict[str, list[str]]:

@@ -9,7 +9,7 @@ import ast
 import re
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[2]
+ROOT = Path(__file__).resolve().parents[3]
 SECTION = "## Faults and hostile input: what is guaranteed"
 TABLES = ("### Faults\n", "### Hostile input\n")  # the other subsections hold figures
 NODE_ID = re.compile(r"(tests/[\w/]+\.py)::([\w:]+)")

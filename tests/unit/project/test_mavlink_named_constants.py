@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-ROOT = Path(__file__).resolve().parents[2]
+ROOT = Path(__file__).resolve().parents[3]
 PACKAGES = ("backend", "vehicle_agents", "protocol", "simulator", "common", "gcs")
 # Fields and variables that hold a MAV_CMD or a MAV_FRAME.
 FIELD_NAMES = frozenset({"command", "frame", "cmd"})

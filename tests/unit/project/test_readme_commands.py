@@ -8,7 +8,7 @@ from pathlib import Path
 
 from protocol.messages import Command
 
-README = Path(__file__).parents[2] / "README.md"
+README = Path(__file__).parents[3] / "README.md"
 
 
 def _command_names() -> set[str]:

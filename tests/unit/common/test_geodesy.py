@@ -16,7 +16,7 @@ from common.geodesy import EARTH_MEAN_RADIUS_M, GeoPoint, LocalFrame, centre_of,
 from gcs.launcher import VEHICLE_SPACING_M, FleetPlan
 from simulator import DEFAULT_HOME, Copter
 
-ROOT = Path(__file__).resolve().parents[2]
+ROOT = Path(__file__).resolve().parents[3]
 WGS84 = Geod(ellps="WGS84")
 MEAN_SPHERE = Geod(a=EARTH_MEAN_RADIUS_M, b=EARTH_MEAN_RADIUS_M)
 

@@ -11,7 +11,7 @@ import pytest
 
 from protocol.messages import json_schema
 
-FRONTEND = Path(__file__).resolve().parents[2] / "frontend"
+FRONTEND = Path(__file__).resolve().parents[3] / "frontend"
 
 
 @pytest.mark.skipif(

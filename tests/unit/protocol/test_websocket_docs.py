@@ -18,7 +18,7 @@ from protocol.messages import (
     hub_to_client,
 )
 
-ROOT = Path(__file__).resolve().parents[2]
+ROOT = Path(__file__).resolve().parents[3]
 SCRIPT = ROOT / "scripts" / "gen_websocket_docs.py"
 PAGE = ROOT / "docs" / "websockets.md"
 

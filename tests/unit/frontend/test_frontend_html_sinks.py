@@ -11,7 +11,7 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
-SOURCES = Path(__file__).resolve().parents[2] / "frontend" / "src"
+SOURCES = Path(__file__).resolve().parents[3] / "frontend" / "src"
 HTML_SINKS = re.compile(
     r"\.(innerHTML|outerHTML)\s*\+?=(?!=)"
     r"|\binsertAdjacentHTML\s*\("

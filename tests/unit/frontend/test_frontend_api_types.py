@@ -11,7 +11,7 @@ import pytest
 
 from backend.openapi_document import openapi_document
 
-FRONTEND = Path(__file__).resolve().parents[2] / "frontend"
+FRONTEND = Path(__file__).resolve().parents[3] / "frontend"
 GENERATOR = FRONTEND / "scripts" / "gen-api"
 
 

@@ -10,7 +10,7 @@ import pytest
 from packaging.requirements import Requirement
 from packaging.utils import canonicalize_name
 
-ROOT = Path(__file__).resolve().parents[2]
+ROOT = Path(__file__).resolve().parents[3]
 PROJECT = "fleet-gcs"
 # lock file -> the extras it installs on top of the base dependencies
 LOCKS = {"agent": (), "hub": ("hub",), "simulator": ("simulator",), "dev": ("dev",)}

@@ -9,7 +9,7 @@ from pathlib import Path
 from backend.api.auth import API_TOKEN_DAYS, ApiTokenRequest
 from backend.openapi_document import openapi_document
 
-ROOT = Path(__file__).resolve().parents[2]
+ROOT = Path(__file__).resolve().parents[3]
 
 
 def test_the_default_lifetime_is_the_request_s_default() -> None:

@@ -11,7 +11,7 @@ from pathlib import Path
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
-ROOT = Path(__file__).resolve().parents[2]
+ROOT = Path(__file__).resolve().parents[3]
 SCRIPT = ROOT / "scripts" / "gen_mavlink_ts.py"
 GENERATED = ROOT / "frontend" / "src" / "generated" / "mavlink.ts"
 MISSIONS = ROOT / "frontend" / "src" / "missions"

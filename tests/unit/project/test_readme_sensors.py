@@ -8,7 +8,7 @@ from pathlib import Path
 
 from vehicle_agents.sensors.lidar.models import MODELS
 
-README = Path(__file__).parents[2] / "README.md"
+README = Path(__file__).parents[3] / "README.md"
 
 
 def test_the_sensor_table_lists_each_model_and_its_default_baud() -> None:

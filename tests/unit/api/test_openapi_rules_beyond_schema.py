@@ -19,7 +19,7 @@ from backend.api.responses import REFUSES_VALID
 from backend.openapi_document import openapi_document
 from protocol.messages import LEASE_COMMANDS, ClientCommand
 
-FUZZ_CONFIG = Path(__file__).parents[1] / "fuzz" / "schemathesis.toml"
+FUZZ_CONFIG = Path(__file__).parents[2] / "fuzz" / "schemathesis.toml"
 SAID = "Refused with 422 though the schema allows it:"
 # What schemathesis, with every check and no allowance, found refused (the item 10).
 FOUND_BY_THE_FUZZER = {

@@ -10,7 +10,7 @@ import shutil
 import subprocess
 from pathlib import Path
 
-FRONTEND = Path(__file__).resolve().parents[2] / "frontend"
+FRONTEND = Path(__file__).resolve().parents[3] / "frontend"
 VITEST = FRONTEND / "node_modules" / "vitest" / "vitest.mjs"
 
 

@@ -4,7 +4,7 @@ between the agent and the flight controller counts the MANUAL_CONTROL that arriv
 
 Guaranteed: at most 100 frames a second reach the flight controller, the newest frame
 among them (a flood collapses, it is not queued), and the lease and the vehicle carry on.
-The deadman on a frozen or stopped stream is test_manual_control.py's.
+The deadman on a frozen or stopped stream is tests/integration/manual_control/'s.
 """
 
 from __future__ import annotations

@@ -1,8 +1,8 @@
-"""Flying by hand through the hub: the lease, the 25 Hz stream, the agent's deadman.
+"""Flying by hand through the hub: the lease, the 25 Hz stream, the agent's deadman, on
+the ArduPilot copter hovering at 10 m (the package's `flying` fleet, conftest.py).
 
 Real hub, simulator and agent processes on loopback, the simulator at real time so that
-the agent's 0.5 s deadman (wall clock) is 0.5 s of simulated flight. An ArduPilot copter
-flies; a PX4 one stands by for PX4's COM_RC_IN_MODE check. The last test restarts the hub.
+the agent's 0.5 s deadman (wall clock) is 0.5 s of simulated flight.
 """
 
 from __future__ import annotations
@@ -11,51 +11,23 @@ import json
 import math
 import threading
 import time
-from collections.abc import Iterator
-from pathlib import Path
 from typing import Any
 
-import httpx
 import pytest
 
 from gcs.launcher import LocalFleet
 from tests.support.api import access_token, api_client, send_command
-from tests.support.hubs import TEST_HUB_ENV
+from tests.support.manual_flight import (
+    OPERATOR_PASSWORD,
+    PX4_VEHICLE,
+    metres_moved,
+    set_param,
+)
 from tests.support.pilots import VEHICLE, Pilot
-from tests.support.processes import running_fleet
-from tests.support.settling import take_off
 from tests.support.waiting import poll_until
-from tests.support.watcher import FleetWatcher, ready, speed_of
+from tests.support.watcher import FleetWatcher, ready
 
 pytestmark = [pytest.mark.integration, pytest.mark.slow]
-
-PX4_VEHICLE = "sim_2"
-WAYPOINT = 16
-OPERATOR_PASSWORD = "stick-and-rudder-42"
-
-
-@pytest.fixture(scope="module")
-def flying(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[LocalFleet, str]]:
-    """One copter at 10 m in GUIDED; a PX4 copter on the ground beside it."""
-    data_dir: Path = tmp_path_factory.mktemp("manual")
-    with running_fleet(data_dir, vehicles=2, speedup=1.0, autopilots=("ardupilot", "px4")) as fleet:
-        base = fleet.plan.hub_http
-        token = access_token(base, "admin", fleet.plan.admin_password)
-        with FleetWatcher(base, token) as watcher, api_client(base, token) as api:
-            watcher.wait_until(ready(VEHICLE), 60, f"{VEHICLE} ready")
-            watcher.wait_until(ready(PX4_VEHICLE), 60, f"{PX4_VEHICLE} ready")
-            take_off(api, watcher, VEHICLE, 10.0, above=9.0)
-            created = api.post(
-                "/api/v1/users",
-                json={"username": "pilot", "password": OPERATOR_PASSWORD, "role": "operator"},
-            )
-            assert created.status_code in (200, 201), created.text
-        yield fleet, token
-
-
-def set_param(api: httpx.Client, vehicle: str, name: str, value: float) -> None:
-    answer = api.put(f"/api/v1/vehicles/{vehicle}/params/{name}", json={"value": value})
-    assert answer.status_code == 200, answer.text
 
 
 def test_the_agent_refuses_a_lease_the_autopilot_would_ignore(
@@ -171,13 +143,6 @@ def test_taking_a_hovering_arducopter_holds_its_height_until_the_first_frame(
             poll_until(lambda: pilot.leases(None, "released by admin"), 10, "the release")
         finally:
             pilot.close()
-
-
-def metres_moved(before: dict[str, Any], after: dict[str, Any]) -> tuple[float, float]:
-    """North and east metres between two states (flat earth: a few tens of metres)."""
-    north = (after["lat"] - before["lat"]) * 111_320.0
-    east = (after["lon"] - before["lon"]) * 111_320.0 * math.cos(math.radians(before["lat"]))
-    return north, east
 
 
 def test_input_without_the_lease_is_refused(flying: tuple[LocalFleet, str]) -> None:
@@ -398,294 +363,5 @@ def test_a_lease_without_input_expires(flying: tuple[LocalFleet, str]) -> None:
             assert 2.0 <= time.monotonic() - granted_at < 5.0
             assert "no input from admin for 2 s" in ended[-1]["reason"]
             watcher.wait_until(lambda v: v[VEHICLE]["state"]["mode"] == "BRAKE", 5, "BRAKE")
-        finally:
-            pilot.close()
-
-
-def test_a_mission_pauses_under_the_lease_and_resumes_after(
-    flying: tuple[LocalFleet, str],
-) -> None:
-    fleet, token = flying
-    base = fleet.plan.hub_http
-    with FleetWatcher(base, token) as watcher, api_client(base, token) as api:
-        watcher.wait_until(ready(VEHICLE), 10, "the fleet")
-        here = watcher.state(VEHICLE)
-        north = 1 / 111_320.0
-        items = [
-            {"command": WAYPOINT, "lat": here["lat"] + 15 * north, "lon": here["lon"], "alt": 10},
-            {"command": WAYPOINT, "lat": here["lat"] + 60 * north, "lon": here["lon"], "alt": 10},
-            {"command": WAYPOINT, "lat": here["lat"], "lon": here["lon"], "alt": 10},
-        ]
-        uploaded = api.post(f"/api/v1/vehicles/{VEHICLE}/mission", json={"items": items})
-        assert uploaded.status_code == 200, uploaded.text
-        assert send_command(api, VEHICLE, name="set_mode", mode="AUTO")["status"] == "accepted"
-        watcher.wait_until(
-            lambda v: v[VEHICLE]["state"].get("mission_current") == 2, 60, "on its way to item 2"
-        )
-        pilot = Pilot(base, token)
-        stop = threading.Event()
-        streamer = threading.Thread(target=pilot.stream, args=(stop, 0), daemon=True)
-        try:
-            granted = pilot.take()
-            assert granted["resume_mode"] == "AUTO", granted
-            streamer.start()  # centred sticks: the vehicle stops and stays
-            paused = watcher.wait_until(
-                lambda v: (
-                    v[VEHICLE]["state"]["mode"] == "LOITER" and speed_of(v[VEHICLE]["state"]) < 0.3
-                ),
-                20,
-                "the mission paused in LOITER",
-            )[VEHICLE]["state"]
-            assert paused["mission_current"] == 2
-            stop.set()
-            streamer.join(5)
-            pilot.control("release")
-            released = poll_until(lambda: pilot.leases(None, "released"), 5, "the release")
-            assert released[-1]["resume_mode"] == "AUTO"  # the dashboard offers to resume
-
-            resumed = send_command(api, VEHICLE, name="set_mode", mode="AUTO")
-            assert resumed["status"] == "accepted"
-            # It carries on from item 2, not from the start.
-            watcher.wait_until(
-                lambda v: (
-                    v[VEHICLE]["state"]["mode"] == "AUTO" and speed_of(v[VEHICLE]["state"]) > 1.0
-                ),
-                20,
-                "the mission resumed",
-            )
-            assert watcher.state(VEHICLE)["mission_current"] >= 2
-            watcher.wait_until(
-                lambda v: v[VEHICLE]["state"].get("mission_current") == 3, 60, "item 3 next"
-            )
-            assert send_command(api, VEHICLE, name="hold")["status"] == "accepted"
-        finally:
-            stop.set()
-            if streamer.is_alive():
-                streamer.join(5)
-            pilot.close()
-
-
-def press(pilot: Pilot, bit: int) -> None:
-    """Hold a button for a few frames of the stream, as a thumb does."""
-    pilot.buttons = bit
-    sent = pilot.seq
-    poll_until(lambda: pilot.seq >= sent + 5, 5, "five frames with the button", every_s=0.05)
-    pilot.buttons = 0
-
-
-def test_the_select_and_hold_buttons(flying: tuple[LocalFleet, str]) -> None:
-    """The seed's select button: ignored high up; on the ground it arms, and disarms
-    again. The hold button holds the vehicle and gives control back."""
-    fleet, token = flying
-    base = fleet.plan.hub_http
-    with FleetWatcher(base, token) as watcher:
-        watcher.wait_until(ready(VEHICLE), 10, "the fleet")
-        watcher.wait_until(ready(PX4_VEHICLE), 10, "the PX4 copter")
-        high = Pilot(base, token)
-        ground = Pilot(base, token, vehicle=PX4_VEHICLE)
-        stop = threading.Event()
-        streams = [
-            threading.Thread(target=pilot.stream, args=(stop, 0), daemon=True)
-            for pilot in (high, ground)
-        ]
-        try:
-            assert high.take()["holder"] == "admin"
-            assert ground.take()["holder"] == "admin"
-            for stream in streams:
-                stream.start()
-            # At 10 m the select button does nothing but say so.
-            press(high, 1)
-            watcher.wait_until(
-                lambda v: any("select ignored at" in e["text"] for e in watcher.events),
-                5,
-                "select ignored high up",
-            )
-            assert watcher.state(VEHICLE)["mode"] == "LOITER"
-            # On the ground, disarmed: select arms; pressed again, it disarms.
-            assert watcher.state(PX4_VEHICLE)["armed"] is False
-            press(ground, 1)
-            watcher.wait_until(lambda v: v[PX4_VEHICLE]["state"]["armed"], 10, "armed")
-            press(ground, 1)
-            watcher.wait_until(lambda v: not v[PX4_VEHICLE]["state"]["armed"], 10, "disarmed again")
-            # The hold button: BRAKE, and the lease goes back.
-            press(high, 2)
-            watcher.wait_until(lambda v: v[VEHICLE]["state"]["mode"] == "BRAKE", 5, "BRAKE")
-            poll_until(lambda: high.leases(None, "hold button pressed"), 5, "the lease ended")
-        finally:
-            stop.set()
-            for stream in streams:
-                if stream.is_alive():
-                    stream.join(5)
-            ground.control("release")
-            high.close()
-            ground.close()
-
-
-def test_a_flying_px4_is_taken_by_hand_and_its_deadman_hold_stays_a_hold(
-    flying: tuple[LocalFleet, str],
-) -> None:
-    """PX4 refuses POSCTL in the air (TEMPORARILY_REJECTED) until it has had manual
-    input: the agent's centred sticks come first. When the stream stops, the deadman's
-    Hold stays a hold past PX4's manual-control-loss failsafe (COM_RC_LOSS_T +
-    COM_FAIL_ACT_T, shortened to 1 s here), for COM_RCL_EXCEPT exempts Hold."""
-    fleet, token = flying
-    base = fleet.plan.hub_http
-    with FleetWatcher(base, token) as watcher, api_client(base, token) as api:
-        watcher.wait_until(ready(PX4_VEHICLE), 10, "the PX4 vehicle")
-        set_param(api, PX4_VEHICLE, "COM_RCL_EXCEPT", 2)  # as the refusal's fix sets it
-        set_param(api, PX4_VEHICLE, "COM_FAIL_ACT_T", 1.0)
-        assert send_command(api, PX4_VEHICLE, name="arm")["status"] == "accepted"
-        assert send_command(api, PX4_VEHICLE, name="takeoff", altitude=4)["status"] == "accepted"
-        watcher.wait_until(
-            lambda v: (
-                v[PX4_VEHICLE]["state"]["mode"] == "LOITER"
-                and (v[PX4_VEHICLE]["state"]["alt_rel"] or 0) > 3.5
-            ),
-            60,
-            "the PX4 vehicle hovering in Hold",
-        )
-        pilot = Pilot(base, token, vehicle=PX4_VEHICLE, source="touch")
-        stop = threading.Event()
-        streamer = threading.Thread(target=pilot.stream, args=(stop, 0), daemon=True)
-        try:
-            lease = pilot.take()
-            assert lease["type"] == "lease", lease
-            assert lease["holder"] == "admin"
-            streamer.start()
-            watcher.wait_until(
-                lambda v: v[PX4_VEHICLE]["state"]["mode"] == "POSCTL", 5, "Position mode"
-            )
-            poll_until(lambda: pilot.said("manual_echo"), 5, "a flown frame")
-            stop.set()
-            streamer.join(5)
-            watcher.wait_until(
-                lambda v: v[PX4_VEHICLE]["state"]["mode"] == "LOITER", 5, "the deadman's Hold"
-            )
-            poll_until(lambda: pilot.leases(None, "stopped for"), 5, "the lease to end")
-            # Past the failsafe's 1.5 s from the last frame (and a second more), still Hold.
-            modes: set[str] = set()
-
-            def past_the_failsafe(vehicles: dict[str, Any]) -> bool:
-                modes.add(vehicles[PX4_VEHICLE]["state"]["mode"])
-                return time.monotonic() - pilot.last_sent_at > 2.5
-
-            watcher.wait_until(past_the_failsafe, 10, "the failsafe's time to pass")
-            assert modes == {"LOITER"}, modes
-        finally:
-            stop.set()
-            if streamer.is_alive():
-                streamer.join(5)
-            pilot.close()
-
-
-def test_a_px4_mission_pauses_under_the_lease_and_resumes_after(
-    flying: tuple[LocalFleet, str],
-) -> None:
-    """PX4's mission mode is MISSION (AUTO.MISSION in PX4's terms): taking the sticks in it
-    pauses the mission, the lease and its release offer MISSION to resume it, and MISSION
-    carries on from the item it was flying to."""
-    fleet, token = flying
-    base = fleet.plan.hub_http
-    with FleetWatcher(base, token) as watcher, api_client(base, token) as api:
-        watcher.wait_until(ready(PX4_VEHICLE), 10, "the PX4 vehicle")
-        # Mission and Hold exempt from PX4's manual-control-loss failsafe: an earlier
-        # test's stick input has stopped, and the mission must not turn into a Return.
-        set_param(api, PX4_VEHICLE, "COM_RCL_EXCEPT", 3)
-        if not watcher.state(PX4_VEHICLE)["armed"]:  # run alone: fly it up first
-            assert send_command(api, PX4_VEHICLE, name="arm")["status"] == "accepted"
-            taken_off = send_command(api, PX4_VEHICLE, name="takeoff", altitude=4)
-            assert taken_off["status"] == "accepted", taken_off
-        watcher.wait_until(
-            lambda v: (v[PX4_VEHICLE]["state"]["alt_rel"] or 0) > 3.5, 60, "the PX4 vehicle up"
-        )
-        here = watcher.state(PX4_VEHICLE)
-        north = 1 / 111_320.0
-        items = [
-            {"command": WAYPOINT, "lat": here["lat"] + 10 * north, "lon": here["lon"], "alt": 5},
-            {"command": WAYPOINT, "lat": here["lat"] + 60 * north, "lon": here["lon"], "alt": 5},
-            {"command": WAYPOINT, "lat": here["lat"], "lon": here["lon"], "alt": 5},
-        ]
-        uploaded = api.post(f"/api/v1/vehicles/{PX4_VEHICLE}/mission", json={"items": items})
-        assert uploaded.status_code == 200, uploaded.text
-        started = send_command(api, PX4_VEHICLE, name="set_mode", mode="MISSION")
-        assert started["status"] == "accepted", started
-        watcher.wait_until(
-            lambda v: v[PX4_VEHICLE]["state"].get("mission_current") == 2, 60, "off to item 2"
-        )
-        pilot = Pilot(base, token, vehicle=PX4_VEHICLE)
-        stop = threading.Event()
-        streamer = threading.Thread(target=pilot.stream, args=(stop, 0), daemon=True)
-        try:
-            granted = pilot.take()
-            assert granted.get("resume_mode") == "MISSION", granted
-            assert pilot.events("the mission is paused (MISSION resumes it)")
-            streamer.start()
-            paused = watcher.wait_until(
-                lambda v: (
-                    v[PX4_VEHICLE]["state"]["mode"] == "POSCTL"
-                    and speed_of(v[PX4_VEHICLE]["state"]) < 0.3
-                ),
-                20,
-                "the mission paused in POSCTL",
-            )[PX4_VEHICLE]["state"]
-            assert paused["mission_current"] == 2
-            stop.set()
-            streamer.join(5)
-            pilot.control("release")
-            released = poll_until(lambda: pilot.leases(None, "released"), 5, "the release")
-            assert released[-1]["resume_mode"] == "MISSION"
-
-            resumed = send_command(api, PX4_VEHICLE, name="set_mode", mode="MISSION")
-            assert resumed["status"] == "accepted", resumed
-            watcher.wait_until(
-                lambda v: (
-                    v[PX4_VEHICLE]["state"]["mode"] == "MISSION"
-                    and speed_of(v[PX4_VEHICLE]["state"]) > 1.0
-                ),
-                20,
-                "the mission resumed",
-            )
-            assert watcher.state(PX4_VEHICLE)["mission_current"] >= 2
-            watcher.wait_until(
-                lambda v: v[PX4_VEHICLE]["state"].get("mission_current") == 3, 60, "item 3 next"
-            )
-            assert send_command(api, PX4_VEHICLE, name="hold")["status"] == "accepted"
-        finally:
-            stop.set()
-            if streamer.is_alive():
-                streamer.join(5)
-            pilot.close()
-
-
-def test_a_lease_survives_a_hub_restart_only_as_revoked(flying: tuple[LocalFleet, str]) -> None:
-    """Last: it restarts the hub. The hub is killed with a lease held; the restarted hub
-    reports that lease revoked to every dashboard, refuses the old pilot's stream, and
-    the agent's deadman held the vehicle meanwhile."""
-    fleet, token = flying
-    base = fleet.plan.hub_http
-    pilot = Pilot(base, token)
-    try:
-        assert pilot.take()["holder"] == "admin"
-        for _ in range(5):
-            pilot.stick(0)
-    finally:
-        pilot.close()
-    fleet.kill("hub")
-    fleet.start_hub(TEST_HUB_ENV)
-    fleet.wait_until_ready()
-    token = access_token(base, "admin", fleet.plan.admin_password)
-    with FleetWatcher(base, token) as watcher:
-        watcher.wait_until(ready(VEHICLE), 30, "the agent back")
-        # The deadman, with no hub (the first state seen may predate it: waited on).
-        watcher.wait_until(lambda v: v[VEHICLE]["state"]["mode"] == "BRAKE", 15, "BRAKE")
-        pilot = Pilot(base, token)
-        try:
-            revoked = poll_until(
-                lambda: pilot.leases(None, "revoked: the hub restarted"), 10, "the revocation"
-            )
-            assert "while admin held it" in revoked[-1]["reason"]
-            pilot.seq = 1000
-            pilot.stick(500)
-            poll_until(lambda: pilot.refusals("does not hold"), 5, "the old stream refused")
         finally:
             pilot.close()

@@ -1,5 +1,5 @@
-"""MAVLink forwarding: the routing rules, then the forwarder on real UDP sockets with real
-MAVLink frames (a stand-in flight controller link records what reaches the vehicle)."""
+"""The MAVLink forwarder on real UDP sockets with real MAVLink frames (a stand-in flight
+controller link records what reaches the vehicle)."""
 
 from __future__ import annotations
 
@@ -15,102 +15,14 @@ import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from gcs.launcher import free_port
+from tests.support.forwarding import AGENT, MAVPROXY, OTHER_GCS, QGC, VEHICLE, heartbeat
 from tests.support.waiting import poll_until_async
 from vehicle_agents.fcu.messages import MavMessage
-from vehicle_agents.forwarding.endpoints import NO_TARGET, Endpoint, EndpointAddress, Heard, targets
+from vehicle_agents.forwarding.endpoints import Endpoint, EndpointAddress
 from vehicle_agents.forwarding.forwarder import MavlinkForwarder
 
-VEHICLE = (1, 1)
-AGENT = (254, 191)
-QGC = (255, 190)
-MAVPROXY = (255, 230)
-OTHER_GCS = (250, 190)
 WAIT_S = 5.0
 P = ParamSpec("P")
-
-
-# -- the rules -----------------------------------------------------------------
-
-
-def heard(*ids: tuple[int, int]) -> Heard:
-    side = Heard()
-    for each in ids:
-        side.add(each)
-    return side
-
-
-@pytest.mark.parametrize(
-    ("side", "source", "target", "goes"),
-    [
-        (heard(QGC), VEHICLE, (NO_TARGET, NO_TARGET), True),  # telemetry: to every GCS
-        (heard(), VEHICLE, (NO_TARGET, NO_TARGET), True),  # even one not heard from yet
-        (heard(QGC), VEHICLE, (0, 0), True),  # a broadcast
-        (heard(QGC), VEHICLE, QGC, True),  # QGC's answer, to QGC
-        (heard(QGC), VEHICLE, (255, 0), True),  # any component of system 255
-        (heard(QGC), VEHICLE, (255, NO_TARGET), True),  # a message with target_system only
-        (heard(QGC), VEHICLE, MAVPROXY, False),  # another component of 255, not heard here
-        (heard(QGC), VEHICLE, AGENT, False),  # the agent's own answers stay with the agent
-        (heard(OTHER_GCS), VEHICLE, QGC, False),  # another GCS's answer
-        (heard(QGC), QGC, (NO_TARGET, NO_TARGET), False),  # never back where it came from
-    ],
-)
-def test_frames_go_where_their_target_was_heard_from(
-    side: Heard, source: tuple[int, int], target: tuple[int, int], goes: bool
-) -> None:
-    assert side.wants(source, *target) is goes
-
-
-def test_the_vehicle_side_takes_anything_for_its_systems() -> None:
-    vehicle = heard(VEHICLE)
-    assert vehicle.wants_system(QGC, 1)  # for the autopilot
-    assert vehicle.wants_system(QGC, 0)
-    assert vehicle.wants_system(QGC, NO_TARGET)  # a GCS heartbeat
-    assert not vehicle.wants_system(QGC, 7)  # another vehicle's
-    assert not vehicle.wants_system(QGC, AGENT[0])  # the agent's
-    assert not vehicle.wants_system(VEHICLE, 1)  # its own frame, come back
-
-
-def test_targets_are_read_from_the_message_fields() -> None:
-    ack = mavlink2.MAVLink_command_ack_message(512, 0, 0, 0, 255, 190)
-    assert targets(ack) == (255, 190)
-    assert targets(heartbeat()) == (NO_TARGET, NO_TARGET)
-    set_mode = mavlink2.MAVLink_set_mode_message(1, 1, 4)  # target_system only
-    assert targets(set_mode) == (1, NO_TARGET)
-
-
-@pytest.mark.parametrize(
-    ("text", "listen", "host", "port"),
-    [
-        ("udpout:10.0.0.5:14550", False, "10.0.0.5", 14550),
-        ("udpin:0.0.0.0:14551", True, "0.0.0.0", 14551),
-        ("udpout:[::1]:14550", False, "::1", 14550),
-        ("udpout:gcs.local:14550", False, "gcs.local", 14550),
-    ],
-)
-def test_endpoint_addresses(text: str, listen: bool, host: str, port: int) -> None:
-    address = EndpointAddress.parse(text)
-    assert (address.listen, address.host, address.port) == (listen, host, port)
-    assert str(address) == text
-
-
-@pytest.mark.parametrize(
-    "text", ["udp:10.0.0.5:14550", "tcp:10.0.0.5:5760", "udpout:10.0.0.5", "udpin::0", "x"]
-)
-def test_bad_endpoint_addresses_are_refused_naming_the_forms(text: str) -> None:
-    with pytest.raises(ValueError, match="udpin:HOST:PORT"):
-        EndpointAddress.parse(text)
-
-
-# -- the forwarder on real sockets ---------------------------------------------
-
-
-def heartbeat(kind: int = mavlink2.MAV_TYPE_QUADROTOR) -> MavMessage:
-    autopilot = (
-        mavlink2.MAV_AUTOPILOT_INVALID
-        if kind == mavlink2.MAV_TYPE_GCS
-        else mavlink2.MAV_AUTOPILOT_ARDUPILOTMEGA
-    )
-    return mavlink2.MAVLink_heartbeat_message(kind, autopilot, 0, 0, 0, 3)
 
 
 def encode(message: MavMessage, ids: tuple[int, int], seq: int = 0) -> bytes:

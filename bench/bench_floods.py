@@ -50,7 +50,7 @@ from protocol.photos import MAX_PHOTO_BYTES, PhotoMeta
 from tests.integration.test_hub_bad_input import scripted_agent
 from tests.integration.test_photo_routes import CAMERA, POSE
 from tests.support.api import access_token
-from tests.survey_shapes import kml_polygon
+from tests.support.survey_shapes import kml_polygon
 
 PROBE_EVERY_S = 0.05
 PASSWORD = "correct horse battery"

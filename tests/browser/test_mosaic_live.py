@@ -17,8 +17,8 @@ from gcs.launcher import FleetPlan, LocalFleet, free_port
 from tests.browser.conftest import log_in
 from tests.support.api import access_token, api_client
 from tests.support.hubs import TEST_HUB_ENV
+from tests.support.survey_shapes import geojson_area
 from tests.support.waiting import poll_until
-from tests.survey_shapes import geojson_area
 
 pytestmark = [pytest.mark.browser, pytest.mark.integration, pytest.mark.slow]
 

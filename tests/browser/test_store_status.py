@@ -17,7 +17,7 @@ from tests.conftest import ADMIN_PASSWORD, POSTGRES_ADDRESS, hub_settings, scrat
 from tests.support.agents import scripted_agent, telemetry_frame
 from tests.support.api import access_token, api_client
 from tests.support.hub_server import running_hub
-from tests.tcp_proxy import CuttableProxy
+from tests.support.tcp_proxy import CuttableProxy
 
 pytestmark = [pytest.mark.browser, pytest.mark.integration]
 

@@ -1,7 +1,7 @@
 """Each photo the camera takes is an event with its place (issue 17), over real MAVLink
 bytes: ArduPilot's CAMERA_FEEDBACK, PX4's CAMERA_TRIGGER and CAMERA_IMAGE_CAPTURED.
 
-`ScriptedFlightController` (tests/mavlink_peer.py) sends what each case pushes; the
+`ScriptedFlightController` (tests/support/mavlink_peer.py) sends what each case pushes; the
 agent's `FcuLink` and `EventSource` run in-process (tests/support/fcu_reports.py) and
 their events are read back from a real `Outbox`.
 """
@@ -13,7 +13,6 @@ import asyncio
 import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
-from tests.mavlink_peer import ScriptedFlightController
 from tests.support.fcu_reports import (
     ARDUPILOT,
     LAT,
@@ -21,6 +20,7 @@ from tests.support.fcu_reports import (
     PX4,
     agent_on,
 )
+from tests.support.mavlink_peer import ScriptedFlightController
 from vehicle_agents.fcu.messages import MavMessage
 
 pytestmark = pytest.mark.integration

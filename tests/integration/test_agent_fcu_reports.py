@@ -4,7 +4,7 @@ progress without a mission, no position before the autopilot has one, and the
 autopilot's own mode list read again when it changes. Its photos' events are
 test_agent_camera_events.py's.
 
-`ScriptedFlightController` (tests/mavlink_peer.py) sends what each case pushes; the
+`ScriptedFlightController` (tests/support/mavlink_peer.py) sends what each case pushes; the
 agent's `FcuLink` and `EventSource` run in-process (tests/support/fcu_reports.py) and
 their events are read back from a real `Outbox`.
 """
@@ -20,7 +20,6 @@ import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 from pymavlink.dialects.v20 import development
 
-from tests.mavlink_peer import ScriptedFlightController, _is_command
 from tests.support.api import api_client
 from tests.support.fcu_reports import (
     ARDUPILOT,
@@ -33,6 +32,7 @@ from tests.support.fcu_reports import (
     reached,
     text,
 )
+from tests.support.mavlink_peer import ScriptedFlightController, _is_command
 from tests.support.processes import agent_process
 from tests.support.waiting import poll_until
 from tests.support.watcher import FleetWatcher, state_of

@@ -23,8 +23,8 @@ from protocol.messages import (
     ManualApplied,
     ManualFrame,
 )
-from tests.mavlink_peer import Answer, ScriptedFlightController
 from tests.support.executors import with_executor
+from tests.support.mavlink_peer import Answer, ScriptedFlightController
 from tests.support.processes import agent_process
 from tests.support.scripted_hub import ScriptedHub, _command
 from tests.support.waiting import poll_until_async

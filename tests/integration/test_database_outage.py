@@ -18,8 +18,8 @@ from tests.support.agents import scripted_agent
 from tests.support.api import access_token, api_client
 from tests.support.databases import answering
 from tests.support.hub_server import running_hub
+from tests.support.tcp_proxy import CuttableProxy
 from tests.support.waiting import poll_until
-from tests.tcp_proxy import CuttableProxy
 
 # The server the suite uses (GCS_TEST_POSTGRES_ADDRESS may name another), behind the proxy.
 _host, _, _port = POSTGRES_ADDRESS.rpartition(":")

@@ -22,9 +22,9 @@ from tests.support.api import access_token, api_client
 from tests.support.hubs import TEST_HUB_ENV
 from tests.support.processes import spilled_frames
 from tests.support.settling import take_off
+from tests.support.tcp_proxy import CuttableProxy
 from tests.support.waiting import poll_until
 from tests.support.watcher import FleetWatcher, connected, ready
-from tests.tcp_proxy import CuttableProxy
 
 pytestmark = [pytest.mark.integration, pytest.mark.slow]
 

@@ -14,9 +14,9 @@ import httpx
 import pytest
 
 from gcs.launcher import FleetPlan, LocalFleet, free_port
-from tests.mavlink_peer import ScriptedFlightController
 from tests.support.api import access_token
 from tests.support.hubs import TEST_HUB_ENV
+from tests.support.mavlink_peer import ScriptedFlightController
 from tests.support.processes import agent_process
 from tests.support.waiting import poll_until
 

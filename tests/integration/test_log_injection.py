@@ -9,8 +9,8 @@ from pathlib import Path
 import httpx
 
 from gcs.launcher import FleetPlan, LocalFleet, free_port
-from tests.mavlink_peer import ScriptedFlightController
 from tests.support.hubs import TEST_HUB_ENV
+from tests.support.mavlink_peer import ScriptedFlightController
 from tests.support.processes import agent_process
 from tests.support.scripted_hub import ScriptedHub, _command
 

@@ -27,8 +27,8 @@ from tests.support.api import access_token, api_client
 from tests.support.hub_server import running_hub
 from tests.support.photos import CAMERA_MODEL, GROUND_BELOW_M, _accepts
 from tests.support.processes import agent_process
+from tests.support.tcp_proxy import CuttableProxy
 from tests.support.waiting import poll_until
-from tests.tcp_proxy import CuttableProxy
 
 pytestmark = pytest.mark.integration
 

@@ -9,7 +9,7 @@ import math
 from common.formation import ConsensusGains, Controller
 from common.geodesy import LocalFrame
 from simulator import DEFAULT_HOME
-from tests.formation_sim import SimVehicle, fly_formation
+from tests.support.formation_sim import SimVehicle, fly_formation
 from vehicle_agents.control.formation import Action, Follower
 
 MIN_SEPARATION_M = 2.0

@@ -1,5 +1,5 @@
 """The agent's flight-controller side in-process against a `ScriptedFlightController`
-(tests/mavlink_peer.py): its `FcuLink` and `EventSource`, with the events read back from
+(tests/support/mavlink_peer.py): its `FcuLink` and `EventSource`, with the events read back from
 a real `Outbox`, and the MAVLink messages the report tests push."""
 
 from __future__ import annotations
@@ -14,7 +14,7 @@ from typing import Any
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from protocol.messages import VehicleState
-from tests.mavlink_peer import ScriptedFlightController
+from tests.support.mavlink_peer import ScriptedFlightController
 from vehicle_agents.agent import EventSource
 from vehicle_agents.fcu.link import FcuLink
 from vehicle_agents.fcu.messages import MavMessage

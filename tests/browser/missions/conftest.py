@@ -12,9 +12,9 @@ from playwright.sync_api import Browser, Page
 from gcs.launcher import DEFAULT_HOME, FleetPlan, LocalFleet, free_port
 from tests.browser.conftest import SIZES, checked_page
 from tests.conftest import FLEET_SPEEDUP
-from tests.map_tiles import farmland_tiles, write_mbtiles
 from tests.support.api import access_token, api_client
 from tests.support.hubs import TEST_HUB_ENV
+from tests.support.map_tiles import farmland_tiles, write_mbtiles
 from tests.support.mission_editor import vehicle_states
 from tests.support.waiting import poll_until
 

@@ -22,7 +22,7 @@ from common.formation import (
 from common.geodesy import LocalFrame
 from simulator import DEFAULT_HOME
 from simulator.mavconst import CopterMode
-from tests.formation_sim import SimVehicle, take_off
+from tests.support.formation_sim import SimVehicle, take_off
 from vehicle_agents.control.formation import (
     POSVEL_TYPE_MASK,
     Action,

@@ -33,8 +33,8 @@ from backend.viz3d.mosaic_layer import GROUND_LIFT_M, MAX_TEXTURE_PX, MosaicLaye
 from backend.viz3d.scene import FleetScene
 from backend.viz3d.server import VizServer
 from common.geodesy import GeoPoint, LocalFrame
+from tests.support.survey_shapes import geojson_area
 from tests.support.waiting import poll_until_async
-from tests.survey_shapes import geojson_area
 
 HOME = (47.397742, 8.545594, 488.0)
 TRUTH = LocalFrame(*HOME)

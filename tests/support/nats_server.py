@@ -19,7 +19,7 @@ import pytest
 
 from gcs.launcher import free_port
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 SHIPPED_CONFIG = ROOT / "deploy" / "nats-server.conf"
 HUB_USER = "gcs-hub"  # the user deploy/nats-server.conf admits
 

@@ -30,7 +30,7 @@ from dataclasses import dataclass
 
 import pytest
 
-from tests.tcp_proxy import CuttableProxy, Filter
+from tests.support.tcp_proxy import CuttableProxy, Filter
 
 # A poor cellular or long-range radio link, as issue 24 states it.
 DELAY_S, JITTER_S, LOSS, RATE = 0.300, 0.050, 0.05, "256kbit"

@@ -1,10 +1,7 @@
-"""Each photo the camera takes is an event with its place (issue 17), over real MAVLink
-bytes: ArduPilot's CAMERA_FEEDBACK, PX4's CAMERA_TRIGGER and CAMERA_IMAGE_CAPTURED.
-
-`ScriptedFlightController` (tests/support/mavlink_peer.py) sends what each case pushes; the
-agent's `FcuLink` and `EventSource` run in-process (tests/support/fcu_reports.py) and
-their events are read back from a real `Outbox`.
-"""
+"""Each photo the camera takes is an event with its place (issue 17): ArduPilot's
+CAMERA_FEEDBACK, PX4's CAMERA_TRIGGER and CAMERA_IMAGE_CAPTURED, pushed as real MAVLink
+bytes by a scripted flight controller to the agent's link run in-process
+(tests/support/fcu_reports.py)."""
 
 from __future__ import annotations
 

@@ -1,7 +1,7 @@
 """Prints the hub's OpenAPI document as JSON: ``python -m backend.openapi_document``.
 
 The dashboard's REST types (``frontend/src/generated/api.ts``) are generated from it by
-``npm run gen:api``, and tests/unit/test_frontend_api_types.py checks they still match.
+``npm run gen:api``, and tests/unit/frontend/test_frontend_api_types.py checks they still match.
 """
 
 from __future__ import annotations

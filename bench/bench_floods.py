@@ -47,10 +47,10 @@ import httpx
 from common.geodesy import LocalFrame
 from gcs.launcher import FleetPlan, LocalFleet, free_port
 from protocol.photos import MAX_PHOTO_BYTES, PhotoMeta
-from tests.helpers import access_token
 from tests.integration.imagery.test_photo_routes import CAMERA, POSE
 from tests.integration.test_hub_bad_input import scripted_agent
-from tests.survey_shapes import kml_polygon
+from tests.support.api import access_token
+from tests.support.survey_shapes import kml_polygon
 
 PROBE_EVERY_S = 0.05
 PASSWORD = "correct horse battery"

@@ -20,7 +20,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from common.formation import ConsensusGains, Controller
-from tests.formation_sim import FormationRun, fly_formation
+from tests.support.formation_sim import FormationRun, fly_formation
 from vehicle_agents.control.formation_follower import FollowerSettings
 
 CONTROLLERS = {

@@ -28,8 +28,10 @@ from common.geodesy import GeoPoint
 from protocol.photos import CameraIntrinsics, PhotoMeta, PhotoPose
 from simulator.outputs.photos import nadir_renderer
 from tests.conftest import ADMIN_PASSWORD, hub_settings
-from tests.helpers import access_token, api_client, poll_until_async, running_hub
 from tests.integration.test_hub_bad_input import scripted_agent
+from tests.support.api import access_token, api_client
+from tests.support.hub_server import running_hub
+from tests.support.waiting import poll_until_async
 from vehicle_agents.camera.geotag import geotag
 from vehicle_agents.camera.queue import MIB, PhotoQueue
 from vehicle_agents.camera.upload import PhotoUploader

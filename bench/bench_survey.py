@@ -33,7 +33,7 @@ from backend.survey.planning.coverage import coverage
 from backend.survey.planning.planner import plan_lanes
 from backend.survey.planning.report import best_angle
 from backend.survey.planning.split import Drone, split
-from tests.survey_shapes import SHAPES, shape
+from tests.support.survey_shapes import SHAPES, shape
 
 CALC = calculate(preset("sony_a6000_16mm"), gsd_cm=2.0, side_overlap_pct=70, front_overlap_pct=80)
 
@@ -53,7 +53,7 @@ def _area(km2: float) -> Polygon:
     return Polygon([(0, 0), (s, 0.1 * s), (1.05 * s, s), (-0.05 * s, 0.95 * s)])
 
 
-# The unit tests' shapes (tests/survey_shapes.py), at 100 m.
+# The unit tests' shapes (tests/support/survey_shapes.py), at 100 m.
 SHAPE_CALC = calculate(
     preset("sony_a6000_16mm"), altitude_m=100, side_overlap_pct=70, front_overlap_pct=80
 )

@@ -6,7 +6,7 @@ go in as (lat, lon[, alt]) and local offsets come out, and go back in, as (east,
 
 The formulas are pymap3d's (geodetic <-> ECEF <-> ENU on the WGS84 ellipsoid, and Meeus's
 haversine). pymap3d is pure Python with no dependencies, so it fits the agent's base install
-on a Pi Zero; pyproj would give the same numbers (tests/unit/test_geodesy.py checks against
+on a Pi Zero; pyproj would give the same numbers (tests/unit/common/test_geodesy.py checks against
 it) from a large binary wheel. Without numpy, pymap3d works on floats with the math module,
 which is what keeps these calls to microseconds (bench/bench_geodesy.py).
 """

@@ -3,7 +3,7 @@
 The opencv-python wheels' loader prepends the wheel's own library folder to
 ``LD_LIBRARY_PATH`` as it imports; its libraries are loaded by then, and every process this
 one starts afterwards (a simulator, an agent, a browser) would inherit the change. Import
-cv2 from here to leave the environment as it was (tests/unit/test_import_side_effects.py).
+cv2 from here to leave the environment as it was (tests/unit/project/test_import_side_effects.py).
 The agent imports it only for a USB or CSI camera (its optional ``camera`` extra).
 """
 

@@ -1,7 +1,7 @@
 """The hub's REST bodies and answers and the live feed's messages, as pydantic models.
 
 GENERATED FILE - DO NOT EDIT. Written by scripts/gen_client_models.py from the hub's
-OpenAPI document and the wire protocol's JSON Schema (tests/unit/test_client_models.py
+OpenAPI document and the wire protocol's JSON Schema (tests/unit/gcs_client/test_client_models.py
 checks it is in step with them). Lenient by design: no bounds (the hub checks those and
 says what it refused), and fields a newer hub adds are kept, not refused.
 """

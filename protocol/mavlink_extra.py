@@ -10,7 +10,7 @@
 
 Each class is what pymavlink's generator makes of the message's XML definition: the
 fields in definition order, the wire order (sorted by type size), the struct format and the
-CRC extra (as mavparse computes it; `tests/unit/test_mavlink_extra.py` checks them against
+CRC extra (as mavparse computes it; `tests/unit/protocol/test_mavlink_extra.py` checks them against
 pymavlink's own classes where it has them). `register` adds them to a dialect's decoder table.
 """
 

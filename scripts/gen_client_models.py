@@ -6,7 +6,7 @@ feed's messages, hub to client and client to hub).
     .venv/bin/python scripts/gen_client_models.py          # rewrite the module
     .venv/bin/python scripts/gen_client_models.py --check  # exit 1 if it is stale
 
-tests/unit/test_client_models.py fails when the module and the sources differ, as the
+tests/unit/gcs_client/test_client_models.py fails when the module and the sources differ, as the
 dashboard's `npm run gen:api` check does for its TypeScript types.
 
 Why generated rather than the client importing protocol/: protocol/ imports pymavlink (it
@@ -41,7 +41,7 @@ HEADER = '''\
 """The hub's REST bodies and answers and the live feed's messages, as pydantic models.
 
 GENERATED FILE - DO NOT EDIT. Written by scripts/gen_client_models.py from the hub's
-OpenAPI document and the wire protocol's JSON Schema (tests/unit/test_client_models.py
+OpenAPI document and the wire protocol's JSON Schema (tests/unit/gcs_client/test_client_models.py
 checks it is in step with them). Lenient by design: no bounds (the hub checks those and
 says what it refused), and fields a newer hub adds are kept, not refused.
 """

@@ -5,7 +5,7 @@ as the Python side does and never types a number by hand.
     .venv/bin/python scripts/gen_mavlink_ts.py          # rewrite the file
     .venv/bin/python scripts/gen_mavlink_ts.py --check  # exit 1 if it is stale
 
-tests/unit/test_frontend_mavlink_names.py fails when the file and pymavlink differ.
+tests/unit/frontend/test_frontend_mavlink_names.py fails when the file and pymavlink differ.
 One `export const` per value, not an object: the bundler keeps only the ones in use.
 """
 

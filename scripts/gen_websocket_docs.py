@@ -5,7 +5,7 @@ keep-alive and the close codes.
     .venv/bin/python scripts/gen_websocket_docs.py          # rewrite the page
     .venv/bin/python scripts/gen_websocket_docs.py --check  # exit 1 if it is stale
 
-tests/unit/test_websocket_docs.py fails when the page and the protocol module differ.
+tests/unit/protocol/test_websocket_docs.py fails when the page and the protocol module differ.
 The prose is here; every name, number, field and close code comes from the code.
 """
 

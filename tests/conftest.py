@@ -12,16 +12,13 @@ from sqlalchemy import Engine
 
 from backend.storage.database import make_engine
 from gcs.launcher import LocalFleet
-from tests.helpers import (
-    access_token,
-    api_client,
-    poll_until,
-    running_fleet,
-    running_hub,
-    settle_fleet,
-)
+from tests.support.api import access_token, api_client
+from tests.support.hub_server import running_hub
 from tests.support.hubs import ADMIN_PASSWORD, hub_settings, migrated_template
 from tests.support.postgres import POSTGRES_ADDRESS, scratch_postgres
+from tests.support.processes import running_fleet
+from tests.support.settling import settle_fleet
+from tests.support.waiting import poll_until
 
 # imported from here by many test modules
 __all__ = ["ADMIN_PASSWORD", "POSTGRES_ADDRESS", "hub_settings", "scratch_postgres"]

@@ -180,7 +180,7 @@ def test_the_scaled_hubs_start_in_production_mode(
 def test_the_scaled_nats_server_admits_only_the_hubs_login() -> None:
     """The nats service runs deploy/nats-server.conf with the password the hubs present:
     that very file, run here, refuses a client without the login and admits the hubs."""
-    from tests.nats_server import login_refused, nats_server
+    from tests.support.nats_server import login_refused, nats_server
 
     services = _scaled_services()
     bus = services["nats"]

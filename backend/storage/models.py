@@ -71,7 +71,8 @@ class TelemetryRow(Base):
 TELEMETRY_KEY_COLUMNS = ("id", "vehicle_id", "stream_id", "seq", "time")
 # The stored state fields, read off the model above so that a column added there is stored,
 # read back, charted and exported with no second list to keep (the exporters' ExportSample
-# and the API's Sample are typed mirrors, held to this by tests/unit/test_telemetry_fields.py).
+# and the API's Sample are typed mirrors, held to this by
+# tests/unit/storage/test_telemetry_fields.py).
 TELEMETRY_STATE_COLUMNS: tuple[str, ...] = tuple(
     column.name
     for column in TelemetryRow.__table__.columns

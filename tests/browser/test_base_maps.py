@@ -18,8 +18,8 @@ from playwright.sync_api import Browser, Page, expect
 
 from gcs.launcher import DEFAULT_HOME, FleetPlan, LocalFleet, free_port
 from tests.browser.conftest import SIZES, checked_page, log_in
-from tests.map_tiles import png_tile, write_mbtiles
 from tests.support.hubs import TEST_HUB_ENV
+from tests.support.map_tiles import png_tile, write_mbtiles
 
 pytestmark = [pytest.mark.browser, pytest.mark.integration]
 

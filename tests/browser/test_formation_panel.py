@@ -20,10 +20,12 @@ from playwright.sync_api import Browser, Page, expect
 from common.geodesy import LocalFrame
 from gcs.launcher import FleetPlan, LocalFleet, free_port
 from tests.browser.conftest import log_in
-from tests.helpers import FleetWatcher, access_token, api_client, poll_until
+from tests.support.api import access_token, api_client
 from tests.support.formations import take_off_all
 from tests.support.hubs import TEST_HUB_ENV
 from tests.support.maps import PixelMap, _assert_on_open_map
+from tests.support.waiting import poll_until
+from tests.support.watcher import FleetWatcher
 
 pytestmark = [pytest.mark.browser, pytest.mark.integration, pytest.mark.slow]
 

@@ -12,7 +12,8 @@ from playwright.sync_api import Page, expect
 
 from gcs.launcher import LocalFleet
 from tests.browser.conftest import log_in
-from tests.helpers import FleetWatcher, api_client
+from tests.support.api import api_client
+from tests.support.watcher import FleetWatcher
 
 pytestmark = [pytest.mark.browser, pytest.mark.integration]
 

@@ -15,9 +15,10 @@ from playwright.sync_api import Page, Response, expect
 from common.geodesy import LocalFrame
 from gcs.launcher import FleetPlan, LocalFleet, free_port
 from tests.browser.conftest import log_in
-from tests.helpers import access_token, api_client, poll_until
+from tests.support.api import access_token, api_client
 from tests.support.hubs import TEST_HUB_ENV
-from tests.survey_shapes import geojson_area
+from tests.support.survey_shapes import geojson_area
+from tests.support.waiting import poll_until
 
 pytestmark = [pytest.mark.browser, pytest.mark.integration, pytest.mark.slow]
 

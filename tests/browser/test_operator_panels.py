@@ -15,7 +15,8 @@ from playwright.sync_api import Browser, Page, expect
 from gcs.launcher import LocalFleet
 from tests.browser.conftest import SIZES, checked_page, log_in
 from tests.conftest import FLEET_SPEEDUP
-from tests.helpers import access_token, api_client, running_fleet
+from tests.support.api import access_token, api_client
+from tests.support.processes import running_fleet
 
 pytestmark = [pytest.mark.browser, pytest.mark.integration]
 

@@ -13,7 +13,9 @@ from playwright.sync_api import Dialog, Page, expect
 
 from gcs.launcher import LocalFleet
 from tests.browser.conftest import log_in
-from tests.helpers import FleetWatcher, access_token, api_client, ready, running_fleet, send_command
+from tests.support.api import access_token, api_client, send_command
+from tests.support.processes import running_fleet
+from tests.support.watcher import FleetWatcher, ready
 
 pytestmark = [pytest.mark.browser, pytest.mark.integration, pytest.mark.slow]
 

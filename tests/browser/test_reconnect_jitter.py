@@ -15,7 +15,7 @@ from playwright.sync_api import Page, WebSocketRoute, expect
 from backend.settings import REPO_ROOT
 from tests.browser.conftest import log_in
 from tests.conftest import ADMIN_PASSWORD, hub_settings
-from tests.helpers import running_hub
+from tests.support.hub_server import running_hub
 
 pytestmark = [pytest.mark.browser, pytest.mark.integration]
 

@@ -13,7 +13,9 @@ from playwright.sync_api import Page, expect
 
 from gcs.launcher import LocalFleet
 from tests.browser.conftest import log_in
-from tests.helpers import access_token, api_client, poll_until, running_fleet
+from tests.support.api import access_token, api_client
+from tests.support.processes import running_fleet
+from tests.support.waiting import poll_until
 
 pytestmark = [pytest.mark.browser, pytest.mark.integration, pytest.mark.slow]
 

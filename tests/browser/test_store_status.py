@@ -14,9 +14,10 @@ from playwright.sync_api import Page, expect
 
 from tests.browser.conftest import log_in
 from tests.conftest import ADMIN_PASSWORD, POSTGRES_ADDRESS, hub_settings, scratch_postgres
-from tests.helpers import access_token, api_client, running_hub
 from tests.support.agents import scripted_agent, telemetry_frame
-from tests.tcp_proxy import CuttableProxy
+from tests.support.api import access_token, api_client
+from tests.support.hub_server import running_hub
+from tests.support.tcp_proxy import CuttableProxy
 
 pytestmark = [pytest.mark.browser, pytest.mark.integration]
 

@@ -16,9 +16,10 @@ from playwright.sync_api import Page, expect
 from common.geodesy import LocalFrame
 from gcs.launcher import FleetPlan, LocalFleet, free_port
 from tests.browser.conftest import log_in
-from tests.helpers import access_token, api_client, poll_until
+from tests.support.api import access_token, api_client
 from tests.support.hubs import TEST_HUB_ENV
 from tests.support.maps import PixelMap, _assert_on_open_map, _box
+from tests.support.waiting import poll_until
 
 pytestmark = [pytest.mark.browser, pytest.mark.integration, pytest.mark.slow]
 

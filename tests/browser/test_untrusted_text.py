@@ -22,8 +22,9 @@ from backend.settings import REPO_ROOT
 from protocol.messages import Event, Telemetry, VehicleState, encode
 from tests.browser.conftest import log_in
 from tests.conftest import ADMIN_PASSWORD, hub_settings
-from tests.helpers import poll_until, running_hub
 from tests.support.agents import scripted_agent
+from tests.support.hub_server import running_hub
+from tests.support.waiting import poll_until
 
 pytestmark = [pytest.mark.browser, pytest.mark.integration]
 

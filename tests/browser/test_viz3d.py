@@ -12,7 +12,7 @@ from playwright.sync_api import Frame, Page, expect
 from backend.viz3d.colours import rgb, vehicle_colour
 from gcs.launcher import LocalFleet
 from tests.browser.conftest import log_in
-from tests.helpers import poll_until
+from tests.support.waiting import poll_until
 
 pytestmark = [pytest.mark.browser, pytest.mark.integration]
 
@@ -78,7 +78,7 @@ def test_the_3d_view_shows_the_fleet_and_follows_it(
     # The scene arrived: the vehicles' nodes are in viser's scene tree.
     expect(iframe.get_by_text(VEHICLE, exact=False).first).to_be_attached(timeout=30_000)
     assert any(url.endswith("/viz") for url in sockets), sockets
-    # This viewer's own replay panel (tests/unit/test_viz_replay.py drives it).
+    # This viewer's own replay panel (tests/unit/viz3d/test_viz_replay.py drives it).
     expect(iframe.get_by_text("Replay a flight").first).to_be_attached(timeout=30_000)
 
     before = _canvas_png(viz)
@@ -86,7 +86,7 @@ def test_the_3d_view_shows_the_fleet_and_follows_it(
     assert _colours(before, page) > 20, "the 3D canvas is blank"
 
     # Selecting a vehicle on the dashboard turns this page's own 3D viewer to it (the
-    # camera itself: tests/unit/test_viz_viewers.py).
+    # camera itself: tests/unit/viz3d/test_viz_viewers.py).
     with page.expect_response(
         lambda r: "/viz/viewers/" in r.url and r.request.method == "POST", timeout=30_000
     ) as turned:

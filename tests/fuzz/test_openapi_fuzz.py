@@ -28,7 +28,8 @@ import pytest
 
 from gcs.launcher import LocalFleet
 from tests.conftest import _environment
-from tests.helpers import access_token, api_client, running_fleet
+from tests.support.api import access_token, api_client
+from tests.support.processes import running_fleet
 
 EXAMPLES_PER_OPERATION = 6
 LOWER_ROLES = ["operator", "viewer"]

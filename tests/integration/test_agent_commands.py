@@ -1,6 +1,6 @@
 """The agent's command exchange against a scripted flight controller over real TCP.
 
-`ScriptedFlightController` (tests/mavlink_peer.py) is a MAVLink peer that sends
+`ScriptedFlightController` (tests/support/mavlink_peer.py) is a MAVLink peer that sends
 heartbeats and answers each command as the test scripts it: MAV_RESULT_IN_PROGRESS acks
 with progress and then a final ACK, an ACK that never ends, a silent refusal. The
 agent's `CommandExecutor` runs in-process with short timeouts, over its real `FcuLink`;
@@ -30,9 +30,12 @@ from protocol.messages import (
     TakeoffCommand,
 )
 from tests.conftest import hub_settings
-from tests.helpers import FleetWatcher, agent_process, api_client, connected, running_hub
-from tests.mavlink_peer import HOME_ALT_MSL, Answer, Script, ScriptedFlightController
+from tests.support.api import api_client
 from tests.support.executors import with_executor
+from tests.support.hub_server import running_hub
+from tests.support.mavlink_peer import HOME_ALT_MSL, Answer, Script, ScriptedFlightController
+from tests.support.processes import agent_process
+from tests.support.watcher import FleetWatcher, connected
 from vehicle_agents.control.executor import CommandExecutor
 from vehicle_agents.fcu.messages import MavMessage
 

@@ -13,7 +13,7 @@ from pathlib import Path
 import pytest
 
 from gcs.launcher import end_with_parent, free_port
-from tests.helpers import FleetWatcher, connected
+from tests.support.watcher import FleetWatcher, connected
 from vehicle_agents.config import default_vehicle_id
 
 pytestmark = pytest.mark.integration

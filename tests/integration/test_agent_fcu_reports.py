@@ -1,19 +1,18 @@
 """What the agent reports from what the flight controller says, over real MAVLink bytes:
 PX4's repeated MISSION_ITEM_REACHED and chunked STATUSTEXTs as single events, no mission
-progress without a mission, and no position before the autopilot has one.
+progress without a mission, no position before the autopilot has one, and the
+autopilot's own mode list read again when it changes. Its photos' events are
+test_agent_camera_events.py's.
 
-`ScriptedFlightController` (tests/mavlink_peer.py) sends what each case pushes; the
-agent's `FcuLink` and `EventSource` run in-process and their events are read back from a
-real `Outbox`.
+`ScriptedFlightController` (tests/support/mavlink_peer.py) sends what each case pushes; the
+agent's `FcuLink` and `EventSource` run in-process (tests/support/fcu_reports.py) and
+their events are read back from a real `Outbox`.
 """
 
 from __future__ import annotations
 
 import asyncio
-import contextlib
-import json
-import time
-from collections.abc import AsyncIterator, Callable
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -21,90 +20,27 @@ import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 from pymavlink.dialects.v20 import development
 
-from protocol.messages import VehicleState
-from tests.helpers import FleetWatcher, agent_process, api_client, poll_until, state_of
-from tests.mavlink_peer import ScriptedFlightController, _is_command
+from tests.support.api import api_client
+from tests.support.fcu_reports import (
+    ARDUPILOT,
+    LAT,
+    LON,
+    NO_MISSION,
+    PX4,
+    agent_on,
+    current,
+    reached,
+    text,
+)
+from tests.support.mavlink_peer import ScriptedFlightController, _is_command
+from tests.support.processes import agent_process
+from tests.support.waiting import poll_until
+from tests.support.watcher import FleetWatcher, state_of
 from vehicle_agents.fcu.available_modes import AvailableModes
-from vehicle_agents.fcu.link import FcuLink
 from vehicle_agents.fcu.messages import MavMessage
-from vehicle_agents.hub.outbox import Outbox
-from vehicle_agents.publishing.events import EventSource
 from vehicle_agents.telemetry.snapshot import link_snapshot
 
 pytestmark = pytest.mark.integration
-
-PX4 = mavlink2.MAV_AUTOPILOT_PX4
-ARDUPILOT = mavlink2.MAV_AUTOPILOT_ARDUPILOTMEGA
-NO_MISSION = mavlink2.MISSION_STATE_NO_MISSION
-ACTIVE = mavlink2.MISSION_STATE_ACTIVE
-LAT, LON = -353632620, 1491652370
-
-
-class Agent:
-    """The agent's FCU side, in-process: its link, its events, its snapshot."""
-
-    def __init__(self, link: FcuLink, outbox: Outbox) -> None:
-        self.link, self.outbox = link, outbox
-
-    async def events(self, count: int, timeout_s: float = 5.0) -> list[dict[str, Any]]:
-        got: list[dict[str, Any]] = []
-        async with asyncio.timeout(timeout_s):
-            while len(got) < count:
-                got.append(json.loads(await self.outbox.next_frame()))
-        return got
-
-    async def no_more_events(self, quiet_s: float = 1.5) -> None:
-        with contextlib.suppress(TimeoutError):
-            async with asyncio.timeout(quiet_s):
-                extra = json.loads(await self.outbox.next_frame())
-                raise AssertionError(f"unexpected event {extra}")
-
-    async def state_until(
-        self, check: Callable[[VehicleState], bool], timeout_s: float = 8.0
-    ) -> VehicleState:
-        deadline = time.monotonic() + timeout_s
-        while not check(state := link_snapshot(self.link)):
-            assert time.monotonic() < deadline, f"state never matched: {state}"
-            await self.link.wait_for(lambda m: True, 0.5)
-        return state
-
-    async def received(self, kind: str, timeout_s: float = 5.0) -> MavMessage:
-        message = await self.link.wait_for(lambda m: m.get_type() == kind, timeout_s)
-        assert message is not None, f"no {kind} arrived"
-        return message
-
-
-@contextlib.asynccontextmanager
-async def agent_on(
-    fcu: ScriptedFlightController, *, has_image_source: bool = True
-) -> AsyncIterator[Agent]:
-    link = FcuLink(f"tcp:127.0.0.1:{fcu.port}")
-    running = asyncio.create_task(link.run())
-    try:
-        await asyncio.wait_for(link.wait_identified(), 10)
-        assert link.modes is not None
-        outbox = Outbox("test", 1000)
-        events = EventSource(outbox, link.modes.autopilot, has_image_source=has_image_source)
-        link.listeners.append(events.on_message)
-        yield Agent(link, outbox)
-    finally:
-        running.cancel()
-        with contextlib.suppress(asyncio.CancelledError):
-            await running
-
-
-def current(seq: int, total: int, state: int = ACTIVE) -> MavMessage:
-    return mavlink2.MAVLink_mission_current_message(seq, total, state, 0)
-
-
-def reached(seq: int) -> MavMessage:
-    return mavlink2.MAVLink_mission_item_reached_message(seq)
-
-
-def text(body: str, text_id: int = 0, chunk: int = 0) -> MavMessage:
-    return mavlink2.MAVLink_statustext_message(
-        mavlink2.MAV_SEVERITY_INFO, body.encode(), text_id, chunk
-    )
 
 
 # -- 12.21: a reached item is one event per pass -----------------------------------------
@@ -276,133 +212,6 @@ def test_the_hub_stores_no_position_and_one_reached_event_with_its_item(
         assert {(s["lat"], s["lon"], s["alt_msl"]) for s in samples} == {(None, None, None)}
         summary = api.get(f"/api/v1/vehicles/{vehicle}").json()
         assert (summary["state"]["lat"], summary["state"]["lon"]) == (None, None)
-
-
-# -- issue 17: each photo the camera takes is an event with its place --------------------
-
-
-def feedback(index: int, target_system: int, flags: int) -> MavMessage:
-    # As AP_Camera::send_feedback fills it: target_system is the vehicle's own id.
-    return mavlink2.MAVLink_camera_feedback_message(
-        0, target_system, 0, index, LAT, LON, 620.5, 30.25, 0, 0, 90, 0, flags, index
-    )
-
-
-def test_camera_feedback_becomes_a_camera_event_with_the_photo() -> None:
-    async def run() -> None:
-        with ScriptedFlightController(autopilot=ARDUPILOT) as fcu:
-            async with agent_on(fcu) as agent:
-                fcu.push(
-                    feedback(1, fcu.system_id, mavlink2.CAMERA_FEEDBACK_PHOTO),
-                    feedback(2, fcu.system_id, mavlink2.CAMERA_FEEDBACK_VIDEO),
-                    feedback(3, fcu.system_id, mavlink2.CAMERA_FEEDBACK_PHOTO),
-                )
-                events = await agent.events(2)
-                await agent.no_more_events()
-        assert [e["kind"] for e in events] == ["camera", "camera"]
-        assert events[0]["photo"] == {
-            "index": 1,
-            "lat": LAT / 1e7,
-            "lon": LON / 1e7,
-            "alt_rel": 30.25,
-        }
-        assert events[1]["photo"]["index"] == 3
-        assert events[0]["text"].startswith("photo 1 at -35.3632620, 149.1652370")
-
-    asyncio.run(run())
-
-
-def test_camera_feedback_without_an_image_source_is_counted_and_said_once() -> None:
-    """SITL's camera (ArduPilot's CAM1_TYPE 1, PX4's TRIG_INTERFACE 3) tells of each
-    shutter with no image anywhere: the agent without --camera counts each, and says
-    once that no image will follow."""
-
-    async def run() -> None:
-        with ScriptedFlightController(autopilot=ARDUPILOT) as fcu:
-            async with agent_on(fcu, has_image_source=False) as agent:
-                fcu.push(
-                    feedback(1, fcu.system_id, mavlink2.CAMERA_FEEDBACK_PHOTO),
-                    feedback(2, fcu.system_id, mavlink2.CAMERA_FEEDBACK_PHOTO),
-                )
-                events = await agent.events(3)
-                await agent.no_more_events()
-        assert [e["kind"] for e in events] == ["camera", "upload", "camera"]
-        assert events[1]["text"] == (
-            "photo 1: the autopilot's camera fired, but no image source is configured "
-            "(--camera): shots are counted, no image is uploaded"
-        )
-        assert events[1]["severity"] == mavlink2.MAV_SEVERITY_NOTICE
-
-    asyncio.run(run())
-
-
-def test_px4s_camera_trigger_becomes_a_camera_event_where_the_drone_was() -> None:
-    """PX4's CAMERA_TRIGGER carries no position: the photo is placed at the latest
-    GLOBAL_POSITION_INT; none is reported before the autopilot has a position."""
-
-    async def run() -> None:
-        with ScriptedFlightController(autopilot=PX4) as fcu:
-            async with agent_on(fcu) as agent:
-                fcu.push(mavlink2.MAVLink_camera_trigger_message(0, 0))  # no position yet
-                await agent.no_more_events()
-                fcu.push(
-                    mavlink2.MAVLink_global_position_int_message(
-                        1000, LAT, LON, 614_500, 30_250, 0, 0, 0, 0
-                    ),
-                    mavlink2.MAVLink_camera_trigger_message(1_764_288_000_000_000, 1),
-                )
-                events = await agent.events(1)
-        assert events[0]["kind"] == "camera"
-        assert events[0]["photo"] == {
-            "index": 1,
-            "lat": LAT / 1e7,
-            "lon": LON / 1e7,
-            "alt_rel": 30.25,
-        }
-
-    asyncio.run(run())
-
-
-def captured(index: int, lat: int = LAT) -> MavMessage:
-    """PX4's CAMERA_IMAGE_CAPTURED (camera_feedback), level and facing north, 30.25 m
-    above home; its relative_alt is the rangefinder's (-1 m: none)."""
-    return mavlink2.MAVLink_camera_image_captured_message(
-        42_000, 0, 0, lat, LON, 614_500, -1000, [1.0, 0.0, 0.0, 0.0], index, 1, b""
-    )
-
-
-def test_px4s_two_messages_of_a_shutter_are_one_camera_event_and_a_close_pair_two() -> None:
-    """PX4 tells of each shutter with CAMERA_TRIGGER (where asked for) and
-    CAMERA_IMAGE_CAPTURED, with one index: one event each, whichever comes first or alone;
-    a lane end's two shutters a millisecond apart are two."""
-
-    async def run() -> None:
-        with ScriptedFlightController(autopilot=PX4) as fcu:
-            async with agent_on(fcu) as agent:
-                fcu.push(
-                    mavlink2.MAVLink_global_position_int_message(
-                        1000, LAT, LON, 614_500, 30_250, 0, 0, 0, 0
-                    ),
-                    mavlink2.MAVLink_camera_trigger_message(0, 0),
-                    captured(0),
-                    mavlink2.MAVLink_camera_trigger_message(0, 1),  # the lane end's pair
-                    mavlink2.MAVLink_camera_trigger_message(0, 2),
-                    captured(1),
-                    captured(2),
-                    captured(3, lat=LAT + 100),  # no CAMERA_TRIGGER: the link never asked
-                )
-                events = await agent.events(4)
-                await agent.no_more_events()
-        assert [e["kind"] for e in events] == ["camera"] * 4
-        assert [e["photo"]["index"] for e in events] == [0, 1, 2, 3]
-        assert events[3]["photo"] == {
-            "index": 3,
-            "lat": (LAT + 100) / 1e7,
-            "lon": LON / 1e7,
-            "alt_rel": 30.25,
-        }
-
-    asyncio.run(run())
 
 
 # -- the autopilot's own mode list (AVAILABLE_MODES) -------------------------------------

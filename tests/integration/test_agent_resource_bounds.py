@@ -17,8 +17,10 @@ import pytest
 
 from protocol.messages import AGENT_WS_PATH, MAX_FRAME_BYTES, CloseCode
 from tests.conftest import ADMIN_PASSWORD, hub_settings
-from tests.helpers import access_token, agent_hello, api_client, running_hub
 from tests.support.agents import close_code, scripted_agent, websocket
+from tests.support.api import access_token, api_client
+from tests.support.hellos import agent_hello
+from tests.support.hub_server import running_hub
 from tests.support.tlogs import tlog_of
 
 pytestmark = pytest.mark.integration

@@ -1,6 +1,6 @@
 """MAV_RESULT names and the frames position commands go in, per autopilot.
 
-The result codes come from a scripted flight controller (tests/mavlink_peer.py) over
+The result codes come from a scripted flight controller (tests/support/mavlink_peer.py) over
 real TCP; the frames are checked against the simulator's PX4 and ArduCopter
 personalities, which refuse what the real autopilots refuse.
 """
@@ -15,8 +15,8 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 from protocol.messages import ChangeSpeedCommand, CommandOutcome, GotoCommand, SetHomeCommand
 from simulator.config import DEFAULT_HOME, Autopilot
 from simulator.copter import Copter
-from tests.mavlink_peer import Answer, ScriptedFlightController
 from tests.support.fcu import fcu_url, on_link, simulated
+from tests.support.mavlink_peer import Answer, ScriptedFlightController
 from vehicle_agents.control.executor import CommandExecutor
 from vehicle_agents.fcu.messages import MavMessage
 from vehicle_agents.fcu.results import result_name

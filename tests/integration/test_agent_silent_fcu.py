@@ -8,8 +8,10 @@ from collections.abc import Callable, Iterator
 
 import pytest
 
-from tests.helpers import FleetWatcher, agent_process, api_client, connected
+from tests.support.api import api_client
+from tests.support.processes import agent_process
 from tests.support.silent_fcu import SilentFlightController
+from tests.support.watcher import FleetWatcher, connected
 
 pytestmark = pytest.mark.integration
 

@@ -23,10 +23,11 @@ from protocol.messages import (
     ManualApplied,
     ManualFrame,
 )
-from tests.helpers import agent_process, poll_until_async
-from tests.mavlink_peer import Answer, ScriptedFlightController
 from tests.support.executors import with_executor
+from tests.support.mavlink_peer import Answer, ScriptedFlightController
+from tests.support.processes import agent_process
 from tests.support.scripted_hub import ScriptedHub, _command
+from tests.support.waiting import poll_until_async
 from vehicle_agents.control.executor import CommandExecutor
 from vehicle_agents.control.manual import ManualPilot
 

@@ -14,9 +14,10 @@ from backend.storage.database import make_engine
 from common.retry import Backoff
 from protocol.messages import AGENT_WS_PATH, CloseCode
 from tests.conftest import ADMIN_PASSWORD, hub_settings
-from tests.helpers import access_token, api_client, running_hub
 from tests.support.agents import close_code, scripted_agent, websocket
+from tests.support.api import access_token, api_client
 from tests.support.flights import OPERATOR_TOKEN, _heartbeat, _recorded_flight
+from tests.support.hub_server import running_hub
 from vehicle_agents.tlog.uploads import UPLOAD_BACKOFF, TlogUploader
 
 LATER_TOKEN = "field-kit-alpha-rotated-9876543210"

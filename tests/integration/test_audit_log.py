@@ -12,8 +12,10 @@ import httpx
 
 from backend.audit import AuditAction
 from tests.conftest import ADMIN_PASSWORD, hub_settings
-from tests.helpers import access_token, api_client, poll_until, running_hub
 from tests.support.agents import scripted_agent
+from tests.support.api import access_token, api_client
+from tests.support.hub_server import running_hub
+from tests.support.waiting import poll_until
 
 
 def test_an_entry_names_the_api_token_that_acted(

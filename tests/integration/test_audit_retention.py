@@ -17,7 +17,9 @@ from backend.storage.logbook import Logbook
 from backend.storage.models import AuditRow
 from backend.storage.retention import RetentionPolicy
 from tests.conftest import ADMIN_PASSWORD, hub_settings
-from tests.helpers import access_token, api_client, poll_until, running_hub
+from tests.support.api import access_token, api_client
+from tests.support.hub_server import running_hub
+from tests.support.waiting import poll_until
 
 DAY = 86400.0
 

@@ -28,7 +28,7 @@ from backend.auth.policy import (
     Role,
 )
 from protocol.messages import AGENT_WS_PATH, CLIENT_WS_PATH, AgentToHub, ClientToHub, CloseCode
-from tests.helpers import access_token
+from tests.support.api import access_token
 
 PASSWORD = "correct horse battery"
 
@@ -153,7 +153,7 @@ def test_client_feed_needs_a_login_and_serves_every_role(hub: str, users: dict[s
         with connect(url, additional_headers=headers) as feed:
             assert json.loads(feed.recv(timeout=5))["type"] == "fleet"
             # Every message a reader may send, each well formed, is served for every role;
-            # the COMMAND ones (control, manual) are tested in test_manual_control.py.
+            # the COMMAND ones (control, manual) are tested in tests/integration/manual_control/.
             for message_type, permission in CLIENT_MESSAGE_PERMISSIONS.items():
                 if permission is not Permission.READ:
                     continue

@@ -10,8 +10,9 @@ import pytest
 
 from gcs.launcher import LocalFleet
 from simulator import ListenAddress, SimulatorConfig
-from tests.helpers import FleetWatcher, api_client, ready
+from tests.support.api import api_client
 from tests.support.simulators import serving
+from tests.support.watcher import FleetWatcher, ready
 from vehicle_agents.fcu.available_modes import AvailableModes
 from vehicle_agents.fcu.link import FcuLink
 

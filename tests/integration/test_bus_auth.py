@@ -24,9 +24,11 @@ import psycopg
 import pytest
 
 from gcs.launcher import free_port
-from tests.helpers import FleetWatcher, api_client, connected, poll_until, send_command
-from tests.nats_server import HUB_USER, login_refused, nats_server
+from tests.support.api import api_client, send_command
+from tests.support.nats_server import HUB_USER, login_refused, nats_server
 from tests.support.two_hubs import VEHICLE, TwoHubs, two_hubs
+from tests.support.waiting import poll_until
+from tests.support.watcher import FleetWatcher, connected
 
 pytestmark = pytest.mark.integration
 

@@ -23,12 +23,9 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 from protocol.photos import parse_camera_model
 from simulator import ListenAddress, SimulatorConfig
 from simulator.config import DEFAULT_HOME
-from tests.helpers import (
-    poll_until,
-    poll_until_async,
-)
 from tests.support.photos import CAMERA_MODEL, camera_vehicle
 from tests.support.simulators import serving
+from tests.support.waiting import poll_until, poll_until_async
 from vehicle_agents.fcu.link import FcuLink
 
 pytestmark = pytest.mark.integration

@@ -34,8 +34,9 @@ from gcs_client.models import (
     VehicleSummary,
 )
 from tests.conftest import ADMIN_PASSWORD, hub_settings
-from tests.helpers import api_client, running_hub
-from tests.tcp_proxy import CuttableProxy
+from tests.support.api import api_client
+from tests.support.hub_server import running_hub
+from tests.support.tcp_proxy import CuttableProxy
 
 pytestmark = pytest.mark.integration
 

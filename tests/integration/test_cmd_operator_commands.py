@@ -16,16 +16,9 @@ import httpx
 import pytest
 
 from gcs.launcher import FleetPlan, LocalFleet
-from tests.helpers import (
-    FleetWatcher,
-    access_token,
-    api_client,
-    ready,
-    running_fleet,
-    send_command,
-    speed_of,
-    state_of,
-)
+from tests.support.api import access_token, api_client, send_command
+from tests.support.processes import running_fleet
+from tests.support.watcher import FleetWatcher, ready, speed_of, state_of
 
 pytestmark = pytest.mark.integration
 

@@ -19,9 +19,9 @@ from protocol.messages import (
     Hello,
     encode,
 )
-from tests.helpers import access_token, api_client
 from tests.support.accounts import PASSWORD, _no_command_reaches, _user
 from tests.support.agents import ScriptedAgent, websocket
+from tests.support.api import access_token, api_client
 
 
 @contextmanager

@@ -9,7 +9,7 @@ import httpx
 
 from backend.app import dashboard_dir
 from tests.conftest import hub_settings
-from tests.helpers import running_hub
+from tests.support.hub_server import running_hub
 
 
 def _built(folder: Path) -> Path:

@@ -13,11 +13,13 @@ from typing import Any
 import pytest
 
 from tests.conftest import ADMIN_PASSWORD, POSTGRES_ADDRESS, hub_settings, scratch_postgres
-from tests.helpers import access_token, api_client, poll_until, running_hub
 from tests.support.accounts import PASSWORD, _no_command_reaches, _user
 from tests.support.agents import scripted_agent
+from tests.support.api import access_token, api_client
 from tests.support.databases import answering
-from tests.tcp_proxy import CuttableProxy
+from tests.support.hub_server import running_hub
+from tests.support.tcp_proxy import CuttableProxy
+from tests.support.waiting import poll_until
 
 # The server the suite uses (GCS_TEST_POSTGRES_ADDRESS may name another), behind the proxy.
 _host, _, _port = POSTGRES_ADDRESS.rpartition(":")

@@ -15,7 +15,9 @@ import pytest
 from pymavlink import mavutil
 
 from gcs.launcher import free_port
-from tests.helpers import FleetWatcher, access_token, poll_until
+from tests.support.api import access_token
+from tests.support.waiting import poll_until
+from tests.support.watcher import FleetWatcher
 
 pytestmark = pytest.mark.integration
 
@@ -170,7 +172,7 @@ def test_no_child_outlives_the_launcher_whatever_ends_it(
 PYTEST_STARTS_A_FLEET = """
 from pathlib import Path
 
-from tests.helpers import running_fleet
+from tests.support.processes import running_fleet
 
 
 def test_fleet_until_killed(tmp_path: Path) -> None:

@@ -18,14 +18,10 @@ import pytest
 
 from gcs.launcher import LocalFleet, free_port
 from tests.conftest import FLEET_SPEEDUP
-from tests.helpers import (
-    FleetWatcher,
-    access_token,
-    api_client,
-    poll_until,
-    ready,
-    running_fleet,
-)
+from tests.support.api import access_token, api_client
+from tests.support.processes import running_fleet
+from tests.support.waiting import poll_until
+from tests.support.watcher import FleetWatcher, ready
 
 pytestmark = pytest.mark.integration
 

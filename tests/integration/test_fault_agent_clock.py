@@ -15,8 +15,9 @@ import httpx
 import pytest
 
 from protocol.messages import Telemetry, VehicleState, encode
-from tests.helpers import FleetWatcher, connected, poll_until, state_of
 from tests.support.agents import scripted_agent
+from tests.support.waiting import poll_until
+from tests.support.watcher import FleetWatcher, connected, state_of
 
 pytestmark = pytest.mark.integration
 

@@ -18,16 +18,11 @@ from pathlib import Path
 import pytest
 
 from gcs.launcher import LocalFleet
-from tests.helpers import (
-    FleetWatcher,
-    access_token,
-    api_client,
-    poll_until,
-    ready,
-    running_fleet,
-    send_command,
-    take_off,
-)
+from tests.support.api import access_token, api_client, send_command
+from tests.support.processes import running_fleet
+from tests.support.settling import take_off
+from tests.support.waiting import poll_until
+from tests.support.watcher import FleetWatcher, ready
 
 pytestmark = [pytest.mark.integration, pytest.mark.slow]
 

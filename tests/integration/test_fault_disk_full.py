@@ -21,15 +21,17 @@ from pathlib import Path
 import pytest
 
 from tests.conftest import ADMIN_PASSWORD, hub_settings
-from tests.helpers import access_token, api_client, poll_until, running_hub
-from tests.store_outage import (
+from tests.support.agents import scripted_agent
+from tests.support.api import access_token, api_client
+from tests.support.hub_server import running_hub
+from tests.support.store_outage import (
     degraded,
     everything_stored,
     safety_commands_go_through,
     stored,
     streaming,
 )
-from tests.support.agents import scripted_agent
+from tests.support.waiting import poll_until
 
 pytestmark = pytest.mark.integration
 

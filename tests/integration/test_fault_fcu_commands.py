@@ -17,10 +17,12 @@ import httpx
 import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
-from tests.helpers import FleetWatcher, agent_process, api_client, connected
+from tests.support.api import api_client
 from tests.support.fcu import FcuTap, sim_config, state_of
+from tests.support.processes import agent_process
 from tests.support.silent_fcu import SilentFlightController
 from tests.support.simulators import serving
+from tests.support.watcher import FleetWatcher, connected
 from vehicle_agents.fcu.commands import CommandTimeouts
 
 pytestmark = pytest.mark.integration

@@ -24,9 +24,10 @@ from websockets.sync.client import connect
 
 from gcs.launcher import FleetPlan, LocalFleet, end_with_parent, free_port
 from protocol.messages import CLIENT_WS_PATH
-from tests.helpers import access_token, api_client, poll_until, send_command
-from tests.netem import FieldLink, ImpairedRelay, field_link
+from tests.support.api import access_token, api_client, send_command
 from tests.support.hubs import TEST_HUB_ENV
+from tests.support.netem import FieldLink, ImpairedRelay, field_link
+from tests.support.waiting import poll_until
 
 pytestmark = [pytest.mark.integration, pytest.mark.slow]
 

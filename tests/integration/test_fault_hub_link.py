@@ -22,18 +22,13 @@ from pathlib import Path
 import pytest
 
 from gcs.launcher import FleetPlan, LocalFleet, free_port
-from tests.helpers import (
-    FleetWatcher,
-    access_token,
-    api_client,
-    connected,
-    poll_until,
-    ready,
-    spilled_frames,
-    take_off,
-)
+from tests.support.api import access_token, api_client
 from tests.support.hubs import TEST_HUB_ENV
-from tests.tcp_proxy import CuttableProxy
+from tests.support.processes import spilled_frames
+from tests.support.settling import take_off
+from tests.support.tcp_proxy import CuttableProxy
+from tests.support.waiting import poll_until
+from tests.support.watcher import FleetWatcher, connected, ready
 
 pytestmark = [pytest.mark.integration, pytest.mark.slow]
 

@@ -19,17 +19,12 @@ import pytest
 
 from common.geodesy import LocalFrame
 from gcs.launcher import LocalFleet
-from tests.helpers import (
-    FleetWatcher,
-    access_token,
-    api_client,
-    poll_until,
-    ready,
-    running_fleet,
-    spilled_frames,
-)
+from tests.support.api import access_token, api_client
 from tests.support.formations import ALTITUDES, LEADER, LEFT, RIGHT, _request, take_off_all
 from tests.support.hubs import TEST_HUB_ENV
+from tests.support.processes import running_fleet, spilled_frames
+from tests.support.waiting import poll_until
+from tests.support.watcher import FleetWatcher, ready
 
 pytestmark = [pytest.mark.integration, pytest.mark.slow]
 

@@ -4,7 +4,7 @@ between the agent and the flight controller counts the MANUAL_CONTROL that arriv
 
 Guaranteed: at most 100 frames a second reach the flight controller, the newest frame
 among them (a flood collapses, it is not queued), and the lease and the vehicle carry on.
-The deadman on a frozen or stopped stream is test_manual_control.py's.
+The deadman on a frozen or stopped stream is tests/integration/manual_control/'s.
 """
 
 from __future__ import annotations
@@ -17,17 +17,13 @@ from typing import Any
 import pytest
 
 from gcs.launcher import FleetPlan, LocalFleet, free_port
-from tests.helpers import (
-    FleetWatcher,
-    access_token,
-    api_client,
-    poll_until,
-    ready,
-    take_off,
-)
+from tests.support.api import access_token, api_client
 from tests.support.fcu import FcuTap
 from tests.support.hubs import TEST_HUB_ENV
 from tests.support.pilots import Pilot
+from tests.support.settling import take_off
+from tests.support.waiting import poll_until
+from tests.support.watcher import FleetWatcher, ready
 
 pytestmark = [pytest.mark.integration, pytest.mark.slow]
 

@@ -26,16 +26,18 @@ import pytest
 
 from gcs.launcher import free_port
 from tests.conftest import ADMIN_PASSWORD, hub_settings
-from tests.helpers import access_token, api_client, poll_until, running_hub
-from tests.store_outage import (
+from tests.support.agents import scripted_agent, telemetry_frame
+from tests.support.api import access_token, api_client
+from tests.support.databases import answering
+from tests.support.hub_server import running_hub
+from tests.support.store_outage import (
     degraded,
     everything_stored,
     safety_commands_go_through,
     stored,
     streaming,
 )
-from tests.support.agents import scripted_agent, telemetry_frame
-from tests.support.databases import answering
+from tests.support.waiting import poll_until
 
 pytestmark = pytest.mark.integration
 

@@ -25,7 +25,7 @@ from gcs.launcher import free_port
 from simulator import SimulatorServer
 from simulator.config import MessageIntervalSupport
 from simulator.mavlink.message_context import SecondGps
-from tests.helpers import FleetWatcher, agent_process, api_client, poll_until
+from tests.support.api import api_client
 from tests.support.fcu import (
     SET_MESSAGE_INTERVAL,
     SYSID,
@@ -33,7 +33,10 @@ from tests.support.fcu import (
     sim_config,
     state_of,
 )
+from tests.support.processes import agent_process
 from tests.support.simulators import serving
+from tests.support.waiting import poll_until
+from tests.support.watcher import FleetWatcher
 from vehicle_agents.fcu.link import FcuLink
 from vehicle_agents.fcu.stream_plan import DEFAULT_RATES_HZ
 from vehicle_agents.fcu.stream_watch import RateWatchSettings

@@ -21,7 +21,7 @@ from protocol.messages import (
     VehicleState,
     encode,
 )
-from tests.helpers import agent_hello
+from tests.support.hellos import agent_hello
 
 SAID_ONCE = ("autopilot", "vehicle_type", "modes")
 COPTER_MODES = ("STABILIZE", "ALT_HOLD", "LOITER", "GUIDED", "LAND", "RTL", "AUTO")

@@ -14,9 +14,11 @@ import httpx
 import pytest
 
 from gcs.launcher import FleetPlan, LocalFleet, free_port
-from tests.helpers import access_token, agent_process, poll_until
-from tests.mavlink_peer import ScriptedFlightController
+from tests.support.api import access_token
 from tests.support.hubs import TEST_HUB_ENV
+from tests.support.mavlink_peer import ScriptedFlightController
+from tests.support.processes import agent_process
+from tests.support.waiting import poll_until
 
 pytestmark = pytest.mark.integration
 

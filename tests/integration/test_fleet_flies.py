@@ -10,8 +10,10 @@ import httpx
 import pytest
 
 from gcs.launcher import LocalFleet
-from tests.helpers import FleetWatcher, api_client, poll_until
-from tests.mavutil_state import mavutil_in_mavlink2
+from tests.support.api import api_client
+from tests.support.mavutil_state import mavutil_in_mavlink2
+from tests.support.waiting import poll_until
+from tests.support.watcher import FleetWatcher
 
 pytestmark = pytest.mark.integration
 

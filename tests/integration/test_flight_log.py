@@ -25,8 +25,10 @@ from backend.storage.retention import RetentionPolicy
 from backend.storage.writer import StorageWriter
 from protocol.messages import EventKind, Telemetry, VehicleState
 from tests.conftest import ADMIN_PASSWORD, hub_settings
-from tests.helpers import access_token, agent_hello, api_client, running_hub
-from tests.mavutil_state import mavutil_in_mavlink2, read_tlog
+from tests.support.api import access_token, api_client
+from tests.support.hellos import agent_hello
+from tests.support.hub_server import running_hub
+from tests.support.mavutil_state import mavutil_in_mavlink2, read_tlog
 
 HOME = (-35.363262, 149.165237)
 HOUR_AT_10HZ = 36_000

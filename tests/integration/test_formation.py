@@ -20,15 +20,7 @@ from backend.formation.route import LeaderRoute
 from common.formation import LeaderState, Offset, OffsetFrame, slot_target
 from common.geodesy import LocalFrame
 from gcs.launcher import LocalFleet
-from tests.helpers import (
-    FleetWatcher,
-    access_token,
-    api_client,
-    poll_until,
-    ready,
-    running_fleet,
-    send_command,
-)
+from tests.support.api import access_token, api_client, send_command
 from tests.support.formations import (
     ALTITUDES,
     LEADER,
@@ -41,6 +33,9 @@ from tests.support.formations import (
     _request,
     take_off_all,
 )
+from tests.support.processes import running_fleet
+from tests.support.waiting import poll_until
+from tests.support.watcher import FleetWatcher, ready
 
 pytestmark = [pytest.mark.integration, pytest.mark.slow]
 

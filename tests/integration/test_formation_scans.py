@@ -14,8 +14,11 @@ from typing import Any
 import pytest
 
 from common.geodesy import LocalFrame
-from tests.helpers import FleetWatcher, access_token, api_client, poll_until, running_fleet
+from tests.support.api import access_token, api_client
 from tests.support.formations import take_off_all
+from tests.support.processes import running_fleet
+from tests.support.waiting import poll_until
+from tests.support.watcher import FleetWatcher
 
 pytestmark = [pytest.mark.integration, pytest.mark.slow]
 

@@ -19,8 +19,10 @@ import pytest
 from common.geodesy import LocalFrame
 from protocol.messages import LandedState, Telemetry, VehicleState, encode
 from tests.conftest import hub_settings
-from tests.helpers import api_client, poll_until, running_hub
 from tests.support.agents import ScriptedAgent, scripted_agent
+from tests.support.api import api_client
+from tests.support.hub_server import running_hub
+from tests.support.waiting import poll_until
 
 Enrol = Callable[[str], str]
 SITE = LocalFrame(-35.363262, 149.165237)

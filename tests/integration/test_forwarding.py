@@ -17,7 +17,7 @@ from pymavlink import mavutil
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from gcs.launcher import free_port
-from tests.helpers import FleetWatcher
+from tests.support.watcher import FleetWatcher
 
 pytestmark = pytest.mark.integration
 

@@ -9,8 +9,8 @@ import pytest
 
 from gcs.launcher import FleetPlan, LocalFleet, free_port
 from protocol.messages import Unavailable, encode
-from tests.helpers import access_token, api_client
 from tests.support.agents import scripted_agent, telemetry_frame
+from tests.support.api import access_token, api_client
 from tests.support.delivery import _acked, _next
 from tests.support.hubs import TEST_HUB_ENV
 

@@ -9,8 +9,9 @@ from pathlib import Path
 import httpx
 
 from tests.conftest import ADMIN_PASSWORD, hub_settings
-from tests.helpers import access_token, api_client, running_hub
 from tests.support.agents import scripted_agent
+from tests.support.api import access_token, api_client
+from tests.support.hub_server import running_hub
 
 
 def _audit_entries(api: httpx.Client) -> int:

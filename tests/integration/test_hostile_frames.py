@@ -27,7 +27,6 @@ from protocol.messages import (
     agent_to_hub,
     client_to_hub,
 )
-from tests.helpers import api_client
 from tests.support.agents import (
     close_code,
     scripted_agent,
@@ -36,6 +35,7 @@ from tests.support.agents import (
     websocket,
     ws_url,
 )
+from tests.support.api import api_client
 from tests.support.frames import AGENT_FRAMES, CLIENT_FRAMES, any_frames, scan_frames
 
 Enrol = Callable[[str], str]

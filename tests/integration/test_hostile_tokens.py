@@ -11,7 +11,8 @@ import httpx
 import pytest
 
 from tests.conftest import ADMIN_PASSWORD, hub_settings
-from tests.helpers import access_token, running_hub
+from tests.support.api import access_token
+from tests.support.hub_server import running_hub
 
 PUBLIC = {"/api/v1/health", "/api/v1/auth/token", "/api/v1/auth/login"}
 

@@ -23,9 +23,10 @@ from PIL import Image
 
 from backend.survey.files.items import MAX_FILE_BYTES
 from tests.conftest import ADMIN_PASSWORD, hub_settings
-from tests.helpers import access_token, api_client, running_hub
-from tests.map_tiles import png_tile, write_mbtiles
 from tests.support.agents import scripted_agent
+from tests.support.api import access_token, api_client
+from tests.support.hub_server import running_hub
+from tests.support.map_tiles import png_tile, write_mbtiles
 from tests.support.tlogs import tlog_of
 
 Enrol = Callable[[str], str]

@@ -18,7 +18,6 @@ from protocol.messages import (
     CloseCode,
     encode,
 )
-from tests.helpers import agent_hello, api_client
 from tests.support.agents import (
     close_code,
     scripted_agent,
@@ -28,6 +27,8 @@ from tests.support.agents import (
     websocket,
     ws_url,
 )
+from tests.support.api import api_client
+from tests.support.hellos import agent_hello
 
 Enrol = Callable[[str], str]
 

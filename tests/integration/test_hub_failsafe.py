@@ -9,16 +9,11 @@ from pathlib import Path
 import pytest
 
 from gcs.launcher import LocalFleet
-from tests.helpers import (
-    FleetWatcher,
-    access_token,
-    api_client,
-    poll_until,
-    ready,
-    running_fleet,
-    spilled_frames,
-)
+from tests.support.api import access_token, api_client
 from tests.support.hubs import TEST_HUB_ENV
+from tests.support.processes import running_fleet, spilled_frames
+from tests.support.waiting import poll_until
+from tests.support.watcher import FleetWatcher, ready
 
 pytestmark = [pytest.mark.integration, pytest.mark.slow]
 

@@ -14,7 +14,7 @@ from pathlib import Path
 import httpx
 
 from gcs.launcher import free_port
-from tests.helpers import poll_until
+from tests.support.waiting import poll_until
 
 
 def test_a_request_in_progress_holds_the_hub_no_longer_than_its_grace(tmp_path: Path) -> None:

@@ -26,10 +26,13 @@ from backend.storage.repository import Repository
 from backend.storage.writer import StorageWriter
 from protocol.messages import STATE_BOUNDS, LiveState, Telemetry, VehicleState, encode
 from tests.conftest import ADMIN_PASSWORD, hub_settings
-from tests.helpers import access_token, agent_hello, api_client, poll_until, running_hub
-from tests.mavutil_state import mavutil_in_mavlink2, read_tlog
 from tests.support.agents import ScriptedAgent, scripted_agent
+from tests.support.api import access_token, api_client
+from tests.support.hellos import agent_hello
+from tests.support.hub_server import running_hub
+from tests.support.mavutil_state import mavutil_in_mavlink2, read_tlog
 from tests.support.metrics import _metrics, _value
+from tests.support.waiting import poll_until
 
 Enrol = Callable[[str], str]
 HOME = (-35.363262, 149.165237)

@@ -16,7 +16,9 @@ import pytest
 from common.geodesy import LocalFrame
 from gcs.demo_lidars import DEMO_LIDARS
 from simulator.world.obstacles import default_scene
-from tests.helpers import access_token, poll_until, running_fleet
+from tests.support.api import access_token
+from tests.support.processes import running_fleet
+from tests.support.waiting import poll_until
 
 pytestmark = pytest.mark.integration
 

@@ -8,8 +8,8 @@ from collections.abc import Callable
 import pytest
 
 from protocol.messages import Event, encode
-from tests.helpers import FleetWatcher
 from tests.support.agents import scripted_agent
+from tests.support.watcher import FleetWatcher
 
 pytestmark = pytest.mark.integration
 

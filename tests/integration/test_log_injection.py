@@ -9,9 +9,9 @@ from pathlib import Path
 import httpx
 
 from gcs.launcher import FleetPlan, LocalFleet, free_port
-from tests.helpers import agent_process
-from tests.mavlink_peer import ScriptedFlightController
 from tests.support.hubs import TEST_HUB_ENV
+from tests.support.mavlink_peer import ScriptedFlightController
+from tests.support.processes import agent_process
 from tests.support.scripted_hub import ScriptedHub, _command
 
 FORGED = "2031-01-01 00:00:00,000 INFO    backend.audit: audit: admin"

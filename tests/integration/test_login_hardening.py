@@ -23,7 +23,9 @@ from backend.app import create_app
 from backend.auth.password_work import PasswordWork
 from backend.errors import RateLimited
 from tests.conftest import ADMIN_PASSWORD, hub_settings
-from tests.helpers import access_token, api_client, poll_until, raw_http_answer, running_hub
+from tests.support.api import access_token, api_client, raw_http_answer
+from tests.support.hub_server import running_hub
+from tests.support.waiting import poll_until
 
 PASSWORD = "correct horse battery"
 

@@ -10,8 +10,8 @@ from collections.abc import Callable
 import pytest
 
 from protocol.messages import CLIENT_WS_PATH, ProtocolError, agent_to_hub
-from tests.helpers import api_client
 from tests.support.agents import scripted_agent, telemetry_frame, wait_stored, websocket, ws_url
+from tests.support.api import api_client
 
 Enrol = Callable[[str], str]
 

@@ -10,7 +10,7 @@ from websockets.exceptions import ConnectionClosed
 from websockets.sync.client import connect
 
 from protocol.messages import AGENT_WS_PATH, CLIENT_WS_PATH
-from tests.helpers import access_token
+from tests.support.api import access_token
 from tests.support.metrics import _metrics, _value
 
 

@@ -13,8 +13,9 @@ import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from gcs.launcher import LocalFleet
-from tests.helpers import FleetWatcher, api_client, ready, state_of
+from tests.support.api import api_client
 from tests.support.simulators import mavlink_client, wait_for
+from tests.support.watcher import FleetWatcher, ready, state_of
 
 pytestmark = pytest.mark.integration
 

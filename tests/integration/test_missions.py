@@ -9,7 +9,8 @@ import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from gcs.launcher import LocalFleet
-from tests.helpers import FleetWatcher, api_client
+from tests.support.api import api_client
+from tests.support.watcher import FleetWatcher
 
 pytestmark = pytest.mark.integration
 

@@ -11,17 +11,10 @@ import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from gcs.launcher import LocalFleet
-from tests.helpers import (
-    FleetWatcher,
-    access_token,
-    api_client,
-    poll_until,
-    ready,
-    running_fleet,
-    send_command,
-    speed_of,
-    state_of,
-)
+from tests.support.api import access_token, api_client, send_command
+from tests.support.processes import running_fleet
+from tests.support.waiting import poll_until
+from tests.support.watcher import FleetWatcher, ready, speed_of, state_of
 
 pytestmark = pytest.mark.integration
 

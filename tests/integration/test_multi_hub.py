@@ -23,16 +23,10 @@ from websockets.sync.client import ClientConnection, connect
 
 from common.geodesy import LocalFrame
 from protocol.messages import CLIENT_WS_PATH
-from tests.helpers import (
-    FleetWatcher,
-    access_token,
-    api_client,
-    connected,
-    on_the_ground,
-    poll_until,
-    send_command,
-)
+from tests.support.api import access_token, api_client, send_command
 from tests.support.two_hubs import VEHICLE, TwoHubs, two_hubs
+from tests.support.waiting import poll_until
+from tests.support.watcher import FleetWatcher, connected, on_the_ground
 
 pytestmark = pytest.mark.integration
 

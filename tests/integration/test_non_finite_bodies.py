@@ -9,8 +9,8 @@ from collections.abc import Callable
 import httpx
 import pytest
 
-from tests.helpers import api_client
 from tests.support.agents import scripted_agent
+from tests.support.api import api_client
 
 Enrol = Callable[[str], str]
 JSON = {"Content-Type": "application/json"}

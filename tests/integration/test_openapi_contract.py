@@ -11,7 +11,8 @@ import httpx
 import pytest
 
 from tests.conftest import ADMIN_PASSWORD, hub_settings
-from tests.helpers import access_token, api_client, running_hub
+from tests.support.api import access_token, api_client
+from tests.support.hub_server import running_hub
 
 
 @pytest.fixture

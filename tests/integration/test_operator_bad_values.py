@@ -26,13 +26,9 @@ from websockets.sync.client import ClientConnection, connect
 
 from gcs.launcher import LocalFleet
 from protocol.messages import CLIENT_WS_PATH, Command, ManualAxes, MissionItem
-from tests.helpers import (
-    FleetWatcher,
-    access_token,
-    api_client,
-    connected,
-    poll_until,
-)
+from tests.support.api import access_token, api_client
+from tests.support.waiting import poll_until
+from tests.support.watcher import FleetWatcher, connected
 
 pytestmark = pytest.mark.integration
 

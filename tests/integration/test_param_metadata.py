@@ -17,7 +17,8 @@ from websockets.sync.client import ClientConnection, connect
 
 from protocol.messages import AGENT_WS_PATH, CommandOutcome, CommandResult, encode
 from tests.conftest import hub_settings
-from tests.helpers import agent_hello, running_hub
+from tests.support.hellos import agent_hello
+from tests.support.hub_server import running_hub
 
 pytestmark = pytest.mark.integration
 

@@ -5,7 +5,8 @@ from __future__ import annotations
 import pytest
 
 from gcs.launcher import LocalFleet
-from tests.helpers import FleetWatcher, api_client
+from tests.support.api import api_client
+from tests.support.watcher import FleetWatcher
 
 pytestmark = pytest.mark.integration
 

@@ -23,8 +23,9 @@ import pytest
 from common.retry import Backoff
 from gcs.launcher import FleetPlan, LocalFleet, free_port
 from protocol.messages import CommandOutcome, Telemetry, VehicleState, encode
-from tests.helpers import agent_hello, poll_until_async
+from tests.support.hellos import agent_hello
 from tests.support.hubs import TEST_HUB_ENV
+from tests.support.waiting import poll_until_async
 from vehicle_agents.hub.link import HubLink, HubTimeouts
 from vehicle_agents.hub.outbox import Outbox
 

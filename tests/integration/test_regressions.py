@@ -12,8 +12,10 @@ import pytest
 from backend.storage.flights import FlightTracker
 from backend.storage.records import TelemetryEnvelope
 from protocol.messages import CLIENT_WS_PATH, CloseCode, Telemetry, VehicleState
-from tests.helpers import FleetWatcher, api_client, poll_until
 from tests.support.agents import close_code, scripted_agent, telemetry_frame, websocket
+from tests.support.api import api_client
+from tests.support.waiting import poll_until
+from tests.support.watcher import FleetWatcher
 
 Enrol = Callable[[str], str]
 

@@ -33,7 +33,10 @@ from protocol.scans import (
     split_client_scan_frame,
 )
 from tests.conftest import ADMIN_PASSWORD, hub_settings
-from tests.helpers import access_token, agent_hello, api_client, poll_until, running_hub
+from tests.support.api import access_token, api_client
+from tests.support.hellos import agent_hello
+from tests.support.hub_server import running_hub
+from tests.support.waiting import poll_until
 
 pytestmark = pytest.mark.integration
 

@@ -25,8 +25,11 @@ from gcs.launcher import LocalFleet
 from protocol.messages import CLIENT_WS_PATH
 from protocol.scans import ScanFrame, split_client_scan_frame
 from simulator.world.obstacles import default_scene
-from tests.helpers import FleetWatcher, access_token, api_client, poll_until, running_fleet
+from tests.support.api import access_token, api_client
 from tests.support.hubs import TEST_HUB_ENV
+from tests.support.processes import running_fleet
+from tests.support.waiting import poll_until
+from tests.support.watcher import FleetWatcher
 
 pytestmark = [pytest.mark.integration, pytest.mark.slow]
 

@@ -16,7 +16,7 @@ from websockets.sync.client import ClientConnection
 
 from backend.audit import AuditLog
 from backend.auth.accounts import Accounts
-from backend.hub import _bootstrap_accounts
+from backend.hub.start import _bootstrap_accounts
 from backend.settings import HubSettings
 from backend.storage.database import make_engine, migrate
 from protocol.messages import (
@@ -25,9 +25,11 @@ from protocol.messages import (
     encode,
 )
 from tests.conftest import hub_settings
-from tests.helpers import FleetWatcher, access_token, api_client, running_hub
 from tests.support.accounts import PASSWORD, _no_command_reaches, _report_position, _user
 from tests.support.agents import scripted_agent
+from tests.support.api import access_token, api_client
+from tests.support.hub_server import running_hub
+from tests.support.watcher import FleetWatcher
 
 Enrol = Callable[[str], str]
 

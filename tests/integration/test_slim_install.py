@@ -13,7 +13,7 @@ from pathlib import Path
 import pytest
 
 from gcs.launcher import end_with_parent, free_port
-from tests.helpers import FleetWatcher, ready
+from tests.support.watcher import FleetWatcher, ready
 from vehicle_agents.config import default_vehicle_id
 from vehicle_agents.slim_install import installed_pymavlink, slim, unneeded_files
 

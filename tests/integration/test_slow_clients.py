@@ -15,8 +15,8 @@ import httpx
 import pytest
 
 from gcs.launcher import FleetPlan, LocalFleet, free_port
-from tests.helpers import poll_until
 from tests.support.hubs import TEST_HUB_ENV
+from tests.support.waiting import poll_until
 
 pytestmark = pytest.mark.integration
 

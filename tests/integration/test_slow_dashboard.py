@@ -22,7 +22,10 @@ from backend.observability import metrics
 from backend.realtime.client_feed import ClientFeed
 from protocol.messages import AGENT_WS_PATH, CLIENT_WS_PATH, LiveState, VehicleState, encode
 from tests.conftest import ADMIN_PASSWORD, hub_settings
-from tests.helpers import access_token, agent_hello, poll_until, running_hub
+from tests.support.api import access_token
+from tests.support.hellos import agent_hello
+from tests.support.hub_server import running_hub
+from tests.support.waiting import poll_until
 
 VEHICLES = 8
 SLOW_CLIENT_TIMEOUT_S = 2.0

@@ -17,7 +17,7 @@ from backend.storage.models import Base
 from backend.storage.records import TelemetryEnvelope
 from backend.storage.repository import Repository
 from protocol.messages import Telemetry, VehicleState
-from tests.helpers import agent_hello
+from tests.support.hellos import agent_hello
 
 
 def _sample(vehicle_id: str, seq: int, time: float) -> TelemetryEnvelope:

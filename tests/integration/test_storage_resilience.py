@@ -7,9 +7,11 @@ from pathlib import Path
 import httpx
 
 from tests.conftest import ADMIN_PASSWORD, POSTGRES_ADDRESS, hub_settings, scratch_postgres
-from tests.helpers import access_token, api_client, poll_until, running_hub
 from tests.support.agents import scripted_agent, telemetry_frame
-from tests.tcp_proxy import CuttableProxy
+from tests.support.api import access_token, api_client
+from tests.support.hub_server import running_hub
+from tests.support.tcp_proxy import CuttableProxy
+from tests.support.waiting import poll_until
 
 SAMPLES = 200
 

@@ -10,8 +10,9 @@ import pytest
 
 from backend.settings import HubSettings
 from tests.conftest import ADMIN_PASSWORD, hub_settings
-from tests.helpers import access_token, api_client, running_hub
-from tests.map_tiles import png_tile, write_mbtiles, write_pmtiles
+from tests.support.api import access_token, api_client
+from tests.support.hub_server import running_hub
+from tests.support.map_tiles import png_tile, write_mbtiles, write_pmtiles
 
 NORTH, SOUTH = png_tile((0, 128, 0), 16), png_tile((0, 0, 128), 16)
 TILES = {(0, 0, 0): png_tile((200, 0, 0), 16), (1, 0, 0): NORTH, (1, 0, 1): SOUTH}

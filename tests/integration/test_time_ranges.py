@@ -12,8 +12,10 @@ import pytest
 
 from protocol.messages import Telemetry, VehicleState, encode
 from tests.conftest import ADMIN_PASSWORD, hub_settings
-from tests.helpers import access_token, api_client, poll_until, running_hub
 from tests.support.agents import scripted_agent
+from tests.support.api import access_token, api_client
+from tests.support.hub_server import running_hub
+from tests.support.waiting import poll_until
 
 # Finer than a microsecond, as a clock's float seconds are.
 TIMES = [1_700_000_000.1234567, 1_700_000_000.2234567, 1_700_000_000.3234567]

@@ -11,9 +11,11 @@ from pathlib import Path
 import pytest
 
 from tests.conftest import ADMIN_PASSWORD, hub_settings
-from tests.helpers import access_token, api_client, poll_until_async, running_hub
 from tests.support.agents import scripted_agent
+from tests.support.api import access_token, api_client
 from tests.support.flights import OPERATOR_TOKEN, _heartbeat, _recorded_flight
+from tests.support.hub_server import running_hub
+from tests.support.waiting import poll_until_async
 from vehicle_agents.tlog.pruning import DAY_S, UPLOADED_DIR, TlogRetention
 from vehicle_agents.tlog.uploads import TlogUploader
 

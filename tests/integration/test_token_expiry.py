@@ -13,8 +13,9 @@ from websockets.sync.client import ClientConnection, connect
 
 from protocol.messages import CLIENT_WS_PATH, CloseCode
 from tests.conftest import ADMIN_PASSWORD, hub_settings
-from tests.helpers import access_token, running_hub
 from tests.support.agents import scripted_agent, telemetry_frame
+from tests.support.api import access_token
+from tests.support.hub_server import running_hub
 from tests.viz_wire import SUBPROTOCOL
 
 TOKEN_TTL_S = 3.0

@@ -11,7 +11,7 @@ from websockets.exceptions import ConnectionClosed
 from websockets.sync.client import connect
 
 from protocol.messages import CLIENT_WS_PATH, CloseCode
-from tests.helpers import api_client
+from tests.support.api import api_client
 
 
 def _chunks(total: int, size: int = 64 * 1024) -> Iterator[bytes]:

@@ -11,8 +11,9 @@ import pytest
 import backend.hub.start
 from backend.auth.rate_limit import Limit, RateLimiter
 from tests.conftest import ADMIN_PASSWORD, hub_settings
-from tests.helpers import access_token, api_client, running_hub
 from tests.support.agents import scripted_agent
+from tests.support.api import access_token, api_client
+from tests.support.hub_server import running_hub
 
 VEHICLE = "b1"
 Route = tuple[str, str, dict[str, object] | None]

@@ -20,9 +20,12 @@ import httpx
 import pytest
 from pymavlink.dialects.v20 import common as mavlink2
 
-from tests.helpers import FleetWatcher, agent_process, api_client, connected, poll_until
-from tests.mavlink_peer import ScriptedFlightController
-from tests.tcp_proxy import CuttableProxy
+from tests.support.api import api_client
+from tests.support.mavlink_peer import ScriptedFlightController
+from tests.support.processes import agent_process
+from tests.support.tcp_proxy import CuttableProxy
+from tests.support.waiting import poll_until
+from tests.support.watcher import FleetWatcher, connected
 from vehicle_agents.cli import EXIT_VEHICLE_ID_IN_USE
 
 pytestmark = pytest.mark.integration

@@ -11,7 +11,7 @@ import httpx
 import pytest
 
 from gcs.launcher import LocalFleet
-from tests.helpers import poll_until
+from tests.support.waiting import poll_until
 
 pytestmark = pytest.mark.integration
 

@@ -12,7 +12,9 @@ from websockets.sync.client import ClientConnection, connect
 
 from common.geodesy import LocalFrame
 from gcs.launcher import LocalFleet
-from tests.helpers import FleetWatcher, api_client, ready, take_off
+from tests.support.api import api_client
+from tests.support.settling import take_off
+from tests.support.watcher import FleetWatcher, ready
 from tests.viz_wire import SUBPROTOCOL, scene_messages, viewer_camera
 
 pytestmark = pytest.mark.integration

@@ -13,7 +13,8 @@ from websockets.sync.client import connect
 
 from protocol.messages import CloseCode
 from tests.conftest import ADMIN_PASSWORD, hub_settings
-from tests.helpers import access_token, running_hub
+from tests.support.api import access_token
+from tests.support.hub_server import running_hub
 from tests.viz_wire import SUBPROTOCOL, scene_messages, scene_socket
 
 PASSWORD = "correct horse battery staple"

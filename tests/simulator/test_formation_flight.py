@@ -9,7 +9,7 @@ import math
 from common.formation import ConsensusGains, Controller
 from common.geodesy import LocalFrame
 from simulator import DEFAULT_HOME
-from tests.formation_sim import SimVehicle, fly_formation
+from tests.support.formation_sim import SimVehicle, fly_formation
 from vehicle_agents.control.formation_follower import Follower
 from vehicle_agents.control.formation_setpoint import Action
 
@@ -33,7 +33,7 @@ def test_seed_square_with_the_consensus_controller() -> None:
     a steady leg both agree with the leader, so the legs' error is the corners' again,
     plus a third of the partner's corner transient (the slots swing 4.2 m apart at each
     90-degree turn): measured 0.33 m, against 0.26 m for leader-following
-    (the law itself is checked in tests/unit/formation/test_formation.py)."""
+    (the law itself is checked in tests/unit/formation/test_follower.py)."""
     consensus = fly_formation(
         min_separation_m=MIN_SEPARATION_M,
         controller=Controller.CONSENSUS,

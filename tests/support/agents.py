@@ -15,7 +15,8 @@ from websockets.exceptions import ConnectionClosed
 from websockets.sync.client import ClientConnection, connect
 
 from protocol.messages import AGENT_WS_PATH, Telemetry, VehicleState, encode
-from tests.helpers import agent_hello, poll_until
+from tests.support.hellos import agent_hello
+from tests.support.waiting import poll_until
 
 
 def ws_url(base_url: str, path: str) -> str:

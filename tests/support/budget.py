@@ -5,7 +5,7 @@ A test whose setup and call together take longer than `budget_s()` is named in t
 summary, and fails beyond `FAIL_FACTOR` times the budget, unless it is marked
 ``@pytest.mark.slow`` (on the function, or ``pytestmark`` for a module) and the
 README's list of slow tests names it (its node id, or its module for a module-wide mark)
-with the reason. `tests/unit/test_slow_list.py` checks that list against the marks.
+with the reason. `tests/unit/project/test_slow_list.py` checks that list against the marks.
 """
 
 from __future__ import annotations

@@ -14,7 +14,7 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 from protocol.photos import CameraIntrinsics, PhotoPose
 from simulator.config import ListenAddress
 from simulator.outputs.photos import PhotoServer
-from tests.helpers import poll_until_async
+from tests.support.waiting import poll_until_async
 from vehicle_agents.camera.queue import PhotoQueue
 from vehicle_agents.camera.sources import SimulatedCamera
 from vehicle_agents.camera.trigger import CameraTrigger

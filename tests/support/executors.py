@@ -7,7 +7,7 @@ import contextlib
 from collections.abc import Awaitable, Callable
 from typing import TypeVar
 
-from tests.mavlink_peer import ScriptedFlightController
+from tests.support.mavlink_peer import ScriptedFlightController
 from vehicle_agents.control.executor import CommandExecutor
 from vehicle_agents.fcu.commands import CommandTimeouts
 from vehicle_agents.fcu.link import FcuLink

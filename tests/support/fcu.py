@@ -14,7 +14,7 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 from simulator import ListenAddress, SimulatorConfig, SimulatorServer
 from simulator.config import Autopilot
 from tests.support.simulators import serving
-from tests.tcp_proxy import CuttableProxy, Filter
+from tests.support.tcp_proxy import CuttableProxy, Filter
 from vehicle_agents.control.executor import CommandExecutor
 from vehicle_agents.fcu.commands import CommandTimeouts
 from vehicle_agents.fcu.link import FcuLink

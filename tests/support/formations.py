@@ -7,11 +7,8 @@ from typing import Any
 import httpx
 
 from common.geodesy import LocalFrame
-from tests.helpers import (
-    FleetWatcher,
-    ready,
-    send_command,
-)
+from tests.support.api import send_command
+from tests.support.watcher import FleetWatcher, ready
 
 LEADER, RIGHT, LEFT = "sim_1", "sim_3", "sim_2"  # the right slot is on the sim_3 side
 

@@ -35,7 +35,7 @@ from protocol.messages import CommandOutcome as Outcome
 from protocol.scans import (
     encode_scan,
 )
-from tests.helpers import agent_hello
+from tests.support.hellos import agent_hello
 from tests.support.scans import _frame
 
 json_values = st.recursive(

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from playwright.sync_api import FloatRect, Page, expect
 
-from tests.helpers import poll_until
+from tests.support.waiting import poll_until
 
 
 def _box(page: Page, selector: str) -> FloatRect:

@@ -15,8 +15,11 @@ from pymavlink import mavutil
 
 from gcs.launcher import free_port
 from simulator.config import DEFAULT_HOME
-from tests.helpers import access_token, agent_process, api_client, poll_until, running_hub
+from tests.support.api import access_token, api_client
+from tests.support.hub_server import running_hub
 from tests.support.hubs import ADMIN_PASSWORD, hub_settings
+from tests.support.processes import agent_process
+from tests.support.waiting import poll_until
 
 CAMERA_MODEL = "4.8,3.6,320,240,5.4"  # a small sensor and image: fast to render and send
 

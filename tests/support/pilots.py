@@ -10,9 +10,7 @@ from typing import Any
 from websockets.sync.client import ClientConnection, connect
 
 from protocol.messages import CLIENT_WS_PATH
-from tests.helpers import (
-    poll_until,
-)
+from tests.support.waiting import poll_until
 
 VEHICLE = "sim_1"
 

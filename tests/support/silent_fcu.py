@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from tests.mavlink_peer import ScriptedFlightController
+from tests.support.mavlink_peer import ScriptedFlightController
 from vehicle_agents.fcu.messages import MavMessage
 
 

@@ -13,11 +13,9 @@ import httpx
 
 from gcs.launcher import FleetPlan, LocalFleet, free_port
 from tests.conftest import scratch_postgres
-from tests.helpers import (
-    access_token,
-    poll_until,
-)
+from tests.support.api import access_token
 from tests.support.hubs import TEST_HUB_ENV
+from tests.support.waiting import poll_until
 
 VEHICLE = "sim_1"
 

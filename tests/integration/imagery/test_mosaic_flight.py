@@ -39,11 +39,13 @@ from common.opencv import cv2
 from gcs.launcher import FleetPlan, LocalFleet, free_port
 from protocol.photos import CameraIntrinsics, PhotoPose
 from simulator.world.ground import Ground
-from tests.helpers import FleetWatcher, access_token, api_client, on_the_ground, poll_until
 from tests.mosaic_photos import NO_RTK, Noise, marker_errors_m, mosaic_of, target_errors_m
+from tests.support.api import access_token, api_client
 from tests.support.hubs import TEST_HUB_ENV
-from tests.survey_shapes import geojson_area
-from tests.tcp_proxy import CuttableProxy
+from tests.support.survey_shapes import geojson_area
+from tests.support.tcp_proxy import CuttableProxy
+from tests.support.waiting import poll_until
+from tests.support.watcher import FleetWatcher, on_the_ground
 
 pytestmark = [pytest.mark.integration, pytest.mark.slow]
 

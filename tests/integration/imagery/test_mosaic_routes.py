@@ -23,8 +23,9 @@ from backend.imagery.mosaic.service import MosaicService
 from protocol.photos import CameraIntrinsics
 from simulator.world.ground import Ground
 from tests.conftest import ADMIN_PASSWORD, hub_settings
-from tests.helpers import access_token, api_client, running_hub
 from tests.mosaic_photos import HOME, mosaic_of, survey_photos
+from tests.support.api import access_token, api_client
+from tests.support.hub_server import running_hub
 
 SURVEY = "5e1f0a9b2c3d"
 CAMERA = CameraIntrinsics(

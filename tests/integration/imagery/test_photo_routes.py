@@ -15,8 +15,8 @@ import pytest
 from PIL import Image
 
 from protocol.photos import CameraIntrinsics, PhotoMeta, PhotoPose
-from tests.helpers import poll_until_async
 from tests.support.agents import scripted_agent
+from tests.support.waiting import poll_until_async
 from vehicle_agents.camera.geotag import geotag
 from vehicle_agents.camera.queue import PhotoQueue
 from vehicle_agents.camera.upload import PhotoUploader
@@ -178,7 +178,8 @@ def test_a_vehicles_uploads_at_once_are_capped_and_its_agent_waits_its_turn(
     tries again (a refusal for good would have dropped it); once the stale upload
     expires, the photo goes through."""
     from tests.conftest import ADMIN_PASSWORD, hub_settings
-    from tests.helpers import access_token, api_client, running_hub
+    from tests.support.api import access_token, api_client
+    from tests.support.hub_server import running_hub
 
     settings = hub_settings(tmp_path, photo_uploads_per_vehicle=1)
     with running_hub(settings) as hub:

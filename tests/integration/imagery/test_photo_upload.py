@@ -23,9 +23,12 @@ from pymavlink import mavutil
 from gcs.launcher import free_port
 from simulator.config import DEFAULT_HOME
 from tests.conftest import ADMIN_PASSWORD, hub_settings
-from tests.helpers import access_token, agent_process, api_client, poll_until, running_hub
+from tests.support.api import access_token, api_client
+from tests.support.hub_server import running_hub
 from tests.support.photos import CAMERA_MODEL, GROUND_BELOW_M, _accepts
-from tests.tcp_proxy import CuttableProxy
+from tests.support.processes import agent_process
+from tests.support.tcp_proxy import CuttableProxy
+from tests.support.waiting import poll_until
 
 pytestmark = pytest.mark.integration
 

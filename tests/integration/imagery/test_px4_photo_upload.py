@@ -14,8 +14,8 @@ import pytest
 from pymavlink import mavutil
 
 from simulator.config import DEFAULT_HOME
-from tests.helpers import poll_until
 from tests.support.photos import camera_vehicle
+from tests.support.waiting import poll_until
 
 pytestmark = pytest.mark.integration
 

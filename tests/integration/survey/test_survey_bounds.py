@@ -25,8 +25,10 @@ import pytest
 
 from common.geodesy import LocalFrame
 from gcs.launcher import LocalFleet
-from tests.helpers import FleetWatcher, access_token, api_client, poll_until, raw_http_answer, ready
-from tests.survey_shapes import kml_polygon
+from tests.support.api import access_token, api_client, raw_http_answer
+from tests.support.survey_shapes import kml_polygon
+from tests.support.waiting import poll_until
+from tests.support.watcher import FleetWatcher, ready
 
 pytestmark = pytest.mark.integration
 

@@ -18,15 +18,11 @@ from shapely.geometry import Polygon, box
 
 from common.geodesy import LocalFrame
 from gcs.launcher import FleetPlan, LocalFleet, free_port
-from tests.helpers import (
-    FleetWatcher,
-    access_token,
-    api_client,
-    on_the_ground,
-    poll_until,
-)
+from tests.support.api import access_token, api_client
 from tests.support.hubs import TEST_HUB_ENV
-from tests.survey_shapes import geojson_area
+from tests.support.survey_shapes import geojson_area
+from tests.support.waiting import poll_until
+from tests.support.watcher import FleetWatcher, on_the_ground
 
 pytestmark = [pytest.mark.integration, pytest.mark.slow]
 

@@ -15,8 +15,9 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 from backend.survey.files.qgc_plan import read_qgc_plan_items
 from backend.survey.planning.camera import PRESETS
 from gcs.launcher import LocalFleet
-from tests.helpers import FleetWatcher, api_client, ready
+from tests.support.api import api_client
 from tests.support.surveys import read_wpl
+from tests.support.watcher import FleetWatcher, ready
 
 pytestmark = pytest.mark.integration
 

@@ -9,7 +9,7 @@ from types import ModuleType
 import pytest
 
 from backend.exports import ExportEvent, ExportSample, sample_position, tlog_chunks
-from tests.mavutil_state import mavutil_in_mavlink2, read_tlog
+from tests.support.mavutil_state import mavutil_in_mavlink2, read_tlog
 from tests.unit.exports import flight_data
 from tests.unit.exports.flight_data import T0, events, flight, samples
 

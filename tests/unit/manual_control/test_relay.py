@@ -8,7 +8,7 @@ from backend.fleet.commands import AgentChannel
 from backend.fleet.registry import FleetRegistry
 from backend.manual_control.relay import ManualRelay
 from protocol.messages import ManualAxes, ManualFrame, Message
-from tests.helpers import agent_hello
+from tests.support.hellos import agent_hello
 
 
 def frame(seq: int) -> ManualFrame:

@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 from backend.mapping.tiles import TileLibrary, TileSetError, UnknownTileSet, open_tile_set
-from tests.map_tiles import png_tile, write_mbtiles, write_pmtiles
+from tests.support.map_tiles import png_tile, write_mbtiles, write_pmtiles
 
 RED, GREEN, BLUE = png_tile((255, 0, 0), 8), png_tile((0, 255, 0), 8), png_tile((0, 0, 255), 8)
 # At zoom 1, XYZ y=0 is the northern row; MBTiles stores it as TMS row 1.

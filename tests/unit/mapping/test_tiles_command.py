@@ -8,7 +8,7 @@ import pytest
 
 from backend.mapping.tiles import TileLibrary
 from gcs.cli import main
-from tests.map_tiles import png_tile, write_mbtiles, write_pmtiles
+from tests.support.map_tiles import png_tile, write_mbtiles, write_pmtiles
 
 TILE = png_tile((10, 20, 30), 8)
 

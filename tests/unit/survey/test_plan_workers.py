@@ -18,7 +18,7 @@ from backend.survey.planning.schemas import SurveyRequest
 from backend.survey.planning.survey import Fleet
 from common.geodesy import GeoPoint, LocalFrame
 from tests.conftest import hub_settings
-from tests.helpers import poll_until, poll_until_async
+from tests.support.waiting import poll_until, poll_until_async
 
 FRAME = LocalFrame(47.0, 8.0, 0.0)
 

@@ -1,6 +1,6 @@
 """A survey plan's size is estimated before it is planned: never above what the planner
 makes (so nothing that fits is refused), refused past the limits naming each one. (A plan's
-time is bounded by killing its worker process: tests/unit/test_worker_pool.py.)"""
+time is bounded by killing its worker process: tests/unit/worker_pool/test_worker_pool.py.)"""
 
 from __future__ import annotations
 
@@ -21,7 +21,7 @@ from backend.survey.planning.mission import survey_mission
 from backend.survey.planning.planner import plan_lanes
 from backend.survey.planning.report import best_angle
 from common.geodesy import GeoPoint, LocalFrame
-from tests.survey_shapes import SHAPES
+from tests.support.survey_shapes import SHAPES
 
 LIMITS = SurveyLimits(survey_max_lanes=1000, survey_max_photos=20_000, survey_max_mission_items=700)
 

@@ -22,7 +22,7 @@ from backend.survey.planning.mission import mission_items
 from backend.survey.planning.planner import PlanError, plan_lanes
 from backend.survey.planning.report import best_angle, flight_time_s
 from common.geodesy import GeoPoint
-from tests.survey_shapes import SHAPES, shape
+from tests.support.survey_shapes import SHAPES, shape
 
 CALC = calculate(
     preset("sony_a6000_16mm"), altitude_m=100, side_overlap_pct=70, front_overlap_pct=80

@@ -18,7 +18,6 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 from simulator.outputs.cameras import CameraComponent
 from simulator.outputs.photos import pose_of
 from simulator.vehicle import PhotoTaken
-from tests.helpers import poll_until_async
 from tests.support.cameras import (
     BOOT_EPOCH,
     CAMERA,
@@ -27,6 +26,7 @@ from tests.support.cameras import (
     photo_server,
     queued,
 )
+from tests.support.waiting import poll_until_async
 from vehicle_agents.camera.mavlink_camera import MavlinkCamera
 from vehicle_agents.camera.queue import PhotoQueue
 from vehicle_agents.camera.sources import CaptureError, Shot

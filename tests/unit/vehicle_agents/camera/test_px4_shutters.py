@@ -12,7 +12,6 @@ import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from simulator.vehicle import PhotoTaken
-from tests.helpers import poll_until_async
 from tests.support.cameras import (
     BOOT_EPOCH,
     CAMERA,
@@ -21,6 +20,7 @@ from tests.support.cameras import (
     photo_server,
     trigger_for,
 )
+from tests.support.waiting import poll_until_async
 from vehicle_agents.camera.queue import QueuedPhoto
 from vehicle_agents.camera.sources import SimulatedCamera
 from vehicle_agents.camera.trigger import SHOT_QUEUE, CameraTrigger

@@ -11,7 +11,7 @@ from typing import Any
 import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
-from tests.mavutil_state import mavutil_in_mavlink2, read_tlog
+from tests.support.mavutil_state import mavutil_in_mavlink2, read_tlog
 from vehicle_agents.tlog.recorder import TlogRecorder, TlogUploadError, upload_tlog
 
 T0 = 1_700_000_000.0  # 2023-11-14T22:13:20Z

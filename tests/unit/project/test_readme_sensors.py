@@ -1,0 +1,22 @@
+"""The README's sensor table is the agent's model table: every model, its default baud
+rate, and nothing the agent does not read."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+from vehicle_agents.sensors.lidar.models import MODELS
+
+README = Path(__file__).parents[3] / "README.md"
+
+
+def test_the_sensor_table_lists_each_model_and_its_default_baud() -> None:
+    text = README.read_text()
+    section = text[text.index("### Sensors") :]
+    section = section[: section.index("\n## ")]
+    rows = {
+        match[1]: match[2]
+        for match in re.finditer(r"^\| [^|]+ \| `([a-z0-9-]+)` \| [^|]+ \| (\d+)", section, re.M)
+    }
+    assert rows == {name: str(model.baud) for name, model in MODELS.items()}

@@ -347,3 +347,6 @@ def test_fly_here_moves_the_vehicle(
     )
     shot(page, "fly-here-arrived", size)
     assert api.post(commands, json={"name": "land"}).status_code == 200
+    poll_until(
+        lambda: not vehicle_states(api)[GOTO_VEHICLE]["armed"], 120, f"{GOTO_VEHICLE} landed"
+    )

@@ -117,13 +117,11 @@ def create_app(settings: HubSettings | None = None) -> FastAPI:
         # The features, each on the started hub before it runs (their routes read them).
         app.state.formation = await formation_wiring.attach(hub)
         survey_deps.provide(app.state, hub.surveys)  # the survey's routes take its service
-        photo_deps.provide(app.state, hub.photos, hub.registry)  # the imagery's routes too
-        mosaic_deps.provide(app.state, hub.mosaic, hub.tiles)
+        photo_deps.provide(app.state, hub.photos)  # the imagery's routes too
+        mosaic_deps.provide(app.state, hub.mosaic)
         scan_deps.provide(
             app.state,
-            scan_deps.ScanRouteServices(
-                hub.scans, hub.registry, hub.logbook, hub.refresh_obstacles
-            ),
+            scan_deps.ScanRouteServices(hub.scans, hub.refresh_obstacles),
         )
         hub.scene_layers.extend(scan_scene_layers(hub.scans, hub.bus))
         runner = asyncio.create_task(run_hub(hub), name="hub")

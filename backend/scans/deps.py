@@ -1,8 +1,9 @@
-"""The scan routes' typed FastAPI dependencies: the scan service and what the routes read
-beside it, never the hub.
+"""The scan routes' typed FastAPI dependencies: the scan service and the obstacles'
+refresh, never the hub. The fleet's registry and the logbook the routes also read are the
+API's (``backend/api/deps.py``'s ``RegistryDep`` and ``LogbookDep``).
 
 The app hands them over when the hub starts (``app.py`` calls ``provide``); a route
-declares ``scans: ScansDep`` (or ``fleet: FleetDep``, ...) and is handed it.
+declares ``scans: ScansDep`` and is handed it.
 """
 
 from __future__ import annotations
@@ -15,10 +16,8 @@ from fastapi import Depends
 from starlette.datastructures import State
 from starlette.requests import HTTPConnection
 
-from backend.fleet.registry import FleetRegistry
 from backend.scans.pointmap import MapObstacle
 from backend.scans.service import ScanService
-from backend.storage.logbook import Logbook
 
 STATE_KEY = "scans"
 
@@ -30,8 +29,6 @@ RefreshObstacles = Callable[[], Awaitable[list[MapObstacle]]]
 @dataclass(frozen=True)
 class ScanRouteServices:
     scans: ScanService
-    fleet: FleetRegistry  # a route about a vehicle first checks it is known (404)
-    logbook: Logbook  # a flight's time range, for its points
     refresh_obstacles: RefreshObstacles
 
 
@@ -49,19 +46,9 @@ def get_scans(connection: HTTPConnection) -> ScanService:
     return _services(connection).scans
 
 
-def get_fleet(connection: HTTPConnection) -> FleetRegistry:
-    return _services(connection).fleet
-
-
-def get_logbook(connection: HTTPConnection) -> Logbook:
-    return _services(connection).logbook
-
-
 def get_refresh_obstacles(connection: HTTPConnection) -> RefreshObstacles:
     return _services(connection).refresh_obstacles
 
 
 ScansDep = Annotated[ScanService, Depends(get_scans)]
-FleetDep = Annotated[FleetRegistry, Depends(get_fleet)]
-LogbookDep = Annotated[Logbook, Depends(get_logbook)]
 RefreshObstaclesDep = Annotated[RefreshObstacles, Depends(get_refresh_obstacles)]

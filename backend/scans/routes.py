@@ -12,13 +12,14 @@ from fastapi import Query
 from fastapi.responses import Response
 from pydantic import BaseModel, Field
 
+from backend.api.deps import LogbookDep, RegistryDep
 from backend.api.logs.common import FlightIdPath, flight_end
 from backend.api.security import SecuredRouter, requires
 from backend.api.time_ranges import Moment, time_query, time_range
 from backend.api.vehicles import VehicleIdPath
 from backend.auth.policy import Permission
 from backend.errors import NotFound
-from backend.scans.deps import FleetDep, LogbookDep, RefreshObstaclesDep, ScansDep
+from backend.scans.deps import RefreshObstaclesDep, ScansDep
 from backend.scans.export import ply_bytes
 from backend.scans.pointmap import PointMap
 from backend.scans.points import WorldPoints, world_points
@@ -102,7 +103,7 @@ def _body(scans: ScanService, vehicle_id: str, data: bytes) -> ScanPoints:
     openapi_extra=requires(Permission.READ),
     responses={404: {"description": "Unknown vehicle, or no scan from it yet"}},
 )
-async def latest_scan(vehicle_id: VehicleIdPath, scans: ScansDep, fleet: FleetDep) -> ScanPoints:
+async def latest_scan(vehicle_id: VehicleIdPath, scans: ScansDep, fleet: RegistryDep) -> ScanPoints:
     """The vehicle's newest scan as world points (live, else the newest stored)."""
     fleet.get(vehicle_id)
     row = await asyncio.to_thread(scans.repository.latest, vehicle_id)
@@ -134,7 +135,7 @@ async def latest_scan(vehicle_id: VehicleIdPath, scans: ScansDep, fleet: FleetDe
 async def scans_between(
     vehicle_id: VehicleIdPath,
     scans: ScansDep,
-    fleet: FleetDep,
+    fleet: RegistryDep,
     start: Annotated[Moment | None, time_query("end - 1 min")] = None,
     end: Annotated[Moment | None, time_query("now")] = None,
     limit: Annotated[int, Query(ge=1, le=MAX_SCANS_PAGE)] = 20,
@@ -164,7 +165,7 @@ async def scans_between(
     openapi_extra=requires(Permission.READ),
 )
 async def scan_diagnostics(
-    vehicle_id: VehicleIdPath, scans: ScansDep, fleet: FleetDep
+    vehicle_id: VehicleIdPath, scans: ScansDep, fleet: RegistryDep
 ) -> ScanDiagnosticsBody:
     """What the hub made of this vehicle's scans (received, stored, refused by reason), and
     what the agent's LIDAR parser decoded and dropped by reason, as the agent last said."""

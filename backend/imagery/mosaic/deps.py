@@ -1,8 +1,9 @@
-"""The mosaic routes' typed FastAPI dependencies: the mosaics and the offline tile library
-(where a mosaic is installed as a base map), never the hub.
+"""The mosaic routes' typed FastAPI dependency: the mosaics, never the hub (the offline
+tile library, where a mosaic is installed as a base map, is the API's ``TilesDep``,
+``backend/api/deps.py``).
 
-The app provides them on its state when the hub starts (``app.py``); a route declares
-``mosaics: MosaicsDep`` or ``tiles: TileLibraryDep`` and is handed it.
+The app provides it on its state when the hub starts (``app.py``); a route declares
+``mosaics: MosaicsDep`` and is handed it.
 """
 
 from __future__ import annotations
@@ -15,7 +16,6 @@ from starlette.datastructures import State
 from starlette.requests import HTTPConnection
 
 from backend.imagery.mosaic.service import MosaicService
-from backend.mapping.tiles import TileLibrary
 
 STATE_KEY = "mosaics"
 
@@ -25,12 +25,11 @@ class MosaicRoutesUse:
     """What the mosaic routes use of the running hub."""
 
     mosaics: MosaicService
-    tiles: TileLibrary
 
 
-def provide(state: State, mosaics: MosaicService, tiles: TileLibrary) -> None:
-    """Make these the ones the routes are handed (the app's lifespan calls this)."""
-    setattr(state, STATE_KEY, MosaicRoutesUse(mosaics, tiles))
+def provide(state: State, mosaics: MosaicService) -> None:
+    """Make this the one the routes are handed (the app's lifespan calls this)."""
+    setattr(state, STATE_KEY, MosaicRoutesUse(mosaics))
 
 
 def _provided(connection: HTTPConnection) -> MosaicRoutesUse:
@@ -42,9 +41,4 @@ def get_mosaics(connection: HTTPConnection) -> MosaicService:
     return _provided(connection).mosaics
 
 
-def get_tile_library(connection: HTTPConnection) -> TileLibrary:
-    return _provided(connection).tiles
-
-
 MosaicsDep = Annotated[MosaicService, Depends(get_mosaics)]
-TileLibraryDep = Annotated[TileLibrary, Depends(get_tile_library)]

@@ -17,12 +17,13 @@ from fastapi import Path, Request, Response
 from fastapi.responses import FileResponse, JSONResponse
 from pydantic import Field
 
+from backend.api.deps import TilesDep
 from backend.api.responses import ErrorMessage
 from backend.api.security import SecuredRouter, requires
 from backend.api.tiles import TileSet
 from backend.auth.policy import Permission
 from backend.errors import Conflict, InvalidRequest, NotFound
-from backend.imagery.mosaic.deps import MosaicsDep, TileLibraryDep
+from backend.imagery.mosaic.deps import MosaicsDep
 from backend.imagery.mosaic.export import FORMATS, ExportError
 from backend.imagery.mosaic.progress import MosaicProgress
 from backend.imagery.mosaic.service import SURVEY_ID, MosaicService, UnknownMosaic
@@ -101,9 +102,7 @@ async def export_mosaic(
         409: {"description": "The mosaic has no tiles yet", "model": ErrorMessage},
     },
 )
-async def install_basemap(
-    survey_id: SurveyIdPath, mosaics: MosaicsDep, tiles: TileLibraryDep
-) -> TileSet:
+async def install_basemap(survey_id: SurveyIdPath, mosaics: MosaicsDep, tiles: TilesDep) -> TileSet:
     """Put the mosaic in the hub's offline tiles folder as `mosaic-<survey_id>.pmtiles`:
     the dashboard then offers it as a base map, with no internet (done again, it is
     replaced by the mosaic as it is now)."""

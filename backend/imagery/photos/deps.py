@@ -1,14 +1,14 @@
-"""The photo routes' typed FastAPI dependencies: the photo ingest and the fleet's vehicles,
-never the hub.
+"""The photo routes' typed FastAPI dependency: the photo ingest, never the hub (the fleet's
+registry they also read is the API's ``RegistryDep``, ``backend/api/deps.py``).
 
-The app provides them on its state when the hub starts (``app.py``); a route declares
-``photos: PhotosDep`` or ``vehicles: VehiclesDep`` and is handed it.
+The app provides it on its state when the hub starts (``app.py``); a route declares
+``photos: PhotosDep`` and is handed it.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Annotated, Protocol
+from typing import Annotated
 
 from fastapi import Depends
 from starlette.datastructures import State
@@ -19,23 +19,16 @@ from backend.imagery.photos.ingest import PhotoIngest
 STATE_KEY = "photos"
 
 
-class VehicleDirectory(Protocol):
-    """The fleet's registry: a vehicle by id, or NotFound (404)."""
-
-    def get(self, vehicle_id: str) -> object: ...
-
-
 @dataclass(frozen=True)
 class PhotoRoutesUse:
     """What the photo routes use of the running hub."""
 
     photos: PhotoIngest
-    vehicles: VehicleDirectory
 
 
-def provide(state: State, photos: PhotoIngest, vehicles: VehicleDirectory) -> None:
-    """Make these the ones the routes are handed (the app's lifespan calls this)."""
-    setattr(state, STATE_KEY, PhotoRoutesUse(photos, vehicles))
+def provide(state: State, photos: PhotoIngest) -> None:
+    """Make this the one the routes are handed (the app's lifespan calls this)."""
+    setattr(state, STATE_KEY, PhotoRoutesUse(photos))
 
 
 def _provided(connection: HTTPConnection) -> PhotoRoutesUse:
@@ -47,9 +40,4 @@ def get_photos(connection: HTTPConnection) -> PhotoIngest:
     return _provided(connection).photos
 
 
-def get_vehicles(connection: HTTPConnection) -> VehicleDirectory:
-    return _provided(connection).vehicles
-
-
 PhotosDep = Annotated[PhotoIngest, Depends(get_photos)]
-VehiclesDep = Annotated[VehicleDirectory, Depends(get_vehicles)]

@@ -25,12 +25,13 @@ from pydantic import AfterValidator, BaseModel, Field
 from starlette.background import BackgroundTask
 from starlette.responses import Response
 
+from backend.api.deps import RegistryDep
 from backend.api.finite_json import FiniteJsonRoute
 from backend.api.security import SecuredRouter, requires
 from backend.auth.policy import Permission
 from backend.errors import Forbidden
 from backend.imagery.photos.checks import Refusal, Refused
-from backend.imagery.photos.deps import PhotosDep, VehiclesDep, get_photos
+from backend.imagery.photos.deps import PhotosDep, get_photos
 from backend.imagery.photos.export import write_zip
 from backend.imagery.photos.repository import PhotoCount
 from backend.imagery.photos.uploads import OffsetMismatch
@@ -102,7 +103,7 @@ async def upload_photo_chunk(
     photo_id: PhotoIdPath,
     request: Request,
     photos: PhotosDep,
-    vehicles: VehiclesDep,
+    vehicles: RegistryDep,
     offset: Annotated[int, Query(ge=0, le=MAX_PHOTO_BYTES)] = 0,
     x_photo_meta: Annotated[str | None, Header(max_length=8192)] = None,
 ) -> Response:
@@ -132,7 +133,7 @@ async def photo_upload_status(
     vehicle_id: Annotated[VehicleId, Path()],
     photo_id: PhotoIdPath,
     photos: PhotosDep,
-    vehicles: VehiclesDep,
+    vehicles: RegistryDep,
 ) -> UploadStatus:
     """How much of the photo the hub has (404: nothing yet), to resume a cut upload."""
     vehicles.get(vehicle_id)
@@ -194,7 +195,7 @@ class VehiclePhotos(DronePhotos):
 async def vehicle_photos(
     vehicle_id: Annotated[VehicleId, Path()],
     photos: PhotosDep,
-    vehicles: VehiclesDep,
+    vehicles: RegistryDep,
     limit: Annotated[int, Query(ge=0, le=10_000)] = 100,
 ) -> VehiclePhotos:
     """One vehicle's photos, whatever their survey: counts with reasons, the newest."""

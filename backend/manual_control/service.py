@@ -49,6 +49,15 @@ log = logging.getLogger(__name__)
 
 EXPIRY_CHECK_S = 0.1  # how often the hub looks for leases that input stopped renewing
 RESTART_SCAN_ROWS = 10_000  # the newest lease audit rows read at start
+# An agent's "manual" event this severe (WARNING) or worse: browser control has ended on
+# the vehicle (its deadman, the autopilot taking over, a refusal).
+MANUAL_ENDED_SEVERITY = 4
+
+
+def ends_manual_control(kind: str, severity: int | None) -> bool:
+    """Whether an agent's event says browser control has ended on its vehicle (the agent
+    gateway and the fleet link both ask; an event without a severity counts as DEBUG)."""
+    return kind == "manual" and (severity or 7) <= MANUAL_ENDED_SEVERITY
 
 
 class Feed(Protocol):

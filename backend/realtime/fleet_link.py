@@ -20,6 +20,7 @@ import nats
 from nats.aio.client import Client as Nats
 
 from backend.fleet.registry import FleetRegistry
+from backend.manual_control.service import ends_manual_control
 from backend.realtime.bus import Topic
 from backend.realtime.nats_bus import NatsBus
 from backend.realtime.routing import AgentRoutes, RemoteChannel
@@ -32,9 +33,6 @@ log = logging.getLogger(__name__)
 # a renewal late by a busy database does not hand the vehicle to someone else.
 LEASE_CLAIM_MARGIN_S = 2.0
 LEASE_EXPIRY_S = 2.0  # backend.manual_control.lease.LeaseLimits' default
-# An agent's "manual" event this severe (WARNING) or worse: browser control has ended on
-# the vehicle (backend/realtime/agent_gateway/inbound.py says the same of its own agents).
-MANUAL_ENDED_SEVERITY = 4
 # A vehicle of another hub not heard of for this long is asked after; if no hub answers
 # for it (its hub died, and its agent has not reconnected elsewhere yet), it is shown
 # offline here rather than connected for ever.
@@ -143,8 +141,7 @@ class FleetLink:
                 self._heard_at[message.id] = time.monotonic()
         elif (
             isinstance(message, LiveEvent)
-            and message.kind == "manual"
-            and (message.severity or 7) <= MANUAL_ENDED_SEVERITY
+            and ends_manual_control(message.kind, message.severity)
             and self.on_manual_ended is not None
         ):
             await self.on_manual_ended(message.vehicle_id, message.text)

@@ -10,6 +10,7 @@ import time
 from sqlalchemy.exc import SQLAlchemyError
 
 from backend.fleet.commands import AgentChannel
+from backend.manual_control.service import ends_manual_control
 from backend.observability.metrics import count_rejected
 from backend.realtime.bus import Topic
 from backend.realtime.collaborators import GatewayServices
@@ -36,9 +37,6 @@ from protocol.messages import (
 log = logging.getLogger(__name__)
 
 SCAN_ERROR_INTERVAL_S = 1.0  # refused scans are answered at most this often
-
-# An agent's "manual" event at WARNING or worse: browser control has ended on the vehicle.
-MANUAL_ENDED_SEVERITY = 4
 
 
 class AgentFrames:
@@ -89,7 +87,7 @@ class AgentFrames:
                 )
                 await self.hub.bus.publish(Topic.STORAGE, hello.vehicle_id, stored)
                 await self.hub.publish_event(stored)
-                if message.kind == "manual" and (message.severity or 7) <= MANUAL_ENDED_SEVERITY:
+                if ends_manual_control(message.kind, message.severity):
                     await self._end_manual_control(hello.vehicle_id, message.text)
             case Unavailable():
                 log.warning(

@@ -56,8 +56,11 @@ MANUAL_ENDED_SEVERITY = 4
 
 def ends_manual_control(kind: str, severity: int | None) -> bool:
     """Whether an agent's event says browser control has ended on its vehicle (the agent
-    gateway and the fleet link both ask; an event without a severity counts as DEBUG)."""
-    return kind == "manual" and (severity or 7) <= MANUAL_ENDED_SEVERITY
+    gateway and the fleet link both ask; an event without a severity counts as DEBUG).
+    EMERGENCY is severity 0: a missing severity is tested with ``is None``, since
+    ``severity or 7`` read the most severe event as the least."""
+    level = 7 if severity is None else severity
+    return kind == "manual" and level <= MANUAL_ENDED_SEVERITY
 
 
 class Feed(Protocol):

@@ -23,8 +23,9 @@ from tests.support.waiting import poll_until
 # imported from here by many test modules
 __all__ = ["ADMIN_PASSWORD", "POSTGRES_ADDRESS", "hub_settings", "scratch_postgres"]
 
-# The slow-test budget: an unmarked test over 20 s fails (tests/support/budget.py).
-pytest_plugins = ["tests.support.budget"]
+# The slow-test budget: an unmarked test over 20 s fails (tests/support/budget.py); every
+# run ends with each folder's setup and call times (tests/support/phase_times.py).
+pytest_plugins = ["tests.support.budget", "tests.support.phase_times"]
 
 # Fast enough that a take-off and landing take seconds, slow enough that the
 # 10 Hz telemetry still samples the climb finely.

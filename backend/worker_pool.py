@@ -3,7 +3,7 @@ files' parsing, password hashes.
 
 Why processes: in a thread of the hub's process, Python work holds the GIL, and the event
 loop waits for it at each turn. Planning a survey in two threads held `/health` at a p99
-of 170 ms and parsing KML in one at 234 ms (README "The hub under floods"). A worker
+of 170 ms and parsing KML in one at 234 ms (docs/deployer.md "The hub under floods"). A worker
 process has its own interpreter: the event loop only sends the job and reads the answer.
 
 Why not `concurrent.futures.ProcessPoolExecutor`: a job there cannot be stopped. Killing

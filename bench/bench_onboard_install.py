@@ -1,8 +1,8 @@
-"""What an onboard install holds: the agent-only install measured as the README states it.
+"""What an onboard install holds: the agent-only install measured as docs/deployer.md states it.
 
     .venv/bin/python bench/bench_onboard_install.py            # options: --seconds 60
 
-In a temporary folder, as the README's onboard steps do it: builds the agent wheel
+In a temporary folder, as docs/deployer.md's onboard steps do it: builds the agent wheel
 (./agent), makes a fresh venv with this Python, installs requirements/agent.txt with
 --require-hashes and the wheel with --no-deps, then measures
 
@@ -17,7 +17,7 @@ In a temporary folder, as the README's onboard steps do it: builds the agent whe
   sampled once a second after a warm-up.
 
 Prints the figures as a table; asserts nothing. The machine it runs on is not the drone's:
-the README says which machine the figures are from.
+docs/deployer.md says which machine the figures are from.
 """
 
 from __future__ import annotations

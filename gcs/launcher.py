@@ -75,7 +75,7 @@ class FleetPlan:
     # --camera-model (sensor mm, image px, focal mm), None for no cameras.
     camera_model: str | None = None
     # Each ArduPilot vehicle is set up for this GCS as its owner would set up a real
-    # aircraft (README, "Flying by hand"): SYSID_MYGCS = the agent's id, so that the
+    # aircraft (docs/operator.md, "Flying by hand"): SYSID_MYGCS = the agent's id, so that the
     # autopilot takes the agent's stick input and counts its heartbeats for the GCS
     # failsafe. The simulator keeps ArduPilot's default, 255, which is what a vehicle not
     # yet set up has; False leaves it there. (PX4 checks no sender id: its

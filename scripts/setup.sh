@@ -34,7 +34,7 @@ if [ $need_node -eq 1 ] || [ $python_ok -eq 0 ]; then
 fi
 if [ $dev -eq 1 ]; then
     # The browser tests drive Debian's Chromium; the compose test validates the file;
-    # the README's client steps, which the suite runs, use curl.
+    # docs/integrator.md's client steps, which the suite runs, use curl.
     apt_install chromium docker-compose curl
 fi
 

@@ -116,7 +116,7 @@ class AgentSettings(BaseSettings):
         default="ydlidar-tmini-pro",
         description="the serial LIDAR's model, which picks its wire format and default baud "
         "rate: rplidar-a1, -a2, -a3, -c1, -s1, -s2, ydlidar-x2, -x4, -g4, -tmini-pro, ld06, "
-        "ld19, stl27l (README, 'Sensors'; `gcs-agent lidar-probe DEVICE` finds it)",
+        "ld19, stl27l (docs/reference.md, 'Sensors'; `gcs-agent lidar-probe DEVICE` finds it)",
     )
     lidar_baud: int | None = Field(
         default=None, gt=0, description="the LIDAR's serial baud rate (default: the model's)"
@@ -322,7 +322,7 @@ def describe_errors(error: ValidationError) -> str:
 
 def _unknown_key(path: Path, key: str) -> str:
     close = difflib.get_close_matches(key, AgentSettings.model_fields, n=1, cutoff=0.6)
-    hint = f"did you mean {close[0]!r}?" if close else "see the table in the README"
+    hint = f"did you mean {close[0]!r}?" if close else "see the table in docs/reference.md"
     return f"{path}: unknown setting {key!r}; {hint}"
 
 

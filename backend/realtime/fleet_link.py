@@ -1,4 +1,4 @@
-"""One hub's link to the others (several hubs, README "Several hubs"): one NATS
+"""One hub's link to the others (several hubs, docs/deployer.md "Several hubs"): one NATS
 connection that carries the shared bus (backend/realtime/nats_bus.py) and the routes to
 agents connected elsewhere (backend/realtime/routing.py), and mirrors the other hubs'
 vehicles into this hub's registry so that its dashboards, commands and leases reach them.

@@ -14,7 +14,7 @@ from backend.settings.production import WEAK_SECRETS
 class BusSettings(BaseModel):
     """The NATS bus; unset, the hub is alone and its bus is in-process."""
 
-    # Several hubs (README "Several hubs"): a NATS server joins them; unset, the hub is
+    # Several hubs (docs/deployer.md "Several hubs"): a NATS server joins them; unset, the hub is
     # alone and its bus is in-process (the embedded default).
     bus_url: str | None = Field(
         default=None,

@@ -40,9 +40,10 @@ class ServerSettings(BaseModel):
     )
     max_body_bytes: int = Field(default=1024 * 1024, ge=1024)
     max_tlog_bytes: int = Field(default=512 * 1024 * 1024, ge=1024, description="per upload")
-    # Slow clients (see README "Limits"): a body must come within body_timeout_s plus a
-    # second per body_min_rate_bps bytes; idle keep-alive connections close after
-    # keep_alive_timeout_s; past max_connections, new requests get 503.
+    # Slow clients (see docs/security.md "Limits in force"): a body must come within
+    # body_timeout_s plus a second per body_min_rate_bps bytes; idle keep-alive
+    # connections close after keep_alive_timeout_s; past max_connections, new requests
+    # get 503.
     body_timeout_s: float = Field(default=10.0, gt=0)
     body_min_rate_bps: float = Field(default=1024.0, gt=0)
     keep_alive_timeout_s: int = Field(default=5, ge=1)

@@ -3,7 +3,7 @@ bounded in number and time, and stopped when nobody waits for them any more.
 
 Why processes: planning and XML parsing are Python loops that hold the GIL; in threads of
 the hub's process the event loop waited for them at each turn (`/health` p99 170 ms under
-a flood of previews, 234 ms under one of imports; README "The hub under floods"). Every
+a flood of previews, 234 ms under one of imports; docs/deployer.md "The hub under floods"). Every
 plan is estimated first and refused past the hub's limits (limits.py) inside the worker,
 so what is left to bound is time and number: a plan past `survey_plan_timeout_s`, whose
 client went away, or whose request was cancelled (the hub is stopping), has its worker

@@ -1,4 +1,4 @@
-"""An onboard computer's first connection, as the README tells it: `gcs-agent --print-id`
+"""An onboard computer's first connection, as docs/deployer.md tells it: `gcs-agent --print-id`
 names the vehicle before it is enrolled (no token yet), an admin enrols that id, and the
 agent, started without --vehicle-id, connects under it."""
 

@@ -1,4 +1,4 @@
-"""Several hubs on a NATS server that requires a login (README "Several hubs",
+"""Several hubs on a NATS server that requires a login (docs/deployer.md, "Several hubs",
 docs/security.md): the shipped deploy/nats-server.conf run by the machine's nats-server.
 
 A command that crosses to another hub names its sender; the hub that carries it out

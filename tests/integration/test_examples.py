@@ -19,6 +19,7 @@ import pytest
 from gcs.launcher import LocalFleet, free_port
 from tests.conftest import FLEET_SPEEDUP
 from tests.support.api import access_token, api_client
+from tests.support.docs import page_holding
 from tests.support.processes import running_fleet
 from tests.support.waiting import poll_until
 from tests.support.watcher import FleetWatcher, ready
@@ -215,14 +216,15 @@ def api_get_audit(fleet: LocalFleet, token: str, limit: int) -> list[dict[str, A
     return entries
 
 
-README = EXAMPLES.parent / "README.md"
+CLIENT_STEPS = "From nothing to a working client"
 
 
 def readme_client_steps() -> list[str]:
-    """The shell blocks of the README's "From nothing to a working client", in order."""
-    text = README.read_text()
-    section = text.split("From nothing to a working client", 1)[1]
-    section = section.split("The scripts in [examples/](examples/)", 1)[0]
+    """The shell blocks of "From nothing to a working client" (the integrator's guide), in
+    order."""
+    text = page_holding(CLIENT_STEPS).read_text()
+    section = text.split(CLIENT_STEPS, 1)[1]
+    section = section.split("The scripts in [examples/]", 1)[0]
     return [textwrap.dedent(block) for block in re.findall(r"```sh\n(.*?)```", section, re.S)]
 
 
@@ -241,7 +243,7 @@ def test_the_readmes_client_steps_work_in_order(fleet: LocalFleet, tmp_path: Pat
     steps = readme_client_steps()
     assert len(steps) == 6, "one block for each of steps 1 to 6"
     vehicle = "sim_1"
-    assert vehicle == fleet.vehicle_id(0)  # the id the README's steps use
+    assert vehicle == fleet.vehicle_id(0)  # the id the guide's steps use
     watcher_token = access_token(fleet.plan.hub_http, "admin", fleet.plan.admin_password)
     with FleetWatcher(fleet.plan.hub_http, watcher_token) as watcher:
         watcher.wait_until(

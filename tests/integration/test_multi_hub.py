@@ -1,4 +1,4 @@
-"""Two hub processes sharing PostgreSQL and NATS (README "Several hubs").
+"""Two hub processes sharing PostgreSQL and NATS (docs/deployer.md, "Several hubs").
 
 Real processes on loopback: hub A and hub B on one fresh PostgreSQL database and one
 NATS subject prefix of their own, a simulated copter, and its agent, which knows both

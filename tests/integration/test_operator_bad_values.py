@@ -233,7 +233,7 @@ def test_stick_input_refuses_the_number_naming_the_axis(
             watcher.wait_until(connected(VEHICLE), 30, f"{VEHICLE} connected")
         # The lease opens only once the agent has checked that the autopilot takes
         # MANUAL_CONTROL from it: ArduPilot from its GCS's id, which the launcher set to
-        # the agent's 254 (the README's setup), as `gcs demo` does.
+        # the agent's 254 (the deployer's guide's setup), as `gcs demo` does.
         wpnav_speed = _wpnav_speed(api)
         pilot.send(json.dumps({"type": "control", "vehicle_id": VEHICLE, "action": "acquire"}))
         granted = _said(pilot, "lease", "lease_refused")  # a refusal: say which

@@ -11,6 +11,8 @@ from pathlib import Path, PurePosixPath
 
 import pytest
 
+from tests.support.docs import page_holding
+
 ROOT = Path(__file__).resolve().parents[2]
 SHIPPED = {"vehicle_agents", "protocol", "common"}
 PIP_WHEEL = [sys.executable, "-m", "pip", "wheel", "--no-deps", "--no-build-isolation", "-q"]
@@ -19,7 +21,7 @@ NEVER_ON_A_DRONE = {"backend", "simulator", "gcs", "frontend", "tests", "bench"}
 
 @pytest.fixture(scope="module")
 def agent_wheel(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    """The wheel, built as the README says, with the hatchling of this environment (no
+    """The wheel, built as the deployer's guide says, with the hatchling of this environment (no
     network: the dev extra installs it)."""
     out = tmp_path_factory.mktemp("wheel")
     subprocess.run(
@@ -82,9 +84,10 @@ def test_the_agent_runs_from_its_wheel_without_the_rest(agent_wheel: Path, tmp_p
 
 
 def test_the_offline_build_the_readme_gives_is_the_one_built_here() -> None:
-    """An offline board cannot fetch the build backend: the README says so, and gives
+    """An offline board cannot fetch the build backend: the deployer's guide says so, and
+    gives
     the command this module builds with (PIP_WHEEL), which needs no package index."""
-    readme = " ".join((ROOT / "README.md").read_text().split())
+    readme = " ".join(page_holding("fetches the build backend (hatchling").read_text().split())
     backend = tomllib.loads((ROOT / "agent" / "pyproject.toml").read_text())["build-system"]
     assert backend["requires"] == ["hatchling>=1.21"]
     assert "fetches the build backend (hatchling" in readme

@@ -1,10 +1,10 @@
-"""The suite's slow-test budget (README, "Slow tests"), a pytest plugin that the root
+"""The suite's slow-test budget (docs/reference.md, "Slow tests"), a pytest plugin that the root
 conftest loads.
 
 A test whose setup and call together take longer than `budget_s()` is named in the run's
 summary, and fails beyond `FAIL_FACTOR` times the budget, unless it is marked
 ``@pytest.mark.slow`` (on the function, or ``pytestmark`` for a module) and the
-README's list of slow tests names it (its node id, or its module for a module-wide mark)
+list of slow tests in docs/reference.md names it (its node id, or its module for a module-wide mark)
 with the reason. `tests/unit/project/test_slow_list.py` checks that list against the marks.
 """
 
@@ -18,12 +18,13 @@ from pathlib import Path
 
 import pytest
 
+from tests.support.docs import page_holding
+
 BUDGET_S = 20.0
 # A machine much slower or busier than the 2-core reference can widen the budget; CI
 # keeps the default.
 BUDGET_VARIABLE = "GCS_TEST_BUDGET_S"
 REPO = Path(__file__).resolve().parents[2]
-README = REPO / "README.md"
 SLOW_LIST_HEADING = "### Slow tests"
 
 # A busy or slower machine stretches every test alike: an unmarked test between the
@@ -73,7 +74,8 @@ def record(item: pytest.Item, report: pytest.TestReport) -> None:
     report.outcome = "failed"
     report.longrepr = (
         f"{timing}. Make it faster (tests/README.md), or mark it "
-        "@pytest.mark.slow and add it with its reason to the README's list of slow tests."
+        "@pytest.mark.slow and add it with its reason to the list of slow tests in "
+        "docs/reference.md."
     )
 
 
@@ -117,9 +119,10 @@ def _names_slow(node: ast.expr) -> bool:
     )
 
 
-def listed_slow(readme: Path = README) -> dict[str, str]:
-    """The README's list of slow tests: each row's module or node id and its reason."""
-    text = readme.read_text()
+def listed_slow(page: Path | None = None) -> dict[str, str]:
+    """The list of slow tests (on the page that holds it, docs/reference.md): each row's
+    module or node id and its reason."""
+    text = (page or page_holding(SLOW_LIST_HEADING)).read_text()
     start = text.index(SLOW_LIST_HEADING)
     section = text[start : text.find("\n#", start + len(SLOW_LIST_HEADING))]
     rows = re.findall(r"^\| `(tests/[^`]+)` \| (.+?) \|$", section, re.MULTILINE)

@@ -1,5 +1,5 @@
 """Two hub processes on one PostgreSQL database and one NATS bus, a vehicle on hub A
-(README, "Several hubs")."""
+(docs/deployer.md, "Several hubs")."""
 
 from __future__ import annotations
 

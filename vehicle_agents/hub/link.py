@@ -120,7 +120,7 @@ class HubLink:
         modes: ModeReport | None = None,
         reconnect_sleep: Sleep = asyncio.sleep,
     ) -> None:
-        # Several hubs (README "Several hubs"): after a failed or ended session the next
+        # Several hubs (docs/deployer.md "Several hubs"): after a failed or ended session the next
         # attempt goes to the next URL, round the list, still after a jittered wait, so
         # the agents of a hub that died spread over the others.
         self.urls = [url, *fallback_urls]
@@ -192,7 +192,7 @@ class HubLink:
             additional_headers={"Authorization": f"Bearer {self._token}"},
             max_size=MAX_FRAME_BYTES,
             # No permessage-deflate on the agent link: its frames are small and many, and
-            # compressing them cost the hub more CPU than the link saves (README, Scale).
+            # compressing them cost the hub more CPU than the link saves (docs/reference.md, Scale).
             compression=None,
             ping_interval=self.timeouts.ping_interval_s,
             open_timeout=self.timeouts.welcome_s,

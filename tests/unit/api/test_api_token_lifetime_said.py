@@ -8,6 +8,7 @@ from pathlib import Path
 
 from backend.api.auth import API_TOKEN_DAYS, ApiTokenRequest
 from backend.openapi_document import openapi_document
+from tests.support.docs import pages
 
 ROOT = Path(__file__).resolve().parents[3]
 
@@ -29,7 +30,8 @@ def test_the_api_document_says_when_an_api_token_expires() -> None:
 
 
 def test_the_readme_and_the_socket_page_say_it_too() -> None:
-    for page in ("README.md", "docs/websockets.md"):
+    for page in pages():
+        assert "long-lived" not in page.read_text().lower(), page
+    for page in ("docs/integrator.md", "docs/websockets.md"):
         text = " ".join((ROOT / page).read_text().split())
-        assert "long-lived" not in text.lower(), page
         assert f"{API_TOKEN_DAYS} days unless" in text, page

@@ -1,10 +1,11 @@
 """The systemd units in deploy/ give the hub a state directory that is its data directory,
-and the README walks through the hub's user and folders."""
+and the deployer's guide walks through the hub's user and folders."""
 
 from __future__ import annotations
 
 from pathlib import Path
 
+from tests.support.docs import page_holding
 from vehicle_agents.cli import EXIT_VEHICLE_ID_IN_USE
 
 ROOT = Path(__file__).parents[3]
@@ -31,8 +32,9 @@ def test_the_hub_unit_has_its_data_directory_as_state_directory() -> None:
 
 
 def test_the_readme_gives_the_hub_service_steps() -> None:
-    readme = (ROOT / "README.md").read_text()
-    steps = readme[readme.index("**Running the hub as a service.**") :]
+    lead = "**Running the hub as a service.**"
+    readme = page_holding(lead).read_text()
+    steps = readme[readme.index(lead) :]
     for step in (
         "useradd --system",
         "install -d -m 750 -o root -g gcs /etc/gcs",

@@ -1,14 +1,14 @@
-"""The README's table of commands names every command the protocol defines."""
+"""The table of commands (the integrator's guide) names every command the protocol defines."""
 
 from __future__ import annotations
 
 import re
 import typing
-from pathlib import Path
 
 from protocol.messages import Command
+from tests.support.docs import page_holding
 
-README = Path(__file__).parents[3] / "README.md"
+TABLE_HEADER = "| `name` | fields |"
 
 
 def _command_names() -> set[str]:
@@ -17,9 +17,9 @@ def _command_names() -> set[str]:
 
 
 def test_the_readme_lists_every_command() -> None:
-    text = README.read_text()
-    table = text[text.index("| `name` | fields |") :].split("\n\n", 1)[0]
+    text = page_holding(TABLE_HEADER).read_text()
+    table = text[text.index(TABLE_HEADER) :].split("\n\n", 1)[0]
     listed = set(re.findall(r"`([a-z_]+)`", table.split("| fields |", 1)[1]))
     missing = _command_names() - listed
-    assert not missing, f"README's command table lacks {sorted(missing)}"
+    assert not missing, f"the command table lacks {sorted(missing)}"
     assert {"param_set", "mission_upload"} <= _command_names()

@@ -1,18 +1,16 @@
-"""The README's sensor table is the agent's model table: every model, its default baud
+"""The sensor table (the reference guide) is the agent's model table: every model, its default baud
 rate, and nothing the agent does not read."""
 
 from __future__ import annotations
 
 import re
-from pathlib import Path
 
+from tests.support.docs import page_holding
 from vehicle_agents.sensors.lidar.models import MODELS
-
-README = Path(__file__).parents[3] / "README.md"
 
 
 def test_the_sensor_table_lists_each_model_and_its_default_baud() -> None:
-    text = README.read_text()
+    text = page_holding("### Sensors").read_text()
     section = text[text.index("### Sensors") :]
     section = section[: section.index("\n## ")]
     rows = {

@@ -1,4 +1,4 @@
-"""The slow-test budget: the README's list of slow tests is the tests marked slow, each
+"""The slow-test budget: the list of slow tests (docs/reference.md) is the tests marked slow, each
 with a reason, and an unmarked test over the budget fails."""
 
 from __future__ import annotations
@@ -14,7 +14,7 @@ from tests.support.budget import BUDGET_VARIABLE, REPO, listed_slow, marked_slow
 def test_the_readme_lists_exactly_the_tests_marked_slow_each_with_a_reason() -> None:
     listed = listed_slow()
     assert set(listed) == marked_slow(), (
-        "README's Slow tests and the @pytest.mark.slow marks differ: "
+        "docs/reference.md's Slow tests and the @pytest.mark.slow marks differ: "
         f"listed but not marked {sorted(set(listed) - marked_slow())}, "
         f"marked but not listed {sorted(marked_slow() - set(listed))}"
     )

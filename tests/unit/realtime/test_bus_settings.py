@@ -1,4 +1,4 @@
-"""The hubs' NATS credentials (README "Several hubs"): a hub outside development refuses
+"""The hubs' NATS credentials (docs/deployer.md, "Several hubs"): a hub outside development refuses
 a bus it would join without a login, and the URL's secret never reaches a log."""
 
 from __future__ import annotations

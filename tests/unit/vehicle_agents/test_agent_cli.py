@@ -10,6 +10,7 @@ from pathlib import Path
 
 import pytest
 
+from tests.support.docs import page_holding
 from vehicle_agents.cli import build_parser, overrides_from
 from vehicle_agents.config import (
     ENV_PREFIX,
@@ -169,11 +170,11 @@ def test_a_toml_syntax_error_names_the_file_and_the_place(tmp_path: Path) -> Non
 
 
 def test_the_readme_lists_every_setting_by_its_one_name() -> None:
-    """The README's table of the agent's settings: a row per setting, each naming the
+    """The table of the agent's settings (docs/reference.md): a row per setting, each naming the
     config key, the flag and the variable, and nothing else."""
-    readme = (ROOT / "README.md").read_text()
+    readme = page_holding("| key | flag | variable | default and meaning |").read_text()
     rows = re.findall(r"^\| `([a-z_]+)` \| `(--[a-z-]+)` \| `([A-Z_]+)` \|", readme, re.MULTILINE)
-    assert rows, "the README's agent settings table is missing"
+    assert rows, "the agent settings table is missing"
     assert [key for key, _, _ in rows] == list(AgentSettings.model_fields)
     for key, flag, variable in rows:
         assert (flag, variable) == (flag_for(key), f"{ENV_PREFIX}{key.upper()}")

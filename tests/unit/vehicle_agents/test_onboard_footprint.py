@@ -40,7 +40,7 @@ def test_the_agent_loads_one_dialect() -> None:
 
 
 # The agent's RSS bar (DESIGN.md: 60 MB at 200 messages/s); its imports alone took 47 MiB
-# when measured (README, "What an onboard install holds"), so this leaves room to run.
+# when measured (docs/deployer.md, "What an onboard install holds"), so this leaves room to run.
 IMPORTED_RSS_BUDGET_MIB = 52
 NEVER_IMPORTED = {
     "backend",

@@ -1,5 +1,5 @@
 """The LIDAR models the agent reads on a serial port: each one's family, wire format,
-default baud rate and wiring (the README's sensor table is this table), and how to start
+default baud rate and wiring (the sensor table in docs/reference.md is this table), and how to start
 and stop it."""
 
 from __future__ import annotations
@@ -18,7 +18,7 @@ class Model:
     name: str
     family: Family
     baud: int
-    wire: str  # the wire format, as the README and the simulator's --lidar-format name it
+    wire: str  # the wire format, as docs/reference.md and the simulator's --lidar-format name it
     wiring: str
     sample_bytes: int | None = None  # YDLIDAR: 2 or 3
     intercept: bool = False  # YDLIDAR X2/X4: the manual's angle correction

@@ -1,7 +1,8 @@
 """An arming shorter than the telemetry period still reaches the hub, whose flight log
 finds flights from arm to disarm: the agent takes a snapshot as each HEARTBEAT that
 changes the armed state is handled, even with the disarm right behind it in one read
-from the wire (a take-off landed straight away, as the README's step 4 does)."""
+from the wire (a take-off landed straight away, as step 4 of docs/integrator.md's client
+steps does)."""
 
 from __future__ import annotations
 

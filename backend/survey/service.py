@@ -92,9 +92,7 @@ class SurveyService(SurveyTracker):
                     home_s=part.home_s,
                     total_s=part.total_s,
                     lane_paths=part.lane_paths,
-                    check=MissionCheckResponse.build(
-                        [*check.violations, *camera], check.estimate
-                    ),
+                    check=MissionCheckResponse.build([*check.violations, *camera], check.estimate),
                 )
             )
         calc = survey.calc

@@ -17,8 +17,8 @@ from dataclasses import dataclass
 from backend.fleet.registry import VehicleRecord
 from backend.safety.violations import SURVEY_CAMERA, Violation
 from backend.survey.planning.camera import FLEET_PREFIX, Camera, fleet_preset_id, preset
-from backend.survey.planning.schemas import CameraModel, ManualCamera
 from backend.survey.planning.schemas import Camera as RequestedCamera
+from backend.survey.planning.schemas import CameraModel, ManualCamera
 from protocol.photos import CameraIntrinsics, describe_camera
 
 # Sensor and focal length may differ this much (relative) between the plan and the drone:

@@ -21,8 +21,8 @@ from backend.api.responses import ErrorMessage
 from backend.api.security import CurrentPrincipal, SecuredRouter, requires
 from backend.auth.policy import Permission
 from backend.survey.deps import SurveysDep
-from backend.survey.fleet_cameras import fleet_cameras
 from backend.survey.files.items import MAX_FILE_BYTES
+from backend.survey.fleet_cameras import fleet_cameras
 from backend.survey.flight.run import HandoverOffer, SurveyRun
 from backend.survey.planning.camera import PRESETS
 from backend.survey.planning.schemas import SurveyPreview, SurveyRequest

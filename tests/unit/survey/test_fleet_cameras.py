@@ -50,7 +50,7 @@ def test_a_fleet_preset_plans_by_its_name_alone() -> None:
     )
     # GSD = 40 m * 6.3 mm * 100 / (1600 px * 4.5 mm) = 3.5 cm/px
     assert calculate(camera, altitude_m=40).gsd_cm == pytest.approx(3.5)
-    with pytest.raises(CameraError, match="fleet:6.3,4.7"):
+    with pytest.raises(CameraError, match=r"fleet:6\.3,4\.7"):
         preset("fleet:6.3,4.7")
 
 

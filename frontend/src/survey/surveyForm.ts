@@ -78,7 +78,9 @@ export class SurveyForm {
   }
 
   private option(camera: CameraPreset): HTMLOptionElement {
-    const option = new Option(camera.name, camera.id);
+    // A fleet camera's name ends with its figures, which the title has: the list keeps to
+    // the width the panel's two columns give it.
+    const option = new Option(camera.name.replace(/ \(.*\)$/, ""), camera.id);
     option.title =
       `${camera.sensor_width_mm} x ${camera.sensor_height_mm} mm sensor, ` +
       `${camera.image_width_px} x ${camera.image_height_px} px, ${camera.focal_length_mm} mm`;

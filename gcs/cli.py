@@ -17,11 +17,12 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from common.log_escaping import escape_control_characters_in_logs
-from gcs.demo_lidars import DEMO_LIDAR_NAMES
+from gcs.demo_camera import DEMO_CAMERA_MODEL
+from gcs.demo_lidars import DEFAULT_DEMO_LIDAR, DEMO_LIDAR_NAMES
 
 if TYPE_CHECKING:
     from backend.settings import HubSettings
-    from gcs.launcher import LocalFleet
+    from gcs.launcher import FleetPlan, LocalFleet
 
 LOG_FORMAT = "%(asctime)s %(levelname)-7s %(name)s: %(message)s"  # as vehicle_agents.cli
 
@@ -136,19 +137,26 @@ def _sim(args: argparse.Namespace, rest: list[str]) -> int:
     return simulator_main(rest)
 
 
-def _demo(args: argparse.Namespace) -> int:
-    from gcs.launcher import FleetPlan, LocalFleet
+def demo_plan(args: argparse.Namespace) -> FleetPlan:
+    """The fleet `gcs demo` starts from its options (secrets kept in the data folder)."""
+    from gcs.launcher import FleetPlan
 
-    plan = FleetPlan.reusing_secrets(
+    return FleetPlan.reusing_secrets(
         args.data_dir,
         vehicles=args.vehicles,
         host=args.host,
         port=args.port,
         speedup=args.speedup,
-        camera_model=args.camera_model,
+        camera_model=None if args.no_cameras else args.camera_model,
         lidars=args.lidar is not None,
-        lidar=args.lidar or "ydlidar",
+        lidar=args.lidar or DEFAULT_DEMO_LIDAR,
     )
+
+
+def _demo(args: argparse.Namespace) -> int:
+    from gcs.launcher import LocalFleet
+
+    plan = demo_plan(args)
     fleet = LocalFleet(plan)
     log = logging.getLogger("gcs.demo")
     # Every way of asking the launcher to end stops the fleet the way Ctrl-C does: also
@@ -265,18 +273,41 @@ def build_parser() -> argparse.ArgumentParser:
     demo.add_argument("--speedup", type=float, default=1.0)
     demo.add_argument(
         "--camera-model",
+        type=_camera_model,
+        default=DEMO_CAMERA_MODEL,
         metavar="SW_MM,SH_MM,W_PX,H_PX,F_MM",
-        help="fit every vehicle with a camera of this model (e.g. 6.3,4.7,1600,1200,4.5): "
-        "its survey photos, rendered by the simulator, go to the hub (default: no cameras)",
+        help="the camera every vehicle carries: sensor width,height (mm), image width,height "
+        "(px), focal length (mm); its survey photos, rendered by the simulator, go to the "
+        "hub, which offers it as a survey preset named after the vehicles (default: "
+        f"{DEMO_CAMERA_MODEL}, 1.2 MP; 13.2,8.8,5472,3648,8.8 is a DJI Phantom 4 Pro's)",
+    )
+    demo.add_argument(
+        "--no-cameras",
+        action="store_true",
+        help="fit no cameras (no survey photos, no mosaic)",
     )
     demo.add_argument(
         "--lidar",
+        nargs="?",
+        const=DEFAULT_DEMO_LIDAR,
         choices=DEMO_LIDAR_NAMES,
         metavar="FORMAT",
-        help="fit every vehicle with a 2-D LIDAR speaking this wire format, read by the "
-        f"agent's parser for it: {', '.join(DEMO_LIDAR_NAMES)} (default: no LIDAR)",
+        help="fit every vehicle with a 2-D LIDAR whose scans show on the map and in 3D, "
+        f"speaking this wire format (read by the agent's parser for it; {DEFAULT_DEMO_LIDAR} "
+        f"when none is given): {', '.join(DEMO_LIDAR_NAMES)} (default: no LIDAR)",
     )
     return parser
+
+
+def _camera_model(text: str) -> str:
+    """An agent's --camera-model, checked here so that a typo stops the demo at once."""
+    from protocol.photos import parse_camera_model
+
+    try:
+        parse_camera_model(text)
+    except ValueError as error:
+        raise argparse.ArgumentTypeError(str(error)) from None
+    return text
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -28,3 +28,5 @@ DEMO_LIDARS = {
 }
 
 DEMO_LIDAR_NAMES = tuple(DEMO_LIDARS)
+# `gcs demo --lidar` with no name: the YDLIDAR T-mini Pro's format, the lightest to parse.
+DEFAULT_DEMO_LIDAR = "ydlidar"

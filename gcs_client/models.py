@@ -147,6 +147,10 @@ class CameraPreset(Model):
     image_height_px: int
     focal_length_mm: float
     distance_trigger: bool = Field(description="False: one DO_DIGICAM_CONTROL per photo")
+    vehicle_ids: list[str] | None = Field(
+        default=None,
+        description="The vehicles whose agents carry this camera (a `fleet:` preset); empty for a catalogue camera",
+    )
 
 
 class ChangeSpeedCommand(Model):
@@ -1179,7 +1183,9 @@ class SurveyPhotos(Model):
 
 
 class SurveyPreview(Model):
-    ok: bool = Field(description="True when every part's mission passes the safety rails")
+    ok: bool = Field(
+        description="True when every part's mission passes the safety rails and each drone carries the camera the plan assumes (rule survey_camera)"
+    )
     altitude_m: float
     gsd_cm: float | None = Field(description="null for a manual camera (no sensor figures)")
     footprint_side_m: float
@@ -1520,6 +1526,7 @@ class ViolationModel(Model):
         "position_unknown",
         "mission_item",
         "mission_unchecked",
+        "survey_camera",
     ] = Field(description="Stable name of the rule that was broken")
     message: str = Field(description="What is wrong, with the numbers and units")
     limit: float | None = Field(default=None, description="The rule's limit, where it has one")

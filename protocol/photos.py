@@ -77,3 +77,25 @@ def parse_camera_model(text: str) -> CameraIntrinsics:
             "expected sensor width,height (mm),image width,height (px),focal length (mm), "
             f"e.g. 13.2,8.8,5472,3648,8.8; got {text!r}"
         ) from None
+
+
+def format_camera_model(camera: CameraIntrinsics) -> str:
+    """The camera in the form `parse_camera_model` reads (an agent's --camera-model)."""
+    return ",".join(
+        f"{value:g}"
+        for value in (
+            camera.sensor_width_mm,
+            camera.sensor_height_mm,
+            camera.image_width_px,
+            camera.image_height_px,
+            camera.focal_length_mm,
+        )
+    )
+
+
+def describe_camera(camera: CameraIntrinsics) -> str:
+    """The camera's figures for a person: "6.3x4.7 mm, 1600x1200 px, 4.5 mm"."""
+    return (
+        f"{camera.sensor_width_mm:g}x{camera.sensor_height_mm:g} mm, "
+        f"{camera.image_width_px}x{camera.image_height_px} px, {camera.focal_length_mm:g} mm"
+    )

@@ -16,6 +16,7 @@ from protocol.messages import (
     ManualStartCommand,
     ManualStopCommand,
 )
+from protocol.photos import parse_camera_model
 from vehicle_agents import __version__
 from vehicle_agents.config import AgentSettings, default_vehicle_id, hub_http_base
 from vehicle_agents.control.executor import CommandExecutor
@@ -86,6 +87,8 @@ async def _run(settings: AgentSettings) -> None:
             capabilities=CAPABILITIES + ([SCAN_CAPABILITY] if settings.lidar else []),
             agent_version=__version__,
             stream_id=uuid.uuid4().hex[:16],
+            # The hub offers this camera as a survey preset and checks surveys against it.
+            camera=parse_camera_model(settings.camera_model) if settings.camera else None,
         )
         # The autopilot's own mode list, once read, replaces the fixed table the hello has.
         mode_report = ModeReport(hello.modes)

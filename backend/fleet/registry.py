@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING, Protocol
 
 from backend.errors import VehicleNotFound
 from protocol.messages import Hello, Telemetry, VehicleState, VehicleSummary
+from protocol.photos import CameraIntrinsics
 
 if TYPE_CHECKING:
     from backend.fleet.commands import AgentChannel
@@ -68,6 +69,9 @@ class VehicleRecord:
     # The connected agent's command channel, None while no agent is connected: the one
     # record of whether the vehicle is online (commands go down this channel).
     channel: AgentChannel | None = field(default=None, repr=False, compare=False)
+    # The camera its agent uploads photos from, as its latest hello said (None: no camera,
+    # or not known: an agent that has not connected to this hub since it started).
+    camera: CameraIntrinsics | None = None
 
     @property
     def connected(self) -> bool:
@@ -141,6 +145,7 @@ class FleetRegistry:
                 vehicle_type=hello.vehicle_type,
                 modes=list(hello.modes),
                 system_id=hello.system_id,
+                camera=hello.camera,
             )
             self._vehicles[record.id] = record
         else:
@@ -148,6 +153,7 @@ class FleetRegistry:
             record.vehicle_type = hello.vehicle_type
             record.modes = list(hello.modes)
             record.system_id = hello.system_id
+        record.camera = hello.camera
         record.channel = channel
         # A new connection sends its own live state if it is behind again.
         record.live_ahead_at = None

@@ -26,6 +26,7 @@ RuleName = Literal[
     "position_unknown",
     "mission_item",
     "mission_unchecked",
+    "survey_camera",
 ]
 GEOFENCE: Final = "geofence"
 GEOFENCE_MAX_ALTITUDE: Final = "geofence_max_altitude"
@@ -42,6 +43,8 @@ POSITION_UNKNOWN: Final = "position_unknown"
 MISSION_ITEM: Final = "mission_item"
 # A mission that would fly without having been checked: none on board, or unreadable.
 MISSION_UNCHECKED: Final = "mission_unchecked"
+# A survey planned for another camera than the one a chosen drone carries.
+SURVEY_CAMERA: Final = "survey_camera"
 RULES: Final[tuple[RuleName, ...]] = (
     GEOFENCE,
     GEOFENCE_MAX_ALTITUDE,
@@ -55,6 +58,7 @@ RULES: Final[tuple[RuleName, ...]] = (
     POSITION_UNKNOWN,
     MISSION_ITEM,
     MISSION_UNCHECKED,
+    SURVEY_CAMERA,
 )
 
 

@@ -16,11 +16,13 @@ from fastapi.responses import JSONResponse, PlainTextResponse, Response
 from pydantic import BaseModel, Field
 from starlette.convertors import Convertor, register_url_convertor
 
+from backend.api.deps import RegistryDep
 from backend.api.responses import ErrorMessage
 from backend.api.security import CurrentPrincipal, SecuredRouter, requires
 from backend.auth.policy import Permission
 from backend.survey.deps import SurveysDep
 from backend.survey.files.items import MAX_FILE_BYTES
+from backend.survey.fleet_cameras import fleet_cameras
 from backend.survey.flight.run import HandoverOffer, SurveyRun
 from backend.survey.planning.camera import PRESETS
 from backend.survey.planning.schemas import SurveyPreview, SurveyRequest
@@ -41,14 +43,30 @@ class CameraPreset(BaseModel):
     image_height_px: int
     focal_length_mm: float
     distance_trigger: bool = Field(description="False: one DO_DIGICAM_CONTROL per photo")
+    vehicle_ids: list[VehicleId] = Field(
+        default_factory=list,
+        description="The vehicles whose agents carry this camera (a `fleet:` preset); "
+        "empty for a catalogue camera",
+    )
 
 
 @router.get(
     "/surveys/cameras", response_model=list[CameraPreset], openapi_extra=requires(Permission.READ)
 )
-async def camera_presets() -> list[CameraPreset]:
-    """The camera presets, so a client offers exactly the hub's (the dashboard does)."""
-    return [
+async def camera_presets(registry: RegistryDep) -> list[CameraPreset]:
+    """The camera presets, so a client offers exactly the hub's (the dashboard does): first
+    each camera the fleet's agents said they carry (`fleet:` and its figures, named after
+    its vehicles), then the catalogue's."""
+    fleet = [
+        CameraPreset(
+            id=carried.preset_id,
+            **carried.camera.model_dump(exclude={"landscape", "name"}),
+            name=carried.name,
+            vehicle_ids=list(carried.vehicle_ids),
+        )
+        for carried in fleet_cameras(registry.all())
+    ]
+    return fleet + [
         CameraPreset(id=key, **camera.model_dump(exclude={"landscape"}))
         for key, camera in PRESETS.items()
     ]

@@ -29,6 +29,7 @@ from backend.settings import HubSettings
 from backend.survey.files.areas import mission_path_geojson
 from backend.survey.files.qgc_plan import to_qgc_plan
 from backend.survey.files.wpl import to_wpl
+from backend.survey.fleet_cameras import camera_violations, carried_cameras
 from backend.survey.flight.handover import accept_offer
 from backend.survey.flight.progress import new_run
 from backend.survey.flight.run import ACTIVE_STATES, DroneState, SurveyRun, SurveyState
@@ -73,10 +74,12 @@ class SurveyService(SurveyTracker):
         safety rails; nothing is kept or uploaded. `gone` as for `create`."""
         records = self._chosen(request.vehicle_ids)
         survey = await self.planner.plan(request, _fleet(records), gone)
+        cameras = camera_violations(request.camera, carried_cameras(records))
         parts = []
         for part in survey.parts:
             record = records[part.vehicle_id]
             check = await asyncio.to_thread(self._hub.safety.check_mission, record, part.items)
+            camera = [cameras[record.id]] if record.id in cameras else []
             parts.append(
                 SurveyPart(
                     vehicle_id=part.vehicle_id,
@@ -89,7 +92,7 @@ class SurveyService(SurveyTracker):
                     home_s=part.home_s,
                     total_s=part.total_s,
                     lane_paths=part.lane_paths,
-                    check=MissionCheckResponse.from_plan_check(check),
+                    check=MissionCheckResponse.build([*check.violations, *camera], check.estimate),
                 )
             )
         calc = survey.calc
@@ -140,7 +143,11 @@ class SurveyService(SurveyTracker):
                     f"vehicle {vid} is not ready: {state.not_ready_reason or 'pre-arm checks'}",
                 )
         survey = await self.planner.plan(request, _fleet(records), gone)
-        violations: list[dict[str, object]] = []
+        # Before take-off, not at upload: a drone whose camera is not the plan's.
+        cameras = camera_violations(request.camera, carried_cameras(records))
+        violations: list[dict[str, object]] = [
+            {**asdict(violation), "vehicle_id": vid} for vid, violation in cameras.items()
+        ]
         for part in survey.parts:
             record = records[part.vehicle_id]
             check = await asyncio.to_thread(self._hub.safety.check_mission, record, part.items)
@@ -163,6 +170,11 @@ class SurveyService(SurveyTracker):
         run = self.get(survey_id)
         if run.state is not SurveyState.PLANNED:
             raise Conflict(f"survey {survey_id} is {run.state}; only a planned one can start")
+        # An agent may have come back with another camera since the survey was created.
+        chosen = {d.vehicle_id: self._hub.registry.get(d.vehicle_id) for d in run.drones}
+        if cameras := camera_violations(run.request.camera, carried_cameras(chosen)):
+            reasons = "; ".join(violation.message for violation in cameras.values())
+            raise Conflict(f"survey {survey_id} not started: {reasons}")
         uploads = await asyncio.gather(
             *(
                 self._commands.send(principal, d.vehicle_id, MissionUploadCommand(items=d.items))

@@ -19,6 +19,7 @@ from protocol.messages.base import (
 )
 from protocol.messages.delivery import ReplayedStream
 from protocol.messages.vehicle_state import VehicleState
+from protocol.photos import CameraIntrinsics
 
 
 class Hello(Message):
@@ -39,6 +40,12 @@ class Hello(Message):
         description="Names this agent run's sequence counters, and the run itself: a new "
         "hello from the same run replaces its stale connection, one from another run is "
         "refused while the first still answers (close 4409)."
+    )
+    camera: CameraIntrinsics | None = Field(
+        default=None,
+        description="The camera whose photos this agent uploads (its --camera-model), so "
+        "that the hub offers it as a survey preset and refuses, before take-off, a survey "
+        "planned for another camera; null when the agent has no camera.",
     )
 
 

@@ -21,7 +21,12 @@ from typing import Any, Final
 from pydantic import ValidationError
 
 from common.camera_geometry import gsd_m, height_for_gsd_m
-from protocol.photos import CameraIntrinsics
+from protocol.photos import (
+    CameraIntrinsics,
+    describe_camera,
+    format_camera_model,
+    parse_camera_model,
+)
 
 
 class CameraError(ValueError):
@@ -99,7 +104,24 @@ PRESETS: Final[dict[str, Camera]] = {
 }
 
 
+# A camera the fleet carries, named by its figures (an agent's --camera-model after the
+# prefix), so that the name alone says the camera: a survey stored with it, the photos'
+# checks and the planning workers read it without asking which vehicle carried it.
+FLEET_PREFIX: Final = "fleet:"
+
+
+def fleet_preset_id(camera: CameraIntrinsics) -> str:
+    """The preset name of a camera a vehicle carries: "fleet:6.3,4.7,1600,1200,4.5"."""
+    return FLEET_PREFIX + format_camera_model(camera)
+
+
 def preset(name: str) -> Camera:
+    if name.startswith(FLEET_PREFIX):
+        try:
+            figures = parse_camera_model(name.removeprefix(FLEET_PREFIX))
+        except ValueError as error:
+            raise CameraError(f"camera preset {name!r}: {error}") from None
+        return camera_of(name=describe_camera(figures), **figures.model_dump())
     try:
         return PRESETS[name]
     except KeyError:

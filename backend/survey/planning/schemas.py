@@ -132,7 +132,10 @@ class SurveyPart(_Strict):
 
 
 class SurveyPreview(_Strict):
-    ok: bool = Field(description="True when every part's mission passes the safety rails")
+    ok: bool = Field(
+        description="True when every part's mission passes the safety rails and each "
+        "drone carries the camera the plan assumes (rule survey_camera)"
+    )
     altitude_m: float
     gsd_cm: float | None = Field(description="null for a manual camera (no sensor figures)")
     footprint_side_m: float

@@ -493,7 +493,9 @@ export interface paths {
         };
         /**
          * Camera Presets
-         * @description The camera presets, so a client offers exactly the hub's (the dashboard does).
+         * @description The camera presets, so a client offers exactly the hub's (the dashboard does): first
+         *     each camera the fleet's agents said they carry (`fleet:` and its figures, named after
+         *     its vehicles), then the catalogue's.
          */
         get: operations["camera_presets_api_v1_surveys_cameras_get"];
         put?: never;
@@ -1755,6 +1757,11 @@ export interface components {
              * @description False: one DO_DIGICAM_CONTROL per photo
              */
             distance_trigger: boolean;
+            /**
+             * Vehicle Ids
+             * @description The vehicles whose agents carry this camera (a `fleet:` preset); empty for a catalogue camera
+             */
+            vehicle_ids?: string[];
         };
         /** ChangeSpeedCommand */
         ChangeSpeedCommand: {
@@ -3359,7 +3366,7 @@ export interface components {
         SurveyPreview: {
             /**
              * Ok
-             * @description True when every part's mission passes the safety rails
+             * @description True when every part's mission passes the safety rails and each drone carries the camera the plan assumes (rule survey_camera)
              */
             ok: boolean;
             /** Altitude M */
@@ -4011,7 +4018,7 @@ export interface components {
              * @description Stable name of the rule that was broken
              * @enum {string}
              */
-            rule: "geofence" | "geofence_max_altitude" | "max_altitude" | "min_altitude" | "min_height_above_home" | "max_distance_from_home" | "min_launch_battery" | "battery_sufficiency" | "home_altitude" | "position_unknown" | "mission_item" | "mission_unchecked";
+            rule: "geofence" | "geofence_max_altitude" | "max_altitude" | "min_altitude" | "min_height_above_home" | "max_distance_from_home" | "min_launch_battery" | "battery_sufficiency" | "home_altitude" | "position_unknown" | "mission_item" | "mission_unchecked" | "survey_camera";
             /**
              * Message
              * @description What is wrong, with the numbers and units

@@ -91,6 +91,20 @@ export interface Hello {
    * Names this agent run's sequence counters, and the run itself: a new hello from the same run replaces its stale connection, one from another run is refused while the first still answers (close 4409).
    */
   stream_id: string;
+  /**
+   * The camera whose photos this agent uploads (its --camera-model), so that the hub offers it as a survey preset and refuses, before take-off, a survey planned for another camera; null when the agent has no camera.
+   */
+  camera: CameraIntrinsics | null;
+}
+/**
+ * The pinhole camera that took the photo (the survey's camera model).
+ */
+export interface CameraIntrinsics {
+  sensor_width_mm: number;
+  sensor_height_mm: number;
+  image_width_px: number;
+  image_height_px: number;
+  focal_length_mm: number;
 }
 export interface Telemetry {
   type: "telemetry";

@@ -65,7 +65,10 @@ export class SurveyPanel {
   private readonly closeButton: HTMLButtonElement;
   private readonly holeButton: HTMLButtonElement;
   private readonly form: SurveyForm;
-  private readonly drones = new DroneChooser(() => this.schedulePreview());
+  private readonly drones = new DroneChooser(() => {
+    void this.form.chooseFor(this.drones.ids).catch(() => undefined); // the presets are read again at the next choice
+    this.schedulePreview();
+  });
   private readonly summary: HTMLElement;
   private readonly parts: HTMLTableSectionElement;
   private readonly status: HTMLElement;

@@ -67,4 +67,5 @@ def test_rule_names_are_stable() -> None:
         "position_unknown",
         "mission_item",
         "mission_unchecked",
+        "survey_camera",
     )

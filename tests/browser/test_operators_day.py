@@ -288,6 +288,9 @@ def test_an_operators_day(browser: Browser, fleet: LocalFleet, size: str, tmp_pa
             browser, *SIZES[size], accept_downloads=True, has_touch=size != "desktop"
         ) as page,
     ):
+        # A loaded machine: four drones' feeds, their photos and scans, at real time.
+        page.set_default_timeout(30_000)
+        page.set_default_navigation_timeout(90_000)
         day = Day(page, size, api, shots_folder(tmp_path), LocalFrame(*plan.vehicle_home(0)[:2]))
         try:
             log_in_step(day, plan)

@@ -278,6 +278,7 @@ def replay_and_export(day: Day) -> None:
 
 
 @pytest.mark.slow
+@pytest.mark.timeout(1800)  # a size's day: minutes of real-time flight on a loaded machine
 @pytest.mark.parametrize("size", list(SIZES))
 def test_an_operators_day(browser: Browser, fleet: LocalFleet, size: str, tmp_path: Path) -> None:
     plan, began = fleet.plan, time.monotonic()

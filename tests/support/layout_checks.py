@@ -23,15 +23,19 @@ const describe = (element) => {
 const shown = (element) => {
     const style = getComputedStyle(element);
     const r = element.getBoundingClientRect();
+    // checkVisibility: also false inside a closed <details>, which still has a box.
     return r.width > 0 && r.height > 0 && style.visibility !== "hidden"
-        && parseFloat(style.opacity) > 0;
+        && parseFloat(style.opacity) > 0
+        && element.checkVisibility({ checkOpacity: true, checkVisibilityCSS: true });
 };
 // The part of the box its ancestors' overflow clipping leaves: content scrolled inside a
 // panel or laid out past a map's edge is not off the screen, it is clipped.
 const clipped = (element) => {
     let { left, top, right, bottom } = element.getBoundingClientRect();
     const fixed = getComputedStyle(element).position === "fixed";
-    for (let up = element.parentElement; up && !fixed; up = up.parentElement) {
+    // Not the page's own clipping: a body that hides its overflow cuts off, not scrolls.
+    const page = [document.body, document.documentElement];
+    for (let up = element.parentElement; up && !fixed && !page.includes(up); up = up.parentElement) {
         const style = getComputedStyle(up);
         if (style.overflowX !== "visible" || style.overflowY !== "visible") {
             const box = up.getBoundingClientRect();

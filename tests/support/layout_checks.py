@@ -34,8 +34,8 @@ const clipped = (element) => {
     let { left, top, right, bottom } = element.getBoundingClientRect();
     const fixed = getComputedStyle(element).position === "fixed";
     // Not the page's own clipping: a body that hides its overflow cuts off, not scrolls.
-    const page = [document.body, document.documentElement];
-    for (let up = element.parentElement; up && !fixed && !page.includes(up); up = up.parentElement) {
+    const roots = [document.body, document.documentElement];
+    for (let up = element.parentElement; up && !fixed && !roots.includes(up);) {
         const style = getComputedStyle(up);
         if (style.overflowX !== "visible" || style.overflowY !== "visible") {
             const box = up.getBoundingClientRect();
@@ -49,6 +49,7 @@ const clipped = (element) => {
             }
         }
         if (getComputedStyle(up).position === "fixed") break;
+        up = up.parentElement;
     }
     return { left, top, right, bottom };
 };

@@ -1,0 +1,287 @@
+"""The operator's day (tests/browser/test_operators_day.py): the day's page, its
+screenshots and layout measurements, and the dashboard's parts as an operator finds them.
+
+Every selector the day uses is here, one small function each, so that a change of the
+dashboard's layout is one edit. Those marked ``AFTER-MERGE`` name what the branches of
+issue #33 change (the fleet as cards, the phone's header menu, the Start mission button)."""
+
+from __future__ import annotations
+
+import contextlib
+import os
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import httpx
+from playwright.sync_api import FloatRect, Locator, Page, expect
+
+from common.geodesy import LocalFrame
+from tests.support.layout_checks import covered_controls, overflowing_elements
+from tests.support.maps import _assert_on_open_map, _box, _on_open_map
+from tests.support.waiting import poll_until
+
+SHOTS_VARIABLE = "GCS_DAY_SHOTS"
+States = dict[str, dict[str, Any]]  # each vehicle's latest state, by its id
+
+
+@dataclass
+class Day:
+    """One size's day: the page, a read-only API client to wait on, where its shots go,
+    and the layout faults each step measured."""
+
+    page: Page
+    size: str
+    api: httpx.Client
+    shots: Path
+    frame: LocalFrame  # metres about the first vehicle's home
+    faults: dict[str, list[str]] = field(default_factory=dict)
+    steps: int = 0
+
+    @property
+    def small(self) -> bool:
+        return self.size != "desktop"
+
+    def shot(self, step: str) -> None:
+        """The screenshot of a step, and its layout measured."""
+        self.steps += 1
+        name = f"{self.size}-{self.steps:02d}-{step}"
+        self.page.screenshot(path=self.shots / f"{name}.png")
+        found = [f"overflows: {o}" for o in overflowing_elements(self.page)]
+        found += [f"covered: {c}" for c in covered_controls(self.page)]
+        if found:
+            self.faults[name] = found
+
+    def states(self) -> States:
+        return {v["id"]: v["state"] or {} for v in self.api.get("/api/v1/vehicles").json()}
+
+    def wait(self, test: Callable[[States], object], s: float, what: str) -> None:
+        """API reads only: to wait for the fleet's state, never to act on it."""
+        poll_until(lambda: test(self.states()), s, what)
+
+
+def patient_token(base_url: str, password: str) -> str:
+    """The admin's bearer token, waiting out a hub busy starting four drones' feeds."""
+    response = httpx.post(
+        f"{base_url}/api/v1/auth/token",
+        data={"username": "admin", "password": password},
+        timeout=60,
+    )
+    response.raise_for_status()
+    token: str = response.json()["access_token"]
+    return token
+
+
+def shots_folder(default: Path) -> Path:
+    folder = Path(os.environ.get(SHOTS_VARIABLE) or default)
+    folder.mkdir(parents=True, exist_ok=True)
+    return folder
+
+
+# -- the dashboard's parts ------------------------------------------------------------
+
+
+def drawer(day: Day, name: str, open_: bool) -> None:
+    """On a tablet or a phone the fleet ("fleet") and the panels ("ops") are drawers.
+    AFTER-MERGE: the layout branch keeps the fleet as cards in a side column."""
+    if not day.small:
+        return
+    button = day.page.locator(f'button[data-action="drawer-{name}"]')
+    if (button.get_attribute("aria-expanded") == "true") != open_:
+        button.click()
+    expect(button).to_have_attribute("aria-expanded", str(open_).lower())
+
+
+def fleet_entry(page: Page, vehicle: str) -> Locator:
+    """A vehicle's row in the fleet. AFTER-MERGE: a card, ``[data-vehicle-id]`` kept."""
+    return page.locator(f'tr[data-vehicle-id="{vehicle}"]')
+
+
+def select_vehicle(day: Day, vehicle: str) -> None:
+    drawer(day, "fleet", True)
+    fleet_entry(day.page, vehicle).locator('[data-field="mode"]').click()
+    drawer(day, "fleet", False)
+    expect(day.page.locator('[data-field="mission-vehicle"]')).to_contain_text(vehicle)
+
+
+def take_off(day: Day, vehicle: str, altitude: float) -> None:
+    """The fleet's Takeoff button (it arms in GUIDED and climbs)."""
+    drawer(day, "fleet", True)
+    entry = fleet_entry(day.page, vehicle)
+    entry.locator('input[data-field="takeoff-altitude"]').fill(f"{altitude:g}")
+    entry.locator('button[data-action="takeoff"]').click()
+    # Its answer shows on the row; whether it came in time is the caller's wait on the
+    # climb (on a loaded machine the hub's 15 s for the agent's answer can run out while
+    # the vehicle takes off).
+    expect(entry.locator('[data-field="command-result"]')).to_contain_text("takeoff")
+    drawer(day, "fleet", False)
+
+
+def mission_panel(page: Page) -> Locator:
+    return page.locator(".mission-panel")
+
+
+def panel_open(page: Page, toggle: str, body: str, open_: bool) -> None:
+    """A panel folded or unfolded by its header's toggle."""
+    button = page.locator(f'[data-action="{toggle}"]')
+    if (button.get_attribute("aria-expanded") == "true") != open_:
+        button.click()
+    if open_:
+        expect(page.locator(body)).to_be_visible()
+    else:
+        expect(page.locator(body)).to_be_hidden()
+
+
+def mission_open(page: Page, open_: bool) -> None:
+    panel_open(page, "mission-toggle", ".mission-body", open_)
+
+
+def survey_open(page: Page, open_: bool) -> None:
+    panel_open(page, "survey-toggle", ".survey-body", open_)
+
+
+def formation_open(page: Page) -> Locator:
+    page.locator('[data-action="formation-toggle"]').click()
+    return page.locator(".formation-panel")
+
+
+def pilot_panel(day: Day) -> Locator:
+    """AFTER-MERGE: the layout branch's pilot panel; the fields' names are kept."""
+    drawer(day, "ops", True)
+    return day.page.locator('[data-panel="pilot"]')
+
+
+def flights_button(page: Page) -> Locator:
+    """AFTER-MERGE: on a phone, in the header's menu (open it first)."""
+    return page.get_by_role("button", name="Flights")
+
+
+def view_3d_button(page: Page) -> Locator:
+    return page.locator(".viz3d-toggle")
+
+
+# -- the map --------------------------------------------------------------------------
+
+
+class PixelMap:
+    """Page pixels from lat/lon, read off the map's pointer readout at two open points,
+    as tests/support/maps.py's, but each reading waits for the readout to change: on a
+    loaded machine the readout lags the pointer, and the other's reading read a stale
+    text (its maps.PixelMap never saw two alike, and timed out)."""
+
+    def __init__(self, page: Page) -> None:
+        self.page = page
+        area = _box(page, "#map")
+        grid = [
+            (area["x"] + area["width"] * fx / 10, area["y"] + area["height"] * fy / 10)
+            for fx in range(1, 10)
+            for fy in range(2, 10)
+        ]
+        open_points = [p for p in grid if _on_open_map(page, *p)]
+        assert len(open_points) >= 2, "no open map to read positions from"
+        self.a, self.b = max(
+            ((p, q) for p in open_points for q in open_points),
+            key=lambda pq: min(abs(pq[0][0] - pq[1][0]), abs(pq[0][1] - pq[1][1])),
+        )
+        last: list[tuple[tuple[float, float], ...]] = [()]
+
+        def settled() -> bool:
+            now = (self._read(*self.a), self._read(*self.b))
+            same, last[0] = now == last[0], now
+            return same
+
+        poll_until(settled, 30, "the map to settle", every_s=0.3)
+        (lat_a, lon_a), (lat_b, lon_b) = last[0]
+        self.lat0, self.lon0 = lat_a, lon_a
+        self.per_lon = (self.b[0] - self.a[0]) / (lon_b - lon_a)
+        self.per_lat = (self.b[1] - self.a[1]) / (lat_b - lat_a)
+
+    def _read(self, x: float, y: float) -> tuple[float, float]:
+        readout = self.page.locator('[data-field="cursor-position"]')
+        before = readout.inner_text() if readout.is_visible() else ""
+        self.page.mouse.move(x, y)
+        # Unchanged after 3 s: the same place as before, the map has not moved.
+        with contextlib.suppress(AssertionError):
+            expect(readout).not_to_have_text(before, timeout=3_000)
+        lat, lon = (float(part) for part in readout.inner_text().split(","))
+        return lat, lon
+
+    def pixel(self, lat: float, lon: float) -> tuple[float, float]:
+        return (
+            self.a[0] + (lon - self.lon0) * self.per_lon,
+            self.a[1] + (lat - self.lat0) * self.per_lat,
+        )
+
+    def metres_per_px(self) -> float:
+        return 111_320.0 / abs(self.per_lat)
+
+
+def open_space(day: Day, panel: str) -> FloatRect:
+    """The map not under ``panel``, below the controls along its top: beside the panel
+    when it leaves room, else the whole map (a phone: the panel is folded to draw)."""
+    area = _box(day.page, "#map")
+    top, bottom = area["y"] + 70, area["y"] + area["height"] - 40
+    shown = day.page.locator(panel).first
+    box = shown.bounding_box() if shown.is_visible() else None
+    width = area["width"]
+    if box is not None and box["x"] - area["x"] >= 300:
+        width = box["x"] - area["x"] - 20
+    return {"x": area["x"], "y": top, "width": width, "height": bottom - top}
+
+
+def frame_on_map(
+    day: Day, centre_m: tuple[float, float], size_m: tuple[float, float], space: FloatRect
+) -> PixelMap:
+    """Zoom until a ``size_m`` box fills a good part of ``space``, then drag the map to put
+    ``centre_m`` (east, north) in its middle."""
+    page = day.page
+    pixels = PixelMap(page)
+    for _ in range(8):
+        wide, deep = (m / pixels.metres_per_px() for m in size_m)
+        if wide > space["width"] * 0.8 or deep > space["height"] * 0.7:
+            page.locator(".leaflet-control-zoom-out").click()
+        elif wide < space["width"] * 0.3 and deep < space["height"] * 0.3:
+            page.locator(".leaflet-control-zoom-in").click()
+        else:
+            break
+        pixels = PixelMap(page)
+    centre = pixels.pixel(*day.frame.to_geo(*centre_m))
+    wanted = (space["x"] + space["width"] / 2, space["y"] + space["height"] / 2)
+    start = pixels.a
+    page.mouse.move(*start)
+    page.mouse.down()
+    page.mouse.move(start[0] + wanted[0] - centre[0], start[1] + wanted[1] - centre[1], steps=15)
+    page.mouse.up()
+    return PixelMap(page)
+
+
+def map_point(day: Day, pixels: PixelMap, east: float, north: float) -> tuple[float, float]:
+    """Where (east, north) is drawn, checked to be open map a click reaches."""
+    x, y = pixels.pixel(*day.frame.to_geo(east, north))
+    _assert_on_open_map(day.page, x, y)
+    return x, y
+
+
+def long_press(page: Page, x: float, y: float, until: str) -> None:
+    """A finger held on the screen (CDP touch events) until ``until`` shows."""
+    cdp = page.context.new_cdp_session(page)
+    point = [{"x": x, "y": y}]
+    cdp.send("Input.dispatchTouchEvent", {"type": "touchStart", "touchPoints": point})
+    try:
+        expect(page.locator(until)).to_be_visible(timeout=10_000)
+    finally:
+        cdp.send("Input.dispatchTouchEvent", {"type": "touchEnd", "touchPoints": []})
+        cdp.detach()
+
+
+def drag(page: Page, target: Locator, dx: float, dy: float) -> Callable[[], None]:
+    """Press in the middle of ``target`` and move by (dx, dy); returns the release."""
+    target.scroll_into_view_if_needed()
+    box = target.bounding_box()
+    assert box is not None
+    x, y = box["x"] + box["width"] / 2, box["y"] + box["height"] / 2
+    page.mouse.move(x, y)
+    page.mouse.down()
+    page.mouse.move(x + dx, y + dy, steps=8)
+    return page.mouse.up

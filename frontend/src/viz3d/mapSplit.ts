@@ -32,6 +32,8 @@ export class MapSplit {
   private mode: SplitMode = "closed";
   private readonly observer: ResizeObserver;
   private mapWidth = -1;
+  /** Where on the divider the pointer took hold of it, so the divider does not jump to it. */
+  private grip = 0;
 
   constructor(
     private readonly map: HTMLElement,
@@ -134,6 +136,7 @@ export class MapSplit {
       if (event.button !== 0) return;
       event.preventDefault();
       divider.setPointerCapture(event.pointerId);
+      this.grip = event.clientX - this.element.getBoundingClientRect().left;
       // The view's iframe would swallow the pointer's moves while it is over it.
       this.element.classList.add("dragging");
     });
@@ -141,7 +144,7 @@ export class MapSplit {
       if (!divider.hasPointerCapture(event.pointerId)) return;
       const area = this.map.offsetWidth + this.reserved;
       const right = this.element.getBoundingClientRect().right;
-      this.setShare((right - event.clientX) / area);
+      this.setShare((right - event.clientX + this.grip) / area);
     });
     const end = (event: PointerEvent) => {
       if (!divider.hasPointerCapture(event.pointerId)) return;

@@ -57,8 +57,9 @@ def skipped_note(skipped: Mapping[str, int], origin: GeoPoint | None, configured
                 f"3D view's origin** ({_origin_text(origin, configured)}). The 3D view draws "
                 "in metres around that point, and it stays there while the hub runs. They "
                 "belong to something far from the rest of the fleet (a vehicle, a mission, a "
-                "survey or a replayed flight), or are bad GPS fixes. To centre the 3D view elsewhere, restart the hub "
-                f"with {ORIGIN_SETTING}=latitude,longitude of the place you fly."
+                "survey or a replayed flight), or are bad GPS fixes. To centre the 3D view "
+                f"elsewhere, restart the hub with {ORIGIN_SETTING}=latitude,longitude of the "
+                "place you fly."
             )
         else:
             what, action = _WHY.get(reason, (reason, ""))

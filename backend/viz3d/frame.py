@@ -46,7 +46,7 @@ class SceneFrame:
     """Places positions in the local frame, and counts those it will not place."""
 
     def __init__(self, origin: GeoPoint | None = None) -> None:
-        self._configured = origin
+        self.configured = origin
         self.local: LocalFrame | None = None
         if origin is not None and math.isfinite(origin.alt):
             self.local = LocalFrame(origin.lat, origin.lon, origin.alt)
@@ -64,8 +64,8 @@ class SceneFrame:
         lat, lon, alt = (float(value) for value in home)  # type: ignore[arg-type]
         if not (-90 <= lat <= 90 and -180 <= lon <= 180):
             return False
-        if self._configured is not None:
-            lat, lon = self._configured.lat, self._configured.lon
+        if self.configured is not None:
+            lat, lon = self.configured.lat, self.configured.lon
         self.local = LocalFrame(lat, lon, alt)
         return True
 

@@ -21,6 +21,7 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from backend.viz3d.colours import rgb, vehicle_colour
 from backend.viz3d.frame import SceneFrame, Vector, attitude_wxyz
+from backend.viz3d.skipped_note import skipped_note
 from protocol.messages import MissionItem, VehicleSummary
 
 # A flat arrowhead, 2 m long, pointing along the body's forward (x) axis.
@@ -189,7 +190,14 @@ class FleetScene:
             f"{root}/body", BODY_VERTICES, BODY_FACES, color=colour, side="double"
         )
         body.on_click(lambda event: self._clicked(vehicle_id, event.client))
-        label = self.server.scene.add_label(f"{root}/label", vehicle_id, position=(0, 0, 1.5))
+        # Centred above the model, not running to the right over its neighbour's.
+        label = self.server.scene.add_label(
+            f"{root}/label",
+            vehicle_id,
+            position=(0, 0, 1.5),
+            anchor="bottom-center",
+            font_screen_scale=0.9,
+        )
         self.show_layer(VEHICLES)
         self._follow_choice.options = ("(none)", *sorted([*self._vehicles, vehicle_id]))
         vehicle = _Vehicle(frame=frame, label=label, colour=colour)
@@ -197,15 +205,8 @@ class FleetScene:
         return vehicle
 
     def _label(self, vehicle: _Vehicle, summary: VehicleSummary) -> None:
-        state = summary.state
-        parts = [summary.id]
-        if state is not None:
-            parts.append(state.mode)
-            if state.alt_rel is not None:
-                parts.append(f"{state.alt_rel:.0f} m")
-        if not summary.connected:
-            parts.append("offline")
-        text = " · ".join(parts)
+        # The id alone: "sim_1 · STABILIZE · 0 m" overlapped a neighbour parked 15 m away.
+        text = summary.id if summary.connected else f"{summary.id} (offline)"
         if vehicle.label.text != text:
             vehicle.label.text = text
 
@@ -389,11 +390,11 @@ class FleetScene:
                 client.camera.look_at = position
 
     def _show_skipped(self) -> None:
-        skipped = self.frame.skipped
-        text = (
-            "Positions skipped: " + ", ".join(f"{n} {why}" for why, n in sorted(skipped.items()))
-            if skipped
-            else ""
+        local = self.frame.local
+        text = skipped_note(
+            self.frame.skipped,
+            None if local is None else local.origin,
+            self.frame.configured is not None,
         )
         if self._skipped.content != text:
             self._skipped.content = text

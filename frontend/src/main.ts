@@ -14,7 +14,6 @@ import "./styles/fleet.css";
 import "./styles/login.css";
 import "./styles/audit.css";
 import "./styles/replay.css";
-import "./styles/viz3d.css";
 
 const header = new Header();
 const appParts = [document.querySelector<HTMLElement>(".app-header")!, document.querySelector<HTMLElement>(".layout")!];

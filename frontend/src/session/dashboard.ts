@@ -116,7 +116,8 @@ export class Dashboard {
     );
     ops.element.firstElementChild?.after(pilot.element);
     this.pilot = pilot;
-    this.viz3d = new Viz3dPane(document.getElementById("map")!, store);
+    // Leaflet watches only the window: the split narrows the map itself.
+    this.viz3d = new Viz3dPane(document.getElementById("map")!, store, () => map.leaflet.invalidateSize());
     this.missions = new MissionTools(map.leaflet, can(user, "command"), store);
     this.survey = new SurveyPanel(map.leaflet, can(user, "command"), store);
     this.formation = new FormationPanel(map.leaflet, can(user, "command"), store);

@@ -1,11 +1,13 @@
-// The 3D view beside the map: the hub's viser scene (/viz/, behind the same login) in an
-// iframe that takes the right half of the map's area while it is open. The iframe is
-// made only when the pane opens, so a dashboard that never looks in 3D loads no viser.
-// The two views select the same vehicle: the viewer's page tells us its id and a secret
-// (backend/viz3d/viewers.py), with which we turn its camera to our selection; a click on
-// a vehicle in 3D comes back as a message naming it.
+// The 3D view beside the map or instead of it: the hub's viser scene (/viz/, behind the
+// same login) in an iframe, in the part of the map's area that MapSplit gives it. The
+// iframe is made only when the view opens, so a dashboard that never looks in 3D loads
+// no viser. The two views select the same vehicle: the viewer's page tells us its id and
+// a secret (backend/viz3d/viewers.py), with which we turn its camera to our selection; a
+// click on a vehicle in 3D comes back as a message naming it.
 import { selectInViewer } from "../hub/api";
 import type { DashboardStore } from "../store/dashboardStore";
+import { MapSplit, type SplitMode } from "./mapSplit";
+import "./viz3d.css";
 
 export const VIZ_URL = "/viz/";
 
@@ -20,9 +22,22 @@ interface SelectMessage {
   vehicle: string;
 }
 
+function barButton(text: string, action: string, onClick: () => void): HTMLButtonElement {
+  const made = document.createElement("button");
+  made.type = "button";
+  made.className = "map-button";
+  made.dataset.action = action;
+  made.textContent = text;
+  made.addEventListener("click", onClick);
+  return made;
+}
+
 export class Viz3dPane {
   readonly button: HTMLButtonElement;
-  private pane: HTMLElement | null = null;
+  readonly split: MapSplit;
+  private readonly pane: HTMLElement;
+  private readonly fullButton: HTMLButtonElement;
+  private readonly closeButton: HTMLButtonElement;
   private frame: HTMLIFrameElement | null = null;
   private readonly resize: ResizeObserver;
   private viewer: { id: number; secret: string } | null = null;
@@ -32,61 +47,69 @@ export class Viz3dPane {
   constructor(
     private readonly map: HTMLElement,
     private readonly store: DashboardStore,
+    mapResized: () => void = () => undefined,
   ) {
     store.subscribe((state) => state.selection.id, (id) => id && this.select(id));
     window.addEventListener("message", this.onMessage);
-    this.button = document.createElement("button");
-    this.button.type = "button";
-    this.button.className = "map-button viz3d-toggle";
-    this.button.textContent = "3D view";
+    this.button = barButton("3D view", "viz3d-toggle", () => this.toggle());
+    this.button.classList.add("viz3d-toggle");
     this.button.setAttribute("aria-pressed", "false");
-    this.button.addEventListener("click", () => this.toggle());
     map.parentElement!.append(this.button);
-    this.resize = new ResizeObserver(() => this.place());
+    this.pane = document.createElement("section");
+    this.pane.className = "viz3d-pane";
+    this.pane.setAttribute("aria-label", "3D view");
+    const bar = document.createElement("div");
+    bar.className = "viz3d-bar";
+    const title = document.createElement("span");
+    title.className = "viz3d-title";
+    title.textContent = "3D view";
+    this.fullButton = barButton("Instead of the map", "viz3d-full", () => this.split.setFull(!this.split.full));
+    this.closeButton = barButton("Close 3D view", "viz3d-close", () => this.toggle());
+    bar.append(title, this.fullButton, this.closeButton);
+    this.pane.append(bar);
+    this.split = new MapSplit(map, this.pane, { mapResized, modeChanged: (mode) => this.modeChanged(mode) });
+    this.resize = new ResizeObserver(() => this.placeButton());
     this.resize.observe(map);
-    this.place();
+    this.placeButton();
   }
 
   get isOpen(): boolean {
-    return this.pane !== null;
+    return this.frame !== null;
   }
 
   toggle(): void {
-    if (this.pane) {
-      this.pane.remove();
-      this.pane = null;
+    if (this.frame) {
+      this.frame.remove();
       this.frame = null;
       this.viewer = null;
+      this.split.setOpen(false);
+      this.button.focus();
     } else {
-      const pane = document.createElement("section");
-      pane.className = "viz3d-pane";
-      pane.setAttribute("aria-label", "3D view");
       const frame = document.createElement("iframe");
       frame.src = VIZ_URL;
       frame.title = "3D view of the fleet";
-      pane.append(frame);
-      this.map.parentElement!.append(pane);
-      this.pane = pane;
+      this.pane.append(frame);
       this.frame = frame;
+      this.split.setOpen(true);
     }
     this.button.setAttribute("aria-pressed", String(this.isOpen));
-    this.place();
   }
 
-  /** The pane over the map's right half, and the button at the map's bottom left. */
-  private place(): void {
-    const { offsetLeft, offsetTop, offsetWidth, offsetHeight } = this.map;
+  /** Beside the map the bar offers the whole area; instead of it, the way back. On a
+   * narrow screen (always instead) only the way back. */
+  private modeChanged(mode: SplitMode): void {
+    const narrow = mode === "instead" && !this.split.full;
+    this.fullButton.hidden = narrow;
+    this.fullButton.textContent = this.split.full ? "Beside the map" : "Instead of the map";
+    this.closeButton.textContent = mode === "instead" ? "Back to map" : "Close 3D view";
+    this.placeButton();
+  }
+
+  /** The toggle at the map's bottom left (the scale and notices stand above it). */
+  private placeButton(): void {
+    const { offsetLeft, offsetTop, offsetHeight } = this.map;
     this.button.style.left = `${offsetLeft + 10}px`;
     this.button.style.top = `${offsetTop + offsetHeight - 44}px`;
-    if (this.pane) {
-      const half = Math.round(offsetWidth / 2);
-      Object.assign(this.pane.style, {
-        left: `${offsetLeft + offsetWidth - half}px`,
-        top: `${offsetTop}px`,
-        width: `${half}px`,
-        height: `${offsetHeight}px`,
-      });
-    }
   }
 
   /** The map's selection: this dashboard's viewer turns to it (once it has said who it is). */
@@ -119,7 +142,7 @@ export class Viz3dPane {
   remove(): void {
     window.removeEventListener("message", this.onMessage);
     this.resize.disconnect();
-    this.pane?.remove();
+    this.split.remove();
     this.button.remove();
   }
 }

@@ -1,6 +1,7 @@
 // The page-side half of tests/support/layout_checks.py: one function, called with what to
-// measure ("overflowing" or "covered"), returning descriptions of what is wrong.
-(kind) => {
+// measure ("overflowing" or "covered") and a selector of what may lie over controls (or
+// null), returning descriptions of what is wrong.
+([kind, allowedOver]) => {
   // An element's tag, id, classes, data-action/field/vehicle-id, start of its text and box.
   const describe = (element) => {
     const box = element.getBoundingClientRect();
@@ -18,23 +19,23 @@
     return `${parts.join("")} "${text}" at x=${x}, y=${y}`;
   };
 
-  // Laid out with a size and not hidden by a style.
+  // Laid out with a size and drawn: not hidden by a style of its own or an ancestor's, nor
+  // inside a closed <details> (whose content keeps a box but is not rendered).
   const shown = (element) => {
     const box = element.getBoundingClientRect();
     if (box.width <= 0 || box.height <= 0) return false;
-    const style = getComputedStyle(element);
-    return style.visibility !== "hidden" && style.display !== "none" && Number(style.opacity) !== 0;
+    return element.checkVisibility({ checkOpacity: true, checkVisibilityCSS: true, contentVisibilityAuto: true });
   };
 
   // Scrolled out of sight: wholly outside a scrolling ancestor (a list's row scrolled
-  // past) or the map (its panes). Clipping by any other ancestor does not count: what a
-  // plain clip cuts off is lost to the reader, the fault these checks are for.
+  // past). Clipping by any other ancestor (the map's edge included) does not count: what
+  // a plain clip cuts off is lost to the reader, the fault these checks are for.
   const scrolledAway = (element) => {
     const box = element.getBoundingClientRect();
     for (let up = element.parentElement; up && up !== document.body; up = up.parentElement) {
       const style = getComputedStyle(up);
       const scrolls = /auto|scroll/.test(style.overflowX + style.overflowY);
-      if (!scrolls && !up.classList.contains("leaflet-container")) continue;
+      if (!scrolls) continue;
       const clip = up.getBoundingClientRect();
       const apart =
         box.right <= clip.left || box.left >= clip.right || box.bottom <= clip.top || box.top >= clip.bottom;
@@ -65,14 +66,24 @@
     const selector = "button, select, input:not([type=hidden]), summary, a[href], [role=button]";
     const found = [];
     for (const control of document.querySelectorAll(selector)) {
+      // A control that takes no pointer (map labels while replaying) is not pressed here.
       if (!shown(control) || control.closest("[inert]")) continue;
+      if (getComputedStyle(control).pointerEvents === "none") continue;
       const box = control.getBoundingClientRect();
       const x = box.left + box.width / 2;
       const y = box.top + box.height / 2;
       // Off screen or scrolled out of its list is not covered: a scroll brings it back.
       if (x < 0 || y < 0 || x >= innerWidth || y >= innerHeight || scrolledAway(control)) continue;
+      // On the map's own canvas (a vehicle's label), outside the map's edge: panned away.
+      const canvas = control.closest(".leaflet-map-pane") && control.closest(".leaflet-container");
+      if (canvas) {
+        const edge = canvas.getBoundingClientRect();
+        if (x < edge.left || x > edge.right || y < edge.top || y > edge.bottom) continue;
+      }
       const hit = document.elementFromPoint(x, y);
       if (hit === null || hit === control || control.contains(hit)) continue;
+      // What a menu opened on purpose lies over is not a fault.
+      if (allowedOver && hit.closest(allowedOver)) continue;
       // The label round an input is the same control.
       const label = hit.closest("label");
       if (label && label.contains(control)) continue;

@@ -17,13 +17,15 @@ def overflowing_elements(page: Page) -> list[str]:
     """Every shown element whose box reaches past the viewport's left or right edge (the
     map's own panes and tiles excepted, and what is scrolled out of a list), and a page
     that scrolls sideways; empty when none."""
-    found: list[str] = page.evaluate(_MEASURE_JS, "overflowing")
+    found: list[str] = page.evaluate(_MEASURE_JS, ["overflowing", None])
     return found
 
 
-def covered_controls(page: Page) -> list[str]:
+def covered_controls(page: Page, allowed_over: str | None = None) -> list[str]:
     """Every shown control (button, select, input, summary, link) on screen whose centre
     belongs to another element: `document.elementFromPoint` there returns neither it nor
-    one of its descendants. Empty when every control can be pressed where it is drawn."""
-    found: list[str] = page.evaluate(_MEASURE_JS, "covered")
+    one of its descendants. Empty when every control can be pressed where it is drawn.
+    ``allowed_over`` is a CSS selector of what may lie over controls (a menu opened on
+    purpose covers the page under it)."""
+    found: list[str] = page.evaluate(_MEASURE_JS, ["covered", allowed_over])
     return found

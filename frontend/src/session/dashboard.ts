@@ -49,7 +49,7 @@ export class Dashboard {
   private map: FleetMap | null = null;
   private table: FleetTable | null = null;
   private fold: FleetFold | null = null;
-  /** Re-fits the map whenever its area changes size (a docked panel, a drawer, a split). */
+  /** Re-fits the map, keeping its centre, whenever its area changes size (a docked panel, a drawer, a split). */
   private mapResize: ResizeObserver | null = null;
   private dock: MapDock | null = null;
   private scans: ScanLayer | null = null;
@@ -105,7 +105,10 @@ export class Dashboard {
     this.store = store;
     const map = new FleetMap(document.getElementById("map")!, config, store);
     this.map = map;
-    this.mapResize = new ResizeObserver(() => map.leaflet.invalidateSize({ pan: false }));
+    this.mapResize = new ResizeObserver(() => {
+      map.leaflet.invalidateSize({ animate: false });
+      map.refitIfHidden();
+    });
     this.mapResize.observe(document.getElementById("map")!);
     this.dock = new MapDock(document.getElementById("map")!, document.querySelector<HTMLElement>(".map-dock")!);
     this.fold = new FleetFold(document.querySelector<HTMLElement>(".fleet-panel")!);

@@ -52,6 +52,9 @@
       // Leaflet's panes and tiles are the map's own canvas, bigger than the map by design
       // and clipped by it: only its controls (what a person reads and presses) count.
       if (element.closest(".leaflet-map-pane")) continue;
+      // Inside a drawing, its shapes (a turning horizon) are clipped by the <svg>: the
+      // <svg> itself is what is measured.
+      if (element instanceof SVGElement && element.ownerSVGElement) continue;
       const box = element.getBoundingClientRect();
       if (box.left >= -0.5 && box.right <= width + 0.5) continue;
       if (!scrolledAway(element)) found.push(describe(element));

@@ -53,7 +53,7 @@ def _small(size: str) -> bool:
 
 
 def _open_drawer(page: Page, size: str, drawer: str) -> None:
-    """On a tablet or phone the fleet list and the panels are drawers over the map."""
+    """On a tablet or phone the fleet list and the panels are drawers beside the map."""
     if not _small(size):
         return
     button = page.locator(f'button[data-action="drawer-{drawer}"]')

@@ -76,7 +76,7 @@ export class OpsPanels {
     this.count.setAttribute("role", "status");
     document.getElementById("vehicle-count")?.after(this.count);
 
-    // On small screens the fleet list and these panels are drawers over the map.
+    // On smaller screens the fleet list and these panels are drawers beside the map.
     this.toggles = element(
       "div",
       { className: "drawer-toggles" },

@@ -10,7 +10,7 @@ const BODIES = ".map-panel-body, .mission-body";
 
 export class MapDock {
   /** Where each docked panel stood on the map. */
-  private readonly homes = new Map<HTMLElement, Comment>();
+  private readonly homes = new Map<HTMLElement, HTMLElement>();
   private readonly observer: MutationObserver;
 
   constructor(
@@ -40,19 +40,23 @@ export class MapDock {
   }
 
   private moveIn(panel: HTMLElement): void {
-    const home = document.createComment("a docked panel's place");
+    // An empty box of the folded panel's (its button's) size keeps its place, so the buttons below it do
+    // not slide up under the pointer (a hovered base-map list would open).
+    const home = document.createElement("div");
+    home.className = "docked-panel-place leaflet-control";
+    home.style.height = `${panel.firstElementChild?.getBoundingClientRect().height ?? 0}px`;
     panel.before(home);
     this.homes.set(panel, home);
     this.dock.append(panel);
   }
 
-  private moveOut(panel: HTMLElement, home: Comment): void {
+  private moveOut(panel: HTMLElement, home: HTMLElement): void {
     this.homes.delete(panel);
     if (home.isConnected) home.replaceWith(panel);
     else panel.remove(); // its map control is gone: so is the panel
   }
 
-  private forget(panel: HTMLElement, home: Comment): void {
+  private forget(panel: HTMLElement, home: HTMLElement): void {
     this.homes.delete(panel);
     home.remove();
   }

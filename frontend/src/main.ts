@@ -9,6 +9,8 @@ import type { CurrentUser } from "./hub/types";
 // Last, so the theme overrides Leaflet's stylesheet (imported by ./map/fleetMap).
 // The page's own styles, in cascade order (each panel's beside its code).
 import "./styles/base.css";
+import "./styles/layout.css";
+import "./styles/header.css";
 import "./styles/map.css";
 import "./styles/fleet.css";
 import "./styles/login.css";

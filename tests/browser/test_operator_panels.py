@@ -53,7 +53,7 @@ def _small(size: str) -> bool:
 
 
 def _open_drawer(page: Page, size: str, drawer: str) -> None:
-    """On a tablet or phone the fleet list and the panels are drawers over the map."""
+    """On a tablet or phone the fleet list and the panels are drawers beside the map."""
     if not _small(size):
         return
     button = page.locator(f'button[data-action="drawer-{drawer}"]')
@@ -196,7 +196,7 @@ def test_a_draining_battery_turns_the_marker_and_row_to_the_warning_colour(
     expect(row.locator("td.vehicle-name")).to_have_css("color", WARN_COLOUR)
     expect(marker).to_have_attribute("data-warning", "warning")
     expect(marker.locator(".vehicle-label")).to_have_css("color", WARN_COLOUR)
-    expect(marker.locator(".marker-warning")).to_have_text("⚠")
+    expect(marker.locator('.marker-warning svg[data-icon="warning"]')).to_have_count(1)
     count = page.locator('[data-field="warning-count"]')
     expect(count).to_have_attribute("data-level", "warning")
     expect(count).to_contain_text("1")

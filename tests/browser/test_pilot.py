@@ -48,7 +48,7 @@ def take_control(page: Page, fleet: LocalFleet, source: str = "touch") -> None:
         "Nobody flies it by hand", timeout=30_000
     )
     # Nothing is sent before the pilot asks: no stick takes control by itself.
-    expect(pilot.locator('[data-field="pilot-status"]')).to_have_text("not flying")
+    expect(pilot.locator('[data-field="pilot-status"]')).to_have_text("not flown by hand")
     pilot.locator('button[data-action="take-control"]').click()
     expect(pilot.locator('[data-field="lease-holder"]')).to_have_text(
         "Flown by hand by admin", timeout=30_000

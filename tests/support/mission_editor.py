@@ -33,7 +33,7 @@ def small(size: str) -> bool:
 
 
 def toggle_drawer(page: Page, size: str, drawer: str, open_: bool) -> None:
-    """On a tablet or a phone the fleet list and the panels are drawers over the map."""
+    """On a tablet or a phone the fleet list and the panels are drawers beside the map."""
     if not small(size):
         return
     button = page.locator(f'button[data-action="drawer-{drawer}"]')

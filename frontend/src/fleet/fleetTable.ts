@@ -1,5 +1,6 @@
 // The fleet list: one VehicleRow per vehicle, kept sorted by id, never rebuilt.
 import type { VehicleSummary } from "../hub/types";
+import { onCommandSent } from "../hub/commands";
 import type { DashboardStore } from "../store/dashboardStore";
 import { type CommandRunner, VehicleRow } from "./vehicleRow";
 
@@ -10,6 +11,7 @@ export class FleetTable {
   private readonly emptyRow: HTMLTableRowElement | null;
   private selectedId: string | null = null;
   private readonly listeners = new AbortController();
+  private readonly unfollowCommands: () => void;
 
   /** `runCommand` is null for users who may not command: their rows get no controls. */
   constructor(
@@ -19,6 +21,10 @@ export class FleetTable {
   ) {
     this.emptyRow = body.querySelector("tr.empty-row");
     store.followFleet(this);
+    // A command from elsewhere (a go-to on the map, a mode) replaces the row's last answer.
+    this.unfollowCommands = onCommandSent((id, command, answer) => {
+      if (this.runCommand) void this.rows.get(id)?.follow(command, answer);
+    });
     store.subscribe((state) => state.selection.id, (id) => this.select(id));
     const onSelect = (id: string) => store.select(id, true);
     const { signal } = this.listeners;
@@ -65,6 +71,7 @@ export class FleetTable {
   /** Removes every row and the table's listeners (the session ended). */
   destroy(): void {
     this.listeners.abort();
+    this.unfollowCommands();
     for (const row of this.rows.values()) row.element.remove();
     this.rows.clear();
     this.selectedId = null;

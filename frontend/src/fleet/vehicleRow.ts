@@ -62,6 +62,8 @@ export class VehicleRow {
   private readonly link: HTMLElement;
   private readonly controls: RowControls | null = null;
   private pending = false;
+  /** Counts the commands shown: only the latest one's answer may land on the row. */
+  private shownCommands = 0;
   private lastSeen: number | null = null;
 
   /** `runCommand` is null for users without the "command" permission: no controls at all. */
@@ -193,12 +195,22 @@ export class VehicleRow {
     if (this.pending || !this.runCommand) return;
     const command = this.commandFor(action);
     this.setPending(true);
-    this.showResult({ text: `${command.name}: sending…`, tone: "pending" });
     try {
-      this.showResult(await this.runCommand(this.id, command));
+      await this.follow(command, this.runCommand(this.id, command));
     } finally {
       this.setPending(false);
     }
+  }
+
+  /**
+   * Shows a command sent to this vehicle (from this row or any other panel: a go-to, a
+   * mode) and then its answer, unless a newer command has replaced it meanwhile.
+   */
+  async follow(command: Command, answer: Promise<CommandFeedback>): Promise<void> {
+    const shown = ++this.shownCommands;
+    this.showResult({ text: `${command.name}: sending…`, tone: "pending" });
+    const feedback = await answer;
+    if (shown === this.shownCommands) this.showResult(feedback);
   }
 
   private setPending(pending: boolean): void {

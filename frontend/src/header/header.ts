@@ -1,7 +1,9 @@
 // The header: connection status, vehicle count, a transient notice line, and who
-// is logged in (with the flights, audit-log and logout buttons).
+// is logged in (with the flights, audit-log and logout buttons). On a narrow screen those
+// four fold into a menu behind one button (styles/header.css), so the header fits.
 import type { ConnectionState } from "../hub/connection";
 import { type CurrentUser, can } from "../hub/types";
+import { icon } from "../ui/icons";
 
 const NOTICE_MS = 10_000;
 
@@ -18,9 +20,24 @@ export class Header {
   private readonly count = document.getElementById("vehicle-count")!;
   private readonly notice = document.getElementById("notice")!;
   private readonly userMenu = document.getElementById("user-menu")!;
+  private readonly menuToggle = document.getElementById("header-menu-toggle")!;
   private auditButton: HTMLButtonElement | null = null;
   private flightsButton: HTMLButtonElement | null = null;
   private noticeTimer: number | undefined;
+
+  constructor() {
+    this.menuToggle.append(icon("menu"));
+    this.menuToggle.addEventListener("click", () => this.setMenuOpen(this.menuToggle.getAttribute("aria-expanded") !== "true"));
+    // A pick from the menu closes it (the buttons' own handlers still run).
+    this.userMenu.addEventListener("click", (event) => {
+      if ((event.target as HTMLElement).closest("button")) this.setMenuOpen(false);
+    });
+  }
+
+  private setMenuOpen(open: boolean): void {
+    this.menuToggle.setAttribute("aria-expanded", String(open));
+    this.userMenu.parentElement?.classList.toggle("menu-open", open);
+  }
 
   setConnection(state: ConnectionState, retryInMs?: number): void {
     this.status.dataset.state = state;
@@ -65,6 +82,8 @@ export class Header {
     this.auditButton = null;
     this.flightsButton = null;
     this.userMenu.hidden = user === null;
+    this.menuToggle.hidden = user === null;
+    this.setMenuOpen(false);
     if (!user || !actions) return;
 
     const name = document.createElement("span");

@@ -9,7 +9,23 @@ export interface CommandFeedback {
   tone: ResultTone;
 }
 
-export async function runCommand(vehicleId: string, command: Command): Promise<CommandFeedback> {
+/** Told of every command sent, from any panel, with its answer to come. */
+export type CommandListener = (vehicleId: string, command: Command, answer: Promise<CommandFeedback>) => void;
+const listeners = new Set<CommandListener>();
+
+/** Follows every command sent (the fleet row shows the latest one's answer); returns the unfollow. */
+export function onCommandSent(listener: CommandListener): () => void {
+  listeners.add(listener);
+  return () => listeners.delete(listener);
+}
+
+export function runCommand(vehicleId: string, command: Command): Promise<CommandFeedback> {
+  const answer = answerOf(vehicleId, command);
+  for (const listener of listeners) listener(vehicleId, command, answer);
+  return answer;
+}
+
+async function answerOf(vehicleId: string, command: Command): Promise<CommandFeedback> {
   try {
     const { outcome } = await sendCommand(vehicleId, command);
     if (outcome.status === "accepted") return { text: `${command.name}: accepted`, tone: "accepted" };

@@ -6,6 +6,7 @@ import * as L from "leaflet";
 import { fetchTileSets } from "./tileSets";
 import type { TileSet } from "./tileSets";
 import type { HubConfig } from "../hub/types";
+import { icon } from "../ui/icons";
 
 const FAILURES_BEFORE_FALLBACK = 4;
 const MAX_ZOOM = 22;
@@ -33,6 +34,7 @@ interface Base {
 export class BaseMaps {
   private readonly notice: HTMLDivElement;
   private readonly noticeControl: L.Control;
+  private readonly noticeText: HTMLElement;
   private bases: Base[] = [];
   private control: L.Control.Layers | null = null;
   private destroyed = false;
@@ -46,6 +48,17 @@ export class BaseMaps {
     this.notice = L.DomUtil.create("div", "map-notice");
     this.notice.dataset.field = "basemap-notice";
     this.notice.hidden = true;
+    // One line (its full text on hover) with a button that puts it away, so it never
+    // stands over a panel's buttons for good; a new notice shows again.
+    this.noticeText = L.DomUtil.create("span", "map-notice-text", this.notice);
+    const dismiss = L.DomUtil.create("button", "map-notice-dismiss", this.notice);
+    dismiss.type = "button";
+    dismiss.dataset.action = "dismiss-basemap-notice";
+    dismiss.title = "Hide this notice";
+    dismiss.setAttribute("aria-label", dismiss.title);
+    dismiss.append(icon("close"));
+    dismiss.addEventListener("click", () => (this.notice.hidden = true));
+    L.DomEvent.disableClickPropagation(this.notice);
     const NoticeControl = L.Control.extend({ onAdd: () => this.notice });
     this.noticeControl = new NoticeControl({ position: "bottomleft" });
     this.noticeControl.addTo(map);
@@ -162,7 +175,9 @@ export class BaseMaps {
   }
 
   private say(text: string): void {
-    this.notice.textContent = text;
+    if (this.noticeText.textContent === text && text !== "") return; // dismissed stays dismissed
+    this.noticeText.textContent = text;
+    this.notice.title = text;
     this.notice.hidden = text === "";
   }
 

@@ -14,6 +14,9 @@ import type { DashboardStore } from "../store/dashboardStore";
 const GRID_PX = [320, 64]; // major and minor lines, in the order of styles/map.css
 const FIT_MAX_ZOOM = 19; // close enough to tell apart vehicles a few metres apart
 
+/** About a vehicle label's width, drawn right of its symbol. */
+const LABEL_PX = 90;
+
 export class FleetMap {
   private readonly map: L.Map;
   private readonly vehicles: VehicleLayer;
@@ -119,8 +122,52 @@ export class FleetMap {
     const points = this.vehicles.positions();
     if (points.length === 0) return;
     const zoom = Math.min(FIT_MAX_ZOOM, this.map.getMaxZoom());
-    if (points.length === 1) this.map.setView(points[0], zoom);
-    else this.map.fitBounds(L.latLngBounds(points), { padding: [48, 48], maxZoom: zoom });
+    // Clear of the buttons along the map's sides (on a phone they take much of it), with
+    // room for the labels drawn right of each vehicle.
+    const { topLeft, bottomRight } = this.openArea();
+    this.map.fitBounds(L.latLngBounds(points), { paddingTopLeft: topLeft, paddingBottomRight: bottomRight, maxZoom: zoom });
+  }
+
+  /**
+   * After the map's area changed size (a drawer, a docked panel): fits the fleet again if
+   * a vehicle is now out of sight or under the map's buttons; a view that still shows them
+   * all (the operator's own framing) is kept.
+   */
+  refitIfHidden(): void {
+    const points = this.vehicles.positions();
+    if (points.length === 0 || this.container.classList.contains("replaying")) return;
+    const { topLeft, bottomRight } = this.openArea();
+    const size = this.map.getSize();
+    const hidden = points.some((point) => {
+      const at = this.map.latLngToContainerPoint(point);
+      return at.x < topLeft[0] || at.y < topLeft[1] || at.x > size.x - bottomRight[0] || at.y > size.y - bottomRight[1];
+    });
+    if (hidden) this.fitFleet();
+  }
+
+  /** The margins the map's corner controls take (and a label's width on the right). */
+  private openArea(): { topLeft: L.PointTuple; bottomRight: L.PointTuple } {
+    const container = this.map.getContainer();
+    const box = container.getBoundingClientRect();
+    const corner = (name: string) => container.querySelector(`.leaflet-${name}`)?.getBoundingClientRect();
+    const left = corner("top.leaflet-left");
+    const right = corner("top.leaflet-right");
+    const bottom = corner("bottom.leaflet-left");
+    const margin = 16;
+    const leftPx = left && left.width > 0 ? left.right - box.left : 0;
+    const rightPx = right && right.width > 0 ? box.right - right.left : 0;
+    const topPx = Math.max(this.overlayBottom(box), 0);
+    const bottomPx = bottom && bottom.height > 0 ? box.bottom - bottom.top : 0;
+    return {
+      topLeft: [Math.min(leftPx, box.width / 3) + margin, Math.min(topPx, box.height / 3) + margin],
+      bottomRight: [Math.min(rightPx + LABEL_PX, box.width / 2) + margin, Math.min(bottomPx, box.height / 3) + margin],
+    };
+  }
+
+  /** How far down the map the buttons laid over its top (the drawer buttons) reach. */
+  private overlayBottom(box: DOMRect): number {
+    const over = document.querySelector(".drawer-toggles")?.getBoundingClientRect();
+    return over && over.height > 0 ? over.bottom - box.top : 48;
   }
 
   private moveGrid(): void {

@@ -1,6 +1,7 @@
-// A panel in the map's top-right corner that folds open under its button (the survey and
-// formation panels), and the map clicks a panel draws with: while drawing, each click on
-// the map is the panel's and the cursor is a crosshair.
+// A panel whose button sits in the map's top-right corner (the survey and formation
+// panels): open, it stands in the map area's dock beside the map (map/mapDock.ts), so it
+// never covers the vehicles it acts on. And the map clicks a panel draws with: while drawing, each click on the map is the
+// panel's and the cursor is a crosshair.
 import * as L from "leaflet";
 import "./foldingPanel.css";
 import { button, el } from "../ui/dom";
@@ -18,6 +19,7 @@ export class FoldingPanel {
     toggle.classList.add("map-panel-toggle");
     this.body = el("div", `map-panel-body ${name}-body`);
     this.body.hidden = true;
+    toggle.setAttribute("aria-expanded", "false");
     toggle.addEventListener("click", () => {
       this.body.hidden = !this.body.hidden;
       toggle.setAttribute("aria-expanded", String(!this.body.hidden));

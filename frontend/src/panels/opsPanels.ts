@@ -5,6 +5,7 @@
 // It decorates the row and marker elements by their data-vehicle-id, so the table and
 // the map need not know about warnings.
 import { element } from "../ui/dom";
+import { icon, setIcon } from "../ui/icons";
 import { type IncomingEvent, type LogEvent, CRITICAL_SEVERITY, effectiveSeverity } from "../events/eventLog";
 import { EventFeed } from "../events/eventFeed";
 import type { VehicleSummary } from "../hub/types";
@@ -21,7 +22,7 @@ import {
   validLevels,
 } from "./warnings";
 import "./panels.css";
-import "./drawers.css"; // after panels.css: the smaller screens override it
+// The drawers that hold these panels on smaller screens: styles/layout.css.
 
 /** Link age changes with the clock, not with messages: look again this often. */
 const TICK_MS = 500;
@@ -75,7 +76,7 @@ export class OpsPanels {
     this.count.setAttribute("role", "status");
     document.getElementById("vehicle-count")?.after(this.count);
 
-    // On small screens the fleet list and these panels are drawers over the map.
+    // On smaller screens the fleet list and these panels are drawers beside the map.
     this.toggles = element(
       "div",
       { className: "drawer-toggles" },
@@ -190,8 +191,11 @@ export class OpsPanels {
       names.push(`${entry.vehicle.id}: ${entry.warnings.warnings.map((w) => w.text).join(", ")}`);
     }
     const level: WarningLevel = critical > 0 ? "critical" : warning > 0 ? "warning" : "ok";
-    const text = level === "ok" ? "no warnings" : `${LEVEL_ICONS[level]} ${warning + critical}`;
-    if (this.count.textContent !== text) this.count.textContent = text;
+    const text = level === "ok" ? "no warnings" : String(warning + critical);
+    if (this.count.textContent !== text || this.count.dataset.level !== level) {
+      const name = LEVEL_ICONS[level];
+      this.count.replaceChildren(...(name ? [icon(name, level)] : []), text);
+    }
     this.count.dataset.level = level;
     this.count.dataset.count = String(warning + critical);
     this.count.dataset.critical = String(critical);
@@ -307,8 +311,7 @@ function decorateRow(entry: Tracked, onAck: () => void): void {
   parts.onAck = onAck;
   const { level, warnings } = entry.warnings;
   if (row.dataset.warning !== level) row.dataset.warning = level;
-  const icon = LEVEL_ICONS[level];
-  if (parts.icon.textContent !== icon) parts.icon.textContent = icon;
+  setIcon(parts.icon, LEVEL_ICONS[level], level);
   const title = warnings.map((w) => w.text).join("; ");
   if (parts.icon.title !== title) {
     parts.icon.title = title;
@@ -340,6 +343,6 @@ function decorateMarker(id: string, warnings: VehicleWarnings): void {
     badge = element("span", { className: "marker-warning" });
     marker.append(badge);
   }
-  badge.textContent = LEVEL_ICONS[warnings.level];
+  setIcon(badge, LEVEL_ICONS[warnings.level], warnings.level);
   badge.title = title;
 }

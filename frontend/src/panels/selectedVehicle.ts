@@ -6,7 +6,8 @@ import { MISSING, formatAltitude, formatSpeed } from "../ui/format";
 import type { Command, VehicleSummary } from "../hub/types";
 import { AttitudeIndicator } from "./attitude";
 import { distanceM } from "./geo";
-import { LEVEL_ICONS, type VehicleWarnings } from "./warnings";
+import { LEVEL_ICONS, type VehicleWarnings, type WarningLevel } from "./warnings";
+import { icon } from "../ui/icons";
 
 export type Runner = (vehicleId: string, command: Command) => Promise<CommandFeedback>;
 
@@ -115,7 +116,7 @@ export class SelectedVehiclePanel {
       this.warningList.dataset.key = key;
       this.warningList.replaceChildren(
         ...warnings.warnings.map((w) => {
-          const li = element("li", { className: "warning-item", textContent: `${LEVEL_ICONS[w.level]} ${w.text}` });
+          const li = element("li", { className: "warning-item" }, ...levelIcon(w.level), w.text);
           li.dataset.level = w.level;
           li.dataset.kind = w.kind;
           return li;
@@ -180,4 +181,10 @@ export class SelectedVehiclePanel {
     this.modeResult.title = text;
     this.modeResult.dataset.tone = tone;
   }
+}
+
+/** A warning level's icon, as the children to put before its text (none when ok). */
+function levelIcon(level: WarningLevel): SVGSVGElement[] {
+  const name = LEVEL_ICONS[level];
+  return name ? [icon(name, level)] : [];
 }

@@ -2,6 +2,7 @@
 // autopilot's estimator (EKF) health. Pure: the state, the clock and the levels in,
 // a level and its reasons out; the views draw them on the row, the marker and the header.
 import type { VehicleSummary } from "../hub/types";
+import type { IconName } from "../ui/icons";
 
 export type WarningLevel = "ok" | "warning" | "critical";
 export type WarningKind = "battery" | "link" | "gps" | "ekf";
@@ -34,8 +35,8 @@ export interface VehicleWarnings {
   warnings: Warning[];
 }
 
-/** The glyph drawn with a level (beside the colour, for colour-blind eyes). */
-export const LEVEL_ICONS: Record<WarningLevel, string> = { ok: "", warning: "⚠", critical: "⛔" };
+/** The icon drawn with a level (beside the colour, for colour-blind eyes); none when ok. */
+export const LEVEL_ICONS: Record<WarningLevel, IconName | null> = { ok: null, warning: "warning", critical: "critical" };
 
 export function evaluate(
   vehicle: VehicleSummary,

@@ -19,7 +19,7 @@ import { HubPing } from "./hubPing";
 import { PilotStats } from "./pilotStats";
 import { confirmFix, writeFix } from "./refusalFix";
 import { settingsFormParts } from "./settingsForm";
-import { statusLine } from "./statusLine";
+import { NOT_FLOWN, statusLine } from "./statusLine";
 import { Shaper, toManualAxes } from "./shaping";
 import "./pilot.css";
 
@@ -75,7 +75,7 @@ export class PilotPanel {
     this.ui = {
       title: element("h2", { className: "panel-title", textContent: "Fly by hand" }),
       holder: field("p", "lease-holder", { className: "pilot-holder", textContent: "Select a vehicle" }),
-      status: field("output", "pilot-status", { className: "pilot-status", textContent: "not flying" }),
+      status: field("output", "pilot-status", { className: "pilot-status", textContent: NOT_FLOWN }),
       axes: field("code", "pilot-axes", { className: "pilot-axes" }),
     };
     this.ui.status.setAttribute("aria-live", "assertive");
@@ -115,10 +115,14 @@ export class PilotPanel {
       { className: "pilot-panel" },
       this.ui.title,
       this.ui.holder,
-      canFly
-        ? element("div", { className: "pilot-controls" }, this.sourcePicker, this.take, this.release, this.resume)
-        : element("span"),
-      this.isAdmin ? this.revoke : element("span"),
+      // One row: the input, then taking, giving back and (an admin) taking away control.
+      element(
+        "div",
+        { className: "pilot-controls" },
+        ...(canFly ? [this.sourcePicker, this.take, this.release] : []),
+        ...(this.isAdmin ? [this.revoke] : []),
+        ...(canFly ? [this.resume] : []),
+      ),
       this.ui.status,
       canFly && this.isAdmin ? element("div", { className: "pilot-fix" }, this.fix) : element("span"),
       this.sticks,

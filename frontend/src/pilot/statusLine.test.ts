@@ -7,7 +7,7 @@ const refusal = { vehicle_id: "a", reason: "SYSID_MYGCS is 255", fix: { param: "
 
 describe("the pilot's status line", () => {
   it("says what the panel is doing, flying first", () => {
-    expect(statusLine(idle)).toEqual({ text: "not flying", state: "idle" });
+    expect(statusLine(idle)).toEqual({ text: "not flown by hand", state: "idle" });
     expect(statusLine({ ...idle, sendingWith: "Gamepad", asking: true, refusal })).toEqual({ text: "flying with Gamepad, 25 Hz", state: "sending" });
     expect(statusLine({ ...idle, asking: true, refusal })).toEqual({ text: "asking for control…", state: "asking" });
     expect(statusLine({ ...idle, stoppedWhy: "page hidden" })).toEqual({ text: "stopped: page hidden — the vehicle holds", state: "stopped" });

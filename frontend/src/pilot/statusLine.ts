@@ -19,6 +19,9 @@ export interface StatusLine {
   state: "idle" | "sending" | "asking" | "refused" | "stopped";
 }
 
+/** Idle: nobody flies this vehicle from here (it may well be in the air, under its autopilot). */
+export const NOT_FLOWN = "not flown by hand";
+
 export function statusLine(activity: PilotActivity): StatusLine {
   const { refusal } = activity;
   if (activity.sendingWith !== null) return { text: `flying with ${activity.sendingWith}, 25 Hz`, state: "sending" };
@@ -30,5 +33,5 @@ export function statusLine(activity: PilotActivity): StatusLine {
     return { text, state: "refused" };
   }
   if (activity.stoppedWhy) return { text: `stopped: ${activity.stoppedWhy} — the vehicle holds`, state: "stopped" };
-  return { text: "not flying", state: "idle" };
+  return { text: NOT_FLOWN, state: "idle" };
 }

@@ -7,12 +7,14 @@ import { runCommand } from "../hub/commands";
 import { FleetSocket } from "../hub/connection";
 import { DashboardStore } from "../store/dashboardStore";
 import { FleetBatch } from "../store/fleetBatch";
+import { FleetFold } from "../fleet/fleetFold";
 import { FleetTable } from "../fleet/fleetTable";
 import { FormationPanel } from "../formation";
 import { linkState } from "../ui/format";
 import { PROTOCOL_VERSION } from "../generated/protocol";
 import type { Header } from "../header/header";
 import { FleetMap } from "../map/fleetMap";
+import { MapDock } from "../map/mapDock";
 import { OpsPanels } from "../panels/opsPanels";
 import { PilotPanel } from "../pilot/pilotPanel";
 import { MissionTools } from "../missions";
@@ -46,6 +48,10 @@ export class Dashboard {
   private socket: FleetSocket | null = null;
   private map: FleetMap | null = null;
   private table: FleetTable | null = null;
+  private fold: FleetFold | null = null;
+  /** Re-fits the map, keeping its centre, whenever its area changes size (a docked panel, a drawer, a split). */
+  private mapResize: ResizeObserver | null = null;
+  private dock: MapDock | null = null;
   private scans: ScanLayer | null = null;
   private audit: AuditPanel | null = null;
   private replay: ReplayPanel | null = null;
@@ -99,6 +105,13 @@ export class Dashboard {
     this.store = store;
     const map = new FleetMap(document.getElementById("map")!, config, store);
     this.map = map;
+    this.mapResize = new ResizeObserver(() => {
+      map.leaflet.invalidateSize({ animate: false });
+      map.refitIfHidden();
+    });
+    this.mapResize.observe(document.getElementById("map")!);
+    this.dock = new MapDock(document.getElementById("map")!, document.querySelector<HTMLElement>(".map-dock")!);
+    this.fold = new FleetFold(document.querySelector<HTMLElement>(".fleet-panel")!);
     this.table = new FleetTable(
       document.querySelector<HTMLTableSectionElement>("#fleet-table tbody")!,
       can(user, "command") ? runCommand : null,
@@ -129,6 +142,7 @@ export class Dashboard {
         let online = 0;
         for (const vehicle of all.values()) if (linkState(vehicle) !== "offline") online++;
         header.setCounts(all.size, online);
+        this.fold?.setCount(all.size);
       },
     );
     const fleet = new FleetBatch((frame) => {
@@ -205,6 +219,8 @@ export class Dashboard {
     this.pilot = null;
     this.ops?.destroy();
     this.ops = null;
+    this.dock?.destroy();
+    this.dock = null;
     this.missions?.destroy();
     this.missions = null;
     this.survey?.destroy();
@@ -213,6 +229,10 @@ export class Dashboard {
     this.formation = null;
     this.table?.destroy();
     this.table = null;
+    this.fold?.destroy();
+    this.fold = null;
+    this.mapResize?.disconnect();
+    this.mapResize = null;
     this.scans?.destroy();
     this.scans = null;
     this.map?.destroy();

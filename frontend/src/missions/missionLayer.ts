@@ -20,7 +20,10 @@ export interface MissionDrawing {
   current: number | null;
   /** Refusals by item number (1 is the first after home). */
   refusals: Map<number, string[]>;
+  /** Markers drag (a plan being edited). */
   editable: boolean;
+  /** A click on a leg inserts a waypoint: only while adding waypoints is the map's tool. */
+  inserting: boolean;
 }
 
 export interface MissionLayerHooks {
@@ -67,7 +70,7 @@ export class MissionLayer {
 
   draw(drawing: MissionDrawing): void {
     this.group.clearLayers();
-    const { items, home, current, refusals, editable } = drawing;
+    const { items, home, current, refusals, editable, inserting } = drawing;
     let previous: L.LatLng | null = home;
     items.forEach((item, index) => {
       const seq = index + 1;
@@ -85,7 +88,7 @@ export class MissionLayer {
           refused: Boolean(refused),
           flown,
           active,
-          editable,
+          editable: inserting,
           rtl: item.command === CMD.RTL,
         });
       }

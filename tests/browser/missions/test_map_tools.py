@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import math
 
+import httpx
 from playwright.sync_api import Locator, Page, expect
 
 from gcs.launcher import LocalFleet
@@ -49,8 +50,10 @@ def _banner(page: Page) -> Locator:
     return page.locator('[data-field="map-tool-banner"]')
 
 
-def test_one_map_tool_at_a_time(sized_page: tuple[Page, str], mission_fleet: LocalFleet) -> None:
-    page, size = sized_page
+def test_one_map_tool_at_a_time(
+    sized_page: tuple[Page, str], mission_fleet: LocalFleet, api: httpx.Client
+) -> None:
+    page, size = sized_page  # `api`: every vehicle has a position
     log_in(page, mission_fleet.plan.hub_http, "admin", mission_fleet.plan.admin_password)
     expect(page.locator(".vehicle-marker")).to_have_count(3, timeout=30_000)
     select(page, size, VEHICLE)

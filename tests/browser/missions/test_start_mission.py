@@ -9,7 +9,6 @@ from __future__ import annotations
 from typing import Any
 
 import httpx
-import pytest
 from playwright.sync_api import Page, expect
 
 from common.geodesy import LocalFrame
@@ -79,7 +78,6 @@ def test_start_mission_stops_at_the_first_refusal_with_its_reason(
         assert api.delete(rails).status_code in (200, 204)
 
 
-@pytest.mark.slow
 def test_start_mission_checks_arms_takes_off_and_flies_it(
     wide_page: Page, mission_fleet: LocalFleet, api: httpx.Client
 ) -> None:

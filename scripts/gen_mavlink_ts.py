@@ -6,7 +6,9 @@ as the Python side does and never types a number by hand.
     .venv/bin/python scripts/gen_mavlink_ts.py --check  # exit 1 if it is stale
 
 tests/unit/frontend/test_frontend_mavlink_names.py fails when the file and pymavlink differ.
-One `export const` per value, not an object: the bundler keeps only the ones in use.
+One `export const` per value, not an object: the bundler keeps only the ones in use; and
+one table of names per enum (MAV_CMD_NAMES, MAV_FRAME_NAMES), so that a command the
+dashboard has no word of its own for shows as MAVLink names it, never as a bare number.
 """
 
 from __future__ import annotations
@@ -55,6 +57,13 @@ def render() -> str:
             if summary := _summary(entry.description or ""):
                 lines.append(f"/** {summary} */")
             lines.append(f"export const {entry.name} = {value};")
+    for enum in ENUMS:
+        lines += ["", f"/** Every {enum} value's MAVLink name. */"]
+        lines.append(f"export const {enum}_NAMES: Readonly<Record<number, string>> = {{")
+        for value, entry in sorted(mavlink2.enums[enum].items()):
+            if not entry.name.endswith("_ENUM_END"):
+                lines.append(f'  {value}: "{entry.name}",')
+        lines.append("};")
     return "\n".join(lines) + "\n"
 
 

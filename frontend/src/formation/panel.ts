@@ -86,10 +86,8 @@ export class FormationPanel {
     this.layer = new FormationLayer(map);
     this.panel = new FoldingPanel(map, "formation", "Formation", "Fly vehicles in formation behind a leader");
     this.element = this.panel.element;
-    this.clicks = new MapClicks(map, (at) => {
-      this.route.push(at);
-      this.renderRoute();
-    });
+    const clickTool = { label: "Drawing formation route", owner: this.element, onEnd: () => this.renderRoute() };
+    this.clicks = new MapClicks(map, (at) => (this.route.push(at), this.renderRoute()), clickTool);
     const shapes = Object.entries(SHAPE_NAMES);
 
     // -- the members

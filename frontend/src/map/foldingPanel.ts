@@ -1,10 +1,13 @@
 // A panel whose button sits in the map's top-right corner (the survey and formation
 // panels): open, it stands in the map area's dock beside the map (map/mapDock.ts), so it
-// never covers the vehicles it acts on. And the map clicks a panel draws with: while drawing, each click on the map is the
-// panel's and the cursor is a crosshair.
+// never covers the vehicles it acts on. And the map clicks a panel draws with: while
+// drawing, each click on the map is the panel's, the cursor is a crosshair and the map's
+// banner names the tool.
 import * as L from "leaflet";
 import "./foldingPanel.css";
 import { button, el } from "../ui/dom";
+import { type MapTool, type MapToolRegistry, mapToolsOf } from "./mapTools";
+import { showToolBanner } from "./toolBanner";
 
 export class FoldingPanel {
   readonly element: HTMLElement;
@@ -23,6 +26,8 @@ export class FoldingPanel {
     toggle.addEventListener("click", () => {
       this.body.hidden = !this.body.hidden;
       toggle.setAttribute("aria-expanded", String(!this.body.hidden));
+      // A folded panel draws nothing: its tool ends (it once drew on, unseen).
+      if (this.body.hidden) mapToolsOf(map).endOwnedBy(this.element);
     });
     this.element.append(toggle, this.body);
     // Clicks and wheel turns on the panel stay off the map (no drawn vertex, no zoom).
@@ -38,29 +43,51 @@ export class FoldingPanel {
   }
 }
 
-/** Map clicks handed to `onClick` while drawing; off otherwise. */
+export interface MapClicksOptions {
+  /** What the map's banner says while drawing, e.g. "Drawing survey area". */
+  label: string;
+  /** The panel the drawing belongs to (its element): folding it ends the drawing. */
+  owner?: object;
+  /** Something else ended the drawing (another tool, Esc, Done, a fold). */
+  onEnd?: () => void;
+}
+
+/** Map clicks handed to `onClick` while drawing; off otherwise. Drawing is one of the
+ * map's tools (mapTools.ts): starting it ends any other, and the banner shows it. */
 export class MapClicks {
-  private drawing = false;
+  private readonly tools: MapToolRegistry;
+  private readonly tool: MapTool;
 
   constructor(
     private readonly map: L.Map,
     private readonly onClick: (at: L.LatLng) => void,
+    options: MapClicksOptions,
   ) {
+    this.tools = mapToolsOf(map);
+    showToolBanner(map);
+    this.tool = {
+      label: options.label,
+      owner: options.owner,
+      ended: () => {
+        this.crosshair(false);
+        options.onEnd?.();
+      },
+    };
     map.on("click", this.handle);
   }
 
   get active(): boolean {
-    return this.drawing;
+    return this.tools.isActive(this.tool);
   }
 
   start(): void {
-    this.drawing = true;
-    this.map.getContainer().classList.add("map-drawing-mode");
+    this.tools.start(this.tool);
+    this.crosshair(true);
   }
 
   stop(): void {
-    this.drawing = false;
-    this.map.getContainer().classList.remove("map-drawing-mode");
+    this.tools.release(this.tool);
+    this.crosshair(false);
   }
 
   destroy(): void {
@@ -68,7 +95,11 @@ export class MapClicks {
     this.map.off("click", this.handle);
   }
 
+  private crosshair(on: boolean): void {
+    this.map.getContainer().classList.toggle("map-drawing-mode", on);
+  }
+
   private readonly handle = (event: L.LeafletMouseEvent): void => {
-    if (this.drawing) this.onClick(event.latlng);
+    if (this.active) this.onClick(event.latlng);
   };
 }

@@ -1,8 +1,7 @@
 // The mission panel: shows the selected vehicle's mission, and edits one on the map.
 //
-// Click the map to add a waypoint, drag a marker to move it, click a leg to insert one,
-// delete from the list; altitude (with its frame) and speed per item; take-off, loiter
-// time, land and RTL items. Every edit is checked by the hub's rails (`mission-check`,
+// Edit: each map click adds a waypoint (the map's one tool until Done, Esc or a fold), a
+// click on a leg inserts one, a marker drags; altitude, frame and speed per item. Every edit is checked by the hub's rails (`mission-check`,
 // debounced) and each refusal shows on the items it names. Upload to the vehicle being
 // edited (or to others the operator ticks on purpose, each checked against its own rails
 // first), download from the vehicle, and open or save a QGroundControl `.plan` file.
@@ -13,6 +12,8 @@ import * as L from "leaflet";
 import type { VehicleSummary } from "../hub/types";
 import { checkMission } from "./api";
 import { MissionLayer } from "./missionLayer";
+import { MapClicks } from "../map/foldingPanel";
+import { missionHome, missionPanelShell } from "./panelShell";
 import { CMD, type MissionCheck, type MissionItem, makeItem } from "./model";
 import { PlanError, readPlan } from "./plan";
 import { type RowEdits, adderButtons, missionRows } from "./itemRows";
@@ -27,6 +28,8 @@ const CHECK_DELAY_MS = 400;
 export class MissionEditor {
   readonly element: HTMLElement;
   private readonly layer: MissionLayer;
+  /** Map clicks add waypoints: one of the map's tools (map/mapTools.ts). */
+  private readonly clicks: MapClicks;
   private readonly control: L.Control;
   private readonly vehicles = new Map<string, VehicleSummary>();
   /** The missions on the vehicles, as last uploaded from here or downloaded. */
@@ -63,22 +66,17 @@ export class MissionEditor {
   ) {
     this.layer = new MissionLayer(map, {
       move: (index, to) => this.edit((items) => Object.assign(items[index], { lat: to.lat, lon: to.lng })),
-      insert: (index, at) => this.edit((items) => items.splice(index, 0, this.waypointAt(at, items, index))),
+      insert: (index, at) => this.clicks.active && this.edit((items) => items.splice(index, 0, this.waypointAt(at, items, index))),
       pick: (index) => this.focusRow(index),
     });
 
-    this.element = el("div", "mission-panel");
-    const toggle = button("mission-toggle", "Mission", "Show or edit the selected vehicle's mission");
-    this.body = el("div", "mission-body");
-    this.body.hidden = true;
-    toggle.addEventListener("click", () => {
-      this.body.hidden = !this.body.hidden;
-      toggle.setAttribute("aria-expanded", String(!this.body.hidden));
-    });
+    ({ element: this.element, body: this.body, control: this.control } = missionPanelShell(map));
     this.title = el("div", "mission-title", "mission-vehicle");
 
     this.editButton = button("mission-edit", "Edit", "Edit this mission on the map (click the map to add waypoints)");
-    this.editButton.addEventListener("click", () => (this.draft ? this.stopEditing() : this.startEditing()));
+    this.editButton.addEventListener("click", () => (this.clicks.active ? this.finishClicks() : this.startEditing()));
+    const discard = button("mission-discard", "Discard", "Drop this plan: show the vehicle's mission again");
+    discard.addEventListener("click", () => this.stopEditing());
     const download = button("mission-download", "Download", "Read the mission on the vehicle");
     download.addEventListener("click", () => void this.download());
     const upload = button("mission-upload", "Upload", "Send this mission to the vehicles ticked below");
@@ -102,28 +100,20 @@ export class MissionEditor {
     );
 
     const tools = el("div", "mission-toolbar");
-    tools.append(this.editButton, download, open, save);
+    tools.append(this.editButton, discard, download, open, save);
     if (canCommand) tools.append(upload);
     const uploadTo = el("div", "mission-upload-to");
-    const uploadLabel = el("span", "mission-upload-label");
-    uploadLabel.textContent = "Upload to";
-    uploadTo.append(uploadLabel, this.targets);
+    uploadTo.append(Object.assign(el("span", "mission-upload-label"), { textContent: "Upload to" }), this.targets);
     uploadTo.hidden = !canCommand;
     this.list = el("ol", "mission-items", "mission-items");
     this.verdict = el("div", "mission-check", "mission-check");
     this.status = el("div", "mission-status", "mission-status");
     this.status.setAttribute("role", "status");
     const hint = el("p", "mission-hint");
-    hint.textContent = "Editing: click the map to add a waypoint, drag one to move it, click a leg to insert one.";
+    hint.textContent = "Edit: click the map to add a waypoint, a leg to insert one; drag one to move it.";
     this.body.append(this.title, tools, uploadTo, add, hint, this.list, this.verdict, this.status, this.fileInput);
-    this.element.append(toggle, this.body);
-    L.DomEvent.disableClickPropagation(this.element);
-    L.DomEvent.disableScrollPropagation(this.element);
-
-    const Panel = L.Control.extend({ onAdd: () => this.element });
-    this.control = new Panel({ position: "topright" });
-    this.control.addTo(map);
-    map.on("click", this.onMapClick);
+    const tool = { label: "Adding mission waypoints", owner: this.element, onEnd: () => this.render() };
+    this.clicks = new MapClicks(map, (at) => this.addWaypoint(at), tool);
     this.render();
   }
 
@@ -160,20 +150,34 @@ export class MissionEditor {
     this.destroyed = true;
     window.clearTimeout(this.checkTimer);
     this.checkAbort?.abort();
-    this.map.off("click", this.onMapClick);
+    this.clicks.destroy();
     this.control.remove();
     this.layer.destroy();
   }
 
   // ------------------------------------------------------------------ editing
 
+  /** A section of the panel's own (Start mission), under the list. */
+  addSection(section: HTMLElement): void {
+    this.body.insertBefore(section, this.fileInput);
+  }
+
+  /** Map clicks add waypoints to the plan (one begun from the vehicle's mission if none is). */
   private startEditing(): void {
-    this.draft = startingPlan(this.selectedId ? this.known.get(this.selectedId) : undefined, this.selected());
+    this.draft ??= startingPlan(this.selectedId ? this.known.get(this.selectedId) : undefined, this.selected());
     this.body.hidden = false;
+    this.clicks.start();
     this.changed();
   }
 
+  /** Done adding waypoints: the plan stays, to upload, save or discard. */
+  private finishClicks(): void {
+    this.clicks.stop();
+    this.render();
+  }
+
   private stopEditing(): void {
+    this.clicks.stop();
     this.draft = null;
     this.refusals = new Map();
     this.checkAbort?.abort();
@@ -192,10 +196,9 @@ export class MissionEditor {
     this.scheduleCheck();
   }
 
-  private readonly onMapClick = (event: L.LeafletMouseEvent): void => {
-    if (!this.draft) return;
-    this.edit((items) => items.push(this.waypointAt(event.latlng, items, items.length)));
-  };
+  private addWaypoint(at: L.LatLng): void {
+    this.edit((items) => items.push(this.waypointAt(at, items, items.length)));
+  }
 
   private waypointAt(at: L.LatLng, items: readonly MissionItem[], index: number): MissionItem {
     return makeItem(CMD.WAYPOINT, at.lat, at.lng, lastAltitude(items, index));
@@ -341,9 +344,11 @@ export class MissionEditor {
     this.title.textContent = id
       ? `${this.draft ? "Editing a plan for" : "Mission of"} ${id}`
       : "Select a vehicle to see or edit its mission.";
-    this.editButton.textContent = this.draft ? "Done" : "Edit";
+    this.editButton.textContent = this.clicks.active ? "Done" : "Edit";
+    this.editButton.classList.toggle("active", this.clicks.active);
     this.body.classList.toggle("editing", this.draft !== null);
-    this.map.getContainer().classList.toggle("mission-editing", this.draft !== null);
+    this.body.classList.toggle("adding", this.clicks.active);
+    this.map.getContainer().classList.toggle("mission-editing", this.clicks.active);
     this.renderList();
     this.drawnKey = "";
     this.drawMap();
@@ -380,18 +385,14 @@ export class MissionEditor {
       this.drawnKey = "none";
       return;
     }
-    const home =
-      state?.home_lat != null && state.home_lon != null
-        ? L.latLng(state.home_lat, state.home_lon)
-        : state?.lat != null && state.lon != null && !(state.lat === 0 && state.lon === 0)
-          ? L.latLng(state.lat, state.lon)
-          : null;
+    const home = missionHome(state);
     const current = this.draft ? null : (state?.mission_current ?? null);
     // Telemetry comes at several hertz: redraw only when what is drawn changes.
-    const key = `${this.draft ? "draft" : "live"}|${current}|${home?.lat.toFixed(6)},${home?.lng.toFixed(6)}`;
+    const key = `${this.draft ? "draft" : "live"}|${this.clicks.active}|${current}|${home?.lat.toFixed(6)},${home?.lng.toFixed(6)}`;
     if (key === this.drawnKey) return;
     this.drawnKey = key;
-    this.layer.draw({ items, home, current, refusals: this.refusals, editable: this.draft !== null });
+    const editable = this.draft !== null;
+    this.layer.draw({ items, home, current, refusals: this.refusals, editable, inserting: this.clicks.active });
     const active = this.list.querySelector(".mission-row.active");
     if (active && String(current) !== (active as HTMLElement).dataset.seq) this.renderList();
     else if (!this.draft && current !== null && !active) this.renderList();

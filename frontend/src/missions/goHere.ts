@@ -1,15 +1,22 @@
 // "Fly here": right-click (or a long press on a touch screen) on the map offers to send
 // the selected vehicle there at an altitude above home. The confirmation shows the
 // distance and the rails' verdict on that go-to (`goto-check`, the same rails the `goto`
-// command is held to) before anything is sent; a refused go-to cannot be confirmed.
+// command is held to) before anything is sent; a refused go-to cannot be confirmed. An
+// accepted go-to closes the popup and its answer shows at the point for a few seconds.
+//
+// Not while a map tool is on (mapTools.ts): on a touch screen a long press is the same
+// finger as a tap placing a corner or a waypoint, and a go-to opened (and confirmed) by
+// mistake mid-drawing flies a real vehicle. The tool's banner says how to finish first.
 import * as L from "leaflet";
 import { runCommand } from "../hub/commands";
 import type { VehicleSummary } from "../hub/types";
 import { checkGoto } from "./api";
+import { mapToolsOf } from "../map/mapTools";
 
 const LONG_PRESS_MS = 600;
 const DEFAULT_ALT_M = 10;
 const CHECK_DELAY_MS = 250;
+const ANSWER_SHOWN_MS = 4000;
 
 function formatDistance(metres: number): string {
   return metres >= 1000 ? `${(metres / 1000).toFixed(2)} km` : `${Math.round(metres)} m`;
@@ -50,6 +57,7 @@ export class GoHere {
 
   private readonly onContextMenu = (event: L.LeafletMouseEvent): void => {
     L.DomEvent.preventDefault(event.originalEvent);
+    if (mapToolsOf(this.map).active) return this.cancelPress();
     if (this.pressStart) {
       // A browser that makes a long press a "contextmenu" (Chrome on Android): one popup.
       this.cancelPress();
@@ -60,7 +68,7 @@ export class GoHere {
 
   // Leaflet turns a long press into "contextmenu" only on Safari: do it for every touch screen.
   private readonly onPointerDown = (event: PointerEvent): void => {
-    if (event.pointerType !== "touch") return;
+    if (event.pointerType !== "touch" || mapToolsOf(this.map).active) return;
     this.cancelPress();
     this.pressOpened = false;
     this.pressStart = { x: event.clientX, y: event.clientY };
@@ -179,10 +187,22 @@ export class GoHere {
       void runCommand(id, { name: "goto", lat: at.lat, lon: at.lng, altitude: alt }).then((feedback) => {
         result.textContent = feedback.text;
         result.dataset.tone = feedback.tone;
+        // Accepted: done with the popup. A refusal stays, its reason beside the altitude.
+        if (feedback.tone === "accepted") this.answer(at, result);
       });
     });
     check();
     this.show(at, box);
+  }
+
+  /** The popup closes; its answer stays at the point a few seconds, out of the way. */
+  private answer(at: L.LatLng, result: HTMLElement): void {
+    this.popup?.remove();
+    const tip = L.tooltip({ permanent: true, direction: "top", className: "go-here-answer" })
+      .setLatLng(at)
+      .setContent(result)
+      .addTo(this.map);
+    window.setTimeout(() => tip.remove(), ANSWER_SHOWN_MS);
   }
 
   private show(at: L.LatLng, content: HTMLElement): void {

@@ -1,9 +1,10 @@
-// The dashboard's mission tools: the mission panel and editor, and "fly here".
+// The dashboard's mission tools: the mission panel and editor, "Start mission", and "fly here".
 import type * as L from "leaflet";
 import type { VehicleSummary } from "../hub/types";
 import type { DashboardStore } from "../store/dashboardStore";
 import { MissionEditor } from "./editor";
 import { GoHere } from "./goHere";
+import { StartMission } from "./startMission";
 import "./missions.css";
 
 export class MissionTools {
@@ -14,8 +15,10 @@ export class MissionTools {
 
   constructor(map: L.Map, canCommand: boolean, store: DashboardStore) {
     this.editor = new MissionEditor(map, canCommand);
+    const selected = () => (this.selectedId ? this.vehicles.get(this.selectedId) : undefined);
+    if (canCommand) this.editor.addSection(new StartMission(selected).element);
     this.goHere = canCommand
-      ? new GoHere(map, () => (this.selectedId ? this.vehicles.get(this.selectedId) : undefined))
+      ? new GoHere(map, selected)
       : null;
     store.followFleet(this);
     store.subscribe((state) => state.selection.id, (id) => this.select(id));

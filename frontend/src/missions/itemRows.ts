@@ -3,7 +3,7 @@
 // delete, and the rails' refusals on the items they name. A speed item is MAVLink's own,
 // shown folded into the row of the item it applies to.
 import { button, el } from "../ui/dom";
-import { CMD, EDITABLE_COMMANDS, type MissionItem, commandName, frameName } from "./model";
+import { CMD, EDITABLE_COMMANDS, type MissionItem, commandName, commandNumber, frameName, frameNumber } from "./model";
 
 /** What a row's controls change, by item index. */
 export interface RowEdits {
@@ -103,6 +103,7 @@ function missionRow({ items, editing, current, refusals: refused }: RowsShown, e
   } else {
     const name = el("span", "mission-kind", "command");
     name.textContent = commandName(item.command);
+    name.title = commandNumber(item.command);
     row.append(name);
   }
 
@@ -116,6 +117,7 @@ function missionRow({ items, editing, current, refusals: refused }: RowsShown, e
     });
     const frame = el("span", "mission-frame", "frame");
     frame.textContent = `m ${frameName(item.frame)}`;
+    frame.title = frameNumber(item.frame);
     row.append(alt, frame);
   }
   if (item.command === CMD.LOITER_TIME) {

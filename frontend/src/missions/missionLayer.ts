@@ -9,8 +9,14 @@
 // not a free polyline, so Geoman's vertex editing would need mapping back onto items
 // anyway; draggable markers and clickable legs are all the editing it needs, with no
 // extra dependency.
+//
+// A long mission (a survey's, 95 items) is drawn as its lanes: the path's lines, and
+// numbers only where it starts, ends, turns, takes off, lands or returns, on the active
+// item and on refused ones; a turn's number too close to one already drawn waits for the
+// operator to zoom in (lanes.ts).
 import * as L from "leaflet";
 import { CMD, type MissionItem, placeOf } from "./model";
+import { type PlacedItem, numberedItems } from "./lanes";
 
 export interface MissionDrawing {
   items: readonly MissionItem[];
@@ -20,7 +26,10 @@ export interface MissionDrawing {
   current: number | null;
   /** Refusals by item number (1 is the first after home). */
   refusals: Map<number, string[]>;
+  /** Markers drag (a plan being edited). */
   editable: boolean;
+  /** A click on a leg inserts a waypoint: only while adding waypoints is the map's tool. */
+  inserting: boolean;
 }
 
 export interface MissionLayerHooks {
@@ -59,15 +68,24 @@ export class MissionLayer {
     private readonly hooks: MissionLayerHooks,
   ) {
     this.group.addTo(map);
+    map.on("zoomend", this.redraw);
   }
 
+  private last: MissionDrawing | null = null;
+  private readonly redraw = (): void => {
+    if (this.last) this.draw(this.last);
+  };
+
   clear(): void {
+    this.last = null;
     this.group.clearLayers();
   }
 
   draw(drawing: MissionDrawing): void {
     this.group.clearLayers();
-    const { items, home, current, refusals, editable } = drawing;
+    this.last = drawing;
+    const { items, home, current, refusals, editable, inserting } = drawing;
+    const placed: PlacedItem[] = [];
     let previous: L.LatLng | null = home;
     items.forEach((item, index) => {
       const seq = index + 1;
@@ -85,16 +103,27 @@ export class MissionLayer {
           refused: Boolean(refused),
           flown,
           active,
-          editable,
+          editable: inserting,
           rtl: item.command === CMD.RTL,
         });
       }
-      this.addMarker(item, seq, index, at, { refused, flown, active, editable, movable: place !== null });
+      placed.push({ item, seq, at, key: Boolean(refused) || active, movable: place !== null });
       previous = at;
     });
+    const numbered = numberedItems(placed, (at) => this.map.latLngToLayerPoint(at));
+    for (const { item, seq, at, movable } of placed) {
+      if (!numbered.has(seq)) continue;
+      const refused = refusals.get(seq);
+      const flown = current !== null && seq < current;
+      const active = current !== null && seq === current;
+      this.addMarker(item, seq, seq - 1, at, { refused, flown, active, editable, movable });
+    }
+    // How many of the places carry a number: for the tests and for a person reading the DOM.
+    this.map.getContainer().dataset.missionNumbered = `${numbered.size}/${placed.length}`;
   }
 
   destroy(): void {
+    this.map.off("zoomend", this.redraw);
     this.group.remove();
   }
 

@@ -36,8 +36,14 @@ const FRAME_NAMES: Record<number, string> = {
   [FRAME.GLOBAL_TERRAIN_ALT]: "above terrain",
 };
 
+/** A frame in words, else its MAVLink name (MISSION), else its number. */
 export function frameName(frame: number): string {
-  return FRAME_NAMES[frame] ?? `MAV_FRAME ${frame}`;
+  return FRAME_NAMES[frame] ?? mav.MAV_FRAME_NAMES[frame]?.replace(/^MAV_FRAME_/, "") ?? frameNumber(frame);
+}
+
+/** The number behind a frame's name, for its tooltip. */
+export function frameNumber(frame: number): string {
+  return `MAV_FRAME ${frame}`;
 }
 
 const COMMAND_NAMES: Record<number, string> = {
@@ -51,8 +57,14 @@ const COMMAND_NAMES: Record<number, string> = {
   [mav.MAV_CMD_DO_CHANGE_SPEED]: "Change speed",
 };
 
+/** A command in words, else its MAVLink name (DO_DIGICAM_CONTROL), else its number. */
 export function commandName(command: number): string {
-  return COMMAND_NAMES[command] ?? `MAV_CMD ${command}`;
+  return COMMAND_NAMES[command] ?? mav.MAV_CMD_NAMES[command]?.replace(/^MAV_CMD_/, "") ?? commandNumber(command);
+}
+
+/** The number behind a command's name, for its tooltip. */
+export function commandNumber(command: number): string {
+  return `MAV_CMD ${command}`;
 }
 
 /** The commands the editor offers in an item's type list. */

@@ -93,10 +93,8 @@ export class SurveyPanel {
     this.panel = new FoldingPanel(map, "survey", "Survey", "Plan and fly an area survey");
     this.element = this.panel.element;
     this.body = this.panel.body;
-    this.clicks = new MapClicks(map, (at) => {
-      this.drawing?.push(at);
-      this.renderArea();
-    });
+    const clickTool = { label: "Drawing survey area", owner: this.element, onEnd: () => this.endRing() };
+    this.clicks = new MapClicks(map, (at) => (this.drawing?.push(at), this.renderArea()), clickTool);
 
     // -- the area
     this.drawButton = button("survey-draw", "Draw area", "Click the map to place the area's corners");
@@ -150,7 +148,6 @@ export class SurveyPanel {
   update(vehicles: Iterable<VehicleSummary>): void {
     this.drones.update(vehicles);
   }
-
   remove(id: string): void {
     this.drones.remove(id);
   }
@@ -162,8 +159,7 @@ export class SurveyPanel {
     if (update.survey_id !== this.surveyId) return;
     this.progress = update;
     this.renderProgress();
-    const now = Date.now();
-    if (now - this.detailAt >= DETAIL_EVERY_MS || ENDED.has(update.state)) void this.refreshDetail();
+    if (Date.now() - this.detailAt >= DETAIL_EVERY_MS || ENDED.has(update.state)) void this.refreshDetail();
   }
 
   destroy(): void {
@@ -202,6 +198,13 @@ export class SurveyPanel {
     this.clicks.stop();
     this.renderArea();
     this.schedulePreview();
+  }
+
+  /** Ended from outside (Esc, Done, a fold): three corners or more close the ring, fewer go. */
+  private endRing(): void {
+    if ((this.drawing?.length ?? 0) >= 3) return this.closeRing();
+    this.drawing = null;
+    this.renderArea();
   }
 
   private clearArea(): void {

@@ -3,7 +3,9 @@
 // start of its own: ArduPilot refuses to arm in AUTO, and armed in STABILIZE it disarms
 // itself after a few seconds. What works (QGroundControl's own order for a copter):
 //   1. read the mission on board and have the hub's rails check it (`mission-check`);
-//   2. the guided mode (the vehicle's own name for it), then arm;
+//   2. the guided mode (ArduPilot's GUIDED), then arm. PX4 has no such mode to arm in:
+//      its OFFBOARD refuses to engage without a setpoint stream, and its take-off command
+//      switches to TAKEOFF by itself, so on PX4 the vehicle arms in the mode it is in;
 //   3. take off to the mission's first height (startHeight.ts: never a made-up 0 m);
 //   4. wait, bounded and shown, until airborne near that height;
 //   5. the mission mode: AUTO on ArduPilot, MISSION on PX4 (protocol/mission_rules.py).
@@ -16,7 +18,8 @@ import { checkMission } from "./api";
 import { takeoffHeight } from "./startHeight";
 import { missionOnBoard } from "./vehicleMissions";
 
-const GUIDED_MODES = ["GUIDED", "OFFBOARD"];
+/** ArduPilot's mode for arming before a take-off command (not PX4's OFFBOARD: above). */
+const GUIDED_MODE = "GUIDED";
 const MISSION_MODES = ["AUTO", "MISSION"];
 const CLIMB_POLL_MS = 250;
 /** Bounded: a climb of `height` metres gets this long plus CLIMB_S_PER_M each metre. */
@@ -77,7 +80,7 @@ export class StartMission {
 
     const flying = vehicle.state?.armed && (vehicle.state.alt_rel ?? 0) >= near(height.metres);
     if (!flying) {
-      const guided = vehicle.modes.find((mode) => GUIDED_MODES.includes(mode));
+      const guided = vehicle.autopilot === "px4" ? undefined : vehicle.modes.find((mode) => mode === GUIDED_MODE);
       if (guided && vehicle.state?.mode !== guided) await this.command("mode", `Mode ${guided}`, id, { name: "set_mode", mode: guided });
       if (!vehicle.state?.armed) await this.command("arm", "Arm", id, { name: "arm" });
       await this.command("takeoff", `Take off to ${height.metres} m`, id, { name: "takeoff", altitude: height.metres });

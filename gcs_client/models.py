@@ -1401,6 +1401,10 @@ class VehicleChange(Model):
     )
     connected: bool
     last_seen: float | None = Field(default=None, description="Unix time of the last telemetry.")
+    airborne_since: float | None = Field(
+        default=None,
+        description="Unix time (the vehicle's telemetry clock) of its take-off: the first sample in which it flew (armed, landed_state takeoff/in_air/landing) after one in which it was on the ground. Null while it is on the ground, and while the hub has not seen it take off (it was already flying when the hub first heard from it): unknown, never zero.",
+    )
     state: VehicleState | None = Field(default=None)
 
 
@@ -1493,6 +1497,10 @@ class VehicleSummary(Model):
     modes: list[str]
     connected: bool
     last_seen: float | None = Field(default=None, description="Unix time of the last telemetry.")
+    airborne_since: float | None = Field(
+        default=None,
+        description="Unix time (the vehicle's telemetry clock) of its take-off: the first sample in which it flew (armed, landed_state takeoff/in_air/landing) after one in which it was on the ground. Null while it is on the ground, and while the hub has not seen it take off (it was already flying when the hub first heard from it): unknown, never zero.",
+    )
     state: VehicleState | None = Field(default=None)
 
 

@@ -8,6 +8,7 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Protocol
 
 from backend.errors import VehicleNotFound
+from backend.fleet.airborne import TakeoffClock
 from protocol.messages import Hello, Telemetry, VehicleState, VehicleSummary
 
 if TYPE_CHECKING:
@@ -68,6 +69,9 @@ class VehicleRecord:
     # The connected agent's command channel, None while no agent is connected: the one
     # record of whether the vehicle is online (commands go down this channel).
     channel: AgentChannel | None = field(default=None, repr=False, compare=False)
+    # When it took off, from the states it reported in order (sent to browsers, so a
+    # reloaded page shows the flight's own time, not the time since the page loaded).
+    takeoff: TakeoffClock = field(default_factory=TakeoffClock, repr=False, compare=False)
 
     @property
     def connected(self) -> bool:
@@ -99,6 +103,7 @@ class VehicleRecord:
             modes=self.modes,
             connected=self.connected,
             last_seen=self.last_seen,
+            airborne_since=self.takeoff.airborne_since,
             state=self.state,
         )
 
@@ -176,6 +181,7 @@ class FleetRegistry:
         record.modes = list(summary.modes)
         record.last_seen = summary.last_seen
         record.state = summary.state
+        record.takeoff.airborne_since = summary.airborne_since
         if not summary.connected:
             record.channel = None
         elif record.channel is None:
@@ -204,6 +210,7 @@ class FleetRegistry:
         record.live_ahead_at = time
         record.state = state
         record.last_seen = time
+        record.takeoff.observe(state, time)
         return True
 
     def apply(self, vehicle_id: str, stream_id: str, telemetry: Telemetry) -> bool:
@@ -219,4 +226,5 @@ class FleetRegistry:
             record.live_ahead_at = None  # caught up: numbers order the samples again
         record.state = telemetry.state
         record.last_seen = telemetry.time
+        record.takeoff.observe(telemetry.state, telemetry.time)
         return True

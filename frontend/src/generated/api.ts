@@ -3978,6 +3978,11 @@ export interface components {
              * @description Unix time of the last telemetry.
              */
             last_seen?: number | null;
+            /**
+             * Airborne Since
+             * @description Unix time (the vehicle's telemetry clock) of its take-off: the first sample in which it flew (armed, landed_state takeoff/in_air/landing) after one in which it was on the ground. Null while it is on the ground, and while the hub has not seen it take off (it was already flying when the hub first heard from it): unknown, never zero.
+             */
+            airborne_since?: number | null;
             state?: components["schemas"]["VehicleState"] | null;
         };
         /** ViewerLooksAt */

@@ -59,10 +59,13 @@ def test_a_finished_mosaic_is_on_the_map_after_a_hub_restart(
     browser: Browser, tmp_path: Path
 ) -> None:
     _build_mosaic(tmp_path)
-    with checked_page(browser, *SIZES["desktop"]) as page:
-        for run in ("first", "restarted"):
-            with running_hub(hub_settings(tmp_path, frontend_dir=DASHBOARD)) as base_url:
-                log_in(page, base_url, "admin", ADMIN_PASSWORD)
-                layer = page.locator(f'#map .survey-mosaic[data-survey-id="{SURVEY}"]')
-                expect(layer).to_be_attached(timeout=30_000)
-                page.screenshot(path=f"/tmp/truths-shots/mosaic-{run}.png")
+    for run in ("first", "restarted"):
+        # Each run a new hub on the same data folder, and a page of its own.
+        with (
+            running_hub(hub_settings(tmp_path, frontend_dir=DASHBOARD)) as base_url,
+            checked_page(browser, *SIZES["desktop"]) as page,
+        ):
+            log_in(page, base_url, "admin", ADMIN_PASSWORD)
+            layer = page.locator(f'#map .survey-mosaic[data-survey-id="{SURVEY}"]')
+            expect(layer).to_be_attached(timeout=30_000)
+            page.screenshot(path=f"/tmp/truths-shots/mosaic-{run}.png")

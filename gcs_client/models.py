@@ -414,7 +414,13 @@ class FormationStatus(Model):
     formed_at: float | None = Field(
         description="Unix time every follower reached its slot and the route's clock started; null while they join"
     )
-    route_duration_s: float
+    route_duration_s: float = Field(description="The route's length in the fleet's seconds")
+    state: Literal["joining", "flying", "route_done", "stopped"] = Field(
+        description="joining: the followers make for their slots; flying: the leader flies the route; route_done: it reached the route's last waypoint and the formation holds there until stopped; stopped: ended (see `stopped`)"
+    )
+    route_done_at: float | None = Field(
+        description="Unix time the leader reaches the route's last waypoint (in the future while flying); null while joining, or when it stopped before the end"
+    )
     controller: Controller
     tracking: dict[str, TrackingModel] = Field(
         description="Each follower's error from its slot (the leader carried to the time of the follower's report): live, and RMS and maximum per leg and over the mission"
@@ -1407,6 +1413,10 @@ class VehicleChange(Model):
     )
     connected: bool
     last_seen: float | None = Field(default=None, description="Unix time of the last telemetry.")
+    airborne_since: float | None = Field(
+        default=None,
+        description="Unix time (the vehicle's telemetry clock) of its take-off: the first sample in which it flew (armed, landed_state takeoff/in_air/landing) after one in which it was on the ground. Null while it is on the ground, and while the hub has not seen it take off (it was already flying when the hub first heard from it): unknown, never zero.",
+    )
     state: VehicleState | None = Field(default=None)
 
 
@@ -1499,6 +1509,10 @@ class VehicleSummary(Model):
     modes: list[str]
     connected: bool
     last_seen: float | None = Field(default=None, description="Unix time of the last telemetry.")
+    airborne_since: float | None = Field(
+        default=None,
+        description="Unix time (the vehicle's telemetry clock) of its take-off: the first sample in which it flew (armed, landed_state takeoff/in_air/landing) after one in which it was on the ground. Null while it is on the ground, and while the hub has not seen it take off (it was already flying when the hub first heard from it): unknown, never zero.",
+    )
     state: VehicleState | None = Field(default=None)
 
 

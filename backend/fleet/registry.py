@@ -8,6 +8,7 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Protocol
 
 from backend.errors import VehicleNotFound
+from backend.fleet.airborne import TakeoffClock
 from protocol.messages import Hello, Telemetry, VehicleState, VehicleSummary
 from protocol.photos import CameraIntrinsics
 
@@ -72,6 +73,9 @@ class VehicleRecord:
     # The camera its agent uploads photos from, as its latest hello said (None: no camera,
     # or not known: an agent that has not connected to this hub since it started).
     camera: CameraIntrinsics | None = None
+    # When it took off, from the states it reported in order (sent to browsers, so a
+    # reloaded page shows the flight's own time, not the time since the page loaded).
+    takeoff: TakeoffClock = field(default_factory=TakeoffClock, repr=False, compare=False)
 
     @property
     def connected(self) -> bool:
@@ -103,6 +107,7 @@ class VehicleRecord:
             modes=self.modes,
             connected=self.connected,
             last_seen=self.last_seen,
+            airborne_since=self.takeoff.airborne_since,
             state=self.state,
         )
 
@@ -182,6 +187,7 @@ class FleetRegistry:
         record.modes = list(summary.modes)
         record.last_seen = summary.last_seen
         record.state = summary.state
+        record.takeoff.airborne_since = summary.airborne_since
         if not summary.connected:
             record.channel = None
         elif record.channel is None:
@@ -210,6 +216,7 @@ class FleetRegistry:
         record.live_ahead_at = time
         record.state = state
         record.last_seen = time
+        record.takeoff.observe(state, time)
         return True
 
     def apply(self, vehicle_id: str, stream_id: str, telemetry: Telemetry) -> bool:
@@ -225,4 +232,5 @@ class FleetRegistry:
             record.live_ahead_at = None  # caught up: numbers order the samples again
         record.state = telemetry.state
         record.last_seen = telemetry.time
+        record.takeoff.observe(telemetry.state, telemetry.time)
         return True

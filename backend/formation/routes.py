@@ -19,7 +19,7 @@ from backend.api.security import CurrentPrincipal, SecuredRouter, audit_entry, r
 from backend.audit import AuditAction, AuditLog
 from backend.auth.policy import Permission, Principal
 from backend.errors import GcsError
-from backend.formation.active import ActiveFormation
+from backend.formation.active import ActiveFormation, FormationState
 from backend.formation.deps import FormationServiceDep
 from backend.formation.metrics import ErrorStats, FollowerTracking
 from backend.formation.schemas import FormationRequest, OffsetModel, ShapeChange
@@ -75,7 +75,16 @@ class FormationStatus(BaseModel):
         description="Unix time every follower reached its slot and the route's clock "
         "started; null while they join"
     )
-    route_duration_s: float
+    route_duration_s: float = Field(description="The route's length in the fleet's seconds")
+    state: FormationState = Field(
+        description="joining: the followers make for their slots; flying: the leader flies "
+        "the route; route_done: it reached the route's last waypoint and the formation "
+        "holds there until stopped; stopped: ended (see `stopped`)"
+    )
+    route_done_at: float | None = Field(
+        description="Unix time the leader reaches the route's last waypoint (in the future "
+        "while flying); null while joining, or when it stopped before the end"
+    )
     controller: Controller
     tracking: dict[str, TrackingModel] = Field(
         description="Each follower's error from its slot (the leader carried to the time "
@@ -84,7 +93,7 @@ class FormationStatus(BaseModel):
     stopped: str | None = Field(description="Why it stopped; null while it flies")
 
     @classmethod
-    def of(cls, formation: ActiveFormation) -> FormationStatus:
+    def of(cls, formation: ActiveFormation, now: float) -> FormationStatus:
         return cls(
             id=formation.id,
             leader_id=formation.plan.leader_id,
@@ -95,6 +104,8 @@ class FormationStatus(BaseModel):
             started_at=formation.started_at,
             formed_at=formation.formed_at,
             route_duration_s=formation.plan.route.duration_s,
+            state=formation.state(now),
+            route_done_at=formation.route_done_at,
             controller=formation.plan.controller,
             tracking={v: TrackingModel.of(t) for v, t in formation.metrics.followers.items()},
             stopped=formation.stopped,
@@ -128,7 +139,7 @@ async def start_formation(
             followers=formation.followers,
             controller=formation.plan.controller.value,
         )
-    return FormationStatus.of(formation)
+    return FormationStatus.of(formation, formations.now())
 
 
 class StoredFormationModel(BaseModel):
@@ -183,7 +194,7 @@ async def list_formations(
 async def get_formation(
     formation_id: FormationIdPath, formations: FormationServiceDep
 ) -> FormationStatus:
-    return FormationStatus.of(formations.get(formation_id))
+    return FormationStatus.of(formations.get(formation_id), formations.now())
 
 
 @router.patch(
@@ -202,7 +213,7 @@ async def change_formation(
     async with _audited(request, principal, audit, action, formation_id) as note:
         note.update(body.model_dump(exclude_none=True, mode="json"))
         formation = await formations.change_shape(formation_id, body)
-    return FormationStatus.of(formation)
+    return FormationStatus.of(formation, formations.now())
 
 
 @router.post(
@@ -220,7 +231,7 @@ async def stop_formation(
     """Every member leaves the formation and holds where it is."""
     async with _audited(request, principal, audit, AuditAction.FORMATION_STOP, formation_id):
         await formations.stop(formation_id, by=principal.name)
-    return FormationStatus.of(formations.get(formation_id))
+    return FormationStatus.of(formations.get(formation_id), formations.now())
 
 
 @asynccontextmanager

@@ -56,9 +56,14 @@ class FormationService:
         # reckons run in the vehicles' seconds, as their agents' followers do. The stamps
         # stay Unix time, the one clock every member shares.
         self._period = 1.0 / (rate_hz * speedup)
+        self._speedup = speedup
         self._clock = clock
         self._formations: dict[str, ActiveFormation] = {}
         self._relay = FormationRelay(registry, self._send, scan_source, speedup)
+
+    def now(self) -> float:
+        """The hub's clock, as the formations' times are stamped."""
+        return self._clock()
 
     def busy(self) -> set[str]:
         return {v for f in self.active() for v in f.members}
@@ -109,6 +114,7 @@ class FormationService:
             self._clock(),
             started_by=by,
             offsets=plan.offsets,
+            speedup=self._speedup,
         )
         self._formations[formation.id] = formation
         await self._send_slots(formation)

@@ -27,6 +27,7 @@ from backend.mapping.tiles import TileLibrary
 from backend.realtime.bus import InProcessBus, Topic
 from backend.realtime.collaborators import AgentConnection, ClientConnection
 from backend.realtime.fleet_link import FleetLink
+from backend.realtime.live_events import RecentEvents
 from backend.realtime.nats_bus import NatsBus
 from backend.realtime.routing import AgentRoutes
 from backend.realtime.vehicle_fanout import VehicleFanout
@@ -101,6 +102,8 @@ class Hub:
     # Survey photos from the agents' uploads; each stored photo of a survey goes on to
     # the mosaic (``photos.sink``).
     photos: PhotoIngest
+    # The newest live events, which a dashboard gets first when it connects.
+    recent_events: RecentEvents = field(default_factory=RecentEvents)
     # Live agent connections by vehicle, so revoking a token can drop its connection.
     agent_sessions: dict[str, AgentConnection] = field(default_factory=dict)
     # Held while an agent's hello is judged against the one holding its vehicle id.

@@ -32,6 +32,7 @@ from backend.mapping.tiles import TileLibrary
 from backend.realtime.bus import InProcessBus, ReliableSubscription, Topic
 from backend.realtime.collaborators import AgentConnection, ClientConnection
 from backend.realtime.fleet_link import FleetLink
+from backend.realtime.live_events import RecentEvents
 from backend.realtime.nats_bus import NatsBus
 from backend.realtime.vehicle_fanout import VehicleFanout
 from backend.safety.rails_store import RailsRepository
@@ -125,7 +126,10 @@ async def start_hub(settings: HubSettings) -> Hub:
     )
     await manual_control.revoke_left_open(engine)
     view = await View3D.start(settings, logbook) if settings.viz_enabled else View3D()
+    recent_events = RecentEvents()
+    bus.subscribe(Topic.VEHICLE_EVENT, recent_events)
     return Hub(
+        recent_events=recent_events,
         settings=settings,
         engine=engine,
         repository=repository,

@@ -196,6 +196,7 @@ class ClientFeed(PeerConnection):
         # Joined before the snapshot, so no change falls between the two.
         self.hub.fanout.join(self.vehicles)
         self.hub.bus.subscribe(Topic.VEHICLE_EVENT, events)
+        self.hub.recent_events.replay_into(events)
         self.hub.bus.subscribe(Topic.SURVEYS, surveys)
         try:
             fleet = [record.summary() for record in self.hub.registry.all()]

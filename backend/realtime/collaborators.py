@@ -18,6 +18,7 @@ from backend.fleet.commands import CommandDispatcher
 from backend.fleet.registry import FleetRegistry, VehicleRecord
 from backend.manual_control.service import ManualControl
 from backend.realtime.bus import Bus, Subscription
+from backend.realtime.live_events import RecentEvents
 from backend.realtime.routing import AgentRoutes
 from backend.realtime.vehicle_fanout import VehicleFanout
 from backend.settings import HubSettings
@@ -107,6 +108,11 @@ class FeedServices(Protocol):
 
     @property
     def dispatcher(self) -> CommandDispatcher: ...
+
+    @property
+    def recent_events(self) -> RecentEvents:
+        """The newest live events, which a new feed sends first."""
+        ...
 
     async def record(self, entry: AuditEntry) -> None: ...
 

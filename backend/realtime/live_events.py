@@ -13,6 +13,7 @@ queue with this policy:
 from __future__ import annotations
 
 import asyncio
+from collections import deque
 from collections.abc import Hashable
 from typing import Any
 
@@ -21,6 +22,9 @@ from protocol.messages import MAX_LIVE_EVENTS, EventBatch, LiveEvent
 
 # Enough for a burst from a whole fleet between two batches; beyond it, drop by severity.
 DEFAULT_QUEUE_EVENTS = 512
+# What a dashboard opened now is shown of the time before it (a reload, a second operator):
+# the fleet's link-ups and the rest, not an empty log until the next event.
+RECENT_EVENTS = 200
 # A missing severity ranks below MAV_SEVERITY_DEBUG (7): it goes first.
 _NO_SEVERITY_RANK = 8
 
@@ -72,6 +76,28 @@ class EventSubscription:
             self._ready.clear()
         dropped, self._dropped = self._dropped, 0
         return EventBatch(events=coalesce(taken), dropped=dropped)
+
+
+class RecentEvents:
+    """The hub's newest live events (``Topic.VEHICLE_EVENT``), which a client feed sends
+    first: bounded, the oldest going first."""
+
+    def __init__(self, limit: int = RECENT_EVENTS) -> None:
+        self._events: deque[LiveEvent] = deque(maxlen=limit)
+
+    def offer(self, key: Hashable, message: Any) -> bool:
+        assert isinstance(message, LiveEvent)
+        self._events.append(message)
+        return True
+
+    async def put(self, key: Hashable, message: Any) -> None:
+        self.offer(key, message)
+
+    def replay_into(self, subscription: EventSubscription) -> None:
+        """Queue the recent events for a new client, oldest first (the dashboard folds
+        an event it already holds, one that also came live)."""
+        for event in list(self._events):
+            subscription.offer(event.vehicle_id, event)
 
 
 def coalesce(events: list[LiveEvent]) -> list[LiveEvent]:

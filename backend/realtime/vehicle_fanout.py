@@ -46,6 +46,7 @@ def vehicle_change(summary: VehicleSummary, with_info: bool) -> VehicleChange:
         modes=list(summary.modes) if with_info else None,
         connected=summary.connected,
         last_seen=summary.last_seen,
+        airborne_since=summary.airborne_since,
         state=summary.state,
     )
 

@@ -10,6 +10,13 @@ from pydantic import ConfigDict, Field
 from protocol.messages.base import MAX_FLEET, MAX_MODES, Message, Name, VehicleId
 from protocol.messages.vehicle_state import VehicleState
 
+_AIRBORNE_SINCE = (
+    "Unix time (the vehicle's telemetry clock) of its take-off: the first sample in which "
+    "it flew (armed, landed_state takeoff/in_air/landing) after one in which it was on "
+    "the ground. Null while it is on the ground, and while the hub has not seen it take "
+    "off (it was already flying when the hub first heard from it): unknown, never zero."
+)
+
 
 class VehicleSummary(Message):
     id: VehicleId
@@ -18,6 +25,7 @@ class VehicleSummary(Message):
     modes: list[Name] = Field(max_length=MAX_MODES)
     connected: bool
     last_seen: float | None = Field(default=None, description="Unix time of the last telemetry.")
+    airborne_since: float | None = Field(default=None, description=_AIRBORNE_SINCE)
     state: VehicleState | None = None
 
 
@@ -60,6 +68,7 @@ class VehicleChange(Message):
     )
     connected: bool
     last_seen: float | None = Field(default=None, description="Unix time of the last telemetry.")
+    airborne_since: float | None = Field(default=None, description=_AIRBORNE_SINCE)
     state: VehicleState | None = None
 
 

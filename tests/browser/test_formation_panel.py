@@ -31,6 +31,8 @@ pytestmark = [pytest.mark.browser, pytest.mark.integration, pytest.mark.slow]
 
 ROOT = Path(__file__).resolve().parents[2]
 OUTPUT = ROOT / "test-output" / "formation"
+# Formed: the leader flies the route, or has flown it and the formation holds.
+FORMED = re.compile(r"^(flying|route_done)$")
 LEADER, FOLLOWERS = "sim_1", ["sim_2", "sim_3"]
 # The followers below the leader, as in tests/integration/test_formation.py.
 ALTITUDES = {LEADER: 8.0, "sim_2": 3.0, "sim_3": 2.0}
@@ -80,7 +82,7 @@ def _a_viewer_follows_it_read_only(
         panel = page.locator(".formation-panel")
         progress = panel.locator('[data-field="formation-progress"]')
         expect(progress).to_have_attribute("data-formation-id", formation_id)
-        expect(progress).to_have_attribute("data-state", "formed")
+        expect(progress).to_have_attribute("data-state", FORMED)
         for action in ("formation-start", "formation-change", "formation-stop"):
             expect(panel.locator(f'[data-action="{action}"]')).to_be_hidden()
     finally:
@@ -165,7 +167,11 @@ def test_an_operator_flies_a_formation_from_the_panel(
         assert live["stopped"] is None
         assert set(live["slots"]) == set(FOLLOWERS)
 
-        expect(progress).to_have_attribute("data-state", "formed", timeout=40_000)
+        expect(progress).to_have_attribute("data-state", FORMED, timeout=40_000)
+        # when the route ends, from the hub: no sum of formed_at and the route's length
+        expect(progress.locator('[data-field="formation-route-end"]')).to_have_text(
+            re.compile(r"^Route (ends|done) at \d\d:\d\d:\d\d$")
+        )
         for follower in FOLLOWERS:
             expect(progress.locator(f'li[data-vehicle-id="{follower}"]')).to_contain_text(
                 "m from its slot"

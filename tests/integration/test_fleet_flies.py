@@ -114,6 +114,13 @@ def test_arm_takeoff_land_through_rest(
             lambda v: v[vehicle]["state"]["landed_state"] == "in_air", 5, f"{vehicle} in air"
         )
         assert watcher.state(vehicle)["landed_state_source"] == "autopilot"
+        # Its take-off time is the hub's, the same for a page opened now (a reload).
+        took_off = api.get(f"/api/v1/vehicles/{vehicle}").json()["airborne_since"]
+        assert took_off is not None
+        assert started_at - 5 <= took_off <= started_at + 10
+        with FleetWatcher(base, fleet_admin_token) as reloaded:
+            snapshot = reloaded.wait_until(lambda v: vehicle in v, 10, f"{vehicle} listed")
+            assert snapshot[vehicle]["airborne_since"] == took_off
         # The other vehicles stayed on the ground.
         # The vehicles that were on the ground stayed there (the fleet is shared with
         # the browser test, which may have flown another one).
@@ -131,6 +138,7 @@ def test_arm_takeoff_land_through_rest(
         watcher.wait_until(
             lambda v: v[vehicle]["state"]["landed_state"] == "on_ground", 5, f"{vehicle} landed"
         )
+        assert api.get(f"/api/v1/vehicles/{vehicle}").json()["airborne_since"] is None
 
         # The climb is in the stored history.
         history = api.get(

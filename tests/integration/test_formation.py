@@ -284,7 +284,16 @@ def _fly_and_measure(
                 errors[follower].append(math.dist(slot[:2], places[follower][:2]))
         return t > route.duration_s
 
+    flying = api.get(f"/api/v1/formations/{formation['id']}").json()
+    assert flying["state"] == "flying"
+    # the hub says when the route ends (a 1x fleet: the route's own seconds)
+    assert flying["route_done_at"] == pytest.approx(formed_at + route.duration_s)
     watcher.wait_until(sample, route.duration_s + 30, "the square flown")
+    poll_until(
+        lambda: api.get(f"/api/v1/formations/{formation['id']}").json()["state"] == "route_done",
+        5,
+        "the hub to say the route is done",
+    )
     rms = {f: math.sqrt(sum(e * e for e in es) / len(es)) for f, es in errors.items()}
     print(f"formation through the hub: RMS {rms}, closest pair {closest:.2f} m")
     assert all(len(es) > 50 for es in errors.values()), errors

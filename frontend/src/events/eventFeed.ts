@@ -72,15 +72,15 @@ export class EventFeed {
   /** The events to show (the log's, oldest first); re-renders. */
   setEvents(events: readonly LogEvent[]): void {
     this.events = events;
-    let added = false;
-    for (const event of events) {
-      if (!this.vehicles.has(event.vehicleId)) {
-        this.vehicles.add(event.vehicleId);
-        added = true;
-      }
-    }
-    if (added) this.refreshVehicleOptions();
+    this.offerVehicles(events.map((event) => event.vehicleId));
     this.render();
+  }
+
+  /** Vehicles the filter offers even before they have an event: the whole fleet. */
+  offerVehicles(ids: Iterable<string>): void {
+    const before = this.vehicles.size;
+    for (const id of ids) this.vehicles.add(id);
+    if (this.vehicles.size !== before) this.refreshVehicleOptions();
   }
 
   /** Shows the vehicle's events only (null: all). */

@@ -26,6 +26,7 @@ import {
 } from "./api";
 import { type SlotDrawing, FormationLayer } from "./layer";
 import { type LeaderPose, routePose, slotPlaces } from "./slots";
+import { formationHeadline, routeEndText } from "./statusText";
 
 const POLL_MS = 1000;
 
@@ -312,13 +313,13 @@ export class FormationPanel {
   private show(status: FormationStatus): void {
     const first = this.status?.id !== status.id;
     this.status = status;
-    const state = status.stopped !== null ? "stopped" : status.formed_at !== null ? "formed" : "joining";
     this.progress.hidden = false;
-    this.progress.dataset.state = state;
+    this.progress.dataset.state = status.state;
     this.progress.dataset.formationId = status.id;
     const head = el("div", "formation-progress-head", "formation-state");
-    const leader = status.leader_id ?? "virtual leader";
-    head.textContent = `Formation ${status.id} (${leader}): ${state}${status.stopped ? `: ${status.stopped}` : ""}`;
+    head.textContent = formationHeadline(status);
+    const routeEnd = el("div", "formation-route-end", "formation-route-end");
+    routeEnd.textContent = routeEndText(status);
     const list = el("ul", "formation-tracking");
     Object.keys(status.slots).forEach((vehicleId, index) => {
       const live = status.tracking[vehicleId]?.live_xy_m;
@@ -330,7 +331,7 @@ export class FormationPanel {
       item.append(swatch, `${vehicleId}: ${live == null ? "no report yet" : `${live.toFixed(1)} m from its slot`}`);
       list.append(item);
     });
-    this.progress.replaceChildren(head, list);
+    this.progress.replaceChildren(head, routeEnd, list);
     const flying = status.stopped === null;
     this.live.hidden = !this.canCommand || !flying;
     this.planning.hidden = !this.canCommand || flying;

@@ -2171,8 +2171,22 @@ export interface components {
              * @description Unix time every follower reached its slot and the route's clock started; null while they join
              */
             formed_at: number | null;
-            /** Route Duration S */
+            /**
+             * Route Duration S
+             * @description The route's length in the fleet's seconds
+             */
             route_duration_s: number;
+            /**
+             * State
+             * @description joining: the followers make for their slots; flying: the leader flies the route; route_done: it reached the route's last waypoint and the formation holds there until stopped; stopped: ended (see `stopped`)
+             * @enum {string}
+             */
+            state: "joining" | "flying" | "route_done" | "stopped";
+            /**
+             * Route Done At
+             * @description Unix time the leader reaches the route's last waypoint (in the future while flying); null while joining, or when it stopped before the end
+             */
+            route_done_at: number | null;
             controller: components["schemas"]["Controller"];
             /**
              * Tracking
@@ -3985,6 +3999,11 @@ export interface components {
              * @description Unix time of the last telemetry.
              */
             last_seen?: number | null;
+            /**
+             * Airborne Since
+             * @description Unix time (the vehicle's telemetry clock) of its take-off: the first sample in which it flew (armed, landed_state takeoff/in_air/landing) after one in which it was on the ground. Null while it is on the ground, and while the hub has not seen it take off (it was already flying when the hub first heard from it): unknown, never zero.
+             */
+            airborne_since?: number | null;
             state?: components["schemas"]["VehicleState"] | null;
         };
         /** ViewerLooksAt */

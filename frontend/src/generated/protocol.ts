@@ -908,6 +908,10 @@ export interface VehicleSummary {
    * Unix time of the last telemetry.
    */
   last_seen: number | null;
+  /**
+   * Unix time (the vehicle's telemetry clock) of its take-off: the first sample in which it flew (armed, landed_state takeoff/in_air/landing) after one in which it was on the ground. Null while it is on the ground, and while the hub has not seen it take off (it was already flying when the hub first heard from it): unknown, never zero.
+   */
+  airborne_since: number | null;
   state: VehicleState | null;
 }
 /**
@@ -951,6 +955,10 @@ export interface VehicleChange {
    * Unix time of the last telemetry.
    */
   last_seen: number | null;
+  /**
+   * Unix time (the vehicle's telemetry clock) of its take-off: the first sample in which it flew (armed, landed_state takeoff/in_air/landing) after one in which it was on the ground. Null while it is on the ground, and while the hub has not seen it take off (it was already flying when the hub first heard from it): unknown, never zero.
+   */
+  airborne_since: number | null;
   state: VehicleState | null;
 }
 /**

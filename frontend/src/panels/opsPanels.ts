@@ -32,7 +32,6 @@ const NOTICE = 5;
 interface Tracked {
   vehicle: VehicleSummary;
   warnings: VehicleWarnings;
-  airborneSinceS: number | null;
   batteryFailsafe: boolean;
   /** The newest critical event not yet acknowledged. */
   alert: LogEvent | null;
@@ -103,23 +102,23 @@ export class OpsPanels {
       }
       let entry = this.tracked.get(vehicle.id);
       if (!entry) {
-        entry = { vehicle, warnings: { level: "ok", warnings: [] }, airborneSinceS: null, batteryFailsafe: false, alert: null, acknowledgedId: 0 };
+        entry = { vehicle, warnings: { level: "ok", warnings: [] }, batteryFailsafe: false, alert: null, acknowledgedId: 0 };
         this.tracked.set(vehicle.id, entry);
       } else {
         derived.push(...stateChanges(entry.vehicle, vehicle, nowS));
       }
       entry.vehicle = vehicle;
-      entry.airborneSinceS = airborneSince(entry.airborneSinceS, vehicle, nowS);
       this.refresh(entry, nowS);
     }
     if (derived.length > 0) this.store.addEvents(derived);
+    this.feed.offerVehicles(this.tracked.keys());
     this.renderCount();
   }
 
   private select(id: string | null): void {
     const entry = id ? this.tracked.get(id) : undefined;
     this.selected.select(entry?.vehicle ?? null);
-    if (entry) this.selected.update(entry.vehicle, entry.warnings, entry.airborneSinceS, Date.now() / 1000);
+    if (entry) this.refresh(entry, Date.now() / 1000);
     else this.selected.clear();
     this.feed.filterVehicle(id);
   }
@@ -171,7 +170,7 @@ export class OpsPanels {
     entry.warnings = evaluate(vehicle, ageS, this.levels, entry.batteryFailsafe);
     decorateRow(entry, () => this.acknowledge(entry));
     decorateMarker(vehicle.id, entry.warnings);
-    if (this.selected.selectedId === vehicle.id) this.selected.update(vehicle, entry.warnings, entry.airborneSinceS, nowS);
+    if (this.selected.selectedId === vehicle.id) this.selected.update(vehicle, entry.warnings, ageS);
   }
 
   private acknowledge(entry: Tracked): void {
@@ -265,12 +264,6 @@ function stateChanges(before: VehicleSummary, after: VehicleSummary, nowS: numbe
     events.push({ vehicle_id: after.id, time, kind: now.armed ? "armed" : "disarmed", severity: NOTICE, text: now.armed ? "armed" : "disarmed" });
   }
   return events;
-}
-
-function airborneSince(since: number | null, vehicle: VehicleSummary, nowS: number): number | null {
-  const landed = vehicle.state?.landed_state;
-  if (!landed || landed === "on_ground") return null;
-  return since ?? vehicle.last_seen ?? nowS;
 }
 
 // The table and the map build their elements lazily and may replace them: look one up

@@ -25,6 +25,14 @@ function formatDistance(metres: number | null): string {
   return metres < 1000 ? `${metres.toFixed(0)} m` : `${(metres / 1000).toFixed(2)} km`;
 }
 
+/** Time since the vehicle's own take-off (the hub's `airborne_since`, on the vehicle's
+ *  clock, plus how old its newest state is), so a reloaded page does not restart it. */
+function flightTime(vehicle: VehicleSummary, ageS: number | null): string {
+  const since = vehicle.airborne_since;
+  if (since != null && vehicle.last_seen != null) return formatDuration(vehicle.last_seen - since + (ageS ?? 0));
+  return vehicle.state?.landed_state === "on_ground" ? "on ground" : MISSING;
+}
+
 function stat(label: string, name: string): [HTMLElement, HTMLElement] {
   const value = field("dd", name, { className: "stat-value", textContent: MISSING });
   return [element("div", { className: "stat" }, element("dt", { textContent: label }), value), value];
@@ -94,7 +102,8 @@ export class SelectedVehiclePanel {
     this.element.dataset.vehicleId = id ?? "";
   }
 
-  update(vehicle: VehicleSummary, warnings: VehicleWarnings, airborneSinceS: number | null, nowS: number): void {
+  /** `ageS`: how old the vehicle's newest state is by the browser's clock, null unknown. */
+  update(vehicle: VehicleSummary, warnings: VehicleWarnings, ageS: number | null): void {
     if (vehicle.id !== this.vehicleId) return;
     const state = vehicle.state ?? null;
     setText(this.title, `${vehicle.id} · ${vehicle.autopilot} ${vehicle.vehicle_type}`);
@@ -109,7 +118,7 @@ export class SelectedVehiclePanel {
         ? distanceM(state.lat, state.lon, state.home_lat, state.home_lon)
         : null;
     setText(this.values.home, formatDistance(home));
-    setText(this.values.flight, airborneSinceS === null ? "on ground" : formatDuration(nowS - airborneSinceS));
+    setText(this.values.flight, flightTime(vehicle, ageS));
 
     const key = warnings.warnings.map((w) => `${w.level}:${w.text}`).join("|");
     if (this.warningList.dataset.key !== key) {

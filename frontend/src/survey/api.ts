@@ -61,6 +61,11 @@ export function importArea(format: SurveyFileFormat, content: string): Promise<P
   return post<Partial<SurveyRequest>>("surveys/import", { format, content });
 }
 
+/** Every survey mosaic the hub holds, finished ones too (they outlive a restart). */
+export function listMosaics(): Promise<MosaicDetail[]> {
+  return request<MosaicDetail[]>("mosaics");
+}
+
 /** The survey's live orthomosaic (backend/imagery/mosaic/routes.py); null until a photo reaches it. */
 export async function getMosaic(id: string): Promise<MosaicDetail | null> {
   try {

@@ -8,7 +8,10 @@
 // is installed, and a polygon with holes is all this needs.
 import * as L from "leaflet";
 
+import type { DashboardStore } from "../store/dashboardStore";
 import type { MosaicDetail } from "./api";
+import { FinishedMosaics } from "./finishedMosaics";
+import { mosaicBounds, mosaicLayer, mosaicUrl } from "./mosaicTiles";
 
 export interface LaneDrawing {
   vehicleId: string;
@@ -25,7 +28,13 @@ export class SurveyLayer {
   private mosaic: L.TileLayer | null = null;
   private mosaicUrl = "";
 
-  constructor(private readonly map: L.Map) {
+  private readonly finished: FinishedMosaics;
+
+  constructor(
+    private readonly map: L.Map,
+    store: DashboardStore,
+  ) {
+    this.finished = new FinishedMosaics(map, store);
     this.plan.addTo(map);
     this.photos.addTo(map);
     this.area.addTo(map);
@@ -94,28 +103,18 @@ export class SurveyLayer {
    * tile URL, so each new photo has Leaflet ask for the tiles again; the hub answers the
    * unchanged ones with a 304 (their ETag is their version). */
   showMosaic(mosaic: MosaicDetail): void {
-    if (mosaic.max_zoom === null || mosaic.max_zoom === undefined) return;
-    // The hub's URL is from its root; the dashboard may be served below a path prefix.
-    const base = new URL(".", document.baseURI).pathname + mosaic.tile_url.replace(/^\//, "");
-    const url = `${base}?v=${mosaic.revision ?? 0}`;
-    if (url === this.mosaicUrl) return;
+    const url = mosaicUrl(mosaic);
+    if (url === this.mosaicUrl || mosaic.max_zoom === null || mosaic.max_zoom === undefined) return;
     this.mosaicUrl = url;
-    const b = mosaic.bounds;
     if (this.mosaic) {
       // The mosaic grows: Leaflet reads `bounds` for every tile it considers, so the new
       // outline's box lets it ask for the tiles the latest photos added.
-      if (b) this.mosaic.options.bounds = L.latLngBounds([b[1], b[0]], [b[3], b[2]]);
+      const bounds = mosaicBounds(mosaic);
+      if (bounds) this.mosaic.options.bounds = bounds;
       this.mosaic.setUrl(url);
       return;
     }
-    this.mosaic = L.tileLayer(url, {
-      className: "survey-mosaic",
-      maxZoom: Math.max(this.map.getMaxZoom(), mosaic.max_zoom),
-      maxNativeZoom: mosaic.max_zoom,
-      minNativeZoom: mosaic.min_zoom ?? undefined,
-      bounds: b ? L.latLngBounds([b[1], b[0]], [b[3], b[2]]) : undefined,
-      zIndex: 10, // above the base maps' tiles
-    }).addTo(this.map);
+    this.mosaic = mosaicLayer(this.map, mosaic)?.addTo(this.map) ?? null;
   }
 
   clearMosaic(): void {
@@ -131,6 +130,7 @@ export class SurveyLayer {
   }
 
   destroy(): void {
+    this.finished.destroy();
     this.clearMosaic();
     this.area.remove();
     this.plan.remove();

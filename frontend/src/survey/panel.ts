@@ -89,7 +89,7 @@ export class SurveyPanel {
         for (const update of changedValues(now, before)) this.onSurvey(update);
       },
     );
-    this.layer = new SurveyLayer(map);
+    this.layer = new SurveyLayer(map, store);
     this.panel = new FoldingPanel(map, "survey", "Survey", "Plan and fly an area survey");
     this.element = this.panel.element;
     this.body = this.panel.body;

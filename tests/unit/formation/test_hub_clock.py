@@ -65,3 +65,20 @@ def test_a_fleet_speedup_is_for_simulated_fleets_in_development_only() -> None:
     assert HubSettings(environment="development", fleet_speedup=4.0).fleet_speedup == 4.0
     with pytest.raises(ValidationError):
         HubSettings(environment="development", fleet_speedup=0.5)  # never slower than wall
+
+
+def test_a_formation_says_when_its_route_is_done_in_the_fleets_seconds() -> None:
+    """The route (10 s of flight, 2 s of pause at each end: 14 s) at 4x ends 3.5 s of the
+    wall's after it formed; the state says so, with no sum for a client to do."""
+    formation = _formation(None)
+    formation.speedup = 4.0
+    assert formation.plan.route.duration_s == pytest.approx(14.0)
+    assert formation.route_done_at == pytest.approx(FORMED_AT + 3.5)
+    assert formation.state(FORMED_AT + 3.0) == "flying"
+    assert formation.state(FORMED_AT + 3.5) == "route_done"
+    joining = _formation(None)
+    joining.formed_at = None
+    assert (joining.state(FORMED_AT), joining.route_done_at) == ("joining", None)
+    # stopped before the end: the route was never done
+    formation.stopped, formation.stopped_at = "stopped by the operator", FORMED_AT + 1.0
+    assert (formation.state(FORMED_AT + 9.0), formation.route_done_at) == ("stopped", None)

@@ -49,20 +49,33 @@ def _u_fence(frame: LocalFrame) -> list[dict[str, float]]:
 
 
 def _drawing_area(page: Page) -> FloatRect:
-    """Where the drawing goes: the map beside the mission panel when the panel leaves
-    room for it (a desktop, a tablet), else the whole map with the panel folded away (a
-    phone), below the controls along the map's top."""
+    """Where the drawing goes: the map, below the controls along its top and above the
+    scale and attribution. An open mission panel stands in the map area's dock beside the
+    map (under it on a phone), never over it; where it does lie over the map, the drawing
+    goes to the map's part left of it."""
     area, panel = _box(page, "#map"), _box(page, ".mission-panel")
     top = area["y"] + 70  # the zoom buttons, the drawer toggles, the layer switcher
     bottom = area["y"] + area["height"] - 40  # the scale, the attribution
-    if panel["x"] - area["x"] >= 400:
-        return {"x": area["x"], "y": top, "width": panel["x"] - area["x"], "height": bottom - top}
-    return {"x": area["x"], "y": top, "width": area["width"], "height": bottom - top}
+    width = area["width"]
+    if _overlaps(area, panel):
+        width = panel["x"] - area["x"]
+    return {"x": area["x"], "y": top, "width": width, "height": bottom - top}
+
+
+def _overlaps(one: FloatRect, other: FloatRect) -> bool:
+    return (
+        one["x"] < other["x"] + other["width"]
+        and other["x"] < one["x"] + one["width"]
+        and one["y"] < other["y"] + other["height"]
+        and other["y"] < one["y"] + one["height"]
+    )
 
 
 def _fold_panel_if_in_the_way(page: Page) -> None:
+    """Folding the panel ends its editor (one map tool at a time), so it is folded only
+    where it lies over the map and leaves under 400 px of it for the drawing."""
     area, panel = _box(page, "#map"), _box(page, ".mission-panel")
-    if panel["x"] - area["x"] < 400:
+    if _overlaps(area, panel) and panel["x"] - area["x"] < 400:
         collapse_panel(page)
 
 

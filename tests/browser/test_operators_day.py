@@ -31,6 +31,7 @@ from tests.support.operators_day import (
     frame_on_map,
     long_press,
     map_point,
+    metres_forward,
     mission_open,
     mission_panel,
     open_space,
@@ -227,7 +228,7 @@ def formation_of_airborne_drones(day: Day) -> None:
 
 def fly_by_hand(day: Day, source: str) -> None:
     """Take the lease with ``source`` ("touch": the on-screen sticks; "keyboard"), fly
-    5 m north, release."""
+    5 m forward (pitch: along the heading it has, west after the formation), release."""
     page = day.page
     select_vehicle(day, FLIER)
     pilot = pilot_panel(day)
@@ -236,19 +237,19 @@ def fly_by_hand(day: Day, source: str) -> None:
     expect(pilot.locator('[data-field="lease-holder"]')).to_have_text(
         "Flown by hand by admin", timeout=30_000
     )
-    start = day.states()[FLIER]["lat"]
-    north = lambda s: (s[FLIER]["lat"] - start) * 111_320 > 5  # noqa: E731
+    start = day.states()[FLIER]
+    forward = lambda s: metres_forward(start, s[FLIER]) > 5  # noqa: E731
     if source == "touch":
         release = drag(page, pilot.locator('[data-stick="right"]'), 0, -60)
         try:
-            day.wait(north, 30, f"{FLIER} 5 m north by the stick")
+            day.wait(forward, 30, f"{FLIER} 5 m forward by the stick")
             day.shot("sticks")
         finally:
             release()
     else:
         page.keyboard.down("w")  # pitch forward
         try:
-            day.wait(north, 30, f"{FLIER} 5 m north by the keyboard")
+            day.wait(forward, 30, f"{FLIER} 5 m forward by the keyboard")
             day.shot("keyboard")
         finally:
             page.keyboard.up("w")

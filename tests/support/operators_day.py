@@ -7,6 +7,7 @@ dashboard's layout is one edit."""
 from __future__ import annotations
 
 import contextlib
+import math
 import os
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -70,6 +71,15 @@ def patient_token(base_url: str, password: str) -> str:
     response.raise_for_status()
     token: str = response.json()["access_token"]
     return token
+
+
+def metres_forward(start: dict[str, Any], now: dict[str, Any]) -> float:
+    """How far a vehicle moved along the heading it had at ``start`` (metres; negative:
+    backwards): what pitching forward flies, whichever way it faces."""
+    north = (now["lat"] - start["lat"]) * 111_320
+    east = (now["lon"] - start["lon"]) * 111_320 * math.cos(math.radians(start["lat"]))
+    heading = math.radians(start["heading_deg"])
+    return north * math.cos(heading) + east * math.sin(heading)
 
 
 def shots_folder(default: Path) -> Path:

@@ -31,7 +31,9 @@ from tests.support.operators_day import (
     frame_on_map,
     long_press,
     map_point,
+    metres_forward,
     mission_open,
+    mission_panel,
     open_space,
     patient_token,
     pilot_panel,
@@ -46,9 +48,10 @@ pytestmark = [pytest.mark.browser, pytest.mark.integration]
 
 VEHICLES = ["sim_1", "sim_2", "sim_3", "sim_4"]
 FLIER, SURVEYORS, FOLLOWER = "sim_1", ["sim_2", "sim_3", "sim_4"], "sim_2"
-# The demo's cameras as one of the hub's survey presets (the MicaSense RedEdge-MX: the
-# smallest photos to render). AFTER-MERGE: the demo branch offers each vehicle's camera.
-CAMERA_MODEL, CAMERA_PRESET = "4.8,3.6,1280,960,5.4", "micasense_rededge_mx"
+# The drones' camera (the MicaSense RedEdge-MX's figures: the smallest photos to render);
+# the hub offers it as a survey preset of its own, chosen when the drones share it.
+CAMERA_MODEL = "4.8,3.6,1280,960,5.4"
+FLEET_CAMERA = f"fleet:{CAMERA_MODEL}"
 # Places on the ground, metres (east, north) of sim_1's home; the homes run east 15 m apart.
 FLY_HERE_M = (0.0, 40.0)
 MISSION_M = [(30.0, 40.0), (20.0, 12.0)]  # it ends holding near the follower's home
@@ -119,12 +122,18 @@ def draw_and_start_mission(day: Day) -> None:
     page.locator('[data-action="mission-edit"]').click()
     page.locator('[data-action="mission-clear"]').click()
     page.locator('[data-action="mission-add-22"]').click()  # a take-off item first
-    if day.small:  # AFTER-MERGE: folding the panel ends its tool; the map is drawn on beside it
-        mission_open(page, False)
+    # The panel stays open (folding it ends its tool): the map is drawn on beside it.
     pixels = frame_on_map(day, (15.0, 25.0), (60.0, 50.0), open_space(day, ".mission-panel"))
     for east, north in MISSION_M:
         page.mouse.click(*map_point(day, pixels, east, north))
-    mission_open(page, True)
+    # Done ends the map's tool (its banner goes) and keeps the plan.
+    edit = page.locator('[data-action="mission-edit"]')
+    banner = page.locator(".map-tool-banner")
+    expect(banner).to_contain_text("Esc or Done")
+    expect(edit).to_have_text("Done")
+    edit.click()
+    expect(edit).to_have_text("Edit")
+    expect(banner).to_be_hidden()
     expect(page.locator(".mission-row")).to_have_count(1 + len(MISSION_M))
     verdict = page.locator('[data-field="mission-verdict"]')
     expect(verdict).to_contain_text("Rails: OK", timeout=15_000)
@@ -133,7 +142,6 @@ def draw_and_start_mission(day: Day) -> None:
     expect(page.locator('[data-field="mission-status"]')).to_contain_text(
         f"{FLIER}: uploaded", timeout=30_000
     )
-    page.locator('[data-action="mission-edit"]').click()  # the editor's tool off
     start_mission(day)
     expect(page.locator('.mission-item.active[data-seq="3"]')).to_have_count(1, timeout=90_000)
     end = day.frame.to_geo(*MISSION_M[-1])
@@ -143,28 +151,30 @@ def draw_and_start_mission(day: Day) -> None:
 
 
 def start_mission(day: Day) -> None:
-    """AFTER-MERGE: the tools branch's button does the checked sequence, each step's
-    answer listed: ``day.page.locator(".mission-panel").get_by_role("button",
-    name="Start mission").click()`` then expect its answers. Today the vehicle is already
-    up in GUIDED, so the mode picker's AUTO starts it."""
-    drawer(day, "ops", True)
-    day.page.locator('select[data-field="mode-picker"]').select_option("AUTO")
+    """The Mission panel's Start mission: the checked sequence, each step's answer listed.
+    The vehicle is already up (flown here), so the sequence checks the mission and goes
+    straight to the mission mode."""
+    panel = mission_panel(day.page)
+    panel.get_by_role("button", name="Start mission").click()
+    steps = panel.locator("ol.mission-start-steps")
+    expect(steps.locator('li[data-step="check"]')).to_have_attribute("data-state", "ok")
+    expect(steps.locator('li[data-step="mission"]')).to_have_attribute("data-state", "ok")
+    expect(steps.locator('li[data-state="refused"]')).to_have_count(0)
     day.wait(lambda s: s[FLIER].get("mode") == "AUTO", 15, f"{FLIER} in AUTO")
     day.shot("mission-started")
-    drawer(day, "ops", False)
 
 
 def survey_with_three_drones(day: Day) -> None:
     page = day.page
     survey_open(page, True)
-    page.locator('[data-field="survey-camera"]').select_option(CAMERA_PRESET)
     for name, value in (("height", "30"), ("side", "60"), ("front", "70"), ("speed", "5")):
         page.locator(f'[data-field="survey-{name}"]').fill(value)
     for vehicle in SURVEYORS:
         page.locator(f'.survey-drone[data-vehicle-id="{vehicle}"] input').check()
+    # The drones share one camera: the hub's preset of it is chosen for them.
+    expect(page.locator('[data-field="survey-camera"]')).to_have_value(FLEET_CAMERA)
     page.locator('[data-action="survey-draw"]').click()
-    if day.small:  # AFTER-MERGE: as the mission's, the area is drawn beside the panel
-        survey_open(page, False)
+    # As the mission's, the area is drawn beside (on a phone, above) the docked panel.
     pixels = frame_on_map(day, (5.0, -52.0), (70.0, 55.0), open_space(day, ".survey-panel"))
     for corner in SURVEY_M:
         page.mouse.click(*map_point(day, pixels, *corner))
@@ -204,7 +214,12 @@ def formation_of_airborne_drones(day: Day) -> None:
     day.shot("formation-planned")
     panel.locator('[data-action="formation-start"]').click()
     progress = panel.locator('[data-field="formation-progress"]')
-    expect(progress).to_have_attribute("data-state", "formed", timeout=90_000)
+    # Formed: the follower joined its slot and the leader flies the route (or, a short
+    # route, has flown it and the formation holds at its end).
+    expect(progress).to_have_attribute(
+        "data-state", re.compile(r"^(flying|route_done)$"), timeout=90_000
+    )
+    expect(progress).to_contain_text(re.compile(rf"{FOLLOWER}: [0-2]\.\d m from its slot"))
     day.shot("formation-formed")
     panel.locator('[data-action="formation-stop"]').click()
     expect(progress).to_have_attribute("data-state", "stopped")
@@ -213,7 +228,7 @@ def formation_of_airborne_drones(day: Day) -> None:
 
 def fly_by_hand(day: Day, source: str) -> None:
     """Take the lease with ``source`` ("touch": the on-screen sticks; "keyboard"), fly
-    5 m north, release."""
+    5 m forward (pitch: along the heading it has, west after the formation), release."""
     page = day.page
     select_vehicle(day, FLIER)
     pilot = pilot_panel(day)
@@ -222,19 +237,19 @@ def fly_by_hand(day: Day, source: str) -> None:
     expect(pilot.locator('[data-field="lease-holder"]')).to_have_text(
         "Flown by hand by admin", timeout=30_000
     )
-    start = day.states()[FLIER]["lat"]
-    north = lambda s: (s[FLIER]["lat"] - start) * 111_320 > 5  # noqa: E731
+    start = day.states()[FLIER]
+    forward = lambda s: metres_forward(start, s[FLIER]) > 5  # noqa: E731
     if source == "touch":
         release = drag(page, pilot.locator('[data-stick="right"]'), 0, -60)
         try:
-            day.wait(north, 30, f"{FLIER} 5 m north by the stick")
+            day.wait(forward, 30, f"{FLIER} 5 m forward by the stick")
             day.shot("sticks")
         finally:
             release()
     else:
         page.keyboard.down("w")  # pitch forward
         try:
-            day.wait(north, 30, f"{FLIER} 5 m north by the keyboard")
+            day.wait(forward, 30, f"{FLIER} 5 m forward by the keyboard")
             day.shot("keyboard")
         finally:
             page.keyboard.up("w")
@@ -246,15 +261,26 @@ def fly_by_hand(day: Day, source: str) -> None:
 def the_3d_view(day: Day) -> None:
     """The drones, the survey's lanes, its mosaic and the LIDAR's points: each layer is
     listed in the viewer's panel once its first data is drawn (backend/viz3d/scene.py)."""
-    view_3d_button(day.page).click()
-    viewer = day.page.frame_locator(".viz3d-pane iframe")
+    page = day.page
+    view_3d_button(page).click()
+    # Beside the map, full height, where the map area has room for two (a desktop); on a
+    # phone instead of it; a tablet's area beside a docked panel may have room or not.
+    split = page.locator(".viz3d-split")
+    mode = {"desktop": "^beside$", "phone": "^instead$"}.get(day.size, "^(beside|instead)$")
+    expect(split).to_have_attribute("data-mode", re.compile(mode))
+    viewer = page.frame_locator(".viz3d-pane iframe")
     expect(viewer.locator("canvas").first).to_be_visible(timeout=30_000)
     for layer in ("Vehicles", "Survey lanes", "Mosaic", "LIDAR scans"):
         expect(viewer.get_by_text(layer, exact=True).first).to_be_attached(timeout=30_000)
     for vehicle in VEHICLES:
         expect(viewer.get_by_text(vehicle).first).to_be_attached()
     day.shot("view-3d")
-    view_3d_button(day.page).click()
+    close = page.locator('[data-action="viz3d-close"]')
+    beside = split.get_attribute("data-mode") == "beside"
+    expect(close).to_have_text("Close 3D view" if beside else "Back to map")
+    close.click()
+    expect(split).to_be_hidden()
+    expect(page.locator("#map")).to_be_visible()
 
 
 def replay_and_export(day: Day) -> None:

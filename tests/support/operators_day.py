@@ -2,12 +2,12 @@
 screenshots and layout measurements, and the dashboard's parts as an operator finds them.
 
 Every selector the day uses is here, one small function each, so that a change of the
-dashboard's layout is one edit. Those marked ``AFTER-MERGE`` name what the branches of
-issue #33 change (the fleet as cards, the phone's header menu, the Start mission button)."""
+dashboard's layout is one edit."""
 
 from __future__ import annotations
 
 import contextlib
+import math
 import os
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -73,6 +73,15 @@ def patient_token(base_url: str, password: str) -> str:
     return token
 
 
+def metres_forward(start: dict[str, Any], now: dict[str, Any]) -> float:
+    """How far a vehicle moved along the heading it had at ``start`` (metres; negative:
+    backwards): what pitching forward flies, whichever way it faces."""
+    north = (now["lat"] - start["lat"]) * 111_320
+    east = (now["lon"] - start["lon"]) * 111_320 * math.cos(math.radians(start["lat"]))
+    heading = math.radians(start["heading_deg"])
+    return north * math.cos(heading) + east * math.sin(heading)
+
+
 def shots_folder(default: Path) -> Path:
     folder = Path(os.environ.get(SHOTS_VARIABLE) or default)
     folder.mkdir(parents=True, exist_ok=True)
@@ -83,8 +92,8 @@ def shots_folder(default: Path) -> Path:
 
 
 def drawer(day: Day, name: str, open_: bool) -> None:
-    """On a tablet or a phone the fleet ("fleet") and the panels ("ops") are drawers.
-    AFTER-MERGE: the layout branch keeps the fleet as cards in a side column."""
+    """On a tablet or a phone the fleet ("fleet", "Vehicles") and the panels ("ops",
+    "Panels") are drawers beside or under the map; a desktop shows both in its side column."""
     if not day.small:
         return
     button = day.page.locator(f'button[data-action="drawer-{name}"]')
@@ -94,7 +103,7 @@ def drawer(day: Day, name: str, open_: bool) -> None:
 
 
 def fleet_entry(page: Page, vehicle: str) -> Locator:
-    """A vehicle's row in the fleet. AFTER-MERGE: a card, ``[data-vehicle-id]`` kept."""
+    """A vehicle's card in the fleet (a table row drawn as a card)."""
     return page.locator(f'tr[data-vehicle-id="{vehicle}"]')
 
 
@@ -147,13 +156,16 @@ def formation_open(page: Page) -> Locator:
 
 
 def pilot_panel(day: Day) -> Locator:
-    """AFTER-MERGE: the layout branch's pilot panel; the fields' names are kept."""
+    """The pilot panel (its fields' names kept by the restyle), in the panels' drawer."""
     drawer(day, "ops", True)
     return day.page.locator('[data-panel="pilot"]')
 
 
 def flights_button(page: Page) -> Locator:
-    """AFTER-MERGE: on a phone, in the header's menu (open it first)."""
+    """The Flights button; on a phone it is in the header's menu, opened first."""
+    menu = page.locator('button[data-action="header-menu"]')
+    if menu.is_visible() and menu.get_attribute("aria-expanded") != "true":
+        menu.click()
     return page.get_by_role("button", name="Flights")
 
 

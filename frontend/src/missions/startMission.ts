@@ -7,13 +7,15 @@
 //      its OFFBOARD refuses to engage without a setpoint stream, and its take-off command
 //      switches to TAKEOFF by itself, so on PX4 the vehicle arms in the mode it is in;
 //   3. take off to the mission's first height (startHeight.ts: never a made-up 0 m);
-//   4. wait, bounded and shown, until airborne near that height;
+//   4. wait, bounded and shown, until airborne near that height (steps 2-4 skipped for a
+//      vehicle already in the air);
 //   5. the mission mode: AUTO on ArduPilot, MISSION on PX4 (protocol/mission_rules.py).
 // A sequence of the hub's own endpoints rather than one endpoint: each command is audited
 // and held to the rails as the operator's own, and each answer shows as it comes.
 import { runCommand } from "../hub/commands";
 import type { Command, VehicleSummary } from "../hub/types";
 import { button, el } from "../ui/dom";
+import { isAirborne } from "../ui/format";
 import { checkMission } from "./api";
 import { takeoffHeight } from "./startHeight";
 import { missionOnBoard } from "./vehicleMissions";
@@ -78,7 +80,10 @@ export class StartMission {
     if ("refused" in height) this.fail(check, `take-off height: ${height.refused}`);
     this.done(check, `${items.length} items, rails OK; take-off to ${height.metres} m (${height.from})`);
 
-    const flying = vehicle.state?.armed && (vehicle.state.alt_rel ?? 0) >= near(height.metres);
+    // Already in the air (below the first height too): no take-off, which ArduPilot refuses
+    // to a flying copter; the mission mode flies its take-off item as a climb.
+    const flying =
+      vehicle.state?.armed && (isAirborne(vehicle.state) || (vehicle.state.alt_rel ?? 0) >= near(height.metres));
     if (!flying) {
       const guided = vehicle.autopilot === "px4" ? undefined : vehicle.modes.find((mode) => mode === GUIDED_MODE);
       if (guided && vehicle.state?.mode !== guided) await this.command("mode", `Mode ${guided}`, id, { name: "set_mode", mode: guided });

@@ -30,15 +30,19 @@
   // Scrolled out of sight: wholly outside a scrolling ancestor (a list's row scrolled
   // past). Clipping by any other ancestor (the map's edge included) does not count: what
   // a plain clip cuts off is lost to the reader, the fault these checks are for.
-  const scrolledAway = (element) => {
+  // With `point`, the point (a control's centre, where it is pressed) outside the scrolling
+  // ancestor is enough: a control half scrolled past its list's edge is pressed after a
+  // scroll, and what lies at its centre meanwhile is whatever is beyond that edge.
+  const scrolledAway = (element, point) => {
     const box = element.getBoundingClientRect();
     for (let up = element.parentElement; up && up !== document.body; up = up.parentElement) {
       const style = getComputedStyle(up);
       const scrolls = /auto|scroll/.test(style.overflowX + style.overflowY);
       if (!scrolls) continue;
       const clip = up.getBoundingClientRect();
-      const apart =
-        box.right <= clip.left || box.left >= clip.right || box.bottom <= clip.top || box.top >= clip.bottom;
+      const apart = point
+        ? point.x < clip.left || point.x > clip.right || point.y < clip.top || point.y > clip.bottom
+        : box.right <= clip.left || box.left >= clip.right || box.bottom <= clip.top || box.top >= clip.bottom;
       if (apart) return true;
     }
     return false;
@@ -76,7 +80,7 @@
       const x = box.left + box.width / 2;
       const y = box.top + box.height / 2;
       // Off screen or scrolled out of its list is not covered: a scroll brings it back.
-      if (x < 0 || y < 0 || x >= innerWidth || y >= innerHeight || scrolledAway(control)) continue;
+      if (x < 0 || y < 0 || x >= innerWidth || y >= innerHeight || scrolledAway(control, { x, y })) continue;
       // On the map's own canvas (a vehicle's label), outside the map's edge: panned away.
       const canvas = control.closest(".leaflet-map-pane") && control.closest(".leaflet-container");
       if (canvas) {

@@ -35,6 +35,6 @@ def test_a_control_half_scrolled_out_of_its_list_is_not_covered(page: Page) -> N
         '<input value="half" style="display:block; height:40px">'
         '<div style="height:600px"></div></div>'
     )
-    page.evaluate("document.getElementById('list').scrollTop = 20")
+    page.evaluate("document.getElementById('list').scrollTop = 30")
     assert covered_controls(page) == []
     assert overflowing_elements(page) == []

@@ -9,6 +9,7 @@ from __future__ import annotations
 import math
 
 import httpx
+import pytest
 from playwright.sync_api import Locator, Page, expect
 
 from gcs.launcher import LocalFleet
@@ -17,7 +18,8 @@ from tests.support.mission_editor import collapse_panel, expand_panel, select, s
 
 VEHICLE = "sim_2"
 
-# A point on the open map: inside #map, on no control, panel, marker, drawn shape or banner.
+# A point on the open map: inside #map, on no control, panel, marker, vehicle label (a
+# button that selects its vehicle), drawn shape or banner.
 OPEN_POINTS_JS = """() => {
     const map = document.querySelector('#map');
     const r = map.getBoundingClientRect();
@@ -28,7 +30,7 @@ OPEN_POINTS_JS = """() => {
             if (!e || !map.contains(e)) continue;
             if (e.closest('.leaflet-control, .mission-panel, .map-panel, .drawer-toggles, '
                 + '.leaflet-marker-icon, .leaflet-interactive, .leaflet-popup, '
-                + '.leaflet-tooltip, .map-tool-banner')) continue;
+                + '.leaflet-tooltip, .map-tool-banner, .vehicle-labels, button')) continue;
             points.push([x, y]);
         }
     }
@@ -50,6 +52,7 @@ def _banner(page: Page) -> Locator:
     return page.locator('[data-field="map-tool-banner"]')
 
 
+@pytest.mark.slow
 def test_one_map_tool_at_a_time(
     sized_page: tuple[Page, str], mission_fleet: LocalFleet, api: httpx.Client
 ) -> None:

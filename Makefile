@@ -21,7 +21,7 @@ lint: setup-dev
 	.venv/bin/ruff check .
 	.venv/bin/ruff format --check .
 	.venv/bin/mypy
-	.venv/bin/lint-imports importlinter.toml
+	.venv/bin/lint-imports
 
 setup:
 	scripts/setup.sh

@@ -16,7 +16,7 @@ from typing import Any
 import pytest
 
 ROOT = Path(__file__).resolve().parents[3]
-CONFIG = ROOT / "importlinter.toml"
+CONFIG = ROOT / "pyproject.toml"
 PACKAGES = ("protocol", "common", "vehicle_agents", "simulator", "backend", "gcs", "gcs_client")
 LINT_IMPORTS = Path(sys.executable).with_name("lint-imports")
 

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import contextlib
+
 from playwright.sync_api import FloatRect, Page, expect
 
 from tests.support.waiting import poll_until
@@ -35,11 +37,17 @@ def _assert_on_open_map(page: Page, x: float, y: float) -> None:
 
 def _latlon_at(page: Page, x: float, y: float) -> tuple[float, float]:
     """What the map's pointer readout says at (x, y): moved off and back, so that it
-    reads the map as it is now, not as it was under a pointer that stood still."""
+    reads the map as it is now, not as it was under a pointer that stood still. On a
+    loaded machine the readout lags the pointer, so the reading waits (3 s at most) for
+    the text to change from what it said before the move; unchanged, the place is the
+    same as before and the map has not moved."""
+    readout = page.locator('[data-field="cursor-position"]')
+    before = readout.inner_text() if readout.is_visible() else ""
     page.mouse.move(x + 2, y)
     page.mouse.move(x, y)
-    readout = page.locator('[data-field="cursor-position"]')
     expect(readout).to_be_visible()
+    with contextlib.suppress(AssertionError):
+        expect(readout).not_to_have_text(before, timeout=3_000)
     lat, lon = (float(part) for part in readout.inner_text().split(","))
     return lat, lon
 
@@ -49,7 +57,7 @@ class PixelMap:
     open points (Web Mercator is linear enough over the few hundred metres drawn here).
     Waits for the map to stop moving: a pan or zoom animates."""
 
-    def __init__(self, page: Page) -> None:
+    def __init__(self, page: Page, settle_s: float = 15) -> None:
         area = _box(page, "#map")
         grid = [
             (area["x"] + area["width"] * fx / 10, area["y"] + area["height"] * fy / 10)
@@ -70,7 +78,7 @@ class PixelMap:
             readings[0] = now
             return same
 
-        poll_until(settled, 15, "the map to settle", every_s=0.3)
+        poll_until(settled, settle_s, "the map to settle", every_s=0.3)
         (lat_a, lon_a), (lat_b, lon_b) = readings[0]
         self.lat0, self.lon0 = lat_a, lon_a
         self.per_lon = (self.b[0] - self.a[0]) / (lon_b - lon_a)

@@ -6,7 +6,6 @@ dashboard's layout is one edit."""
 
 from __future__ import annotations
 
-import contextlib
 import math
 import os
 from collections.abc import Callable
@@ -19,7 +18,7 @@ from playwright.sync_api import FloatRect, Locator, Page, expect
 
 from common.geodesy import LocalFrame
 from tests.support.layout_checks import covered_controls, overflowing_elements
-from tests.support.maps import _assert_on_open_map, _box, _on_open_map
+from tests.support.maps import PixelMap, _assert_on_open_map, _box
 from tests.support.waiting import poll_until
 
 SHOTS_VARIABLE = "GCS_DAY_SHOTS"
@@ -176,59 +175,6 @@ def view_3d_button(page: Page) -> Locator:
 # -- the map --------------------------------------------------------------------------
 
 
-class PixelMap:
-    """Page pixels from lat/lon, read off the map's pointer readout at two open points,
-    as tests/support/maps.py's, but each reading waits for the readout to change: on a
-    loaded machine the readout lags the pointer, and the other's reading read a stale
-    text (its maps.PixelMap never saw two alike, and timed out)."""
-
-    def __init__(self, page: Page) -> None:
-        self.page = page
-        area = _box(page, "#map")
-        grid = [
-            (area["x"] + area["width"] * fx / 10, area["y"] + area["height"] * fy / 10)
-            for fx in range(1, 10)
-            for fy in range(2, 10)
-        ]
-        open_points = [p for p in grid if _on_open_map(page, *p)]
-        assert len(open_points) >= 2, "no open map to read positions from"
-        self.a, self.b = max(
-            ((p, q) for p in open_points for q in open_points),
-            key=lambda pq: min(abs(pq[0][0] - pq[1][0]), abs(pq[0][1] - pq[1][1])),
-        )
-        last: list[tuple[tuple[float, float], ...]] = [()]
-
-        def settled() -> bool:
-            now = (self._read(*self.a), self._read(*self.b))
-            same, last[0] = now == last[0], now
-            return same
-
-        poll_until(settled, 30, "the map to settle", every_s=0.3)
-        (lat_a, lon_a), (lat_b, lon_b) = last[0]
-        self.lat0, self.lon0 = lat_a, lon_a
-        self.per_lon = (self.b[0] - self.a[0]) / (lon_b - lon_a)
-        self.per_lat = (self.b[1] - self.a[1]) / (lat_b - lat_a)
-
-    def _read(self, x: float, y: float) -> tuple[float, float]:
-        readout = self.page.locator('[data-field="cursor-position"]')
-        before = readout.inner_text() if readout.is_visible() else ""
-        self.page.mouse.move(x, y)
-        # Unchanged after 3 s: the same place as before, the map has not moved.
-        with contextlib.suppress(AssertionError):
-            expect(readout).not_to_have_text(before, timeout=3_000)
-        lat, lon = (float(part) for part in readout.inner_text().split(","))
-        return lat, lon
-
-    def pixel(self, lat: float, lon: float) -> tuple[float, float]:
-        return (
-            self.a[0] + (lon - self.lon0) * self.per_lon,
-            self.a[1] + (lat - self.lat0) * self.per_lat,
-        )
-
-    def metres_per_px(self) -> float:
-        return 111_320.0 / abs(self.per_lat)
-
-
 def open_space(day: Day, panel: str) -> FloatRect:
     """The map not under ``panel``, below the controls along its top: beside the panel
     when it leaves room, else the whole map (a phone: the panel is folded to draw)."""
@@ -248,7 +194,7 @@ def frame_on_map(
     """Zoom until a ``size_m`` box fills a good part of ``space``, then drag the map to put
     ``centre_m`` (east, north) in its middle."""
     page = day.page
-    pixels = PixelMap(page)
+    pixels = PixelMap(page, settle_s=30)
     for _ in range(8):
         wide, deep = (m / pixels.metres_per_px() for m in size_m)
         if wide > space["width"] * 0.8 or deep > space["height"] * 0.7:
@@ -257,7 +203,7 @@ def frame_on_map(
             page.locator(".leaflet-control-zoom-in").click()
         else:
             break
-        pixels = PixelMap(page)
+        pixels = PixelMap(page, settle_s=30)
     centre = pixels.pixel(*day.frame.to_geo(*centre_m))
     wanted = (space["x"] + space["width"] / 2, space["y"] + space["height"] / 2)
     start = pixels.a
@@ -265,7 +211,7 @@ def frame_on_map(
     page.mouse.down()
     page.mouse.move(start[0] + wanted[0] - centre[0], start[1] + wanted[1] - centre[1], steps=15)
     page.mouse.up()
-    return PixelMap(page)
+    return PixelMap(page, settle_s=30)
 
 
 def map_point(day: Day, pixels: PixelMap, east: float, north: float) -> tuple[float, float]:

@@ -31,6 +31,7 @@ from gcs.launcher import FleetPlan, LocalFleet, free_port
 from tests.browser.conftest import SIZES, checked_page, log_in
 from tests.support.api import api_client
 from tests.support.hubs import TEST_HUB_ENV, seed_database
+from tests.support.maps import long_press
 from tests.support.operators_day import (
     Day,
     drag,
@@ -38,7 +39,6 @@ from tests.support.operators_day import (
     flights_button,
     formation_open,
     frame_on_map,
-    long_press,
     map_point,
     metres_forward,
     mission_open,

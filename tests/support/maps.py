@@ -92,3 +92,16 @@ class PixelMap:
 
     def metres_per_px(self) -> float:
         return 111_320.0 / abs(self.per_lat)
+
+
+def long_press(page: Page, x: float, y: float, until: str) -> None:
+    """A finger held on the screen (CDP touch events, as a touch screen sends them)
+    until ``until`` shows, then lifted: no fixed wait for the long-press timer."""
+    cdp = page.context.new_cdp_session(page)
+    point = [{"x": x, "y": y}]
+    cdp.send("Input.dispatchTouchEvent", {"type": "touchStart", "touchPoints": point})
+    try:
+        expect(page.locator(until)).to_be_visible(timeout=10_000)
+    finally:
+        cdp.send("Input.dispatchTouchEvent", {"type": "touchEnd", "touchPoints": []})
+        cdp.detach()

@@ -221,18 +221,6 @@ def map_point(day: Day, pixels: PixelMap, east: float, north: float) -> tuple[fl
     return x, y
 
 
-def long_press(page: Page, x: float, y: float, until: str) -> None:
-    """A finger held on the screen (CDP touch events) until ``until`` shows."""
-    cdp = page.context.new_cdp_session(page)
-    point = [{"x": x, "y": y}]
-    cdp.send("Input.dispatchTouchEvent", {"type": "touchStart", "touchPoints": point})
-    try:
-        expect(page.locator(until)).to_be_visible(timeout=10_000)
-    finally:
-        cdp.send("Input.dispatchTouchEvent", {"type": "touchEnd", "touchPoints": []})
-        cdp.detach()
-
-
 def drag(page: Page, target: Locator, dx: float, dy: float) -> Callable[[], None]:
     """Press in the middle of ``target`` and move by (dx, dy); returns the release."""
     target.scroll_into_view_if_needed()

@@ -20,6 +20,7 @@ from tests.support.maps import (
     PixelMap,
     _assert_on_open_map,
     _box,
+    long_press,
 )
 from tests.support.mission_editor import (
     CHECK_S,
@@ -276,19 +277,6 @@ def test_a_drawn_mission_is_refused_on_its_leg_fixed_by_dragging_and_flown(
         assert api.put("/api/v1/safety/rails", json=site_rails).status_code == 200
 
 
-def _long_press(page: Page, x: float, y: float, until: str) -> None:
-    """A finger held on the screen (CDP touch events, as a touch screen sends them)
-    until ``until`` shows, then lifted: no fixed wait for the long-press timer."""
-    cdp = page.context.new_cdp_session(page)
-    point = [{"x": x, "y": y}]
-    cdp.send("Input.dispatchTouchEvent", {"type": "touchStart", "touchPoints": point})
-    try:
-        expect(page.locator(until)).to_be_visible(timeout=10_000)
-    finally:
-        cdp.send("Input.dispatchTouchEvent", {"type": "touchEnd", "touchPoints": []})
-        cdp.detach()
-
-
 def test_fly_here_moves_the_vehicle(
     sized_page: tuple[Page, str], mission_fleet: LocalFleet, api: httpx.Client
 ) -> None:
@@ -315,7 +303,7 @@ def test_fly_here_moves_the_vehicle(
 
     verdict = page.locator('[data-field="go-here-verdict"]')
     if small(size):
-        _long_press(page, x, y, until='[data-field="go-here-verdict"]')
+        long_press(page, x, y, until='[data-field="go-here-verdict"]')
     else:
         page.mouse.click(x, y, button="right")
     expect(verdict).to_contain_text("rails: OK", timeout=CHECK_S * 1000)
